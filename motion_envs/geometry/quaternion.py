@@ -1,0 +1,268 @@
+"""Unit quaternions for orientation trajectories.
+
+Convention used everywhere in motion-envs: a quaternion is stored **scalar first**,
+``q = (w, x, y, z)`` along the last axis, with ``w = cos(theta/2)`` and
+``(x, y, z) = sin(theta/2) * axis``. This is MuJoCo's order and the order of the
+``qw, qx, qy, qz`` columns of the data files; scipy uses ``(x, y, z, w)`` by default,
+so conversions happen only in :func:`to_rotation` / :func:`from_rotation`.
+
+All functions are pure numpy and broadcast over any number of leading (batch) axes.
+Functions that *require* unit quaternions validate their input and raise
+``ValueError`` naming the argument; pass ``validate=False`` on hot paths where the
+input is known to be valid.
+
+References: Faraway & Choe (2008), section 3.2; Shoemake (1985); Grassia (1998).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+__all__ = [
+    "IDENTITY",
+    "UNIT_TOLERANCE",
+    "angle",
+    "as_unit",
+    "conjugate",
+    "expmap",
+    "from_rotation",
+    "logmap",
+    "make_continuous",
+    "multiply",
+    "normalize",
+    "slerp",
+    "to_rotation",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: The identity rotation ``(w, x, y, z) = (1, 0, 0, 0)``.
+IDENTITY: FloatArray = np.array([1.0, 0.0, 0.0, 0.0])
+
+#: Largest accepted deviation ``| |q| - 1 |`` for an input said to be a unit quaternion.
+UNIT_TOLERANCE = 1e-6
+
+# Below this angle the series expansions are used instead of the closed forms.
+_SMALL_ANGLE = 1e-4
+
+
+def _as_quaternion_array(q: ArrayLike, name: str) -> FloatArray:
+    """Return ``q`` as a float64 array with last axis 4, finite, or raise ``ValueError``."""
+    arr = np.asarray(q, dtype=np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != 4:
+        raise ValueError(
+            f"{name} must have a last axis of length 4 (w, x, y, z); got shape {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return arr
+
+
+def as_unit(q: ArrayLike, name: str = "q", tol: float = UNIT_TOLERANCE) -> FloatArray:
+    """Validate that ``q`` holds unit quaternions ``(w, x, y, z)`` and return it as float64.
+
+    Raises ``ValueError`` naming ``name`` if the last axis is not 4, a value is NaN or
+    infinite, or a norm differs from 1 by more than ``tol``.
+    """
+    arr = _as_quaternion_array(q, name)
+    norms = np.sqrt(np.einsum("...i,...i->...", arr, arr))
+    bad = np.abs(norms - 1.0) > tol
+    if np.any(bad):
+        worst = float(norms.flat[np.argmax(np.abs(norms - 1.0).ravel())])
+        raise ValueError(
+            f"{name} must contain unit quaternions (|q| = 1 within {tol:g}); "
+            f"{int(np.count_nonzero(bad))} are not (worst norm {worst:.6g})"
+        )
+    return arr
+
+
+def normalize(q: ArrayLike, name: str = "q") -> FloatArray:
+    """Return ``q / |q|`` for quaternions ``(w, x, y, z)``.
+
+    Raises ``ValueError`` naming ``name`` for NaN/inf entries, a wrong last axis or a
+    (near) zero norm, which has no direction to normalise to.
+    """
+    arr = _as_quaternion_array(q, name)
+    norms = np.sqrt(np.einsum("...i,...i->...", arr, arr))
+    if np.any(norms < 1e-12):
+        raise ValueError(f"{name} contains a quaternion of zero norm, which cannot be normalised")
+    return arr / norms[..., None]
+
+
+def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
+    """Hamilton product ``p * q`` of quaternions ``(w, x, y, z)``, broadcast over batches.
+
+    With ``p = [v1, w1]`` and ``q = [v2, w2]`` (vector, scalar)::
+
+        p * q = [w1 v2 + w2 v1 + v1 x v2,  w1 w2 - v1 . v2]
+
+    As rotations, ``p * q`` applies ``q`` first, then ``p`` (same as scipy's ``P * Q``).
+    """
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    pw, px, py, pz = np.moveaxis(p, -1, 0)
+    qw, qx, qy, qz = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
+
+
+def conjugate(q: ArrayLike) -> FloatArray:
+    """Conjugate ``q* = (w, -x, -y, -z)``; the inverse of a unit quaternion."""
+    out = np.array(q, dtype=np.float64, copy=True)
+    out[..., 1:] *= -1.0
+    return out
+
+
+def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
+    """Exponential map from the tangent space at the identity to unit quaternions.
+
+    For ``v`` in R^3 with ``theta = |v|``::
+
+        expmap(v) = (cos(theta/2), sin(theta/2) v / theta),   expmap(0) = (1, 0, 0, 0)
+
+    i.e. the rotation by ``theta`` about ``v/theta`` (equal to scipy's
+    ``Rotation.from_rotvec(v)``). ``sin(theta/2)/theta`` is evaluated by its series
+    ``1/2 - theta^2/48 + theta^4/3840`` for small ``theta`` so nothing divides by a tiny
+    number. Returns shape ``v.shape[:-1] + (4,)``.
+    """
+    v = np.asarray(v, dtype=np.float64)
+    if v.ndim == 0 or v.shape[-1] != 3:
+        raise ValueError(f"{name} must have a last axis of length 3; got shape {v.shape}")
+    theta2 = np.einsum("...i,...i->...", v, v)
+    theta = np.sqrt(theta2)
+    small = theta < _SMALL_ANGLE
+    safe = np.where(small, 1.0, theta)
+    half_sinc = np.where(
+        small, 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0, np.sin(0.5 * safe) / safe
+    )
+    out = np.empty(v.shape[:-1] + (4,))
+    out[..., 0] = np.cos(0.5 * theta)
+    out[..., 1:] = half_sinc[..., None] * v
+    return out
+
+
+def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
+    """Logarithm map from unit quaternions to the tangent space at the identity.
+
+    Inverse of :func:`expmap` on rotation angles in ``[0, pi]``: ``q`` and ``-q`` map to
+    the same vector (the sign is chosen so that ``w >= 0``). With ``q = (w, u)``::
+
+        theta = 2 atan2(|u|, w),   logmap(q) = theta u / |u|,   logmap(identity) = 0
+
+    ``theta / sin(theta/2)`` is evaluated by its series ``2 + theta^2/12`` near 0, and
+    the ``atan2`` form stays accurate near ``theta = pi`` where ``arccos(w)`` would not.
+    Returns shape ``q.shape[:-1] + (3,)``.
+    """
+    q = as_unit(q, name) if validate else np.asarray(q, dtype=np.float64)
+    sign = np.where(q[..., :1] < 0.0, -1.0, 1.0)
+    w = np.abs(q[..., 0])
+    u = q[..., 1:] * sign
+    s = np.sqrt(np.einsum("...i,...i->...", u, u))
+    theta = 2.0 * np.arctan2(s, w)
+    small = s < _SMALL_ANGLE
+    safe = np.where(small, 1.0, s)
+    # theta / s; for small s: theta = 2 s / w (1 - s^2/(3 w^2) + ...) -> 2/w + s^2 ...
+    scale = np.where(small, 2.0 / np.maximum(w, 1e-300) * (1.0 - s * s / 3.0), theta / safe)
+    return scale[..., None] * u
+
+
+def angle(p: ArrayLike, q: ArrayLike, name_p: str = "p", name_q: str = "q") -> FloatArray:
+    """Geodesic angle between orientations, in radians in ``[0, pi]``.
+
+    ``angle(p, q) = 2 * arccos(|p . q|)`` with the dot product clipped to ``[0, 1]``, so a
+    value rounded above 1 never gives NaN and ``angle(q, -q) = 0``. Near 0 the
+    equivalent ``2 * atan2(|p* q|_vec, |p . q|)`` is used for full precision.
+    """
+    p = as_unit(p, name_p)
+    q = as_unit(q, name_q)
+    rel = multiply(conjugate(p), q)
+    vec = np.sqrt(np.einsum("...i,...i->...", rel[..., 1:], rel[..., 1:]))
+    return 2.0 * np.arctan2(vec, np.abs(rel[..., 0]))
+
+
+def slerp(
+    q0: ArrayLike,
+    q1: ArrayLike,
+    alpha: ArrayLike,
+    validate: bool = True,
+) -> FloatArray:
+    """Spherical linear interpolation along the shortest arc.
+
+    With ``cos(theta/2) = q0 . q1`` (after flipping ``q1`` to ``-q1`` when the dot is
+    negative, so the arc is the short one)::
+
+        slerp(q0, q1, a) = sin((1 - a) theta/2) / sin(theta/2) q0 + sin(a theta/2) / sin(theta/2) q1
+
+    At ``q0 == q1`` (``theta -> 0``) the weights tend to ``(1 - a, a)``; the series form is
+    used there, so coincident ends give a constant trajectory with no NaN. ``q0``, ``q1``
+    and ``alpha`` broadcast together: ``q0``/``q1`` have shape ``(..., 4)`` and ``alpha``
+    shape ``(...)``; e.g. ``q0[:, None]``, ``q1[:, None]`` and ``alpha`` of shape ``(B, T)``
+    give ``(B, T, 4)``.
+    """
+    if validate:
+        q0 = as_unit(q0, "q0")
+        q1 = as_unit(q1, "q1")
+        alpha = np.asarray(alpha, dtype=np.float64)
+        if not np.all(np.isfinite(alpha)):
+            raise ValueError("alpha contains NaN or infinite values")
+    else:
+        q0 = np.asarray(q0, dtype=np.float64)
+        q1 = np.asarray(q1, dtype=np.float64)
+        alpha = np.asarray(alpha, dtype=np.float64)
+    dot = np.einsum("...i,...i->...", q0, q1)
+    sign = np.where(dot < 0.0, -1.0, 1.0)[..., None]
+    # half angle h = theta/2 = 2 atan2(|q0 - q1|, |q0 + q1|): accurate at 0 and at pi/2.
+    diff = q0 - sign * q1
+    summ = q0 + sign * q1
+    half = 2.0 * np.arctan2(
+        np.sqrt(np.einsum("...i,...i->...", diff, diff)),
+        np.sqrt(np.einsum("...i,...i->...", summ, summ)),
+    )
+    sign = sign[..., 0]
+    small = half < _SMALL_ANGLE
+    sin_half = np.where(small, 1.0, np.sin(half))
+    a = alpha
+    w0 = np.where(small, 1.0 - a, np.sin((1.0 - a) * half) / sin_half)
+    w1 = np.where(small, a, np.sin(a * half) / sin_half) * sign
+    return w0[..., None] * q0 + w1[..., None] * q1
+
+
+def make_continuous(q: ArrayLike, name: str = "q", axis: int = -2) -> FloatArray:
+    """Remove antipodal jumps along a trajectory (Faraway & Choe, step 2).
+
+    Flips ``q_i`` to ``-q_i`` whenever ``q_i . q_{i-1} < 0`` (after the previous flips),
+    so that consecutive samples lie on the same hemisphere. ``axis`` is the time axis
+    (default: the one before the quaternion axis); leading axes are batches. The first
+    sample keeps its sign.
+    """
+    arr = _as_quaternion_array(q, name)
+    arr = np.moveaxis(arr, axis, 0)
+    if arr.shape[0] < 2:
+        return np.moveaxis(arr.copy(), 0, axis)
+    dots = np.einsum("t...i,t...i->t...", arr[1:], arr[:-1])
+    flips = np.cumsum(dots < 0.0, axis=0) % 2
+    signs = np.concatenate([np.ones((1,) + flips.shape[1:]), 1.0 - 2.0 * flips], axis=0)
+    out = arr * signs[..., None]
+    return np.moveaxis(out, 0, axis)
+
+
+def to_rotation(q: ArrayLike, name: str = "q") -> Rotation:
+    """Convert unit quaternions ``(w, x, y, z)`` to a scipy ``Rotation`` (flattened batch)."""
+    q = as_unit(q, name)
+    return Rotation.from_quat(q.reshape(-1, 4)[:, [1, 2, 3, 0]])
+
+
+def from_rotation(rotation: Rotation) -> FloatArray:
+    """Convert a scipy ``Rotation`` to quaternions ``(w, x, y, z)`` with ``w >= 0``."""
+    xyzw = np.atleast_2d(rotation.as_quat())
+    q = xyzw[:, [3, 0, 1, 2]]
+    return q * np.where(q[:, :1] < 0.0, -1.0, 1.0)
