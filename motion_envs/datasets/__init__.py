@@ -1,0 +1,38 @@
+"""Datasets: real human recordings shipped with the package and the users' CSV formats."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from motion_envs.datasets.orientation import OrientationDataset, read_orientation_csv
+from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG, load_vr_kitchen
+
+__all__ = [
+    "ORIENTATION_DATASETS",
+    "OrientationDataset",
+    "load_orientation_dataset",
+    "load_vr_kitchen",
+    "read_orientation_csv",
+]
+
+#: Built-in orientation datasets by name.
+ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen",)
+
+
+def load_orientation_dataset(
+    data: str | os.PathLike[str], min_deg: float = DEFAULT_MIN_DEG
+) -> OrientationDataset:
+    """Load a built-in orientation dataset by name, or the users' CSV at a path.
+
+    Trajectories rotating less than ``min_deg`` degrees from start to end are dropped
+    and counted in ``n_dropped``.
+    """
+    if isinstance(data, str) and data in ORIENTATION_DATASETS:
+        return load_vr_kitchen(min_deg=min_deg)
+    path = Path(data)
+    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+        raise ValueError(
+            f"data must be one of {list(ORIENTATION_DATASETS)} or a path to a CSV file; got {data!r}"
+        )
+    return read_orientation_csv(path).drop_small_rotations(min_deg)

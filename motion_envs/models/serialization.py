@@ -87,9 +87,7 @@ class SerializableModel:
         """Load a model saved by :meth:`save`; raises :class:`ModelFileError` if it is not a ``cls``."""
         model = load_model(path)
         if not isinstance(model, cls):
-            raise ModelFileError(
-                f"{path} holds a {type(model).__name__}, not a {cls.__name__}"
-            )
+            raise ModelFileError(f"{path} holds a {type(model).__name__}, not a {cls.__name__}")
         return model
 
 
@@ -176,7 +174,9 @@ def load_model(path: str | os.PathLike[str]) -> SerializableModel:
             f"{p} is corrupt or truncated: not valid JSON ({exc.msg} at line {exc.lineno})"
         ) from exc
     if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise ModelFileError(f"{p} is not a motion-envs model file (missing 'format': {FORMAT_NAME!r})")
+        raise ModelFileError(
+            f"{p} is not a motion-envs model file (missing 'format': {FORMAT_NAME!r})"
+        )
     version = doc.get("format_version")
     if version != FORMAT_VERSION:
         raise ModelFileError(

@@ -72,9 +72,7 @@ def speed_fractions_on_grid(
     return _interp_flat(traj, alpha[:, None], normalised_grid(n_points))[..., 0]
 
 
-def average_speed_profile(
-    traj: RaggedTrajectories, n_points: int = DEFAULT_N_POINTS
-) -> FloatArray:
+def average_speed_profile(traj: RaggedTrajectories, n_points: int = DEFAULT_N_POINTS) -> FloatArray:
     """Mean of the trajectories' ``alpha`` curves on the common grid, shape ``(n_points,)``."""
     return speed_fractions_on_grid(traj, n_points).mean(axis=0)
 

@@ -1,0 +1,181 @@
+"""``motion-bench orientation``: Faraway & Choe's Table 1 on real or the users' data.
+
+Prints every criterion beside the paper's value, writes ``results.json`` and a residual
+plot in the style of the paper's Figure 5.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from motion_envs.datasets import ORIENTATION_DATASETS, OrientationDataset, load_orientation_dataset
+from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
+from motion_envs.models.criteria import Table1Result, table1
+from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
+from motion_envs.models.serialization import atomic_write_text
+
+__all__ = ["format_table1", "register", "results_document", "run"]
+
+_ROW_LABELS = {
+    "within_subject": "Within subject",
+    "between_subject": "Between subject",
+    "slerp_empirical": "Slerp, empirical",
+    "slerp_average": "Slerp, average",
+    "null_average": "Null average",
+}
+
+
+def _label(name: str) -> str:
+    if name in _ROW_LABELS:
+        return _ROW_LABELS[name]
+    base, _, rest = name.partition("_d")
+    degree, _, split = rest.partition("_")
+    pretty = base.replace("_", " ").capitalize()
+    suffix = {"loso": ", leave one subject out", "loro": ", leave one replicate out"}.get(split, "")
+    return f"{pretty} (d={degree}){suffix}"
+
+
+def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
+    """Table 1 as text: one row per criterion, ours beside the paper's value (radians)."""
+    lines = [
+        f"Faraway & Choe Table 1 on {dataset.name!r}: {len(dataset)} trajectories "
+        f"({'simulated' if dataset.simulated else 'real'} data), {dataset.n_dropped} dropped, "
+        f"{np.unique(dataset.subjects).size} subjects, {np.unique(dataset.tasks).size} tasks",
+        "median over trajectories of the max over time of the tangent-space error, radians",
+        "",
+        f"{'criterion':<50} {'name':<28} {'ours':>7} {'paper':>7}",
+        "-" * 96,
+    ]
+    for name, value in result.criteria.items():
+        paper = FARAWAY_CHOE_TABLE1.get(name)
+        paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
+        ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
+        note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
+        lines.append(f"{_label(name):<50} {name:<28} {ours} {paper_s}  {note}".rstrip())
+    lines.append("")
+    lines.append(
+        "paper: 1,088 reaches of 20 subjects (hand relative to forearm); rows ending in "
+        "_loso/_loro are ours only (out of sample)."
+    )
+    return "\n".join(lines)
+
+
+def results_document(result: Table1Result, dataset: OrientationDataset) -> dict[str, Any]:
+    """The ``results.json`` document."""
+    return {
+        "dataset": dataset.name,
+        "simulated": dataset.simulated,
+        "n_trajectories": len(dataset),
+        "n_dropped": dataset.n_dropped,
+        "n_subjects": int(np.unique(dataset.subjects).size),
+        "n_tasks": int(np.unique(dataset.tasks).size),
+        "criteria": {k: (v if math.isfinite(v) else None) for k, v in result.criteria.items()},
+        "paper": dict(FARAWAY_CHOE_TABLE1),
+        "fallbacks": dict(result.fallbacks),
+    }
+
+
+def plot_residuals(
+    result: Table1Result, dataset: OrientationDataset, path: Path, task: str | None = None
+) -> Path:
+    """Figure 5 style: three orthogonal, equally scaled views of one task's residual curves."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tasks, counts = np.unique(dataset.tasks, return_counts=True)
+    chosen = task if task is not None else str(tasks[np.argmax(counts)])
+    if chosen not in tasks:
+        raise ValueError(f"task must be one of {tasks.tolist()}; got {chosen!r}")
+    R = result.residuals[dataset.tasks == chosen]
+    lim = float(np.abs(R).max()) * 1.05 or 1.0
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4.2), constrained_layout=True)
+    for ax, (i, j) in zip(axes, [(0, 1), (0, 2), (1, 2)], strict=True):
+        for curve in R:
+            ax.plot(curve[:, i], curve[:, j], lw=0.8, alpha=0.7)
+        ax.plot(0, 0, "k+", ms=10)
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_xlabel("xyz"[i] + " (rad)")
+        ax.set_ylabel("xyz"[j] + " (rad)")
+        ax.grid(alpha=0.3)
+    fig.suptitle(
+        f"Empirical slerp residuals, {dataset.name}, task {chosen!r}: {len(R)} trajectories; "
+        f"max distance from origin {np.linalg.norm(R, axis=2).max():.2f} rad"
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Execute ``motion-bench orientation`` with parsed arguments."""
+    t0 = time.perf_counter()
+    dataset = load_orientation_dataset(args.data, min_deg=args.min_deg)
+    if len(dataset) < 2:
+        raise ValueError(
+            f"only {len(dataset)} trajectories left after dropping those under "
+            f"{args.min_deg} degrees; lower --min-deg"
+        )
+    result = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    elapsed = time.perf_counter() - t0
+    print(format_table1(result, dataset))
+    print(f"\ncomputed in {elapsed:.2f} s")
+    if args.out is not None:
+        out = Path(args.out)
+        doc = results_document(result, dataset)
+        atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")
+        plot_residuals(result, dataset, out / "residuals.png", task=args.plot_task)
+        print(f"wrote {out / 'results.json'} and {out / 'residuals.png'}")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``orientation`` sub-command."""
+    p = subparsers.add_parser(
+        "orientation",
+        help="Faraway & Choe Table 1 (orientation trajectories)",
+        description=(
+            "Compute Faraway & Choe's Table 1 (median over trajectories of the max over "
+            "time of the slerp-residual error, radians) with the paper's value beside "
+            "ours, plus leave-one-subject-out and leave-one-replicate-out rows."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "--data",
+        default="vr-kitchen",
+        help=(
+            f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}) or a path to a CSV with "
+            "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors]"
+        ),
+    )
+    p.add_argument(
+        "--min-deg",
+        type=float,
+        default=DEFAULT_MIN_DEG,
+        help="drop trajectories rotating less than this many degrees from start to end",
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        help="folder for results.json and residuals.png (nothing is written without it)",
+    )
+    p.add_argument(
+        "--plot-task",
+        default=None,
+        help="task whose residuals residuals.png shows (default: the most frequent task)",
+    )
+    p.set_defaults(func=run)

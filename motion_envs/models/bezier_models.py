@@ -1,0 +1,370 @@
+"""Bézier models of slerp residual curves (Faraway & Choe, section 3.4 and Table 1).
+
+Every model describes a residual curve ``r(tau)`` (``n_points x 3``, zero at both ends,
+on the uniform normalised-time grid) by a Bézier curve of degree ``d`` with ``P_0 = P_d = 0``
+and interior control points ``P_1 .. P_{d-1}``; the models differ in how they *predict*
+those control points:
+
+* :class:`NullBezierModel`: one common ``P = mean_l P_l`` (the paper's preferred model
+  for ``d = 2``: the downward tilt);
+* :class:`SubjectBezierModel` / :class:`TaskBezierModel`: ``P`` = mean of the ``P_l``
+  of the same subject / task;
+* :class:`LinearBezierModel`: the multivariate linear model ``g(P) = f(x) + e`` with
+  ``vec(P) = b_0 + B x`` on numeric predictors ``x`` (least squares).
+
+``P_l`` is the least-squares fit of curve ``l`` (:func:`motion_envs.geometry.bezier.fit`).
+Because least squares is linear and the grid is shared, the mean of fitted control
+points equals the fit of the mean curve.
+
+The estimators follow scikit-learn conventions: ``fit`` returns ``self``; fitted
+attributes end in ``_``; ``save``/``load`` use the JSON model format of
+:mod:`motion_envs.models.serialization`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from motion_envs.geometry import bezier
+from motion_envs.models.serialization import SerializableModel
+from motion_envs.models.slerp_residual import normalised_grid
+
+__all__ = [
+    "BezierResidualModel",
+    "GroupBezierModel",
+    "LinearBezierModel",
+    "NullBezierModel",
+    "SubjectBezierModel",
+    "TaskBezierModel",
+    "fit_control_points",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def _check_curves(residuals: ArrayLike, name: str = "residuals") -> FloatArray:
+    R = np.asarray(residuals, dtype=np.float64)
+    if R.ndim != 3 or R.shape[2] != 3 or R.shape[1] < 3:
+        raise ValueError(f"{name} must have shape (L, n_points >= 3, 3); got {R.shape}")
+    if R.shape[0] < 1:
+        raise ValueError(f"{name} must contain at least one curve")
+    if not np.all(np.isfinite(R)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return R
+
+
+def fit_control_points(residuals: ArrayLike, degree: int) -> FloatArray:
+    """Least-squares interior control points of every residual curve, ``(L, d - 1, 3)``.
+
+    ``residuals`` is ``(L, n, 3)`` on the uniform grid of ``n`` points; one shared
+    pseudo-inverse serves all curves (:func:`motion_envs.geometry.bezier.fit`).
+    """
+    R = _check_curves(residuals)
+    return bezier.fit(R, normalised_grid(R.shape[1]), degree)
+
+
+def _labels(values: ArrayLike | None, name: str, n: int) -> NDArray[np.str_]:
+    if values is None:
+        raise ValueError(f"{name} is required by this model")
+    arr = np.asarray(values).astype(str)
+    if arr.shape != (n,):
+        raise ValueError(f"{name} must have shape ({n},); got {arr.shape}")
+    return arr
+
+
+class BezierResidualModel(SerializableModel):
+    """Base class: a Bézier model of slerp residual curves of one degree.
+
+    Parameters
+    ----------
+    degree:
+        Bézier degree ``d >= 1`` (``d - 1`` free interior control points in R^3).
+    """
+
+    def __init__(self, degree: int = 2) -> None:
+        if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
+            raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+        self.degree = int(degree)
+
+    # -- to implement -------------------------------------------------------------
+    def _fit_points(
+        self,
+        points: FloatArray,
+        subjects: NDArray[np.str_] | None,
+        tasks: NDArray[np.str_] | None,
+        predictors: FloatArray | None,
+    ) -> None:
+        raise NotImplementedError
+
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    ) -> FloatArray:
+        """Predicted interior control points, ``(L, d - 1, 3)``."""
+        raise NotImplementedError
+
+    # -- shared -------------------------------------------------------------------
+    def fit(
+        self,
+        residuals: ArrayLike,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    ) -> BezierResidualModel:
+        """Fit to residual curves ``(L, n_points, 3)`` and their labels; returns ``self``.
+
+        Sets ``n_points_`` and the model's own fitted attributes.
+        """
+        R = _check_curves(residuals)
+        L = R.shape[0]
+        points = fit_control_points(R, self.degree)
+        subj = None if subjects is None else _labels(subjects, "subjects", L)
+        task = None if tasks is None else _labels(tasks, "tasks", L)
+        X = None if predictors is None else self._predictor_matrix(predictors, L, fitting=True)
+        self._fit_points(points, subj, task, X)
+        self.n_points_ = int(R.shape[1])
+        return self
+
+    def _predictor_matrix(
+        self, predictors: Mapping[str, ArrayLike] | ArrayLike, n: int, fitting: bool
+    ) -> FloatArray:
+        return np.zeros((n, 0))
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "control_points_") and not hasattr(self, "intercept_"):
+            raise RuntimeError(f"{type(self).__name__} is not fitted; call fit() first")
+
+    def predict(
+        self,
+        n: int | None = None,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        n_points: int | None = None,
+    ) -> FloatArray:
+        """Predicted residual curves ``(L, n_points, 3)`` on the uniform grid."""
+        P = self.predict_control_points(n=n, subjects=subjects, tasks=tasks, predictors=predictors)
+        grid = normalised_grid(n_points or self.n_points_)
+        return bezier.evaluate(P, grid, self.degree)
+
+
+class NullBezierModel(BezierResidualModel):
+    """One common residual: ``P = mean_l P_l`` (no predictors).
+
+    Fitted attributes: ``control_points_`` ``(d - 1, 3)``.
+    """
+
+    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+        self.control_points_ = points.mean(axis=0)
+
+    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+        self._check_fitted()
+        if n is None:
+            for labels in (subjects, tasks):
+                if labels is not None:
+                    n = len(labels)
+        if n is None:
+            raise ValueError("n (the number of curves to predict) is required")
+        return np.broadcast_to(self.control_points_, (n, *self.control_points_.shape)).copy()
+
+    def _get_state(self):
+        return (
+            {"degree": self.degree},
+            {"control_points_": self.control_points_},
+            {"n_points_": self.n_points_},
+        )
+
+    @classmethod
+    def _from_state(cls, params, arrays, attributes):
+        model = cls(**params)
+        model.control_points_ = arrays["control_points_"]
+        model.n_points_ = int(attributes["n_points_"])
+        return model
+
+
+class GroupBezierModel(BezierResidualModel):
+    """``P`` = mean of the fitted ``P_l`` within a group (subject or task).
+
+    Parameters
+    ----------
+    degree:
+        Bézier degree.
+    by:
+        ``"subject"`` or ``"task"``: which label defines the groups.
+    unseen:
+        What to predict for a label not seen in ``fit``: ``"error"`` (raise
+        ``ValueError``) or ``"global"`` (the mean over all training curves, i.e. the
+        null model).
+
+    Fitted attributes: ``groups_`` ``(G,)``, ``control_points_`` ``(G, d - 1, 3)``,
+    ``global_control_points_`` ``(d - 1, 3)``, ``group_sizes_`` ``(G,)``.
+    """
+
+    def __init__(self, degree: int = 2, by: str = "task", unseen: str = "error") -> None:
+        super().__init__(degree)
+        if by not in ("subject", "task"):
+            raise ValueError(f"by must be 'subject' or 'task'; got {by!r}")
+        if unseen not in ("error", "global"):
+            raise ValueError(f"unseen must be 'error' or 'global'; got {unseen!r}")
+        self.by = by
+        self.unseen = unseen
+
+    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+        labels = subjects if self.by == "subject" else tasks
+        if labels is None:
+            raise ValueError(f"{self.by}s is required to fit a {type(self).__name__}")
+        groups, inverse, counts = np.unique(labels, return_inverse=True, return_counts=True)
+        sums = np.zeros((groups.size, *points.shape[1:]))
+        np.add.at(sums, inverse, points)
+        self.groups_ = groups
+        self.group_sizes_ = counts.astype(np.int64)
+        self.control_points_ = sums / counts[:, None, None]
+        self.global_control_points_ = points.mean(axis=0)
+
+    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+        self._check_fitted()
+        labels = subjects if self.by == "subject" else tasks
+        name = f"{self.by}s"
+        if labels is None:
+            raise ValueError(f"{name} is required to predict with a {type(self).__name__}")
+        labels = np.asarray(labels).astype(str)
+        pos = np.searchsorted(self.groups_, labels)
+        pos = np.clip(pos, 0, self.groups_.size - 1)
+        known = self.groups_[pos] == labels
+        if not np.all(known) and self.unseen == "error":
+            unknown = sorted(set(labels[~known].tolist()))
+            raise ValueError(
+                f"{name} contains label(s) not seen in fit: {unknown[:5]}; "
+                f"pass unseen='global' to predict the null model for them"
+            )
+        out = self.control_points_[pos].copy()
+        out[~known] = self.global_control_points_
+        return out
+
+    def _get_state(self):
+        return (
+            {"degree": self.degree, "by": self.by, "unseen": self.unseen},
+            {
+                "control_points_": self.control_points_,
+                "global_control_points_": self.global_control_points_,
+                "group_sizes_": self.group_sizes_,
+            },
+            {"groups_": self.groups_.tolist(), "n_points_": self.n_points_},
+        )
+
+    @classmethod
+    def _from_state(cls, params, arrays, attributes):
+        model = cls.__new__(cls)
+        GroupBezierModel.__init__(model, **params)
+        model.control_points_ = arrays["control_points_"]
+        model.global_control_points_ = arrays["global_control_points_"]
+        model.group_sizes_ = arrays["group_sizes_"]
+        model.groups_ = np.asarray(attributes["groups_"], dtype=str)
+        model.n_points_ = int(attributes["n_points_"])
+        return model
+
+
+class SubjectBezierModel(GroupBezierModel):
+    """The subject predictor: ``P`` = mean of the ``P_l`` of the same subject."""
+
+    def __init__(self, degree: int = 2, unseen: str = "error") -> None:
+        super().__init__(degree, by="subject", unseen=unseen)
+
+
+class TaskBezierModel(GroupBezierModel):
+    """The task predictor: ``P`` = mean of the ``P_l`` of the same task."""
+
+    def __init__(self, degree: int = 2, unseen: str = "error") -> None:
+        super().__init__(degree, by="task", unseen=unseen)
+
+
+class LinearBezierModel(BezierResidualModel):
+    """Multivariate linear model of the control points on numeric predictors.
+
+    ``vec(P_l) = b_0 + B^T x_l + e_l`` with ``vec(P)`` the ``3 (d - 1)`` stacked
+    control-point coordinates and ``x_l`` the ``p`` predictors of curve ``l``; ``b_0``
+    and ``B`` minimise the summed squared error (``numpy.linalg.lstsq`` on the design
+    ``[1, x]``). A design of rank below ``p + 1`` (a constant or collinear predictor,
+    or fewer curves than ``p + 1``) raises ``ValueError``.
+
+    Fitted attributes: ``predictor_names_`` (``p`` names), ``intercept_``
+    ``(d - 1, 3)``, ``coef_`` ``(p, d - 1, 3)``.
+    """
+
+    def _predictor_matrix(self, predictors, n, fitting):
+        if isinstance(predictors, Mapping):
+            names = sorted(predictors)
+            if not fitting:
+                missing = [k for k in self.predictor_names_ if k not in predictors]
+                if missing:
+                    raise ValueError(f"predictors is missing {missing}")
+                names = list(self.predictor_names_)
+            cols = [np.asarray(predictors[k], dtype=np.float64) for k in names]
+            X = np.stack(cols, axis=1) if cols else np.zeros((n, 0))
+        else:
+            X = np.asarray(predictors, dtype=np.float64)
+            if X.ndim == 1:
+                X = X[:, None]
+            names = [f"x{i}" for i in range(X.shape[1])]
+            if not fitting and X.shape[1] != len(self.predictor_names_):
+                raise ValueError(
+                    f"predictors must have {len(self.predictor_names_)} columns; got {X.shape[1]}"
+                )
+        if X.shape[0] != n:
+            raise ValueError(f"predictors must have {n} rows (one per curve); got {X.shape[0]}")
+        if not np.all(np.isfinite(X)):
+            raise ValueError("predictors contains NaN or infinite values")
+        if fitting:
+            self.predictor_names_ = list(names)
+        return X
+
+    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+        if predictors is None:
+            raise ValueError("predictors is required to fit a LinearBezierModel")
+        L, p = predictors.shape
+        design = np.hstack([np.ones((L, 1)), predictors])
+        rank = np.linalg.matrix_rank(design)
+        if rank < p + 1:
+            raise ValueError(
+                f"degenerate regression: the design [1, predictors] has rank {rank} < {p + 1} "
+                f"(constant or collinear predictors, or fewer than {p + 1} curves)"
+            )
+        Y = points.reshape(L, -1)
+        beta, *_ = np.linalg.lstsq(design, Y, rcond=None)
+        k = points.shape[1]
+        self.intercept_ = beta[0].reshape(k, 3)
+        self.coef_ = beta[1:].reshape(p, k, 3)
+
+    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+        self._check_fitted()
+        if predictors is None:
+            raise ValueError("predictors is required to predict with a LinearBezierModel")
+        if isinstance(predictors, Mapping):
+            n = len(next(iter(predictors.values()))) if predictors else 0
+        else:
+            n = np.atleast_1d(np.asarray(predictors)).shape[0]
+        X = self._predictor_matrix(predictors, n, fitting=False)
+        return self.intercept_ + np.einsum("lp,pkc->lkc", X, self.coef_)
+
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any]]:
+        return (
+            {"degree": self.degree},
+            {"intercept_": self.intercept_, "coef_": self.coef_},
+            {"predictor_names_": list(self.predictor_names_), "n_points_": self.n_points_},
+        )
+
+    @classmethod
+    def _from_state(cls, params, arrays, attributes):
+        model = cls(**params)
+        model.intercept_ = arrays["intercept_"]
+        model.coef_ = arrays["coef_"]
+        model.predictor_names_ = list(attributes["predictor_names_"])
+        model.n_points_ = int(attributes["n_points_"])
+        return model

@@ -1,0 +1,265 @@
+"""The error criteria of Faraway & Choe's Table 1, and their out-of-sample versions.
+
+Every criterion is a median over trajectories of the maximum over time of the tangent
+space distance between a residual curve and a prediction of it::
+
+    criterion = median_l  max_t  | r_l(t) - rhat_l(t) |
+
+with ``r_l`` the slerp residual of trajectory ``l`` on the 50-point normalised grid
+(:mod:`motion_envs.models.slerp_residual`) and ``|.|`` the Euclidean norm in R^3.
+Subject ``i``, task ``j``, replicate ``k``; a bullet is a mean over that index.
+
+=========================  ==================================================================
+name                       prediction ``rhat``
+=========================  ==================================================================
+``within_subject``         ``mean_k r_ijk`` over the replicates of (i, j); groups with >= 2
+``between_subject``        ``mean_{i,k} r_ijk``; median over (i, k) within a task, then over j
+``slerp_empirical``        0 (slerp with the trajectory's own speed profile)
+``slerp_average``          0, residuals recomputed against the average speed profile
+``null_average``           ``mean_l r_l``
+``approximation_d{d}``     each curve's own Bézier fit of degree ``d``
+``null_d{d}``              :class:`NullBezierModel` (``P`` = mean of all ``P_l``)
+``subject_predictor_d{d}`` :class:`SubjectBezierModel` (in sample)
+``task_predictor_d{d}``    :class:`TaskBezierModel` (in sample)
+``null_d{d}_loso``         null model fitted without the trajectory's subject
+``task_predictor_d{d}_loso`` task means over the *other* subjects
+``subject_predictor_d{d}_loro`` subject means without the trajectory itself
+=========================  ==================================================================
+
+The paper's predictor rows are in-sample averages; the ``_loso`` (leave one subject
+out) and ``_loro`` (leave one replicate out) rows judge the same models on data they
+were not fitted to. Where a held-out group has no training data (a task only the
+held-out subject performed, a subject with a single trajectory) the null model fitted
+on the same training data is used; the number of such fallbacks is reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from motion_envs.geometry import bezier
+from motion_envs.models.bezier_models import (
+    NullBezierModel,
+    SubjectBezierModel,
+    TaskBezierModel,
+    fit_control_points,
+)
+from motion_envs.models.slerp_residual import (
+    DEFAULT_N_POINTS,
+    RaggedTrajectories,
+    normalised_grid,
+    slerp_residuals,
+)
+from motion_envs.models.speed_profile import average_speed_profile
+
+__all__ = [
+    "CRITERIA_DEGREES",
+    "Table1Result",
+    "between_subject_error",
+    "criterion_names",
+    "max_errors",
+    "median_max_error",
+    "table1",
+    "within_subject_error",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Bézier degrees reported in Table 1.
+CRITERIA_DEGREES: tuple[int, ...] = (2, 3, 4)
+
+
+def criterion_names(degrees: Sequence[int] = CRITERIA_DEGREES) -> list[str]:
+    """Names of every criterion :func:`table1` reports, in table order."""
+    names = ["within_subject", "between_subject", "slerp_empirical", "slerp_average"]
+    for d in degrees:
+        names.append(f"approximation_d{d}")
+    for d in degrees:
+        names.append(f"null_d{d}")
+    names.append("null_average")
+    for kind in ("subject_predictor", "task_predictor"):
+        names.extend(f"{kind}_d{d}" for d in degrees)
+    for d in degrees:
+        names += [f"null_d{d}_loso", f"task_predictor_d{d}_loso", f"subject_predictor_d{d}_loro"]
+    return names
+
+
+def max_errors(residuals: ArrayLike, predictions: ArrayLike | float = 0.0) -> FloatArray:
+    """``max_t |r_l(t) - rhat_l(t)|`` for every curve: ``(L, n, 3)`` -> ``(L,)``."""
+    R = np.asarray(residuals, dtype=np.float64)
+    if R.ndim != 3:
+        raise ValueError(f"residuals must have shape (L, n, 3); got {R.shape}")
+    diff = R - np.asarray(predictions, dtype=np.float64)
+    return np.sqrt(np.einsum("ltc,ltc->lt", diff, diff)).max(axis=1)
+
+
+def median_max_error(residuals: ArrayLike, predictions: ArrayLike | float = 0.0) -> float:
+    """The papers' criterion: ``median_l max_t |r_l(t) - rhat_l(t)|``."""
+    return float(np.median(max_errors(residuals, predictions)))
+
+
+def _group_means(R: FloatArray, keys: NDArray) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Per-curve mean of the curves sharing its key; also the group size of each curve."""
+    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    sums = np.zeros((counts.size, *R.shape[1:]))
+    np.add.at(sums, inverse, R)
+    return (sums / counts[:, None, None])[inverse], counts[inverse]
+
+
+def within_subject_error(residuals: ArrayLike, subjects: ArrayLike, tasks: ArrayLike) -> float:
+    """``median max_t |r_ijk - mean_k r_ijk|`` over curves whose (i, j) has >= 2 replicates."""
+    R = np.asarray(residuals, dtype=np.float64)
+    keys = np.char.add(
+        np.char.add(np.asarray(subjects).astype(str), "\x1f"), np.asarray(tasks).astype(str)
+    )
+    means, sizes = _group_means(R, keys)
+    errors = max_errors(R, means)[sizes >= 2]
+    if errors.size == 0:
+        raise ValueError("within_subject needs at least one (subject, task) pair with 2 replicates")
+    return float(np.median(errors))
+
+
+def between_subject_error(residuals: ArrayLike, tasks: ArrayLike) -> float:
+    """``median_j median_{i,k} max_t |r_ijk - mean_{i,k} r_ijk|``."""
+    R = np.asarray(residuals, dtype=np.float64)
+    tasks = np.asarray(tasks).astype(str)
+    means, _ = _group_means(R, tasks)
+    errors = max_errors(R, means)
+    per_task = [np.median(errors[tasks == j]) for j in np.unique(tasks)]
+    return float(np.median(per_task))
+
+
+@dataclass(frozen=True)
+class Table1Result:
+    """Criteria of Table 1 for one dataset.
+
+    Attributes
+    ----------
+    criteria:
+        name -> value in radians (names from :func:`criterion_names`).
+    residuals:
+        ``(L, n_points, 3)`` empirical slerp residuals the criteria were computed on.
+    average_alpha:
+        ``(n_points,)`` the average speed profile.
+    fallbacks:
+        name -> number of trajectories scored with the null-model fallback (out-of-
+        sample rows only; see the module docstring).
+    """
+
+    criteria: dict[str, float]
+    residuals: FloatArray
+    average_alpha: FloatArray
+    fallbacks: dict[str, int] = field(default_factory=dict)
+
+
+def _leave_one_subject_out(
+    R: FloatArray, subjects: NDArray[np.str_], tasks: NDArray[np.str_], degree: int
+) -> tuple[FloatArray, FloatArray, int]:
+    """Predictions of the null and task models for each curve, fitted without its subject."""
+    grid = normalised_grid(R.shape[1])
+    null_pred = np.empty_like(R)
+    task_pred = np.empty_like(R)
+    fallbacks = 0
+    for s in np.unique(subjects):
+        test = subjects == s
+        train = ~test
+        if not np.any(train):
+            raise ValueError("leave-one-subject-out needs at least two subjects")
+        null = NullBezierModel(degree).fit(R[train])
+        task = TaskBezierModel(degree, unseen="global").fit(R[train], tasks=tasks[train])
+        null_pred[test] = null.predict(n=int(test.sum()))
+        P = task.predict_control_points(tasks=tasks[test])
+        task_pred[test] = bezier.evaluate(P, grid, degree)
+        fallbacks += int(np.count_nonzero(~np.isin(tasks[test], task.groups_)))
+    return null_pred, task_pred, fallbacks
+
+
+def _leave_one_replicate_out(
+    R: FloatArray, subjects: NDArray[np.str_], degree: int
+) -> tuple[FloatArray, int]:
+    """Subject-model prediction of each curve from the subject's other curves.
+
+    Uses the closed form ``(sum_subject P - P_l) / (n_subject - 1)`` (the mean of the
+    other curves' control points); a subject with a single curve falls back to the null
+    model of all other curves.
+    """
+    points = fit_control_points(R, degree)
+    _, inverse, counts = np.unique(subjects, return_inverse=True, return_counts=True)
+    sums = np.zeros((counts.size, *points.shape[1:]))
+    np.add.at(sums, inverse, points)
+    n = counts[inverse]
+    others = (sums[inverse] - points) / np.maximum(n - 1, 1)[:, None, None]
+    lonely = n < 2
+    if np.any(lonely):
+        total = points.sum(axis=0)
+        others[lonely] = (total - points[lonely]) / max(points.shape[0] - 1, 1)
+    return bezier.evaluate(others, normalised_grid(R.shape[1]), degree), int(lonely.sum())
+
+
+def table1(
+    traj: RaggedTrajectories,
+    subjects: ArrayLike,
+    tasks: ArrayLike,
+    degrees: Sequence[int] = CRITERIA_DEGREES,
+    n_points: int = DEFAULT_N_POINTS,
+) -> Table1Result:
+    """Compute every criterion of Table 1 (and the out-of-sample rows) for a dataset.
+
+    Parameters
+    ----------
+    traj:
+        The trajectories (:class:`RaggedTrajectories`).
+    subjects, tasks:
+        ``(L,)`` labels of each trajectory.
+    degrees:
+        Bézier degrees of the approximation/null/predictor rows.
+    n_points:
+        Size of the normalised-time grid (the paper's 50).
+    """
+    L = traj.n_trajectories
+    subjects = np.asarray(subjects).astype(str)
+    tasks = np.asarray(tasks).astype(str)
+    if subjects.shape != (L,) or tasks.shape != (L,):
+        raise ValueError(
+            f"subjects and tasks must have shape ({L},); got {subjects.shape} and {tasks.shape}"
+        )
+    R = slerp_residuals(traj, n_points)
+    abar = average_speed_profile(traj, n_points)
+    R_avg = slerp_residuals(traj, n_points, average_alpha=abar)
+    c: dict[str, float] = {}
+    fallbacks: dict[str, int] = {}
+    c["within_subject"] = within_subject_error(R, subjects, tasks)
+    c["between_subject"] = between_subject_error(R, tasks)
+    c["slerp_empirical"] = median_max_error(R)
+    c["slerp_average"] = median_max_error(R_avg)
+    grid = normalised_grid(n_points)
+    for d in degrees:
+        P = fit_control_points(R, d)
+        c[f"approximation_d{d}"] = median_max_error(R, bezier.evaluate(P, grid, d))
+    for d in degrees:
+        c[f"null_d{d}"] = median_max_error(R, NullBezierModel(d).fit(R).predict(n=L))
+    c["null_average"] = median_max_error(R, R.mean(axis=0))
+    for d in degrees:
+        model = SubjectBezierModel(d).fit(R, subjects=subjects)
+        c[f"subject_predictor_d{d}"] = median_max_error(R, model.predict(subjects=subjects))
+    for d in degrees:
+        model = TaskBezierModel(d).fit(R, tasks=tasks)
+        c[f"task_predictor_d{d}"] = median_max_error(R, model.predict(tasks=tasks))
+    for d in degrees:
+        if np.unique(subjects).size >= 2:
+            null_pred, task_pred, n_fb = _leave_one_subject_out(R, subjects, tasks, d)
+            c[f"null_d{d}_loso"] = median_max_error(R, null_pred)
+            c[f"task_predictor_d{d}_loso"] = median_max_error(R, task_pred)
+            fallbacks[f"task_predictor_d{d}_loso"] = n_fb
+        else:
+            c[f"null_d{d}_loso"] = float("nan")
+            c[f"task_predictor_d{d}_loso"] = float("nan")
+        loro_pred, n_fb = _leave_one_replicate_out(R, subjects, d)
+        c[f"subject_predictor_d{d}_loro"] = median_max_error(R, loro_pred)
+        fallbacks[f"subject_predictor_d{d}_loro"] = n_fb
+    ordered = {name: c[name] for name in criterion_names(degrees)}
+    return Table1Result(criteria=ordered, residuals=R, average_alpha=abar, fallbacks=fallbacks)
