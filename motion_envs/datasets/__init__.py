@@ -33,6 +33,7 @@ def load_orientation_dataset(
     path = Path(data)
     if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
         raise ValueError(
-            f"data must be one of {list(ORIENTATION_DATASETS)} or a path to a CSV file; got {data!r}"
+            f"data must be one of {list(ORIENTATION_DATASETS)} or a path to a CSV file; "
+            f"got {data!r}"
         )
     return read_orientation_csv(path).drop_small_rotations(min_deg)

@@ -18,6 +18,7 @@ ill-posed there); the count is in ``n_dropped``. Predictor: ``duration_s``.
 
 from __future__ import annotations
 
+import itertools
 from importlib import resources
 
 import numpy as np
@@ -66,10 +67,8 @@ def load_vr_kitchen(min_deg: float = DEFAULT_MIN_DEG) -> OrientationDataset:
     if len(group) != len(trials):
         raise ValueError("vr-kitchen data files disagree on the number of trials")
     offsets = np.concatenate([[0], np.cumsum(group.to_numpy())])
-    quats = tuple(
-        quat.make_continuous(q[a:b]) for a, b in zip(offsets[:-1], offsets[1:], strict=True)
-    )
-    times = tuple(t[a:b] - t[a] for a, b in zip(offsets[:-1], offsets[1:], strict=True))
+    quats = tuple(quat.make_continuous(q[a:b]) for a, b in itertools.pairwise(offsets))
+    times = tuple(t[a:b] - t[a] for a, b in itertools.pairwise(offsets))
     subjects = trials["participant"].astype(str).to_numpy()
     tasks = trials["target"].astype(str).to_numpy()
     ids = (

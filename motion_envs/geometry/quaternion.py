@@ -144,7 +144,7 @@ def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
     half_sinc = np.where(
         small, 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0, np.sin(0.5 * safe) / safe
     )
-    out = np.empty(v.shape[:-1] + (4,))
+    out = np.empty((*v.shape[:-1], 4))
     out[..., 0] = np.cos(0.5 * theta)
     out[..., 1:] = half_sinc[..., None] * v
     return out
@@ -250,7 +250,7 @@ def make_continuous(q: ArrayLike, name: str = "q", axis: int = -2) -> FloatArray
         return np.moveaxis(arr.copy(), 0, axis)
     dots = np.einsum("t...i,t...i->t...", arr[1:], arr[:-1])
     flips = np.cumsum(dots < 0.0, axis=0) % 2
-    signs = np.concatenate([np.ones((1,) + flips.shape[1:]), 1.0 - 2.0 * flips], axis=0)
+    signs = np.concatenate([np.ones((1, *flips.shape[1:])), 1.0 - 2.0 * flips], axis=0)
     out = arr * signs[..., None]
     return np.moveaxis(out, 0, axis)
 

@@ -84,7 +84,7 @@ class SerializableModel:
 
     @classmethod
     def load(cls: type[M], path: str | os.PathLike[str]) -> M:
-        """Load a model saved by :meth:`save`; raises :class:`ModelFileError` if it is not a ``cls``."""
+        """Load a model saved by :meth:`save`; :class:`ModelFileError` if it is not a ``cls``."""
         model = load_model(path)
         if not isinstance(model, cls):
             raise ModelFileError(f"{path} holds a {type(model).__name__}, not a {cls.__name__}")
