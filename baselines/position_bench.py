@@ -1,0 +1,432 @@
+"""``motion-bench position``: the sine-series model on LASA (or the users' CSV) vs peers.
+
+Leave one demonstration out per shape (task): every method is fitted on the other
+demonstrations of the shape and predicts the held-out one from its start point, end
+point and duration. All trajectories are resampled (linear interpolation) to
+``--n-points`` samples of normalised time ``tau = t / T`` and every method works and is
+scored on that grid, so the time normalisation is the same for all.
+
+Methods:
+
+* ``line``: the straight line from start to end;
+* ``null``: the line plus the mean residual ``D(tau)`` of the training demonstrations;
+* ``lippi``: :class:`~motion_envs.models.sine_regression.SineSeriesRegression` with
+  conditions ``--conditions`` (start and end by default; columns constant over the
+  training demonstrations, such as LASA's end point at the origin, are dropped) and ``N``
+  chosen by leave-one-out cross-validation on the training demonstrations
+  (``--n-sines auto``);
+* ``dmp``, ``promp``: :mod:`baselines.peers` (``movement_primitives``), same start/goal.
+
+Criteria per held-out demonstration: max error (the papers' criterion), RMSE, DTW and
+swept error area (:mod:`motion_envs.models.position_criteria`). Per shape we take the
+median over its demonstrations; the printed table is the median across shapes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+import time
+import warnings
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines.peers import DMPPeer, ProMPPeer, peers_available
+from motion_envs.datasets.lasa import LASA_CITATION, load_lasa
+from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
+from motion_envs.geometry import sine_series as ss
+from motion_envs.models.position_criteria import CRITERIA
+from motion_envs.models.serialization import atomic_write_text
+from motion_envs.models.sine_regression import (
+    RankDeficientDesignWarning,
+    SineSeriesRegression,
+    select_n_sines,
+)
+
+__all__ = ["METHODS", "format_table", "register", "run", "run_benchmark"]
+
+FloatArray = NDArray[np.float64]
+
+METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp")
+PEER_METHODS = ("dmp", "promp")
+CONDITION_KINDS = ("start", "end", "duration")
+CRITERION_TEXT = {
+    "max_error": "median over demos of max_t |error|",
+    "rmse": "median over demos of RMSE",
+    "dtw": "median over demos of DTW (sum of Euclidean costs)",
+    "swept_area": "median over demos of swept error area",
+}
+
+
+def resample(dataset: PositionDataset, n_points: int) -> tuple[FloatArray, FloatArray]:
+    """All trajectories on ``n_points`` uniform ``tau``: ``(L, K, D)`` and durations ``(L,)``."""
+    if n_points < 5:
+        raise ValueError(f"n_points must be >= 5; got {n_points}")
+    tau = np.linspace(0.0, 1.0, n_points)
+    out = np.empty((len(dataset), n_points, dataset.n_dims))
+    for i, (y, t) in enumerate(zip(dataset.positions, dataset.times, strict=True)):
+        src = ss.normalised_time(t)
+        for j in range(y.shape[1]):
+            out[i, :, j] = np.interp(tau, src, y[:, j])
+    durations = np.array([t[-1] - t[0] for t in dataset.times])
+    return out, durations
+
+
+def _conditions(y: FloatArray, durations: FloatArray, kinds: list[str]) -> FloatArray:
+    parts = {"start": y[:, 0], "end": y[:, -1], "duration": durations[:, None]}
+    return np.column_stack([parts[k] for k in kinds])
+
+
+def _varying(q: FloatArray) -> NDArray[np.bool_]:
+    scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
+    return np.ptp(q, axis=0) > 1e-9 * scale
+
+
+class _Timer:
+    def __init__(self) -> None:
+        self.fit: Counter[str] = Counter()
+        self.predict: Counter[str] = Counter()
+        self.n_fit: Counter[str] = Counter()
+        self.n_predict: Counter[str] = Counter()
+
+    def add(self, method: str, fit_s: float, predict_s: float) -> None:
+        self.fit[method] += fit_s
+        self.predict[method] += predict_s
+        self.n_fit[method] += 1
+        self.n_predict[method] += 1
+
+
+def leave_one_out(
+    y: FloatArray,
+    durations: FloatArray,
+    kinds: list[str],
+    n_sines: int | None,
+    methods: list[str],
+    timer: _Timer,
+    n_weights: int = 10,
+) -> tuple[dict[str, FloatArray], list[int]]:
+    """Predictions ``(n, K, D)`` of every held-out demonstration for each method."""
+    n, k, _ = y.shape
+    tau = np.linspace(0.0, 1.0, k)
+    preds = {m: np.empty_like(y) for m in methods}
+    chosen = []
+    q_all = _conditions(y, durations, kinds)
+    for i in range(n):
+        train = np.delete(np.arange(n), i)
+        start, end = y[i, 0], y[i, -1]
+        line = start + tau[:, None] * (end - start)
+        yt = y[train]
+        if "line" in methods:
+            preds["line"][i] = line
+        if "null" in methods:
+            preds["null"][i] = line + ss.residual(tau, yt).mean(axis=0)
+        if "lippi" in methods:
+            keep = _varying(q_all[train])
+            q_train, q_test = q_all[train][:, keep], q_all[i, keep]
+            t0 = time.perf_counter()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RankDeficientDesignWarning)
+                n_use = n_sines
+                if n_use is None:
+                    cands = [c for c in range(16) if c <= k - 2]
+                    n_use, _ = select_n_sines(list(yt), q_train, candidates=cands)
+                t1 = time.perf_counter()
+                model = SineSeriesRegression(n_sines=n_use).fit(list(yt), q_train)
+            t2 = time.perf_counter()
+            p = model.predict_coefficients(q_test, start=start, end=end)
+            preds["lippi"][i] = ss.evaluate(p, tau)
+            t3 = time.perf_counter()
+            timer.add("lippi", t2 - t1, t3 - t2)
+            timer.fit["lippi_cv"] += t1 - t0
+            chosen.append(int(n_use))
+        for name, cls in (("dmp", DMPPeer), ("promp", ProMPPeer)):
+            if name in methods:
+                t0 = time.perf_counter()
+                peer = cls(n_weights_per_dim=n_weights).fit(yt)
+                t1 = time.perf_counter()
+                preds[name][i] = peer.predict(start, end)
+                timer.add(name, t1 - t0, time.perf_counter() - t1)
+    return preds, chosen
+
+
+def _score(y: FloatArray, preds: dict[str, FloatArray]) -> dict[str, dict[str, float]]:
+    out = {}
+    for m, p in preds.items():
+        out[m] = {c: float(np.median(f(y, p))) for c, f in CRITERIA.items()}
+    return out
+
+
+def _validation_rows(
+    y: FloatArray, durations: FloatArray, kinds: list[str], n_sines: int
+) -> list[dict[str, Any]]:
+    q = _conditions(y, durations, kinds)
+    q = q[:, _varying(q)]
+    if y.shape[0] <= q.shape[1] + 2:
+        return []
+    model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q)
+    return model.validate().summary()
+
+
+def _load(data: str, shapes: list[str] | None) -> PositionDataset:
+    if data == "lasa":
+        return load_lasa(shapes)
+    path = Path(data)
+    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+        raise ValueError(f"--data must be 'lasa' or a path to a position CSV; got {data!r}")
+    ds = read_position_csv(path)
+    if shapes:
+        unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
+        if unknown:
+            raise ValueError(f"--shapes: task(s) {unknown} not in {path}")
+        ds = ds.subset(np.isin(ds.tasks, shapes))
+    return ds
+
+
+def run_benchmark(
+    dataset: PositionDataset,
+    n_points: int = 200,
+    kinds: list[str] | None = None,
+    n_sines: int | None = None,
+    use_peers: bool = True,
+    n_weights: int = 10,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Run the leave-one-out benchmark; returns the ``results.json`` document."""
+    from tqdm import tqdm
+
+    kinds = ["start", "end"] if kinds is None else kinds
+    bad = [k for k in kinds if k not in CONDITION_KINDS]
+    if bad or not kinds:
+        raise ValueError(f"conditions must be among {CONDITION_KINDS}; got {kinds}")
+    have_peers = use_peers and peers_available()
+    methods = [m for m in METHODS if have_peers or m not in PEER_METHODS]
+    y_all, dur_all = resample(dataset, n_points)
+    timer = _Timer()
+    per_shape: dict[str, Any] = {}
+    predictions: dict[str, dict[str, FloatArray]] = {}
+    skipped = []
+    for task in tqdm(dataset.task_names(), desc="shapes", file=sys.stderr, disable=not progress):
+        sel = dataset.tasks == task
+        if sel.sum() < 3:
+            skipped.append(task)
+            continue
+        y, dur = y_all[sel], dur_all[sel]
+        preds, chosen = leave_one_out(y, dur, kinds, n_sines, methods, timer, n_weights)
+        n_val = Counter(chosen).most_common(1)[0][0]
+        per_shape[task] = {
+            "n_demos": int(sel.sum()),
+            "n_sines": chosen,
+            "criteria": _score(y, preds),
+            "validation": _validation_rows(y, dur, kinds, n_val),
+        }
+        predictions[task] = preds
+    if not per_shape:
+        raise ValueError("no shape/task has the 3 or more trajectories leave-one-out needs")
+    summary = {
+        m: {
+            c: float(np.median([per_shape[s]["criteria"][m][c] for s in per_shape]))
+            for c in CRITERIA
+        }
+        for m in methods
+    }
+    timing = {
+        m: {
+            "fit_s_per_call": timer.fit[m] / timer.n_fit[m],
+            "predict_s_per_call": timer.predict[m] / timer.n_predict[m],
+        }
+        for m in ("lippi", *PEER_METHODS)
+        if timer.n_fit[m]
+    }
+    if "lippi" in timing:
+        timing["lippi"]["cv_s_per_call"] = timer.fit["lippi_cv"] / timer.n_fit["lippi"]
+        for m in PEER_METHODS:
+            if m in timing:
+                timing[f"{m}_over_lippi"] = {
+                    "fit": timing[m]["fit_s_per_call"] / timing["lippi"]["fit_s_per_call"],
+                    "predict": timing[m]["predict_s_per_call"]
+                    / timing["lippi"]["predict_s_per_call"],
+                }
+    return {
+        "dataset": dataset.name,
+        "unit": dataset.unit,
+        "n_points": n_points,
+        "conditions": kinds,
+        "n_sines": "auto (leave-one-out CV, 0..15)" if n_sines is None else n_sines,
+        "methods": methods,
+        "peers_available": have_peers,
+        "criteria": CRITERION_TEXT,
+        "summary_median_across_shapes": summary,
+        "per_shape": per_shape,
+        "skipped": skipped,
+        "timing": timing,
+        "citation": LASA_CITATION if dataset.name == "lasa" else None,
+        "_predictions": predictions,
+        "_truth": {t: y_all[dataset.tasks == t] for t in per_shape},
+    }
+
+
+def format_table(doc: dict[str, Any]) -> str:
+    """The printed table: median across shapes of each per-shape criterion."""
+    methods = doc["methods"]
+    unit = f" ({doc['unit']})" if doc["unit"] else ""
+    lines = [
+        f"position benchmark on {doc['dataset']!r}: {len(doc['per_shape'])} shapes, "
+        f"leave one demonstration out, {doc['n_points']}-point normalised-time grid{unit}",
+        "per shape: median over held-out demos; below: median across shapes",
+        "",
+        f"{'criterion':<56}" + "".join(f"{m:>10}" for m in methods),
+        "-" * (56 + 10 * len(methods)),
+    ]
+    for c, text in doc["criteria"].items():
+        vals = "".join(f"{doc['summary_median_across_shapes'][m][c]:10.3f}" for m in methods)
+        lines.append(f"{c + ': ' + text:<56}{vals}")
+    if not doc["peers_available"]:
+        lines.append("dmp, promp: skipped (movement_primitives not installed)")
+    return "\n".join(lines)
+
+
+def format_validation(doc: dict[str, Any]) -> str:
+    """Per shape (phase) and coordinate: the paper's checks of the linear hypothesis."""
+    lines = [
+        "validation of the linear hypothesis (Lippi et al.), all demos of each shape, "
+        "non-exact sine coefficients:",
+        "  normal: share with Lilliefors p > 0.05; F-test: share with p < 0.05; "
+        "CI/|F|: median 95% CI half-width over |F|; jack/|F|: median jackknife sd over |F|",
+        f"{'shape':<18}{'coord':>6}{'n':>4}{'normal':>8}{'F-test':>8}{'CI/|F|':>9}{'jack/|F|':>10}",
+    ]
+    for shape, res in doc["per_shape"].items():
+        if not res["validation"]:
+            lines.append(f"{shape:<18}  (too few demonstrations for the tests)")
+        for row in res["validation"]:
+            lines.append(
+                f"{shape:<18}{row['coordinate']:>6}{row['n_coefficients']:>4}"
+                f"{row['normal_frac']:8.2f}{row['ftest_frac']:8.2f}"
+                f"{row['ci_rel']:9.2f}{row['jack_rel']:10.2f}"
+            )
+    return "\n".join(lines)
+
+
+def _clean(value: Any) -> Any:
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items() if not str(k).startswith("_")}
+    if isinstance(value, list):
+        return [_clean(v) for v in value]
+    return value
+
+
+def _csv_text(doc: dict[str, Any]) -> str:
+    buf = io.StringIO()
+    writer = csv.writer(buf)
+    writer.writerow(["shape", "method", *CRITERIA])
+    for shape, res in doc["per_shape"].items():
+        for m, vals in res["criteria"].items():
+            writer.writerow([shape, m, *(f"{vals[c]:.6g}" for c in CRITERIA)])
+    return buf.getvalue()
+
+
+def plot_grid(doc: dict[str, Any], path: Path) -> None:
+    """Every shape: demonstrations (grey) and each method's leave-one-out predictions."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shapes = list(doc["per_shape"])
+    cols = min(6, len(shapes))
+    rows = math.ceil(len(shapes) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.6 * rows), squeeze=False)
+    colors = {"line": "C7", "null": "C2", "lippi": "C3", "dmp": "C0", "promp": "C1"}
+    for ax, shape in zip(axes.ravel(), shapes, strict=False):
+        truth = doc["_truth"][shape]
+        for y in truth:
+            ax.plot(y[:, 0], y[:, 1], color="0.6", lw=2.0)
+        for m, pred in doc["_predictions"][shape].items():
+            if m == "line":
+                continue
+            for k, y in enumerate(pred):
+                ax.plot(y[:, 0], y[:, 1], color=colors[m], lw=0.7, label=m if k == 0 else None)
+        ax.set_title(shape, fontsize=8)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_aspect("equal", adjustable="datalim")
+    for ax in axes.ravel()[len(shapes) :]:
+        ax.axis("off")
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower right", fontsize=8)
+    fig.suptitle("demonstrations (grey) and leave-one-out predictions", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Entry of ``motion-bench position``."""
+    if not args.no_peers and not peers_available():
+        print(
+            "motion-bench position: movement_primitives is not installed "
+            "(pip install 'motion-envs[peers]'); the DMP and ProMP columns are skipped",
+            file=sys.stderr,
+        )
+    kinds = [k.strip() for k in args.conditions.split(",") if k.strip()]
+    n_sines = None if args.n_sines == "auto" else int(args.n_sines)
+    dataset = _load(args.data, args.shapes)
+    doc = run_benchmark(
+        dataset,
+        n_points=args.n_points,
+        kinds=kinds,
+        n_sines=n_sines,
+        use_peers=not args.no_peers,
+        n_weights=args.n_weights,
+        progress=not args.no_progress,
+    )
+    print(format_table(doc))
+    print()
+    print(format_validation(doc))
+    if doc["timing"]:
+        print()
+        print("timing, seconds per call (fit on the training demos / generate one trajectory):")
+        for m, v in doc["timing"].items():
+            if "fit_s_per_call" in v:
+                print(
+                    f"  {m:<6} fit {v['fit_s_per_call']:.3g}  predict {v['predict_s_per_call']:.3g}"
+                )
+            else:
+                print(f"  {m:<13} fit x{v['fit']:.1f}  predict x{v['predict']:.1f}")
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out / "results.json", json.dumps(_clean(doc), indent=2) + "\n")
+        atomic_write_text(out / "results.csv", _csv_text(doc))
+        plot_grid(doc, out / "shapes.png")
+        print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'shapes.png'}")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``position`` sub-command."""
+    p = subparsers.add_parser(
+        "position",
+        help="sine-series model (Lippi et al.) vs line, null, DMP, ProMP on LASA or a CSV",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--data", default="lasa", help="'lasa' or a position CSV path")
+    p.add_argument("--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV)")
+    p.add_argument("--out", default=None, help="folder for results.json/.csv and shapes.png")
+    p.add_argument("--n-points", type=int, default=200, help="normalised-time grid size")
+    p.add_argument("--n-sines", default="auto", help="N, or 'auto' for cross-validation")
+    p.add_argument("--conditions", default="start,end", help="comma list of start, end, duration")
+    p.add_argument("--n-weights", type=int, default=10, help="DMP/ProMP weights per dimension")
+    p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
