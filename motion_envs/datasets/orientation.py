@@ -9,11 +9,12 @@ CSV format (one row per sample, header required, extra columns allowed)::
 * ``t``: time in seconds, strictly increasing within a trajectory.
 * ``qw, qx, qy, qz``: the orientation as a unit quaternion, scalar first (norms within
   ``1e-3`` of 1 are accepted and renormalised).
+* ``replicate`` (optional): integer replicate number within the (subject, task) pair;
+  without it replicates are numbered 0, 1, ... in file order within each pair.
 * any other **numeric** column is a per-trajectory predictor (e.g. age, height); it must
   be constant within a trajectory.
 
-Each trajectory needs at least 5 samples. Replicates are numbered in file order within
-each (subject, task) pair. Errors name the file and the line number (the header is
+Each trajectory needs at least 5 samples. Errors name the file and the line number (the header is
 line 1).
 """
 
@@ -139,6 +140,7 @@ class OrientationDataset:
                 "trajectory": self.trajectory_ids[l],
                 "subject": self.subjects[l],
                 "task": self.tasks[l],
+                "replicate": self.replicates[l],
                 "t": self.times[l],
                 "qw": q[:, 0],
                 "qx": q[:, 1],
@@ -238,8 +240,16 @@ def read_orientation_csv(
     subjects = per_trajectory("subject").astype(str)
     tasks = per_trajectory("task").astype(str)
     predictors: dict[str, NDArray[np.float64]] = {}
+    if "replicate" in df.columns:
+        rep = pd.to_numeric(df["replicate"], errors="coerce").to_numpy(dtype=np.float64)
+        bad_rep = ~np.isfinite(rep) | (rep != np.round(rep)) | (rep < 0)
+        if bad_rep.any():
+            fail(bad_rep, "'replicate' must be a non-negative integer")
+        replicates = per_trajectory("replicate").astype(np.int64)
+    else:
+        replicates = _replicate_numbers(subjects, tasks)
     for col in df.columns:
-        if col in CSV_COLUMNS:
+        if col in (*CSV_COLUMNS, "replicate"):
             continue
         if not pd.api.types.is_numeric_dtype(df[col]):
             continue
@@ -257,6 +267,6 @@ def read_orientation_csv(
         trajectory_ids=ids.astype(str),
         subjects=subjects,
         tasks=tasks,
-        replicates=_replicate_numbers(subjects, tasks),
+        replicates=replicates,
         predictors=predictors,
     )

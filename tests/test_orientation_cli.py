@@ -1,0 +1,67 @@
+"""``motion-bench orientation`` end to end."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from baselines.cli import main
+from motion_envs.datasets import load_vr_kitchen
+from motion_envs.models.criteria import criterion_names, table1
+from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1
+
+
+def test_cli_prints_table_and_writes_results(tmp_path, capsys):
+    assert main(["orientation", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for name in criterion_names():
+        assert name in out
+    assert "0.242 in the text, 0.265 in the table" in out
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert doc["dataset"] == "vr-kitchen"
+    assert doc["n_trajectories"] == 252 and doc["n_dropped"] == 148
+    assert doc["simulated"] is False
+    assert list(doc["criteria"]) == criterion_names()
+    ds = load_vr_kitchen()
+    ref = table1(ds.ragged, ds.subjects, ds.tasks).criteria
+    for k, v in ref.items():
+        assert doc["criteria"][k] == pytest.approx(v, rel=0, abs=0)
+        if k in FARAWAY_CHOE_TABLE1:
+            assert f"{v:7.3f} {FARAWAY_CHOE_TABLE1[k]:7.3f}" in out
+    png = (tmp_path / "residuals.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10_000
+
+
+def test_cli_min_deg_and_csv(tmp_path, capsys):
+    ds = load_vr_kitchen(min_deg=0).subset(np.arange(60))
+    path = ds.to_csv(tmp_path / "mine.csv")
+    assert (
+        main(["orientation", "--data", str(path), "--min-deg", "20", "--out", str(tmp_path / "o")])
+        == 0
+    )
+    doc = json.loads((tmp_path / "o" / "results.json").read_text())
+    kept = int((np.degrees(ds.rotation_angles()) >= 20).sum())
+    assert doc["n_trajectories"] == kept and doc["n_dropped"] == 60 - kept
+    assert doc["dataset"] == "mine.csv"
+
+
+def test_cli_errors_are_clear(tmp_path, capsys):
+    assert main(["orientation", "--data", str(tmp_path / "missing.csv")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    assert main(["orientation", "--min-deg", "179"]) == 2
+    assert "lower --min-deg" in capsys.readouterr().err
+
+
+def test_console_script_help():
+    out = subprocess.run(
+        [sys.executable, "-m", "baselines.cli", "orientation", "--help"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    for flag in ("--data", "--min-deg", "--out", "--plot-task"):
+        assert flag in out

@@ -1,0 +1,29 @@
+"""The README's two commands stay runnable and CI runs the README's test command."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def readme_commands() -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    quickstart = text.split("## Quickstart", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```bash\n(.*?)\n```", quickstart, flags=re.S)
+
+
+def test_quickstart_has_exactly_two_commands():
+    cmds = readme_commands()
+    assert len(cmds) == 2
+    assert all("\n" not in c for c in cmds)
+    assert "motion-bench" in cmds[0]
+    assert "pytest" in cmds[1]
+
+
+def test_ci_runs_the_readme_test_command():
+    test_cmd = readme_commands()[1]
+    # CI creates its own venv; everything after the activation must be identical.
+    tail = test_cmd.split(". .venv/bin/activate && ", 1)[1]
+    assert tail in (ROOT / ".ci" / "run").read_text()
