@@ -16,7 +16,8 @@ def rows(traj, subject, task, n, age, angle=0.5, t0=0.0):
     for k in range(n):
         h = 0.5 * angle * k / (n - 1)
         out.append(
-            f"{traj},{subject},{task},{t0 + 0.04 * k:.2f},{float(np.cos(h))!r},0,0,{float(np.sin(h))!r},{age}\n"
+            f"{traj},{subject},{task},{t0 + 0.04 * k:.2f},"
+            f"{float(np.cos(h))!r},0,0,{float(np.sin(h))!r},{age}\n"
         )
     return out
 
@@ -36,7 +37,7 @@ def test_roundtrip_via_csv_preserves_table1(tmp_path):
     np.testing.assert_array_equal(back.tasks, ds.tasks)
     np.testing.assert_array_equal(back.replicates, ds.replicates)
     np.testing.assert_allclose(back.predictors["duration_s"], ds.predictors["duration_s"])
-    for a, b in zip(back.quaternions, ds.quaternions):
+    for a, b in zip(back.quaternions, ds.quaternions, strict=True):
         np.testing.assert_allclose(a, b, atol=1e-15)
     ours = table1(back.ragged, back.subjects, back.tasks).criteria
     ref = table1(ds.ragged, ds.subjects, ds.tasks).criteria
@@ -66,15 +67,15 @@ def test_min_deg_drops_and_counts(tmp_path):
     ("mutate", "match"),
     [
         (
-            lambda L: L[:3] + [L[3].replace(",0.12,", ",0.05,")] + L[4:],
+            lambda L: [*L[:3], L[3].replace(",0.12,", ",0.05,"), *L[4:]],
             r"not strictly increasing.*line\(s\) 5",
         ),
-        (lambda L: L[:2] + [L[2].replace(",0,0,", ",nan,0,")] + L[3:], r"NaN.*line\(s\) 4"),
-        (lambda L: L[:1] + [L[1].replace(",0,0,", ",0.3,0,")] + L[2:], r"norm.*line\(s\) 3"),
+        (lambda L: [*L[:2], L[2].replace(",0,0,", ",nan,0,"), *L[3:]], r"NaN.*line\(s\) 4"),
+        (lambda L: [*L[:1], L[1].replace(",0,0,", ",0.3,0,"), *L[2:]], r"norm.*line\(s\) 3"),
         (lambda L: L[:9], r"fewer than 5 samples.*line\(s\) 8"),
         (lambda L: L[:7] + L[:1] + L[7:], r"not contiguous"),
-        (lambda L: L[:1] + [L[1].replace(",30\n", ",31\n")] + L[2:], r"'age' changes.*line\(s\) 3"),
-        (lambda L: L[:1] + [L[1].replace("s1", "s9")] + L[2:], r"'subject' changes.*line\(s\) 3"),
+        (lambda L: [*L[:1], L[1].replace(",30\n", ",31\n"), *L[2:]], r"'age' changes.*line\(s\) 3"),
+        (lambda L: [*L[:1], L[1].replace("s1", "s9"), *L[2:]], r"'subject' changes.*line\(s\) 3"),
     ],
 )
 def test_bad_rows_are_reported_by_line(tmp_path, mutate, match):

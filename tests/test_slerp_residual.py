@@ -80,7 +80,7 @@ def test_batched_equals_one_by_one(ends):
         )[:2]
         for k in range(5)
     ]
-    qs, ts = zip(*seqs)
+    qs, ts = zip(*seqs, strict=True)
     together = slerp_residuals(RaggedTrajectories.from_sequences(qs, ts))
     for k in range(5):
         alone = slerp_residuals(RaggedTrajectories.from_sequences([qs[k]], [ts[k]]))
@@ -99,7 +99,7 @@ def test_resample_orientations_hits_samples_and_slerps_between(ends):
 
 def test_average_profile_residual_ends_at_zero(ends):
     seqs = [make_trajectory(ends[0], ends[1], [[0.1, 0.2, 0.0]], a, 2.0)[:2] for a in (1.5, 3.0)]
-    traj = RaggedTrajectories.from_sequences(*zip(*seqs))
+    traj = RaggedTrajectories.from_sequences(*zip(*seqs, strict=True))
     abar = average_speed_profile(traj)
     grids = speed_fractions_on_grid(traj)
     np.testing.assert_allclose(abar, grids.mean(axis=0))
@@ -118,7 +118,7 @@ def test_beta_fit_recovers_parameters():
     a_m, b_m = fit_beta_speed_profile(alpha, method="moments")
     np.testing.assert_allclose(a_m, a_true, rtol=0.05)
     np.testing.assert_allclose(b_m, b_true, rtol=0.05)
-    a1, b1 = fit_beta_speed_profile(alpha[1])
+    a1, _b1 = fit_beta_speed_profile(alpha[1])
     assert np.ndim(a1) == 0 and a1 == pytest.approx(2.0, rel=1e-5)
 
 

@@ -47,10 +47,15 @@ def median_max(R: np.ndarray, pred: np.ndarray) -> float:
 
 
 def oracle_table1(ds) -> dict[str, float]:
-    R, alphas = zip(*(oracle_residual(q, t) for q, t in zip(ds.quaternions, ds.times)))
+    R, alphas = zip(
+        *(oracle_residual(q, t) for q, t in zip(ds.quaternions, ds.times, strict=False)),
+        strict=False,
+    )
     R = np.stack(R)
     abar = np.mean(alphas, axis=0)
-    R_avg = np.stack([oracle_residual(q, t, abar)[0] for q, t in zip(ds.quaternions, ds.times)])
+    R_avg = np.stack(
+        [oracle_residual(q, t, abar)[0] for q, t in zip(ds.quaternions, ds.times, strict=False)]
+    )
     df = pd.DataFrame({"subject": ds.subjects, "task": ds.tasks})
     out: dict[str, float] = {}
 
@@ -129,8 +134,12 @@ def test_vr_kitchen_angles_match_trial_table(vr_kitchen):
     folder = resources.files("motion_envs.datasets") / "data" / "vr-pointing"
     trials = pd.read_csv(folder / "kitchen_laser_trials.csv")
     trials["id"] = (
-        "p" + trials.participant.astype(str) + "-s" + trials.session.astype(str)
-        + "-t" + trials.trial.astype(str)
+        "p"
+        + trials.participant.astype(str)
+        + "-s"
+        + trials.session.astype(str)
+        + "-t"
+        + trials.trial.astype(str)
     )
     ref = trials.set_index("id").loc[vr_kitchen.trajectory_ids, "start_end_deg"].to_numpy()
     np.testing.assert_allclose(np.degrees(vr_kitchen.rotation_angles()), ref, atol=0.006)
