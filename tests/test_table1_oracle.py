@@ -48,13 +48,13 @@ def median_max(R: np.ndarray, pred: np.ndarray) -> float:
 
 def oracle_table1(ds) -> dict[str, float]:
     R, alphas = zip(
-        *(oracle_residual(q, t) for q, t in zip(ds.quaternions, ds.times, strict=False)),
-        strict=False,
+        *(oracle_residual(q, t) for q, t in zip(ds.quaternions, ds.times, strict=True)),
+        strict=True,
     )
     R = np.stack(R)
     abar = np.mean(alphas, axis=0)
     R_avg = np.stack(
-        [oracle_residual(q, t, abar)[0] for q, t in zip(ds.quaternions, ds.times, strict=False)]
+        [oracle_residual(q, t, abar)[0] for q, t in zip(ds.quaternions, ds.times, strict=True)]
     )
     df = pd.DataFrame({"subject": ds.subjects, "task": ds.tasks})
     out: dict[str, float] = {}
