@@ -19,19 +19,29 @@ with execution time 1; their output is read on the same grid.
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["DMPPeer", "ProMPPeer", "peers_available"]
+__all__ = ["DMPPeer", "ProMPPeer", "peers_available", "peers_missing_reason"]
 
 FloatArray = NDArray[np.float64]
 
 
+def peers_missing_reason() -> str | None:
+    """Why the peers cannot run (``None`` when ``movement_primitives`` imports fine)."""
+    try:
+        importlib.import_module("movement_primitives.dmp")
+        importlib.import_module("movement_primitives.promp")
+    except ImportError as exc:
+        return f"{exc} (pip install 'motion-envs[peers]')"
+    return None
+
+
 def peers_available() -> bool:
-    """True when ``movement_primitives`` is importable."""
-    return importlib.util.find_spec("movement_primitives") is not None
+    """True when ``movement_primitives`` (and what its DMP module imports) is importable."""
+    return peers_missing_reason() is None
 
 
 def _demos(demos: ArrayLike) -> FloatArray:

@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.peers import DMPPeer, ProMPPeer, peers_available
+from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
 from motion_envs.datasets.lasa import LASA_CITATION, load_lasa
 from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
 from motion_envs.geometry import sine_series as ss
@@ -289,7 +289,7 @@ def format_table(doc: dict[str, Any]) -> str:
         vals = "".join(f"{doc['summary_median_across_shapes'][m][c]:10.3f}" for m in methods)
         lines.append(f"{c + ': ' + text:<56}{vals}")
     if not doc["peers_available"]:
-        lines.append("dmp, promp: skipped (movement_primitives not installed)")
+        lines.append("dmp, promp: skipped (movement_primitives not installed or not requested)")
     return "\n".join(lines)
 
 
@@ -371,10 +371,11 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Entry of ``motion-bench position``."""
-    if not args.no_peers and not peers_available():
+    missing = None if args.no_peers else peers_missing_reason()
+    if missing:
         print(
-            "motion-bench position: movement_primitives is not installed "
-            "(pip install 'motion-envs[peers]'); the DMP and ProMP columns are skipped",
+            f"motion-bench position: movement_primitives cannot be used ({missing}); "
+            "the DMP and ProMP columns are skipped",
             file=sys.stderr,
         )
     kinds = [k.strip() for k in args.conditions.split(",") if k.strip()]
