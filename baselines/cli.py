@@ -12,7 +12,11 @@ import sys
 from collections.abc import Sequence
 
 # Modules providing sub-commands, in the order they are listed by --help.
-SUBCOMMAND_MODULES: tuple[str, ...] = ("baselines.orientation_bench", "baselines.position_bench")
+SUBCOMMAND_MODULES: tuple[str, ...] = (
+    "baselines.orientation_bench",
+    "baselines.position_bench",
+    "baselines.calibrate_cohort",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -158,7 +158,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--data",
         default="vr-kitchen",
         help=(
-            f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}) or a path to a CSV with "
+            f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}; 'cohort' is the simulated "
+            "cohort calibrated to the paper, 'cohort:CONFIG' another one, CONFIG a name under "
+            "configs/cohorts/ or a YAML path) or a path to a CSV with "
             "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors]"
         ),
     )

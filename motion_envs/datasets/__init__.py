@@ -17,7 +17,7 @@ __all__ = [
 ]
 
 #: Built-in orientation datasets by name.
-ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen",)
+ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen", "cohort")
 
 
 def load_orientation_dataset(
@@ -25,15 +25,25 @@ def load_orientation_dataset(
 ) -> OrientationDataset:
     """Load a built-in orientation dataset by name, or the users' CSV at a path.
 
-    Trajectories rotating less than ``min_deg`` degrees from start to end are dropped
-    and counted in ``n_dropped``.
+    ``"cohort"`` is the simulated cohort ``faraway2008``; ``"cohort:CONFIG"`` another
+    cohort, CONFIG being a name under ``configs/cohorts/`` or a path to a YAML file
+    (:mod:`motion_envs.datasets.cohort`). Trajectories rotating less than ``min_deg``
+    degrees from start to end are dropped and counted in ``n_dropped``.
     """
-    if isinstance(data, str) and data in ORIENTATION_DATASETS:
+    if isinstance(data, str) and (data == "cohort" or data.startswith("cohort:")):
+        from motion_envs.datasets.cohort import DEFAULT_COHORT, load_cohort
+
+        config = data.partition(":")[2]
+        if data.startswith("cohort:") and not config:
+            raise ValueError("data 'cohort:' needs a config name or YAML path after the colon")
+        return load_cohort(config or DEFAULT_COHORT, min_deg=min_deg)
+    if isinstance(data, str) and data == "vr-kitchen":
         return load_vr_kitchen(min_deg=min_deg)
     path = Path(data)
     if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
         raise ValueError(
-            f"data must be one of {list(ORIENTATION_DATASETS)} or a path to a CSV file; "
+            f"data must be one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a path "
+            "to a CSV file; "
             f"got {data!r}"
         )
     return read_orientation_csv(path).drop_small_rotations(min_deg)
