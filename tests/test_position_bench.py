@@ -67,3 +67,14 @@ def test_cli_errors(tmp_path, capsys):
     assert "--data must be 'lasa'" in capsys.readouterr().err
     assert main(["position", "--shapes", "Circle", "--no-progress"]) == 2
     assert main(["position", "--shapes", "Line", "--conditions", "speed"]) == 2
+
+
+def test_cli_says_when_movement_primitives_is_missing(monkeypatch, capsys):
+    monkeypatch.setattr(pb, "peers_missing_reason", lambda: "No module named 'movement_primitives'")
+    monkeypatch.setattr(pb, "peers_available", lambda: False)
+    args = ["position", "--shapes", "Line", "--n-points", "20", "--n-sines", "2", "--no-progress"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert "movement_primitives cannot be used" in captured.err
+    assert "DMP and ProMP columns are skipped" in captured.err
+    assert "dmp, promp: skipped" in captured.out
