@@ -120,6 +120,50 @@ def plot_residuals(
     return path
 
 
+def _split_dataset(
+    args: argparse.Namespace, dataset: OrientationDataset
+) -> tuple[OrientationDataset, OrientationDataset]:
+    from motion_envs.datasets.splits import split_by_subject
+
+    return split_by_subject(dataset, test_fraction=args.test_fraction, seed=args.split_seed)
+
+
+def _nominal_report(
+    args: argparse.Namespace, dataset: OrientationDataset, split: str
+) -> dict[str, Any]:
+    """Offline criterion of ``--nominal`` fitted on the train split, scored on ``--split``.
+
+    The same :mod:`motion_envs.models.nominal` code builds the environments' nominal, so
+    the zero-action policy of ``MotionEnvs/OrientationReach-v0`` reproduces this value.
+    """
+    from motion_envs.models.nominal import orientation_criterion
+
+    train, test = _split_dataset(args, dataset)
+    scored = {"train": train, "test": test, "all": dataset}[split]
+    res = orientation_criterion(train, scored, nominal=args.nominal, degree=args.degree)
+    degree = f", d={args.degree}" if args.nominal != "slerp" else ""
+    print(
+        f"\nnominal {args.nominal!r}{degree} fitted on the train split ({res['n_train']} "
+        f"trajectories; split by subject, seed {args.split_seed}, test fraction "
+        f"{args.test_fraction:g}); criterion on the {split} split ({res['n_test']} "
+        f"trajectories): {res['criterion']!r} rad"
+        + (
+            f" ({res['n_unseen']} with an unseen label use the null model)"
+            if res["n_unseen"]
+            else ""
+        )
+    )
+    return {
+        "nominal": args.nominal,
+        "degree": args.degree,
+        "scored_on": split,
+        "criterion": res["criterion"],
+        "n_train": res["n_train"],
+        "n_scored": res["n_test"],
+        "n_unseen": res["n_unseen"],
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``motion-bench orientation`` with parsed arguments."""
     t0 = time.perf_counter()
@@ -129,13 +173,28 @@ def run(args: argparse.Namespace) -> int:
             f"only {len(dataset)} trajectories left after dropping those under "
             f"{args.min_deg} degrees; lower --min-deg"
         )
+    full = dataset
+    split = getattr(args, "split", "all")
+    if split != "all":
+        dataset = _split_dataset(args, full)[split == "test"]
     result = table1(dataset.ragged, dataset.subjects, dataset.tasks)
     elapsed = time.perf_counter() - t0
     print(format_table1(result, dataset))
+    nominal = None
+    if getattr(args, "nominal", None) is not None:
+        nominal = _nominal_report(args, full, split)
     print(f"\ncomputed in {elapsed:.2f} s")
     if args.out is not None:
         out = Path(args.out)
         doc = results_document(result, dataset)
+        if split != "all" or nominal is not None:
+            doc["split"] = {
+                "split": split,
+                "split_seed": args.split_seed,
+                "test_fraction": args.test_fraction,
+            }
+        if nominal is not None:
+            doc["nominal"] = nominal
         atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")
         plot_residuals(result, dataset, out / "residuals.png", task=args.plot_task)
         print(f"wrote {out / 'results.json'} and {out / 'residuals.png'}")
@@ -180,4 +239,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="task whose residuals residuals.png shows (default: the most frequent task)",
     )
+    p.add_argument(
+        "--split",
+        choices=("all", "train", "test"),
+        default="all",
+        help="compute Table 1 on all trajectories or on one side of a split by subject",
+    )
+    p.add_argument("--split-seed", type=int, default=0, help="seed of the split by subject")
+    p.add_argument(
+        "--test-fraction", type=float, default=0.25, help="share of subjects held out for test"
+    )
+    p.add_argument(
+        "--nominal",
+        choices=("slerp", "bezier-null", "bezier-task", "bezier-subject"),
+        default=None,
+        help=(
+            "also report the criterion of this nominal model (as in the Gymnasium "
+            "environments), fitted on the train split and scored on --split"
+        ),
+    )
+    p.add_argument("--degree", type=int, default=2, help="Bezier degree of --nominal")
     p.set_defaults(func=run)

@@ -5,4 +5,6 @@ Quaternions are stored scalar first, ``(w, x, y, z)``, everywhere in this packag
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+from motion_envs.envs import ENV_IDS  # registers the Gymnasium environments
+
+__all__ = ["ENV_IDS", "__version__"]

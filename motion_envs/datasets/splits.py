@@ -1,0 +1,86 @@
+"""Train/test splits of datasets by subject (held-out people, not held-out samples).
+
+A split by subject judges a model on people it has never seen: every trajectory of a
+test subject is in the test set and none in the training set. The subjects are sorted,
+shuffled with ``numpy.random.default_rng(seed)`` and the first
+``max(1, round(test_fraction * n_subjects))`` of the permutation are the test subjects
+(at least one subject always stays in training). The same ``(dataset, test_fraction,
+seed)`` always gives the same split, on every platform.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol, TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["DEFAULT_SPLIT_SEED", "DEFAULT_TEST_FRACTION", "held_out_subjects", "split_by_subject"]
+
+#: Seed of the default split used by the environments and ``motion-bench``.
+DEFAULT_SPLIT_SEED = 0
+#: Default share of the subjects held out for testing.
+DEFAULT_TEST_FRACTION = 0.25
+
+
+class _SubjectDataset(Protocol):
+    subjects: NDArray[np.str_]
+
+    def __len__(self) -> int: ...
+
+    def subset(self, mask: Any) -> Any: ...
+
+
+D = TypeVar("D", bound=_SubjectDataset)
+
+
+def _check(test_fraction: float, seed: int) -> None:
+    if not isinstance(test_fraction, (float, int)) or isinstance(test_fraction, bool):
+        raise ValueError(f"test_fraction must be a number in (0, 1); got {test_fraction!r}")
+    if not 0.0 < float(test_fraction) < 1.0:
+        raise ValueError(f"test_fraction must be in (0, 1); got {test_fraction!r}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0; got {seed!r}")
+
+
+def held_out_subjects(
+    subjects: NDArray[np.str_] | list[str],
+    test_fraction: float = DEFAULT_TEST_FRACTION,
+    seed: int = DEFAULT_SPLIT_SEED,
+) -> NDArray[np.str_]:
+    """The sorted subject labels held out for testing (see the module docstring)."""
+    _check(test_fraction, seed)
+    unique = np.unique(np.asarray(subjects).astype(str))
+    if unique.size < 2:
+        raise ValueError(
+            f"a split by subject needs at least 2 subjects; the dataset has {unique.size}"
+        )
+    n_test = min(max(1, round(float(test_fraction) * unique.size)), unique.size - 1)
+    order = np.random.default_rng(int(seed)).permutation(unique.size)
+    return np.sort(unique[order[:n_test]])
+
+
+def split_by_subject(
+    dataset: D, test_fraction: float = DEFAULT_TEST_FRACTION, seed: int = DEFAULT_SPLIT_SEED
+) -> tuple[D, D]:
+    """Split a dataset into ``(train, test)`` by subject.
+
+    Parameters
+    ----------
+    dataset:
+        Any dataset with a ``subjects`` array (one label per trajectory) and a
+        ``subset(mask)`` method, e.g. :class:`~motion_envs.datasets.OrientationDataset`.
+    test_fraction:
+        Share of the *subjects* (not trajectories) held out, in ``(0, 1)``; rounded to
+        a whole number of subjects, at least 1 and at most ``n_subjects - 1``.
+    seed:
+        Seed of the subject permutation (``numpy.random.default_rng(seed)``).
+
+    Returns
+    -------
+    train, test:
+        Two datasets of the same type; trajectory order is kept.
+    """
+    held_out = held_out_subjects(dataset.subjects, test_fraction, seed)
+    is_test = np.isin(np.asarray(dataset.subjects).astype(str), held_out)
+    return dataset.subset(~is_test), dataset.subset(is_test)

@@ -1,0 +1,44 @@
+"""Gymnasium environments of motion-envs, registered at import.
+
+``import motion_envs`` registers every id in :data:`ENV_IDS` with ``gymnasium.register``
+(Gymnasium no longer reads entry points); ``gym.make("motion_envs:MotionEnvs/...")``
+imports the package itself. The environment modules (numpy, scipy, the datasets) are
+imported only when an environment is made.
+
+==============================  ===================================================
+id                              environment
+==============================  ===================================================
+``MotionEnvs/OrientationReach-v0``  :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`
+``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
+==============================  ===================================================
+
+Both come with a native batched-numpy vector environment
+(``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``).
+"""
+
+from __future__ import annotations
+
+import gymnasium
+
+__all__ = ["ENV_IDS", "register_envs"]
+
+_SPECS: dict[str, dict[str, object]] = {
+    "MotionEnvs/OrientationReach-v0": {
+        "entry_point": "motion_envs.envs.orientation_reach:OrientationReachEnv",
+        "vector_entry_point": "motion_envs.envs.vector:OrientationReachVectorEnv",
+        "max_episode_steps": 50,
+    },
+}
+
+#: Every environment id registered by ``import motion_envs``.
+ENV_IDS: tuple[str, ...] = tuple(_SPECS)
+
+
+def register_envs() -> None:
+    """Register every id of :data:`ENV_IDS` (idempotent)."""
+    for env_id, spec in _SPECS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, **spec)  # type: ignore[arg-type]
+
+
+register_envs()

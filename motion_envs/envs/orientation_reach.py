@@ -1,0 +1,444 @@
+"""``MotionEnvs/OrientationReach-v0``: act on top of an analytic orientation trajectory."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.envs import _kernels as K
+
+__all__ = [
+    "DEFAULT_REWARD_WEIGHTS",
+    "N_STEPS",
+    "OrientationReachEnv",
+    "OrientationTask",
+    "load_orientation_task",
+]
+
+#: Steps per episode: the 50 points of the normalised-time grid.
+N_STEPS = 50
+#: Default reward weights (see the class docstring, section Rewards).
+DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
+_SPLITS = ("train", "test")
+
+# Observation layout
+_START, _GOAL, _CURRENT, _TAU, _NOMINAL, _TASK = 0, 4, 8, 12, 13, 17
+
+
+@dataclass(frozen=True)
+class OrientationTask:
+    """Precomputed episodes of one split (read-only arrays shared between environments).
+
+    ``steps[l, k]`` holds, for trajectory ``l`` and grid point ``k``, the 15 values the
+    step kernel needs: ``expmap(rhat_k)`` (4), the nominal ``n_k`` (4), the human ``h_k``
+    (4) and the human residual ``r_k`` (3). ``obs[l, j]`` is the observation before the
+    step that sets grid point ``j`` (``j = 50``: after the last step), with the current
+    orientation left at 0.
+    """
+
+    name: str
+    nominal: str
+    degree: int
+    split: str
+    steps: NDArray[np.float64]  # (L, n, 15)
+    obs: NDArray[np.float32]  # (L, n + 1, obs_dim)
+    trajectory_ids: NDArray[np.str_]
+    subjects: NDArray[np.str_]
+    tasks: NDArray[np.str_]
+    task_names: tuple[str, ...]
+    criterion: float
+    grids: Any  # motion_envs.models.nominal.OrientationGrids
+
+    @property
+    def n_trajectories(self) -> int:
+        return int(self.steps.shape[0])
+
+    @property
+    def obs_dim(self) -> int:
+        return int(self.obs.shape[2])
+
+
+def _check_choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {list(choices)}; got {value!r}")
+    return str(value)
+
+
+def _build_task(
+    data: str | os.PathLike[str],
+    split: str,
+    nominal: str,
+    degree: int,
+    test_fraction: float,
+    split_seed: int,
+    min_deg: float,
+) -> OrientationTask:
+    from motion_envs.datasets import load_orientation_dataset
+    from motion_envs.datasets.splits import split_by_subject
+    from motion_envs.geometry import quaternion as quat
+    from motion_envs.models.nominal import OrientationNominal
+
+    dataset = load_orientation_dataset(data, min_deg=min_deg)
+    if len(dataset) < 2:
+        raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
+    train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
+    model = OrientationNominal(nominal, degree, N_STEPS).fit(train)
+    part = train if split == "train" else test
+    g = model.grids(part)
+    L, n = g.n_trajectories, N_STEPS
+    steps = np.concatenate(
+        [quat.expmap(g.predicted_residuals), g.nominal, g.human, g.residuals], axis=2
+    )
+    task_names = tuple(np.unique(dataset.tasks).tolist())
+    obs = np.zeros((L, n + 1, _TASK + len(task_names)), dtype=np.float32)
+    obs[:, :, _START:_GOAL] = g.starts[:, None, :]
+    obs[:, :, _GOAL:_CURRENT] = g.goals[:, None, :]
+    obs[:, :n, _TAU] = g.tau
+    obs[:, n, _TAU] = 1.0
+    obs[:, :n, _NOMINAL:_TASK] = g.nominal
+    obs[:, n, _NOMINAL:_TASK] = g.nominal[:, -1]
+    task_index = np.searchsorted(np.asarray(task_names), part.tasks)
+    obs[np.arange(L), :, _TASK + task_index] = 1.0
+    np.clip(obs, -1.0, 1.0, out=obs)
+    for arr in (steps, obs):
+        arr.flags.writeable = False
+    return OrientationTask(
+        name=dataset.name,
+        nominal=nominal,
+        degree=int(degree),
+        split=split,
+        steps=steps,
+        obs=obs,
+        trajectory_ids=part.trajectory_ids,
+        subjects=part.subjects,
+        tasks=part.tasks,
+        task_names=task_names,
+        criterion=g.criterion(),
+        grids=g,
+    )
+
+
+_build_task_cached = functools.lru_cache(maxsize=32)(_build_task)
+
+
+def load_orientation_task(
+    data: str | os.PathLike[str] = "vr-kitchen",
+    split: str = "train",
+    nominal: str = "slerp",
+    degree: int = 2,
+    test_fraction: float = 0.25,
+    split_seed: int = 0,
+    min_deg: float = 10.0,
+) -> OrientationTask:
+    """Build (or reuse) the precomputed episodes of a split; built-in data is cached."""
+    from motion_envs.datasets import ORIENTATION_DATASETS
+    from motion_envs.models.nominal import ORIENTATION_NOMINALS
+
+    _check_choice(split, "split", _SPLITS)
+    _check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
+    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
+        raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+    args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
+    if isinstance(data, str) and data in ORIENTATION_DATASETS:
+        return _build_task_cached(*args)
+    return _build_task(*args)
+
+
+def _check_reward_weights(weights: Mapping[str, float] | None) -> dict[str, float]:
+    out = dict(DEFAULT_REWARD_WEIGHTS)
+    if weights is None:
+        return out
+    if not isinstance(weights, Mapping):
+        raise ValueError(f"reward_weights must be a mapping; got {type(weights).__name__}")
+    for key, value in weights.items():
+        if key not in out:
+            raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+            raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"reward_weights[{key!r}] must be finite and >= 0; got {value!r}")
+        out[key] = float(value)
+    return out
+
+
+def _check_scale(residual_scale: float) -> float:
+    if isinstance(residual_scale, bool) or not isinstance(
+        residual_scale, (int, float, np.floating)
+    ):
+        raise ValueError(f"residual_scale must be a number > 0; got {residual_scale!r}")
+    if not math.isfinite(residual_scale) or residual_scale <= 0:
+        raise ValueError(f"residual_scale must be finite and > 0; got {residual_scale!r}")
+    return float(residual_scale)
+
+
+def _observation_space(task: OrientationTask) -> gym.spaces.Box:
+    low = np.full(task.obs_dim, -1.0, dtype=np.float32)
+    low[_TAU] = 0.0
+    low[_TASK:] = 0.0
+    return gym.spaces.Box(low, np.ones(task.obs_dim, dtype=np.float32), dtype=np.float32)
+
+
+class OrientationReachEnv(gym.Env):
+    r"""Replay a human hand-orientation trajectory; the agent corrects an analytic nominal.
+
+    ## Description
+    Faraway & Choe (2008) model a reach's hand orientation as a slerp from the start to
+    the end orientation along an average speed profile, bent by a Bézier residual
+    curve. Each episode replays the *task* of one recorded human trajectory (its start
+    and goal orientation and its task label) on the 50-point normalised-time grid. At
+    every step the agent adds a small rotation to the nominal model's orientation and is
+    scored against what the human actually did, with the paper's criterion. The nominal
+    is fitted on the *training* subjects only (:mod:`motion_envs.models.nominal`), so
+    on ``split="test"`` both the nominal and the agent face people they have not seen.
+
+    The zero action reproduces the nominal model exactly: over the test split, the
+    median of ``info["max_error"]`` at the end of the episodes equals the offline
+    criterion that ``motion-bench orientation --split test --nominal ...`` reports
+    (tested to 1e-9).
+
+    ## Action Space
+    The action space is a `Box(-1, 1, (3,), float32)`: a rotation vector (tangent space
+    at the identity) scaled by `residual_scale`, composed on the right of the nominal
+    orientation: ``q_k = n_k * expmap(residual_scale * a_k)`` (scalar-first quaternions
+    ``(w, x, y, z)``). Actions outside ``[-1, 1]`` are clipped; a wrong shape or a NaN or
+    infinite entry raises `ValueError` and leaves the environment unchanged.
+
+    | Num | Action                                         | Control Min | Control Max | Type (Unit)              |
+    |-----|------------------------------------------------|-------------|-------------|--------------------------|
+    | 0   | x component of the residual rotation vector    | -1          | 1           | rotation (residual_scale rad) |
+    | 1   | y component of the residual rotation vector    | -1          | 1           | rotation (residual_scale rad) |
+    | 2   | z component of the residual rotation vector    | -1          | 1           | rotation (residual_scale rad) |
+
+    ## Observation Space
+    The observation space is a `Box(low, high, (17 + T,), float32)`, ``T`` the number of
+    tasks in the dataset (10 for ``"vr-kitchen"``: 27 values). Quaternions are scalar
+    first and sign-continuous with the start.
+
+    | Num     | Observation                                                   | Min | Max | Type (Unit)      |
+    |---------|---------------------------------------------------------------|-----|-----|------------------|
+    | 0-3     | start orientation ``q_0`` (w, x, y, z)                        | -1  | 1   | unit quaternion  |
+    | 4-7     | goal orientation ``q_n`` (w, x, y, z)                         | -1  | 1   | unit quaternion  |
+    | 8-11    | current orientation (the last one the agent set; ``q_0`` at reset) | -1  | 1   | unit quaternion  |
+    | 12      | ``tau`` of the grid point the next action sets (1 after the last) | 0   | 1   | normalised time  |
+    | 13-16   | the nominal's orientation at that grid point ``n_k``          | -1  | 1   | unit quaternion  |
+    | 17-...  | one-hot task over the dataset's sorted task names             | 0   | 1   | unitless         |
+
+    The subject is not observed: a split by subject holds whole people out, so a
+    subject encoding would be meaningless on the test split.
+
+    ## Rewards
+    With ``e_k`` the base slerp ``slerp(q_0, q_n, alpha_bar(tau_k))`` (training split's
+    average speed profile), ``r_k = logmap(conj(e_k) h_k)`` the human's residual and
+    ``h_k`` the human orientation, the agent's orientation ``q_k`` has
+
+    - *residual error* ``|logmap(conj(e_k) q_k) - r_k|``: the paper's tangent-space
+      distance between the agent's and the human's residual (radians);
+    - *geodesic error* ``2 atan2(|v|, |w|)`` of ``conj(q_k) h_k``: the plain rotation
+      angle between the agent and the human (radians).
+
+    The reward is ``-(w_residual * residual error + w_geodesic * geodesic error +
+    w_action * |a|^2)`` with the weights of `reward_weights` (default ``residual: 1,
+    geodesic: 0, action: 0``). `info` holds ``error``, ``geodesic_error``,
+    ``reward_residual``, ``reward_geodesic``, ``reward_action`` and ``tau`` every step and,
+    at the end of an episode, ``max_error`` (the trajectory's ``max_k`` residual error:
+    its contribution to the paper's median criterion) and ``max_geodesic_error``.
+
+    ## Starting State
+    `reset` draws one trajectory of the split uniformly with the environment's
+    generator (``options={"trajectory": i}`` picks trajectory ``i``); the current
+    orientation is its start ``q_0``. `info` names the trajectory (``trajectory_index``,
+    ``trajectory_id``, ``task``, ``subject``).
+
+    ## Episode End
+    ### Termination
+    The episode terminates after 50 steps, when every point of the grid is set.
+
+    ### Truncation
+    The default duration of an episode is 50 steps (``max_episode_steps`` of the
+    registration), equal to the trajectory, so the last step is both terminated and
+    truncated; a shorter ``max_episode_steps`` truncates earlier.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/OrientationReach-v0", split="test", nominal="bezier-task")
+    ```
+
+    | Parameter        | Type         | Default        | Description |
+    |------------------|--------------|----------------|-------------|
+    | `data`           | **str**      | `"vr-kitchen"` | built-in dataset name or a path to the users' orientation CSV |
+    | `split`          | **str**      | `"train"`      | `"train"` or `"test"`: the subjects of a split by subject |
+    | `nominal`        | **str**      | `"slerp"`      | `"slerp"`, `"bezier-null"`, `"bezier-task"` or `"bezier-subject"` (unseen subjects fall back to the null model) |
+    | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals |
+    | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1 |
+    | `reward_weights` | **dict**     | `None`         | weights of the reward terms, keys `residual`, `geodesic`, `action` (None: 1, 0, 0) |
+    | `test_fraction`  | **float**    | `0.25`         | share of subjects held out for the test split |
+    | `split_seed`     | **int**      | `0`            | seed of the subject permutation (`split_by_subject`) |
+    | `min_deg`        | **float**    | `10.0`         | drop trajectories rotating less than this (degrees) |
+    | `render_mode`    | **str**      | `None`         | `None` or `"rgb_array"` |
+    | `width`          | **int**      | `480`          | frame width in pixels |
+    | `height`         | **int**      | `480`          | frame height in pixels |
+
+    ## Version History
+    * v0: Initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+
+    def __init__(
+        self,
+        data: str | os.PathLike[str] = "vr-kitchen",
+        split: str = "train",
+        nominal: str = "slerp",
+        degree: int = 2,
+        residual_scale: float = 0.25,
+        reward_weights: Mapping[str, float] | None = None,
+        test_fraction: float = 0.25,
+        split_seed: int = 0,
+        min_deg: float = 10.0,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        for name, value in (("width", width), ("height", height)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 16:
+                raise ValueError(f"{name} must be an integer >= 16; got {value!r}")
+        self.residual_scale = _check_scale(residual_scale)
+        self.reward_weights = _check_reward_weights(reward_weights)
+        self.task = load_orientation_task(
+            data, split, nominal, degree, test_fraction, split_seed, min_deg
+        )
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        self.observation_space = _observation_space(self.task)
+        self._renderer: Any = None
+        self._index = -1
+        self._k = N_STEPS
+        self._current: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+        self._history: list[tuple[float, float, float, float]] = []
+
+    # -- episode --------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        L = self.task.n_trajectories
+        if options is not None and options.get("trajectory") is not None:
+            index = options["trajectory"]
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
+            if not 0 <= index < L:
+                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
+            index = int(index)
+        else:
+            index = int(self.np_random.integers(L))
+        self._index = index
+        self._k = 0
+        self._steps = self.task.steps[index].tolist()
+        self._obs = self.task.obs[index]
+        start = tuple(self.task.grids.starts[index].tolist())
+        self._current = start
+        self._history = [start]
+        self._max_error = 0.0
+        self._max_geodesic = 0.0
+        obs = self._obs[0].copy()
+        obs[_CURRENT:_TAU] = start
+        info = {
+            "trajectory_index": index,
+            "trajectory_id": str(self.task.trajectory_ids[index]),
+            "task": str(self.task.tasks[index]),
+            "subject": str(self.task.subjects[index]),
+        }
+        return obs, info
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        k = self._k
+        if k >= N_STEPS:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (3,):
+            raise ValueError(f"action must have shape (3,); got shape {a.shape}")
+        ax, ay, az = a.tolist()
+        if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
+            raise ValueError(f"action must be finite; got {a.tolist()}")
+        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
+        ay = -1.0 if ay < -1.0 else (1.0 if ay > 1.0 else ay)
+        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+        q, err, geo = K.orientation_step_scalar(self._steps[k], ax, ay, az, self.residual_scale)
+        w = self.reward_weights
+        r_res = -w["residual"] * err
+        r_geo = -w["geodesic"] * geo
+        r_act = -w["action"] * (ax * ax + ay * ay + az * az)
+        reward = r_res + r_geo + r_act
+        self._k = k = k + 1
+        self._current = q
+        self._history.append(q)
+        if err > self._max_error:
+            self._max_error = err
+        if geo > self._max_geodesic:
+            self._max_geodesic = geo
+        obs = self._obs[k].copy()
+        obs[_CURRENT:_TAU] = q
+        info = {
+            "error": err,
+            "geodesic_error": geo,
+            "reward_residual": r_res,
+            "reward_geodesic": r_geo,
+            "reward_action": r_act,
+            "tau": (k - 1) / (N_STEPS - 1),
+        }
+        terminated = k == N_STEPS
+        if terminated:
+            info["max_error"] = self._max_error
+            info["max_geodesic_error"] = self._max_geodesic
+        return obs, reward, terminated, False, info
+
+    # -- rendering ------------------------------------------------------------------
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' to "
+                "gym.make(...)"
+            )
+            return None
+        if self._index < 0:
+            raise RuntimeError("call reset() before render()")
+        if self._renderer is None:
+            from motion_envs.envs.rendering import HandFrameRenderer
+
+            self._renderer = HandFrameRenderer(self.width, self.height)
+        g = self.task.grids
+        k = len(self._history) - 1
+        return self._renderer.render(
+            human=g.human[self._index],
+            nominal=g.nominal[self._index],
+            agent=np.asarray(self._history),
+            step=k,
+        )
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
