@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.slerp_residual import MIN_SAMPLES, RaggedTrajectories
 
@@ -150,18 +151,7 @@ class OrientationDataset:
             for key, value in self.predictors.items():
                 frame[key] = value[l]
             frames.append(pd.DataFrame(frame))
-        target = Path(path)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(f".{target.name}.tmp")
-        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.17g")
-        os.replace(tmp, target)
-        return target
-
-
-def _replicate_numbers(subjects: NDArray[np.str_], tasks: NDArray[np.str_]) -> NDArray[np.int64]:
-    """Number trajectories 0, 1, ... in order within each (subject, task) pair."""
-    keys = pd.Series(list(zip(subjects, tasks, strict=True)))
-    return keys.groupby(keys).cumcount().to_numpy(dtype=np.int64)
+        return write_csv(frames, path)
 
 
 def read_orientation_csv(
@@ -175,79 +165,24 @@ def read_orientation_csv(
     one trajectory that are not contiguous, labels or predictors that change within a
     trajectory.
     """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"orientation CSV {p} does not exist")
-    df = pd.read_csv(p, dtype={"trajectory": str, "subject": str, "task": str})
-    missing = [c for c in CSV_COLUMNS if c not in df.columns]
-    if missing:
-        raise ValueError(
-            f"{p}: missing column(s) {missing}; expected header {','.join(CSV_COLUMNS)}"
-        )
-    if len(df) == 0:
-        raise ValueError(f"{p}: no data rows")
-    line = np.arange(len(df)) + 2  # header is line 1
-
-    def fail(mask: NDArray[np.bool_], what: str) -> None:
-        bad = line[mask]
-        shown = ", ".join(str(b) for b in bad[:10]) + (" ..." if bad.size > 10 else "")
-        raise ValueError(f"{p}: {what} on line(s) {shown} ({bad.size} row(s))")
-
-    for col in ("trajectory", "subject", "task"):
-        fail_mask = df[col].isna().to_numpy()
-        if fail_mask.any():
-            fail(fail_mask, f"empty {col!r}")
-    numeric = ["t", "qw", "qx", "qy", "qz"]
-    values = df[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-    nonfinite = ~np.isfinite(values).all(axis=1)
-    if nonfinite.any():
-        fail(nonfinite, "NaN, infinite or non-numeric value in t/qw/qx/qy/qz")
-    t = values[:, 0]
-    q = values[:, 1:]
+    table = read_sample_table(path, CSV_COLUMNS[4:], min_samples, kind="orientation")
+    q = table.values
     norms = np.linalg.norm(q, axis=1)
     nonunit = np.abs(norms - 1.0) > DATA_UNIT_TOLERANCE
     if nonunit.any():
-        fail(nonunit, f"quaternion norm not within {DATA_UNIT_TOLERANCE:g} of 1")
+        table.fail(nonunit, f"quaternion norm not within {DATA_UNIT_TOLERANCE:g} of 1")
     q = q / norms[:, None]
-
-    traj = df["trajectory"].to_numpy(dtype=str)
-    change = np.concatenate([[True], traj[1:] != traj[:-1]])
-    starts = np.flatnonzero(change)
-    ids = traj[starts]
-    if len(set(ids)) != ids.size:
-        dup = pd.Series(ids)[pd.Series(ids).duplicated()].iloc[0]
-        first_rows = starts[ids == dup]
-        fail(np.isin(np.arange(len(df)), first_rows[1:]), f"trajectory {dup!r} is not contiguous")
-    ends = np.concatenate([starts[1:], [len(df)]])
-    lengths = ends - starts
-    short = np.isin(np.arange(len(df)), starts[lengths < min_samples])
-    if short.any():
-        fail(short, f"trajectory with fewer than {min_samples} samples starts")
-    seg = np.repeat(np.arange(ids.size), lengths)
-    dt = np.diff(t)
-    unsorted = np.concatenate([[False], (dt <= 0) & (seg[1:] == seg[:-1])])
-    if unsorted.any():
-        fail(unsorted, "time not strictly increasing within its trajectory")
-
-    def per_trajectory(col: str) -> NDArray:
-        arr = df[col].to_numpy()
-        first = arr[starts]
-        varies = arr != first[seg]
-        if np.any(varies):
-            fail(varies, f"{col!r} changes within a trajectory")
-        return first
-
-    subjects = per_trajectory("subject").astype(str)
-    tasks = per_trajectory("task").astype(str)
-    predictors: dict[str, NDArray[np.float64]] = {}
+    df = table.frame
+    subjects, tasks = table.subjects, table.tasks
     if "replicate" in df.columns:
         rep = pd.to_numeric(df["replicate"], errors="coerce").to_numpy(dtype=np.float64)
         bad_rep = ~np.isfinite(rep) | (rep != np.round(rep)) | (rep < 0)
         if bad_rep.any():
-            fail(bad_rep, "'replicate' must be a non-negative integer")
-        replicates = per_trajectory("replicate").astype(np.int64)
+            table.fail(bad_rep, "'replicate' must be a non-negative integer")
+        replicates = table.per_trajectory("replicate").astype(np.int64)
     else:
-        replicates = _replicate_numbers(subjects, tasks)
+        replicates = replicate_numbers(subjects, tasks)
+    predictors: dict[str, NDArray[np.float64]] = {}
     for col in df.columns:
         if col in (*CSV_COLUMNS, "replicate"):
             continue
@@ -255,16 +190,16 @@ def read_orientation_csv(
             continue
         col_values = df[col].to_numpy(dtype=np.float64)
         if not np.all(np.isfinite(col_values)):
-            fail(~np.isfinite(col_values), f"NaN in predictor column {col!r}")
-        predictors[col] = per_trajectory(col).astype(np.float64)
+            table.fail(~np.isfinite(col_values), f"NaN in predictor column {col!r}")
+        predictors[col] = table.per_trajectory(col).astype(np.float64)
 
-    quats = tuple(quat.make_continuous(q[s:e]) for s, e in zip(starts, ends, strict=True))
-    times = tuple(t[s:e].copy() for s, e in zip(starts, ends, strict=True))
+    quats = tuple(quat.make_continuous(q[s:e]) for s, e in table.segments())
+    times = tuple(table.t[s:e].copy() for s, e in table.segments())
     return OrientationDataset(
-        name=p.name,
+        name=table.path.name,
         quaternions=quats,
         times=times,
-        trajectory_ids=ids.astype(str),
+        trajectory_ids=table.ids,
         subjects=subjects,
         tasks=tasks,
         replicates=replicates,

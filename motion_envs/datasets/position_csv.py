@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from motion_envs.datasets.orientation import _replicate_numbers
+from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
 from motion_envs.models.sine_regression import MIN_SAMPLES
 
 __all__ = ["CSV_COLUMNS", "PositionDataset", "read_position_csv"]
@@ -108,12 +108,7 @@ class PositionDataset:
             }
             frame.update({a: self.positions[i][:, k] for k, a in enumerate(axes)})
             frames.append(pd.DataFrame(frame))
-        target = Path(path)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        tmp = target.with_name(f".{target.name}.tmp")
-        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.17g")
-        os.replace(tmp, target)
-        return target
+        return write_csv(frames, path)
 
 
 def read_position_csv(
@@ -123,71 +118,15 @@ def read_position_csv(
 
     Raises ``ValueError`` naming the file and line numbers of the bad rows.
     """
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"position CSV {p} does not exist")
-    df = pd.read_csv(p, dtype={"trajectory": str, "subject": str, "task": str})
-    missing = [c for c in CSV_COLUMNS if c not in df.columns]
-    if missing:
-        raise ValueError(
-            f"{p}: missing column(s) {missing}; expected header {','.join(CSV_COLUMNS)}[,z]"
-        )
-    if len(df) == 0:
-        raise ValueError(f"{p}: no data rows")
-    line = np.arange(len(df)) + 2  # header is line 1
-
-    def fail(mask: NDArray[np.bool_], what: str) -> None:
-        bad = line[mask]
-        shown = ", ".join(str(b) for b in bad[:10]) + (" ..." if bad.size > 10 else "")
-        raise ValueError(f"{p}: {what} on line(s) {shown} ({bad.size} row(s))")
-
-    for col in ("trajectory", "subject", "task"):
-        empty = df[col].isna().to_numpy()
-        if empty.any():
-            fail(empty, f"empty {col!r}")
-    axes = ["x", "y"] + (["z"] if "z" in df.columns else [])
-    numeric = ["t", *axes]
-    values = df[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-    nonfinite = ~np.isfinite(values).all(axis=1)
-    if nonfinite.any():
-        fail(nonfinite, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
-    t, y = values[:, 0], values[:, 1:]
-
-    traj = df["trajectory"].to_numpy(dtype=str)
-    change = np.concatenate([[True], traj[1:] != traj[:-1]])
-    starts = np.flatnonzero(change)
-    ids = traj[starts]
-    if len(set(ids)) != ids.size:
-        dup = pd.Series(ids)[pd.Series(ids).duplicated()].iloc[0]
-        first_rows = starts[ids == dup]
-        fail(np.isin(np.arange(len(df)), first_rows[1:]), f"trajectory {dup!r} is not contiguous")
-    ends = np.concatenate([starts[1:], [len(df)]])
-    lengths = ends - starts
-    short = np.isin(np.arange(len(df)), starts[lengths < min_samples])
-    if short.any():
-        fail(short, f"trajectory with fewer than {min_samples} samples starts")
-    seg = np.repeat(np.arange(ids.size), lengths)
-    unsorted = np.concatenate([[False], (np.diff(t) <= 0) & (seg[1:] == seg[:-1])])
-    if unsorted.any():
-        fail(unsorted, "time not strictly increasing within its trajectory")
-
-    def per_trajectory(col: str) -> NDArray:
-        arr = df[col].to_numpy()
-        first = arr[starts]
-        varies = arr != first[seg]
-        if np.any(varies):
-            fail(varies, f"{col!r} changes within a trajectory")
-        return first
-
-    subjects = per_trajectory("subject").astype(str)
-    tasks = per_trajectory("task").astype(str)
-    bounds = list(zip(starts, ends, strict=True))
+    table = read_sample_table(
+        path, CSV_COLUMNS[4:], min_samples, kind="position", optional_value_columns=("z",)
+    )
     return PositionDataset(
-        name=p.name,
-        positions=tuple(y[s:e].copy() for s, e in bounds),
-        times=tuple(t[s:e].copy() for s, e in bounds),
-        trajectory_ids=ids.astype(str),
-        subjects=subjects,
-        tasks=tasks,
-        replicates=_replicate_numbers(subjects, tasks),
+        name=table.path.name,
+        positions=tuple(table.values[s:e].copy() for s, e in table.segments()),
+        times=tuple(table.t[s:e].copy() for s, e in table.segments()),
+        trajectory_ids=table.ids,
+        subjects=table.subjects,
+        tasks=table.tasks,
+        replicates=replicate_numbers(table.subjects, table.tasks),
     )

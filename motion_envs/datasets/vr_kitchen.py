@@ -24,7 +24,8 @@ from importlib import resources
 import numpy as np
 import pandas as pd
 
-from motion_envs.datasets.orientation import OrientationDataset, _replicate_numbers
+from motion_envs.datasets.orientation import OrientationDataset
+from motion_envs.datasets.sample_table import replicate_numbers
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["CITATION", "DEFAULT_MIN_DEG", "load_vr_kitchen"]
@@ -86,7 +87,7 @@ def load_vr_kitchen(min_deg: float = DEFAULT_MIN_DEG) -> OrientationDataset:
         trajectory_ids=ids.astype(str),
         subjects=subjects.astype(str),
         tasks=tasks.astype(str),
-        replicates=_replicate_numbers(subjects, tasks),
+        replicates=replicate_numbers(subjects, tasks),
         predictors={"duration_s": np.array([tt[-1] for tt in times])},
     )
     return dataset.drop_small_rotations(min_deg)
