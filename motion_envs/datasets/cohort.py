@@ -75,17 +75,21 @@ from motion_envs.datasets.cohort_config import (
 )
 from motion_envs.datasets.orientation import OrientationDataset
 from motion_envs.geometry import quaternion as quat
-from motion_envs.models.slerp_residual import MIN_SAMPLES
+from motion_envs.models.slerp_residual import DEFAULT_N_POINTS, MIN_SAMPLES, normalised_grid
 from motion_envs.models.speed_profile import beta_alpha
 
 __all__ = [
     "DEFAULT_COHORT",
     "CohortGenerator",
+    "CohortParameters",
+    "TrajectorySample",
     "cohort_size",
+    "draw_trajectory",
     "generate_cohort",
     "iter_cohort",
     "load_cohort",
     "sine_basis",
+    "split_labels",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -124,6 +128,40 @@ class _SubjectDraws:
     trial_duration_u: FloatArray  # (n_all_tasks, R)
     keep_u: FloatArray  # (n_all_tasks, R)
     jitter: FloatArray  # (n_all_tasks, R, 3)
+
+
+@dataclass(frozen=True)
+class CohortParameters:
+    """Ground truth of generated trajectories (one row per trajectory, cohort order).
+
+    Attributes
+    ----------
+    subject_index, task_index, replicate_index:
+        ``(L,)`` indices into the subjects, the design's tasks (``all_tasks``, 60) and
+        the replicate names.
+    predictors:
+        ``(L, 3)`` sex (0 female, 1 male), age (years), height (cm).
+    coefficients:
+        ``(L, K, 3)`` sine coefficients of the residual: ``r_l(tau) = sum_k
+        coefficients[l, k] sin((k + 1) pi tau)``.
+    start, ends:
+        ``(4,)`` start and ``(L, 4)`` end orientations (with jitter).
+    a, b:
+        ``(L,)`` Beta speed-profile shapes.
+    n_samples:
+        ``(L,)`` samples per trajectory (at ``sampling_hz``).
+    """
+
+    subject_index: NDArray[np.int64]
+    task_index: NDArray[np.int64]
+    replicate_index: NDArray[np.int64]
+    predictors: FloatArray
+    coefficients: FloatArray
+    start: FloatArray
+    ends: FloatArray
+    a: FloatArray
+    b: FloatArray
+    n_samples: NDArray[np.int64]
 
 
 class CohortGenerator:
@@ -266,19 +304,31 @@ class CohortGenerator:
             return 0.0
         return float(self.config.get(f"residual.{component}.scale"))
 
-    def generate(self, subjects: range | None = None) -> OrientationDataset:
-        """Generate the trajectories of the given subject indices (default: all).
-
-        The result for ``range(a, b)`` equals the matching slice of the full cohort bit
-        for bit (independent random streams per subject).
-        """
-        c = self.config.data
-        n_sub = int(c["design"]["n_subjects"])
+    def _check_subjects(self, subjects: range | None) -> range:
+        n_sub = int(self.config.get("design.n_subjects"))
         subjects = range(n_sub) if subjects is None else subjects
-        if subjects.step != 1 or subjects.start < 0 or subjects.stop > n_sub:
+        if (
+            not isinstance(subjects, range)
+            or subjects.step != 1
+            or subjects.start < 0
+            or subjects.stop > n_sub
+            or len(subjects) == 0
+        ):
             raise ValueError(
-                f"subjects must be a contiguous range within range({n_sub}); got {subjects}"
+                f"subjects must be a non-empty contiguous range within range({n_sub}); "
+                f"got {subjects!r}"
             )
+        return subjects
+
+    def parameters(self, subjects: range | None = None) -> CohortParameters:
+        """The ground truth of every trajectory of the given subjects (default: all).
+
+        Per trajectory: subject, task and replicate indices, predictors, the residual's
+        sine coefficients, the end orientation, the Beta shapes and the sample count;
+        :meth:`generate` turns these into quaternions.
+        """
+        subjects = self._check_subjects(subjects)
+        c = self.config.data
         dur, sp, des = c["durations"], c["speed_profile"], c["design"]
         sw = np.sqrt(self.spectral_weights())[:, None]  # (K, 1)
         common = self.common_coefficients()
@@ -291,7 +341,6 @@ class CohortGenerator:
         jitter_sd = np.radians(float(des["endpoint_jitter_deg"]))
         dropout = float(des["dropout"])
         req = np.asarray(self.requested, dtype=np.int64)
-        R = len(self.replicate_names)
 
         coefs, ends, log_a, log_b, durations = [], [], [], [], []
         subj_idx, task_idx, rep_idx, preds = [], [], [], []
@@ -300,14 +349,13 @@ class CohortGenerator:
             keep = d.keep_u[req] >= dropout  # (J_req, R)
             jj, rr = np.nonzero(keep)
             tj = req[jj]
-            coef = (
+            coefs.append(
                 common[None]
                 + task_coef[tj]
                 + s_subj * sw * d.curve[None]
                 + s_st * sw * d.task_curves[tj]
                 + s_trial * sw * d.trial_curves[tj, rr]
             )
-            coefs.append(coef)
             jit = quat.expmap(jitter_sd * d.jitter[tj, rr])
             ends.append(quat.multiply(self.task_ends[tj], jit))
             z = np.sqrt(share) * d.speed_z[None, :] + np.sqrt(1 - share) * d.trial_speed_z[tj, rr]
@@ -320,36 +368,64 @@ class CohortGenerator:
             )
             base = dur["base_s"] + dur["per_radian_s"] * angles[tj]
             durations.append(np.maximum(dur["min_s"], base * np.exp(u)))
-            subj_idx.append(np.full(tj.size, i))
+            subj_idx.append(np.full(tj.size, i, dtype=np.int64))
             task_idx.append(tj)
-            rep_idx.append(rr)
-            preds.append(np.tile([i % 2, d.age, d.height], (tj.size, 1)))
-
-        coef = np.concatenate(coefs) if coefs else np.zeros((0, self.harmonics, 3))
-        L = coef.shape[0]
-        if L == 0:
-            raise ValueError(f"no trajectories generated for subjects {subjects}")
-        q_end = np.concatenate(ends)
-        a = np.exp(np.concatenate(log_a))
-        b = np.exp(np.concatenate(log_b))
+            rep_idx.append(rr.astype(np.int64))
+            preds.append(np.tile([i % 2, d.age, d.height], (tj.size, 1)).astype(np.float64))
+        subj = np.concatenate(subj_idx)
+        if subj.size == 0:
+            raise ValueError(f"no trajectories generated for subjects {subjects!r}")
         D = np.concatenate(durations)
-        n = np.maximum(MIN_SAMPLES, np.rint(D * self.hz).astype(np.int64) + 1)
+        return CohortParameters(
+            subject_index=subj,
+            task_index=np.concatenate(task_idx),
+            replicate_index=np.concatenate(rep_idx),
+            predictors=np.concatenate(preds),
+            coefficients=np.concatenate(coefs),
+            start=self.start.copy(),
+            ends=np.concatenate(ends),
+            a=np.exp(np.concatenate(log_a)),
+            b=np.exp(np.concatenate(log_b)),
+            n_samples=np.maximum(MIN_SAMPLES, np.rint(D * self.hz).astype(np.int64) + 1),
+        )
+
+    def true_residuals(
+        self, subjects: range | None = None, n_points: int = DEFAULT_N_POINTS
+    ) -> FloatArray:
+        """The generated residual curves ``r_l`` on the uniform grid, ``(L, n_points, 3)``.
+
+        This is the ground truth the pipeline's measured slerp residuals estimate; they
+        differ because the observed speed profile absorbs the part of ``r_l`` along the
+        slerp's axis and because of noise, jitter and interpolation.
+        """
+        prm = self.parameters(subjects)
+        basis = sine_basis(normalised_grid(n_points), self.harmonics)
+        return np.einsum("nk,lkc->lnc", basis, prm.coefficients)
+
+    def generate(self, subjects: range | None = None) -> OrientationDataset:
+        """Generate the trajectories of the given subject indices (default: all).
+
+        The result for ``range(a, b)`` equals the matching slice of the full cohort bit
+        for bit (independent random streams per subject).
+        """
+        subjects = self._check_subjects(subjects)
+        prm = self.parameters(subjects)
+        L = prm.subject_index.size
+        n = prm.n_samples
         offsets = np.concatenate([[0], np.cumsum(n)])
         idx = np.repeat(np.arange(L), n)
         k = np.arange(offsets[-1]) - offsets[idx]
         t = k / self.hz
         tau = k / (n[idx] - 1.0)
-        alpha = beta_alpha(tau, a[idx], b[idx])
-        slerp = quat.slerp(self.start, q_end[idx], alpha, validate=False)
-        basis = sine_basis(tau, self.harmonics)  # (N, K)
-        r = np.einsum("nk,nkc->nc", basis, coef[idx])
+        alpha = beta_alpha(tau, prm.a[idx], prm.b[idx])
+        slerp = quat.slerp(prm.start, prm.ends[idx], alpha, validate=False)
+        r = np.einsum("nk,nkc->nc", sine_basis(tau, self.harmonics), prm.coefficients[idx])
         q = quat.multiply(slerp, quat.expmap(r))
-        noise_sd = float(c["residual"]["noise_rad"]) if self.noise else 0.0
+        noise_sd = float(self.config.get("residual.noise_rad")) if self.noise else 0.0
         if noise_sd > 0:
             # trajectories are subject-major, so each subject's samples are contiguous
-            per_subject = np.array([c.shape[0] for c in coefs])
-            traj_bounds = np.concatenate([[0], np.cumsum(per_subject)])
-            sample_bounds = offsets[traj_bounds]
+            per_subject = np.bincount(prm.subject_index - subjects.start, minlength=len(subjects))
+            sample_bounds = offsets[np.concatenate([[0], np.cumsum(per_subject)])]
             eps = np.concatenate(
                 [
                     np.random.default_rng(
@@ -363,15 +439,12 @@ class CohortGenerator:
             q = quat.multiply(q, quat.expmap(noise_sd * eps))
         q = quat.normalize(q)
 
-        subj = np.concatenate(subj_idx)
-        tj = np.concatenate(task_idx)
-        rr = np.concatenate(rep_idx)
-        P = np.concatenate(preds)
-        names = np.asarray(self.subject_names)[subj]
-        tasks = np.asarray(self.all_tasks)[tj]
-        reps = np.asarray(self.replicate_names)[rr]
+        names = np.asarray(self.subject_names)[prm.subject_index]
+        tasks = np.asarray(self.all_tasks)[prm.task_index]
+        reps = np.asarray(self.replicate_names)[prm.replicate_index]
         ids = np.char.add(np.char.add(np.char.add(np.char.add(names, "-"), tasks), "-"), reps)
         bounds = offsets[1:-1]
+        P = prm.predictors
         return OrientationDataset(
             name=f"cohort:{self.config.name}",
             quaternions=tuple(np.split(q, bounds)),
@@ -379,8 +452,8 @@ class CohortGenerator:
             trajectory_ids=ids.astype(str),
             subjects=names.astype(str),
             tasks=tasks.astype(str),
-            replicates=rr.astype(np.int64) if R > 1 else np.zeros(L, dtype=np.int64),
-            predictors={"sex": P[:, 0], "age": P[:, 1], "height_cm": P[:, 2]},
+            replicates=prm.replicate_index.copy(),
+            predictors={"sex": P[:, 0].copy(), "age": P[:, 1].copy(), "height_cm": P[:, 2].copy()},
             simulated=True,
         )
 
@@ -391,6 +464,84 @@ class CohortGenerator:
         n_sub = int(self.config.get("design.n_subjects"))
         for start in range(0, n_sub, chunk_subjects):
             yield self.generate(range(start, min(n_sub, start + chunk_subjects)))
+
+
+@dataclass(frozen=True)
+class TrajectorySample:
+    """One trajectory drawn from a dataset, with everything a consumer needs.
+
+    ``quaternions`` ``(n, 4)`` (w, x, y, z) and ``times`` ``(n,)`` seconds; ``subject``,
+    ``task`` and ``replicate`` labels; ``predictors`` name -> value; ``split`` is
+    ``"train"`` or ``"test"`` (split by subject, see
+    :func:`motion_envs.datasets.splits.split_by_subject`); ``index`` is the row in the
+    dataset.
+    """
+
+    index: int
+    trajectory_id: str
+    quaternions: FloatArray
+    times: FloatArray
+    subject: str
+    task: str
+    replicate: int
+    predictors: dict[str, float]
+    split: str
+
+
+def split_labels(
+    dataset: OrientationDataset, test_fraction: float = 0.25, seed: int = 0
+) -> NDArray[np.str_]:
+    """``(L,)`` ``"train"``/``"test"`` per trajectory, the split of ``split_by_subject``."""
+    from motion_envs.datasets.splits import held_out_subjects
+
+    test = np.isin(dataset.subjects, held_out_subjects(dataset.subjects, test_fraction, seed))
+    return np.where(test, "test", "train")
+
+
+def draw_trajectory(
+    dataset: OrientationDataset,
+    index: int | None = None,
+    rng: np.random.Generator | int | None = None,
+    split: str = "all",
+    test_fraction: float = 0.25,
+    split_seed: int = 0,
+) -> TrajectorySample:
+    """Draw one trajectory of any :class:`OrientationDataset` (a cohort or real data).
+
+    Give ``index`` (a row of the dataset) or ``rng`` (a ``numpy.random.Generator`` or a
+    seed; the trajectory is drawn uniformly among those of ``split``: ``"all"``,
+    ``"train"`` or ``"test"``, the split by subject with ``test_fraction`` and
+    ``split_seed``).
+    """
+    if split not in ("all", "train", "test"):
+        raise ValueError(f"split must be 'all', 'train' or 'test'; got {split!r}")
+    labels = split_labels(dataset, test_fraction, split_seed)
+    if index is None:
+        if rng is None:
+            raise ValueError("give index or rng")
+        gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        pool = np.arange(len(dataset)) if split == "all" else np.flatnonzero(labels == split)
+        index = int(pool[gen.integers(pool.size)])
+    elif rng is not None:
+        raise ValueError("give index or rng, not both")
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+        raise ValueError(f"index must be an integer; got {index!r}")
+    if not -len(dataset) <= index < len(dataset):
+        raise ValueError(f"index must be in [0, {len(dataset)}); got {index}")
+    i = int(index) % len(dataset)
+    if split != "all" and labels[i] != split:
+        raise ValueError(f"trajectory {i} is in the {labels[i]!r} split, not {split!r}")
+    return TrajectorySample(
+        index=i,
+        trajectory_id=str(dataset.trajectory_ids[i]),
+        quaternions=dataset.quaternions[i],
+        times=dataset.times[i],
+        subject=str(dataset.subjects[i]),
+        task=str(dataset.tasks[i]),
+        replicate=int(dataset.replicates[i]),
+        predictors={k: float(v[i]) for k, v in dataset.predictors.items()},
+        split=str(labels[i]),
+    )
 
 
 def cohort_size(config: CohortConfig) -> int:
