@@ -72,18 +72,24 @@ def test_expmap_kernel_equals_scipy_rotvec():
 
 @settings(max_examples=200, deadline=None)
 @given(
-    y=arrays(np.float64, 20, elements=st.floats(0, 1e6, allow_subnormal=False)),
-    x=arrays(np.float64, 20, elements=st.floats(0, 1e6, allow_subnormal=False)),
+    v=arrays(
+        np.float64,
+        (20, 4),
+        elements=st.floats(-1, 1, allow_subnormal=False, allow_nan=False),
+    ).filter(lambda a: np.all(np.linalg.norm(a, axis=1) > 1e-3))
 )
-def test_atan2_positive_matches_numpy(y, x):
-    got = K.atan2_positive(K.BATCH, y, x)
-    np.testing.assert_allclose(got, np.arctan2(y, x), rtol=4e-16, atol=5e-16)
+def test_half_angle_matches_numpy_arctan2(v):
+    q = v / np.linalg.norm(v, axis=1, keepdims=True)
+    s = np.linalg.norm(q[:, 1:], axis=1)
+    w = np.abs(q[:, 0])
+    got = K.half_angle(K.BATCH, s, w)
+    np.testing.assert_allclose(got, np.arctan2(s, w), rtol=0, atol=1e-15)
     for i in range(3):
-        assert K.atan2_positive(K.SCALAR, float(y[i]), float(x[i])) == got[i]
+        assert K.half_angle(K.SCALAR, float(s[i]), float(w[i])) == got[i]
 
 
-def test_atan2_positive_hand_worked_values():
-    vals = K.atan2_positive(
-        K.BATCH, np.array([0.0, 1.0, 1.0, 0.0, 3.0**0.5]), np.array([0.0, 1.0, 0.0, 2.0, 1.0])
-    )
-    np.testing.assert_allclose(vals, [0.0, np.pi / 4, np.pi / 2, 0.0, np.pi / 3], atol=4e-16)
+def test_half_angle_hand_worked_values():
+    # (s, w) = (sin h, cos h) for h = 0, pi/6, pi/4, pi/3, pi/2
+    h = np.array([0.0, np.pi / 6, np.pi / 4, np.pi / 3, np.pi / 2])
+    got = K.half_angle(K.BATCH, np.sin(h), np.cos(h))
+    np.testing.assert_allclose(got, h, rtol=0, atol=4e-16)

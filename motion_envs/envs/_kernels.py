@@ -7,7 +7,7 @@ microseconds per step, no numpy call overhead), the native vector environment wi
 :data:`BATCH`. Both backends evaluate the same expressions in the same order with
 correctly rounded ``+ - * / sqrt`` and ``sin``/``cos`` (numpy's float64 ``sin`` and ``cos``
 agree with ``math``'s bit for bit; ``arctan2``/``arctan`` do not, so the arc tangent is
-:func:`atan2_positive`, built from ``+ - * / sqrt`` only), so a vector environment is
+the half-angle :func:`half_angle`, built from ``+ - * / sqrt`` only), so a vector environment is
 bit-identical to single environments (tested). :func:`orientation_step_scalar` is the
 same arithmetic as :func:`orientation_step` with :data:`SCALAR`, inlined by hand for speed
 (bit-identity tested on random inputs).
@@ -27,9 +27,9 @@ import numpy as np
 __all__ = [
     "BATCH",
     "SCALAR",
-    "atan2_positive",
     "expmap",
     "geodesic",
+    "half_angle",
     "logmap",
     "multiply",
     "orientation_step",
@@ -59,33 +59,30 @@ BATCH = SimpleNamespace(
 
 Q = tuple[Any, Any, Any, Any]
 
-_HALF_PI = math.pi / 2.0
-# Taylor coefficients of atan(t) / t in u = t^2: (-1)^n / (2n + 1), n = 0 .. 11; after two
-# half-angle reductions |t| <= tan(pi/16) < 0.2, so the first omitted term is < 1e-17.
-_ATAN_COEFFS = tuple((-1.0) ** n / (2 * n + 1) for n in range(12))
+# Taylor coefficients of atan(t) / t in u = t^2: (-1)^n / (2n + 1), n = 0 .. 7; after three
+# half-angle reductions t <= tan(pi/32) < 0.0985, so the first omitted term is < 5e-18.
+_ATAN_COEFFS = tuple((-1.0) ** n / (2 * n + 1) for n in range(8))
 
 
-def atan2_positive(m: SimpleNamespace, y: Any, x: Any) -> Any:
-    """``atan2(y, x)`` for ``y, x >= 0`` from ``+ - * / sqrt`` only (bit-identical backends).
+def half_angle(m: SimpleNamespace, s: Any, w: Any) -> Any:
+    """``atan2(s, w)`` for ``s = |v| >= 0``, ``w >= 0`` of a unit quaternion ``(w, v)``.
 
-    With ``t = min / max`` in ``[0, 1]``, two half-angle reductions
-    ``t <- t / (1 + sqrt(1 + t^2))`` (``atan t = 2 atan t'``) bring ``t`` below
-    ``tan(pi/16)``, where 12 Taylor terms give full double precision; then
-    ``atan2 = 4 atan(t')`` or ``pi/2 - 4 atan(t')`` when ``y > x``. ``atan2(0, 0) = 0``.
+    Built from ``+ - * / sqrt`` only (so both backends agree bit for bit): with
+    ``s^2 + w^2 = 1``, ``atan2(s, w) = 2 atan(t)``, ``t = s / (1 + w)`` in ``[0, 1]``; three
+    half-angle reductions ``t <- t / (1 + sqrt(1 + t^2))`` (``atan t = 2 atan t'``) bring
+    ``t`` below ``tan(pi/32)``, where 8 Taylor terms give full double precision:
+    ``atan2(s, w) = 16 t3 (1 - u/3 + u^2/5 - ... - u^7/15)``, ``u = t3^2``.
     """
-    swap = y > x
-    a = m.where(swap, x, y)
-    b = m.where(swap, y, x)
-    t = a / m.where(b > 0.0, b, 1.0)
+    t = s / (1.0 + w)
+    t = t / (1.0 + m.sqrt(1.0 + t * t))
     t = t / (1.0 + m.sqrt(1.0 + t * t))
     t = t / (1.0 + m.sqrt(1.0 + t * t))
     u = t * t
     c = _ATAN_COEFFS
-    p = c[11]
-    for i in range(10, -1, -1):
+    p = c[7]
+    for i in range(6, -1, -1):
         p = p * u + c[i]
-    r = 4.0 * (t * p)
-    return m.where(swap, _HALF_PI - r, r)
+    return 16.0 * (t * p)
 
 
 def expmap(m: SimpleNamespace, vx: Any, vy: Any, vz: Any) -> Q:
@@ -114,7 +111,7 @@ def logmap(m: SimpleNamespace, w: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any
     aw = m.abs(w)
     ux, uy, uz = x * sign, y * sign, z * sign
     s = m.sqrt(ux * ux + uy * uy + uz * uz)
-    theta = 2.0 * atan2_positive(m, s, aw)
+    theta = 2.0 * half_angle(m, s, aw)
     small = s < _SMALL_ANGLE
     safe = m.where(small, 1.0, s)
     scale = m.where(small, 2.0 / m.maximum(aw, 1e-300) * (1.0 - s * s / 3.0), theta / safe)
@@ -124,7 +121,7 @@ def logmap(m: SimpleNamespace, w: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any
 def geodesic(m: SimpleNamespace, pw: Any, px: Any, py: Any, pz: Any, q: Q) -> Any:
     """Geodesic angle ``2 atan2(|v|, |w|)`` of ``conj(p) * q`` (as ``quaternion.angle``)."""
     rw, rx, ry, rz = multiply(pw, -px, -py, -pz, *q)
-    return 2.0 * atan2_positive(m, m.sqrt(rx * rx + ry * ry + rz * rz), m.abs(rw))
+    return 2.0 * half_angle(m, m.sqrt(rx * rx + ry * ry + rz * rz), m.abs(rw))
 
 
 def orientation_step(
@@ -163,8 +160,7 @@ def orientation_step_scalar(
     """:func:`orientation_step` with :data:`SCALAR` for one step row ``s`` (15 floats:
     ``expmap(rhat_k)``, ``n_k``, ``h_k``, ``r_k``), inlined: same expressions, same order."""
     sqrt = math.sqrt
-    c = _ATAN_COEFFS
-    c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11 = c
+    c0, c1, c2, c3, c4, c5, c6, c7 = _ATAN_COEFFS
     # d = expmap(scale * a)
     vx, vy, vz = scale * ax, scale * ay, scale * az
     t2 = vx * vx + vy * vy + vz * vz
@@ -185,30 +181,14 @@ def orientation_step_scalar(
     aw = abs(cw)
     ux, uy, uz = cx * sign, cy * sign, cz * sign
     sn = sqrt(ux * ux + uy * uy + uz * uz)
-    # atan2_positive(sn, aw)
-    if sn > aw:
-        a_, b_ = aw, sn
-    else:
-        a_, b_ = sn, aw
-    tt = a_ / (b_ if b_ > 0.0 else 1.0)
+    # half_angle(sn, aw)
+    tt = sn / (1.0 + aw)
+    tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     u = tt * tt
-    p = (
-        (
-            (
-                (((((((c11 * u + c10) * u + c9) * u + c8) * u + c7) * u + c6) * u + c5) * u + c4)
-                * u
-                + c3
-            )
-            * u
-            + c2
-        )
-        * u
-        + c1
-    ) * u + c0
-    r = 4.0 * (tt * p)
-    theta = 2.0 * (_HALF_PI - r if sn > aw else r)
+    p = ((((((c7 * u + c6) * u + c5) * u + c4) * u + c3) * u + c2) * u + c1) * u + c0
+    theta = 2.0 * (16.0 * (tt * p))
     if sn < _SMALL_ANGLE:
         sc = 2.0 / max(aw, 1e-300) * (1.0 - sn * sn / 3.0)
     else:
@@ -229,28 +209,11 @@ def orientation_step_scalar(
     ry = qw * hy - mx * hz + my * hw + mz * hx
     rz = qw * hz + mx * hy - my * hx + mz * hw
     yv = sqrt(rx * rx + ry * ry + rz * rz)
-    xv = abs(rw)
-    if yv > xv:
-        a_, b_ = xv, yv
-    else:
-        a_, b_ = yv, xv
-    tt = a_ / (b_ if b_ > 0.0 else 1.0)
+    tt = yv / (1.0 + abs(rw))
+    tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     u = tt * tt
-    p = (
-        (
-            (
-                (((((((c11 * u + c10) * u + c9) * u + c8) * u + c7) * u + c6) * u + c5) * u + c4)
-                * u
-                + c3
-            )
-            * u
-            + c2
-        )
-        * u
-        + c1
-    ) * u + c0
-    r = 4.0 * (tt * p)
-    geo = 2.0 * (_HALF_PI - r if yv > xv else r)
+    p = ((((((c7 * u + c6) * u + c5) * u + c4) * u + c3) * u + c2) * u + c1) * u + c0
+    geo = 2.0 * (16.0 * (tt * p))
     return (qw, qx, qy, qz), err, geo

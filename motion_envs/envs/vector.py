@@ -1,0 +1,343 @@
+"""Native vector environments: ``N`` episodes stepped together in batched numpy.
+
+``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")`` builds these.
+Sub-environment ``i`` is bit-identical to a single environment made with the same
+arguments and seeded with ``seed + i`` (as :class:`gymnasium.vector.SyncVectorEnv` seeds
+its copies): the step arithmetic is the same kernel
+(:mod:`motion_envs.envs._kernels`) evaluated on arrays, each sub-environment draws its
+trajectories from its own generator, and episodes end and restart as under
+``SyncVectorEnv`` with Gymnasium's default ``AutoresetMode.NEXT_STEP`` (the step after
+an episode's end resets that sub-environment, ignores its action and returns reward 0).
+``max_episode_steps`` (from the registration) truncates like ``TimeLimit``.
+
+``infos`` follow the vector convention: ``infos[key]`` is an ``(N,)`` array and
+``infos["_" + key]`` marks the sub-environments it applies to (entries outside the mask
+are unspecified, not necessarily 0 as under ``SyncVectorEnv``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from motion_envs.envs import _kernels as K
+
+__all__ = ["OrientationReachVectorEnv"]
+
+
+def _check_num_envs(num_envs: int) -> int:
+    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+        raise ValueError(f"num_envs must be an integer >= 1; got {num_envs!r}")
+    return int(num_envs)
+
+
+def _check_max_steps(max_episode_steps: int | None, n_steps: int) -> int:
+    if max_episode_steps is None:
+        return n_steps
+    if (
+        isinstance(max_episode_steps, bool)
+        or not isinstance(max_episode_steps, (int, np.integer))
+        or max_episode_steps < 1
+    ):
+        raise ValueError(f"max_episode_steps must be an integer >= 1; got {max_episode_steps!r}")
+    return int(max_episode_steps)
+
+
+class _ReplayVectorEnv(gym.vector.VectorEnv):
+    """Shared episode bookkeeping of the native vector environments."""
+
+    metadata: ClassVar[dict[str, Any]] = {
+        "render_modes": ["rgb_array"],
+        "render_fps": 25,
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+    _n_steps: int
+    _n_traj: int
+
+    def _setup(self, num_envs: int, max_episode_steps: int | None, single: gym.Env) -> None:
+        self.num_envs = _check_num_envs(num_envs)
+        self._max_steps = _check_max_steps(max_episode_steps, self._n_steps)
+        self.single = single  # validated arguments, spaces and rendering
+        self.single_action_space = single.action_space
+        self.single_observation_space = single.observation_space
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.render_mode = single.render_mode
+        N = self.num_envs
+        self._rngs: list[np.random.Generator | None] = [None] * N
+        self._index = np.zeros(N, dtype=np.int64)
+        self._k = np.zeros(N, dtype=np.int64)
+        self._elapsed = np.zeros(N, dtype=np.int64)
+        self._max_error = np.zeros(N)
+        self._autoreset = np.zeros(N, dtype=bool)
+        self._started = False
+        self._arange = np.arange(N)
+
+    # -- seeding and resets -------------------------------------------------------------
+    def _seed_rngs(self, seed: int | Sequence[int | None] | None) -> None:
+        N = self.num_envs
+        if seed is None:
+            seeds: list[int | None] = [None] * N
+        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+            seeds = [int(seed) + i for i in range(N)]
+        else:
+            seeds = list(seed)  # type: ignore[arg-type]
+            if len(seeds) != N:
+                raise ValueError(f"seed must be an int or a list of {N} seeds; got {len(seeds)}")
+        for i, s in enumerate(seeds):
+            if s is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(s)
+
+    def _draw(self, envs: NDArray[np.int64], trajectories: Any = None) -> None:
+        """Start new episodes in sub-environments ``envs`` (trajectory from each rng)."""
+        for j, i in enumerate(envs.tolist()):
+            if trajectories is not None:
+                self._index[i] = int(trajectories[j])
+            else:
+                self._index[i] = int(self._rngs[i].integers(self._n_traj))  # type: ignore[union-attr]
+        self._k[envs] = 0
+        self._elapsed[envs] = 0
+        self._max_error[envs] = 0.0
+        self._reset_state(envs)
+
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        self._seed_rngs(seed)
+        options = options or {}
+        mask = options.get("reset_mask")
+        if mask is None:
+            envs = self._arange
+        else:
+            mask = np.asarray(mask)
+            if mask.shape != (self.num_envs,) or mask.dtype != bool:
+                raise ValueError(f"options['reset_mask'] must be a bool array ({self.num_envs},)")
+            if not self._started and not mask.all():
+                raise ValueError("the first reset must reset every sub-environment")
+            envs = np.flatnonzero(mask)
+        traj = options.get("trajectory")
+        if traj is not None:
+            traj = np.broadcast_to(np.asarray(traj), (self.num_envs,))[envs]
+            if traj.dtype.kind not in "iu" or np.any((traj < 0) | (traj >= self._n_traj)):
+                raise ValueError(f"options['trajectory'] must hold integers in [0, {self._n_traj})")
+        self._draw(envs, traj)
+        self._autoreset[envs] = False
+        self._started = True
+        obs = self._observe(self._arange, reset=np.isin(self._arange, envs))
+        return obs, self._reset_infos(envs)
+
+    def _reset_infos(self, envs: NDArray[np.int64]) -> dict[str, Any]:
+        mask = np.zeros(self.num_envs, dtype=bool)
+        mask[envs] = True
+        idx = np.where(mask, self._index, 0)
+        return {"trajectory_index": idx, "_trajectory_index": mask}
+
+    def _check_actions(self, actions: Any, dim: int) -> NDArray[np.float64]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != (self.num_envs, dim):
+            raise ValueError(f"actions must have shape ({self.num_envs}, {dim}); got {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError("actions must be finite; got NaN or infinite entries")
+        return np.clip(a, -1.0, 1.0)
+
+    def _finish_step(
+        self, err: NDArray[np.float64], reward: NDArray[np.float64], info: dict[str, Any]
+    ) -> tuple[
+        NDArray[np.float32],
+        NDArray[np.float64],
+        NDArray[np.bool_],
+        NDArray[np.bool_],
+        dict[str, Any],
+    ]:
+        """Advance the counters, handle episode ends and autoresets, build the outputs."""
+        resetting = self._autoreset
+        active = ~resetting
+        self._k += active
+        self._elapsed += active
+        np.maximum(self._max_error, np.where(active, err, 0.0), out=self._max_error)
+        terminated = active & (self._k == self._n_steps)
+        truncated = active & (self._elapsed >= self._max_steps)
+        reward = np.where(active, reward, 0.0)
+        for key in list(info):
+            info["_" + key] = active  # entries outside the mask are unspecified
+        info["tau"] = (self._k - 1) / (self._n_steps - 1)
+        info["_tau"] = active
+        if terminated.any():
+            self._end_infos(info, terminated)
+        reset_envs = np.flatnonzero(resetting)
+        if reset_envs.size:
+            self._draw(reset_envs)
+            for key, value in self._reset_infos(reset_envs).items():
+                info[key] = value
+        obs = self._observe(self._arange, reset=resetting)
+        self._autoreset = terminated | truncated
+        return obs, reward, terminated, truncated, info
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.single.close()
+
+    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode")
+            return None
+        return tuple(self._render_env(i) for i in range(self.num_envs))
+
+    # -- per environment kind ---------------------------------------------------------
+    def _reset_state(self, envs: NDArray[np.int64]) -> None:
+        raise NotImplementedError
+
+    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
+        raise NotImplementedError
+
+    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
+        raise NotImplementedError
+
+    def _render_env(self, i: int) -> NDArray[np.uint8]:
+        raise NotImplementedError
+
+
+class OrientationReachVectorEnv(_ReplayVectorEnv):
+    """``num_envs`` copies of :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`.
+
+    Takes the single environment's keyword arguments plus ``num_envs`` and
+    ``max_episode_steps`` (default: the registration's 50). Observations, rewards,
+    terminations and truncations are bit-identical to ``SyncVectorEnv`` of single
+    environments with the same seeds; ``infos`` carry the same per-step terms and, at an
+    episode's end, ``max_error`` and ``max_geodesic_error``.
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        data: str | os.PathLike[str] = "vr-kitchen",
+        split: str = "train",
+        nominal: str = "slerp",
+        degree: int = 2,
+        residual_scale: float = 0.25,
+        reward_weights: Mapping[str, float] | None = None,
+        test_fraction: float = 0.25,
+        split_seed: int = 0,
+        min_deg: float = 10.0,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        from motion_envs.envs.orientation_reach import N_STEPS, OrientationReachEnv
+
+        single = OrientationReachEnv(
+            data=data,
+            split=split,
+            nominal=nominal,
+            degree=degree,
+            residual_scale=residual_scale,
+            reward_weights=reward_weights,
+            test_fraction=test_fraction,
+            split_seed=split_seed,
+            min_deg=min_deg,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+        )
+        task = single.task
+        self.task = task
+        self._n_steps = N_STEPS
+        self._n_traj = task.n_trajectories
+        self._setup(num_envs, max_episode_steps, single)
+        self.residual_scale = single.residual_scale
+        self.reward_weights = single.reward_weights
+        L, n = task.n_trajectories, N_STEPS
+        self._table = np.ascontiguousarray(task.steps.reshape(L * n, 15).T)  # (15, L n)
+        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
+        self._starts = task.grids.starts
+        N = self.num_envs
+        self._current = np.zeros((N, 4))
+        self._max_geodesic = np.zeros(N)
+        self._history: NDArray[np.float64] | None = (
+            np.zeros((N, n + 1, 4)) if render_mode is not None else None
+        )
+
+    def _reset_state(self, envs: NDArray[np.int64]) -> None:
+        self._current[envs] = self._starts[self._index[envs]]
+        self._max_geodesic[envs] = 0.0
+        if self._history is not None:
+            self._history[envs, 0] = self._current[envs]
+
+    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
+        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
+        obs[:, 8:12] = self._current
+        return obs
+
+    def step(
+        self, actions: Any
+    ) -> tuple[
+        NDArray[np.float32],
+        NDArray[np.float64],
+        NDArray[np.bool_],
+        NDArray[np.bool_],
+        dict[str, Any],
+    ]:
+        a = self._check_actions(actions, 3)
+        n = self._n_steps
+        k = np.minimum(self._k, n - 1)
+        rows = self._table[:, self._index * n + k]
+        ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
+        q, err, geo = K.orientation_step(
+            K.BATCH,
+            (rows[0], rows[1], rows[2], rows[3]),
+            (rows[4], rows[5], rows[6], rows[7]),
+            (rows[8], rows[9], rows[10], rows[11]),
+            rows[12],
+            rows[13],
+            rows[14],
+            ax,
+            ay,
+            az,
+            self.residual_scale,
+        )
+        w = self.reward_weights
+        r_res = -w["residual"] * err
+        r_geo = -w["geodesic"] * geo
+        r_act = -w["action"] * (ax * ax + ay * ay + az * az)
+        reward = r_res + r_geo + r_act
+        active = ~self._autoreset
+        qs = np.stack(q, axis=1)
+        self._current = np.where(active[:, None], qs, self._current)
+        np.maximum(self._max_geodesic, np.where(active, geo, 0.0), out=self._max_geodesic)
+        if self._history is not None:
+            rows_a = np.flatnonzero(active)
+            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
+        info = {
+            "error": err,
+            "geodesic_error": geo,
+            "reward_residual": r_res,
+            "reward_geodesic": r_geo,
+            "reward_action": r_act,
+        }
+        return self._finish_step(err, reward, info)
+
+    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
+        info["max_error"] = np.where(ended, self._max_error, 0.0)
+        info["_max_error"] = ended
+        info["max_geodesic_error"] = np.where(ended, self._max_geodesic, 0.0)
+        info["_max_geodesic_error"] = ended
+
+    def _render_env(self, i: int) -> NDArray[np.uint8]:
+        single = self.single
+        single._index = int(self._index[i])
+        assert self._history is not None
+        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
+        return single.render()  # type: ignore[return-value]

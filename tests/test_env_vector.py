@@ -1,0 +1,157 @@
+"""Native vector environments: bit-identical to N single environments; Sync/Async wrappers."""
+
+from __future__ import annotations
+
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import motion_envs  # noqa: F401  (registers the ids)
+
+ORIENTATION = "MotionEnvs/OrientationReach-v0"
+VECTOR_CASES = [
+    (ORIENTATION, {"nominal": "bezier-task"}),
+    (ORIENTATION, {"split": "test", "reward_weights": {"geodesic": 0.5, "action": 0.1}}),
+]
+
+
+def _actions(env: gym.vector.VectorEnv, steps: int, seed: int = 0) -> np.ndarray:
+    shape = (steps, env.num_envs, *env.single_action_space.shape)
+    # a quarter of the entries out of bounds, to exercise the clipping
+    return np.random.default_rng(seed).uniform(-1.5, 1.5, size=shape).astype(np.float32)
+
+
+def _assert_same_step(native, reference) -> None:
+    for x, y in zip(native[:4], reference[:4], strict=True):
+        np.testing.assert_array_equal(x, y)
+    info_n, info_r = native[4], reference[4]
+    for key in ("max_error", "error", "geodesic_error", "reward_residual"):
+        if "_" + key in info_r:
+            mask = info_r["_" + key]
+            np.testing.assert_array_equal(info_n["_" + key], mask)
+            np.testing.assert_array_equal(info_n[key][mask], info_r[key][mask])
+
+
+@pytest.mark.parametrize(("env_id", "kwargs"), VECTOR_CASES)
+@pytest.mark.parametrize("max_episode_steps", [None, 17])
+def test_native_vector_env_is_bit_identical_to_sync(env_id, kwargs, max_episode_steps):
+    extra = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
+    native = gym.make_vec(
+        env_id, num_envs=5, vectorization_mode="vector_entry_point", **kwargs, **extra
+    )
+    sync = gym.make_vec(env_id, num_envs=5, vectorization_mode="sync", **kwargs, **extra)
+    assert type(native).__name__.endswith("VectorEnv")
+    obs_n, info_n = native.reset(seed=42)
+    obs_s, info_s = sync.reset(seed=42)
+    np.testing.assert_array_equal(obs_n, obs_s)
+    np.testing.assert_array_equal(info_n["trajectory_index"], info_s["trajectory_index"])
+    ended = 0
+    for a in _actions(native, 160):
+        out_n, out_s = native.step(a), sync.step(a)
+        _assert_same_step(out_n, out_s)
+        ended += int(np.count_nonzero(out_s[2] | out_s[3]))
+    assert ended >= 10  # several autoresets happened
+    native.close()
+    sync.close()
+
+
+def test_native_vector_env_equals_single_envs_stepped_by_hand():
+    n = 3
+    native = gym.make_vec(ORIENTATION, num_envs=n, vectorization_mode="vector_entry_point")
+    singles = [gym.make(ORIENTATION) for _ in range(n)]
+    obs, _ = native.reset(seed=9)
+    for i, env in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], env.reset(seed=9 + i)[0])
+    pending = [False] * n
+    for a in _actions(native, 120, seed=1):
+        obs, rew, term, trunc, _ = native.step(a)
+        for i, env in enumerate(singles):
+            if pending[i]:
+                o, _ = env.reset()
+                r, te, tr = 0.0, False, False
+            else:
+                o, r, te, tr, _ = env.step(a[i])
+            np.testing.assert_array_equal(obs[i], o)
+            assert rew[i] == r and term[i] == te and trunc[i] == tr
+            pending[i] = te or tr
+
+
+def test_async_vector_env_with_spawn_matches_sync():
+    kwargs = {"nominal": "bezier-null"}
+    sync = gym.make_vec(ORIENTATION, num_envs=2, vectorization_mode="sync", **kwargs)
+    spawn = gym.make_vec(
+        ORIENTATION,
+        num_envs=2,
+        vectorization_mode="async",
+        vector_kwargs={"context": "spawn"},
+        **kwargs,
+    )
+    try:
+        np.testing.assert_array_equal(sync.reset(seed=1)[0], spawn.reset(seed=1)[0])
+        for a in _actions(sync, 60):
+            _assert_same_step(spawn.step(a), sync.step(a))
+    finally:
+        spawn.close()
+        sync.close()
+
+
+def test_vector_env_rejects_bad_actions_and_stays_usable():
+    env = gym.make_vec(ORIENTATION, num_envs=4, vectorization_mode="vector_entry_point")
+    ref = gym.make_vec(ORIENTATION, num_envs=4, vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    ref.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros((3, 3), np.float32))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros((4, 2), np.float32))
+    bad = np.zeros((4, 3), np.float32)
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        env.step(bad)
+    bad[2, 1] = np.inf
+    with pytest.raises(ValueError, match="finite"):
+        env.step(bad)
+    for a in _actions(env, 60):
+        _assert_same_step(env.step(a), ref.step(a))
+    env.close()
+    env.close()
+
+
+def test_vector_env_partial_reset_and_trajectory_option():
+    env = gym.make_vec(ORIENTATION, num_envs=3, vectorization_mode="vector_entry_point")
+    _, info = env.reset(seed=0, options={"trajectory": [0, 1, 2]})
+    np.testing.assert_array_equal(info["trajectory_index"], [0, 1, 2])
+    for _ in range(5):
+        env.step(np.zeros((3, 3), np.float32))
+    mask = np.array([False, True, False])
+    obs2, info2 = env.reset(options={"reset_mask": mask, "trajectory": 7})
+    np.testing.assert_array_equal(info2["_trajectory_index"], mask)
+    assert info2["trajectory_index"][1] == 7
+    assert obs2[1, 12] == 0.0 and obs2[0, 12] > 0.0
+    with pytest.raises(ValueError, match="trajectory"):
+        env.reset(options={"trajectory": 10**6})
+
+
+def test_pickled_vector_env_reproduces_its_original():
+    env = gym.make_vec(ORIENTATION, num_envs=4, vectorization_mode="vector_entry_point")
+    env.reset(seed=3)
+    acts = _actions(env, 100)
+    for a in acts[:30]:
+        env.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    for a in acts[30:]:
+        _assert_same_step(clone.step(a), env.step(a))
+
+
+@pytest.mark.parametrize("n", [1, 8])
+def test_vector_observations_in_space(n):
+    env = gym.make_vec(
+        ORIENTATION, num_envs=n, vectorization_mode="vector_entry_point", residual_scale=3.0
+    )
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space.contains(obs)
+    for a in _actions(env, 200):
+        obs, *_ = env.step(np.clip(a, -1, 1))
+        assert env.observation_space.contains(obs)
