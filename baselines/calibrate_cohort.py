@@ -111,6 +111,10 @@ def _from_x(config: CohortConfig, x: np.ndarray) -> CohortConfig:
     return config.with_values(**values)
 
 
+class _BudgetExhausted(Exception):
+    """Raised inside the objective when the evaluation budget is used up."""
+
+
 @dataclass(frozen=True)
 class CalibrationResult:
     """Outcome of :func:`calibrate`."""
@@ -149,7 +153,8 @@ def calibrate(
     targets:
         criterion name -> ``(lo, hi)`` interval in radians (``lo == hi`` for a point).
     max_evaluations:
-        Budget of cohort generations + Table 1 evaluations.
+        Budget of cohort generations + Table 1 evaluations (finite-difference Jacobian
+        evaluations included); the best point seen is returned when it runs out.
     diff_step:
         Relative finite-difference step of ``least_squares``.
     progress:
@@ -175,6 +180,8 @@ def calibrate(
         key = x.tobytes()
         if key in cache:
             return cache[key]
+        if len(cache) >= max_evaluations:
+            raise _BudgetExhausted
         crit = fn(_from_x(config, x))
         missing = [n for n in names if n not in crit]
         if missing:
@@ -198,20 +205,22 @@ def calibrate(
     x0 = np.clip(x0, lower, upper)
     initial_res = residuals(x0)
     initial = dict(best["crit"])  # type: ignore[arg-type]
-    message = "no iterations"
+    message = "targets met at the start"
     if float(initial_res @ initial_res) > 0:
-        sol = optimize.least_squares(
-            residuals,
-            x0,
-            bounds=(lower, upper),
-            method="trf",
-            diff_step=diff_step,
-            max_nfev=max_evaluations,
-            x_scale=1.0,
-            xtol=1e-6,
-            ftol=1e-6,
-        )
-        message = str(sol.message)
+        try:
+            sol = optimize.least_squares(
+                residuals,
+                x0,
+                bounds=(lower, upper),
+                method="trf",
+                diff_step=diff_step,
+                x_scale=1.0,
+                xtol=1e-6,
+                ftol=1e-6,
+            )
+            message = str(sol.message)
+        except _BudgetExhausted:
+            message = f"stopped after the budget of {max_evaluations} evaluations"
     bar.close()
     x_best = best["x"]
     final = _from_x(config, x_best)  # type: ignore[arg-type]

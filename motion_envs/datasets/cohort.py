@@ -107,12 +107,6 @@ def sine_basis(tau: FloatArray, harmonics: int) -> FloatArray:
     return np.sin(np.pi * tau[..., None] * k)
 
 
-def _rot(axis: int, deg: float) -> FloatArray:
-    v = np.zeros(3)
-    v[axis] = np.radians(deg)
-    return quat.expmap(v)
-
-
 @dataclass(frozen=True)
 class _SubjectDraws:
     """Everything drawn for one subject (all tasks of the design, all replicates)."""
@@ -212,15 +206,17 @@ class CohortGenerator:
     def task_ends(self) -> FloatArray:
         """``(n_all_tasks, 4)`` nominal end orientation of every task of the design."""
         des = self.config.data["design"]
-        ends = []
-        for p in des["pods"].values():
-            for pitch, yaw in des["blocks"].values():
-                for roll in des["grips"].values():
-                    block = quat.expmap(np.radians([0.0, pitch, yaw]))
-                    q = quat.multiply(self.start, _rot(1, p))
-                    q = quat.multiply(quat.multiply(q, block), _rot(0, roll))
-                    ends.append(q)
-        return np.stack(ends)
+        n_b, n_g = len(des["blocks"]), len(des["grips"])
+        j = np.arange(len(self.all_tasks))
+        pods = np.radians(np.asarray(list(des["pods"].values()), dtype=np.float64))
+        blocks = np.radians(np.asarray(list(des["blocks"].values()), dtype=np.float64))
+        grips = np.radians(np.asarray(list(des["grips"].values()), dtype=np.float64))
+        zeros = np.zeros(j.size)
+        pod = quat.expmap(np.stack([zeros, pods[j // (n_b * n_g)], zeros], axis=1))
+        b = blocks[(j // n_g) % n_b]
+        block = quat.expmap(np.stack([zeros, b[:, 0], b[:, 1]], axis=1))
+        grip = quat.expmap(np.stack([grips[j % n_g], zeros, zeros], axis=1))
+        return quat.multiply(quat.multiply(quat.multiply(self.start, pod), block), grip)
 
     def task_angles(self) -> FloatArray:
         """``(n_all_tasks,)`` start-to-end rotation angle of each task, radians."""
