@@ -17,6 +17,7 @@ from motion_envs.datasets.cohort import (
     draw_trajectory,
     generate_cohort,
     iter_cohort,
+    score_cohort,
     split_labels,
 )
 from motion_envs.datasets.cohort_config import load_cohort_config
@@ -315,3 +316,15 @@ def test_draw_trajectory_by_index_and_rng():
         draw_trajectory(ds, index=len(ds))
     with pytest.raises(ValueError, match="split must be"):
         draw_trajectory(ds, index=0, split="val")
+
+
+def test_streamed_scores_equal_table1():
+    cfg = _small(6)
+    streamed = score_cohort(cfg, chunk_subjects=2)
+    ds = generate_cohort(cfg)
+    full = table1(ds.ragged, ds.subjects, ds.tasks).criteria
+    assert streamed["n_trajectories"] == len(ds)
+    names = [n for n in full if not n.endswith(("_loso", "_loro"))]
+    assert set(names) <= set(streamed)
+    for name in names:
+        assert streamed[name] == pytest.approx(full[name], abs=1e-10), name
