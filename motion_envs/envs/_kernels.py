@@ -67,13 +67,14 @@ _ATAN_COEFFS = tuple((-1.0) ** n / (2 * n + 1) for n in range(8))
 def half_angle(m: SimpleNamespace, s: Any, w: Any) -> Any:
     """``atan2(s, w)`` for ``s = |v| >= 0``, ``w >= 0`` of a unit quaternion ``(w, v)``.
 
-    Built from ``+ - * / sqrt`` only (so both backends agree bit for bit): with
-    ``s^2 + w^2 = 1``, ``atan2(s, w) = 2 atan(t)``, ``t = s / (1 + w)`` in ``[0, 1]``; three
+    Built from ``+ - * / sqrt`` only (so both backends agree bit for bit):
+    ``atan2(s, w) = 2 atan(t)``, ``t = s / (sqrt(s^2 + w^2) + w)`` in ``[0, 1]`` (exact for
+    any norm, so slightly non-unit inputs, e.g. from a near-linear slerp, are fine); three
     half-angle reductions ``t <- t / (1 + sqrt(1 + t^2))`` (``atan t = 2 atan t'``) bring
     ``t`` below ``tan(pi/32)``, where 8 Taylor terms give full double precision:
     ``atan2(s, w) = 16 t3 (1 - u/3 + u^2/5 - ... - u^7/15)``, ``u = t3^2``.
     """
-    t = s / (1.0 + w)
+    t = s / (m.sqrt(s * s + w * w) + w)
     t = t / (1.0 + m.sqrt(1.0 + t * t))
     t = t / (1.0 + m.sqrt(1.0 + t * t))
     t = t / (1.0 + m.sqrt(1.0 + t * t))
@@ -182,7 +183,7 @@ def orientation_step_scalar(
     ux, uy, uz = cx * sign, cy * sign, cz * sign
     sn = sqrt(ux * ux + uy * uy + uz * uz)
     # half_angle(sn, aw)
-    tt = sn / (1.0 + aw)
+    tt = sn / (sqrt(sn * sn + aw * aw) + aw)
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
@@ -209,7 +210,8 @@ def orientation_step_scalar(
     ry = qw * hy - mx * hz + my * hw + mz * hx
     rz = qw * hz + mx * hy - my * hx + mz * hw
     yv = sqrt(rx * rx + ry * ry + rz * rz)
-    tt = yv / (1.0 + abs(rw))
+    xv = abs(rw)
+    tt = yv / (sqrt(yv * yv + xv * xv) + xv)
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
     tt = tt / (1.0 + sqrt(1.0 + tt * tt))
