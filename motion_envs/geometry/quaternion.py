@@ -242,6 +242,21 @@ def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
     return out.reshape((*batch, 4))
 
 
+def _expmap_reference(v: FloatArray) -> FloatArray:
+    """Whole-array form of :func:`expmap` (sine and cosine; the benchmarks' plain numpy)."""
+    theta2 = np.einsum("...i,...i->...", v, v)
+    theta = np.sqrt(theta2)
+    small = theta < _SMALL_ANGLE
+    safe = np.where(small, 1.0, theta)
+    half_sinc = np.where(
+        small, 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0, np.sin(0.5 * safe) / safe
+    )
+    out = np.empty((*v.shape[:-1], 4))
+    out[..., 0] = np.cos(0.5 * theta)
+    out[..., 1:] = half_sinc[..., None] * v
+    return out
+
+
 def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     """Logarithm map from unit quaternions to the tangent space at the identity.
 
