@@ -56,6 +56,14 @@ smooth functions of the scales (what the calibration relies on).
 
 Predictors (numeric, per trajectory): ``sex`` (0 = female, 1 = male), ``age`` (years),
 ``height_cm``. As in the paper's finding, they have no effect on the motion.
+
+Use: :func:`generate_cohort` (an :class:`OrientationDataset` with ``simulated=True``,
+also ``load_orientation_dataset("cohort[:CONFIG]")``), :func:`iter_cohort` (chunks),
+:func:`score_cohort` (Table 1's in-sample rows streamed in bounded memory),
+:func:`draw_trajectory` / :func:`split_labels` (one trajectory with its subject, task,
+predictors and train/test split by subject, for any orientation dataset), and
+:meth:`CohortGenerator.parameters` / :meth:`CohortGenerator.true_residuals` (the ground
+truth behind each trajectory).
 """
 
 from __future__ import annotations
