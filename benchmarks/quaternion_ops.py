@@ -161,6 +161,18 @@ def main(argv: list[str] | None = None) -> int:
     # --- timing -----------------------------------------------------------------
     dst = np.empty_like(q0)
     copy_s = best_time(lambda: np.copyto(dst, q0), max(args.repeats, 7), warmup=1)
+    # Two further floors for slerp, same arrays: the memory traffic of reading two (n, 4)
+    # inputs and writing one, and numpy's transcendental functions the formula needs
+    # (one arctan2 and two tan per pair), on contiguous preallocated arrays.
+    floor_add_s = best_time(lambda: np.add(q0, q1, out=dst), max(args.repeats, 7), warmup=1)
+    x1, x2 = np.ascontiguousarray(q0[:, 1]), np.ascontiguousarray(q0[:, 0])
+    xx, o1, o2 = np.stack([alpha, 1.0 - alpha]), np.empty(n), np.empty((2, n))
+
+    def transcendentals() -> None:
+        np.arctan2(x1, x2, out=o1)
+        np.tan(xx, out=o2)
+
+    floor_trig_s = best_time(transcendentals, max(args.repeats, 7), warmup=1)
     jobs: dict[str, dict[str, tuple[Callable[[], Any], int]]] = {
         "slerp": {
             "ours": (lambda: quat.slerp(q0, q1, alpha, validate=False), args.repeats),
@@ -204,7 +216,31 @@ def main(argv: list[str] | None = None) -> int:
         return n / s / 1e6
 
     rows = [["copy floor (np.copyto)", "copy", copy_s * 1e3, mqs(copy_s), float("nan"), 1.0]]
-    figures: dict[str, Any] = {"copy_floor": {"ms": copy_s * 1e3, "mq_per_s": mqs(copy_s)}}
+    rows.append(
+        [
+            "slerp memory floor (np.add)",
+            "add",
+            floor_add_s * 1e3,
+            mqs(floor_add_s),
+            float("nan"),
+            floor_add_s / copy_s,
+        ]
+    )
+    rows.append(
+        [
+            "slerp trig floor (arctan2+2 tan)",
+            "trig",
+            floor_trig_s * 1e3,
+            mqs(floor_trig_s),
+            float("nan"),
+            floor_trig_s / copy_s,
+        ]
+    )
+    figures: dict[str, Any] = {
+        "copy_floor": {"ms": copy_s * 1e3, "mq_per_s": mqs(copy_s)},
+        "slerp_memory_floor_add": {"ms": floor_add_s * 1e3, "mq_per_s": mqs(floor_add_s)},
+        "slerp_trig_floor": {"ms": floor_trig_s * 1e3, "mq_per_s": mqs(floor_trig_s)},
+    }
     ratios: dict[str, float] = {}
     for op, impl_s in seconds.items():
         anchor = impl_s.get("scipy", impl_s.get("scipy_Slerp"))

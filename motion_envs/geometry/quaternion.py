@@ -90,12 +90,45 @@ def _as_quaternion_array(q: ArrayLike, name: str) -> FloatArray:
     return arr
 
 
+def _all_unit_fast(flat: FloatArray, tol: float) -> bool:
+    """Block-wise ``all(| |q| - 1 | <= tol - 1e-12)`` over ``(n, 4)``; False on NaN/inf.
+
+    A True answer implies :func:`as_unit`'s exact checks pass (the 1e-12 margin covers
+    the rounding differences of the two sums); False only sends the input to them.
+    """
+    strict = tol - 1e-12
+    if not strict >= 0.0:
+        return False
+    n = flat.shape[0]
+    m = min(n, _BLOCK)
+    Q, norm, t = np.empty((4, m)), np.empty(m), np.empty(m)
+    with np.errstate(over="ignore", invalid="ignore"):  # the slow path reports those
+        for start, stop in _blocks(n):
+            k = stop - start
+            Qk, nk, tk = Q[:, :k], norm[:k], t[:k]
+            np.copyto(Qk, flat[start:stop].T)
+            np.multiply(Qk[0], Qk[0], out=nk)
+            for c in (1, 2, 3):
+                np.multiply(Qk[c], Qk[c], out=tk)
+                nk += tk
+            np.sqrt(nk, out=nk)
+            nk -= 1.0
+            np.abs(nk, out=nk)
+            if not (nk <= strict).all():  # NaN and inf compare False
+                return False
+    return True
+
+
 def as_unit(q: ArrayLike, name: str = "q", tol: float = UNIT_TOLERANCE) -> FloatArray:
     """Validate that ``q`` holds unit quaternions ``(w, x, y, z)`` and return it as float64.
 
     Raises ``ValueError`` naming ``name`` if the last axis is not 4, a value is NaN or
     infinite, or a norm differs from 1 by more than ``tol``.
     """
+    arr = np.asarray(q, dtype=np.float64)
+    if arr.ndim > 0 and arr.shape[-1] == 4 and _all_unit_fast(arr.reshape(-1, 4), tol):
+        return arr
+    # Slow path: the exact checks below, and their error messages.
     arr = _as_quaternion_array(q, name)
     norms = np.sqrt(np.einsum("...i,...i->...", arr, arr))
     bad = np.abs(norms - 1.0) > tol
