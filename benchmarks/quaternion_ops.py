@@ -164,6 +164,7 @@ def main(argv: list[str] | None = None) -> int:
     # Two further floors for slerp, same arrays: the memory traffic of reading two (n, 4)
     # inputs and writing one, and numpy's transcendental functions the formula needs
     # (one arctan2 and two tan per pair), on contiguous preallocated arrays.
+    alloc_copy_s = best_time(q0.copy, max(args.repeats, 7), warmup=1)
     floor_add_s = best_time(lambda: np.add(q0, q1, out=dst), max(args.repeats, 7), warmup=1)
     x1, x2 = np.ascontiguousarray(q0[:, 1]), np.ascontiguousarray(q0[:, 0])
     xx, o1, o2 = np.stack([alpha, 1.0 - alpha]), np.empty(n), np.empty((2, n))
@@ -218,6 +219,16 @@ def main(argv: list[str] | None = None) -> int:
     rows = [["copy floor (np.copyto)", "copy", copy_s * 1e3, mqs(copy_s), float("nan"), 1.0]]
     rows.append(
         [
+            "copy into a new array (q0.copy())",
+            "copy+alloc",
+            alloc_copy_s * 1e3,
+            mqs(alloc_copy_s),
+            float("nan"),
+            alloc_copy_s / copy_s,
+        ]
+    )
+    rows.append(
+        [
             "slerp memory floor (np.add)",
             "add",
             floor_add_s * 1e3,
@@ -238,6 +249,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     figures: dict[str, Any] = {
         "copy_floor": {"ms": copy_s * 1e3, "mq_per_s": mqs(copy_s)},
+        "copy_with_allocation": {"ms": alloc_copy_s * 1e3, "mq_per_s": mqs(alloc_copy_s)},
         "slerp_memory_floor_add": {"ms": floor_add_s * 1e3, "mq_per_s": mqs(floor_add_s)},
         "slerp_trig_floor": {"ms": floor_trig_s * 1e3, "mq_per_s": mqs(floor_trig_s)},
     }
