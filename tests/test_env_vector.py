@@ -11,9 +11,13 @@ import pytest
 import motion_envs  # noqa: F401  (registers the ids)
 
 ORIENTATION = "MotionEnvs/OrientationReach-v0"
+POSITION = "MotionEnvs/PositionReach-v0"
+SHAPES = ["Angle", "CShape", "GShape"]
 VECTOR_CASES = [
     (ORIENTATION, {"nominal": "bezier-task"}),
     (ORIENTATION, {"split": "test", "reward_weights": {"geodesic": 0.5, "action": 0.1}}),
+    (POSITION, {"shapes": SHAPES}),
+    (POSITION, {"shapes": SHAPES, "split": "test", "reward_weights": {"action": 0.3}}),
 ]
 
 
@@ -27,7 +31,7 @@ def _assert_same_step(native, reference) -> None:
     for x, y in zip(native[:4], reference[:4], strict=True):
         np.testing.assert_array_equal(x, y)
     info_n, info_r = native[4], reference[4]
-    for key in ("max_error", "error", "geodesic_error", "reward_residual"):
+    for key in ("max_error", "error", "geodesic_error", "reward_residual", "reward_action"):
         if "_" + key in info_r:
             mask = info_r["_" + key]
             np.testing.assert_array_equal(info_n["_" + key], mask)
@@ -57,10 +61,11 @@ def test_native_vector_env_is_bit_identical_to_sync(env_id, kwargs, max_episode_
     sync.close()
 
 
-def test_native_vector_env_equals_single_envs_stepped_by_hand():
+@pytest.mark.parametrize(("env_id", "kwargs"), [(ORIENTATION, {}), (POSITION, {"shapes": SHAPES})])
+def test_native_vector_env_equals_single_envs_stepped_by_hand(env_id, kwargs):
     n = 3
-    native = gym.make_vec(ORIENTATION, num_envs=n, vectorization_mode="vector_entry_point")
-    singles = [gym.make(ORIENTATION) for _ in range(n)]
+    native = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    singles = [gym.make(env_id, **kwargs) for _ in range(n)]
     obs, _ = native.reset(seed=9)
     for i, env in enumerate(singles):
         np.testing.assert_array_equal(obs[i], env.reset(seed=9 + i)[0])
@@ -78,11 +83,14 @@ def test_native_vector_env_equals_single_envs_stepped_by_hand():
             pending[i] = te or tr
 
 
-def test_async_vector_env_with_spawn_matches_sync():
-    kwargs = {"nominal": "bezier-null"}
-    sync = gym.make_vec(ORIENTATION, num_envs=2, vectorization_mode="sync", **kwargs)
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"),
+    [(ORIENTATION, {"nominal": "bezier-null"}), (POSITION, {"shapes": SHAPES})],
+)
+def test_async_vector_env_with_spawn_matches_sync(env_id, kwargs):
+    sync = gym.make_vec(env_id, num_envs=2, vectorization_mode="sync", **kwargs)
     spawn = gym.make_vec(
-        ORIENTATION,
+        env_id,
         num_envs=2,
         vectorization_mode="async",
         vector_kwargs={"context": "spawn"},
@@ -146,10 +154,11 @@ def test_pickled_vector_env_reproduces_its_original():
 
 
 @pytest.mark.parametrize("n", [1, 8])
-def test_vector_observations_in_space(n):
-    env = gym.make_vec(
-        ORIENTATION, num_envs=n, vectorization_mode="vector_entry_point", residual_scale=3.0
-    )
+@pytest.mark.parametrize(
+    ("env_id", "kwargs"), [(ORIENTATION, {"residual_scale": 3.0}), (POSITION, {"shapes": SHAPES})]
+)
+def test_vector_observations_in_space(n, env_id, kwargs):
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
     obs, _ = env.reset(seed=0)
     assert env.observation_space.contains(obs)
     for a in _actions(env, 200):

@@ -15,7 +15,13 @@ from typing import Any, Protocol, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["DEFAULT_SPLIT_SEED", "DEFAULT_TEST_FRACTION", "held_out_subjects", "split_by_subject"]
+__all__ = [
+    "DEFAULT_SPLIT_SEED",
+    "DEFAULT_TEST_FRACTION",
+    "held_out_subjects",
+    "split_by_replicate",
+    "split_by_subject",
+]
 
 #: Seed of the default split used by the environments and ``motion-bench``.
 DEFAULT_SPLIT_SEED = 0
@@ -83,4 +89,37 @@ def split_by_subject(
     """
     held_out = held_out_subjects(dataset.subjects, test_fraction, seed)
     is_test = np.isin(np.asarray(dataset.subjects).astype(str), held_out)
+    return dataset.subset(~is_test), dataset.subset(is_test)
+
+
+def split_by_replicate(
+    dataset: Any,
+    test_fraction: float = DEFAULT_TEST_FRACTION,
+    seed: int = DEFAULT_SPLIT_SEED,
+    mask: bool = False,
+) -> Any:
+    """Split each task's demonstrations into train and test (for one-subject data, e.g. LASA).
+
+    Tasks are visited in sorted order with one ``numpy.random.default_rng(seed)``; each
+    task's trajectories are permuted and the first
+    ``min(max(1, round(test_fraction * n)), n - 2)`` held out, so at least two stay in
+    training (a task with fewer than 3 trajectories stays wholly in training).
+
+    Returns ``(train, test)`` datasets, or with ``mask=True`` the ``(L,)`` boolean mask
+    of the test trajectories.
+    """
+    _check(test_fraction, 0)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0; got {seed!r}")
+    tasks = np.asarray(dataset.tasks).astype(str)
+    rng = np.random.default_rng(int(seed))
+    is_test = np.zeros(tasks.size, dtype=bool)
+    for task in np.unique(tasks):
+        members = np.flatnonzero(tasks == task)
+        n_test = min(max(1, round(float(test_fraction) * members.size)), members.size - 2)
+        perm = rng.permutation(members.size)
+        if n_test > 0:
+            is_test[members[perm[:n_test]]] = True
+    if mask:
+        return is_test
     return dataset.subset(~is_test), dataset.subset(is_test)

@@ -28,6 +28,11 @@ _SPECS: dict[str, dict[str, object]] = {
         "vector_entry_point": "motion_envs.envs.vector:OrientationReachVectorEnv",
         "max_episode_steps": 50,
     },
+    "MotionEnvs/PositionReach-v0": {
+        "entry_point": "motion_envs.envs.position_reach:PositionReachEnv",
+        "vector_entry_point": "motion_envs.envs.vector:PositionReachVectorEnv",
+        "max_episode_steps": 50,
+    },
 }
 
 #: Every environment id registered by ``import motion_envs``.

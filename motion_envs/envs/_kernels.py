@@ -19,6 +19,7 @@ The formulas are those of :mod:`motion_envs.geometry.quaternion` (``expmap``,
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from types import SimpleNamespace
 from typing import Any
 
@@ -34,6 +35,7 @@ __all__ = [
     "multiply",
     "orientation_step",
     "orientation_step_scalar",
+    "position_step",
 ]
 
 _SMALL_ANGLE = 1e-4  # as motion_envs.geometry.quaternion._SMALL_ANGLE
@@ -219,3 +221,19 @@ def orientation_step_scalar(
     p = ((((((c7 * u + c6) * u + c5) * u + c4) * u + c3) * u + c2) * u + c1) * u + c0
     geo = 2.0 * (16.0 * (tt * p))
     return (qw, qx, qy, qz), err, geo
+
+
+def position_step(
+    m: SimpleNamespace, n: Sequence[Any], h: Sequence[Any], a: Sequence[Any], scale: float
+) -> tuple[list[Any], Any]:
+    """One step of the position environment: ``y = n + scale a`` and ``|y - h|``.
+
+    ``n``, ``h``, ``a`` hold the ``D`` coordinates (floats, or ``(N,)`` arrays).
+    """
+    q = [n[i] + scale * a[i] for i in range(len(a))]
+    d = q[0] - h[0]
+    acc = d * d
+    for i in range(1, len(q)):
+        d = q[i] - h[i]
+        acc = acc + d * d
+    return q, m.sqrt(acc)

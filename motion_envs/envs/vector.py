@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
 
-__all__ = ["OrientationReachVectorEnv"]
+__all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
 
 def _check_num_envs(num_envs: int) -> int:
@@ -334,6 +334,120 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         info["_max_error"] = ended
         info["max_geodesic_error"] = np.where(ended, self._max_geodesic, 0.0)
         info["_max_geodesic_error"] = ended
+
+    def _render_env(self, i: int) -> NDArray[np.uint8]:
+        single = self.single
+        single._index = int(self._index[i])
+        assert self._history is not None
+        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
+        return single.render()  # type: ignore[return-value]
+
+
+class PositionReachVectorEnv(_ReplayVectorEnv):
+    """``num_envs`` copies of :class:`~motion_envs.envs.position_reach.PositionReachEnv`.
+
+    Takes the single environment's keyword arguments plus ``num_envs`` and
+    ``max_episode_steps`` (default: the registration's 50); bit-identical to
+    ``SyncVectorEnv`` of single environments with the same seeds.
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        max_episode_steps: int | None = None,
+        data: str | os.PathLike[str] = "lasa",
+        shapes: Sequence[str] | None = None,
+        split: str = "train",
+        nominal: str = "sine",
+        n_sines: int | str = "auto",
+        residual_scale: float = 5.0,
+        reward_weights: Mapping[str, float] | None = None,
+        test_fraction: float = 0.25,
+        split_seed: int = 0,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        from motion_envs.envs.orientation_reach import N_STEPS
+        from motion_envs.envs.position_reach import PositionReachEnv
+
+        single = PositionReachEnv(
+            data=data,
+            shapes=shapes,
+            split=split,
+            nominal=nominal,
+            n_sines=n_sines,
+            residual_scale=residual_scale,
+            reward_weights=reward_weights,
+            test_fraction=test_fraction,
+            split_seed=split_seed,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+        )
+        task = single.task
+        self.task = task
+        self._n_steps = N_STEPS
+        self._n_traj = task.n_trajectories
+        self._setup(num_envs, max_episode_steps, single)
+        self.residual_scale = single.residual_scale
+        self.reward_weights = single.reward_weights
+        L, n, D = task.n_trajectories, N_STEPS, task.n_dims
+        self._D = D
+        self._table = np.ascontiguousarray(task.steps.reshape(L * n, 2 * D).T)  # (2D, L n)
+        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
+        N = self.num_envs
+        self._current = np.zeros((N, D))
+        self._history: NDArray[np.float64] | None = (
+            np.zeros((N, n + 1, D)) if render_mode is not None else None
+        )
+
+    def _reset_state(self, envs: NDArray[np.int64]) -> None:
+        self._current[envs] = self.task.starts[self._index[envs]]
+        if self._history is not None:
+            self._history[envs, 0] = self._current[envs]
+
+    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
+        D = self._D
+        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
+        obs[:, 2 * D : 3 * D] = self._current
+        return obs
+
+    def step(
+        self, actions: Any
+    ) -> tuple[
+        NDArray[np.float32],
+        NDArray[np.float64],
+        NDArray[np.bool_],
+        NDArray[np.bool_],
+        dict[str, Any],
+    ]:
+        D = self._D
+        a = self._check_actions(actions, D)
+        n = self._n_steps
+        k = np.minimum(self._k, n - 1)
+        rows = self._table[:, self._index * n + k]
+        cols = [a[:, i] for i in range(D)]
+        q, err = K.position_step(K.BATCH, rows[:D], rows[D:], cols, self.residual_scale)
+        w = self.reward_weights
+        sq = 0.0
+        for c in cols:
+            sq = sq + c * c
+        r_dist = -w["distance"] * err
+        r_act = -w["action"] * sq
+        reward = r_dist + r_act
+        active = ~self._autoreset
+        qs = np.stack(q, axis=1)
+        self._current = np.where(active[:, None], qs, self._current)
+        if self._history is not None:
+            rows_a = np.flatnonzero(active)
+            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
+        info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
+        return self._finish_step(err, reward, info)
+
+    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
+        info["max_error"] = np.where(ended, self._max_error, 0.0)
+        info["_max_error"] = ended
 
     def _render_env(self, i: int) -> NDArray[np.uint8]:
         single = self.single

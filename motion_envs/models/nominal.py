@@ -40,7 +40,12 @@ angle between ``e_k`` and ``h_k``; the environments also report the plain geodes
 
 Position (Lippi et al.)
 -----------------------
-See :class:`PositionNominal`.
+See :class:`PositionNominal` and :func:`position_grids`: line, null (mean residual) or
+Lippi's sine-series regression, fitted per task on the training demonstrations, on the
+same grid and with the same conditions as ``motion-bench position``. The error of a
+position is the Euclidean distance to the human's at the same grid point; the
+criterion is the median over tasks of the median over their trajectories of the max
+error (``motion-bench position``'s aggregation).
 """
 
 from __future__ import annotations
@@ -49,7 +54,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import (
@@ -72,9 +77,16 @@ if TYPE_CHECKING:
 
 __all__ = [
     "ORIENTATION_NOMINALS",
+    "POSITION_NOMINALS",
+    "POSITION_SPLITS",
     "OrientationGrids",
     "OrientationNominal",
+    "PositionGrids",
+    "PositionNominal",
+    "median_of_task_medians",
     "orientation_criterion",
+    "position_grids",
+    "resample_positions",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -256,3 +268,230 @@ def orientation_criterion(
         "n_test": len(test),
         "n_unseen": unseen,
     }
+
+
+# ---------------------------------------------------------------------------------------
+# Position (Lippi, Avizzano & Ruffaldi)
+# ---------------------------------------------------------------------------------------
+
+#: Nominal models of the position environment.
+POSITION_NOMINALS: tuple[str, ...] = ("line", "null", "sine")
+#: Splits of a position dataset (see :func:`position_grids`).
+POSITION_SPLITS: tuple[str, ...] = ("train", "test", "loo")
+#: Conditions of the sine-series regression (as ``motion-bench position``'s default).
+POSITION_CONDITIONS: tuple[str, ...] = ("start", "end")
+
+
+def resample_positions(
+    dataset: Any, n_points: int = DEFAULT_N_POINTS
+) -> tuple[FloatArray, FloatArray]:
+    """Every trajectory linearly interpolated on ``n_points`` uniform ``tau = (t - t_0)/T``.
+
+    Returns ``(L, n_points, D)`` positions and ``(L,)`` durations ``T`` (the same
+    resampling as ``motion-bench position``).
+    """
+    from motion_envs.geometry import sine_series as ss
+
+    if n_points < 5:
+        raise ValueError(f"n_points must be >= 5; got {n_points}")
+    tau = np.linspace(0.0, 1.0, n_points)
+    out = np.empty((len(dataset), n_points, dataset.n_dims))
+    for i, (y, t) in enumerate(zip(dataset.positions, dataset.times, strict=True)):
+        src = ss.normalised_time(t)
+        for j in range(y.shape[1]):
+            out[i, :, j] = np.interp(tau, src, y[:, j])
+    durations = np.array([t[-1] - t[0] for t in dataset.times])
+    return out, durations
+
+
+def _position_conditions(y: FloatArray, durations: FloatArray) -> FloatArray:
+    """Start and end positions, ``(n, 2 D)`` (``POSITION_CONDITIONS``)."""
+    return np.column_stack([y[:, 0], y[:, -1]])
+
+
+def _varying(q: FloatArray) -> NDArray[np.bool_]:
+    """Condition columns that vary over the training set (constant ones are dropped)."""
+    scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
+    return np.ptp(q, axis=0) > 1e-9 * scale
+
+
+class PositionNominal:
+    """A nominal position model of one task, fitted on its training demonstrations.
+
+    All trajectories are on the uniform ``n``-point grid of normalised time ``tau``.
+    With a trajectory's start ``y_0`` and end ``y_1`` (its task conditions):
+
+    * ``"line"``: ``y_0 + tau (y_1 - y_0)``;
+    * ``"null"``: the line plus the mean training residual ``D(tau)`` (eq. 3);
+    * ``"sine"``: Lippi et al.'s regression
+      (:class:`~motion_envs.models.sine_regression.SineSeriesRegression`) on the
+      conditions ``[start, end]`` (columns constant over the training set, such as
+      LASA's end point at the origin, dropped), ``N`` chosen by leave-one-out
+      cross-validation among 0..15 (:func:`~motion_envs.models.sine_regression.select_n_sines`)
+      when ``n_sines="auto"``; generation overwrites the first two coefficients from
+      the requested start and end.
+
+    This is the protocol of ``motion-bench position`` (its ``line``, ``null`` and
+    ``lippi`` columns), so its leave-one-out criterion is reproduced exactly.
+    """
+
+    def __init__(self, kind: str = "sine", n_sines: int | str = "auto") -> None:
+        if kind not in POSITION_NOMINALS:
+            raise ValueError(f"nominal must be one of {list(POSITION_NOMINALS)}; got {kind!r}")
+        if n_sines != "auto" and (
+            isinstance(n_sines, bool) or not isinstance(n_sines, (int, np.integer)) or n_sines < 0
+        ):
+            raise ValueError(f"n_sines must be 'auto' or an integer >= 0; got {n_sines!r}")
+        self.kind = kind
+        self.n_sines = n_sines
+
+    def fit(self, y: FloatArray, durations: FloatArray) -> PositionNominal:
+        """Fit on ``(n, K, D)`` training trajectories on the grid; returns self."""
+        import warnings
+
+        from motion_envs.geometry import sine_series as ss
+        from motion_envs.models.sine_regression import (
+            RankDeficientDesignWarning,
+            SineSeriesRegression,
+            select_n_sines,
+        )
+
+        y = np.asarray(y, dtype=np.float64)
+        if y.ndim != 3 or y.shape[0] < 1:
+            raise ValueError(f"training trajectories must be (n >= 1, K, D); got {y.shape}")
+        k = y.shape[1]
+        self.tau_ = np.linspace(0.0, 1.0, k)
+        self.n_train_ = int(y.shape[0])
+        if self.kind == "null":
+            self.mean_residual_ = ss.residual(self.tau_, y).mean(axis=0)
+        elif self.kind == "sine":
+            q = _position_conditions(y, durations)
+            self.keep_ = _varying(q)
+            q_train = q[:, self.keep_]
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RankDeficientDesignWarning)
+                n_use = self.n_sines
+                if n_use == "auto":
+                    cands = [c for c in range(16) if c <= k - 2]
+                    n_use, _ = select_n_sines(list(y), q_train, candidates=cands)
+                self.n_sines_ = int(n_use)
+                self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(list(y), q_train)
+        return self
+
+    def predict(self, y: FloatArray, durations: FloatArray) -> FloatArray:
+        """Nominal of each trajectory of ``y`` ``(m, K, D)`` from its own conditions."""
+        from motion_envs.geometry import sine_series as ss
+
+        if not hasattr(self, "tau_"):
+            raise RuntimeError("PositionNominal is not fitted; call fit() first")
+        y = np.asarray(y, dtype=np.float64)
+        tau = self.tau_
+        out = np.empty_like(y)
+        q_all = _position_conditions(y, durations) if self.kind == "sine" else None
+        for i in range(y.shape[0]):
+            start, end = y[i, 0], y[i, -1]
+            line = start + tau[:, None] * (end - start)
+            if self.kind == "line":
+                out[i] = line
+            elif self.kind == "null":
+                out[i] = line + self.mean_residual_
+            else:
+                assert q_all is not None
+                p = self.model_.predict_coefficients(q_all[i, self.keep_], start=start, end=end)
+                out[i] = ss.evaluate(p, tau)
+        return out
+
+
+@dataclass(frozen=True)
+class PositionGrids:
+    """Human and nominal positions of the episodes of one split.
+
+    Attributes: ``tau`` ``(n,)``; ``human``, ``nominal`` ``(L, n, D)``; ``index``
+    ``(L,)`` the trajectories' indices in the dataset; ``tasks`` ``(L,)``.
+    """
+
+    tau: FloatArray
+    human: FloatArray
+    nominal: FloatArray
+    index: NDArray[np.int64]
+    tasks: NDArray[np.str_]
+
+    def max_errors(self) -> FloatArray:
+        """``(L,)`` the nominal's ``max_k |y_k - yhat_k|``."""
+        return np.max(np.linalg.norm(self.human - self.nominal, axis=-1), axis=-1)
+
+    def criterion(self) -> float:
+        """Median over tasks of the median over the task's episodes of the max error.
+
+        The aggregation of ``motion-bench position`` (per shape, then across shapes).
+        """
+        return median_of_task_medians(self.max_errors(), self.tasks)
+
+
+def median_of_task_medians(values: ArrayLike, tasks: ArrayLike) -> float:
+    """``median_task median_{trajectories of the task} values`` (``motion-bench position``)."""
+    values = np.asarray(values, dtype=np.float64)
+    tasks = np.asarray(tasks).astype(str)
+    return float(np.median([np.median(values[tasks == t]) for t in np.unique(tasks)]))
+
+
+def position_grids(
+    dataset: Any,
+    split: str = "test",
+    nominal: str = "sine",
+    n_sines: int | str = "auto",
+    test_fraction: float = 0.25,
+    seed: int = 0,
+    n_points: int = DEFAULT_N_POINTS,
+) -> PositionGrids:
+    """Episodes of a split of a position dataset with the nominal of each trajectory.
+
+    Nominals are fitted per task (shape) on its training demonstrations only:
+
+    * ``"train"`` / ``"test"``: :func:`~motion_envs.datasets.splits.split_by_replicate`
+      holds ``test_fraction`` of each task's demonstrations out (seed ``seed``); the
+      nominal of the task is fitted on the training ones and predicts the split's;
+    * ``"loo"``: every demonstration, each predicted by the nominal fitted on the other
+      demonstrations of its task (``motion-bench position``'s leave-one-out protocol;
+      tasks with fewer than 3 demonstrations are skipped, as there).
+    """
+    from motion_envs.datasets.splits import split_by_replicate
+
+    if split not in POSITION_SPLITS:
+        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    y_all, dur_all = resample_positions(dataset, n_points)
+    tasks = np.asarray(dataset.tasks).astype(str)
+    order = list(dict.fromkeys(tasks.tolist()))
+    idx_out: list[int] = []
+    preds: list[FloatArray] = []
+    if split == "loo":
+        for task in order:
+            members = np.flatnonzero(tasks == task)
+            if members.size < 3:
+                continue
+            for i in members:
+                train = members[members != i]
+                model = PositionNominal(nominal, n_sines).fit(y_all[train], dur_all[train])
+                preds.append(model.predict(y_all[i : i + 1], dur_all[i : i + 1])[0])
+                idx_out.append(int(i))
+    else:
+        is_test = split_by_replicate(dataset, test_fraction=test_fraction, seed=seed, mask=True)
+        for task in order:
+            members = tasks == task
+            train = np.flatnonzero(members & ~is_test)
+            scored = np.flatnonzero(members & (is_test if split == "test" else ~is_test))
+            if scored.size == 0:
+                continue
+            model = PositionNominal(nominal, n_sines).fit(y_all[train], dur_all[train])
+            preds.extend(model.predict(y_all[scored], dur_all[scored]))
+            idx_out.extend(int(i) for i in scored)
+    if not idx_out:
+        raise ValueError(f"the {split!r} split of this dataset holds no trajectory")
+    index = np.asarray(idx_out, dtype=np.int64)
+    return PositionGrids(
+        tau=np.linspace(0.0, 1.0, n_points),
+        human=y_all[index],
+        nominal=np.stack(preds),
+        index=index,
+        tasks=tasks[index],
+    )

@@ -1,0 +1,424 @@
+"""``MotionEnvs/PositionReach-v0``: act on top of an analytic position trajectory."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.envs import _kernels as K
+from motion_envs.envs.orientation_reach import N_STEPS, _check_scale
+
+__all__ = [
+    "DEFAULT_POSITION_REWARD_WEIGHTS",
+    "PositionReachEnv",
+    "PositionTask",
+    "load_position_task",
+]
+
+#: Default reward weights (see the class docstring, section Rewards).
+DEFAULT_POSITION_REWARD_WEIGHTS: Mapping[str, float] = {"distance": 1.0, "action": 0.0}
+
+
+@dataclass(frozen=True)
+class PositionTask:
+    """Precomputed episodes of one split (read-only arrays shared between environments).
+
+    ``steps[l, k]`` holds the nominal ``n_k`` (D values) then the human ``y_k`` (D) of
+    trajectory ``l`` at grid point ``k``; ``obs[l, j]`` the observation before the step
+    that sets grid point ``j`` with the current position left at 0.
+    """
+
+    name: str
+    unit: str
+    nominal: str
+    split: str
+    n_dims: int
+    steps: NDArray[np.float64]  # (L, n, 2 D)
+    obs: NDArray[np.float32]  # (L, n + 1, obs_dim)
+    starts: NDArray[np.float64]  # (L, D)
+    low: NDArray[np.float32]
+    high: NDArray[np.float32]
+    trajectory_ids: NDArray[np.str_]
+    tasks: NDArray[np.str_]
+    task_names: tuple[str, ...]
+    criterion: float
+    grids: Any  # motion_envs.models.nominal.PositionGrids
+
+    @property
+    def n_trajectories(self) -> int:
+        return int(self.steps.shape[0])
+
+    @property
+    def obs_dim(self) -> int:
+        return int(self.obs.shape[2])
+
+
+def _load_dataset(data: str | os.PathLike[str], shapes: tuple[str, ...] | None) -> Any:
+    from pathlib import Path
+
+    from motion_envs.datasets.lasa import load_lasa
+    from motion_envs.datasets.position_csv import read_position_csv
+
+    if isinstance(data, str) and data == "lasa":
+        return load_lasa(list(shapes) if shapes else None)
+    path = Path(data)
+    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+        raise ValueError(f"data must be 'lasa' or a path to a position CSV; got {data!r}")
+    ds = read_position_csv(path)
+    if shapes:
+        unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
+        if unknown:
+            raise ValueError(f"shapes: task(s) {unknown} are not in {path}")
+        ds = ds.subset(np.isin(ds.tasks, list(shapes)))
+    return ds
+
+
+def _build_task(
+    data: str | os.PathLike[str],
+    shapes: tuple[str, ...] | None,
+    split: str,
+    nominal: str,
+    n_sines: int | str,
+    test_fraction: float,
+    split_seed: int,
+    residual_scale: float,
+) -> PositionTask:
+    from motion_envs.models.nominal import position_grids
+
+    dataset = _load_dataset(data, shapes)
+    g = position_grids(dataset, split, nominal, n_sines, test_fraction, split_seed, N_STEPS)
+    L, n, D = g.human.shape
+    steps = np.concatenate([g.nominal, g.human], axis=2)
+    task_names = tuple(sorted(set(np.asarray(dataset.tasks).astype(str).tolist())))
+    starts, goals = g.human[:, 0], g.human[:, -1]
+    # bounds that hold: every position an agent can reach is a nominal + residual
+    lo = min(g.nominal.min(), g.human.min()) - residual_scale
+    hi = max(g.nominal.max(), g.human.max()) + residual_scale
+    pad = 1e-3 * max(1.0, abs(lo), abs(hi))
+    dim = 4 * D + 1 + len(task_names)
+    low = np.full(dim, lo - pad, dtype=np.float32)
+    high = np.full(dim, hi + pad, dtype=np.float32)
+    low[3 * D] = 0.0
+    high[3 * D] = 1.0
+    low[4 * D + 1 :] = 0.0
+    high[4 * D + 1 :] = 1.0
+    obs = np.zeros((L, n + 1, dim), dtype=np.float32)
+    obs[:, :, 0:D] = starts[:, None]
+    obs[:, :, D : 2 * D] = goals[:, None]
+    obs[:, :n, 3 * D] = g.tau
+    obs[:, n, 3 * D] = 1.0
+    obs[:, :n, 3 * D + 1 : 4 * D + 1] = g.nominal
+    obs[:, n, 3 * D + 1 : 4 * D + 1] = g.nominal[:, -1]
+    task_index = np.searchsorted(np.asarray(task_names), g.tasks)
+    obs[np.arange(L), :, 4 * D + 1 + task_index] = 1.0
+    for arr in (steps, obs):
+        arr.flags.writeable = False
+    return PositionTask(
+        name=dataset.name,
+        unit=getattr(dataset, "unit", ""),
+        nominal=nominal,
+        split=split,
+        n_dims=D,
+        steps=steps,
+        obs=obs,
+        starts=starts,
+        low=low,
+        high=high,
+        trajectory_ids=np.asarray(dataset.trajectory_ids)[g.index],
+        tasks=g.tasks,
+        task_names=task_names,
+        criterion=g.criterion(),
+        grids=g,
+    )
+
+
+_build_task_cached = functools.lru_cache(maxsize=32)(_build_task)
+
+
+def load_position_task(
+    data: str | os.PathLike[str] = "lasa",
+    shapes: Sequence[str] | None = None,
+    split: str = "train",
+    nominal: str = "sine",
+    n_sines: int | str = "auto",
+    test_fraction: float = 0.25,
+    split_seed: int = 0,
+    residual_scale: float = 5.0,
+) -> PositionTask:
+    """Build (or reuse) the precomputed episodes of a split; LASA is cached."""
+    from motion_envs.models.nominal import POSITION_NOMINALS, POSITION_SPLITS, PositionNominal
+
+    if split not in POSITION_SPLITS:
+        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    PositionNominal(nominal, n_sines)  # validates nominal and n_sines
+    assert nominal in POSITION_NOMINALS
+    if shapes is not None:
+        if isinstance(shapes, str) or not all(isinstance(s, str) for s in shapes):
+            raise ValueError(f"shapes must be a list of shape names or None; got {shapes!r}")
+        shapes = tuple(shapes)
+    args = (data, shapes, split, nominal, n_sines, float(test_fraction), split_seed, residual_scale)
+    if isinstance(data, str) and data == "lasa":
+        return _build_task_cached(*args)
+    return _build_task(*args)
+
+
+def _check_reward_weights(weights: Mapping[str, float] | None) -> dict[str, float]:
+    out = dict(DEFAULT_POSITION_REWARD_WEIGHTS)
+    if weights is None:
+        return out
+    if not isinstance(weights, Mapping):
+        raise ValueError(f"reward_weights must be a mapping; got {type(weights).__name__}")
+    for key, value in weights.items():
+        if key not in out:
+            raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+            raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"reward_weights[{key!r}] must be finite and >= 0; got {value!r}")
+        out[key] = float(value)
+    return out
+
+
+class PositionReachEnv(gym.Env):
+    r"""Replay a human demonstration's positions; the agent corrects an analytic nominal.
+
+    ## Description
+    Lippi, Avizzano & Ruffaldi (2011) write a movement as a line from its start to its
+    end plus a sine series on normalised time, and regress the coefficients on the
+    movement's boundary conditions. Each episode replays the *task* of one recorded
+    demonstration (its start and end point and its shape/task label) on the 50-point
+    normalised-time grid: at every step the agent moves the nominal model's position
+    by a small offset and is scored by its distance to the demonstration at that time.
+    Nominals are fitted per task on the training demonstrations only
+    (:mod:`motion_envs.models.nominal`).
+
+    The zero action reproduces the nominal exactly: with ``split="loo"`` (every
+    demonstration, its nominal fitted on the other demonstrations of its shape) the
+    median over shapes of the median over their episodes of ``info["max_error"]``
+    equals ``motion-bench position --n-points 50``'s max-error criterion of the same
+    model (``line``, ``null``, ``lippi`` for ``"sine"``), tested to 1e-9.
+
+    ## Action Space
+    The action space is a `Box(-1, 1, (D,), float32)`, ``D`` the data's dimension (2 for
+    LASA): the offset from the nominal position in units of `residual_scale`,
+    ``y_k = n_k + residual_scale * a_k``. Actions outside ``[-1, 1]`` are clipped; a
+    wrong shape or a NaN or infinite entry raises `ValueError` and leaves the
+    environment unchanged.
+
+    | Num | Action                                 | Control Min | Control Max | Type (Unit)                   |
+    |-----|----------------------------------------|-------------|-------------|-------------------------------|
+    | 0   | x offset from the nominal              | -1          | 1           | position (residual_scale)     |
+    | 1   | y offset from the nominal              | -1          | 1           | position (residual_scale)     |
+    | 2   | z offset (3-D data only)               | -1          | 1           | position (residual_scale)     |
+
+    ## Observation Space
+    The observation space is a `Box(low, high, (4 D + 1 + T,), float32)`, ``T`` the number
+    of tasks (30 LASA shapes: 39 values). Position bounds are those of every human and
+    nominal position of the split widened by `residual_scale`, so they hold.
+
+    | Num             | Observation                                                  | Min  | Max  | Type (Unit)     |
+    |-----------------|--------------------------------------------------------------|------|------|-----------------|
+    | 0 .. D-1        | start position ``y_0``                                       | low  | high | position        |
+    | D .. 2D-1       | goal position ``y_1``                                        | low  | high | position        |
+    | 2D .. 3D-1      | current position (the last one set; ``y_0`` at reset)        | low  | high | position        |
+    | 3D              | ``tau`` of the grid point the next action sets (1 after the last) | 0    | 1    | normalised time |
+    | 3D+1 .. 4D      | the nominal's position at that grid point ``n_k``            | low  | high | position        |
+    | 4D+1 ..         | one-hot task (shape) over the sorted task names              | 0    | 1    | unitless        |
+
+    ## Rewards
+    The reward is ``-(w_distance |y_k - h_k| + w_action |a_k|^2)`` with ``h_k`` the
+    demonstration at grid point ``k`` and the weights of `reward_weights` (default
+    ``distance: 1, action: 0``). `info` holds ``error`` (the distance, in the data's
+    unit), ``reward_distance``, ``reward_action`` and ``tau`` every step and, at the end
+    of an episode, ``max_error`` (the paper's per-trajectory criterion).
+
+    ## Starting State
+    `reset` draws one trajectory of the split uniformly with the environment's
+    generator (``options={"trajectory": i}`` picks trajectory ``i``); the current
+    position is its start ``y_0``.
+
+    ## Episode End
+    ### Termination
+    The episode terminates after 50 steps, when every point of the grid is set.
+
+    ### Truncation
+    The default duration of an episode is 50 steps (``max_episode_steps`` of the
+    registration), so the last step is both terminated and truncated.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/PositionReach-v0", shapes=["GShape"], nominal="sine")
+    ```
+
+    | Parameter        | Type         | Default   | Description |
+    |------------------|--------------|-----------|-------------|
+    | `data`           | **str**      | `"lasa"`  | `"lasa"` or a path to the users' position CSV |
+    | `shapes`         | **list**     | `None`    | shapes (LASA) or tasks (CSV) to use; None: all |
+    | `split`          | **str**      | `"train"` | `"train"`, `"test"` (held-out demonstrations of each task, `split_by_replicate`) or `"loo"` (every demonstration, nominal fitted on the others) |
+    | `nominal`        | **str**      | `"sine"`  | `"line"`, `"null"` (line + mean residual) or `"sine"` (Lippi's regression) |
+    | `n_sines`        | **int/str**  | `"auto"`  | number of sines of `"sine"`, or `"auto"` (leave-one-out CV, 0..15) |
+    | `residual_scale` | **float**    | `5.0`     | offset of an action of 1, in the data's unit (mm for LASA) |
+    | `reward_weights` | **dict**     | `None`    | weights of the reward terms, keys `distance`, `action` (None: 1, 0) |
+    | `test_fraction`  | **float**    | `0.25`    | share of each task's demonstrations held out for the test split |
+    | `split_seed`     | **int**      | `0`       | seed of the split (`split_by_replicate`) |
+    | `render_mode`    | **str**      | `None`    | `None` or `"rgb_array"` |
+    | `width`          | **int**      | `480`     | frame width in pixels |
+    | `height`         | **int**      | `480`     | frame height in pixels |
+
+    ## Version History
+    * v0: Initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+
+    def __init__(
+        self,
+        data: str | os.PathLike[str] = "lasa",
+        shapes: Sequence[str] | None = None,
+        split: str = "train",
+        nominal: str = "sine",
+        n_sines: int | str = "auto",
+        residual_scale: float = 5.0,
+        reward_weights: Mapping[str, float] | None = None,
+        test_fraction: float = 0.25,
+        split_seed: int = 0,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        for name, value in (("width", width), ("height", height)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 16:
+                raise ValueError(f"{name} must be an integer >= 16; got {value!r}")
+        self.residual_scale = _check_scale(residual_scale)
+        self.reward_weights = _check_reward_weights(reward_weights)
+        self.task = load_position_task(
+            data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale
+        )
+        D = self.task.n_dims
+        self._D = D
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (D,), dtype=np.float32)
+        self.observation_space = gym.spaces.Box(self.task.low, self.task.high, dtype=np.float32)
+        self._renderer: Any = None
+        self._index = -1
+        self._k = N_STEPS
+        self._history: list[tuple[float, ...]] = []
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        L = self.task.n_trajectories
+        if options is not None and options.get("trajectory") is not None:
+            index = options["trajectory"]
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
+            if not 0 <= index < L:
+                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
+            index = int(index)
+        else:
+            index = int(self.np_random.integers(L))
+        self._index = index
+        self._k = 0
+        self._steps = self.task.steps[index].tolist()
+        self._obs = self.task.obs[index]
+        start = tuple(self.task.starts[index].tolist())
+        self._history = [start]
+        self._max_error = 0.0
+        D = self._D
+        obs = self._obs[0].copy()
+        obs[2 * D : 3 * D] = start
+        info = {
+            "trajectory_index": index,
+            "trajectory_id": str(self.task.trajectory_ids[index]),
+            "task": str(self.task.tasks[index]),
+        }
+        return obs, info
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        k = self._k
+        if k >= N_STEPS:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        D = self._D
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (D,):
+            raise ValueError(f"action must have shape ({D},); got shape {a.shape}")
+        acts = a.tolist()
+        for v in acts:
+            if not math.isfinite(v):
+                raise ValueError(f"action must be finite; got {acts}")
+        acts = [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
+        row = self._steps[k]
+        q, err = K.position_step(K.SCALAR, row[:D], row[D:], acts, self.residual_scale)
+        w = self.reward_weights
+        sq = 0.0
+        for v in acts:
+            sq = sq + v * v
+        r_dist = -w["distance"] * err
+        r_act = -w["action"] * sq
+        reward = r_dist + r_act
+        self._k = k = k + 1
+        self._history.append(tuple(q))
+        if err > self._max_error:
+            self._max_error = err
+        obs = self._obs[k].copy()
+        obs[2 * D : 3 * D] = q
+        info = {
+            "error": err,
+            "reward_distance": r_dist,
+            "reward_action": r_act,
+            "tau": (k - 1) / (N_STEPS - 1),
+        }
+        terminated = k == N_STEPS
+        if terminated:
+            info["max_error"] = self._max_error
+        return obs, reward, terminated, False, info
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' to "
+                "gym.make(...)"
+            )
+            return None
+        if self._index < 0:
+            raise RuntimeError("call reset() before render()")
+        if self._renderer is None:
+            from motion_envs.envs.rendering import CurveRenderer
+
+            self._renderer = CurveRenderer(self.width, self.height, self.task.low, self.task.high)
+        g = self.task.grids
+        return self._renderer.render(
+            human=g.human[self._index],
+            nominal=g.nominal[self._index],
+            agent=np.asarray(self._history),
+            title=f"{self.task.tasks[self._index]}  step {len(self._history) - 1}/{N_STEPS}",
+        )
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state

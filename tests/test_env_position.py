@@ -1,0 +1,240 @@
+"""MotionEnvs/PositionReach-v0: contract, reliability and the zero-action invariant."""
+
+from __future__ import annotations
+
+import json
+import pickle
+import random
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from test_env_orientation import _documented_defaults, _fail_on_warnings, rollout
+
+import motion_envs
+from motion_envs.envs.orientation_reach import N_STEPS
+from motion_envs.envs.position_reach import PositionReachEnv
+
+ENV_ID = "MotionEnvs/PositionReach-v0"
+SHAPES = ["Angle", "CShape", "GShape"]
+
+
+def make(**kwargs):
+    kwargs.setdefault("shapes", SHAPES)
+    return gym.make(ENV_ID, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def actions() -> np.ndarray:
+    return np.random.default_rng(5).uniform(-1, 1, size=(120, 2)).astype(np.float32)
+
+
+def test_registered_and_module_form():
+    assert ENV_ID in motion_envs.ENV_IDS
+    env = gym.make("motion_envs:" + ENV_ID, shapes=SHAPES)
+    assert isinstance(env.unwrapped, PositionReachEnv)
+    assert env.spec.max_episode_steps == N_STEPS
+    assert env.action_space.shape == (2,)
+    assert env.observation_space.shape == (4 * 2 + 1 + 3,)
+
+
+def test_gymnasium_and_sb3_check_env_without_warnings():
+    from gymnasium.utils.env_checker import check_env
+
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    with warnings.catch_warnings(record=True) as record:
+        warnings.simplefilter("always")
+        check_env(gym.make(ENV_ID).unwrapped, skip_render_check=True)
+        sb3_checker.check_env(PositionReachEnv(shapes=SHAPES), warn=True)
+    _fail_on_warnings(record)
+
+
+@pytest.mark.parametrize(
+    ("nominal", "column"), [("line", "line"), ("null", "null"), ("sine", "lippi")]
+)
+def test_zero_action_invariant_matches_motion_bench_position(tmp_path, nominal, column):
+    """Zero-action episodes of split='loo' reproduce motion-bench position's max error."""
+    from baselines.cli import main
+
+    out = tmp_path / "bench"
+    argv = ["position", "--no-peers", "--no-progress", "--n-points", "50", "--out", str(out)]
+    assert main([*argv, "--shapes", *SHAPES]) == 0
+    doc = json.loads((out / "results.json").read_text())
+    offline = doc["summary_median_across_shapes"][column]["max_error"]
+    env = make(split="loo", nominal=nominal)
+    task = env.unwrapped.task
+    maxima = []
+    for l in range(task.n_trajectories):
+        env.reset(options={"trajectory": l})
+        for _ in range(N_STEPS):
+            _, _, terminated, _, info = env.step(np.zeros(2, np.float32))
+        assert terminated
+        maxima.append(info["max_error"])
+    per_shape = [np.median(np.array(maxima)[task.tasks == s]) for s in SHAPES]
+    assert abs(float(np.median(per_shape)) - offline) <= 1e-9
+    for s, value in zip(SHAPES, per_shape, strict=True):
+        assert abs(value - doc["per_shape"][s]["criteria"][column]["max_error"]) <= 1e-9
+
+
+def test_train_test_split_by_replicate():
+    from motion_envs.datasets.lasa import load_lasa
+    from motion_envs.datasets.splits import split_by_replicate
+
+    ds = load_lasa(SHAPES)
+    train, test = split_by_replicate(ds, test_fraction=0.25, seed=0)
+    assert len(train) + len(test) == len(ds)
+    assert not set(train.trajectory_ids) & set(test.trajectory_ids)
+    for s in SHAPES:
+        assert np.count_nonzero(test.tasks == s) == 2  # round(0.25 * 7)
+    env_test = PositionReachEnv(shapes=SHAPES, split="test").task
+    assert sorted(env_test.trajectory_ids) == sorted(test.trajectory_ids)
+    other = split_by_replicate(ds, seed=1, mask=True)
+    assert not np.array_equal(other, split_by_replicate(ds, seed=0, mask=True))
+
+
+def test_zero_action_reproduces_the_nominal_and_ends_at_the_goal():
+    env = make(split="test", nominal="null")
+    task = env.unwrapped.task
+    env.reset(options={"trajectory": 1})
+    errors = []
+    for _ in range(N_STEPS):
+        obs, reward, terminated, truncated, info = env.step(np.zeros(2, np.float32))
+        errors.append(info["error"])
+        assert reward == -info["error"]
+    assert terminated and truncated
+    g = task.grids
+    np.testing.assert_allclose(
+        errors, np.linalg.norm(g.human[1] - g.nominal[1], axis=1), atol=1e-12
+    )
+    assert info["max_error"] == max(errors)
+    np.testing.assert_allclose(obs[4:6], obs[2:4], atol=1e-4)  # ends at the goal
+
+
+def test_residual_scale_is_the_offset_of_a_unit_action():
+    env = make(residual_scale=2.0)
+    obs, _ = env.reset(seed=0)
+    nominal = obs[7:9].astype(np.float64)
+    obs, *_ = env.step(np.array([1.0, -0.5], np.float32))
+    np.testing.assert_allclose(obs[4:6] - nominal, [2.0, -1.0], atol=1e-4)
+
+
+def test_seeded_rollouts_bit_identical_and_global_seeds_irrelevant(actions):
+    np.random.seed(0)  # noqa: NPY002
+    random.seed(0)
+    a = rollout(make(), 3, actions)
+    np.random.seed(1)  # noqa: NPY002
+    random.seed(1)
+    b = rollout(make(), 3, actions)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+
+
+def test_pickled_env_reproduces_its_original(actions):
+    env = make()
+    env.reset(seed=5)
+    for a in actions[:20]:
+        env.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    for a in actions[20:]:
+        r1, r2 = env.step(a), clone.step(a)
+        np.testing.assert_array_equal(r1[0], r2[0])
+        assert r1[1:4] == r2[1:4]
+        if r1[2] or r1[3]:
+            np.testing.assert_array_equal(env.reset()[0], clone.reset()[0])
+
+
+@pytest.mark.parametrize("shape", [(3,), (1,), (1, 2), ()])
+def test_wrong_action_shape_raises(shape):
+    env = make()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(shape, np.float32))
+
+
+def test_clipping_and_non_finite_actions():
+    a, b = make(), make()
+    a.reset(seed=1)
+    b.reset(seed=1)
+    big = np.array([3.0, -9.0], np.float32)
+    ra, rb = a.step(big), b.step(np.clip(big, -1, 1))
+    np.testing.assert_array_equal(ra[0], rb[0])
+    assert ra[1] == rb[1]
+    for bad in (np.nan, np.inf, -np.inf):
+        with pytest.raises(ValueError, match="finite"):
+            a.step(np.array([bad, 0.0], np.float32))
+    for _ in range(5):
+        ra, rb = a.step(np.full(2, 0.3, np.float32)), b.step(np.full(2, 0.3, np.float32))
+        np.testing.assert_array_equal(ra[0], rb[0])
+
+
+def test_observations_stay_in_space_over_10000_random_steps():
+    env = make()
+    env.action_space.seed(0)
+    obs, _ = env.reset(seed=0)
+    for _ in range(10_000):
+        obs, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+        if terminated or truncated:
+            obs, _ = env.reset()
+            assert env.observation_space.contains(obs)
+
+
+def test_close_twice_and_step_before_reset():
+    env = PositionReachEnv(shapes=SHAPES)
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(2))
+    env.close()
+    env.close()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"split": "validation"}, "split"),
+        ({"nominal": "bezier"}, "nominal"),
+        ({"n_sines": -1}, "n_sines"),
+        ({"residual_scale": 0.0}, "residual_scale"),
+        ({"reward_weights": {"geodesic": 1.0}}, "reward_weights"),
+        ({"shapes": ["NoSuchShape"]}, "NoSuchShape"),
+        ({"data": "nowhere"}, "data"),
+        ({"render_mode": "human"}, "render_mode"),
+    ],
+)
+def test_bad_arguments_raise_value_error(kwargs, match):
+    kwargs.setdefault("shapes", SHAPES)
+    with pytest.raises(ValueError, match=match):
+        PositionReachEnv(**kwargs)
+
+
+def test_users_csv_in_3d(tmp_path):
+    from motion_envs.datasets.lasa import load_lasa
+
+    ds = load_lasa(SHAPES)
+    rows = ["trajectory,subject,task,t,x,y,z"]
+    for i in range(len(ds)):
+        y, t = ds.positions[i], ds.times[i]
+        for j in range(0, y.shape[0], 10):
+            vals = [t[j], y[j, 0], y[j, 1], 0.01 * y[j, 0] * y[j, 1]]
+            rows.append(
+                f"{ds.trajectory_ids[i]},s,{ds.tasks[i]}," + ",".join(map(repr, map(float, vals)))
+            )
+    path = tmp_path / "mine.csv"
+    path.write_text("\n".join(rows) + "\n")
+    env = gym.make(ENV_ID, data=str(path), nominal="null", split="test")
+    assert env.action_space.shape == (3,)
+    env.reset(seed=0)
+    obs, *_ = env.step(np.zeros(3, np.float32))
+    assert env.observation_space.contains(obs)
+
+
+def test_documented_argument_defaults_equal_the_signature():
+    import inspect
+
+    documented = _documented_defaults(PositionReachEnv)
+    params = {
+        name: p.default
+        for name, p in inspect.signature(PositionReachEnv.__init__).parameters.items()
+        if name != "self"
+    }
+    assert documented == params
