@@ -1,0 +1,203 @@
+"""Frames of the environments: ``uint8`` ``(height, width, 3)`` RGB arrays.
+
+* :class:`HandFrameRenderer` (orientation): a MuJoCo scene
+  (``assets/hand_frames.xml``) with three hand frames at the origin, the human's
+  (green), the nominal's (translucent grey) and the agent's (orange), each with a long
+  pointing axis, a medium and a short axis; dots trace the tip of the human's and the
+  agent's pointing axis so far. MuJoCo renders offscreen through EGL or OSMesa: when
+  ``MUJOCO_GL`` is unset and there is no display, ``MUJOCO_GL=egl`` is set before MuJoCo
+  is first imported. Without a working OpenGL backend the same scene is drawn with
+  matplotlib's Agg canvas instead (``backend`` says which is used).
+* :class:`CurveRenderer` (position): the human demonstration, the nominal and the
+  agent's positions so far as curves (matplotlib Agg; first two coordinates).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["CurveRenderer", "HandFrameRenderer"]
+
+# axis lengths of the hand frame (pointing, medium, short), as in the MJCF
+_AXES = np.array([0.8, 0.45, 0.25])
+_COLORS = {"human": (0.1, 0.65, 0.2), "nominal": (0.5, 0.5, 0.5), "agent": (0.95, 0.5, 0.05)}
+
+
+def _prefer_offscreen_gl() -> None:
+    if "mujoco" not in sys.modules and "MUJOCO_GL" not in os.environ:
+        if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+            os.environ["MUJOCO_GL"] = "egl"
+
+
+def _rotations(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(n, 3, 3)`` rotation matrices of scalar-first quaternions (normalised first)."""
+    from motion_envs.geometry import quaternion as quat
+
+    return quat.to_rotation(quat.normalize(q)).as_matrix()
+
+
+def _new_figure(width: int, height: int) -> Any:
+    """A figure on its own Agg canvas (no pyplot, no global backend switch)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width / 100, height / 100), dpi=100)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _figure_to_array(fig: Any) -> NDArray[np.uint8]:
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+
+class HandFrameRenderer:
+    """Draw the human, nominal and agent hand frames (see the module docstring)."""
+
+    def __init__(self, width: int = 480, height: int = 480, backend: str = "auto") -> None:
+        if backend not in ("auto", "mujoco", "matplotlib"):
+            raise ValueError(f"backend must be 'auto', 'mujoco' or 'matplotlib'; got {backend!r}")
+        self.width, self.height = int(width), int(height)
+        self._renderer: Any = None
+        self._fig: Any = None
+        self.backend = "matplotlib"
+        if backend in ("auto", "mujoco"):
+            try:
+                self._init_mujoco()
+                self.backend = "mujoco"
+            except Exception as exc:
+                if backend == "mujoco":
+                    raise RuntimeError(
+                        "MuJoCo offscreen rendering is unavailable; install libegl-mesa0 and "
+                        "set MUJOCO_GL=egl (or libosmesa6 and MUJOCO_GL=osmesa): "
+                        f"{type(exc).__name__}: {exc}"
+                    ) from exc
+
+    def _init_mujoco(self) -> None:
+        _prefer_offscreen_gl()
+        import mujoco
+
+        xml = (resources.files("motion_envs.envs") / "assets" / "hand_frames.xml").read_text()
+        self._mj = mujoco
+        self._model = mujoco.MjModel.from_xml_string(xml)
+        self._data = mujoco.MjData(self._model)
+        self._renderer = mujoco.Renderer(self._model, self.height, self.width)
+        self._mocap = {
+            name: int(self._model.body(name).mocapid[0]) for name in ("human", "nominal", "agent")
+        }
+
+    def render(
+        self,
+        human: NDArray[np.float64],
+        nominal: NDArray[np.float64],
+        agent: NDArray[np.float64],
+        step: int,
+    ) -> NDArray[np.uint8]:
+        """Frame at ``step``: ``human``/``nominal`` ``(n, 4)`` grids, ``agent`` ``(step+1, 4)``."""
+        k = int(min(step, human.shape[0] - 1))
+        current = {"human": human[k], "nominal": nominal[k], "agent": agent[-1]}
+        tips_h = _rotations(human[: k + 1])[:, :, 0] * _AXES[0]
+        tips_a = _rotations(agent)[:, :, 0] * _AXES[0]
+        if self.backend == "mujoco":
+            return self._render_mujoco(current, tips_h, tips_a)
+        return self._render_matplotlib(current, tips_h, tips_a, k)
+
+    def _render_mujoco(
+        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray
+    ) -> NDArray[np.uint8]:
+        mj = self._mj
+        for name, q in current.items():
+            self._data.mocap_quat[self._mocap[name]] = q / np.linalg.norm(q)
+        mj.mj_forward(self._model, self._data)
+        self._renderer.update_scene(self._data, camera="view")
+        scene = self._renderer.scene
+        eye = np.eye(3).ravel()
+        for tips, rgb in ((tips_h, _COLORS["human"]), (tips_a, _COLORS["agent"])):
+            for p in tips:
+                if scene.ngeom >= scene.maxgeom:
+                    break
+                mj.mjv_initGeom(
+                    scene.geoms[scene.ngeom],
+                    mj.mjtGeom.mjGEOM_SPHERE,
+                    np.array([0.012, 0.0, 0.0]),
+                    p,
+                    eye,
+                    np.array([*rgb, 0.9], dtype=np.float32),
+                )
+                scene.ngeom += 1
+        return self._renderer.render().copy()
+
+    def _render_matplotlib(
+        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray, k: int
+    ) -> NDArray[np.uint8]:
+        if self._fig is None:
+            self._fig = _new_figure(self.width, self.height)
+        fig = self._fig
+        fig.clear()
+        ax = fig.add_subplot(projection="3d")
+        for name, q in current.items():
+            R = _rotations(q[None])[0]
+            alpha = 0.35 if name == "nominal" else 1.0
+            for j in range(3):
+                end = R[:, j] * _AXES[j]
+                ax.plot(
+                    [0, end[0]], [0, end[1]], [0, end[2]], color=_COLORS[name], lw=3, alpha=alpha
+                )
+        ax.plot(*tips_h.T, ".", color=_COLORS["human"], ms=3)
+        ax.plot(*tips_a.T, ".", color=_COLORS["agent"], ms=3)
+        for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
+            setter(-0.85, 0.85)
+        ax.set_title(f"human (green), nominal (grey), agent (orange); step {k}", fontsize=8)
+        return _figure_to_array(fig)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        self._fig = None
+
+
+class CurveRenderer:
+    """Draw position curves: human (black), nominal (grey dashed), agent (orange)."""
+
+    def __init__(self, width: int, height: int, low: NDArray, high: NDArray) -> None:
+        self.width, self.height = int(width), int(height)
+        self._fig = _new_figure(self.width, self.height)
+        self._lim = (float(low[0]), float(high[0]))
+
+    def render(
+        self,
+        human: NDArray[np.float64],
+        nominal: NDArray[np.float64],
+        agent: NDArray[np.float64],
+        title: str = "",
+    ) -> NDArray[np.uint8]:
+        fig = self._fig
+        fig.clear()
+        ax = fig.add_subplot()
+        ax.plot(human[:, 0], human[:, 1], "-", color="black", lw=1.5, label="human")
+        ax.plot(nominal[:, 0], nominal[:, 1], "--", color="0.55", lw=1.5, label="nominal")
+        ax.plot(
+            agent[:, 0], agent[:, 1], "-o", color=_COLORS["agent"], lw=1.5, ms=2.5, label="agent"
+        )
+        k = min(agent.shape[0] - 1, human.shape[0] - 1)
+        ax.plot(*human[k, :2], "s", color="black", ms=5)
+        ax.plot(*human[0, :2], "k^", ms=6)
+        ax.plot(*human[-1, :2], "k*", ms=9)
+        ax.set_xlim(*self._lim)
+        ax.set_ylim(*self._lim)
+        ax.set_aspect("equal")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=7)
+        ax.set_title(title, fontsize=8)
+        fig.subplots_adjust(left=0.12, right=0.97, bottom=0.08, top=0.92)
+        return _figure_to_array(fig)
+
+    def close(self) -> None:
+        pass
