@@ -32,6 +32,10 @@ from motion_envs.envs import _kernels as K
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
+# Below this many sub-environments the orientation step runs the scalar kernel per
+# environment (numpy's per-call overhead dominates small batches).
+_SCALAR_BELOW = 8
+
 
 def _check_num_envs(num_envs: int) -> int:
     if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
@@ -295,19 +299,29 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         k = np.minimum(self._k, n - 1)
         rows = self._table[:, self._index * n + k]
         ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
-        q, err, geo = K.orientation_step(
-            K.BATCH,
-            (rows[0], rows[1], rows[2], rows[3]),
-            (rows[4], rows[5], rows[6], rows[7]),
-            (rows[8], rows[9], rows[10], rows[11]),
-            rows[12],
-            rows[13],
-            rows[14],
-            ax,
-            ay,
-            az,
-            self.residual_scale,
-        )
+        if self.num_envs < _SCALAR_BELOW:
+            # few environments: the scalar kernel (same arithmetic, bit-identical) is faster
+            outs = [
+                K.orientation_step_scalar(row, *act, self.residual_scale)
+                for row, act in zip(rows.T.tolist(), a.tolist(), strict=True)
+            ]
+            q = tuple(np.array([o[0][c] for o in outs]) for c in range(4))
+            err = np.array([o[1] for o in outs])
+            geo = np.array([o[2] for o in outs])
+        else:
+            q, err, geo = K.orientation_step(
+                K.BATCH,
+                (rows[0], rows[1], rows[2], rows[3]),
+                (rows[4], rows[5], rows[6], rows[7]),
+                (rows[8], rows[9], rows[10], rows[11]),
+                rows[12],
+                rows[13],
+                rows[14],
+                ax,
+                ay,
+                az,
+                self.residual_scale,
+            )
         w = self.reward_weights
         r_res = -w["residual"] * err
         r_geo = -w["geodesic"] * geo

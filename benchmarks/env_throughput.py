@@ -1,0 +1,151 @@
+"""Environment throughput: our envs against Pendulum-v1 and Reacher-v5, same run, same actions.
+
+Single environments (``gym.make``, with the registration's wrappers): steps per second
+of ``MotionEnvs/OrientationReach-v0`` and ``MotionEnvs/PositionReach-v0`` against
+``Pendulum-v1`` and ``Reacher-v5``, each stepping the same pre-sampled uniform actions in
+``[-1, 1]`` (cut to its action dimension) and resetting at episode ends. Vector
+environments: the native batched-numpy vector envs
+(``gym.make_vec(..., vectorization_mode="vector_entry_point")``) at N = 1, 64, 1024,
+against ``Reacher-v5`` under ``SyncVectorEnv`` with 8 copies, in env-steps per second
+(N x vector steps / s). Each figure is the median over ``--repeats`` timed runs, after
+one warm-up run. Reacher-v5 needs ``imageio`` (``pip install "gymnasium[mujoco]"``).
+
+Prints a table, then, as its last line, one JSON object with the figures and ratios.
+
+    python benchmarks/env_throughput.py [--steps 20000] [--vector-steps 300] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from datetime import datetime, timezone
+
+import gymnasium as gym
+import numpy as np
+from tqdm import tqdm
+
+import motion_envs  # noqa: F401  (registers the environments)
+
+OURS = ("MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0")
+ANCHORS = ("Pendulum-v1", "Reacher-v5")
+VECTOR_SIZES = (1, 64, 1024)
+
+
+def _cpu_model() -> str:
+    try:
+        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return platform.processor() or "unknown"
+    for line in out.splitlines():
+        if line.startswith("Model name:"):
+            return line.split(":", 1)[1].strip()
+    return "unknown"
+
+
+def _single_rate(env: gym.Env, actions: np.ndarray) -> float:
+    dim = env.action_space.shape[0]
+    acts = np.ascontiguousarray(actions[:, :dim])
+    env.reset(seed=0)
+    step, reset = env.step, env.reset
+    t0 = time.perf_counter()
+    for a in acts:
+        _, _, terminated, truncated, _ = step(a)
+        if terminated or truncated:
+            reset()
+    return acts.shape[0] / (time.perf_counter() - t0)
+
+
+def _vector_rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> float:
+    n, dim = env.num_envs, env.single_action_space.shape[0]
+    acts = np.ascontiguousarray(actions[:, :n, :dim])
+    env.reset(seed=0)
+    step = env.step
+    t0 = time.perf_counter()
+    for a in acts:
+        step(a)
+    return acts.shape[0] * n / (time.perf_counter() - t0)
+
+
+def _median_rate(fn, repeats: int) -> float:
+    fn()  # warm-up
+    return statistics.median(fn() for _ in range(repeats))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=20_000, help="single-env steps per run")
+    parser.add_argument("--vector-steps", type=int, default=300, help="vector steps per run")
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs per figure")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the pre-sampled actions")
+    args = parser.parse_args(argv)
+    rng = np.random.default_rng(args.seed)
+    single_actions = rng.uniform(-1, 1, size=(args.steps, 3)).astype(np.float32)
+    vector_actions = rng.uniform(-1, 1, size=(args.vector_steps, max(VECTOR_SIZES), 3)).astype(
+        np.float32
+    )
+
+    single: dict[str, float] = {}
+    for env_id in tqdm((*OURS, *ANCHORS), desc="single envs", file=sys.stderr):
+        env = gym.make(env_id)
+        single[env_id] = _median_rate(
+            lambda env=env: _single_rate(env, single_actions), args.repeats
+        )
+        env.close()
+
+    vector: dict[str, dict[str, float]] = {env_id: {} for env_id in OURS}
+    jobs = [(env_id, n) for env_id in OURS for n in VECTOR_SIZES]
+    for env_id, n in tqdm(jobs, desc="vector envs", file=sys.stderr):
+        venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
+        vector[env_id][str(n)] = _median_rate(
+            lambda venv=venv: _vector_rate(venv, vector_actions), args.repeats
+        )
+        venv.close()
+    reacher = gym.make_vec("Reacher-v5", num_envs=8, vectorization_mode="sync")
+    reacher_sync8 = _median_rate(lambda: _vector_rate(reacher, vector_actions), args.repeats)
+    reacher.close()
+
+    pendulum = single["Pendulum-v1"]
+    print(f"steps per second, median of {args.repeats} runs ({_cpu_model()})")
+    print()
+    print(f"{'single environment':<34} {'steps/s':>12} {'/ Pendulum-v1':>14}")
+    for env_id, rate in single.items():
+        print(f"{env_id:<34} {rate:>12,.0f} {rate / pendulum:>14.2f}")
+    print()
+    print(f"{'vector environment':<34} {'N':>6} {'env-steps/s':>14} {'/ Reacher Sync x8':>18}")
+    for env_id in OURS:
+        for n, rate in vector[env_id].items():
+            print(f"{env_id + ' (native)':<34} {n:>6} {rate:>14,.0f} {rate / reacher_sync8:>18.1f}")
+    print(f"{'Reacher-v5 (SyncVectorEnv)':<34} {8:>6} {reacher_sync8:>14,.0f} {1.0:>18.1f}")
+    doc = {
+        "benchmark": "env_throughput",
+        "date": datetime.now(timezone.utc).date().isoformat(),
+        "cpu": _cpu_model(),
+        "python": platform.python_version(),
+        "gymnasium": gym.__version__,
+        "numpy": np.__version__,
+        "repeats": args.repeats,
+        "single_steps_per_s": single,
+        "single_over_pendulum": {k: v / pendulum for k, v in single.items()},
+        "vector_env_steps_per_s": vector,
+        "reacher_sync8_env_steps_per_s": reacher_sync8,
+        "vector_over_reacher_sync8": {
+            env_id: {n: r / reacher_sync8 for n, r in rates.items()}
+            for env_id, rates in vector.items()
+        },
+        "targets": {
+            "single_at_least_pendulum": {env_id: single[env_id] >= pendulum for env_id in OURS},
+            "vector_1024_above_1e6": {env_id: vector[env_id]["1024"] > 1e6 for env_id in OURS},
+        },
+    }
+    print(json.dumps(doc))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
