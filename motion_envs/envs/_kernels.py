@@ -108,13 +108,73 @@ def multiply(pw: Any, px: Any, py: Any, pz: Any, qw: Any, qx: Any, qy: Any, qz: 
     )
 
 
+def _multiply_batch(pw: Any, px: Any, py: Any, pz: Any, qw: Any, qx: Any, qy: Any, qz: Any) -> Q:
+    """:func:`multiply` on arrays with fewer temporaries: same operations, same order."""
+    t = px * qx
+    w = pw * qw
+    w -= t
+    np.multiply(py, qy, out=t)
+    w -= t
+    np.multiply(pz, qz, out=t)
+    w -= t
+    x = pw * qx
+    np.multiply(px, qw, out=t)
+    x += t
+    np.multiply(py, qz, out=t)
+    x += t
+    np.multiply(pz, qy, out=t)
+    x -= t
+    y = pw * qy
+    np.multiply(px, qz, out=t)
+    y -= t
+    np.multiply(py, qw, out=t)
+    y += t
+    np.multiply(pz, qx, out=t)
+    y += t
+    z = pw * qz
+    np.multiply(px, qy, out=t)
+    z += t
+    np.multiply(py, qx, out=t)
+    z -= t
+    np.multiply(pz, qw, out=t)
+    z += t
+    return w, x, y, z
+
+
+def _half_angle_batch(m: SimpleNamespace, s: Any, w: Any) -> Any:
+    """:func:`half_angle` on arrays with fewer temporaries: same operations, same order."""
+    t = s * s
+    u = w * w
+    t += u
+    np.sqrt(t, out=t)
+    t += w
+    np.divide(s, t, out=t)
+    for _ in range(3):
+        np.multiply(t, t, out=u)
+        u += 1.0
+        np.sqrt(u, out=u)
+        u += 1.0
+        t /= u
+    np.multiply(t, t, out=u)
+    c = _ATAN_COEFFS
+    p = u * c[7]
+    for i in range(6, -1, -1):
+        p += c[i]
+        if i:
+            p *= u
+    # p now holds c0 + u (c1 + u (...)); finish as 16 (t p)
+    t *= p
+    t *= 16.0
+    return t
+
+
 def logmap(m: SimpleNamespace, w: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any, Any]:
     """Tangent vector of a unit quaternion (``q`` and ``-q`` give the same vector)."""
     sign = m.where(w < 0.0, -1.0, 1.0)
     aw = m.abs(w)
     ux, uy, uz = x * sign, y * sign, z * sign
     s = m.sqrt(ux * ux + uy * uy + uz * uz)
-    theta = 2.0 * half_angle(m, s, aw)
+    theta = 2.0 * m.half_angle(m, s, aw)
     small = s < _SMALL_ANGLE
     safe = m.where(small, 1.0, s)
     scale = m.where(small, 2.0 / m.maximum(aw, 1e-300) * (1.0 - s * s / 3.0), theta / safe)
@@ -123,8 +183,8 @@ def logmap(m: SimpleNamespace, w: Any, x: Any, y: Any, z: Any) -> tuple[Any, Any
 
 def geodesic(m: SimpleNamespace, pw: Any, px: Any, py: Any, pz: Any, q: Q) -> Any:
     """Geodesic angle ``2 atan2(|v|, |w|)`` of ``conj(p) * q`` (as ``quaternion.angle``)."""
-    rw, rx, ry, rz = multiply(pw, -px, -py, -pz, *q)
-    return 2.0 * half_angle(m, m.sqrt(rx * rx + ry * ry + rz * rz), m.abs(rw))
+    rw, rx, ry, rz = m.multiply(pw, -px, -py, -pz, *q)
+    return 2.0 * m.half_angle(m, m.sqrt(rx * rx + ry * ry + rz * rz), m.abs(rw))
 
 
 def orientation_step(
@@ -148,11 +208,11 @@ def orientation_step(
     angle between ``q`` and the human ``h_k``. Returns ``(q, error, geodesic)``.
     """
     d = expmap(m, scale * ax, scale * ay, scale * az)
-    c = multiply(*e, *d)
+    c = m.multiply(*e, *d)
     lx, ly, lz = logmap(m, *c)
     dx, dy, dz = lx - rx, ly - ry, lz - rz
     err = m.sqrt(dx * dx + dy * dy + dz * dz)
-    q = multiply(*n, *d)
+    q = m.multiply(*n, *d)
     geo = geodesic(m, *q, h)
     return q, err, geo
 
@@ -237,3 +297,9 @@ def position_step(
         d = q[i] - h[i]
         acc = acc + d * d
     return q, m.sqrt(acc)
+
+
+SCALAR.multiply = multiply
+SCALAR.half_angle = half_angle
+BATCH.multiply = _multiply_batch
+BATCH.half_angle = _half_angle_batch
