@@ -50,17 +50,23 @@ def test_gymnasium_and_sb3_check_env_without_warnings():
     _fail_on_warnings(record)
 
 
+@pytest.fixture(scope="module")
+def bench_doc(tmp_path_factory) -> dict:
+    """``motion-bench position`` on the test shapes, 50-point grid, run once."""
+    from baselines.cli import main
+
+    out = tmp_path_factory.mktemp("bench")
+    argv = ["position", "--no-peers", "--no-progress", "--n-points", "50", "--out", str(out)]
+    assert main([*argv, "--shapes", *SHAPES]) == 0
+    return json.loads((out / "results.json").read_text())
+
+
 @pytest.mark.parametrize(
     ("nominal", "column"), [("line", "line"), ("null", "null"), ("sine", "lippi")]
 )
-def test_zero_action_invariant_matches_motion_bench_position(tmp_path, nominal, column):
+def test_zero_action_invariant_matches_motion_bench_position(bench_doc, nominal, column):
     """Zero-action episodes of split='loo' reproduce motion-bench position's max error."""
-    from baselines.cli import main
-
-    out = tmp_path / "bench"
-    argv = ["position", "--no-peers", "--no-progress", "--n-points", "50", "--out", str(out)]
-    assert main([*argv, "--shapes", *SHAPES]) == 0
-    doc = json.loads((out / "results.json").read_text())
+    doc = bench_doc
     offline = doc["summary_median_across_shapes"][column]["max_error"]
     env = make(split="loo", nominal=nominal)
     task = env.unwrapped.task
