@@ -8,7 +8,9 @@ environments: the native batched-numpy vector envs
 (``gym.make_vec(..., vectorization_mode="vector_entry_point")``) at N = 1, 64, 1024,
 against ``Reacher-v5`` under ``SyncVectorEnv`` with 8 copies, in env-steps per second
 (N x vector steps / s). Each figure is the median over ``--repeats`` timed runs, after
-one warm-up run. Reacher-v5 needs ``imageio`` (``pip install "gymnasium[mujoco]"``).
+one warm-up run; the JSON also holds the best run of each (the machine is shared, so the
+spread says how much other load there was). Reacher-v5 needs ``imageio``
+(``pip install "gymnasium[mujoco]"``).
 
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 
@@ -72,9 +74,12 @@ def _vector_rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> float:
     return acts.shape[0] * n / (time.perf_counter() - t0)
 
 
-def _median_rate(fn, repeats: int) -> float:
+def _median_rate(fn, repeats: int, best: dict[str, float], key: str) -> float:
+    """Median rate over ``repeats`` timed runs after a warm-up; the best run into ``best``."""
     fn()  # warm-up
-    return statistics.median(fn() for _ in range(repeats))
+    rates = [fn() for _ in range(repeats)]
+    best[key] = max(rates)
+    return statistics.median(rates)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,11 +95,12 @@ def main(argv: list[str] | None = None) -> int:
         np.float32
     )
 
+    best: dict[str, float] = {}
     single: dict[str, float] = {}
     for env_id in tqdm((*OURS, *ANCHORS), desc="single envs", file=sys.stderr):
         env = gym.make(env_id)
         single[env_id] = _median_rate(
-            lambda env=env: _single_rate(env, single_actions), args.repeats
+            lambda env=env: _single_rate(env, single_actions), args.repeats, best, env_id
         )
         env.close()
 
@@ -103,11 +109,16 @@ def main(argv: list[str] | None = None) -> int:
     for env_id, n in tqdm(jobs, desc="vector envs", file=sys.stderr):
         venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
         vector[env_id][str(n)] = _median_rate(
-            lambda venv=venv: _vector_rate(venv, vector_actions), args.repeats
+            lambda venv=venv: _vector_rate(venv, vector_actions),
+            args.repeats,
+            best,
+            f"{env_id} N={n}",
         )
         venv.close()
     reacher = gym.make_vec("Reacher-v5", num_envs=8, vectorization_mode="sync")
-    reacher_sync8 = _median_rate(lambda: _vector_rate(reacher, vector_actions), args.repeats)
+    reacher_sync8 = _median_rate(
+        lambda: _vector_rate(reacher, vector_actions), args.repeats, best, "Reacher-v5 Sync N=8"
+    )
     reacher.close()
 
     pendulum = single["Pendulum-v1"]
@@ -138,6 +149,7 @@ def main(argv: list[str] | None = None) -> int:
             env_id: {n: r / reacher_sync8 for n, r in rates.items()}
             for env_id, rates in vector.items()
         },
+        "best_run_steps_per_s": best,
         "targets": {
             "single_at_least_pendulum": {env_id: single[env_id] >= pendulum for env_id in OURS},
             "vector_1024_above_1e6": {env_id: vector[env_id]["1024"] > 1e6 for env_id in OURS},
