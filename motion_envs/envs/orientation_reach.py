@@ -110,8 +110,8 @@ def _build_task(
     task_index = np.searchsorted(np.asarray(task_names), part.tasks)
     obs[np.arange(L), :, _TASK + task_index] = 1.0
     np.clip(obs, -1.0, 1.0, out=obs)
-    for arr in (steps, obs):
-        arr.flags.writeable = False
+    for arr in (steps, obs, *vars(g).values()):
+        arr.flags.writeable = False  # shared by every environment built from the cache
     return OrientationTask(
         name=dataset.name,
         nominal=nominal,

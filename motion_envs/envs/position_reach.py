@@ -121,8 +121,8 @@ def _build_task(
     obs[:, n, 3 * D + 1 : 4 * D + 1] = g.nominal[:, -1]
     task_index = np.searchsorted(np.asarray(task_names), g.tasks)
     obs[np.arange(L), :, 4 * D + 1 + task_index] = 1.0
-    for arr in (steps, obs):
-        arr.flags.writeable = False
+    for arr in (steps, obs, starts, *vars(g).values()):
+        arr.flags.writeable = False  # shared by every environment built from the cache
     return PositionTask(
         name=dataset.name,
         unit=getattr(dataset, "unit", ""),
