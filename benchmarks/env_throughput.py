@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import statistics
 import subprocess
@@ -137,6 +138,8 @@ def main(argv: list[str] | None = None) -> int:
         "benchmark": "env_throughput",
         "date": datetime.now(timezone.utc).date().isoformat(),
         "cpu": _cpu_model(),
+        "cores": os.cpu_count(),
+        "load_average_1min": os.getloadavg()[0],
         "python": platform.python_version(),
         "gymnasium": gym.__version__,
         "numpy": np.__version__,
