@@ -31,7 +31,6 @@ import json
 import math
 import sys
 import time
-import warnings
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -42,14 +41,15 @@ from numpy.typing import NDArray
 from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
 from motion_envs.datasets.lasa import LASA_CITATION, load_lasa
 from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
-from motion_envs.geometry import sine_series as ss
+from motion_envs.models.nominal import (
+    PositionNominal,
+    position_conditions,
+    resample_positions,
+    varying_columns,
+)
 from motion_envs.models.position_criteria import CRITERIA
 from motion_envs.models.serialization import atomic_write_text
-from motion_envs.models.sine_regression import (
-    RankDeficientDesignWarning,
-    SineSeriesRegression,
-    select_n_sines,
-)
+from motion_envs.models.sine_regression import SineSeriesRegression
 
 __all__ = ["METHODS", "format_table", "register", "run", "run_benchmark"]
 
@@ -57,37 +57,12 @@ FloatArray = NDArray[np.float64]
 
 METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp")
 PEER_METHODS = ("dmp", "promp")
-CONDITION_KINDS = ("start", "end", "duration")
 CRITERION_TEXT = {
     "max_error": "median over demos of max_t |error|",
     "rmse": "median over demos of RMSE",
     "dtw": "median over demos of DTW (sum of Euclidean costs)",
     "swept_area": "median over demos of swept error area",
 }
-
-
-def resample(dataset: PositionDataset, n_points: int) -> tuple[FloatArray, FloatArray]:
-    """All trajectories on ``n_points`` uniform ``tau``: ``(L, K, D)`` and durations ``(L,)``."""
-    if n_points < 5:
-        raise ValueError(f"n_points must be >= 5; got {n_points}")
-    tau = np.linspace(0.0, 1.0, n_points)
-    out = np.empty((len(dataset), n_points, dataset.n_dims))
-    for i, (y, t) in enumerate(zip(dataset.positions, dataset.times, strict=True)):
-        src = ss.normalised_time(t)
-        for j in range(y.shape[1]):
-            out[i, :, j] = np.interp(tau, src, y[:, j])
-    durations = np.array([t[-1] - t[0] for t in dataset.times])
-    return out, durations
-
-
-def _conditions(y: FloatArray, durations: FloatArray, kinds: list[str]) -> FloatArray:
-    parts = {"start": y[:, 0], "end": y[:, -1], "duration": durations[:, None]}
-    return np.column_stack([parts[k] for k in kinds])
-
-
-def _varying(q: FloatArray) -> NDArray[np.bool_]:
-    scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
-    return np.ptp(q, axis=0) > 1e-9 * scale
 
 
 class _Timer:
@@ -114,39 +89,28 @@ def leave_one_out(
     n_weights: int = 10,
 ) -> tuple[dict[str, FloatArray], list[int]]:
     """Predictions ``(n, K, D)`` of every held-out demonstration for each method."""
-    n, k, _ = y.shape
-    tau = np.linspace(0.0, 1.0, k)
+    n = y.shape[0]
     preds = {m: np.empty_like(y) for m in methods}
     chosen = []
-    q_all = _conditions(y, durations, kinds)
+    n_sines_arg: int | str = "auto" if n_sines is None else n_sines
     for i in range(n):
         train = np.delete(np.arange(n), i)
-        start, end = y[i, 0], y[i, -1]
-        line = start + tau[:, None] * (end - start)
+        held_out = slice(i, i + 1)
         yt = y[train]
-        if "line" in methods:
-            preds["line"][i] = line
-        if "null" in methods:
-            preds["null"][i] = line + ss.residual(tau, yt).mean(axis=0)
-        if "lippi" in methods:
-            keep = _varying(q_all[train])
-            q_train, q_test = q_all[train][:, keep], q_all[i, keep]
+        for method, kind in (("line", "line"), ("null", "null"), ("lippi", "sine")):
+            if method not in methods:
+                continue
             t0 = time.perf_counter()
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RankDeficientDesignWarning)
-                n_use = n_sines
-                if n_use is None:
-                    cands = [c for c in range(16) if c <= k - 2]
-                    n_use, _ = select_n_sines(list(yt), q_train, candidates=cands)
-                t1 = time.perf_counter()
-                model = SineSeriesRegression(n_sines=n_use).fit(list(yt), q_train)
-            t2 = time.perf_counter()
-            p = model.predict_coefficients(q_test, start=start, end=end)
-            preds["lippi"][i] = ss.evaluate(p, tau)
-            t3 = time.perf_counter()
-            timer.add("lippi", t2 - t1, t3 - t2)
-            timer.fit["lippi_cv"] += t1 - t0
-            chosen.append(int(n_use))
+            nominal = PositionNominal(kind, n_sines=n_sines_arg, conditions=kinds)
+            nominal.fit(yt, durations[train])
+            t1 = time.perf_counter()
+            preds[method][i] = nominal.predict(y[held_out], durations[held_out])[0]
+            if method == "lippi":
+                cv = nominal.selection_seconds_
+                timer.add("lippi", t1 - t0 - cv, time.perf_counter() - t1)
+                timer.fit["lippi_cv"] += cv
+                chosen.append(nominal.n_sines_)
+        start, end = y[i, 0], y[i, -1]
         for name, cls in (("dmp", DMPPeer), ("promp", ProMPPeer)):
             if name in methods:
                 t0 = time.perf_counter()
@@ -167,8 +131,8 @@ def _score(y: FloatArray, preds: dict[str, FloatArray]) -> dict[str, dict[str, f
 def _validation_rows(
     y: FloatArray, durations: FloatArray, kinds: list[str], n_sines: int
 ) -> list[dict[str, Any]]:
-    q = _conditions(y, durations, kinds)
-    q = q[:, _varying(q)]
+    q = position_conditions(y, durations, kinds)
+    q = q[:, varying_columns(q)]
     if y.shape[0] <= q.shape[1] + 2:
         return []
     model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q)
@@ -203,12 +167,10 @@ def run_benchmark(
     from tqdm import tqdm
 
     kinds = ["start", "end"] if kinds is None else kinds
-    bad = [k for k in kinds if k not in CONDITION_KINDS]
-    if bad or not kinds:
-        raise ValueError(f"conditions must be among {CONDITION_KINDS}; got {kinds}")
+    position_conditions(np.zeros((1, 2, 1)), np.ones(1), kinds)  # validates the names
     have_peers = use_peers and peers_available()
     methods = [m for m in METHODS if have_peers or m not in PEER_METHODS]
-    y_all, dur_all = resample(dataset, n_points)
+    y_all, dur_all = resample_positions(dataset, n_points)
     timer = _Timer()
     per_shape: dict[str, Any] = {}
     predictions: dict[str, dict[str, FloatArray]] = {}

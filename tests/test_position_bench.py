@@ -12,6 +12,7 @@ from baselines import position_bench as pb
 from baselines.cli import main
 from baselines.peers import peers_available
 from motion_envs.datasets.lasa import load_lasa
+from motion_envs.models.nominal import resample_positions
 from motion_envs.models.position_criteria import max_error
 
 
@@ -41,7 +42,7 @@ def test_cli_lasa_writes_results(tmp_path, capsys):
 
 def test_leave_one_out_matches_hand_computation():
     ds = load_lasa(["Line"])
-    y, dur = pb.resample(ds, 30)
+    y, dur = resample_positions(ds, 30)
     preds, chosen = pb.leave_one_out(y, dur, ["start", "end"], 3, ["line", "null"], pb._Timer())
     assert chosen == []
     tau = np.linspace(0, 1, 30)[:, None]

@@ -50,6 +50,7 @@ error (``motion-bench position``'s aggregation).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -85,8 +86,10 @@ __all__ = [
     "PositionNominal",
     "median_of_task_medians",
     "orientation_criterion",
+    "position_conditions",
     "position_grids",
     "resample_positions",
+    "varying_columns",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -278,8 +281,10 @@ def orientation_criterion(
 POSITION_NOMINALS: tuple[str, ...] = ("line", "null", "sine")
 #: Splits of a position dataset (see :func:`position_grids`).
 POSITION_SPLITS: tuple[str, ...] = ("train", "test", "loo")
-#: Conditions of the sine-series regression (as ``motion-bench position``'s default).
+#: Conditions of the sine-series regression (``motion-bench position``'s default).
 POSITION_CONDITIONS: tuple[str, ...] = ("start", "end")
+#: Every condition column a position nominal can be regressed on.
+CONDITION_KINDS: tuple[str, ...] = ("start", "end", "duration")
 
 
 def resample_positions(
@@ -304,12 +309,19 @@ def resample_positions(
     return out, durations
 
 
-def _position_conditions(y: FloatArray, durations: FloatArray) -> FloatArray:
-    """Start and end positions, ``(n, 2 D)`` (``POSITION_CONDITIONS``)."""
-    return np.column_stack([y[:, 0], y[:, -1]])
+def position_conditions(
+    y: FloatArray, durations: FloatArray, kinds: Sequence[str] = POSITION_CONDITIONS
+) -> FloatArray:
+    """Condition matrix ``Q`` of each trajectory, ``(n, c)``: the chosen columns among
+    ``start`` (``y_0``, D columns), ``end`` (``y_1``, D columns) and ``duration`` (``T``)."""
+    bad = [k for k in kinds if k not in CONDITION_KINDS]
+    if bad or not kinds:
+        raise ValueError(f"conditions must be among {list(CONDITION_KINDS)}; got {list(kinds)}")
+    parts = {"start": y[:, 0], "end": y[:, -1], "duration": np.asarray(durations)[:, None]}
+    return np.column_stack([parts[k] for k in kinds])
 
 
-def _varying(q: FloatArray) -> NDArray[np.bool_]:
+def varying_columns(q: FloatArray) -> NDArray[np.bool_]:
     """Condition columns that vary over the training set (constant ones are dropped)."""
     scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
     return np.ptp(q, axis=0) > 1e-9 * scale
@@ -325,7 +337,7 @@ class PositionNominal:
     * ``"null"``: the line plus the mean training residual ``D(tau)`` (eq. 3);
     * ``"sine"``: Lippi et al.'s regression
       (:class:`~motion_envs.models.sine_regression.SineSeriesRegression`) on the
-      conditions ``[start, end]`` (columns constant over the training set, such as
+      ``conditions`` (default ``[start, end]``; columns constant over the training set, such as
       LASA's end point at the origin, dropped), ``N`` chosen by leave-one-out
       cross-validation among 0..15 (:func:`~motion_envs.models.sine_regression.select_n_sines`)
       when ``n_sines="auto"``; generation overwrites the first two coefficients from
@@ -335,18 +347,29 @@ class PositionNominal:
     ``lippi`` columns), so its leave-one-out criterion is reproduced exactly.
     """
 
-    def __init__(self, kind: str = "sine", n_sines: int | str = "auto") -> None:
+    def __init__(
+        self,
+        kind: str = "sine",
+        n_sines: int | str = "auto",
+        conditions: Sequence[str] = POSITION_CONDITIONS,
+    ) -> None:
         if kind not in POSITION_NOMINALS:
             raise ValueError(f"nominal must be one of {list(POSITION_NOMINALS)}; got {kind!r}")
         if n_sines != "auto" and (
             isinstance(n_sines, bool) or not isinstance(n_sines, (int, np.integer)) or n_sines < 0
         ):
             raise ValueError(f"n_sines must be 'auto' or an integer >= 0; got {n_sines!r}")
+        position_conditions(np.zeros((1, 2, 1)), np.ones(1), conditions)  # validates
         self.kind = kind
         self.n_sines = n_sines
+        self.conditions = tuple(conditions)
 
     def fit(self, y: FloatArray, durations: FloatArray) -> PositionNominal:
-        """Fit on ``(n, K, D)`` training trajectories on the grid; returns self."""
+        """Fit on ``(n, K, D)`` training trajectories on the grid; returns self.
+
+        Sets ``selection_seconds_``: the time spent choosing ``N`` by cross-validation.
+        """
+        import time
         import warnings
 
         from motion_envs.geometry import sine_series as ss
@@ -362,18 +385,21 @@ class PositionNominal:
         k = y.shape[1]
         self.tau_ = np.linspace(0.0, 1.0, k)
         self.n_train_ = int(y.shape[0])
+        self.selection_seconds_ = 0.0
         if self.kind == "null":
             self.mean_residual_ = ss.residual(self.tau_, y).mean(axis=0)
         elif self.kind == "sine":
-            q = _position_conditions(y, durations)
-            self.keep_ = _varying(q)
+            q = position_conditions(y, durations, self.conditions)
+            self.keep_ = varying_columns(q)
             q_train = q[:, self.keep_]
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RankDeficientDesignWarning)
                 n_use = self.n_sines
                 if n_use == "auto":
+                    t0 = time.perf_counter()
                     cands = [c for c in range(16) if c <= k - 2]
                     n_use, _ = select_n_sines(list(y), q_train, candidates=cands)
+                    self.selection_seconds_ = time.perf_counter() - t0
                 self.n_sines_ = int(n_use)
                 self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(list(y), q_train)
         return self
@@ -387,7 +413,7 @@ class PositionNominal:
         y = np.asarray(y, dtype=np.float64)
         tau = self.tau_
         out = np.empty_like(y)
-        q_all = _position_conditions(y, durations) if self.kind == "sine" else None
+        q_all = position_conditions(y, durations, self.conditions) if self.kind == "sine" else None
         for i in range(y.shape[0]):
             start, end = y[i, 0], y[i, -1]
             line = start + tau[:, None] * (end - start)
