@@ -27,3 +27,14 @@ def test_ci_runs_the_readme_test_command():
     # CI creates its own venv; everything after the activation must be identical.
     tail = test_cmd.split(". .venv/bin/activate && ", 1)[1]
     assert tail in (ROOT / ".ci" / "run").read_text()
+
+
+def test_python_examples_run(tmp_path, monkeypatch):
+    """Every ```python block of the README runs as shown (in a scratch folder)."""
+    text = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)\n```", text, flags=re.S)
+    assert len(blocks) >= 3
+    monkeypatch.chdir(tmp_path)
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {"__name__": "readme_example"})
+    assert (tmp_path / "task_d2.json").exists()
