@@ -32,6 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import plain_numpy_quaternion as plain
 from _orientation_timing import best_time, machine, print_json, print_machine, print_table
 
 from motion_envs.datasets import load_orientation_dataset
@@ -68,16 +69,16 @@ def whole_array_quaternions() -> Iterator[None]:
         if validate:
             q0, q1 = quat.as_unit(q0, "q0"), quat.as_unit(q1, "q1")
         f = np.float64
-        return quat._slerp_reference(np.asarray(q0, f), np.asarray(q1, f), np.asarray(alpha, f))
+        return plain.slerp(np.asarray(q0, f), np.asarray(q1, f), np.asarray(alpha, f))
 
     def multiply(p, q):
-        return quat._multiply_reference(np.asarray(p, np.float64), np.asarray(q, np.float64))
+        return plain.multiply(np.asarray(p, np.float64), np.asarray(q, np.float64))
 
     def logmap(q, name="q", validate=True):
-        return quat._logmap_reference(quat.as_unit(q, name) if validate else np.asarray(q))
+        return plain.logmap(quat.as_unit(q, name) if validate else np.asarray(q))
 
     def expmap(v, name="v"):
-        return quat._expmap_reference(np.asarray(v, np.float64))
+        return plain.expmap(np.asarray(v, np.float64))
 
     saved = {k: getattr(quat, k) for k in ("slerp", "multiply", "logmap", "expmap")}
     for k, fn in {"slerp": slerp, "multiply": multiply, "logmap": logmap, "expmap": expmap}.items():

@@ -277,3 +277,26 @@ def test_slerp_rejects_nan_alpha():
 def test_normalize_returns_unit():
     out = quat.normalize([[2.0, 0, 0, 0], [1.0, 1.0, 1.0, 1.0]])
     np.testing.assert_allclose(out, [[1.0, 0, 0, 0], [0.5, 0.5, 0.5, 0.5]])
+
+
+@pytest.mark.parametrize("half", [1e-5, 9e-5, 2e-4])
+def test_slerp_of_nearly_coincident_ends_stays_unit(half):
+    q0 = quat.expmap([0.3, -0.2, 0.5])
+    q1 = quat.multiply(q0, quat.expmap(np.array([0.0, 0.0, 2 * half])))
+    a = np.linspace(0, 1, 11)
+    out = quat.slerp(q0, q1, a)
+    np.testing.assert_allclose(np.linalg.norm(out, axis=-1), 1.0, atol=1e-15)
+    ref = quat.multiply(q0, quat.expmap(np.outer(a, [0.0, 0.0, 2 * half])))
+    np.testing.assert_allclose(out, ref, atol=1e-15)
+
+
+def test_malformed_shapes_raise_value_error():
+    for func, args, name in (
+        (quat.multiply, (np.ones(3), quat.IDENTITY), "p"),
+        (quat.multiply, (quat.IDENTITY, np.ones((2, 5))), "q"),
+        (quat.logmap, (np.ones(3),), "q"),
+    ):
+        with pytest.raises(ValueError, match=rf"^{name} must have a last axis of length 4"):
+            func(*args)
+    with pytest.raises(ValueError, match="q0"):
+        quat.slerp(np.ones(3), quat.IDENTITY, 0.5, validate=False)

@@ -71,7 +71,7 @@ def evaluate(control_points: ArrayLike, t: ArrayLike, degree: int | None = None)
     if t.ndim != 1:
         raise ValueError(f"t must be a 1-D grid; got shape {t.shape}")
     B = bernstein_interior(t, d)  # (n, d-1)
-    return np.einsum("nk,...kc->...nc", B, P)
+    return np.matmul(B, P)  # (n, k) @ (..., k, c) -> (..., n, c)
 
 
 def fit_operator(t: ArrayLike, degree: int) -> FloatArray:
@@ -86,12 +86,15 @@ def fit_operator(t: ArrayLike, degree: int) -> FloatArray:
     if t.ndim != 1:
         raise ValueError(f"t must be a 1-D grid; got shape {t.shape}")
     B = bernstein_interior(t, d)
-    if d > 1 and np.linalg.matrix_rank(B) < d - 1:
+    # pinv(B) = V diag(1/s) U^T from one thin SVD, which also gives the rank.
+    U, sv, Vt = np.linalg.svd(B, full_matrices=False)
+    tol = sv.max(initial=0.0) * max(B.shape) * np.finfo(np.float64).eps
+    if d > 1 and np.count_nonzero(sv > tol) < d - 1:
         raise ValueError(
             f"degree {d} needs at least {d - 1} distinct interior time points; the grid has "
             f"{np.unique(t[(t > 0) & (t < 1)]).size}"
         )
-    return np.linalg.pinv(B)
+    return (Vt.T / sv) @ U.T
 
 
 def fit(curves: ArrayLike, t: ArrayLike, degree: int) -> FloatArray:
@@ -111,4 +114,4 @@ def fit(curves: ArrayLike, t: ArrayLike, degree: int) -> FloatArray:
     if not np.all(np.isfinite(Z)):
         raise ValueError("curves contains NaN or infinite values")
     op = fit_operator(t, degree)
-    return np.einsum("kn,...nc->...kc", op, Z)
+    return np.matmul(op, Z)  # (k, n) @ (..., n, c) -> (..., k, c)

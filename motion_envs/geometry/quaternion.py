@@ -165,8 +165,11 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
     """
     p = np.asarray(p, dtype=np.float64)
     q = np.asarray(q, dtype=np.float64)
-    if p.ndim == 0 or q.ndim == 0 or p.shape[-1] != 4 or q.shape[-1] != 4:
-        return _multiply_reference(p, q)
+    for name, arr in (("p", p), ("q", q)):
+        if arr.ndim == 0 or arr.shape[-1] != 4:
+            raise ValueError(
+                f"{name} must have a last axis of length 4 (w, x, y, z); got shape {arr.shape}"
+            )
     batch = np.broadcast_shapes(p.shape[:-1], q.shape[:-1])
     pf = _flatten(p, batch, (4,))
     qf = _flatten(q, batch, (4,))
@@ -197,21 +200,6 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
                 (np.add if sign > 0 else np.subtract)(rc, tk, out=rc)
         _store_columns(out[start:stop], Rk)
     return out.reshape((*batch, 4))
-
-
-def _multiply_reference(p: FloatArray, q: FloatArray) -> FloatArray:
-    """Whole-array form of :func:`multiply` (also its error path for malformed shapes)."""
-    pw, px, py, pz = np.moveaxis(p, -1, 0)
-    qw, qx, qy, qz = np.moveaxis(q, -1, 0)
-    return np.stack(
-        [
-            pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-        ],
-        axis=-1,
-    )
 
 
 def conjugate(q: ArrayLike) -> FloatArray:
@@ -275,21 +263,6 @@ def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
     return out.reshape((*batch, 4))
 
 
-def _expmap_reference(v: FloatArray) -> FloatArray:
-    """Whole-array form of :func:`expmap` (sine and cosine; the benchmarks' plain numpy)."""
-    theta2 = np.einsum("...i,...i->...", v, v)
-    theta = np.sqrt(theta2)
-    small = theta < _SMALL_ANGLE
-    safe = np.where(small, 1.0, theta)
-    half_sinc = np.where(
-        small, 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0, np.sin(0.5 * safe) / safe
-    )
-    out = np.empty((*v.shape[:-1], 4))
-    out[..., 0] = np.cos(0.5 * theta)
-    out[..., 1:] = half_sinc[..., None] * v
-    return out
-
-
 def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     """Logarithm map from unit quaternions to the tangent space at the identity.
 
@@ -304,7 +277,9 @@ def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     """
     q = as_unit(q, name) if validate else np.asarray(q, dtype=np.float64)
     if q.ndim == 0 or q.shape[-1] != 4:
-        return _logmap_reference(q)
+        raise ValueError(
+            f"{name} must have a last axis of length 4 (w, x, y, z); got shape {q.shape}"
+        )
     batch = q.shape[:-1]
     qf = q.reshape(-1, 4)
     n = qf.shape[0]
@@ -338,20 +313,6 @@ def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     return out.reshape((*batch, 3))
 
 
-def _logmap_reference(q: FloatArray) -> FloatArray:
-    """Whole-array form of :func:`logmap` (also its error path for malformed shapes)."""
-    sign = np.where(q[..., :1] < 0.0, -1.0, 1.0)
-    w = np.abs(q[..., 0])
-    u = q[..., 1:] * sign
-    s = np.sqrt(np.einsum("...i,...i->...", u, u))
-    theta = 2.0 * np.arctan2(s, w)
-    small = s < _SMALL_ANGLE
-    safe = np.where(small, 1.0, s)
-    # theta / s; for small s: theta = 2 s / w (1 - s^2/(3 w^2) + ...) -> 2/w + s^2 ...
-    scale = np.where(small, 2.0 / np.maximum(w, 1e-300) * (1.0 - s * s / 3.0), theta / safe)
-    return scale[..., None] * u
-
-
 def angle(p: ArrayLike, q: ArrayLike, name_p: str = "p", name_q: str = "q") -> FloatArray:
     """Geodesic angle between orientations, in radians in ``[0, pi]``.
 
@@ -379,8 +340,10 @@ def slerp(
 
         slerp(q0, q1, a) = sin((1 - a) theta/2) / sin(theta/2) q0 + sin(a theta/2) / sin(theta/2) q1
 
-    At ``q0 == q1`` (``theta -> 0``) the weights tend to ``(1 - a, a)``; the series form is
-    used there, so coincident ends give a constant trajectory with no NaN. ``q0``, ``q1``
+    Near ``q0 == q1`` (``theta/2 = h < 1e-4``) the weights use their series
+    ``sin(c h) / sin(h) = c (1 + (1 - c^2) h^2 / 6)`` (``c = 1 - a`` and ``a``), so nearly
+    coincident ends stay unit to rounding and coincident ends give a constant trajectory
+    with no NaN. ``q0``, ``q1``
     and ``alpha`` broadcast together: ``q0``/``q1`` have shape ``(..., 4)`` and ``alpha``
     shape ``(...)``; e.g. ``q0[:, None]``, ``q1[:, None]`` and ``alpha`` of shape ``(B, T)``
     give ``(B, T, 4)``.
@@ -395,8 +358,11 @@ def slerp(
         q0 = np.asarray(q0, dtype=np.float64)
         q1 = np.asarray(q1, dtype=np.float64)
         alpha = np.asarray(alpha, dtype=np.float64)
-    if q0.ndim == 0 or q1.ndim == 0 or q0.shape[-1] != 4 or q1.shape[-1] != 4:
-        return _slerp_reference(q0, q1, alpha)
+    for name, arr in (("q0", q0), ("q1", q1)):
+        if arr.ndim == 0 or arr.shape[-1] != 4:
+            raise ValueError(
+                f"{name} must have a last axis of length 4 (w, x, y, z); got shape {arr.shape}"
+            )
     batch = np.broadcast_shapes(q0.shape[:-1], q1.shape[:-1], alpha.shape)
     q0f = _flatten(q0, batch, (4,))
     q1f = _flatten(q1, batch, (4,))
@@ -456,34 +422,18 @@ def slerp(
             xk[1] *= sign
             np.less(phi, small_phi, out=smallk)
             if smallk.any():
+                # sin(c h) / sin(h) = c (1 + (1 - c^2) h^2 / 6) + O(h^4), h = 2 phi
                 a_small = ak[smallk]
-                xk[0][smallk] = 1.0 - a_small
-                xk[1][smallk] = a_small * sign[smallk]
+                h2 = 4.0 * phi[smallk] ** 2
+                b_small = 1.0 - a_small
+                xk[0][smallk] = b_small * (1.0 + (1.0 - b_small * b_small) * h2 / 6.0)
+                xk[1][smallk] = a_small * (1.0 + (1.0 - a_small * a_small) * h2 / 6.0)
+                xk[1][smallk] *= sign[smallk]
             np.multiply(Pk, xk[0], out=Pk)
             np.multiply(Qk, xk[1], out=Qk)
             Pk += Qk
             _store_columns(out[start:stop], Pk)
     return out.reshape((*batch, 4))
-
-
-def _slerp_reference(q0: FloatArray, q1: FloatArray, alpha: FloatArray) -> FloatArray:
-    """Whole-array form of :func:`slerp` (also its error path for malformed shapes)."""
-    dot = np.einsum("...i,...i->...", q0, q1)
-    sign = np.where(dot < 0.0, -1.0, 1.0)[..., None]
-    # half angle h = theta/2 = 2 atan2(|q0 - q1|, |q0 + q1|): accurate at 0 and at pi/2.
-    diff = q0 - sign * q1
-    summ = q0 + sign * q1
-    half = 2.0 * np.arctan2(
-        np.sqrt(np.einsum("...i,...i->...", diff, diff)),
-        np.sqrt(np.einsum("...i,...i->...", summ, summ)),
-    )
-    sign = sign[..., 0]
-    small = half < _SMALL_ANGLE
-    sin_half = np.where(small, 1.0, np.sin(half))
-    a = alpha
-    w0 = np.where(small, 1.0 - a, np.sin((1.0 - a) * half) / sin_half)
-    w1 = np.where(small, a, np.sin(a * half) / sin_half) * sign
-    return w0[..., None] * q0 + w1[..., None] * q1
 
 
 def make_continuous(q: ArrayLike, name: str = "q", axis: int = -2) -> FloatArray:
