@@ -9,7 +9,8 @@ noise, the size of the paper's data):
 * ``bezier.fit``: the public call (validation, ``pinv`` of the 50 x (d-1) design, apply);
 * ``fit_control_points``: what :func:`motion_envs.models.criteria.table1` calls;
 * ``fit_operator``: the ``pinv`` alone;
-* applying a precomputed ``pinv`` with ``einsum`` (the first implementation) and with ``matmul`` (what ``fit`` does);
+* applying a precomputed ``pinv`` with ``einsum`` (the first implementation) and with
+  ``matmul`` (what ``fit`` does);
 * anchors: one ``numpy.linalg.lstsq`` with all 3,264 right-hand sides, and a loop of
   ``lstsq`` per curve (the naive way).
 
