@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 # Modules providing sub-commands, in the order they are listed by --help.
 SUBCOMMAND_MODULES: tuple[str, ...] = (
+    "baselines.run_all",
     "baselines.orientation_bench",
     "baselines.position_bench",
     "baselines.calibrate_cohort",

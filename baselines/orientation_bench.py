@@ -1,12 +1,14 @@
 """``motion-bench orientation``: Faraway & Choe's Table 1 on real or the users' data.
 
-Prints every criterion beside the paper's value, writes ``results.json`` and a residual
-plot in the style of the paper's Figure 5.
+Prints every criterion beside the paper's value, writes ``results.json``,
+``results.csv`` and a residual plot in the style of the paper's Figure 5.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import json
 import math
 import time
@@ -21,7 +23,7 @@ from motion_envs.models.criteria import Table1Result, table1
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
 from motion_envs.models.serialization import atomic_write_text
 
-__all__ = ["format_table1", "register", "results_document", "run"]
+__all__ = ["format_table1", "register", "results_csv", "results_document", "run"]
 
 _ROW_LABELS = {
     "within_subject": "Within subject",
@@ -82,6 +84,19 @@ def results_document(result: Table1Result, dataset: OrientationDataset) -> dict[
     }
 
 
+def results_csv(result: Table1Result) -> str:
+    """``results.csv``: one row per criterion, ``name,label,ours,paper`` (radians)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["name", "label", "ours", "paper"])
+    for name, value in result.criteria.items():
+        paper = FARAWAY_CHOE_TABLE1.get(name)
+        writer.writerow(
+            [name, _label(name), repr(value) if math.isfinite(value) else "", paper or ""]
+        )
+    return buf.getvalue()
+
+
 def plot_residuals(
     result: Table1Result, dataset: OrientationDataset, path: Path, task: str | None = None
 ) -> Path:
@@ -109,7 +124,8 @@ def plot_residuals(
         ax.set_ylabel("xyz"[j] + " (rad)")
         ax.grid(alpha=0.3)
     fig.suptitle(
-        f"Empirical slerp residuals, {dataset.name}, task {chosen!r}: {len(R)} trajectories; "
+        f"Empirical slerp residuals, {dataset.name}"
+        f"{' (SIMULATED)' if dataset.simulated else ''}, task {chosen!r}: {len(R)} trajectories; "
         f"max distance from origin {np.linalg.norm(R, axis=2).max():.2f} rad"
     )
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -196,8 +212,9 @@ def run(args: argparse.Namespace) -> int:
         if nominal is not None:
             doc["nominal"] = nominal
         atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")
+        atomic_write_text(out / "results.csv", results_csv(result))
         plot_residuals(result, dataset, out / "residuals.png", task=args.plot_task)
-        print(f"wrote {out / 'results.json'} and {out / 'residuals.png'}")
+        print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'residuals.png'}")
     return 0
 
 
@@ -232,7 +249,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--out",
         default=None,
-        help="folder for results.json and residuals.png (nothing is written without it)",
+        help="folder for results.json, results.csv and residuals.png (none written without it)",
     )
     p.add_argument(
         "--plot-task",

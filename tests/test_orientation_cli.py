@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import json
 import subprocess
 import sys
@@ -65,3 +66,25 @@ def test_console_script_help():
     ).stdout
     for flag in ("--data", "--min-deg", "--out", "--plot-task"):
         assert flag in out
+
+
+def test_cli_writes_results_csv(tmp_path, capsys):
+    assert main(["orientation", "--out", str(tmp_path)]) == 0
+    rows = list(csv.DictReader((tmp_path / "results.csv").open()))
+    assert [r["name"] for r in rows] == criterion_names()
+    doc = json.loads((tmp_path / "results.json").read_text())
+    for row in rows:
+        assert float(row["ours"]) == doc["criteria"][row["name"]]
+        paper = FARAWAY_CHOE_TABLE1.get(row["name"])
+        assert row["paper"] == ("" if paper is None else str(paper))
+
+
+def test_all_runs_the_selected_jobs(tmp_path, capsys):
+    out = tmp_path / "res"
+    assert main(["all", "--out", str(out), "--only", "orientation-vr-kitchen"]) == 0
+    index = json.loads((out / "index.json").read_text())
+    assert [j["folder"] for j in index["jobs"]] == ["orientation-vr-kitchen"]
+    assert index["jobs"][0]["exit_code"] == 0
+    assert (out / "orientation-vr-kitchen" / "results.json").exists()
+    assert not (out / "position-lasa").exists()
+    assert "real data" in capsys.readouterr().out
