@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
+from motion_envs.envs._common import N_STEPS, ReplayEnv, ReplayTask, check_choice
 
 __all__ = [
     "DEFAULT_REWARD_WEIGHTS",
@@ -25,8 +26,6 @@ __all__ = [
     "load_orientation_task",
 ]
 
-#: Steps per episode: the 50 points of the normalised-time grid.
-N_STEPS = 50
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
 _SPLITS = ("train", "test")
@@ -36,7 +35,7 @@ _START, _GOAL, _CURRENT, _TAU, _NOMINAL, _TASK = 0, 4, 8, 12, 13, 17
 
 
 @dataclass(frozen=True)
-class OrientationTask:
+class OrientationTask(ReplayTask):
     """Precomputed episodes of one split (read-only arrays shared between environments).
 
     ``steps[l, k]`` holds, for trajectory ``l`` and grid point ``k``, the 15 values the
@@ -58,20 +57,6 @@ class OrientationTask:
     task_names: tuple[str, ...]
     criterion: float
     grids: Any  # motion_envs.models.nominal.OrientationGrids
-
-    @property
-    def n_trajectories(self) -> int:
-        return int(self.steps.shape[0])
-
-    @property
-    def obs_dim(self) -> int:
-        return int(self.obs.shape[2])
-
-
-def _check_choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
-    if value not in choices:
-        raise ValueError(f"{name} must be one of {list(choices)}; got {value!r}")
-    return str(value)
 
 
 def _build_task(
@@ -144,41 +129,14 @@ def load_orientation_task(
     from motion_envs.datasets import ORIENTATION_DATASETS
     from motion_envs.models.nominal import ORIENTATION_NOMINALS
 
-    _check_choice(split, "split", _SPLITS)
-    _check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
+    check_choice(split, "split", _SPLITS)
+    check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
         raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
     args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
     return _build_task(*args)
-
-
-def _check_reward_weights(weights: Mapping[str, float] | None) -> dict[str, float]:
-    out = dict(DEFAULT_REWARD_WEIGHTS)
-    if weights is None:
-        return out
-    if not isinstance(weights, Mapping):
-        raise ValueError(f"reward_weights must be a mapping; got {type(weights).__name__}")
-    for key, value in weights.items():
-        if key not in out:
-            raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"reward_weights[{key!r}] must be finite and >= 0; got {value!r}")
-        out[key] = float(value)
-    return out
-
-
-def _check_scale(residual_scale: float) -> float:
-    if isinstance(residual_scale, bool) or not isinstance(
-        residual_scale, (int, float, np.floating)
-    ):
-        raise ValueError(f"residual_scale must be a number > 0; got {residual_scale!r}")
-    if not math.isfinite(residual_scale) or residual_scale <= 0:
-        raise ValueError(f"residual_scale must be finite and > 0; got {residual_scale!r}")
-    return float(residual_scale)
 
 
 def _observation_space(task: OrientationTask) -> gym.spaces.Box:
@@ -188,7 +146,7 @@ def _observation_space(task: OrientationTask) -> gym.spaces.Box:
     return gym.spaces.Box(low, np.ones(task.obs_dim, dtype=np.float32), dtype=np.float32)
 
 
-class OrientationReachEnv(gym.Env):
+class OrientationReachEnv(ReplayEnv):
     r"""Replay a human hand-orientation trajectory; the agent corrects an analytic nominal.
 
     ## Description
@@ -311,67 +269,33 @@ class OrientationReachEnv(gym.Env):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        for name, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 16:
-                raise ValueError(f"{name} must be an integer >= 16; got {value!r}")
-        self.residual_scale = _check_scale(residual_scale)
-        self.reward_weights = _check_reward_weights(reward_weights)
+        self._check_arguments(
+            render_mode, width, height, residual_scale, reward_weights, DEFAULT_REWARD_WEIGHTS
+        )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg
         )
-        self.render_mode = render_mode
-        self.width, self.height = int(width), int(height)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         self.observation_space = _observation_space(self.task)
-        self._renderer: Any = None
-        self._index = -1
-        self._k = N_STEPS
-        self._current: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
-        self._history: list[tuple[float, float, float, float]] = []
+        self._starts = self.task.grids.starts
+        self._cur = slice(_CURRENT, _TAU)
+        self._current: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)
 
     # -- episode --------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        L = self.task.n_trajectories
-        if options is not None and options.get("trajectory") is not None:
-            index = options["trajectory"]
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
-                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
-            if not 0 <= index < L:
-                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
-            index = int(index)
-        else:
-            index = int(self.np_random.integers(L))
-        self._index = index
-        self._k = 0
-        self._steps = self.task.steps[index].tolist()
-        self._obs = self.task.obs[index]
-        start = tuple(self.task.grids.starts[index].tolist())
-        self._current = start
-        self._history = [start]
-        self._max_error = 0.0
+        obs, info = super().reset(seed=seed, options=options)
+        self._current = self._history[0]
         self._max_geodesic = 0.0
-        obs = self._obs[0].copy()
-        obs[_CURRENT:_TAU] = start
-        info = {
-            "trajectory_index": index,
-            "trajectory_id": str(self.task.trajectory_ids[index]),
-            "task": str(self.task.tasks[index]),
-            "subject": str(self.task.subjects[index]),
-        }
+        info["subject"] = str(self.task.subjects[self._index])
         return obs, info
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         k = self._k
         if k >= N_STEPS:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
+        # the action checks, unrolled for three components (hot path)
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (3,):
             raise ValueError(f"action must have shape (3,); got shape {a.shape}")
@@ -387,39 +311,23 @@ class OrientationReachEnv(gym.Env):
         r_geo = -w["geodesic"] * geo
         r_act = -w["action"] * (ax * ax + ay * ay + az * az)
         reward = r_res + r_geo + r_act
-        self._k = k = k + 1
         self._current = q
-        self._history.append(q)
-        if err > self._max_error:
-            self._max_error = err
         if geo > self._max_geodesic:
             self._max_geodesic = geo
-        obs = self._obs[k].copy()
-        obs[_CURRENT:_TAU] = q
         info = {
             "error": err,
             "geodesic_error": geo,
             "reward_residual": r_res,
             "reward_geodesic": r_geo,
             "reward_action": r_act,
-            "tau": (k - 1) / (N_STEPS - 1),
         }
-        terminated = k == N_STEPS
+        obs, terminated = self._end_step(k, q, err, info)
         if terminated:
-            info["max_error"] = self._max_error
             info["max_geodesic_error"] = self._max_geodesic
         return obs, reward, terminated, False, info
 
     # -- rendering ------------------------------------------------------------------
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
-            return None
-        if self._index < 0:
-            raise RuntimeError("call reset() before render()")
+    def _render_frame(self) -> NDArray[np.uint8]:
         if self._renderer is None:
             from motion_envs.envs.rendering import HandFrameRenderer
 
@@ -432,13 +340,3 @@ class OrientationReachEnv(gym.Env):
             agent=np.asarray(self._history),
             step=k,
         )
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs.orientation_reach import N_STEPS, _check_scale
+from motion_envs.envs._common import N_STEPS, ReplayEnv, ReplayTask
 
 __all__ = [
     "DEFAULT_POSITION_REWARD_WEIGHTS",
@@ -30,7 +30,7 @@ DEFAULT_POSITION_REWARD_WEIGHTS: Mapping[str, float] = {"distance": 1.0, "action
 
 
 @dataclass(frozen=True)
-class PositionTask:
+class PositionTask(ReplayTask):
     """Precomputed episodes of one split (read-only arrays shared between environments).
 
     ``steps[l, k]`` holds the nominal ``n_k`` (D values) then the human ``y_k`` (D) of
@@ -53,14 +53,6 @@ class PositionTask:
     task_names: tuple[str, ...]
     criterion: float
     grids: Any  # motion_envs.models.nominal.PositionGrids
-
-    @property
-    def n_trajectories(self) -> int:
-        return int(self.steps.shape[0])
-
-    @property
-    def obs_dim(self) -> int:
-        return int(self.obs.shape[2])
 
 
 def _load_dataset(data: str | os.PathLike[str], shapes: tuple[str, ...] | None) -> Any:
@@ -172,24 +164,7 @@ def load_position_task(
     return _build_task(*args)
 
 
-def _check_reward_weights(weights: Mapping[str, float] | None) -> dict[str, float]:
-    out = dict(DEFAULT_POSITION_REWARD_WEIGHTS)
-    if weights is None:
-        return out
-    if not isinstance(weights, Mapping):
-        raise ValueError(f"reward_weights must be a mapping; got {type(weights).__name__}")
-    for key, value in weights.items():
-        if key not in out:
-            raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"reward_weights[{key!r}] must be finite and >= 0; got {value!r}")
-        out[key] = float(value)
-    return out
-
-
-class PositionReachEnv(gym.Env):
+class PositionReachEnv(ReplayEnv):
     r"""Replay a human demonstration's positions; the agent corrects an analytic nominal.
 
     ## Description
@@ -298,60 +273,23 @@ class PositionReachEnv(gym.Env):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        for name, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 16:
-                raise ValueError(f"{name} must be an integer >= 16; got {value!r}")
-        self.residual_scale = _check_scale(residual_scale)
-        self.reward_weights = _check_reward_weights(reward_weights)
+        self._check_arguments(
+            render_mode,
+            width,
+            height,
+            residual_scale,
+            reward_weights,
+            DEFAULT_POSITION_REWARD_WEIGHTS,
+        )
         self.task = load_position_task(
             data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale
         )
         D = self.task.n_dims
         self._D = D
-        self.render_mode = render_mode
-        self.width, self.height = int(width), int(height)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (D,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(self.task.low, self.task.high, dtype=np.float32)
-        self._renderer: Any = None
-        self._index = -1
-        self._k = N_STEPS
-        self._history: list[tuple[float, ...]] = []
-
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        L = self.task.n_trajectories
-        if options is not None and options.get("trajectory") is not None:
-            index = options["trajectory"]
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
-                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
-            if not 0 <= index < L:
-                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
-            index = int(index)
-        else:
-            index = int(self.np_random.integers(L))
-        self._index = index
-        self._k = 0
-        self._steps = self.task.steps[index].tolist()
-        self._obs = self.task.obs[index]
-        start = tuple(self.task.starts[index].tolist())
-        self._history = [start]
-        self._max_error = 0.0
-        D = self._D
-        obs = self._obs[0].copy()
-        obs[2 * D : 3 * D] = start
-        info = {
-            "trajectory_index": index,
-            "trajectory_id": str(self.task.trajectory_ids[index]),
-            "task": str(self.task.tasks[index]),
-        }
-        return obs, info
+        self._starts = self.task.starts
+        self._cur = slice(2 * D, 3 * D)
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         k = self._k
@@ -375,32 +313,11 @@ class PositionReachEnv(gym.Env):
         r_dist = -w["distance"] * err
         r_act = -w["action"] * sq
         reward = r_dist + r_act
-        self._k = k = k + 1
-        self._history.append(tuple(q))
-        if err > self._max_error:
-            self._max_error = err
-        obs = self._obs[k].copy()
-        obs[2 * D : 3 * D] = q
-        info = {
-            "error": err,
-            "reward_distance": r_dist,
-            "reward_action": r_act,
-            "tau": (k - 1) / (N_STEPS - 1),
-        }
-        terminated = k == N_STEPS
-        if terminated:
-            info["max_error"] = self._max_error
+        info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
+        obs, terminated = self._end_step(k, tuple(q), err, info)
         return obs, reward, terminated, False, info
 
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
-            return None
-        if self._index < 0:
-            raise RuntimeError("call reset() before render()")
+    def _render_frame(self) -> NDArray[np.uint8]:
         if self._renderer is None:
             from motion_envs.envs.rendering import CurveRenderer
 
@@ -412,13 +329,3 @@ class PositionReachEnv(gym.Env):
             agent=np.asarray(self._history),
             title=f"{self.task.tasks[self._index]}  step {len(self._history) - 1}/{N_STEPS}",
         )
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state

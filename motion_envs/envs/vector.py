@@ -29,12 +29,18 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
+from motion_envs.envs._common import N_STEPS
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
 # Below this many sub-environments the orientation step runs the scalar kernel per
 # environment (numpy's per-call overhead dominates small batches).
 _SCALAR_BELOW = 8
+
+# observations, rewards, terminations, truncations, infos
+_StepResult = tuple[
+    NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
+]
 
 
 def _check_num_envs(num_envs: int) -> int:
@@ -63,13 +69,18 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         "render_fps": 25,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
-    _n_steps: int
-    _n_traj: int
 
-    def _setup(self, num_envs: int, max_episode_steps: int | None, single: gym.Env) -> None:
+    def _setup(self, num_envs: int, max_episode_steps: int | None, single: Any) -> None:
+        """Set up ``num_envs`` copies of ``single`` (a ``_common.ReplayEnv``, already checked)."""
+        task = single.task
+        self.task = task
+        self._n_steps = N_STEPS
+        self._n_traj = task.n_trajectories
         self.num_envs = _check_num_envs(num_envs)
         self._max_steps = _check_max_steps(max_episode_steps, self._n_steps)
         self.single = single  # validated arguments, spaces and rendering
+        self.residual_scale = single.residual_scale
+        self.reward_weights = single.reward_weights
         self.single_action_space = single.action_space
         self.single_observation_space = single.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -84,6 +95,16 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         self._autoreset = np.zeros(N, dtype=bool)
         self._started = False
         self._arange = np.arange(N)
+        L, n, width = task.steps.shape
+        self._table = np.ascontiguousarray(task.steps.reshape(L * n, width).T)  # (width, L n)
+        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
+        self._starts = single._starts
+        self._cur = single._cur  # the observation's slice of the current state
+        dim = self._cur.stop - self._cur.start
+        self._current = np.zeros((N, dim))
+        self._history: NDArray[np.float64] | None = (
+            np.zeros((N, n + 1, dim)) if self.render_mode is not None else None
+        )
 
     # -- seeding and resets -------------------------------------------------------------
     def _seed_rngs(self, seed: int | Sequence[int | None] | None) -> None:
@@ -147,7 +168,10 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         idx = np.where(mask, self._index, 0)
         return {"trajectory_index": idx, "_trajectory_index": mask}
 
-    def _check_actions(self, actions: Any, dim: int) -> NDArray[np.float64]:
+    def _check_actions(
+        self, actions: Any, dim: int
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The clipped ``(N, dim)`` actions and the step table's columns of the grid points."""
         if not self._started:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(actions, dtype=np.float64)
@@ -155,20 +179,26 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
             raise ValueError(f"actions must have shape ({self.num_envs}, {dim}); got {a.shape}")
         if not np.isfinite(a).all():
             raise ValueError("actions must be finite; got NaN or infinite entries")
-        return np.clip(a, -1.0, 1.0)
+        n = self._n_steps
+        k = np.minimum(self._k, n - 1)
+        return np.clip(a, -1.0, 1.0), self._table[:, self._index * n + k]
 
     def _finish_step(
-        self, err: NDArray[np.float64], reward: NDArray[np.float64], info: dict[str, Any]
-    ) -> tuple[
-        NDArray[np.float32],
-        NDArray[np.float64],
-        NDArray[np.bool_],
-        NDArray[np.bool_],
-        dict[str, Any],
-    ]:
-        """Advance the counters, handle episode ends and autoresets, build the outputs."""
+        self,
+        q: Sequence[NDArray[np.float64]],
+        err: NDArray[np.float64],
+        reward: NDArray[np.float64],
+        info: dict[str, Any],
+    ) -> _StepResult:
+        """Record the states ``q`` (components), advance the counters, handle episode ends
+        and autoresets, build the outputs."""
         resetting = self._autoreset
         active = ~resetting
+        qs = np.stack(q, axis=1)
+        self._current = np.where(active[:, None], qs, self._current)
+        if self._history is not None:
+            rows_a = np.flatnonzero(active)
+            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
         self._k += active
         self._elapsed += active
         np.maximum(self._max_error, np.where(active, err, 0.0), out=self._max_error)
@@ -199,18 +229,27 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
             return None
         return tuple(self._render_env(i) for i in range(self.num_envs))
 
-    # -- per environment kind ---------------------------------------------------------
+    # -- per environment kind (overridden to add state) ---------------------------------
     def _reset_state(self, envs: NDArray[np.int64]) -> None:
-        raise NotImplementedError
+        self._current[envs] = self._starts[self._index[envs]]
+        if self._history is not None:
+            self._history[envs, 0] = self._current[envs]
 
     def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
-        raise NotImplementedError
+        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
+        obs[:, self._cur] = self._current
+        return obs
 
     def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
-        raise NotImplementedError
+        info["max_error"] = np.where(ended, self._max_error, 0.0)
+        info["_max_error"] = ended
 
     def _render_env(self, i: int) -> NDArray[np.uint8]:
-        raise NotImplementedError
+        single = self.single
+        single._index = int(self._index[i])
+        assert self._history is not None
+        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
+        return single.render()  # type: ignore[return-value]
 
 
 class OrientationReachVectorEnv(_ReplayVectorEnv):
@@ -240,7 +279,7 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        from motion_envs.envs.orientation_reach import N_STEPS, OrientationReachEnv
+        from motion_envs.envs.orientation_reach import OrientationReachEnv
 
         single = OrientationReachEnv(
             data=data,
@@ -256,48 +295,15 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
             width=width,
             height=height,
         )
-        task = single.task
-        self.task = task
-        self._n_steps = N_STEPS
-        self._n_traj = task.n_trajectories
         self._setup(num_envs, max_episode_steps, single)
-        self.residual_scale = single.residual_scale
-        self.reward_weights = single.reward_weights
-        L, n = task.n_trajectories, N_STEPS
-        self._table = np.ascontiguousarray(task.steps.reshape(L * n, 15).T)  # (15, L n)
-        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
-        self._starts = task.grids.starts
-        N = self.num_envs
-        self._current = np.zeros((N, 4))
-        self._max_geodesic = np.zeros(N)
-        self._history: NDArray[np.float64] | None = (
-            np.zeros((N, n + 1, 4)) if render_mode is not None else None
-        )
+        self._max_geodesic = np.zeros(self.num_envs)
 
     def _reset_state(self, envs: NDArray[np.int64]) -> None:
-        self._current[envs] = self._starts[self._index[envs]]
+        super()._reset_state(envs)
         self._max_geodesic[envs] = 0.0
-        if self._history is not None:
-            self._history[envs, 0] = self._current[envs]
 
-    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
-        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
-        obs[:, 8:12] = self._current
-        return obs
-
-    def step(
-        self, actions: Any
-    ) -> tuple[
-        NDArray[np.float32],
-        NDArray[np.float64],
-        NDArray[np.bool_],
-        NDArray[np.bool_],
-        dict[str, Any],
-    ]:
-        a = self._check_actions(actions, 3)
-        n = self._n_steps
-        k = np.minimum(self._k, n - 1)
-        rows = self._table[:, self._index * n + k]
+    def step(self, actions: Any) -> _StepResult:
+        a, rows = self._check_actions(actions, 3)
         ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
         if self.num_envs < _SCALAR_BELOW:
             # few environments: the scalar kernel (same arithmetic, bit-identical) is faster
@@ -328,12 +334,7 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         r_act = -w["action"] * (ax * ax + ay * ay + az * az)
         reward = r_res + r_geo + r_act
         active = ~self._autoreset
-        qs = np.stack(q, axis=1)
-        self._current = np.where(active[:, None], qs, self._current)
         np.maximum(self._max_geodesic, np.where(active, geo, 0.0), out=self._max_geodesic)
-        if self._history is not None:
-            rows_a = np.flatnonzero(active)
-            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
         info = {
             "error": err,
             "geodesic_error": geo,
@@ -341,20 +342,12 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
             "reward_geodesic": r_geo,
             "reward_action": r_act,
         }
-        return self._finish_step(err, reward, info)
+        return self._finish_step(q, err, reward, info)
 
     def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
-        info["max_error"] = np.where(ended, self._max_error, 0.0)
-        info["_max_error"] = ended
+        super()._end_infos(info, ended)
         info["max_geodesic_error"] = np.where(ended, self._max_geodesic, 0.0)
         info["_max_geodesic_error"] = ended
-
-    def _render_env(self, i: int) -> NDArray[np.uint8]:
-        single = self.single
-        single._index = int(self._index[i])
-        assert self._history is not None
-        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
-        return single.render()  # type: ignore[return-value]
 
 
 class PositionReachVectorEnv(_ReplayVectorEnv):
@@ -382,7 +375,6 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        from motion_envs.envs.orientation_reach import N_STEPS
         from motion_envs.envs.position_reach import PositionReachEnv
 
         single = PositionReachEnv(
@@ -399,48 +391,12 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
             width=width,
             height=height,
         )
-        task = single.task
-        self.task = task
-        self._n_steps = N_STEPS
-        self._n_traj = task.n_trajectories
         self._setup(num_envs, max_episode_steps, single)
-        self.residual_scale = single.residual_scale
-        self.reward_weights = single.reward_weights
-        L, n, D = task.n_trajectories, N_STEPS, task.n_dims
-        self._D = D
-        self._table = np.ascontiguousarray(task.steps.reshape(L * n, 2 * D).T)  # (2D, L n)
-        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
-        N = self.num_envs
-        self._current = np.zeros((N, D))
-        self._history: NDArray[np.float64] | None = (
-            np.zeros((N, n + 1, D)) if render_mode is not None else None
-        )
+        self._D = self.task.n_dims
 
-    def _reset_state(self, envs: NDArray[np.int64]) -> None:
-        self._current[envs] = self.task.starts[self._index[envs]]
-        if self._history is not None:
-            self._history[envs, 0] = self._current[envs]
-
-    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
+    def step(self, actions: Any) -> _StepResult:
         D = self._D
-        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
-        obs[:, 2 * D : 3 * D] = self._current
-        return obs
-
-    def step(
-        self, actions: Any
-    ) -> tuple[
-        NDArray[np.float32],
-        NDArray[np.float64],
-        NDArray[np.bool_],
-        NDArray[np.bool_],
-        dict[str, Any],
-    ]:
-        D = self._D
-        a = self._check_actions(actions, D)
-        n = self._n_steps
-        k = np.minimum(self._k, n - 1)
-        rows = self._table[:, self._index * n + k]
+        a, rows = self._check_actions(actions, D)
         cols = [a[:, i] for i in range(D)]
         q, err = K.position_step(K.BATCH, rows[:D], rows[D:], cols, self.residual_scale)
         w = self.reward_weights
@@ -450,22 +406,5 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         r_dist = -w["distance"] * err
         r_act = -w["action"] * sq
         reward = r_dist + r_act
-        active = ~self._autoreset
-        qs = np.stack(q, axis=1)
-        self._current = np.where(active[:, None], qs, self._current)
-        if self._history is not None:
-            rows_a = np.flatnonzero(active)
-            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
         info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
-        return self._finish_step(err, reward, info)
-
-    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
-        info["max_error"] = np.where(ended, self._max_error, 0.0)
-        info["_max_error"] = ended
-
-    def _render_env(self, i: int) -> NDArray[np.uint8]:
-        single = self.single
-        single._index = int(self._index[i])
-        assert self._history is not None
-        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
-        return single.render()  # type: ignore[return-value]
+        return self._finish_step(q, err, reward, info)
