@@ -17,13 +17,20 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-__all__ = ["LABEL_COLUMNS", "SampleTable", "read_sample_table", "replicate_numbers", "write_csv"]
+__all__ = [
+    "LABEL_COLUMNS",
+    "SampleTable",
+    "read_csv_exact",
+    "read_sample_table",
+    "replicate_numbers",
+    "write_csv",
+]
 
 #: Label columns every sample CSV starts with.
 LABEL_COLUMNS: tuple[str, ...] = ("trajectory", "subject", "task")
@@ -33,6 +40,21 @@ def replicate_numbers(subjects: NDArray[np.str_], tasks: NDArray[np.str_]) -> ND
     """Number trajectories 0, 1, ... in order within each (subject, task) pair."""
     keys = pd.Series(list(zip(subjects, tasks, strict=True)))
     return keys.groupby(keys).cumcount().to_numpy(dtype=np.int64)
+
+
+_PANDAS_MAJOR = int(pd.__version__.split(".", 1)[0])
+
+
+def read_csv_exact(path: str | os.PathLike[str], **kwargs: Any) -> pd.DataFrame:
+    """``pandas.read_csv`` that parses every float exactly (round trip).
+
+    pandas 3 parses floats exactly by default; pandas 2 needs
+    ``float_precision="round_trip"`` (which pandas 3 deprecates), else a float written with
+    17 significant digits can read back 1 ulp off.
+    """
+    if _PANDAS_MAJOR < 3:
+        kwargs.setdefault("float_precision", "round_trip")
+    return pd.read_csv(path, **kwargs)
 
 
 def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
@@ -129,7 +151,7 @@ def read_sample_table(
     if not p.exists():
         raise FileNotFoundError(f"{kind} CSV {p} does not exist")
     required = (*LABEL_COLUMNS, "t", *value_columns)
-    frame = pd.read_csv(p, dtype={c: str for c in LABEL_COLUMNS})
+    frame = read_csv_exact(p, dtype={c: str for c in LABEL_COLUMNS})
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise ValueError(f"{p}: missing column(s) {missing}; expected header {','.join(required)}")

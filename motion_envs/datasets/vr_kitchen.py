@@ -22,10 +22,9 @@ import itertools
 from importlib import resources
 
 import numpy as np
-import pandas as pd
 
 from motion_envs.datasets.orientation import OrientationDataset
-from motion_envs.datasets.sample_table import replicate_numbers
+from motion_envs.datasets.sample_table import read_csv_exact, replicate_numbers
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["CITATION", "DEFAULT_MIN_DEG", "load_vr_kitchen"]
@@ -54,9 +53,9 @@ def load_vr_kitchen(min_deg: float = DEFAULT_MIN_DEG) -> OrientationDataset:
     """
     folder = _data_dir()
     with resources.as_file(folder / "kitchen_laser_samples.csv.gz") as path:
-        samples = pd.read_csv(path)
+        samples = read_csv_exact(path)
     with resources.as_file(folder / "kitchen_laser_trials.csv") as path:
-        trials = pd.read_csv(path)
+        trials = read_csv_exact(path)
     keys = ["participant", "session", "trial"]
     samples = samples.sort_values([*keys, "t_s"], kind="stable")
     trials = trials.sort_values(keys, kind="stable").reset_index(drop=True)
