@@ -39,8 +39,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
-from motion_envs.datasets.lasa import LASA_CITATION, load_lasa
-from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
+from motion_envs.datasets import load_position_dataset
+from motion_envs.datasets.lasa import LASA_CITATION
+from motion_envs.datasets.position_csv import PositionDataset
 from motion_envs.models.nominal import (
     PositionNominal,
     position_conditions,
@@ -137,21 +138,6 @@ def _validation_rows(
         return []
     model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q)
     return model.validate().summary()
-
-
-def _load(data: str, shapes: list[str] | None) -> PositionDataset:
-    if data == "lasa":
-        return load_lasa(shapes)
-    path = Path(data)
-    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-        raise ValueError(f"--data must be 'lasa' or a path to a position CSV; got {data!r}")
-    ds = read_position_csv(path)
-    if shapes:
-        unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
-        if unknown:
-            raise ValueError(f"--shapes: task(s) {unknown} not in {path}")
-        ds = ds.subset(np.isin(ds.tasks, shapes))
-    return ds
 
 
 def run_benchmark(
@@ -342,7 +328,7 @@ def run(args: argparse.Namespace) -> int:
         )
     kinds = [k.strip() for k in args.conditions.split(",") if k.strip()]
     n_sines = None if args.n_sines == "auto" else int(args.n_sines)
-    dataset = _load(args.data, args.shapes)
+    dataset = load_position_dataset(args.data, args.shapes)
     doc = run_benchmark(
         dataset,
         n_points=args.n_points,

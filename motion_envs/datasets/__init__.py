@@ -3,18 +3,30 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
+from motion_envs.datasets.lasa import load_lasa
 from motion_envs.datasets.orientation import OrientationDataset, read_orientation_csv
+from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG, load_vr_kitchen
 
 __all__ = [
     "ORIENTATION_DATASETS",
+    "POSITION_DATASETS",
     "OrientationDataset",
+    "PositionDataset",
     "load_orientation_dataset",
+    "load_position_dataset",
     "load_vr_kitchen",
     "read_orientation_csv",
+    "read_position_csv",
 ]
+
+#: Built-in position datasets by name.
+POSITION_DATASETS: tuple[str, ...] = ("lasa",)
 
 #: Built-in orientation datasets by name.
 ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen", "cohort")
@@ -47,3 +59,28 @@ def load_orientation_dataset(
             f"got {data!r}"
         )
     return read_orientation_csv(path).drop_small_rotations(min_deg)
+
+
+def load_position_dataset(
+    data: str | os.PathLike[str], shapes: Sequence[str] | None = None
+) -> PositionDataset:
+    """Load the built-in ``"lasa"`` set or the users' position CSV at a path.
+
+    ``shapes`` keeps only those tasks (LASA shape names, or the CSV's task labels);
+    an unknown name raises ``ValueError`` naming it.
+    """
+    if isinstance(data, str) and data in POSITION_DATASETS:
+        return load_lasa(list(shapes) if shapes else None)
+    path = Path(data)
+    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+        raise ValueError(
+            f"data must be one of {list(POSITION_DATASETS)} or a path to a position CSV; "
+            f"got {data!r}"
+        )
+    ds = read_position_csv(path)
+    if shapes:
+        unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
+        if unknown:
+            raise ValueError(f"shapes: task(s) {unknown} are not in {path}")
+        ds = ds.subset(np.isin(ds.tasks, list(shapes)))
+    return ds

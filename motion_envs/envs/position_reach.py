@@ -55,26 +55,6 @@ class PositionTask(ReplayTask):
     grids: Any  # motion_envs.models.nominal.PositionGrids
 
 
-def _load_dataset(data: str | os.PathLike[str], shapes: tuple[str, ...] | None) -> Any:
-    from pathlib import Path
-
-    from motion_envs.datasets.lasa import load_lasa
-    from motion_envs.datasets.position_csv import read_position_csv
-
-    if isinstance(data, str) and data == "lasa":
-        return load_lasa(list(shapes) if shapes else None)
-    path = Path(data)
-    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-        raise ValueError(f"data must be 'lasa' or a path to a position CSV; got {data!r}")
-    ds = read_position_csv(path)
-    if shapes:
-        unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
-        if unknown:
-            raise ValueError(f"shapes: task(s) {unknown} are not in {path}")
-        ds = ds.subset(np.isin(ds.tasks, list(shapes)))
-    return ds
-
-
 def _build_task(
     data: str | os.PathLike[str],
     shapes: tuple[str, ...] | None,
@@ -85,9 +65,10 @@ def _build_task(
     split_seed: int,
     residual_scale: float,
 ) -> PositionTask:
+    from motion_envs.datasets import load_position_dataset
     from motion_envs.models.nominal import position_grids
 
-    dataset = _load_dataset(data, shapes)
+    dataset = load_position_dataset(data, shapes)
     g = position_grids(dataset, split, nominal, n_sines, test_fraction, split_seed, N_STEPS)
     L, n, D = g.human.shape
     steps = np.concatenate([g.nominal, g.human], axis=2)
