@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _orientation_timing import best_time, machine, print_json, print_machine, print_table
+from _timing import best_time, machine, print_json, print_machine, print_table
 
 from motion_envs.geometry import bezier
 from motion_envs.models.bezier_models import fit_control_points

@@ -24,13 +24,13 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import time
 from datetime import datetime, timezone
 
 import gymnasium as gym
 import numpy as np
+from _timing import cpu_model  # benchmarks/ is on sys.path when run as a script
 from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the environments)
@@ -38,17 +38,6 @@ import motion_envs  # noqa: F401  (registers the environments)
 OURS = ("MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0")
 ANCHORS = ("Pendulum-v1", "Reacher-v5")
 VECTOR_SIZES = (1, 64, 1024)
-
-
-def _cpu_model() -> str:
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
-    except (OSError, subprocess.CalledProcessError):
-        return platform.processor() or "unknown"
-    for line in out.splitlines():
-        if line.startswith("Model name:"):
-            return line.split(":", 1)[1].strip()
-    return "unknown"
 
 
 def _single_rate(env: gym.Env, actions: np.ndarray) -> float:
@@ -123,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     reacher.close()
 
     pendulum = single["Pendulum-v1"]
-    print(f"steps per second, median of {args.repeats} runs ({_cpu_model()})")
+    print(f"steps per second, median of {args.repeats} runs ({cpu_model()})")
     print()
     print(f"{'single environment':<34} {'steps/s':>12} {'/ Pendulum-v1':>14}")
     for env_id, rate in single.items():
@@ -137,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
     doc = {
         "benchmark": "env_throughput",
         "date": datetime.now(timezone.utc).date().isoformat(),
-        "cpu": _cpu_model(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "load_average_1min": os.getloadavg()[0],
         "python": platform.python_version(),

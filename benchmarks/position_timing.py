@@ -18,18 +18,18 @@ import argparse
 import json
 import platform
 import statistics
-import subprocess
 import sys
 import time
 from collections.abc import Callable
 from datetime import datetime, timezone
 
 import numpy as np
+from _timing import cpu_model  # benchmarks/ is on sys.path when run as a script
 
 from baselines.peers import DMPPeer, ProMPPeer, peers_missing_reason
-from baselines.position_bench import resample
 from motion_envs.datasets.lasa import load_lasa
 from motion_envs.geometry import sine_series as ss
+from motion_envs.models.nominal import resample_positions
 from motion_envs.models.sine_regression import SineSeriesRegression, select_n_sines
 
 
@@ -40,17 +40,6 @@ def _median_time(fn: Callable[[], object], repeats: int) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
-
-
-def _cpu_model() -> str:
-    try:
-        out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
-    except (OSError, subprocess.CalledProcessError):
-        return platform.processor() or "unknown"
-    for line in out.splitlines():
-        if line.startswith("Model name:"):
-            return line.split(":", 1)[1].strip()
-    return "unknown"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -69,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"movement_primitives cannot be used ({missing}); timing the sine series only",
               file=sys.stderr)  # fmt: skip
     ds = load_lasa(args.shapes)
-    y_all, _ = resample(ds, args.n_points)
+    y_all, _ = resample_positions(ds, args.n_points)
     per: dict[str, dict[str, list[float]]] = {}
 
     def record(method: str, what: str, seconds: float) -> None:
@@ -115,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     doc = {
         "benchmark": "position_timing",
         "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"),
-        "machine": {"cpu": _cpu_model(), "python": platform.python_version()},
+        "machine": {"cpu": cpu_model(), "python": platform.python_version()},
         "shapes": args.shapes,
         "n_points": args.n_points,
         "n_sines": args.n_sines,

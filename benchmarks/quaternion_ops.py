@@ -38,7 +38,7 @@ from scipy.spatial.transform import Rotation, Slerp
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import plain_numpy_quaternion as plain
-from _orientation_timing import best_time, machine, print_json, print_machine, print_table
+from _timing import best_time, machine, print_json, print_machine, print_table
 
 from motion_envs.geometry import quaternion as quat
 

@@ -33,7 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import plain_numpy_quaternion as plain
-from _orientation_timing import best_time, machine, print_json, print_machine, print_table
+from _timing import best_time, machine, print_json, print_machine, print_table
 
 from motion_envs.datasets import load_orientation_dataset
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG

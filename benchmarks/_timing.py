@@ -33,7 +33,8 @@ def best_time(fn: Callable[[], Any], repeats: int, warmup: int = 0) -> float:
     return best
 
 
-def _cpu_model() -> str:
+def cpu_model() -> str:
+    """The CPU model name from lscpu (or the platform's processor string)."""
     try:
         out = subprocess.run(["lscpu"], capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
@@ -49,7 +50,7 @@ def machine() -> dict[str, Any]:
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
     return {
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d"),
-        "cpu": _cpu_model(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "load_average_1min": round(load[0], 2),
         "python": platform.python_version(),

@@ -1,0 +1,32 @@
+"""Every benchmark script still imports and parses its arguments (they are not run here:
+timing belongs in benchmarks/, not in the test suite)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+SCRIPTS = sorted(
+    p
+    for p in BENCHMARKS.glob("*.py")
+    if not p.name.startswith("_") and p.name != "plain_numpy_quaternion.py"
+)
+
+
+def test_scripts_found():
+    names = {p.name for p in SCRIPTS}
+    assert {"quaternion_ops.py", "bezier_fit.py", "table1_vr_kitchen.py"} <= names
+    assert {"env_throughput.py", "position_timing.py", "cohort_scaling.py"} <= names
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)
+def test_script_help(script):
+    out = subprocess.run(
+        [sys.executable, str(script), "--help"], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    assert "usage:" in out.stdout
