@@ -43,8 +43,10 @@ from motion_envs.datasets import load_position_dataset
 from motion_envs.datasets.lasa import LASA_CITATION
 from motion_envs.datasets.position_csv import PositionDataset
 from motion_envs.models.nominal import (
+    POSITION_SPLITS,
     PositionNominal,
     position_conditions,
+    position_folds,
     resample_positions,
     varying_columns,
 )
@@ -80,24 +82,31 @@ class _Timer:
         self.n_predict[method] += 1
 
 
-def leave_one_out(
-    y: FloatArray,
+def predict_folds(
+    y_all: FloatArray,
     durations: FloatArray,
+    folds: list[tuple[str, NDArray[np.int64], NDArray[np.int64]]],
     kinds: list[str],
     n_sines: int | None,
     methods: list[str],
     timer: _Timer,
     n_weights: int = 10,
 ) -> tuple[dict[str, FloatArray], list[int]]:
-    """Predictions ``(n, K, D)`` of every held-out demonstration for each method."""
-    n = y.shape[0]
-    preds = {m: np.empty_like(y) for m in methods}
+    """Each method's predictions of the scored demonstrations of ``folds``, in fold order.
+
+    Every fold fits each method on its training demonstrations and predicts its scored
+    ones from their own start, end and duration. Returns ``method -> (m, K, D)`` and the
+    ``N`` the sine series chose in each fold.
+    """
+    scored_all = np.concatenate([scored for _, _, scored in folds])
+    preds = {m: np.empty((scored_all.size, *y_all.shape[1:])) for m in methods}
     chosen = []
     n_sines_arg: int | str = "auto" if n_sines is None else n_sines
-    for i in range(n):
-        train = np.delete(np.arange(n), i)
-        held_out = slice(i, i + 1)
-        yt = y[train]
+    row = 0
+    for _, train, scored in folds:
+        rows = slice(row, row + scored.size)
+        row += scored.size
+        yt = y_all[train]
         for method, kind in (("line", "line"), ("null", "null"), ("lippi", "sine")):
             if method not in methods:
                 continue
@@ -105,20 +114,21 @@ def leave_one_out(
             nominal = PositionNominal(kind, n_sines=n_sines_arg, conditions=kinds)
             nominal.fit(yt, durations[train])
             t1 = time.perf_counter()
-            preds[method][i] = nominal.predict(y[held_out], durations[held_out])[0]
+            preds[method][rows] = nominal.predict(y_all[scored], durations[scored])
             if method == "lippi":
                 cv = nominal.selection_seconds_
-                timer.add("lippi", t1 - t0 - cv, time.perf_counter() - t1)
+                timer.add("lippi", t1 - t0 - cv, (time.perf_counter() - t1) / scored.size)
                 timer.fit["lippi_cv"] += cv
                 chosen.append(nominal.n_sines_)
-        start, end = y[i, 0], y[i, -1]
         for name, cls in (("dmp", DMPPeer), ("promp", ProMPPeer)):
-            if name in methods:
-                t0 = time.perf_counter()
-                peer = cls(n_weights_per_dim=n_weights).fit(yt)
-                t1 = time.perf_counter()
-                preds[name][i] = peer.predict(start, end)
-                timer.add(name, t1 - t0, time.perf_counter() - t1)
+            if name not in methods:
+                continue
+            t0 = time.perf_counter()
+            peer = cls(n_weights_per_dim=n_weights).fit(yt)
+            t1 = time.perf_counter()
+            for k, i in enumerate(scored):
+                preds[name][rows.start + k] = peer.predict(y_all[i, 0], y_all[i, -1])
+            timer.add(name, t1 - t0, (time.perf_counter() - t1) / scored.size)
     return preds, chosen
 
 
@@ -148,8 +158,18 @@ def run_benchmark(
     use_peers: bool = True,
     n_weights: int = 10,
     progress: bool = True,
+    split: str = "loo",
+    test_fraction: float = 0.25,
+    split_seed: int = 0,
 ) -> dict[str, Any]:
-    """Run the leave-one-out benchmark; returns the ``results.json`` document."""
+    """Run the benchmark on one split (default leave one out); returns ``results.json``.
+
+    ``split="loo"`` predicts every demonstration from the others of its shape;
+    ``"test"``/``"train"`` fit on each shape's training demonstrations of
+    :func:`~motion_envs.datasets.splits.split_by_replicate` (``test_fraction``,
+    ``split_seed``) and score the split's (the folds of
+    :func:`motion_envs.models.nominal.position_folds`, shared with PositionReach-v0).
+    """
     from tqdm import tqdm
 
     kinds = ["start", "end"] if kinds is None else kinds
@@ -160,24 +180,35 @@ def run_benchmark(
     timer = _Timer()
     per_shape: dict[str, Any] = {}
     predictions: dict[str, dict[str, FloatArray]] = {}
+    truths: dict[str, FloatArray] = {}
+    folds = position_folds(dataset, split, test_fraction, split_seed)
     skipped = []
     for task in tqdm(dataset.task_names(), desc="shapes", file=sys.stderr, disable=not progress):
-        sel = dataset.tasks == task
-        if sel.sum() < 3:
+        task_folds = [f for f in folds if f[0] == task]
+        if not task_folds:
             skipped.append(task)
             continue
-        y, dur = y_all[sel], dur_all[sel]
-        preds, chosen = leave_one_out(y, dur, kinds, n_sines, methods, timer, n_weights)
+        scored = np.concatenate([f[2] for f in task_folds])
+        preds, chosen = predict_folds(
+            y_all, dur_all, task_folds, kinds, n_sines, methods, timer, n_weights
+        )
+        y = y_all[scored]
+        members = dataset.tasks == task
         n_val = Counter(chosen).most_common(1)[0][0]
         per_shape[task] = {
-            "n_demos": int(sel.sum()),
+            "n_demos": int(members.sum()),
+            "n_scored": int(scored.size),
             "n_sines": chosen,
             "criteria": _score(y, preds),
-            "validation": _validation_rows(y, dur, kinds, n_val),
+            "validation": _validation_rows(y_all[members], dur_all[members], kinds, n_val),
         }
         predictions[task] = preds
+        truths[task] = y
     if not per_shape:
-        raise ValueError("no shape/task has the 3 or more trajectories leave-one-out needs")
+        raise ValueError(
+            f"no shape/task can be scored on split {split!r} "
+            "(leave-one-out needs 3 or more trajectories per task)"
+        )
     summary = {
         m: {
             c: float(np.median([per_shape[s]["criteria"][m][c] for s in per_shape]))
@@ -206,6 +237,7 @@ def run_benchmark(
         "dataset": dataset.name,
         "unit": dataset.unit,
         "n_points": n_points,
+        "split": {"split": split, "test_fraction": test_fraction, "split_seed": split_seed},
         "conditions": kinds,
         "n_sines": "auto (leave-one-out CV, 0..15)" if n_sines is None else n_sines,
         "methods": methods,
@@ -217,8 +249,17 @@ def run_benchmark(
         "timing": timing,
         "citation": LASA_CITATION if dataset.name == "lasa" else None,
         "_predictions": predictions,
-        "_truth": {t: y_all[dataset.tasks == t] for t in per_shape},
+        "_truth": truths,
     }
+
+
+def _split_text(split: dict[str, Any]) -> str:
+    if split["split"] == "loo":
+        return "leave one demonstration out"
+    return (
+        f"{split['split']} split (test fraction {split['test_fraction']:g} per shape, "
+        f"seed {split['split_seed']})"
+    )
 
 
 def format_table(doc: dict[str, Any]) -> str:
@@ -227,7 +268,7 @@ def format_table(doc: dict[str, Any]) -> str:
     unit = f" ({doc['unit']})" if doc["unit"] else ""
     lines = [
         f"position benchmark on {doc['dataset']!r}: {len(doc['per_shape'])} shapes, "
-        f"leave one demonstration out, {doc['n_points']}-point normalised-time grid{unit}",
+        f"{_split_text(doc['split'])}, {doc['n_points']}-point normalised-time grid{unit}",
         "per shape: median over held-out demos; below: median across shapes",
         "",
         f"{'criterion':<56}" + "".join(f"{m:>10}" for m in methods),
@@ -283,7 +324,7 @@ def _csv_text(doc: dict[str, Any]) -> str:
 
 
 def plot_grid(doc: dict[str, Any], path: Path) -> None:
-    """Every shape: demonstrations (grey) and each method's leave-one-out predictions."""
+    """Every shape: scored demonstrations (grey) and each method's predictions of them."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -311,7 +352,7 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
         ax.axis("off")
     handles, labels = axes.ravel()[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower right", fontsize=8)
-    fig.suptitle("demonstrations (grey) and leave-one-out predictions", fontsize=10)
+    fig.suptitle(f"demonstrations (grey) and predictions, {_split_text(doc['split'])}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -337,6 +378,9 @@ def run(args: argparse.Namespace) -> int:
         use_peers=not args.no_peers,
         n_weights=args.n_weights,
         progress=not args.no_progress,
+        split=args.split,
+        test_fraction=args.test_fraction,
+        split_seed=args.split_seed,
     )
     print(format_table(doc))
     print()
@@ -376,6 +420,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--n-sines", default="auto", help="N, or 'auto' for cross-validation")
     p.add_argument("--conditions", default="start,end", help="comma list of start, end, duration")
     p.add_argument("--n-weights", type=int, default=10, help="DMP/ProMP weights per dimension")
+    p.add_argument(
+        "--split",
+        choices=POSITION_SPLITS,
+        default="loo",
+        help="loo: leave one demonstration out per shape; test/train: fit on each shape's "
+        "training demonstrations (split_by_replicate) and score the test/train ones, as "
+        "PositionReach-v0's split",
+    )
+    p.add_argument(
+        "--test-fraction", type=float, default=0.25, help="held-out share per shape (test/train)"
+    )
+    p.add_argument("--split-seed", type=int, default=0, help="seed of the per-shape split")
     p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

@@ -50,25 +50,37 @@ def test_gymnasium_and_sb3_check_env_without_warnings():
     _fail_on_warnings(record)
 
 
-@pytest.fixture(scope="module")
-def bench_doc(tmp_path_factory) -> dict:
-    """``motion-bench position`` on the test shapes, 50-point grid, run once."""
+def run_bench(out, split: str) -> dict:
+    """``motion-bench position`` on the test shapes, 50-point grid, one split."""
     from baselines.cli import main
 
-    out = tmp_path_factory.mktemp("bench")
     argv = ["position", "--no-peers", "--no-progress", "--n-points", "50", "--out", str(out)]
-    assert main([*argv, "--shapes", *SHAPES]) == 0
+    assert main([*argv, "--split", split, "--shapes", *SHAPES]) == 0
     return json.loads((out / "results.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def bench_doc(tmp_path_factory) -> dict:
+    return run_bench(tmp_path_factory.mktemp("bench"), "loo")
+
+
+@pytest.fixture(scope="module")
+def bench_doc_test(tmp_path_factory) -> dict:
+    return run_bench(tmp_path_factory.mktemp("bench_test"), "test")
 
 
 @pytest.mark.parametrize(
     ("nominal", "column"), [("line", "line"), ("null", "null"), ("sine", "lippi")]
 )
-def test_zero_action_invariant_matches_motion_bench_position(bench_doc, nominal, column):
-    """Zero-action episodes of split='loo' reproduce motion-bench position's max error."""
-    doc = bench_doc
+@pytest.mark.parametrize("split", ["loo", "test"])
+def test_zero_action_invariant_matches_motion_bench_position(
+    bench_doc, bench_doc_test, nominal, column, split
+):
+    """Zero-action episodes of a split reproduce ``motion-bench position --split``'s max error."""
+    doc = bench_doc if split == "loo" else bench_doc_test
+    assert doc["split"]["split"] == split
     offline = doc["summary_median_across_shapes"][column]["max_error"]
-    env = make(split="loo", nominal=nominal)
+    env = make(split=split, nominal=nominal)
     task = env.unwrapped.task
     maxima = []
     for l in range(task.n_trajectories):

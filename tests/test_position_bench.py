@@ -12,7 +12,7 @@ from baselines import position_bench as pb
 from baselines.cli import main
 from baselines.peers import peers_available
 from motion_envs.datasets.lasa import load_lasa
-from motion_envs.models.nominal import resample_positions
+from motion_envs.models.nominal import position_folds, resample_positions
 from motion_envs.models.position_criteria import max_error
 
 
@@ -43,7 +43,11 @@ def test_cli_lasa_writes_results(tmp_path, capsys):
 def test_leave_one_out_matches_hand_computation():
     ds = load_lasa(["Line"])
     y, dur = resample_positions(ds, 30)
-    preds, chosen = pb.leave_one_out(y, dur, ["start", "end"], 3, ["line", "null"], pb._Timer())
+    folds = position_folds(ds, "loo")
+    assert [f[2].tolist() for f in folds] == [[i] for i in range(7)]
+    preds, chosen = pb.predict_folds(
+        y, dur, folds, ["start", "end"], 3, ["line", "null"], pb._Timer()
+    )
     assert chosen == []
     tau = np.linspace(0, 1, 30)[:, None]
     line0 = y[0, 0] + tau * (y[0, -1] - y[0, 0])
@@ -51,6 +55,19 @@ def test_leave_one_out_matches_hand_computation():
     resid = y[1:] - y[1:, :1] - tau * (y[1:, -1:] - y[1:, :1])
     np.testing.assert_allclose(preds["null"][0], line0 + resid.mean(axis=0), atol=1e-12)
     assert max_error(y[0], preds["line"][0]) > 0
+
+
+def test_test_split_scores_only_held_out_demos(tmp_path, capsys):
+    out = tmp_path / "res"
+    argv = ["position", "--shapes", "Line", "Angle", "--n-points", "30", "--n-sines", "3"]
+    assert main([*argv, "--split", "test", "--no-peers", "--no-progress", "--out", str(out)]) == 0
+    assert "test split (test fraction 0.25 per shape, seed 0)" in capsys.readouterr().out
+    doc = json.loads((out / "results.json").read_text())
+    ds = load_lasa(["Line", "Angle"])
+    folds = position_folds(ds, "test")
+    for task, train, scored in folds:
+        assert doc["per_shape"][task]["n_scored"] == scored.size == 2
+        assert train.size == 5 and not set(train) & set(scored)
 
 
 def test_cli_on_csv_without_peers(tmp_path, capsys):

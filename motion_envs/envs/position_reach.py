@@ -158,11 +158,12 @@ class PositionReachEnv(ReplayEnv):
     Nominals are fitted per task on the training demonstrations only
     (:mod:`motion_envs.models.nominal`).
 
-    The zero action reproduces the nominal exactly: with ``split="loo"`` (every
-    demonstration, its nominal fitted on the other demonstrations of its shape) the
-    median over shapes of the median over their episodes of ``info["max_error"]``
-    equals ``motion-bench position --n-points 50``'s max-error criterion of the same
-    model (``line``, ``null``, ``lippi`` for ``"sine"``), tested to 1e-9.
+    The zero action reproduces the nominal exactly: on a split (``"test"``, ``"train"``,
+    or ``"loo"``: every demonstration, its nominal fitted on the other demonstrations of
+    its shape) the median over shapes of the median over their episodes of
+    ``info["max_error"]`` equals ``motion-bench position --split SPLIT --n-points 50``'s
+    max-error criterion of the same model (``line``, ``null``, ``lippi`` for ``"sine"``),
+    tested to 1e-9 for ``"test"`` and ``"loo"``.
 
     ## Action Space
     The action space is a `Box(-1, 1, (D,), float32)`, ``D`` the data's dimension (2 for

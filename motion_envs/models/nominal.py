@@ -87,6 +87,7 @@ __all__ = [
     "median_of_task_medians",
     "orientation_criterion",
     "position_conditions",
+    "position_folds",
     "position_grids",
     "resample_positions",
     "varying_columns",
@@ -461,6 +462,43 @@ def median_of_task_medians(values: ArrayLike, tasks: ArrayLike) -> float:
     return float(np.median([np.median(values[tasks == t]) for t in np.unique(tasks)]))
 
 
+def position_folds(
+    dataset: Any,
+    split: str = "loo",
+    test_fraction: float = 0.25,
+    seed: int = 0,
+) -> list[tuple[str, NDArray[np.int64], NDArray[np.int64]]]:
+    """The ``(task, train indices, scored indices)`` folds of a split of a position
+    dataset (anything with ``.tasks``), tasks in order of first appearance.
+
+    * ``"loo"``: one fold per demonstration, trained on the other demonstrations of its
+      task (tasks with fewer than 3 demonstrations are skipped);
+    * ``"train"`` / ``"test"``: one fold per task, trained on the task's training
+      demonstrations of :func:`~motion_envs.datasets.splits.split_by_replicate`
+      (``test_fraction``, ``seed``) and scoring the split's own (tasks with none skipped).
+    """
+    from motion_envs.datasets.splits import split_by_replicate
+
+    if split not in POSITION_SPLITS:
+        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    tasks = np.asarray(dataset.tasks).astype(str)
+    folds: list[tuple[str, NDArray[np.int64], NDArray[np.int64]]] = []
+    if split != "loo":
+        is_test = split_by_replicate(dataset, test_fraction=test_fraction, seed=seed, mask=True)
+    for task in dict.fromkeys(tasks.tolist()):
+        members = np.flatnonzero(tasks == task)
+        if split == "loo":
+            if members.size < 3:
+                continue
+            folds.extend((task, members[members != i], np.array([i])) for i in members)
+        else:
+            in_task = tasks == task
+            scored = np.flatnonzero(in_task & (is_test if split == "test" else ~is_test))
+            if scored.size:
+                folds.append((task, np.flatnonzero(in_task & ~is_test), scored))
+    return folds
+
+
 def position_grids(
     dataset: Any,
     split: str = "test",
@@ -481,36 +519,15 @@ def position_grids(
       demonstrations of its task (``motion-bench position``'s leave-one-out protocol;
       tasks with fewer than 3 demonstrations are skipped, as there).
     """
-    from motion_envs.datasets.splits import split_by_replicate
-
-    if split not in POSITION_SPLITS:
-        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    folds = position_folds(dataset, split, test_fraction, seed)
     y_all, dur_all = resample_positions(dataset, n_points)
     tasks = np.asarray(dataset.tasks).astype(str)
-    order = list(dict.fromkeys(tasks.tolist()))
     idx_out: list[int] = []
     preds: list[FloatArray] = []
-    if split == "loo":
-        for task in order:
-            members = np.flatnonzero(tasks == task)
-            if members.size < 3:
-                continue
-            for i in members:
-                train = members[members != i]
-                model = PositionNominal(nominal, n_sines).fit(y_all[train], dur_all[train])
-                preds.append(model.predict(y_all[i : i + 1], dur_all[i : i + 1])[0])
-                idx_out.append(int(i))
-    else:
-        is_test = split_by_replicate(dataset, test_fraction=test_fraction, seed=seed, mask=True)
-        for task in order:
-            members = tasks == task
-            train = np.flatnonzero(members & ~is_test)
-            scored = np.flatnonzero(members & (is_test if split == "test" else ~is_test))
-            if scored.size == 0:
-                continue
-            model = PositionNominal(nominal, n_sines).fit(y_all[train], dur_all[train])
-            preds.extend(model.predict(y_all[scored], dur_all[scored]))
-            idx_out.extend(int(i) for i in scored)
+    for _, train, scored in folds:
+        model = PositionNominal(nominal, n_sines).fit(y_all[train], dur_all[train])
+        preds.extend(model.predict(y_all[scored], dur_all[scored]))
+        idx_out.extend(int(i) for i in scored)
     if not idx_out:
         raise ValueError(f"the {split!r} split of this dataset holds no trajectory")
     index = np.asarray(idx_out, dtype=np.int64)
