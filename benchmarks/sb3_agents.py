@@ -3,7 +3,8 @@
 For each environment, PPO (``MlpPolicy``, SB3's default hyper-parameters, seeded) is
 trained on ``split="train"`` for ``--timesteps`` steps on the native vector environment
 (``gym.make_vec(..., vectorization_mode="vector_entry_point")``, adapted to SB3's
-``VecEnv`` interface below, with ``VecMonitor``), then evaluated deterministically on
+``VecEnv`` interface by :class:`baselines.sb3.GymnasiumVecEnv`, with ``VecMonitor``),
+then evaluated deterministically on
 ``split="test"``: one episode per test trajectory (``reset(options={"trajectory": i})``),
 ``info["max_error"]`` at the episode's end. Three policies are scored:
 
@@ -42,7 +43,6 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from _timing import machine, print_json, print_table  # benchmarks/ is on sys.path
-from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the environments)
 
@@ -52,98 +52,12 @@ DEFAULT_SHAPES = ("Angle", "CShape", "GShape", "Sine", "Worm")
 TOLERANCE = 1e-9  # nominal criterion vs motion-bench
 
 
-def _sb3_vec_env_class() -> type:
-    """``GymnasiumVecEnv``: an SB3 ``VecEnv`` over a Gymnasium ``VectorEnv`` (built lazily,
-    so that ``--help`` does not import torch)."""
-    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
-
-    class GymnasiumVecEnv(VecEnv):
-        """SB3 ``VecEnv`` over a Gymnasium vector env with ``AutoresetMode.NEXT_STEP``.
-
-        SB3 expects a finished sub-environment to be reset within the same ``step`` (the
-        last observation in ``infos[i]["terminal_observation"]``); Gymnasium's default
-        resets it on the next step. On an episode end this adapter therefore resets the
-        finished sub-environments at once with ``reset(options={"reset_mask": done})``.
-        """
-
-        def __init__(self, venv: gym.vector.VectorEnv) -> None:
-            mode = venv.metadata.get("autoreset_mode")
-            if mode is not None and mode != gym.vector.AutoresetMode.NEXT_STEP:
-                raise ValueError(f"venv must use AutoresetMode.NEXT_STEP; got {mode}")
-            self.venv = venv
-            super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
-            self._actions: np.ndarray | None = None
-
-        def reset(self) -> np.ndarray:
-            seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
-            obs, _ = self.venv.reset(seed=seeds)
-            self._reset_seeds()
-            self._reset_options()
-            return obs
-
-        def step_async(self, actions: np.ndarray) -> None:
-            self._actions = actions
-
-        def step_wait(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[dict[str, Any]]]:
-            obs, reward, terminated, truncated, info = self.venv.step(self._actions)
-            done = terminated | truncated
-            infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-            for i in np.flatnonzero(done).tolist():
-                infos[i]["terminal_observation"] = obs[i].copy()
-                infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
-                if "max_error" in info and info["_max_error"][i]:
-                    infos[i]["max_error"] = float(info["max_error"][i])
-            if done.any():
-                obs_reset, _ = self.venv.reset(options={"reset_mask": done})
-                obs = np.where(done[:, None], obs_reset, obs)
-            return obs, reward.astype(np.float32), done, infos
-
-        def close(self) -> None:
-            self.venv.close()
-
-        def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
-            value = getattr(self.venv, attr_name)
-            return [value for _ in self._get_indices(indices)]
-
-        def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
-            raise NotImplementedError("GymnasiumVecEnv does not set sub-environment attributes")
-
-        def env_method(self, method_name: str, *args: Any, indices: Any = None, **kw: Any):
-            raise NotImplementedError("GymnasiumVecEnv does not call sub-environment methods")
-
-        def env_is_wrapped(self, wrapper_class: type, indices: Any = None) -> list[bool]:
-            return [False for _ in self._get_indices(indices)]
-
-    return GymnasiumVecEnv
-
-
-def _progress_callback(total: int, desc: str):
-    """An SB3 callback drawing a tqdm bar (stderr) with the latest mean episode return."""
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    class TqdmCallback(BaseCallback):
-        def _on_training_start(self) -> None:
-            self.bar = tqdm(total=total, desc=desc, unit="step", file=sys.stderr)
-
-        def _on_step(self) -> bool:
-            self.bar.update(self.training_env.num_envs)
-            return True
-
-        def _on_rollout_end(self) -> None:
-            buf = self.model.ep_info_buffer
-            if buf:
-                self.bar.set_postfix(ep_return=f"{np.mean([e['r'] for e in buf]):.3g}")
-
-        def _on_training_end(self) -> None:
-            self.bar.close()
-
-    return TqdmCallback()
-
-
 def train_ppo(env_id: str, kwargs: dict[str, Any], timesteps: int, n_envs: int, seed: int):
     """PPO (MlpPolicy, default hyper-parameters) on the train split; (model, seconds)."""
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecMonitor
+
+    from baselines.sb3 import GymnasiumVecEnv, TqdmCallback
 
     venv = gym.make_vec(
         env_id,
@@ -152,10 +66,10 @@ def train_ppo(env_id: str, kwargs: dict[str, Any], timesteps: int, n_envs: int, 
         split="train",
         **kwargs,
     )
-    env = VecMonitor(_sb3_vec_env_class()(venv))
+    env = VecMonitor(GymnasiumVecEnv(venv))
     model = PPO("MlpPolicy", env, seed=seed, verbose=0, device="cpu")
     t0 = time.perf_counter()
-    model.learn(timesteps, callback=_progress_callback(timesteps, env_id.split("/")[-1]))
+    model.learn(timesteps, callback=TqdmCallback(timesteps, env_id.split("/")[-1]))
     seconds = time.perf_counter() - t0
     env.close()
     return model, seconds
