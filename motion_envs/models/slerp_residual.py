@@ -35,6 +35,7 @@ __all__ = [
     "DEFAULT_N_POINTS",
     "MIN_SAMPLES",
     "RaggedTrajectories",
+    "interpolate_on_grid",
     "normalised_grid",
     "resample_orientations",
     "slerp_residuals",
@@ -178,15 +179,23 @@ def speed_fractions(traj: RaggedTrajectories) -> FloatArray:
     return alpha
 
 
-def _interp_flat(traj: RaggedTrajectories, values: FloatArray, grid: FloatArray) -> FloatArray:
+def _global_abscissae(traj: RaggedTrajectories, grid: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Samples' ``tau + 2 l`` (increasing across trajectories) and the grid's, ``(L * n,)``."""
+    x = traj.tau + 2.0 * traj.trajectory_index()
+    xq = (grid[None, :] + 2.0 * np.arange(traj.n_trajectories)[:, None]).ravel()
+    return x, xq
+
+
+def interpolate_on_grid(traj: RaggedTrajectories, values: ArrayLike, grid: ArrayLike) -> FloatArray:
     """Linear interpolation of per-sample ``values`` ``(N_total, c)`` onto ``grid`` per trajectory.
 
     Returns ``(L, len(grid), c)``. One ``np.interp`` call per column for all
     trajectories, using the increasing global abscissa ``tau + 2 l``.
     """
+    values = np.asarray(values, dtype=np.float64)
+    grid = np.asarray(grid, dtype=np.float64)
     L = traj.n_trajectories
-    x = traj.tau + 2.0 * traj.trajectory_index()
-    xq = (grid[None, :] + 2.0 * np.arange(L)[:, None]).ravel()
+    x, xq = _global_abscissae(traj, grid)
     out = np.empty((xq.size, values.shape[1]))
     for c in range(values.shape[1]):
         out[:, c] = np.interp(xq, x, values[:, c])
@@ -201,8 +210,7 @@ def resample_orientations(traj: RaggedTrajectories, grid: ArrayLike) -> FloatArr
     """
     grid = np.asarray(grid, dtype=np.float64)
     L = traj.n_trajectories
-    x = traj.tau + 2.0 * traj.trajectory_index()
-    xq = (grid[None, :] + 2.0 * np.arange(L)[:, None]).ravel()
+    x, xq = _global_abscissae(traj, grid)
     # right neighbour index, kept inside each trajectory
     j1 = np.searchsorted(x, xq, side="left")
     first = np.repeat(traj.offsets[:-1], grid.size)
@@ -239,7 +247,7 @@ def slerp_residuals(
         e = quat.slerp(q0[idx], qn[idx], alpha, validate=False)
         r = quat.multiply(quat.conjugate(e), traj.quaternions)
         v = quat.logmap(r, validate=False)
-        out = _interp_flat(traj, v, grid)
+        out = interpolate_on_grid(traj, v, grid)
     else:
         abar = np.asarray(average_alpha, dtype=np.float64)
         if abar.shape != (n_points,):

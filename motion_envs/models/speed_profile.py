@@ -27,7 +27,7 @@ from scipy import optimize, special
 from motion_envs.models.slerp_residual import (
     DEFAULT_N_POINTS,
     RaggedTrajectories,
-    _interp_flat,
+    interpolate_on_grid,
     normalised_grid,
     speed_fractions,
 )
@@ -69,7 +69,7 @@ def speed_fractions_on_grid(
 ) -> FloatArray:
     """Each trajectory's ``alpha`` interpolated linearly onto the common grid, ``(L, n_points)``."""
     alpha = speed_fractions(traj)
-    return _interp_flat(traj, alpha[:, None], normalised_grid(n_points))[..., 0]
+    return interpolate_on_grid(traj, alpha[:, None], normalised_grid(n_points))[..., 0]
 
 
 def average_speed_profile(traj: RaggedTrajectories, n_points: int = DEFAULT_N_POINTS) -> FloatArray:
