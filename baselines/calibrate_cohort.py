@@ -34,12 +34,12 @@ from tqdm.auto import tqdm
 
 from motion_envs.datasets.cohort import CohortGenerator
 from motion_envs.datasets.cohort_config import (
-    _REPO_DIR,
     CALIBRATED_PARAMETERS,
     DEFAULT_COHORT,
+    REPO_CONFIG_DIR,
     CohortConfig,
-    _package_dir,
     load_cohort_config,
+    package_config_dir,
     resolve_cohort_config,
 )
 from motion_envs.models.criteria import table1
@@ -320,8 +320,8 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else source
     final.save(out)
     print(f"\nwrote {out}")
-    if out.resolve().parent == _REPO_DIR.resolve():
-        packaged = Path(str(_package_dir())) / out.name
+    if out.resolve().parent == REPO_CONFIG_DIR.resolve():
+        packaged = Path(str(package_config_dir())) / out.name
         final.save(packaged)
         print(f"wrote {packaged} (package copy)")
     return 0

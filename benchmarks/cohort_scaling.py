@@ -6,7 +6,7 @@ For each size the cohort ``faraway2008`` is enlarged by adding subjects (same de
 * ``generate``: streamed generation in chunks of ``--chunk-subjects`` subjects
   (:func:`motion_envs.datasets.cohort.iter_cohort`), each chunk discarded;
 * ``score``: streamed generation + Table 1's in-sample rows for d = 2, 3, 4
-  (:func:`motion_envs.datasets.cohort.score_cohort`: two passes, running sums);
+  (:func:`motion_envs.models.criteria.score_cohort`: two passes, running sums);
 * ``cpu us/tr``: CPU time of this process per trajectory for ``score`` (less sensitive
   than wall time to other jobs on the machine);
 * ``peak MB``: peak memory traced by ``tracemalloc`` (numpy arrays included) during a
@@ -32,9 +32,9 @@ import platform
 import time
 import tracemalloc
 
-from motion_envs.datasets.cohort import generate_cohort, iter_cohort, score_cohort
+from motion_envs.datasets.cohort import generate_cohort, iter_cohort
 from motion_envs.datasets.cohort_config import load_cohort_config
-from motion_envs.models.criteria import table1
+from motion_envs.models.criteria import score_cohort, table1
 
 
 def _config(n_trajectories: int):

@@ -17,7 +17,6 @@ from motion_envs.datasets.cohort import (
     draw_trajectory,
     generate_cohort,
     iter_cohort,
-    score_cohort,
     split_labels,
 )
 from motion_envs.datasets.cohort_config import load_cohort_config
@@ -26,6 +25,7 @@ from motion_envs.datasets.splits import split_by_subject
 from motion_envs.models.bezier_models import NullBezierModel, SubjectBezierModel, TaskBezierModel
 from motion_envs.models.criteria import (
     median_max_error,
+    score_cohort,
     table1,
     within_subject_error,
 )

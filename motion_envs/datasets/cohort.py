@@ -59,7 +59,8 @@ Predictors (numeric, per trajectory): ``sex`` (0 = female, 1 = male), ``age`` (y
 
 Use: :func:`generate_cohort` (an :class:`OrientationDataset` with ``simulated=True``,
 also ``load_orientation_dataset("cohort[:CONFIG]")``), :func:`iter_cohort` (chunks),
-:func:`score_cohort` (Table 1's in-sample rows streamed in bounded memory),
+:func:`motion_envs.models.criteria.score_cohort` (Table 1's in-sample rows streamed in
+bounded memory),
 :func:`draw_trajectory` / :func:`split_labels` (one trajectory with its subject, task,
 predictors and train/test split by subject, for any orientation dataset), and
 :meth:`CohortGenerator.parameters` / :meth:`CohortGenerator.true_residuals` (the ground
@@ -82,9 +83,9 @@ from motion_envs.datasets.cohort_config import (
     load_cohort_config,
 )
 from motion_envs.datasets.orientation import OrientationDataset
+from motion_envs.datasets.ragged import DEFAULT_N_POINTS, MIN_SAMPLES, normalised_grid
 from motion_envs.geometry import quaternion as quat
-from motion_envs.models.slerp_residual import DEFAULT_N_POINTS, MIN_SAMPLES, normalised_grid
-from motion_envs.models.speed_profile import beta_alpha
+from motion_envs.geometry.beta_profile import beta_alpha
 
 __all__ = [
     "DEFAULT_COHORT",
@@ -96,7 +97,6 @@ __all__ = [
     "generate_cohort",
     "iter_cohort",
     "load_cohort",
-    "score_cohort",
     "sine_basis",
     "split_labels",
 ]
@@ -547,124 +547,6 @@ def draw_trajectory(
         predictors={k: float(v[i]) for k, v in dataset.predictors.items()},
         split=str(labels[i]),
     )
-
-
-def _add_groups(sums: FloatArray, counts: NDArray[np.int64], keys: NDArray, values: FloatArray):
-    np.add.at(sums, keys, values)
-    np.add.at(counts, keys, 1)
-
-
-def score_cohort(
-    config: CohortConfig | str | os.PathLike[str] = DEFAULT_COHORT,
-    chunk_subjects: int = 64,
-    degrees: tuple[int, ...] = (2, 3, 4),
-    progress: bool = False,
-) -> dict[str, float]:
-    """The in-sample rows of Table 1 of a cohort, streamed chunk by chunk.
-
-    Gives the same values as :func:`motion_envs.models.criteria.table1` (rows
-    ``within_subject`` .. ``task_predictor_d{d}``; not the leave-one-out rows) without
-    holding the cohort in memory: two passes over the chunks (the second regenerates
-    them, bit-identical), keeping only running sums (mean control points overall, per
-    subject and per task; mean curves overall and per task; the mean speed profile) and
-    one float per trajectory and criterion for the medians. Memory is
-    ``O(chunk + L)`` floats instead of ``O(samples)``.
-    """
-    from tqdm.auto import tqdm
-
-    from motion_envs.geometry import bezier
-    from motion_envs.models.bezier_models import fit_control_points
-    from motion_envs.models.criteria import criterion_names, max_errors
-    from motion_envs.models.slerp_residual import slerp_residuals
-    from motion_envs.models.speed_profile import speed_fractions_on_grid
-
-    gen = CohortGenerator(config)
-    n_sub = int(gen.config.get("design.n_subjects"))
-    if chunk_subjects < 1:
-        raise ValueError(f"chunk_subjects must be >= 1; got {chunk_subjects}")
-    chunks = [range(a, min(n_sub, a + chunk_subjects)) for a in range(0, n_sub, chunk_subjects)]
-    n_pts = DEFAULT_N_POINTS
-    grid = normalised_grid(n_pts)
-    J = len(gen.all_tasks)
-    subj_of = {name: i for i, name in enumerate(gen.subject_names)}
-    task_of = {name: j for j, name in enumerate(gen.all_tasks)}
-    P_sum = {d: np.zeros((d - 1, 3)) for d in degrees}
-    P_subj = {d: np.zeros((n_sub, d - 1, 3)) for d in degrees}
-    P_task = {d: np.zeros((J, d - 1, 3)) for d in degrees}
-    n_subj = np.zeros(n_sub, dtype=np.int64)
-    n_task = np.zeros(J, dtype=np.int64)
-    curve_task = np.zeros((J, n_pts, 3))
-    curve_sum = np.zeros((n_pts, 3))
-    alpha_sum = np.zeros(n_pts)
-    errors: dict[str, list[FloatArray]] = {}
-    task_labels: list[NDArray[np.int64]] = []
-    L = 0
-
-    def keep(name: str, values: FloatArray) -> None:
-        errors.setdefault(name, []).append(values)
-
-    def labels(ds: OrientationDataset) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        si = np.array([subj_of[s] for s in ds.subjects], dtype=np.int64)
-        tj = np.array([task_of[t] for t in ds.tasks], dtype=np.int64)
-        return si, tj
-
-    bar = tqdm(total=2 * len(chunks), desc="score cohort", unit="chunk", disable=not progress)
-    for chunk in chunks:  # pass 1: sums and the curve-wise criteria
-        ds = gen.generate(chunk)
-        traj = ds.ragged
-        si, tj = labels(ds)
-        R = slerp_residuals(traj, n_pts)
-        L += R.shape[0]
-        alpha_sum += speed_fractions_on_grid(traj, n_pts).sum(axis=0)
-        curve_sum += R.sum(axis=0)
-        _add_groups(curve_task, n_task, tj, R)
-        np.add.at(n_subj, si, 1)
-        pair = si * J + tj  # subjects are whole within a chunk, so pairs are too
-        _, inv, cnt = np.unique(pair, return_inverse=True, return_counts=True)
-        means = np.zeros((cnt.size, n_pts, 3))
-        np.add.at(means, inv, R)
-        means /= cnt[:, None, None]
-        keep("within_subject", max_errors(R, means[inv])[cnt[inv] >= 2])
-        keep("slerp_empirical", max_errors(R))
-        for d in degrees:
-            P = fit_control_points(R, d)
-            keep(f"approximation_d{d}", max_errors(R, bezier.evaluate(P, grid, d)))
-            P_sum[d] += P.sum(axis=0)
-            np.add.at(P_subj[d], si, P)
-            np.add.at(P_task[d], tj, P)
-        bar.update(1)
-    abar = alpha_sum / L
-    curve_mean = curve_sum / L
-    task_curve = curve_task / np.maximum(n_task, 1)[:, None, None]
-    for chunk in chunks:  # pass 2: errors against the global, subject and task means
-        ds = gen.generate(chunk)
-        traj = ds.ragged
-        si, tj = labels(ds)
-        R = slerp_residuals(traj, n_pts)
-        keep("slerp_average", max_errors(slerp_residuals(traj, n_pts, average_alpha=abar)))
-        keep("null_average", max_errors(R, curve_mean))
-        keep("between_subject", max_errors(R, task_curve[tj]))
-        task_labels.append(tj)
-        for d in degrees:
-            null = bezier.evaluate(P_sum[d] / L, grid, d)
-            keep(f"null_d{d}", max_errors(R, null))
-            Ps = P_subj[d][si] / n_subj[si][:, None, None]
-            keep(f"subject_predictor_d{d}", max_errors(R, bezier.evaluate(Ps, grid, d)))
-            Pt = P_task[d][tj] / n_task[tj][:, None, None]
-            keep(f"task_predictor_d{d}", max_errors(R, bezier.evaluate(Pt, grid, d)))
-        bar.update(1)
-    bar.close()
-    out: dict[str, float] = {}
-    between = np.concatenate(errors.pop("between_subject"))
-    tasks = np.concatenate(task_labels)
-    out_between = float(np.median([np.median(between[tasks == j]) for j in np.unique(tasks)]))
-    for name in criterion_names(degrees):
-        if name == "between_subject":
-            out[name] = out_between
-        elif name in errors:
-            out[name] = float(np.median(np.concatenate(errors[name])))
-    out["n_trajectories"] = float(L)
-    return out
 
 
 def cohort_size(config: CohortConfig) -> int:

@@ -21,19 +21,24 @@ import os
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
-from motion_envs.models.serialization import atomic_write_text
+if TYPE_CHECKING:
+    from importlib.resources.abc import Traversable
+
+from motion_envs._io import atomic_write_text
 
 __all__ = [
     "CALIBRATED_PARAMETERS",
     "DEFAULT_COHORT",
+    "REPO_CONFIG_DIR",
     "YAML_HEADER",
     "CohortConfig",
     "available_cohorts",
     "load_cohort_config",
+    "package_config_dir",
     "resolve_cohort_config",
 ]
 
@@ -52,7 +57,8 @@ CALIBRATED_PARAMETERS: tuple[str, ...] = (
     "speed_profile.spread",
 )
 
-_REPO_DIR = Path(__file__).resolve().parents[2] / "configs" / "cohorts"
+#: ``configs/cohorts`` of the source checkout (may not exist in an installed package).
+REPO_CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "cohorts"
 
 #: Comment block written at the top of every saved cohort YAML (documents each key).
 YAML_HEADER = """\
@@ -328,15 +334,16 @@ class CohortConfig:
         return target
 
 
-def _package_dir():
+def package_config_dir() -> Traversable:
+    """The folder of the cohort configs shipped inside the package."""
     return resources.files("motion_envs.datasets") / "cohorts"
 
 
 def available_cohorts() -> list[str]:
     """Names of the shipped cohort configurations."""
-    names = {p.name[:-5] for p in _package_dir().iterdir() if p.name.endswith(".yaml")}
-    if _REPO_DIR.is_dir():
-        names |= {p.stem for p in _REPO_DIR.glob("*.yaml")}
+    names = {p.name[:-5] for p in package_config_dir().iterdir() if p.name.endswith(".yaml")}
+    if REPO_CONFIG_DIR.is_dir():
+        names |= {p.stem for p in REPO_CONFIG_DIR.glob("*.yaml")}
     return sorted(names)
 
 
@@ -350,10 +357,10 @@ def resolve_cohort_config(config: str | os.PathLike[str]) -> Path:
         return path
     if not text or "/" in text or "\\" in text:
         raise ValueError(f"config must be a cohort name or a path to a YAML file; got {text!r}")
-    repo = _REPO_DIR / f"{text}.yaml"
+    repo = REPO_CONFIG_DIR / f"{text}.yaml"
     if repo.is_file():
         return repo
-    packaged = _package_dir() / f"{text}.yaml"
+    packaged = package_config_dir() / f"{text}.yaml"
     if packaged.is_file():
         return Path(str(packaged))
     raise ValueError(

@@ -30,9 +30,9 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from motion_envs.datasets.ragged import MIN_SAMPLES, RaggedTrajectories
 from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
 from motion_envs.geometry import quaternion as quat
-from motion_envs.models.slerp_residual import MIN_SAMPLES, RaggedTrajectories
 
 __all__ = [
     "CSV_COLUMNS",

@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
-from motion_envs.models.sine_regression import MIN_SAMPLES
 
 __all__ = ["CSV_COLUMNS", "PositionDataset", "read_position_csv"]
 

@@ -13,6 +13,7 @@ numbers (the header is line 1); the format-specific loaders add their own checks
 
 from __future__ import annotations
 
+import gzip
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -22,6 +23,8 @@ from typing import Any, NoReturn
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
+
+from motion_envs._io import atomic_write_bytes, atomic_write_text
 
 __all__ = [
     "LABEL_COLUMNS",
@@ -203,14 +206,9 @@ def write_csv(frames: Sequence[pd.DataFrame], path: str | os.PathLike[str]) -> P
     """Concatenate per-trajectory frames and write them to ``path`` atomically.
 
     Floats are written with 17 significant digits, so a float64 read back is identical.
+    A path ending in ``.gz`` is gzip-compressed.
     """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = target.with_name(f".{target.name}.tmp")
-    try:
-        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.17g")
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return target
+    text = pd.concat(frames, ignore_index=True).to_csv(index=False, float_format="%.17g")
+    if str(path).lower().endswith(".gz"):
+        return atomic_write_bytes(path, gzip.compress(text.encode("utf-8"), mtime=0))
+    return atomic_write_text(path, text)

@@ -18,7 +18,9 @@ from numpy.typing import NDArray
 __all__ = [
     "DEFAULT_SPLIT_SEED",
     "DEFAULT_TEST_FRACTION",
+    "POSITION_SPLITS",
     "held_out_subjects",
+    "position_folds",
     "split_by_replicate",
     "split_by_subject",
 ]
@@ -27,6 +29,8 @@ __all__ = [
 DEFAULT_SPLIT_SEED = 0
 #: Default share of the subjects held out for testing.
 DEFAULT_TEST_FRACTION = 0.25
+#: Splits of a position dataset (see :func:`position_folds`).
+POSITION_SPLITS: tuple[str, ...] = ("train", "test", "loo")
 
 
 class _SubjectDataset(Protocol):
@@ -123,3 +127,38 @@ def split_by_replicate(
     if mask:
         return is_test
     return dataset.subset(~is_test), dataset.subset(is_test)
+
+
+def position_folds(
+    dataset: Any,
+    split: str = "loo",
+    test_fraction: float = 0.25,
+    seed: int = 0,
+) -> list[tuple[str, NDArray[np.int64], NDArray[np.int64]]]:
+    """The ``(task, train indices, scored indices)`` folds of a split of a position
+    dataset (anything with ``.tasks``), tasks in order of first appearance.
+
+    * ``"loo"``: one fold per demonstration, trained on the other demonstrations of its
+      task (tasks with fewer than 3 demonstrations are skipped);
+    * ``"train"`` / ``"test"``: one fold per task, trained on the task's training
+      demonstrations of :func:`~motion_envs.datasets.splits.split_by_replicate`
+      (``test_fraction``, ``seed``) and scoring the split's own (tasks with none skipped).
+    """
+    if split not in POSITION_SPLITS:
+        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    tasks = np.asarray(dataset.tasks).astype(str)
+    folds: list[tuple[str, NDArray[np.int64], NDArray[np.int64]]] = []
+    if split != "loo":
+        is_test = split_by_replicate(dataset, test_fraction=test_fraction, seed=seed, mask=True)
+    for task in dict.fromkeys(tasks.tolist()):
+        members = np.flatnonzero(tasks == task)
+        if split == "loo":
+            if members.size < 3:
+                continue
+            folds.extend((task, members[members != i], np.array([i])) for i in members)
+        else:
+            in_task = tasks == task
+            scored = np.flatnonzero(in_task & (is_test if split == "test" else ~is_test))
+            if scored.size:
+                folds.append((task, np.flatnonzero(in_task & ~is_test), scored))
+    return folds

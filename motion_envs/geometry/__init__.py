@@ -1,8 +1,8 @@
-"""Pure-numpy geometry: unit quaternions, Bézier curves, sine series.
+"""Pure-numpy geometry: unit quaternions, Bézier curves, sine series, Beta speed profiles.
 
 Every function works on batches (leading axes) and states its formula in the docstring.
 """
 
-from motion_envs.geometry import bezier, quaternion, sine_series
+from motion_envs.geometry import beta_profile, bezier, quaternion, sine_series
 
-__all__ = ["bezier", "quaternion", "sine_series"]
+__all__ = ["beta_profile", "bezier", "quaternion", "sine_series"]

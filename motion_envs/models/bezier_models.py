@@ -29,9 +29,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.datasets.ragged import normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.models.serialization import SerializableModel
-from motion_envs.models.slerp_residual import normalised_grid
 
 __all__ = [
     "BezierResidualModel",

@@ -15,10 +15,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.datasets.ragged import DEFAULT_N_POINTS, normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
-from motion_envs.models.slerp_residual import DEFAULT_N_POINTS, normalised_grid
-from motion_envs.models.speed_profile import beta_alpha
+from motion_envs.geometry.beta_profile import beta_alpha
 
 __all__ = ["predict_orientations"]
 

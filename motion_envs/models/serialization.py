@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
+
+from motion_envs._io import atomic_write_text
 
 __all__ = [
     "FORMAT_NAME",
@@ -114,26 +115,6 @@ def _decode_array(name: str, obj: Any, path: str) -> np.ndarray:
         return arr.reshape(shape)
     except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(f"{path}: array {name!r} is malformed ({exc})") from exc
-
-
-def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
-    """Write ``text`` to ``path`` atomically: temp file in the same folder, fsync, rename."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    return target
 
 
 def save_model(model: SerializableModel, path: str | os.PathLike[str]) -> Path:

@@ -56,6 +56,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.serialization import SerializableModel
 
@@ -75,9 +76,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 Mode = Literal["hyperplane", "free"]
-
-#: Fewest samples accepted for one trajectory.
-MIN_SAMPLES = 5
 
 
 class RankDeficientDesignWarning(UserWarning):

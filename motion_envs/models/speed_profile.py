@@ -15,7 +15,9 @@ Two fits are offered, both batched over trajectories sampled on one common grid:
 * ``"least_squares"`` (default): minimise ``sum_k (alpha_k - I_{tau_k}(a, b))^2`` over
   ``log a, log b`` with ``scipy.optimize.least_squares``, started from the moments fit.
 
-The "average speed profile" of Table 1 is the mean of the ``alpha`` curves on the grid.
+``beta_alpha`` and ``beta_speed`` live in :mod:`motion_envs.geometry.beta_profile`
+and are re-exported here. The "average speed profile" of Table 1 is the mean of the
+``alpha`` curves on the grid.
 """
 
 from __future__ import annotations
@@ -24,13 +26,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import optimize, special
 
-from motion_envs.models.slerp_residual import (
-    DEFAULT_N_POINTS,
-    RaggedTrajectories,
-    interpolate_on_grid,
-    normalised_grid,
-    speed_fractions,
-)
+from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
+from motion_envs.datasets.resampling import interpolate_on_grid
+from motion_envs.geometry.beta_profile import beta_alpha, beta_speed
+from motion_envs.models.slerp_residual import speed_fractions
 
 __all__ = [
     "average_speed_profile",
@@ -44,24 +43,6 @@ FloatArray = NDArray[np.float64]
 
 _MIN_SHAPE = 1e-3
 _MAX_SHAPE = 1e3
-
-
-def beta_alpha(tau: ArrayLike, a: ArrayLike, b: ArrayLike) -> FloatArray:
-    """Cumulative fraction ``alpha(tau) = I_tau(a, b)`` (the Beta CDF); broadcasts."""
-    a = np.asarray(a, dtype=np.float64)
-    b = np.asarray(b, dtype=np.float64)
-    if np.any(~np.isfinite(a) | (a <= 0)) or np.any(~np.isfinite(b) | (b <= 0)):
-        raise ValueError("Beta shape parameters a and b must be finite and > 0")
-    tau = np.clip(np.asarray(tau, dtype=np.float64), 0.0, 1.0)
-    return special.betainc(a, b, tau)
-
-
-def beta_speed(tau: ArrayLike, a: ArrayLike, b: ArrayLike) -> FloatArray:
-    """Speed profile ``d alpha / d tau``: the Beta density at ``tau``; broadcasts."""
-    tau = np.asarray(tau, dtype=np.float64)
-    from scipy.stats import beta as beta_dist
-
-    return beta_dist.pdf(tau, a, b)
 
 
 def speed_fractions_on_grid(
