@@ -15,6 +15,10 @@ cohort's seed is held fixed (common random numbers), so the objective is a
 deterministic, piecewise smooth function of ``x``. The targets are the paper's rows
 that the issue asks to match; the d = 3 and d = 4 rows are not targets (MODELS.md
 explains why the paper's d = 3 null cannot follow from its procedure).
+
+:func:`run` fits (a pure function of a :class:`CalibrateConfig`), :func:`report` is the
+printed text and :func:`write` saves the calibrated YAML: to ``--out``, or over the
+shipped configuration (and its package copy) only with ``--replace-shipped``.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ import numpy as np
 from scipy import optimize
 from tqdm.auto import tqdm
 
+from baselines import options
 from motion_envs.datasets.cohort import CohortGenerator
 from motion_envs.datasets.cohort_config import (
     CALIBRATED_PARAMETERS,
@@ -47,12 +52,16 @@ from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1
 
 __all__ = [
     "PAPER_TARGETS",
+    "CalibrateConfig",
     "CalibrationResult",
+    "CalibrationRun",
     "calibrate",
     "cohort_criteria",
     "format_report",
     "register",
+    "report",
     "run",
+    "write",
 ]
 
 #: The paper's Table 1 rows the cohort is calibrated to, as [lo, hi] intervals (radians).
@@ -261,19 +270,26 @@ def format_report(result: CalibrationResult) -> str:
     return "\n".join(lines)
 
 
-def _load_targets(spec: str) -> dict[str, tuple[float, float]]:
+def load_targets(spec: str) -> dict[str, tuple[float, float]]:
+    """``paper`` (:data:`PAPER_TARGETS`) or a JSON file ``{criterion: value or [lo, hi]}``."""
     if spec == "paper":
         return dict(PAPER_TARGETS)
     path = Path(spec)
     if not path.is_file():
         raise ValueError(f"--target must be 'paper' or a JSON file of targets; got {spec!r}")
-    raw = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
     if not isinstance(raw, dict) or not raw:
         raise ValueError(f"{path}: expected a JSON object criterion -> value or [lo, hi]")
     out = {}
     for name, value in raw.items():
         pair = value if isinstance(value, list) else [value, value]
-        if len(pair) != 2 or not all(isinstance(v, (int, float)) for v in pair):
+        if len(pair) != 2 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in pair
+        ):
             raise ValueError(f"{path}: target {name!r} must be a number or [lo, hi]")
         out[name] = (float(pair[0]), float(pair[1]))
     return out
@@ -292,77 +308,177 @@ def _record(result: CalibrationResult, target_spec: str) -> dict[str, object]:
     }
 
 
-def run(args: argparse.Namespace) -> int:
-    """Execute ``motion-bench calibrate-cohort`` with parsed arguments."""
-    source = resolve_cohort_config(args.config)
-    config = load_cohort_config(source)
-    targets = _load_targets(args.target)
-    print(f"calibrating cohort {config.name!r} from {source} (seed {config.seed}) to {args.target}")
+@dataclass(frozen=True)
+class CalibrateConfig:
+    """What ``motion-bench calibrate-cohort`` fits (the defaults are the CLI's).
+
+    ``target`` is ``"paper"`` or a JSON file of targets, ``config`` the starting cohort
+    (a name under ``configs/cohorts/`` or a YAML path); ``check_seeds`` other seeds are
+    generated with the fitted parameters to report the spread of the criteria.
+    """
+
+    target: str = "paper"
+    config: str = DEFAULT_COHORT
+    max_evaluations: int = 150
+    check_seeds: int = 3
+    progress: bool = True
+
+
+@dataclass(frozen=True)
+class CalibrationRun:
+    """What :func:`run` returns: the fit, the config to save and the seeds' spread."""
+
+    source: Path
+    result: CalibrationResult
+    final: CohortConfig
+    seed_spread: dict[str, tuple[float, float]]
+    n_seeds: int
+
+
+def run(config: CalibrateConfig) -> CalibrationRun:
+    """Calibrate the cohort of ``config``; no printing (but a progress bar), no files."""
+    source = resolve_cohort_config(config.config)
+    start = load_cohort_config(source)
+    targets = load_targets(config.target)
     result = calibrate(
-        config, targets, max_evaluations=args.max_evaluations, progress=not args.no_progress
+        start, targets, max_evaluations=config.max_evaluations, progress=config.progress
     )
-    print(format_report(result))
     data = dict(result.config.data)
-    data["calibration"] = _record(result, args.target)
+    data["calibration"] = _record(result, config.target)
     final = CohortConfig(data, source=str(source))
-    if args.check_seeds > 0:
-        print(f"\nsame parameters, {args.check_seeds} other seeds (spread of the criteria):")
-        rows = {name: [] for name in targets}
-        for s in range(1, args.check_seeds + 1):
+    spread: dict[str, tuple[float, float]] = {}
+    if config.check_seeds > 0:
+        rows: dict[str, list[float]] = {name: [] for name in targets}
+        for s in range(1, config.check_seeds + 1):
             crit = cohort_criteria(final.with_values(seed=final.seed + s))
             for name in targets:
                 rows[name].append(crit[name])
-        for name, vals in rows.items():
-            print(f"  {name:<24} {min(vals):.3f} .. {max(vals):.3f}")
+        spread = {name: (min(vals), max(vals)) for name, vals in rows.items()}
+    return CalibrationRun(source, result, final, spread, config.check_seeds)
+
+
+def report(outcome: CalibrationRun) -> str:
+    """The text ``motion-bench calibrate-cohort`` prints after fitting."""
+    lines = [format_report(outcome.result)]
+    if outcome.seed_spread:
+        lines.append(f"\nsame parameters, {outcome.n_seeds} other seeds (spread of the criteria):")
+        for name, (lo, hi) in outcome.seed_spread.items():
+            lines.append(f"  {name:<24} {lo:.3f} .. {hi:.3f}")
+    return "\n".join(lines)
+
+
+def write(outcome: CalibrationRun, out: Path | None, replace_shipped: bool = False) -> list[Path]:
+    """Save the calibrated YAML to ``out``; with ``replace_shipped`` over the starting
+    config instead (a file of the repository's ``configs/cohorts/`` also updates the
+    package copy). Atomic writes."""
+    if replace_shipped:
+        written = [outcome.final.save(outcome.source)]
+        if outcome.source.resolve().parent == REPO_CONFIG_DIR.resolve():
+            packaged = Path(str(package_config_dir())) / outcome.source.name
+            written.append(outcome.final.save(packaged))
+        return written
+    if out is None:
+        raise ValueError("write needs an output path or replace_shipped=True")
+    return [outcome.final.save(out)]
+
+
+def default_out(config_name: str) -> Path:
+    """Where the calibrated YAML goes without ``--out``: ``results/calibrate-cohort/NAME.yaml``."""
+    return Path("results") / "calibrate-cohort" / f"{Path(config_name).stem}.yaml"
+
+
+def main(args: argparse.Namespace) -> int:
+    """``motion-bench calibrate-cohort`` with parsed arguments: run, print, write."""
+    config = CalibrateConfig(
+        target=args.target,
+        config=args.config,
+        max_evaluations=args.max_evaluations,
+        check_seeds=args.check_seeds,
+        progress=not args.no_progress,
+    )
+    source = resolve_cohort_config(config.config)
+    start = load_cohort_config(source)
+    print(f"calibrating cohort {start.name!r} from {source} (seed {start.seed}) to {config.target}")
+    outcome = run(config)
+    print(report(outcome))
     if args.dry_run:
         print("\n--dry-run: nothing written")
         return 0
-    out = Path(args.out) if args.out else source
-    final.save(out)
-    print(f"\nwrote {out}")
-    if out.resolve().parent == REPO_CONFIG_DIR.resolve():
-        packaged = Path(str(package_config_dir())) / out.name
-        final.save(packaged)
-        print(f"wrote {packaged} (package copy)")
+    out = args.out if args.out is not None else default_out(config.config)
+    written = write(outcome, out, replace_shipped=args.replace_shipped)
+    print("\n" + "\n".join(f"wrote {p}" for p in written))
     return 0
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def target_option(text: str) -> str:
+    """``--target``: ``paper`` or a readable JSON file of targets (checked now)."""
+    try:
+        load_targets(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("--target must be ")) from None
+    return text
+
+
+def config_option(text: str) -> str:
+    """``--config``: a cohort name or a YAML path that resolves (checked now)."""
+    try:
+        resolve_cohort_config(text)
+    except (ValueError, FileNotFoundError) as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     """Add the ``calibrate-cohort`` sub-command."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "calibrate-cohort",
         help="fit the virtual cohort's scales to the paper's Table 1",
         description=(
             "Fit the simulated cohort's residual scales, spectral decay and speed-profile "
             "spread (least squares on log scales, seed held fixed) so that Table 1 computed "
             "on the generated data matches the targets; prints target vs achieved and "
-            "writes the calibrated YAML."
+            "writes the calibrated YAML to --out (the shipped config is replaced only with "
+            "--replace-shipped)."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument(
         "--target",
         default="paper",
+        type=target_option,
         help="'paper' (Faraway & Choe Table 1) or a JSON file {criterion: value or [lo, hi]}",
     )
     p.add_argument(
         "--config",
         default=DEFAULT_COHORT,
+        type=config_option,
         help="starting cohort config: a name under configs/cohorts/ or a YAML path",
     )
-    p.add_argument(
+    where = p.add_mutually_exclusive_group()
+    where.add_argument(
         "--out",
         default=None,
-        help="where to write the calibrated YAML (default: overwrite the starting config; "
-        "a file in the repository's configs/cohorts/ also updates the package copy)",
+        type=options.output_file,
+        help="where to write the calibrated YAML (default: results/calibrate-cohort/NAME.yaml)",
     )
-    p.add_argument("--max-evaluations", type=int, default=150, help="budget of cohort evaluations")
+    where.add_argument(
+        "--replace-shipped",
+        action="store_true",
+        help="overwrite the starting config instead (a file of the repository's "
+        "configs/cohorts/ also updates the package copy)",
+    )
+    where.add_argument("--dry-run", action="store_true", help="fit and report, write nothing")
+    p.add_argument(
+        "--max-evaluations",
+        type=options.int_at_least(2),
+        default=150,
+        help="budget of cohort evaluations",
+    )
     p.add_argument(
         "--check-seeds",
-        type=int,
+        type=options.non_negative_int,
         default=3,
         help="after fitting, report the criteria's range over this many other seeds",
     )
-    p.add_argument("--dry-run", action="store_true", help="fit and report, write nothing")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    p.set_defaults(func=run)
+    p.set_defaults(func=main)

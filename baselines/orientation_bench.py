@@ -1,7 +1,9 @@
 """``motion-bench orientation``: Faraway & Choe's Table 1 on real or the users' data.
 
-Prints every criterion beside the paper's value, writes ``results.json``,
-``results.csv`` and a residual plot in the style of the paper's Figure 5.
+:func:`run` computes (a pure function of an :class:`OrientationConfig`); :func:`report`
+is the printed table, every criterion beside the paper's value; :func:`write` writes
+``results.json``, ``results.csv`` and a residual plot in the style of the paper's
+Figure 5. :func:`register` adds the sub-command to ``motion-bench``.
 """
 
 from __future__ import annotations
@@ -12,18 +14,75 @@ import io
 import json
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from baselines import options
+from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import ORIENTATION_DATASETS, OrientationDataset, load_orientation_dataset
+from motion_envs.datasets.splits import split_by_subject
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.criteria import Table1Result, table1
+from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS, orientation_criterion
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
-from motion_envs.models.serialization import atomic_write_text
 
-__all__ = ["format_table1", "register", "results_csv", "results_document", "run"]
+__all__ = [
+    "OrientationConfig",
+    "OrientationResults",
+    "format_table1",
+    "plot_residuals",
+    "register",
+    "report",
+    "results_csv",
+    "results_document",
+    "run",
+    "write",
+]
+
+SPLITS: tuple[str, ...] = ("all", "train", "test")
+
+
+@dataclass(frozen=True)
+class OrientationConfig:
+    """What ``motion-bench orientation`` computes (the defaults are the CLI's).
+
+    Attributes
+    ----------
+    data:
+        ``"vr-kitchen"``, ``"cohort"``, ``"cohort:CONFIG"`` or a path to an orientation CSV.
+    min_deg:
+        Trajectories rotating less than this (degrees, start to end) are dropped.
+    split, split_seed, test_fraction:
+        Table 1 on ``"all"`` trajectories or one side of the split by subject.
+    nominal, degree:
+        Also score this nominal model (fitted on the train split) on ``split``.
+    plot_task:
+        Task whose residuals :func:`write` draws (None: the most frequent).
+    """
+
+    data: str = "vr-kitchen"
+    min_deg: float = DEFAULT_MIN_DEG
+    split: str = "all"
+    split_seed: int = 0
+    test_fraction: float = 0.25
+    nominal: str | None = None
+    degree: int = 2
+    plot_task: str | None = None
+
+
+@dataclass(frozen=True)
+class OrientationResults:
+    """What :func:`run` returns: the scored dataset, Table 1, the nominal's criterion."""
+
+    config: OrientationConfig
+    dataset: OrientationDataset
+    table: Table1Result
+    nominal: dict[str, Any] | None
+    seconds: float
+
 
 _ROW_LABELS = {
     "within_subject": "Within subject",
@@ -100,11 +159,11 @@ def results_csv(result: Table1Result) -> str:
 def plot_residuals(
     result: Table1Result, dataset: OrientationDataset, path: Path, task: str | None = None
 ) -> Path:
-    """Figure 5 style: three orthogonal, equally scaled views of one task's residual curves."""
-    import matplotlib
+    """Figure 5 style: three orthogonal, equally scaled views of one task's residual curves.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Written atomically to ``path``; returns it.
+    """
+    from matplotlib.figure import Figure
 
     tasks, counts = np.unique(dataset.tasks, return_counts=True)
     chosen = task if task is not None else str(tasks[np.argmax(counts)])
@@ -112,7 +171,8 @@ def plot_residuals(
         raise ValueError(f"task must be one of {tasks.tolist()}; got {chosen!r}")
     R = result.residuals[dataset.tasks == chosen]
     lim = float(np.abs(R).max()) * 1.05 or 1.0
-    fig, axes = plt.subplots(1, 3, figsize=(12, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(12, 4.2), constrained_layout=True)
+    axes = fig.subplots(1, 3)
     for ax, (i, j) in zip(axes, [(0, 1), (0, 2), (1, 2)], strict=True):
         for curve in R:
             ax.plot(curve[:, i], curve[:, j], lw=0.8, alpha=0.7)
@@ -128,51 +188,30 @@ def plot_residuals(
         f"{' (SIMULATED)' if dataset.simulated else ''}, task {chosen!r}: {len(R)} trajectories; "
         f"max distance from origin {np.linalg.norm(R, axis=2).max():.2f} rad"
     )
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+    return save_figure(fig, path, dpi=110)
 
 
-def _split_dataset(
-    args: argparse.Namespace, dataset: OrientationDataset
+def _split(
+    config: OrientationConfig, dataset: OrientationDataset
 ) -> tuple[OrientationDataset, OrientationDataset]:
-    from motion_envs.datasets.splits import split_by_subject
-
-    return split_by_subject(dataset, test_fraction=args.test_fraction, seed=args.split_seed)
+    return split_by_subject(dataset, test_fraction=config.test_fraction, seed=config.split_seed)
 
 
-def _nominal_report(
-    args: argparse.Namespace, dataset: OrientationDataset, split: str
-) -> dict[str, Any]:
-    """Offline criterion of ``--nominal`` fitted on the train split, scored on ``--split``.
+def _nominal_criterion(config: OrientationConfig, dataset: OrientationDataset) -> dict[str, Any]:
+    """Offline criterion of ``config.nominal`` fitted on the train split, scored on ``split``.
 
-    The same :mod:`motion_envs.models.nominal` code builds the environments' nominal, so
-    the zero-action policy of ``MotionEnvs/OrientationReach-v0`` reproduces this value.
+    The same :mod:`motion_envs.models.orientation_nominal` code builds the environments'
+    nominal, so the zero-action policy of ``MotionEnvs/OrientationReach-v0`` reproduces
+    this value.
     """
-    from motion_envs.models.nominal import orientation_criterion
-
-    train, test = _split_dataset(args, dataset)
-    scored = {"train": train, "test": test, "all": dataset}[split]
-    res = orientation_criterion(train, scored, nominal=args.nominal, degree=args.degree)
-    degree = f", d={args.degree}" if args.nominal != "slerp" else ""
-    print(
-        f"\nnominal {args.nominal!r}{degree} fitted on the train split ({res['n_train']} "
-        f"trajectories; split by subject, seed {args.split_seed}, test fraction "
-        f"{args.test_fraction:g}); criterion on the {split} split ({res['n_test']} "
-        f"trajectories): {res['criterion']!r} rad"
-        + (
-            f" ({res['n_unseen']} with an unseen label use the null model)"
-            if res["n_unseen"]
-            else ""
-        )
-    )
+    assert config.nominal is not None
+    train, test = _split(config, dataset)
+    scored = {"train": train, "test": test, "all": dataset}[config.split]
+    res = orientation_criterion(train, scored, nominal=config.nominal, degree=config.degree)
     return {
-        "nominal": args.nominal,
-        "degree": args.degree,
-        "scored_on": split,
+        "nominal": config.nominal,
+        "degree": config.degree,
+        "scored_on": config.split,
         "criterion": res["criterion"],
         "n_train": res["n_train"],
         "n_scored": res["n_test"],
@@ -180,47 +219,122 @@ def _nominal_report(
     }
 
 
-def run(args: argparse.Namespace) -> int:
-    """Execute ``motion-bench orientation`` with parsed arguments."""
+def run(config: OrientationConfig) -> OrientationResults:
+    """Table 1 (and the nominal's criterion) for ``config``; no printing, no files.
+
+    Raises ``ValueError`` for unusable data and :class:`~baselines.options.ConfigError`
+    (naming the field) for a ``plot_task`` the data does not have, before computing.
+    """
     t0 = time.perf_counter()
-    dataset = load_orientation_dataset(args.data, min_deg=args.min_deg)
+    dataset = load_orientation_dataset(config.data, min_deg=config.min_deg)
     if len(dataset) < 2:
-        raise ValueError(
+        raise options.ConfigError(
+            "min_deg",
             f"only {len(dataset)} trajectories left after dropping those under "
-            f"{args.min_deg} degrees; lower --min-deg"
+            f"{config.min_deg} degrees; lower --min-deg",
         )
     full = dataset
-    split = getattr(args, "split", "all")
-    if split != "all":
-        dataset = _split_dataset(args, full)[split == "test"]
-    result = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    if config.split != "all":
+        dataset = _split(config, full)[config.split == "test"]
+    if config.plot_task is not None and config.plot_task not in set(dataset.tasks.tolist()):
+        raise options.ConfigError(
+            "plot_task",
+            f"task {config.plot_task!r} is not in the data; choose one of "
+            f"{sorted(set(dataset.tasks.tolist()))}",
+        )
+    table = table1(dataset.ragged, dataset.subjects, dataset.tasks)
     elapsed = time.perf_counter() - t0
-    print(format_table1(result, dataset))
-    nominal = None
-    if getattr(args, "nominal", None) is not None:
-        nominal = _nominal_report(args, full, split)
-    print(f"\ncomputed in {elapsed:.2f} s")
+    nominal = _nominal_criterion(config, full) if config.nominal is not None else None
+    return OrientationResults(config, dataset, table, nominal, elapsed)
+
+
+def _nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
+    degree = f", d={config.degree}" if config.nominal != "slerp" else ""
+    unseen = (
+        f" ({nominal['n_unseen']} with an unseen label use the null model)"
+        if nominal["n_unseen"]
+        else ""
+    )
+    return (
+        f"\nnominal {config.nominal!r}{degree} fitted on the train split ({nominal['n_train']} "
+        f"trajectories; split by subject, seed {config.split_seed}, test fraction "
+        f"{config.test_fraction:g}); criterion on the {config.split} split "
+        f"({nominal['n_scored']} trajectories): {nominal['criterion']!r} rad{unseen}"
+    )
+
+
+def report(results: OrientationResults) -> str:
+    """The text ``motion-bench orientation`` prints."""
+    parts = [format_table1(results.table, results.dataset)]
+    if results.nominal is not None:
+        parts.append(_nominal_text(results.config, results.nominal))
+    parts.append(f"\ncomputed in {results.seconds:.2f} s")
+    return "\n".join(parts)
+
+
+def document(results: OrientationResults) -> dict[str, Any]:
+    """The ``results.json`` document of a run."""
+    config = results.config
+    doc = results_document(results.table, results.dataset)
+    if config.split != "all" or results.nominal is not None:
+        doc["split"] = {
+            "split": config.split,
+            "split_seed": config.split_seed,
+            "test_fraction": config.test_fraction,
+        }
+    if results.nominal is not None:
+        doc["nominal"] = results.nominal
+    return doc
+
+
+def write(results: OrientationResults, out: str | Path) -> list[Path]:
+    """Write ``results.json``, ``results.csv`` and ``residuals.png`` into ``out`` (atomic)."""
+    folder = Path(out)
+    return [
+        atomic_write_text(folder / "results.json", json.dumps(document(results), indent=2) + "\n"),
+        atomic_write_text(folder / "results.csv", results_csv(results.table)),
+        plot_residuals(
+            results.table, results.dataset, folder / "residuals.png", task=results.config.plot_task
+        ),
+    ]
+
+
+def main(args: argparse.Namespace) -> int:
+    """``motion-bench orientation`` with parsed arguments: run, print, write."""
+    config = OrientationConfig(
+        data=args.data,
+        min_deg=args.min_deg,
+        split=args.split,
+        split_seed=args.split_seed,
+        test_fraction=args.test_fraction,
+        nominal=args.nominal,
+        degree=args.degree,
+        plot_task=args.plot_task,
+    )
+    results = run(config)
+    print(report(results))
     if args.out is not None:
-        out = Path(args.out)
-        doc = results_document(result, dataset)
-        if split != "all" or nominal is not None:
-            doc["split"] = {
-                "split": split,
-                "split_seed": args.split_seed,
-                "test_fraction": args.test_fraction,
-            }
-        if nominal is not None:
-            doc["nominal"] = nominal
-        atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")
-        atomic_write_text(out / "results.csv", results_csv(result))
-        plot_residuals(result, dataset, out / "residuals.png", task=args.plot_task)
-        print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'residuals.png'}")
+        written = write(results, args.out)
+        print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
     return 0
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def orientation_data(text: str) -> str:
+    """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
+    if text in ORIENTATION_DATASETS or text.startswith("cohort:"):
+        return text
+    if not Path(text).exists():
+        raise argparse.ArgumentTypeError(
+            f"expected one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a CSV file; "
+            f"{text} does not exist"
+        )
+    return str(options.input_file(text))
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     """Add the ``orientation`` sub-command."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "orientation",
         help="Faraway & Choe Table 1 (orientation trajectories)",
         description=(
@@ -228,11 +342,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "time of the slerp-residual error, radians) with the paper's value beside "
             "ours, plus leave-one-subject-out and leave-one-replicate-out rows."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument(
         "--data",
         default="vr-kitchen",
+        type=orientation_data,
         help=(
             f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}; 'cohort' is the simulated "
             "cohort calibrated to the paper, 'cohort:CONFIG' another one, CONFIG a name under "
@@ -242,14 +356,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--min-deg",
-        type=float,
+        type=options.non_negative_float,
         default=DEFAULT_MIN_DEG,
         help="drop trajectories rotating less than this many degrees from start to end",
     )
     p.add_argument(
         "--out",
         default=None,
-        help="folder for results.json, results.csv and residuals.png (none written without it)",
+        type=options.output_folder,
+        help="folder for results.json, results.csv and residuals.png (nothing written without it)",
     )
     p.add_argument(
         "--plot-task",
@@ -258,22 +373,32 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--split",
-        choices=("all", "train", "test"),
+        choices=SPLITS,
         default="all",
         help="compute Table 1 on all trajectories or on one side of a split by subject",
     )
-    p.add_argument("--split-seed", type=int, default=0, help="seed of the split by subject")
     p.add_argument(
-        "--test-fraction", type=float, default=0.25, help="share of subjects held out for test"
+        "--split-seed",
+        type=options.non_negative_int,
+        default=0,
+        help="seed of the split by subject",
+    )
+    p.add_argument(
+        "--test-fraction",
+        type=options.fraction,
+        default=0.25,
+        help="share of subjects held out for test",
     )
     p.add_argument(
         "--nominal",
-        choices=("slerp", "bezier-null", "bezier-task", "bezier-subject"),
+        choices=ORIENTATION_NOMINALS,
         default=None,
         help=(
             "also report the criterion of this nominal model (as in the Gymnasium "
             "environments), fitted on the train split and scored on --split"
         ),
     )
-    p.add_argument("--degree", type=int, default=2, help="Bezier degree of --nominal")
-    p.set_defaults(func=run)
+    p.add_argument(
+        "--degree", type=options.positive_int, default=2, help="Bezier degree of --nominal"
+    )
+    p.set_defaults(func=main)

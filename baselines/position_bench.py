@@ -20,6 +20,10 @@ Methods:
 Criteria per held-out demonstration: max error (the papers' criterion), RMSE, DTW and
 swept error area (:mod:`motion_envs.models.position_criteria`). Per shape we take the
 median over its demonstrations; the printed table is the median across shapes.
+
+:func:`run` computes (a pure function of a :class:`PositionConfig`), :func:`report` is
+the printed text, :func:`write` writes ``results.json``, ``results.csv`` and
+``shapes.png``; :func:`register` adds the sub-command to ``motion-bench``.
 """
 
 from __future__ import annotations
@@ -32,29 +36,41 @@ import math
 import sys
 import time
 from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from baselines import options
 from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
-from motion_envs.datasets import load_position_dataset
+from motion_envs._io import atomic_write_text, save_figure
+from motion_envs.datasets import POSITION_DATASETS, load_position_dataset
 from motion_envs.datasets.lasa import LASA_CITATION
 from motion_envs.datasets.position_csv import PositionDataset
-from motion_envs.models.nominal import (
-    POSITION_SPLITS,
+from motion_envs.datasets.resampling import resample_positions
+from motion_envs.datasets.splits import POSITION_SPLITS, position_folds
+from motion_envs.models.position_criteria import CRITERIA
+from motion_envs.models.position_nominal import (
+    CONDITION_KINDS,
     PositionNominal,
     position_conditions,
-    position_folds,
-    resample_positions,
     varying_columns,
 )
-from motion_envs.models.position_criteria import CRITERIA
-from motion_envs.models.serialization import atomic_write_text
 from motion_envs.models.sine_regression import SineSeriesRegression
 
-__all__ = ["METHODS", "format_table", "register", "run", "run_benchmark"]
+__all__ = [
+    "METHODS",
+    "PositionConfig",
+    "format_table",
+    "plot_grid",
+    "register",
+    "report",
+    "run",
+    "run_benchmark",
+    "write",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -66,6 +82,28 @@ CRITERION_TEXT = {
     "dtw": "median over demos of DTW (sum of Euclidean costs)",
     "swept_area": "median over demos of swept error area",
 }
+
+
+@dataclass(frozen=True)
+class PositionConfig:
+    """What ``motion-bench position`` computes (the defaults are the CLI's).
+
+    ``data`` is ``"lasa"`` or a position CSV path, ``shapes`` the tasks kept (None: all);
+    the other fields are :func:`run_benchmark`'s arguments (``n_sines=None``: chosen by
+    cross-validation; ``use_peers``: the DMP and ProMP columns when installed).
+    """
+
+    data: str = "lasa"
+    shapes: tuple[str, ...] | None = None
+    n_points: int = 200
+    conditions: tuple[str, ...] = ("start", "end")
+    n_sines: int | None = None
+    n_weights: int = 10
+    split: str = "loo"
+    test_fraction: float = 0.25
+    split_seed: int = 0
+    use_peers: bool = True
+    progress: bool = True
 
 
 class _Timer:
@@ -324,16 +362,17 @@ def _csv_text(doc: dict[str, Any]) -> str:
 
 
 def plot_grid(doc: dict[str, Any], path: Path) -> None:
-    """Every shape: scored demonstrations (grey) and each method's predictions of them."""
-    import matplotlib
+    """Every shape: scored demonstrations (grey) and each method's predictions of them.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Written atomically to ``path``.
+    """
+    from matplotlib.figure import Figure
 
     shapes = list(doc["per_shape"])
     cols = min(6, len(shapes))
     rows = math.ceil(len(shapes) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.6 * rows), squeeze=False)
+    fig = Figure(figsize=(2.6 * cols, 2.6 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     colors = {"line": "C7", "null": "C2", "lippi": "C3", "dmp": "C0", "promp": "C1"}
     for ax, shape in zip(axes.ravel(), shapes, strict=False):
         truth = doc["_truth"][shape]
@@ -354,72 +393,169 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
     fig.legend(handles, labels, loc="lower right", fontsize=8)
     fig.suptitle(f"demonstrations (grey) and predictions, {_split_text(doc['split'])}", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, path, dpi=90)
 
 
-def run(args: argparse.Namespace) -> int:
-    """Entry of ``motion-bench position``."""
-    missing = None if args.no_peers else peers_missing_reason()
+def run(config: PositionConfig) -> dict[str, Any]:
+    """The benchmark of ``config``: the ``results.json`` document (plus the predictions
+    under ``_predictions``/``_truth`` for :func:`plot_grid`); no printing, no files."""
+    dataset = load_position_dataset(config.data, config.shapes)
+    return run_benchmark(
+        dataset,
+        n_points=config.n_points,
+        kinds=list(config.conditions),
+        n_sines=config.n_sines,
+        use_peers=config.use_peers,
+        n_weights=config.n_weights,
+        progress=config.progress,
+        split=config.split,
+        test_fraction=config.test_fraction,
+        split_seed=config.split_seed,
+    )
+
+
+def report(doc: dict[str, Any]) -> str:
+    """The text ``motion-bench position`` prints: table, validation, timing."""
+    parts = [format_table(doc), "", format_validation(doc)]
+    if doc["timing"]:
+        parts += [
+            "",
+            "timing, seconds per call (fit on the training demos / generate one trajectory):",
+        ]
+        for m, v in doc["timing"].items():
+            if "fit_s_per_call" in v:
+                parts.append(
+                    f"  {m:<6} fit {v['fit_s_per_call']:.3g}  predict {v['predict_s_per_call']:.3g}"
+                )
+            else:
+                parts.append(f"  {m:<13} fit x{v['fit']:.1f}  predict x{v['predict']:.1f}")
+    return "\n".join(parts)
+
+
+def write(doc: dict[str, Any], out: str | Path) -> list[Path]:
+    """Write ``results.json``, ``results.csv`` and ``shapes.png`` into ``out`` (atomic)."""
+    folder = Path(out)
+    written = [
+        atomic_write_text(folder / "results.json", json.dumps(_clean(doc), indent=2) + "\n"),
+        atomic_write_text(folder / "results.csv", _csv_text(doc)),
+    ]
+    plot_grid(doc, folder / "shapes.png")
+    return [*written, folder / "shapes.png"]
+
+
+def warn_missing_peers(use_peers: bool) -> None:
+    """Say on stderr when the DMP and ProMP columns will be skipped."""
+    missing = peers_missing_reason() if use_peers else None
     if missing:
         print(
             f"motion-bench position: movement_primitives cannot be used ({missing}); "
             "the DMP and ProMP columns are skipped",
             file=sys.stderr,
         )
-    kinds = [k.strip() for k in args.conditions.split(",") if k.strip()]
-    n_sines = None if args.n_sines == "auto" else int(args.n_sines)
-    dataset = load_position_dataset(args.data, args.shapes)
-    doc = run_benchmark(
-        dataset,
+
+
+def main(args: argparse.Namespace) -> int:
+    """``motion-bench position`` with parsed arguments: run, print, write."""
+    warn_missing_peers(not args.no_peers)
+    config = PositionConfig(
+        data=args.data,
+        shapes=tuple(args.shapes) if args.shapes else None,
         n_points=args.n_points,
-        kinds=kinds,
-        n_sines=n_sines,
-        use_peers=not args.no_peers,
+        conditions=args.conditions,
+        n_sines=args.n_sines,
         n_weights=args.n_weights,
-        progress=not args.no_progress,
         split=args.split,
         test_fraction=args.test_fraction,
         split_seed=args.split_seed,
+        use_peers=not args.no_peers,
+        progress=not args.no_progress,
     )
-    print(format_table(doc))
-    print()
-    print(format_validation(doc))
-    if doc["timing"]:
-        print()
-        print("timing, seconds per call (fit on the training demos / generate one trajectory):")
-        for m, v in doc["timing"].items():
-            if "fit_s_per_call" in v:
-                print(
-                    f"  {m:<6} fit {v['fit_s_per_call']:.3g}  predict {v['predict_s_per_call']:.3g}"
-                )
-            else:
-                print(f"  {m:<13} fit x{v['fit']:.1f}  predict x{v['predict']:.1f}")
+    doc = run(config)
+    print(report(doc))
     if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(out / "results.json", json.dumps(_clean(doc), indent=2) + "\n")
-        atomic_write_text(out / "results.csv", _csv_text(doc))
-        plot_grid(doc, out / "shapes.png")
-        print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'shapes.png'}")
+        written = write(doc, args.out)
+        print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
     return 0
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def position_data(text: str) -> str:
+    """``--data``: ``lasa`` or an existing position CSV file."""
+    if text in POSITION_DATASETS:
+        return text
+    if not Path(text).exists():
+        raise argparse.ArgumentTypeError(
+            f"expected one of {list(POSITION_DATASETS)} or a CSV file; {text} does not exist"
+        )
+    return str(options.input_file(text))
+
+
+def n_sines_option(text: str) -> int | None:
+    """``--n-sines``: ``auto`` (None, chosen by cross-validation) or an integer >= 0."""
+    if text == "auto":
+        return None
+    try:
+        return options.non_negative_int(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected 'auto' or an integer >= 0; got {text!r}"
+        ) from None
+
+
+def conditions_option(text: str) -> tuple[str, ...]:
+    """``--conditions``: a comma list of ``start``, ``end``, ``duration``."""
+    kinds = tuple(k.strip() for k in text.split(",") if k.strip())
+    bad = [k for k in kinds if k not in CONDITION_KINDS]
+    if bad or not kinds:
+        raise argparse.ArgumentTypeError(
+            f"expected a comma list of {', '.join(CONDITION_KINDS)}; got {text!r}"
+        )
+    return kinds
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     """Add the ``position`` sub-command."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "position",
         help="sine-series model (Lippi et al.) vs line, null, DMP, ProMP on LASA or a CSV",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=(
+            "Leave one demonstration out per shape (task): every method is fitted on the\n"
+            "other demonstrations of the shape and predicts the held-out one from its start,\n"
+            "end and duration, on an --n-points grid of normalised time tau = t / T.\n"
+            "Methods: line (start to end), null (line + mean residual), lippi (sine-series\n"
+            "regression on --conditions, N by leave-one-out cross-validation), dmp and promp\n"
+            "(movement_primitives, same start and goal). Criteria: max error (the papers'),\n"
+            "RMSE, DTW, swept error area; median over a shape's demonstrations, then across\n"
+            "shapes."
+        ),
     )
-    p.add_argument("--data", default="lasa", help="'lasa' or a position CSV path")
-    p.add_argument("--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV)")
-    p.add_argument("--out", default=None, help="folder for results.json/.csv and shapes.png")
-    p.add_argument("--n-points", type=int, default=200, help="normalised-time grid size")
-    p.add_argument("--n-sines", default="auto", help="N, or 'auto' for cross-validation")
-    p.add_argument("--conditions", default="start,end", help="comma list of start, end, duration")
-    p.add_argument("--n-weights", type=int, default=10, help="DMP/ProMP weights per dimension")
+    p.add_argument(
+        "--data", default="lasa", type=position_data, help="'lasa' or a position CSV path"
+    )
+    p.add_argument(
+        "--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV); default: all"
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        type=options.output_folder,
+        help="folder for results.json/.csv and shapes.png (nothing written without it)",
+    )
+    p.add_argument(
+        "--n-points", type=options.int_at_least(5), default=200, help="normalised-time grid size"
+    )
+    p.add_argument(
+        "--n-sines", type=n_sines_option, default="auto", help="N, or 'auto' for cross-validation"
+    )
+    p.add_argument(
+        "--conditions",
+        type=conditions_option,
+        default="start,end",
+        help="comma list of start, end, duration",
+    )
+    p.add_argument(
+        "--n-weights", type=options.positive_int, default=10, help="DMP/ProMP weights per dimension"
+    )
     p.add_argument(
         "--split",
         choices=POSITION_SPLITS,
@@ -429,9 +565,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "PositionReach-v0's split",
     )
     p.add_argument(
-        "--test-fraction", type=float, default=0.25, help="held-out share per shape (test/train)"
+        "--test-fraction",
+        type=options.fraction,
+        default=0.25,
+        help="held-out share per shape (test/train)",
     )
-    p.add_argument("--split-seed", type=int, default=0, help="seed of the per-shape split")
+    p.add_argument(
+        "--split-seed", type=options.non_negative_int, default=0, help="seed of the per-shape split"
+    )
     p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=run)
+    p.set_defaults(func=main)

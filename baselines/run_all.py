@@ -10,84 +10,157 @@ Runs, one after the other, with each sub-command's defaults:
    the line, the mean residual, DMP and ProMP on the real LASA handwriting set.
 
 Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
-what was written goes to ``OUT/index.json``.
+what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
+false`` until the last one is done), so an interrupted run leaves an index that lists
+exactly the jobs whose files are new. Every file is written atomically: a previous
+result is never left half-written.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-from motion_envs.models.serialization import atomic_write_text
+from baselines import options, orientation_bench, position_bench
+from motion_envs._io import atomic_write_text
 
-__all__ = ["JOBS", "register", "run"]
+__all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
 
-#: ``(folder, title, argv)`` of each job, in order.
-JOBS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    (
+
+@dataclass(frozen=True)
+class Job:
+    """One benchmark of ``motion-bench all``: its folder, title and sub-command config."""
+
+    folder: str
+    title: str
+    config: orientation_bench.OrientationConfig | position_bench.PositionConfig
+
+    def command(self, out: Path) -> str:
+        """The equivalent ``motion-bench`` command line (recorded in the index)."""
+        if isinstance(self.config, orientation_bench.OrientationConfig):
+            head = f"orientation --data {self.config.data}"
+        else:
+            head = f"position --data {self.config.data}"
+        return f"motion-bench {head} --out {out / self.folder}"
+
+
+#: The jobs, in order.
+JOBS: tuple[Job, ...] = (
+    Job(
         "orientation-vr-kitchen",
         "Orientation trajectories on vr-kitchen (real data)",
-        ("orientation", "--data", "vr-kitchen"),
+        orientation_bench.OrientationConfig(data="vr-kitchen"),
     ),
-    (
+    Job(
         "orientation-cohort",
         "Orientation trajectories on the virtual cohort (SIMULATED data, calibrated to the paper)",
-        ("orientation", "--data", "cohort"),
+        orientation_bench.OrientationConfig(data="cohort"),
     ),
-    (
+    Job(
         "position-lasa",
         "Position trajectories on LASA handwriting (real data)",
-        ("position", "--data", "lasa"),
+        position_bench.PositionConfig(data="lasa"),
     ),
 )
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run every job of :data:`JOBS`; returns the first non-zero exit code, else 0."""
-    from baselines.cli import main
+@dataclass(frozen=True)
+class AllConfig:
+    """``out``: the results folder; ``only``: job folders to run (None: all);
+    ``progress``: progress bars of the position job."""
 
-    out = Path(args.out)
-    index = {"jobs": []}
-    status = 0
-    for folder, title, argv in JOBS:
-        if args.only and folder not in args.only:
-            continue
-        print(f"\n{'=' * 100}\n{title}\n{'=' * 100}", flush=True)
-        extra = ["--no-progress"] if args.no_progress and argv[0] == "position" else []
-        t0 = time.perf_counter()
-        rc = main([*argv, *extra, "--out", str(out / folder)])
-        index["jobs"].append(
-            {
-                "folder": folder,
-                "title": title,
-                "command": "motion-bench " + " ".join([*argv, "--out", str(out / folder)]),
-                "exit_code": rc,
-                "seconds": round(time.perf_counter() - t0, 2),
-            }
+    out: Path = Path("results")
+    only: tuple[str, ...] | None = None
+    progress: bool = True
+
+
+def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) -> None:
+    config = job.config
+    if isinstance(config, orientation_bench.OrientationConfig):
+        results = orientation_bench.run(config)
+        echo(orientation_bench.report(results))
+        written = orientation_bench.write(results, out / job.folder)
+    else:
+        position_bench.warn_missing_peers(config.use_peers)
+        doc = position_bench.run(
+            position_bench.PositionConfig(**{**config.__dict__, "progress": progress})
         )
-        status = status or rc
+        echo(position_bench.report(doc))
+        written = position_bench.write(doc, out / job.folder)
+    echo(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+
+
+def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> dict[str, Any]:
+    """Run the jobs of ``config``; returns the index (also written to ``OUT/index.json``).
+
+    Unlike the other sub-commands' ``run``, this one writes: its results are the jobs'
+    files. ``echo`` receives the text the CLI prints. A job failing on bad data is
+    recorded with ``exit_code`` 2 and its message, and the next job runs.
+    """
+    out = Path(config.out)
+    index: dict[str, Any] = {"jobs": [], "complete": False}
+    for job in JOBS:
+        if config.only and job.folder not in config.only:
+            continue
+        echo(f"\n{'=' * 100}\n{job.title}\n{'=' * 100}")
+        t0 = time.perf_counter()
+        entry: dict[str, Any] = {
+            "folder": job.folder,
+            "title": job.title,
+            "command": job.command(out),
+            "exit_code": 0,
+        }
+        try:
+            _run_job(job, out, config.progress, echo)
+        except (ValueError, OSError) as exc:
+            print(f"motion-bench all: {job.folder}: error: {exc}", file=sys.stderr)
+            entry["exit_code"] = 2
+            entry["error"] = str(exc)
+        entry["seconds"] = round(time.perf_counter() - t0, 2)
+        index["jobs"].append(entry)
+        atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
+    index["complete"] = True
     atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
-    print(f"\nall results are in {out}/ (index: {out / 'index.json'})")
-    return status
+    echo(f"\nall results are in {out}/ (index: {out / 'index.json'})")
+    return index
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def main(args: argparse.Namespace) -> int:
+    """``motion-bench all`` with parsed arguments; the first failing job's code, else 0."""
+    config = AllConfig(
+        out=args.out, only=tuple(args.only) if args.only else None, progress=not args.no_progress
+    )
+    index = run(config, echo=lambda text: print(text, flush=True))
+    return next((job["exit_code"] for job in index["jobs"] if job["exit_code"]), 0)
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     """Add the ``all`` sub-command."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "all",
         help="every benchmark on the built-in data (orientation: vr-kitchen and cohort; "
         "position: LASA)",
-        description=__doc__.split("\n\n", 1)[1] if __doc__ else None,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=__doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else "",
     )
-    p.add_argument("--out", default="results", help="folder for every job's results")
+    p.add_argument(
+        "--out",
+        default="results",
+        type=options.output_folder,
+        help="folder for every job's results",
+    )
     p.add_argument(
         "--only",
         nargs="+",
-        choices=[job[0] for job in JOBS],
-        help="run only these jobs",
+        choices=[job.folder for job in JOBS],
+        metavar="JOB",
+        help=f"run only these jobs, among {', '.join(job.folder for job in JOBS)} (default: all)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.set_defaults(func=run)
+    p.set_defaults(func=main)

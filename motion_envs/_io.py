@@ -24,7 +24,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "current_umask"]
+__all__ = [
+    "atomic_write",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "current_umask",
+    "save_figure",
+]
 
 
 def current_umask() -> int:
@@ -78,3 +84,14 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically (see :func:`atomic_write`)."""
     return atomic_write(path, lambda fh: fh.write(data), binary=True)
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], **savefig_kwargs: Any) -> Path:
+    """Save a matplotlib figure to ``path`` atomically (``fig.savefig`` into the temp file).
+
+    The format comes from the path's suffix (``.png`` by default); ``savefig_kwargs``
+    (``dpi``, ...) are passed on. matplotlib is not imported here: any object with a
+    ``savefig(file, format=...)`` method works.
+    """
+    fmt = Path(path).suffix.lstrip(".").lower() or "png"
+    return atomic_write(path, lambda fh: fig.savefig(fh, format=fmt, **savefig_kwargs), binary=True)

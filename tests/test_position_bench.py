@@ -82,7 +82,7 @@ def test_cli_on_csv_without_peers(tmp_path, capsys):
 
 def test_cli_errors(tmp_path, capsys):
     assert main(["position", "--data", "nope", "--no-progress"]) == 2
-    assert "data must be one of ['lasa']" in capsys.readouterr().err
+    assert "argument --data: expected one of ['lasa']" in capsys.readouterr().err
     assert main(["position", "--shapes", "Circle", "--no-progress"]) == 2
     assert main(["position", "--shapes", "Line", "--conditions", "speed"]) == 2
 

@@ -1,0 +1,231 @@
+"""Command-line plumbing shared by the ``motion-bench`` sub-commands.
+
+A sub-command module exposes a frozen ``*Config`` dataclass, a pure
+``run(config) -> results`` (no argparse, no printing, no files), ``report(results)`` (the
+text printed), ``write(results, out)`` (files and plots) and ``register(subparsers)``.
+This module holds what they share on the argparse side:
+
+* :class:`Parser`: an ``ArgumentParser`` without abbreviated options whose errors are
+  one line, ``motion-bench CMD: error: argument --opt: ...``, exit status 2;
+* :class:`HelpFormatter`: every non-empty default shown once, ``(default: X)``;
+* ``type=`` checkers (:func:`positive_int`, :func:`input_file`, :func:`output_folder`,
+  ...) so that every user error is reported, naming its option, *before* any
+  computation starts;
+* :class:`ConfigError`: raised by a ``run`` that finds an inconsistent config after
+  loading its data (e.g. a ``--plot-task`` the data does not have), naming the field.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+import tempfile
+import textwrap
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, NoReturn
+
+__all__ = [
+    "ConfigError",
+    "HelpFormatter",
+    "Parser",
+    "add_subcommand",
+    "fail",
+    "fraction",
+    "input_file",
+    "int_at_least",
+    "non_negative_float",
+    "non_negative_int",
+    "option_name",
+    "output_file",
+    "output_folder",
+    "positive_int",
+]
+
+
+class ConfigError(ValueError):
+    """A config value is invalid for the data it is used with; ``field`` names it."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(f"{field}: {message}")
+        self.field = field
+        self.message = message
+
+
+def option_name(field: str) -> str:
+    """The command-line option of a config field: ``plot_task`` -> ``--plot-task``."""
+    return "--" + field.replace("_", "-")
+
+
+class Parser(argparse.ArgumentParser):
+    """``ArgumentParser`` with ``allow_abbrev=False`` and one-line errors (exit 2)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Descriptions re-filled paragraph by paragraph (blank lines and list items kept);
+    ``(default: X)`` added once to each option's help when the default is not empty
+    (None, False, an empty list) and the help does not already say it."""
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        blocks = []
+        for paragraph in text.strip().split("\n\n"):
+            items: list[str] = []
+            for line in paragraph.splitlines():
+                stripped = line.strip()
+                if not items or re.match(r"(\d+\.|[-*]) ", stripped):
+                    items.append(stripped)
+                else:
+                    items[-1] += " " + stripped
+            for item in items:
+                marker = re.match(r"(\d+\.|[-*]) ", item)
+                hang = " " * (len(marker.group(0)) if marker else 0)
+                blocks.append(
+                    textwrap.fill(
+                        item, width, initial_indent=indent, subsequent_indent=indent + hang
+                    )
+                )
+            blocks.append("")
+        return "\n".join(blocks).rstrip()
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if (
+            default in (None, False, argparse.SUPPRESS)
+            or default == []
+            or "%(default)" in text
+            or "default:" in text
+            or action.option_strings == []
+        ):
+            return action.help
+        return f"{text} (default: %(default)s)"
+
+
+def add_subcommand(
+    subparsers: argparse._SubParsersAction[Parser], name: str, help: str, description: str
+) -> Parser:
+    """A sub-command parser with the project's formatter and error style."""
+    parser: Parser = subparsers.add_parser(
+        name,
+        help=help,
+        description=description,
+        formatter_class=HelpFormatter,
+        allow_abbrev=False,
+    )
+    return parser
+
+
+# --------------------------------------------------------------------------------------
+# type= checkers: argparse reports their ArgumentTypeError as "argument --opt: message"
+# --------------------------------------------------------------------------------------
+
+
+def _number(text: str, kind: Callable[[str], Any], what: str) -> Any:
+    try:
+        value = kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}")
+    return value
+
+
+def int_at_least(low: int) -> Callable[[str], int]:
+    """A ``type=`` checker accepting integers ``>= low``."""
+
+    def check(text: str) -> int:
+        what = f"an integer >= {low}"
+        value: int = _number(text, int, what)
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}")
+        return value
+
+    check.__name__ = f"integer >= {low}"
+    return check
+
+
+#: An integer >= 1.
+positive_int = int_at_least(1)
+#: An integer >= 0.
+non_negative_int = int_at_least(0)
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number >= 0."""
+    value: float = _number(text, float, "a finite number >= 0")
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0; got {text!r}")
+    return value
+
+
+def fraction(text: str) -> float:
+    """A number strictly between 0 and 1."""
+    value: float = _number(text, float, "a number in (0, 1)")
+    if not 0.0 < value < 1.0:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1); got {text!r}")
+    return value
+
+
+def input_file(text: str) -> Path:
+    """An existing, readable file (not a folder)."""
+    path = Path(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"{text} does not exist")
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
+    try:
+        with path.open("rb") as fh:
+            fh.read(1)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"cannot read {text}: {exc.strerror}") from None
+    return path
+
+
+def _probe_folder(folder: Path, text: str) -> None:
+    """Check that files can be created in the nearest existing ancestor of ``folder``."""
+    probe = folder
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise argparse.ArgumentTypeError(f"{probe} is a file, not a folder (in {text})")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"cannot write in {probe}: {exc.strerror}") from None
+
+
+def output_folder(text: str) -> Path:
+    """A folder that exists and is writable, or can be created."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
+    _probe_folder(path, text)
+    return path
+
+
+def output_file(text: str) -> Path:
+    """A file path whose folder is writable (or can be created); not an existing folder."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
+    _probe_folder(path.parent, text)
+    return path
+
+
+def fail(prog: str, message: str, status: int = 2) -> int:
+    """Print ``prog: error: message`` on stderr (one line); return ``status``."""
+    print(f"{prog}: error: {' '.join(message.split())}", file=sys.stderr)
+    return status
