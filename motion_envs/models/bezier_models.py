@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import normalised_grid
 from motion_envs.geometry import bezier
-from motion_envs.models.serialization import SerializableModel
+from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = [
     "BezierResidualModel",
@@ -74,6 +74,26 @@ def _labels(values: ArrayLike | None, name: str, n: int) -> NDArray[np.str_]:
     if arr.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},); got {arr.shape}")
     return arr
+
+
+def _state_array(
+    arrays: Mapping[str, NDArray[Any]], name: str, shape: tuple[int, ...]
+) -> FloatArray:
+    """``arrays[name]`` checked against ``shape`` (-1: any size); ValueError naming the field."""
+    arr = arrays[name]
+    if arr.ndim != len(shape) or any(
+        e not in (-1, a) for e, a in zip(shape, arr.shape, strict=True)
+    ):
+        want = "(" + ", ".join("n" if e == -1 else str(e) for e in shape) + ")"
+        raise ValueError(f"field arrays.{name}: shape {list(arr.shape)} does not match {want}")
+    return np.asarray(arr, dtype=np.float64)
+
+
+def _state_n_points(attributes: Mapping[str, Any]) -> int:
+    n = attributes["n_points_"]
+    if n < 2:
+        raise ValueError(f"field attributes.n_points_: must be >= 2; got {n}")
+    return int(n)
 
 
 class BezierResidualModel(SerializableModel):
@@ -181,11 +201,17 @@ class NullBezierModel(BezierResidualModel):
             {"n_points_": self.n_points_},
         )
 
+    state_schema = StateSchema(
+        params={"degree": "int"},
+        arrays={"control_points_": ("float64", 2)},
+        attributes={"n_points_": "int"},
+    )
+
     @classmethod
     def _from_state(cls, params, arrays, attributes):
         model = cls(**params)
-        model.control_points_ = arrays["control_points_"]
-        model.n_points_ = int(attributes["n_points_"])
+        model.control_points_ = _state_array(arrays, "control_points_", (model.degree - 1, 3))
+        model.n_points_ = _state_n_points(attributes)
         return model
 
 
@@ -259,15 +285,38 @@ class GroupBezierModel(BezierResidualModel):
             {"groups_": self.groups_.tolist(), "n_points_": self.n_points_},
         )
 
+    state_schema = StateSchema(
+        params={"degree": "int", "by": "str", "unseen": "str"},
+        arrays={
+            "control_points_": ("float64", 3),
+            "global_control_points_": ("float64", 2),
+            "group_sizes_": ("int64", 1),
+        },
+        attributes={"groups_": "str_list", "n_points_": "int"},
+    )
+
     @classmethod
     def _from_state(cls, params, arrays, attributes):
         model = cls.__new__(cls)
         GroupBezierModel.__init__(model, **params)
-        model.control_points_ = arrays["control_points_"]
-        model.global_control_points_ = arrays["global_control_points_"]
-        model.group_sizes_ = arrays["group_sizes_"]
-        model.groups_ = np.asarray(attributes["groups_"], dtype=str)
-        model.n_points_ = int(attributes["n_points_"])
+        fixed_by = {"SubjectBezierModel": "subject", "TaskBezierModel": "task"}.get(cls.__name__)
+        if fixed_by is not None and model.by != fixed_by:
+            raise ValueError(f"field params.by: a {cls.__name__} groups by {fixed_by!r}")
+        groups = attributes["groups_"]
+        if not groups or sorted(set(groups)) != groups:
+            raise ValueError("field attributes.groups_: must be sorted, unique and not empty")
+        k = model.degree - 1
+        model.control_points_ = _state_array(arrays, "control_points_", (len(groups), k, 3))
+        model.global_control_points_ = _state_array(arrays, "global_control_points_", (k, 3))
+        sizes = arrays["group_sizes_"]
+        if sizes.shape != (len(groups),) or np.any(sizes < 1):
+            raise ValueError(
+                f"field arrays.group_sizes_: must be {len(groups)} integers >= 1; "
+                f"got shape {list(sizes.shape)}"
+            )
+        model.group_sizes_ = sizes.astype(np.int64)
+        model.groups_ = np.asarray(groups, dtype=str)
+        model.n_points_ = _state_n_points(attributes)
         return model
 
 
@@ -360,11 +409,19 @@ class LinearBezierModel(BezierResidualModel):
             {"predictor_names_": list(self.predictor_names_), "n_points_": self.n_points_},
         )
 
+    state_schema = StateSchema(
+        params={"degree": "int"},
+        arrays={"intercept_": ("float64", 2), "coef_": ("float64", 3)},
+        attributes={"predictor_names_": "str_list", "n_points_": "int"},
+    )
+
     @classmethod
     def _from_state(cls, params, arrays, attributes):
         model = cls(**params)
-        model.intercept_ = arrays["intercept_"]
-        model.coef_ = arrays["coef_"]
-        model.predictor_names_ = list(attributes["predictor_names_"])
-        model.n_points_ = int(attributes["n_points_"])
+        names = list(attributes["predictor_names_"])
+        k = model.degree - 1
+        model.intercept_ = _state_array(arrays, "intercept_", (k, 3))
+        model.coef_ = _state_array(arrays, "coef_", (len(names), k, 3))
+        model.predictor_names_ = names
+        model.n_points_ = _state_n_points(attributes)
         return model

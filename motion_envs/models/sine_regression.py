@@ -58,7 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
-from motion_envs.models.serialization import SerializableModel
+from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = [
     "MIN_SAMPLES",
@@ -503,25 +503,54 @@ class SineSeriesRegression(SerializableModel):
         }
         return {"n_sines": int(self.n_sines)}, arrays, {"rank": self.rank_}
 
+    state_schema = StateSchema(
+        params={"n_sines": "int"},
+        arrays={
+            "coefficients": ("float64", 3),
+            "conditions": ("float64", 2),
+            "durations": ("float64", 1),
+            "F": ("float64", 2),
+        },
+        attributes={"rank": "int"},
+    )
+
     @classmethod
     def _from_state(
         cls,
         params: dict[str, Any],
-        arrays: dict[str, np.ndarray],
+        arrays: dict[str, NDArray[Any]],
         attributes: dict[str, Any],
     ) -> SineSeriesRegression:
-        model = cls(n_sines=int(params["n_sines"]))
+        n_sines = params["n_sines"]
+        if n_sines < 0:
+            raise ValueError(f"field params.n_sines: must be >= 0; got {n_sines}")
+        model = cls(n_sines=int(n_sines))
         p, q, f = arrays["coefficients"], arrays["conditions"], arrays["F"]
-        if (
-            p.ndim != 3
-            or p.shape[1] != model.n_sines + 2
-            or q.shape[0] != p.shape[0]
-            or f.shape != (p.shape[1] * p.shape[2], q.shape[1] + 1)
-        ):
-            raise ValueError("array shapes are inconsistent with n_sines")
+        d = arrays["durations"]
+        if p.shape[0] < 1 or p.shape[1] != model.n_sines + 2 or p.shape[2] < 1:
+            raise ValueError(
+                f"field arrays.coefficients: shape {list(p.shape)} does not match "
+                f"(n >= 1, n_sines + 2 = {model.n_sines + 2}, D >= 1)"
+            )
+        if q.shape[0] != p.shape[0]:
+            raise ValueError(
+                f"field arrays.conditions: {q.shape[0]} rows; coefficients has {p.shape[0]}"
+            )
+        if d.shape != (p.shape[0],):
+            raise ValueError(
+                f"field arrays.durations: shape {list(d.shape)} does not match ({p.shape[0]},)"
+            )
+        if f.shape != (p.shape[1] * p.shape[2], q.shape[1] + 1):
+            raise ValueError(
+                f"field arrays.F: shape {list(f.shape)} does not match "
+                f"({p.shape[1] * p.shape[2]}, {q.shape[1] + 1})"
+            )
+        rank = attributes["rank"]
+        if not 0 <= rank <= q.shape[1] + 1:
+            raise ValueError(f"field attributes.rank: must be in [0, {q.shape[1] + 1}]; got {rank}")
         model.coefficients_, model.conditions_ = p, q
-        model.durations_, model.F_ = arrays["durations"], f
-        model.rank_ = int(attributes["rank"])
+        model.durations_, model.F_ = d, f
+        model.rank_ = int(rank)
         return model
 
 

@@ -1,0 +1,156 @@
+"""Every file is written atomically: killed or interrupted writers never truncate a
+previous file, concurrent writers both finish, permissions follow the umask, and an
+interrupted ``motion-bench all`` exits 130 with one line and a consistent index."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from motion_envs._io import atomic_write_bytes, atomic_write_text, current_umask, save_figure
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
+
+WRITER = textwrap.dedent(
+    """
+    import json, sys
+    from motion_envs._io import atomic_write_text
+    path, tag, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    body = json.dumps({"tag": tag, "data": [tag * 64] * 20000})
+    print("ready", flush=True)
+    for _ in range(n):
+        atomic_write_text(path, body)
+    """
+)
+
+
+def _writer(path: Path, tag: str, n: int) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-c", WRITER, str(path), tag, str(n)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+        cwd=ROOT,
+    )
+
+
+def _assert_complete(path: Path, tags: set[str]) -> None:
+    doc = json.loads(path.read_text())
+    assert doc["tag"] in tags
+    assert len(doc["data"]) == 20000
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+def test_a_writer_killed_mid_write_leaves_the_previous_file_complete(tmp_path, sig):
+    target = tmp_path / "results.json"
+    atomic_write_text(target, json.dumps({"tag": "old", "data": ["old"] * 20000}))
+    proc = _writer(target, "new", 10_000)
+    assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
+    time.sleep(0.3)
+    proc.send_signal(sig)
+    proc.wait(timeout=30)
+    _assert_complete(target, {"old", "new"})
+    if sig == signal.SIGINT:  # Python cleans its temporary file up on KeyboardInterrupt
+        assert [p.name for p in tmp_path.iterdir()] == ["results.json"]
+
+
+def test_two_concurrent_writers_both_finish(tmp_path):
+    target = tmp_path / "out" / "results.json"
+    procs = [_writer(target, tag, 40) for tag in ("a", "b")]
+    for proc in procs:
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 0, err
+    _assert_complete(target, {"a", "b"})
+    assert [p.name for p in target.parent.iterdir()] == ["results.json"]
+
+
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600), (0o002, 0o664)])
+def test_written_files_follow_the_umask(tmp_path, umask, mode):
+    old = os.umask(umask)
+    try:
+        assert current_umask() == umask
+        text = atomic_write_text(tmp_path / "a.json", "{}\n")
+        data = atomic_write_bytes(tmp_path / "b.bin", b"\x00")
+    finally:
+        os.umask(old)
+    assert text.stat().st_mode & 0o777 == mode
+    assert data.stat().st_mode & 0o777 == mode
+
+
+def test_figures_are_saved_atomically(tmp_path):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(2, 2))
+    fig.subplots().plot([0, 1], [1, 0])
+    path = save_figure(fig, tmp_path / "plot.png", dpi=50)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["plot.png"]
+
+
+def test_a_failed_write_keeps_the_previous_file(tmp_path):
+    target = atomic_write_text(tmp_path / "x.txt", "previous")
+
+    def boom(fh):
+        fh.write("partial")
+        raise RuntimeError("disk full")
+
+    from motion_envs._io import atomic_write
+
+    with pytest.raises(RuntimeError):
+        atomic_write(target, boom)
+    assert target.read_text() == "previous"
+    assert [p.name for p in tmp_path.iterdir()] == ["x.txt"]
+
+
+def test_motion_bench_all_interrupted_exits_130_and_keeps_results(tmp_path):
+    out = tmp_path / "results"
+    previous = out / "position-lasa" / "results.json"
+    previous.parent.mkdir(parents=True)
+    previous.write_text(json.dumps({"previous": "run"}))
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "baselines.cli",
+            "all",
+            "--out",
+            str(out),
+            "--only",
+            "orientation-vr-kitchen",
+            "position-lasa",
+            "--no-progress",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+        cwd=ROOT,
+    )
+    index = out / "index.json"
+    deadline = time.monotonic() + 120
+    while not index.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    assert index.exists(), "the first job did not finish in time"
+    time.sleep(0.5)  # inside the position job
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1 and "interrupted" in lines[0], err
+    assert "Traceback" not in err
+    doc = json.loads(index.read_text())
+    assert [job["folder"] for job in doc["jobs"]] == ["orientation-vr-kitchen"]
+    assert doc["complete"] is False
+    assert json.loads((out / "orientation-vr-kitchen" / "results.json").read_text())["criteria"]
+    assert json.loads(previous.read_text()) == {"previous": "run"}
+    assert not [p for p in out.rglob("*") if p.name.endswith(".tmp")]
