@@ -1,0 +1,188 @@
+"""``motion-bench`` user errors: checked before any computation, one line naming the
+option, exit status 2, no traceback; no abbreviations; --version; clean --help."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from baselines import calibrate_cohort, orientation_bench, position_bench, run_all
+from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
+from motion_envs import __version__
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture()
+def paths(tmp_path):
+    """A file, a folder, a read-only folder and a small valid target JSON."""
+    (tmp_path / "file.txt").write_text("not a folder\n")
+    (tmp_path / "folder").mkdir()
+    ro = tmp_path / "readonly"
+    ro.mkdir()
+    ro.chmod(0o555)
+    (tmp_path / "bad.json").write_text("{not json")
+    yield tmp_path
+    ro.chmod(0o755)
+
+
+@pytest.fixture(autouse=True)
+def no_computation(monkeypatch):
+    """Any computation starting means a check came too late."""
+
+    def started(*args, **kwargs):
+        raise AssertionError("the computation started before the error was reported")
+
+    monkeypatch.setattr(orientation_bench, "table1", started)
+    monkeypatch.setattr(position_bench, "run_benchmark", started)
+    monkeypatch.setattr(calibrate_cohort, "calibrate", started)
+
+
+# (argv with {tmp} for the fixture folder, expected fragment of the one error line)
+CASES = [
+    (["orientation", "--data", "{tmp}/missing.csv"], "argument --data: expected one of"),
+    (["orientation", "--data", "{tmp}/folder"], "argument --data: {tmp}/folder is a folder"),
+    (["orientation", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
+    (["orientation", "--out", "{tmp}/file.txt/sub"], "argument --out:"),
+    (["orientation", "--plot-task", "no-such-task"], "argument --plot-task: task 'no-such-task'"),
+    (["orientation", "--degree", "two"], "argument --degree: expected an integer >= 1"),
+    (["orientation", "--degree", "0"], "argument --degree: expected an integer >= 1"),
+    (["orientation", "--split-seed", "1.5"], "argument --split-seed: expected an integer"),
+    (["orientation", "--min-deg", "nan"], "argument --min-deg: expected a finite number"),
+    (["orientation", "--test-fraction", "1.5"], "argument --test-fraction: expected a number"),
+    (["orientation", "--split", "middle"], "argument --split: invalid choice"),
+    (["orientation", "--dat", "vr-kitchen"], "unrecognized arguments: --dat"),
+    (["orientation", "--min-deg", "179"], "argument --min-deg: only 0 trajectories"),
+    (["position", "--data", "{tmp}/missing.csv"], "argument --data: expected one of ['lasa']"),
+    (["position", "--data", "{tmp}/folder"], "argument --data: {tmp}/folder is a folder"),
+    (["position", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
+    (["position", "--n-points", "many"], "argument --n-points: expected an integer >= 5"),
+    (["position", "--n-points", "3"], "argument --n-points: expected an integer >= 5"),
+    (["position", "--n-sines", "x"], "argument --n-sines: expected 'auto' or an integer"),
+    (["position", "--n-weights", "1e3"], "argument --n-weights: expected an integer"),
+    (["position", "--conditions", "speed"], "argument --conditions: expected a comma list"),
+    (["position", "--n-point", "50"], "unrecognized arguments: --n-point"),
+    (["all", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
+    (["all", "--only", "nothing"], "argument --only: invalid choice"),
+    (["all", "--ou", "x"], "unrecognized arguments: --ou"),
+    (["calibrate-cohort", "--max-evaluations", "x"], "argument --max-evaluations: expected"),
+    (["calibrate-cohort", "--max-evaluations", "1"], "argument --max-evaluations: expected"),
+    (["calibrate-cohort", "--target", "{tmp}/missing.json"], "argument --target:"),
+    (["calibrate-cohort", "--target", "{tmp}/bad.json"], "argument --target: {tmp}/bad.json"),
+    (["calibrate-cohort", "--config", "no-such-cohort"], "argument --config:"),
+    (["calibrate-cohort", "--out", "{tmp}/folder"], "argument --out: {tmp}/folder is a folder"),
+    (
+        ["calibrate-cohort", "--out", "{tmp}/x.yaml", "--replace-shipped"],
+        "argument --replace-shipped: not allowed with argument --out",
+    ),
+    (["calibrate-cohort", "--check-seeds", "-1"], "argument --check-seeds: expected"),
+    (["nonsense"], "argument COMMAND: invalid choice"),
+    (["--vers", "all"], "unrecognized arguments: --vers"),
+]
+
+
+@pytest.mark.parametrize(("argv", "fragment"), CASES, ids=[" ".join(c[0]) for c in CASES])
+def test_user_errors_are_one_line_exit_2(paths, capsys, argv, fragment):
+    argv = [a.replace("{tmp}", str(paths)) for a in argv]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    lines = [line for line in captured.err.splitlines() if line.strip()]
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("motion-bench")
+    assert fragment.replace("{tmp}", str(paths)) in lines[0]
+    assert "Traceback" not in captured.err
+    assert captured.out == ""
+
+
+def test_unwritable_out_is_reported_first(paths, capsys):
+    ro = paths / "readonly"
+    try:
+        (ro / "probe").write_text("x")
+    except OSError:
+        pass
+    else:
+        pytest.skip("this user can write in a read-only folder (root)")
+    for argv in (["orientation", "--out", str(ro)], ["all", "--out", str(ro / "sub")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "argument --out: cannot write in" in err
+
+
+def test_unreadable_data_is_reported_first(paths, capsys):
+    data = paths / "secret.csv"
+    data.write_text("trajectory,subject,task,t,qw,qx,qy,qz\n")
+    data.chmod(0)
+    try:
+        data.read_bytes()
+    except OSError:
+        pass
+    else:
+        pytest.skip("this user can read a file with mode 000 (root)")
+    assert main(["orientation", "--data", str(data)]) == 2
+    assert "argument --data: cannot read" in capsys.readouterr().err
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"motion-bench {__version__}"
+
+
+def _helps() -> dict[str, str]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    out = {"motion-bench": parser.format_help()}
+    out.update({name: p.format_help() for name, p in sub.choices.items()})
+    return out
+
+
+def test_every_subcommand_is_registered():
+    assert set(_helps()) == {"motion-bench", "all", "orientation", "position", "calibrate-cohort"}
+    assert len(SUBCOMMAND_MODULES) == 4
+
+
+@pytest.mark.parametrize(
+    "name", ["motion-bench", "all", "orientation", "position", "calibrate-cohort"]
+)
+def test_help_is_plain_text_with_each_default_once(name):
+    text = _helps()[name]
+    for markup in ("``", ":class:", ":func:", ":mod:", ":data:", ":meth:"):
+        assert markup not in text, markup
+    options = re.split(r"\n  (?=-)", text.split("options:", 1)[1])
+    for block in options:
+        assert block.count("default") <= 1, block
+    assert "(default: None)" not in text and "(default: False)" not in text
+
+
+def test_no_parser_allows_abbreviations():
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    assert parser.allow_abbrev is False
+    assert all(p.allow_abbrev is False for p in sub.choices.values())
+
+
+def test_console_error_has_no_traceback_in_a_subprocess(tmp_path):
+    out = subprocess.run(
+        [sys.executable, "-m", "baselines.cli", "position", "--n-points", "x"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines() == [
+        "motion-bench position: error: argument --n-points: expected an integer >= 5; got 'x'"
+    ]
+
+
+def test_calibrate_writes_to_out_not_the_shipped_config():
+    args = build_parser().parse_args(["calibrate-cohort"])
+    assert args.out is None and args.replace_shipped is False
+    assert calibrate_cohort.default_out("faraway2008") == Path(
+        "results/calibrate-cohort/faraway2008.yaml"
+    )
+    assert run_all.JOBS[0].folder == "orientation-vr-kitchen"
