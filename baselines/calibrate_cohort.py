@@ -29,7 +29,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +120,15 @@ def _from_x(config: CohortConfig, x: np.ndarray) -> CohortConfig:
     return config.with_values(**values)
 
 
+@dataclass
+class _Best:
+    """The best point the optimiser has evaluated so far."""
+
+    cost: float = math.inf
+    x: np.ndarray | None = None
+    crit: dict[str, float] = field(default_factory=dict)
+
+
 class _BudgetExhausted(Exception):
     """Raised inside the objective when the evaluation budget is used up."""
 
@@ -183,7 +192,7 @@ def calibrate(
     t0 = time.perf_counter()
     cache: dict[bytes, np.ndarray] = {}
     bar = tqdm(total=max_evaluations, desc="calibrate-cohort", disable=not progress, unit="eval")
-    best: dict[str, object] = {"cost": math.inf, "x": None, "crit": None}
+    best = _Best()
 
     def residuals(x: np.ndarray) -> np.ndarray:
         key = x.tobytes()
@@ -197,11 +206,11 @@ def calibrate(
             raise ValueError(f"criteria {missing} are not computed; cannot calibrate to them")
         res = np.array([relative_miss(float(crit[n]), targets[n]) for n in names])
         cost = 0.5 * float(res @ res)
-        if cost < best["cost"]:  # type: ignore[operator]
-            best.update(cost=cost, x=x.copy(), crit=dict(crit))
+        if cost < best.cost:
+            best.cost, best.x, best.crit = cost, x.copy(), dict(crit)
         cache[key] = res
         bar.update(1)
-        bar.set_postfix(cost=f"{cost:.2e}", best=f"{best['cost']:.2e}")
+        bar.set_postfix(cost=f"{cost:.2e}", best=f"{best.cost:.2e}")
         return res
 
     x0 = _to_x(config)
@@ -213,7 +222,7 @@ def calibrate(
     )
     x0 = np.clip(x0, lower, upper)
     initial_res = residuals(x0)
-    initial = dict(best["crit"])  # type: ignore[arg-type]
+    initial = dict(best.crit)
     message = "targets met at the start"
     if float(initial_res @ initial_res) > 0:
         try:
@@ -231,16 +240,16 @@ def calibrate(
         except _BudgetExhausted:
             message = f"stopped after the budget of {max_evaluations} evaluations"
     bar.close()
-    x_best = best["x"]
-    final = _from_x(config, x_best)  # type: ignore[arg-type]
-    achieved = dict(best["crit"])  # type: ignore[arg-type]
+    assert best.x is not None  # the first evaluation always improves on inf
+    final = _from_x(config, best.x)
+    achieved = dict(best.crit)
     return CalibrationResult(
         config=final,
         targets=dict(targets),
         achieved=achieved,
         initial=initial,
         n_evaluations=len(cache),
-        cost=float(best["cost"]),  # type: ignore[arg-type]
+        cost=best.cost,
         seconds=time.perf_counter() - t0,
         message=message,
     )

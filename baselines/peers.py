@@ -112,4 +112,4 @@ class ProMPPeer:
         """``(K, D)`` conditioned mean trajectory on the fitted grid."""
         cond = self.promp_.condition_position(np.asarray(start, dtype=np.float64), t=0.0, t_max=1.0)
         cond = cond.condition_position(np.asarray(goal, dtype=np.float64), t=1.0, t_max=1.0)
-        return cond.mean_trajectory(self.tau_)
+        return np.asarray(cond.mean_trajectory(self.tau_), dtype=np.float64)

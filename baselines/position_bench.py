@@ -35,7 +35,7 @@ import json
 import math
 import sys
 import time
-from collections import Counter
+from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -108,8 +108,8 @@ class PositionConfig:
 
 class _Timer:
     def __init__(self) -> None:
-        self.fit: Counter[str] = Counter()
-        self.predict: Counter[str] = Counter()
+        self.fit: defaultdict[str, float] = defaultdict(float)
+        self.predict: defaultdict[str, float] = defaultdict(float)
         self.n_fit: Counter[str] = Counter()
         self.n_predict: Counter[str] = Counter()
 

@@ -67,8 +67,8 @@ def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
 
 
 def _per_trajectory(
-    path: Path, frame: pd.DataFrame, column: str, starts: NDArray, ends: NDArray
-) -> NDArray:
+    path: Path, frame: pd.DataFrame, column: str, starts: NDArray[Any], ends: NDArray[Any]
+) -> NDArray[Any]:
     arr = frame[column].to_numpy()
     first = arr[starts]
     varies = arr != np.repeat(first, ends - starts)
@@ -118,7 +118,7 @@ class SampleTable:
         """``[(start, end), ...]`` row range of each trajectory."""
         return list(zip(self.starts.tolist(), self.ends.tolist(), strict=True))
 
-    def per_trajectory(self, column: str) -> NDArray:
+    def per_trajectory(self, column: str) -> NDArray[Any]:
         """The value of ``column`` for each trajectory; it must not change within one."""
         return _per_trajectory(self.path, self.frame, column, self.starts, self.ends)
 

@@ -34,7 +34,8 @@ POSITION_SPLITS: tuple[str, ...] = ("train", "test", "loo")
 
 
 class _SubjectDataset(Protocol):
-    subjects: NDArray[np.str_]
+    @property
+    def subjects(self) -> NDArray[np.str_]: ...
 
     def __len__(self) -> int: ...
 

@@ -20,8 +20,12 @@ from __future__ import annotations
 
 import itertools
 from importlib import resources
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from importlib.resources.abc import Traversable
 
 from motion_envs.datasets.orientation import OrientationDataset
 from motion_envs.datasets.sample_table import read_csv_exact, replicate_numbers
@@ -38,7 +42,7 @@ CITATION = (
 )
 
 
-def _data_dir():
+def _data_dir() -> Traversable:
     return resources.files("motion_envs.datasets") / "data" / "vr-pointing"
 
 

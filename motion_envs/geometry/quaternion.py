@@ -16,6 +16,8 @@ References: Faraway & Choe (2008), section 3.2; Shoemake (1985); Grassia (1998).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
@@ -54,7 +56,7 @@ _SMALL_ANGLE = 1e-4
 _BLOCK = 8192
 
 
-def _blocks(n: int):
+def _blocks(n: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` of consecutive blocks covering ``range(n)``."""
     for start in range(0, n, _BLOCK):
         yield start, min(start + _BLOCK, n)

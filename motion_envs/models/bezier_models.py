@@ -24,7 +24,7 @@ attributes end in ``_``; ``save``/``load`` use the JSON model format of
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -96,6 +96,9 @@ def _state_n_points(attributes: Mapping[str, Any]) -> int:
     return int(n)
 
 
+B = TypeVar("B", bound="BezierResidualModel")
+
+
 class BezierResidualModel(SerializableModel):
     """Base class: a Bézier model of slerp residual curves of one degree.
 
@@ -132,12 +135,12 @@ class BezierResidualModel(SerializableModel):
 
     # -- shared -------------------------------------------------------------------
     def fit(
-        self,
+        self: B,
         residuals: ArrayLike,
         subjects: ArrayLike | None = None,
         tasks: ArrayLike | None = None,
         predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
-    ) -> BezierResidualModel:
+    ) -> B:
         """Fit to residual curves ``(L, n_points, 3)`` and their labels; returns ``self``.
 
         Sets ``n_points_`` and the model's own fitted attributes.
@@ -181,20 +184,32 @@ class NullBezierModel(BezierResidualModel):
     Fitted attributes: ``control_points_`` ``(d - 1, 3)``.
     """
 
-    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+    def _fit_points(
+        self,
+        points: FloatArray,
+        subjects: NDArray[np.str_] | None,
+        tasks: NDArray[np.str_] | None,
+        predictors: FloatArray | None,
+    ) -> None:
         self.control_points_ = points.mean(axis=0)
 
-    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    ) -> FloatArray:
         self._check_fitted()
         if n is None:
             for labels in (subjects, tasks):
                 if labels is not None:
-                    n = len(labels)
+                    n = int(np.shape(labels)[0])
         if n is None:
             raise ValueError("n (the number of curves to predict) is required")
         return np.broadcast_to(self.control_points_, (n, *self.control_points_.shape)).copy()
 
-    def _get_state(self):
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
             {"degree": self.degree},
             {"control_points_": self.control_points_},
@@ -208,7 +223,12 @@ class NullBezierModel(BezierResidualModel):
     )
 
     @classmethod
-    def _from_state(cls, params, arrays, attributes):
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> NullBezierModel:
         model = cls(**params)
         model.control_points_ = _state_array(arrays, "control_points_", (model.degree - 1, 3))
         model.n_points_ = _state_n_points(attributes)
@@ -242,7 +262,13 @@ class GroupBezierModel(BezierResidualModel):
         self.by = by
         self.unseen = unseen
 
-    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+    def _fit_points(
+        self,
+        points: FloatArray,
+        subjects: NDArray[np.str_] | None,
+        tasks: NDArray[np.str_] | None,
+        predictors: FloatArray | None,
+    ) -> None:
         labels = subjects if self.by == "subject" else tasks
         if labels is None:
             raise ValueError(f"{self.by}s is required to fit a {type(self).__name__}")
@@ -254,7 +280,13 @@ class GroupBezierModel(BezierResidualModel):
         self.control_points_ = sums / counts[:, None, None]
         self.global_control_points_ = points.mean(axis=0)
 
-    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    ) -> FloatArray:
         self._check_fitted()
         labels = subjects if self.by == "subject" else tasks
         name = f"{self.by}s"
@@ -274,7 +306,7 @@ class GroupBezierModel(BezierResidualModel):
         out[~known] = self.global_control_points_
         return out
 
-    def _get_state(self):
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
             {"degree": self.degree, "by": self.by, "unseen": self.unseen},
             {
@@ -296,7 +328,12 @@ class GroupBezierModel(BezierResidualModel):
     )
 
     @classmethod
-    def _from_state(cls, params, arrays, attributes):
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> GroupBezierModel:
         model = cls.__new__(cls)
         GroupBezierModel.__init__(model, **params)
         fixed_by = {"SubjectBezierModel": "subject", "TaskBezierModel": "task"}.get(cls.__name__)
@@ -347,7 +384,13 @@ class LinearBezierModel(BezierResidualModel):
     ``(d - 1, 3)``, ``coef_`` ``(p, d - 1, 3)``.
     """
 
-    def _predictor_matrix(self, predictors, n, fitting):
+    predictor_names_: list[str]
+    intercept_: FloatArray
+    coef_: FloatArray
+
+    def _predictor_matrix(
+        self, predictors: Mapping[str, ArrayLike] | ArrayLike, n: int, fitting: bool
+    ) -> FloatArray:
         if isinstance(predictors, Mapping):
             names = sorted(predictors)
             if not fitting:
@@ -374,7 +417,13 @@ class LinearBezierModel(BezierResidualModel):
             self.predictor_names_ = list(names)
         return X
 
-    def _fit_points(self, points, subjects, tasks, predictors) -> None:
+    def _fit_points(
+        self,
+        points: FloatArray,
+        subjects: NDArray[np.str_] | None,
+        tasks: NDArray[np.str_] | None,
+        predictors: FloatArray | None,
+    ) -> None:
         if predictors is None:
             raise ValueError("predictors is required to fit a LinearBezierModel")
         L, p = predictors.shape
@@ -388,21 +437,27 @@ class LinearBezierModel(BezierResidualModel):
         Y = points.reshape(L, -1)
         beta, *_ = np.linalg.lstsq(design, Y, rcond=None)
         k = points.shape[1]
-        self.intercept_ = beta[0].reshape(k, 3)
-        self.coef_ = beta[1:].reshape(p, k, 3)
+        self.intercept_ = np.asarray(beta[0], dtype=np.float64).reshape(k, 3)
+        self.coef_ = np.asarray(beta[1:], dtype=np.float64).reshape(p, k, 3)
 
-    def predict_control_points(self, n=None, subjects=None, tasks=None, predictors=None):
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: ArrayLike | None = None,
+        tasks: ArrayLike | None = None,
+        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    ) -> FloatArray:
         self._check_fitted()
         if predictors is None:
             raise ValueError("predictors is required to predict with a LinearBezierModel")
         if isinstance(predictors, Mapping):
-            n = len(next(iter(predictors.values()))) if predictors else 0
+            n = int(np.shape(next(iter(predictors.values())))[0]) if predictors else 0
         else:
             n = np.atleast_1d(np.asarray(predictors)).shape[0]
         X = self._predictor_matrix(predictors, n, fitting=False)
         return self.intercept_ + np.einsum("lp,pkc->lkc", X, self.coef_)
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any]]:
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
             {"degree": self.degree},
             {"intercept_": self.intercept_, "coef_": self.coef_},
@@ -416,7 +471,12 @@ class LinearBezierModel(BezierResidualModel):
     )
 
     @classmethod
-    def _from_state(cls, params, arrays, attributes):
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> LinearBezierModel:
         model = cls(**params)
         names = list(attributes["predictor_names_"])
         k = model.degree - 1

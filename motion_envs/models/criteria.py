@@ -38,7 +38,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -106,7 +106,7 @@ def median_max_error(residuals: ArrayLike, predictions: ArrayLike | float = 0.0)
     return float(np.median(max_errors(residuals, predictions)))
 
 
-def _group_means(R: FloatArray, keys: NDArray) -> tuple[FloatArray, NDArray[np.int64]]:
+def _group_means(R: FloatArray, keys: NDArray[Any]) -> tuple[FloatArray, NDArray[np.int64]]:
     """Per-curve mean of the curves sharing its key; also the group size of each curve."""
     _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
     sums = np.zeros((counts.size, *R.shape[1:]))
@@ -248,11 +248,11 @@ def table1(
         c[f"null_d{d}"] = median_max_error(R, NullBezierModel(d).fit(R).predict(n=L))
     c["null_average"] = median_max_error(R, R.mean(axis=0))
     for d in degrees:
-        model = SubjectBezierModel(d).fit(R, subjects=subjects)
-        c[f"subject_predictor_d{d}"] = median_max_error(R, model.predict(subjects=subjects))
+        by_subject = SubjectBezierModel(d).fit(R, subjects=subjects)
+        c[f"subject_predictor_d{d}"] = median_max_error(R, by_subject.predict(subjects=subjects))
     for d in degrees:
-        model = TaskBezierModel(d).fit(R, tasks=tasks)
-        c[f"task_predictor_d{d}"] = median_max_error(R, model.predict(tasks=tasks))
+        by_task = TaskBezierModel(d).fit(R, tasks=tasks)
+        c[f"task_predictor_d{d}"] = median_max_error(R, by_task.predict(tasks=tasks))
     for d in degrees:
         if np.unique(subjects).size >= 2:
             null_pred, task_pred, n_fb = _leave_one_subject_out(R, subjects, tasks, d)

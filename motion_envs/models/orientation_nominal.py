@@ -49,6 +49,7 @@ from motion_envs.datasets.resampling import resample_orientations
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import (
     BezierResidualModel,
+    GroupBezierModel,
     NullBezierModel,
     SubjectBezierModel,
     TaskBezierModel,
@@ -233,7 +234,7 @@ def orientation_criterion(
     g = model.grids(test)
     unseen = 0
     rm = model.residual_model_
-    if rm is not None and hasattr(rm, "groups_"):
+    if isinstance(rm, GroupBezierModel):
         labels = test.subjects if rm.by == "subject" else test.tasks
         unseen = int(np.count_nonzero(~np.isin(np.asarray(labels).astype(str), rm.groups_)))
     errs = g.max_errors()

@@ -312,7 +312,7 @@ def correct_online(
     if mode == "free":
         dp = _solve(a1, r, None, "free", "correct_online")
     else:
-        a = np.kron(a1, np.eye(dims))
+        a = np.kron(a1, np.eye(dims)).astype(np.float64, copy=False)
         dp = _solve(a, r.reshape(-1), f_q, mode, "correct_online").reshape(n_basis, dims)
     return p + dp
 
@@ -696,7 +696,7 @@ def select_n_sines(
         raise ValueError("candidates must not be empty")
     folds = np.arange(n) % k
     taus = [
-        np.linspace(0.0, 1.0, len(y)) if times is None else ss.normalised_time(times[i])
+        np.linspace(0.0, 1.0, np.shape(y)[0]) if times is None else ss.normalised_time(times[i])
         for i, y in enumerate(positions)
     ]
     ys = [np.asarray(y, dtype=np.float64) for y in positions]
