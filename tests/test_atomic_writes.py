@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -110,6 +111,45 @@ def test_a_failed_write_keeps_the_previous_file(tmp_path):
         atomic_write(target, boom)
     assert target.read_text() == "previous"
     assert [p.name for p in tmp_path.iterdir()] == ["x.txt"]
+
+
+# Ways of writing a file without motion_envs._io; none may appear in library code.
+DIRECT_WRITES = (
+    re.compile(r"\.savefig\((?!fh)"),
+    re.compile(r"\.write_(text|bytes)\("),
+    re.compile(r"\bopen\([^)]*['\"][wax]b?['\"]"),
+    re.compile(r"\.to_(csv|json|parquet)\((?![a-z_]+=)[^)]"),  # to a path, not to a string
+    re.compile(r"json\.dump\("),
+    re.compile(r"np\.save"),
+)
+
+
+def test_every_file_is_written_through_io():
+    offenders = []
+    for pkg in ("motion_envs", "baselines"):
+        for path in sorted((ROOT / pkg).rglob("*.py")):
+            if path.name == "_io.py":
+                continue
+            for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                code = line.split("#", 1)[0]
+                if any(p.search(code) for p in DIRECT_WRITES) and "def to_csv" not in code:
+                    offenders.append(f"{path.relative_to(ROOT)}:{n}: {line.strip()}")
+    assert not offenders, "\n".join(offenders)
+
+
+def test_two_motion_bench_runs_on_the_same_out_both_finish(tmp_path):
+    out = tmp_path / "same"
+    cmd = [sys.executable, "-m", "baselines.cli", "orientation", "--out", str(out)]
+    procs = [
+        subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
+        for _ in range(2)
+    ]
+    for proc in procs:
+        _, err = proc.communicate(timeout=300)
+        assert proc.returncode == 0, err
+    assert json.loads((out / "results.json").read_text())["criteria"]
+    assert (out / "residuals.png").read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in out.iterdir()) == ["residuals.png", "results.csv", "results.json"]
 
 
 def test_motion_bench_all_interrupted_exits_130_and_keeps_results(tmp_path):
