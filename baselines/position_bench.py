@@ -398,7 +398,8 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
 
 def run(config: PositionConfig) -> dict[str, Any]:
     """The benchmark of ``config``: the ``results.json`` document (plus the predictions
-    under ``_predictions``/``_truth`` for :func:`plot_grid`); no printing, no files."""
+    under ``_predictions``/``_truth`` for :func:`plot_grid`); no files, no printing
+    except the progress bar on stderr when ``config.progress``."""
     dataset = load_position_dataset(config.data, config.shapes)
     return run_benchmark(
         dataset,

@@ -99,18 +99,29 @@ def test_user_errors_are_one_line_exit_2(paths, capsys, argv, fragment):
     assert captured.out == ""
 
 
-def test_unwritable_out_is_reported_first(paths, capsys):
+def _unwritable_folder(paths: Path) -> Path:
+    """A folder this user cannot create files in: a mode-555 folder, or /proc for root."""
     ro = paths / "readonly"
     try:
         (ro / "probe").write_text("x")
     except OSError:
-        pass
-    else:
-        pytest.skip("this user can write in a read-only folder (root)")
-    for argv in (["orientation", "--out", str(ro)], ["all", "--out", str(ro / "sub")]):
+        return ro
+    (ro / "probe").unlink()
+    if Path("/proc").is_dir():
+        return Path("/proc")
+    pytest.skip("no folder this user cannot write in")
+
+
+def test_unwritable_out_is_reported_first(paths, capsys):
+    ro = _unwritable_folder(paths)
+    for argv in (
+        ["orientation", "--out", str(ro / "new")],
+        ["all", "--out", str(ro / "new" / "sub")],
+        ["calibrate-cohort", "--out", str(ro / "cohort.yaml")],
+    ):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
-        assert err.count("\n") == 0 and "argument --out: cannot write in" in err
+        assert err.count("\n") == 0 and "argument --out: cannot write in" in err, err
 
 
 def test_unreadable_data_is_reported_first(paths, capsys):
