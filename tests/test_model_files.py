@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from motion_envs.models.bezier_models import (
     LinearBezierModel,
@@ -296,3 +299,56 @@ def test_registry_is_complete_in_a_fresh_process(tmp_path, index):
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
     )
     assert out.stdout.split()[0] == type(model).__name__
+
+
+json_values = st.recursive(
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(10**30), max_value=10**30)
+    | st.floats(allow_nan=True, allow_infinity=True)
+    | st.text(max_size=5),
+    lambda inner: (
+        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner, max_size=3)
+    ),
+    max_leaves=8,
+)
+
+
+def _leaf_paths(doc, prefix=()):
+    if isinstance(doc, dict):
+        for k, v in doc.items():
+            yield (*prefix, k)
+            yield from _leaf_paths(v, (*prefix, k))
+    elif isinstance(doc, list):
+        for i, v in enumerate(doc[:3]):
+            yield (*prefix, i)
+            yield from _leaf_paths(v, (*prefix, i))
+
+
+@settings(
+    max_examples=int(os.environ.get("FUZZ_EXAMPLES", "150")),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(data=st.data())
+def test_fuzzed_files_raise_only_model_file_error(saved, tmp_path, data):
+    """Any field replaced by any JSON value, or the text cut and spliced: the file loads
+    or raises ModelFileError, never another exception."""
+    cls = data.draw(st.sampled_from(sorted(saved)))
+    doc = saved[cls]
+    path = tmp_path / "fuzz.json"
+    if data.draw(st.booleans()):
+        where = data.draw(st.sampled_from(list(_leaf_paths(doc))))
+        text = json.dumps(_set(doc, where, data.draw(json_values)))
+    else:
+        text = json.dumps(doc)
+        a = data.draw(st.integers(0, len(text)))
+        b = data.draw(st.integers(a, min(len(text), a + 20)))
+        text = text[:a] + data.draw(st.text(max_size=5)) + text[b:]
+    path.write_text(text, encoding="utf-8", errors="surrogatepass")
+    try:
+        model = load_model(path)
+    except ModelFileError as exc:
+        assert str(path) in str(exc)
+    else:
+        assert isinstance(model, SerializableModel)
