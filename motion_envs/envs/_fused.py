@@ -15,7 +15,8 @@ State layout (shared with the numpy path of :mod:`motion_envs.envs.vector`):
 
 * ``steps[l, k]`` (float64): the step row of trajectory ``l`` at grid point ``k`` (the
   task's ``steps``), and one extra row ``k = n`` holding the trajectory's start state
-  (``dim`` values) then ``residual_scale`` and the reward weights;
+  (``dim`` values), the lower and upper bounds of the current state in the observation
+  (``dim`` each; infinite when not clipped), ``residual_scale`` and the reward weights;
 * ``si[i]`` (int64): trajectory index, grid point ``k``, elapsed steps, autoreset flag,
   position in the trajectory pool, then the pool (the next trajectory indices);
 * ``sf[i]`` (float64): current state (``dim`` values), running max error, running max
@@ -68,8 +69,18 @@ def _reset_env(i, si, sf, steps, obs_table, dim, cur_lo, out_obs):  # type: igno
     sf[i, dim] = 0.0
     sf[i, dim + 1] = 0.0
     out_obs[i, :] = obs_table[idx, 0, :]
+    _write_current(i, sf, start, dim, cur_lo, out_obs)
+
+
+@njit(cache=True)
+def _write_current(i, sf, extra, dim, cur_lo, out_obs):  # type: ignore[no-untyped-def]
+    """The current state into the observation, clipped to its bounds (in ``extra``)."""
     for j in range(dim):
-        out_obs[i, cur_lo + j] = sf[i, j]
+        v = sf[i, j]
+        lo = extra[dim + j]
+        hi = extra[2 * dim + j]
+        v = lo if v < lo else v
+        out_obs[i, cur_lo + j] = hi if v > hi else v
 
 
 @njit(cache=True)
@@ -98,9 +109,9 @@ def batch_step(
     N, d = actions.shape
     n_steps = steps.shape[1] - 1
     dim = sf.shape[1] - 2
-    params = steps[0, n_steps]
-    scale = params[dim]
-    w = params[dim + 1 :]
+    extra = steps[0, n_steps]
+    scale = extra[3 * dim]
+    w = extra[3 * dim + 1 :]
     for i in range(N):
         if mode == DISABLED and si[i, AUTORESET] != 0:
             return 2, i, 0, 0
@@ -176,8 +187,7 @@ def batch_step(
             out_f[tau_row + 1, i] = sf[i, dim]
             out_f[tau_row + 2, i] = sf[i, dim + 1]
         out_obs[i, :] = obs_table[idx, kk, :]
-        for j in range(dim):
-            out_obs[i, cur_lo + j] = sf[i, j]
+        _write_current(i, sf, extra, dim, cur_lo, out_obs)
         ended = terminated or truncated
         if mode == SAME_STEP and ended:
             final_obs[i, :] = out_obs[i, :]

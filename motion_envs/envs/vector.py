@@ -48,7 +48,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS
+from motion_envs.envs._common import N_STEPS, JsonSpecMixin
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
@@ -96,7 +96,7 @@ def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
         ) from None
 
 
-class _ReplayVectorEnv(gym.vector.VectorEnv):
+class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
     """Shared episode bookkeeping of the native vector environments.
 
     A subclass sets ``_KIND`` (the :mod:`~motion_envs.envs._fused` kind), ``_STEP_KEYS``
@@ -156,12 +156,15 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         self._cur = single._cur  # the observation's slice of the current state
         self._cur_lo = self._cur.start
         self._dim = dim = self._cur.stop - self._cur.start
-        # the compiled loop's table: the step rows, then a row with the start and parameters
-        params = (self.residual_scale, *weights)
-        self._steps = np.zeros((L, n + 1, max(width, dim + len(params))))
+        bounds = single._cur_bounds or ((-np.inf,) * dim, (np.inf,) * dim)
+        self._cur_low, self._cur_high = (np.asarray(b, dtype=np.float64) for b in bounds)
+        # the compiled loop's table: the step rows, then a row with the start, the bounds
+        # of the current state in the observation and the parameters
+        extra = (*bounds[0], *bounds[1], self.residual_scale, *weights)
+        self._steps = np.zeros((L, n + 1, max(width, dim + len(extra))))
         self._steps[:, :n, :width] = task.steps
         self._steps[:, n, :dim] = self._starts
-        self._steps[:, n, dim : dim + len(params)] = params
+        self._steps[:, n, dim : dim + len(extra)] = extra
         self._si = np.zeros((N, _POOL_AT + _POOL), dtype=np.int64)
         self._pool = self._si[:, _POOL_AT:]  # a view: the compiled loop reads the pool in si
         self._sf = np.zeros((N, dim + 2))
@@ -284,7 +287,7 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
     def _observe(self) -> NDArray[np.float32]:
         si = self._si
         obs = self._obs_table[si[:, _IDX], si[:, _K]]
-        obs[:, self._cur] = self._sf[:, : self._dim]
+        obs[:, self._cur] = np.clip(self._sf[:, : self._dim], self._cur_low, self._cur_high)
         return obs
 
     def _record_history(self) -> None:
