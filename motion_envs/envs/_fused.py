@@ -48,13 +48,16 @@ ORIENTATION, POSITION = 0, 1
 # si columns
 IDX, K_, ELAPSED, AUTORESET, PTR, POOL = 0, 1, 2, 3, 4, 5
 
-_orientation_step = njit(cache=True)(K.orientation_step_scalar)
-_position_step = njit(cache=True)(K.position_step_scalar)
-_orientation_reward = njit(cache=True)(K.orientation_reward)
-_position_reward = njit(cache=True)(K.position_reward)
+# error_model="numpy": no zero-division checks (no divisor can be 0; the kernels guard
+# their small-angle cases); never fastmath, which would reorder the arithmetic
+_jit = njit(cache=True, error_model="numpy")
+_orientation_step = _jit(K.orientation_step_scalar)
+_position_step = _jit(K.position_step_scalar)
+_orientation_reward = _jit(K.orientation_reward)
+_position_reward = _jit(K.position_reward)
 
 
-@njit(cache=True)
+@_jit
 def _reset_env(i, si, sf, steps, obs_table, dim, cur_lo, out_obs):  # type: ignore[no-untyped-def]
     """Start sub-environment ``i`` on the next trajectory of its pool; its first observation."""
     idx = si[i, POOL + si[i, PTR]]
@@ -68,11 +71,17 @@ def _reset_env(i, si, sf, steps, obs_table, dim, cur_lo, out_obs):  # type: igno
         sf[i, j] = start[j]
     sf[i, dim] = 0.0
     sf[i, dim + 1] = 0.0
-    out_obs[i, :] = obs_table[idx, 0, :]
+    _copy_row(obs_table[idx, 0], out_obs[i])
     _write_current(i, sf, start, dim, cur_lo, out_obs)
 
 
-@njit(cache=True)
+@_jit
+def _copy_row(src, dst):  # type: ignore[no-untyped-def]
+    for j in range(src.shape[0]):
+        dst[j] = src[j]
+
+
+@_jit
 def _write_current(i, sf, extra, dim, cur_lo, out_obs):  # type: ignore[no-untyped-def]
     """The current state into the observation, clipped to its bounds (in ``extra``)."""
     for j in range(dim):
@@ -83,7 +92,7 @@ def _write_current(i, sf, extra, dim, cur_lo, out_obs):  # type: ignore[no-untyp
         out_obs[i, cur_lo + j] = hi if v > hi else v
 
 
-@njit(cache=True)
+@_jit
 def batch_step(
     kind,
     mode,
@@ -186,11 +195,11 @@ def batch_step(
             n_term += 1
             out_f[tau_row + 1, i] = sf[i, dim]
             out_f[tau_row + 2, i] = sf[i, dim + 1]
-        out_obs[i, :] = obs_table[idx, kk, :]
+        _copy_row(obs_table[idx, kk], out_obs[i])
         _write_current(i, sf, extra, dim, cur_lo, out_obs)
         ended = terminated or truncated
         if mode == SAME_STEP and ended:
-            final_obs[i, :] = out_obs[i, :]
+            _copy_row(out_obs[i], final_obs[i])
             _reset_env(i, si, sf, steps, obs_table, dim, cur_lo, out_obs)
             out_b[2, i] = False
             out_b[3, i] = True
