@@ -233,7 +233,7 @@ def orientation_step(
     dx, dy, dz = lx - rx, ly - ry, lz - rz
     err = m.sqrt(dx * dx + dy * dy + dz * dz)
     q = m.multiply(*n, *d)
-    geo = geodesic(m, *q, h)
+    geo = geodesic(m, q[0], q[1], q[2], q[3], h)
     return q, err, geo
 
 
@@ -304,7 +304,7 @@ def orientation_step_scalar(
 
 
 def position_step(
-    m: SimpleNamespace, n: Sequence[Any], h: Sequence[Any], a: Sequence[Any], scale: float
+    m: SimpleNamespace, n: Any, h: Any, a: Sequence[Any], scale: float
 ) -> tuple[list[Any], Any]:
     """One step of the position environment: ``y = n + scale a`` and ``|y - h|``.
 

@@ -105,7 +105,7 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
     implements :meth:`_physics_numpy`.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {
+    metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's instance attribute)
         "render_modes": ["rgb_array"],
         "render_fps": 25,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
@@ -144,7 +144,7 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.render_mode = single.render_mode
         N = self.num_envs
-        self._action_shape = (N, *self.single_action_space.shape)
+        self._action_shape: tuple[int, ...] = (N, *self.single_action_space.shape)  # type: ignore[misc]
         self._rngs: list[np.random.Generator | None] = [None] * N
         self._started = False
         self._arange = np.arange(N)
@@ -514,7 +514,7 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         if self.num_envs < _SCALAR_BELOW:
             # few environments: the scalar kernel (same arithmetic, bit-identical) is faster
             outs = [
-                K.orientation_step_scalar(row, *act, self.residual_scale)
+                K.orientation_step_scalar(row, act[0], act[1], act[2], self.residual_scale)
                 for row, act in zip(rows.T.tolist(), a.tolist(), strict=True)
             ]
             q = tuple(np.array([o[0][c] for o in outs]) for c in range(4))
@@ -609,7 +609,7 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         D = self._dim
         cols = [a[:, i] for i in range(D)]
         q, err = K.position_step(K.BATCH, rows[:D], rows[D:], cols, self.residual_scale)
-        sq = 0.0
+        sq: Any = 0.0
         for c in cols:
             sq = sq + c * c
         r_dist, r_act, reward = K.position_reward(err, sq, *self._weights.tolist())
