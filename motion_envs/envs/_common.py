@@ -9,7 +9,9 @@ and pickling. The step arithmetic and the reward stay in the environment modules
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -19,6 +21,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "N_STEPS",
+    "JsonSpecMixin",
     "ReplayEnv",
     "ReplayTask",
     "check_choice",
@@ -83,12 +86,36 @@ class ReplayTask:
         return int(self.obs.shape[2])
 
 
-class ReplayEnv(gym.Env):
+def json_safe_spec(spec: Any) -> Any:
+    """``spec`` with a path-like ``data`` argument stored as ``str`` (``os.fspath``), so
+    ``spec.to_json()`` works and the spec remakes the same environment."""
+    if spec is None or not isinstance(spec.kwargs.get("data"), os.PathLike):
+        return spec
+    return dataclasses.replace(spec, kwargs={**spec.kwargs, "data": os.fspath(spec.kwargs["data"])})
+
+
+class JsonSpecMixin:
+    """``spec`` property whose setter (called by ``gym.make``/``gym.make_vec``) stores a
+    path-like ``data`` argument as a string: see :func:`json_safe_spec`."""
+
+    _spec: Any = None
+
+    @property
+    def spec(self) -> Any:
+        return self._spec
+
+    @spec.setter
+    def spec(self, value: Any) -> None:
+        self._spec = json_safe_spec(value)
+
+
+class ReplayEnv(JsonSpecMixin, gym.Env):
     """Episode mechanics of a single replay environment.
 
     A subclass sets ``task`` (``n_trajectories``, ``steps``, ``obs``, ``trajectory_ids``,
-    ``tasks``), ``_starts`` (the ``(L, D)`` start of each trajectory) and ``_cur`` (the
-    slice of the observation that holds the current state) in ``__init__``, after
+    ``tasks``), ``_starts`` (the ``(L, D)`` start of each trajectory), ``_cur`` (the
+    slice of the observation that holds the current state) and, if the observation clips
+    the current state, ``_cur_bounds`` (its ``(low, high)`` per component) in ``__init__``, after
     :meth:`_check_arguments`; and implements ``step`` (ending with :meth:`_end_step`) and
     :meth:`_render_frame`.
     """
@@ -96,6 +123,7 @@ class ReplayEnv(gym.Env):
     task: Any
     _starts: NDArray[np.float64]
     _cur: slice
+    _cur_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
     def _check_arguments(
         self,
@@ -166,7 +194,11 @@ class ReplayEnv(gym.Env):
         if err > self._max_error:
             self._max_error = err
         obs = self._obs[k + 1].copy()
-        obs[self._cur] = q
+        if self._cur_bounds is None:
+            obs[self._cur] = q
+        else:
+            lo, hi = self._cur_bounds
+            obs[self._cur] = [min(max(v, a), b) for v, a, b in zip(q, lo, hi, strict=True)]
         info["tau"] = k / (N_STEPS - 1)
         terminated = k + 1 == N_STEPS
         if terminated:

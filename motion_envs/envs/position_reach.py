@@ -46,13 +46,43 @@ class PositionTask(ReplayTask):
     steps: NDArray[np.float64]  # (L, n, 2 D)
     obs: NDArray[np.float32]  # (L, n + 1, obs_dim)
     starts: NDArray[np.float64]  # (L, D)
-    low: NDArray[np.float32]
+    low: NDArray[np.float32]  # (D,) plot extents of this split (rendering)
     high: NDArray[np.float32]
+    obs_low: NDArray[np.float32]  # (obs_dim,) observation space: independent of the split
+    obs_high: NDArray[np.float32]
+    cur_low: NDArray[np.float64]  # (D,) float64 bounds of the current position (clipped)
+    cur_high: NDArray[np.float64]
     trajectory_ids: NDArray[np.str_]
     tasks: NDArray[np.str_]
     task_names: tuple[str, ...]
     criterion: float
     grids: Any  # motion_envs.models.nominal.PositionGrids
+
+
+def _observation_bounds(
+    dataset: Any, D: int, n_tasks: int, residual_scale: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Observation bounds (float64) that depend on the data (and ``residual_scale``), never on the split.
+
+    With ``lo_d``, ``hi_d`` the extent of coordinate ``d`` over every demonstration of
+    the whole dataset (all splits) on the grid and ``m_d = (hi_d - lo_d) +
+    residual_scale``: start and goal lie in ``[lo_d, hi_d]``; current and nominal
+    position in ``[lo_d - m_d, hi_d + m_d]`` (the observation clips them there); ``tau``
+    and the one-hot task in ``[0, 1]``.
+    """
+    from motion_envs.models.nominal import resample_positions
+
+    y, _ = resample_positions(dataset, N_STEPS)
+    lo, hi = y.min(axis=(0, 1)), y.max(axis=(0, 1))
+    margin = (hi - lo) + residual_scale
+    dim = 4 * D + 1 + n_tasks
+    low = np.zeros(dim)
+    high = np.ones(dim)
+    low[0:D] = low[D : 2 * D] = lo
+    high[0:D] = high[D : 2 * D] = hi
+    low[2 * D : 3 * D] = low[3 * D + 1 : 4 * D + 1] = lo - margin
+    high[2 * D : 3 * D] = high[3 * D + 1 : 4 * D + 1] = hi + margin
+    return low, high
 
 
 def _build_task(
@@ -74,18 +104,16 @@ def _build_task(
     steps = np.concatenate([g.nominal, g.human], axis=2)
     task_names = tuple(sorted(set(np.asarray(dataset.tasks).astype(str).tolist())))
     starts, goals = g.human[:, 0], g.human[:, -1]
-    # bounds that hold: every position an agent can reach is a nominal + residual
+    # plot extents of this split (rendering only): every position an agent can reach is a
+    # nominal + residual
     lo = min(g.nominal.min(), g.human.min()) - residual_scale
     hi = max(g.nominal.max(), g.human.max()) + residual_scale
     pad = 1e-3 * max(1.0, abs(lo), abs(hi))
-    dim = 4 * D + 1 + len(task_names)
-    low = np.full(dim, lo - pad, dtype=np.float32)
-    high = np.full(dim, hi + pad, dtype=np.float32)
-    low[3 * D] = 0.0
-    high[3 * D] = 1.0
-    low[4 * D + 1 :] = 0.0
-    high[4 * D + 1 :] = 1.0
-    obs = np.zeros((L, n + 1, dim), dtype=np.float32)
+    low = np.full(D, lo - pad, dtype=np.float32)
+    high = np.full(D, hi + pad, dtype=np.float32)
+    low64, high64 = _observation_bounds(dataset, D, len(task_names), residual_scale)
+    obs_low, obs_high = low64.astype(np.float32), high64.astype(np.float32)
+    obs = np.zeros((L, n + 1, obs_low.size), dtype=np.float32)
     obs[:, :, 0:D] = starts[:, None]
     obs[:, :, D : 2 * D] = goals[:, None]
     obs[:, :n, 3 * D] = g.tau
@@ -94,6 +122,7 @@ def _build_task(
     obs[:, n, 3 * D + 1 : 4 * D + 1] = g.nominal[:, -1]
     task_index = np.searchsorted(np.asarray(task_names), g.tasks)
     obs[np.arange(L), :, 4 * D + 1 + task_index] = 1.0
+    np.clip(obs, obs_low, obs_high, out=obs)  # a diverged nominal (see the class docstring)
     for arr in (steps, obs, starts, *vars(g).values()):
         arr.flags.writeable = False  # shared by every environment built from the cache
     return PositionTask(
@@ -107,6 +136,10 @@ def _build_task(
         starts=starts,
         low=low,
         high=high,
+        obs_low=obs_low,
+        obs_high=obs_high,
+        cur_low=low64[2 * D : 3 * D],
+        cur_high=high64[2 * D : 3 * D],
         trajectory_ids=np.asarray(dataset.trajectory_ids)[g.index],
         tasks=g.tasks,
         task_names=task_names,
@@ -180,17 +213,25 @@ class PositionReachEnv(ReplayEnv):
 
     ## Observation Space
     The observation space is a `Box(low, high, (4 D + 1 + T,), float32)`, ``T`` the number
-    of tasks (30 LASA shapes: 39 values). Position bounds are those of every human and
-    nominal position of the split widened by `residual_scale`, so they hold.
+    of tasks (30 LASA shapes: 39 values). It depends on `data`, `shapes` and
+    `residual_scale` only, never on `split`, `split_seed` or `test_fraction`, so a policy
+    trained on one split loads and runs on another (SB3's ``PPO.load(path, env=...)``,
+    ``set_env``). With ``lo_d``, ``hi_d`` the extent of coordinate ``d`` over every
+    demonstration of the dataset (all splits) and the margin ``m_d = (hi_d - lo_d) +
+    residual_scale``, start and goal lie in ``[lo_d, hi_d]``, current and nominal position
+    in ``[lo_d - m_d, hi_d + m_d]``. A nominal fitted on very few demonstrations can
+    diverge beyond that margin (LASA, ``nominal="sine"``, ``test_fraction=0.5``: up to
+    3 data extents on some test splits; never on the default splits); the observation
+    clips such positions to the bounds, while the error and reward use the true ones.
 
-    | Num             | Observation                                                  | Min  | Max  | Type (Unit)     |
-    |-----------------|--------------------------------------------------------------|------|------|-----------------|
-    | 0 .. D-1        | start position ``y_0``                                       | low  | high | position        |
-    | D .. 2D-1       | goal position ``y_1``                                        | low  | high | position        |
-    | 2D .. 3D-1      | current position (the last one set; ``y_0`` at reset)        | low  | high | position        |
-    | 3D              | ``tau`` of the grid point the next action sets (1 after the last) | 0    | 1    | normalised time |
-    | 3D+1 .. 4D      | the nominal's position at that grid point ``n_k``            | low  | high | position        |
-    | 4D+1 ..         | one-hot task (shape) over the sorted task names              | 0    | 1    | unitless        |
+    | Num             | Observation                                                  | Min       | Max       | Type (Unit)     |
+    |-----------------|--------------------------------------------------------------|-----------|-----------|-----------------|
+    | 0 .. D-1        | start position ``y_0``                                       | lo_d      | hi_d      | position        |
+    | D .. 2D-1       | goal position ``y_1``                                        | lo_d      | hi_d      | position        |
+    | 2D .. 3D-1      | current position (the last one set; ``y_0`` at reset)        | lo_d - m_d | hi_d + m_d | position        |
+    | 3D              | ``tau`` of the grid point the next action sets (1 after the last) | 0         | 1         | normalised time |
+    | 3D+1 .. 4D      | the nominal's position at that grid point ``n_k``            | lo_d - m_d | hi_d + m_d | position        |
+    | 4D+1 ..         | one-hot task (shape) over the sorted task names              | 0         | 1         | unitless        |
 
     ## Rewards
     The reward is ``-(w_distance |y_k - h_k| + w_action |a_k|^2)`` with ``h_k`` the
@@ -269,9 +310,14 @@ class PositionReachEnv(ReplayEnv):
         D = self.task.n_dims
         self._D = D
         self.action_space = gym.spaces.Box(-1.0, 1.0, (D,), dtype=np.float32)
-        self.observation_space = gym.spaces.Box(self.task.low, self.task.high, dtype=np.float32)
+        self.observation_space = gym.spaces.Box(
+            self.task.obs_low, self.task.obs_high, dtype=np.float32
+        )
         self._starts = self.task.starts
         self._cur = slice(2 * D, 3 * D)
+        # the current position is clipped to the observation bounds, as float64 (float32
+        # rounding is monotonic, so the float32 observation stays inside the bounds)
+        self._cur_bounds = (tuple(self.task.cur_low.tolist()), tuple(self.task.cur_high.tolist()))
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         k = self._k
@@ -286,15 +332,13 @@ class PositionReachEnv(ReplayEnv):
             if not math.isfinite(v):
                 raise ValueError(f"action must be finite; got {acts}")
         acts = [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
-        row = self._steps[k]
-        q, err = K.position_step(K.SCALAR, row[:D], row[D:], acts, self.residual_scale)
+        q = [0.0] * D
+        err = K.position_step_scalar(self._steps[k], acts, self.residual_scale, q)
         w = self.reward_weights
         sq = 0.0
         for v in acts:
             sq = sq + v * v
-        r_dist = -w["distance"] * err
-        r_act = -w["action"] * sq
-        reward = r_dist + r_act
+        r_dist, r_act, reward = K.position_reward(err, sq, w["distance"], w["action"])
         info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
         obs, terminated = self._end_step(k, tuple(q), err, info)
         return obs, reward, terminated, False, info
