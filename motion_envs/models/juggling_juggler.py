@@ -110,6 +110,14 @@ class PhaseFit:
     end_cov: FloatArray
     n_examples: int
 
+    @property
+    def end_chol(self) -> FloatArray:
+        """A square root ``L`` of ``end_cov`` (``L L^T = end_cov``; eigen form, PSD-safe)."""
+        if not hasattr(self, "_chol"):
+            w, v = np.linalg.eigh(self.end_cov)
+            self._chol = v * np.sqrt(np.maximum(w, 0.0))
+        return self._chol
+
 
 class AnalyticJuggler:
     """The analytic juggler (see the module docstring); the contract's controller.
@@ -203,7 +211,7 @@ class AnalyticJuggler:
     # -- planning -------------------------------------------------------------------
     def _draw_end(self, phase: str) -> FloatArray:
         fit = self.phases_[phase]
-        return self._rng.multivariate_normal(fit.end_mean, fit.end_cov)
+        return fit.end_mean + fit.end_chol @ self._rng.standard_normal(2)
 
     def _draw_duration(self, phase: str) -> float:
         lo, hi = self.phases_[phase].duration_range

@@ -34,8 +34,8 @@ __all__ = ["TRACKING_ROWS", "BallisticWorld", "draw_episode_noise"]
 
 FloatArray = NDArray[np.float64]
 
-#: Rows of tracking noise drawn at reset (used cyclically beyond: 20 s at 200 Hz).
-TRACKING_ROWS = 4000
+#: Rows of tracking noise drawn at reset (used cyclically beyond: 10 s at 200 Hz).
+TRACKING_ROWS = 2000
 
 
 def draw_episode_noise(
