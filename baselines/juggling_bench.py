@@ -185,8 +185,10 @@ def phase_errors(
             "n_test": len(te),
             "n_sines": int(model.n_sines),
             "duration_range_s": list(juggler.phases_[phase].duration_range),
-            "samples_range": [int(min(len(s.times) for s in tr + te)),
-                              int(max(len(s.times) for s in tr + te))],
+            "samples_range": [
+                int(min(len(s.times) for s in tr + te)),
+                int(max(len(s.times) for s in tr + te)),
+            ],
             "methods": methods,
             "within_person": within,
             "lippi_over_within": methods["lippi"]["max_error"] / within["max_error"]
@@ -278,16 +280,15 @@ def run(config: JugglingConfig) -> dict[str, Any]:
         run_cycle(juggler, BallisticWorld(demos.task), JugglingNoise(), r, True, True)
         for r in cycle_rngs(config.seed + 1, config.figure_cycles)
     ]
-    five = next(
-        (r for r in rates if abs(r["noise"] - 0.05) < 1e-12 and r["correction"]), None
-    )
+    five = next((r for r in rates if abs(r["noise"] - 0.05) < 1e-12 and r["correction"]), None)
     targets = {
         "unperturbed_catch_rate>=0.99": rate >= TARGET_UNPERTURBED,
         "noise5_corrected_catch_rate>=0.90": None
         if five is None
         else five["catch_rate"] >= TARGET_NOISE5_CORRECTED,
         "lippi_within_1.5x_within_person": {
-            p: bool(v["lippi_over_within"] <= TARGET_VARIABILITY_RATIO) for p, v in per_phase.items()
+            p: bool(v["lippi_over_within"] <= TARGET_VARIABILITY_RATIO)
+            for p, v in per_phase.items()
         },
         "lippi_ahead_of_minimum_jerk": {
             p: bool(v["methods"]["lippi"]["max_error"] < v["methods"]["minimum_jerk"]["max_error"])
@@ -300,9 +301,7 @@ def run(config: JugglingConfig) -> dict[str, Any]:
         "simulated": demos.simulated,
         "world": "pure model (BallisticWorld)",
         "task": asdict(demos.task),
-        "config": {
-            k: v for k, v in asdict(config).items() if k not in ("task", "progress")
-        },
+        "config": {k: v for k, v in asdict(config).items() if k not in ("task", "progress")},
         "split": {
             "by": "demonstration (cycle)",
             "n_train_cycles": len(train),
@@ -353,8 +352,7 @@ def format_report(doc: dict[str, Any]) -> str:
     methods = list(next(iter(doc["per_phase"].values()))["methods"])
     lines += [
         "",
-        "per phase, held-out demonstrations (m): median over demos of max_t |error| "
-        "(and of RMSE)",
+        "per phase, held-out demonstrations (m): median over demos of max_t |error| (and of RMSE)",
         f"{'phase':<9}{'N':>3}" + "".join(f"{m:>22}" for m in [*methods, "within-person"]),
     ]
     for phase, v in doc["per_phase"].items():
@@ -383,9 +381,7 @@ def format_report(doc: dict[str, Any]) -> str:
     t = doc["targets"]
     lines += ["", "targets (issue 9):"]
     lines.append(f"  unperturbed catch rate >= 0.99: {_met(t['unperturbed_catch_rate>=0.99'])}")
-    lines.append(
-        f"  5 % noise with eq. 10 >= 0.90: {_met(t['noise5_corrected_catch_rate>=0.90'])}"
-    )
+    lines.append(f"  5 % noise with eq. 10 >= 0.90: {_met(t['noise5_corrected_catch_rate>=0.90'])}")
     for key, text in (
         ("lippi_within_1.5x_within_person", "Lippi within 1.5x within-person variability"),
         ("lippi_ahead_of_minimum_jerk", "Lippi ahead of minimum jerk (max error)"),
@@ -404,17 +400,30 @@ def results_csv(doc: dict[str, Any]) -> str:
     """``results.csv``: one row per catch-rate run and per (phase, method)."""
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(["kind", "phase", "method", "noise", "correction", "catch_rate", "max_error",
-                "rmse"])
-    w.writerow(["catch_rate", "", "analytic_juggler", 0.0, True, f"{doc['catch_rate']:.6g}",
-                "", ""])
+    w.writerow(
+        ["kind", "phase", "method", "noise", "correction", "catch_rate", "max_error", "rmse"]
+    )
+    w.writerow(
+        ["catch_rate", "", "analytic_juggler", 0.0, True, f"{doc['catch_rate']:.6g}", "", ""]
+    )
     for r in doc["catch_rates"]:
-        w.writerow(["catch_rate", "", "analytic_juggler", r["noise"], r["correction"],
-                    f"{r['catch_rate']:.6g}", "", ""])
+        w.writerow(
+            [
+                "catch_rate",
+                "",
+                "analytic_juggler",
+                r["noise"],
+                r["correction"],
+                f"{r['catch_rate']:.6g}",
+                "",
+                "",
+            ]
+        )
     for phase, v in doc["per_phase"].items():
         for m, c in [*v["methods"].items(), ("within_person", v["within_person"])]:
-            w.writerow(["phase_error", phase, m, "", "", "", f"{c['max_error']:.6g}",
-                        f"{c['rmse']:.6g}"])
+            w.writerow(
+                ["phase_error", phase, m, "", "", "", f"{c['max_error']:.6g}", f"{c['rmse']:.6g}"]
+            )
     return buf.getvalue()
 
 
