@@ -36,17 +36,24 @@ Choices, and why:
   centre within ``catch_radius`` of the hand's) snaps it back into the hand. Contacts are
   disabled: nothing collides, so ``data.warning`` stays empty whatever the hand does.
 
-Step order (identical in ``BallisticWorld``; state before the step: hand ``p0, v0``,
-``v0 = 0`` at reset):
+Step order: exactly ``BallisticWorld``'s (:mod:`motion_envs.models.juggling_world`),
+whose noise draws (:func:`~motion_envs.models.juggling_world.draw_episode_noise`, at reset)
+the scene reuses, so that for the same hand targets and generator both give the same
+states to round-off (tested to 1e-9):
 
-1. ``p1 = hand_target``, ``v1 = (p1 - p0) / dt``, ``a1 = (v1 - v0) / dt``; one ``mj_step``
-   (time ``+= dt``; a flying ball moves along its parabola).
-2. If the ball was held: if ``release_armed`` and ``a1_z < -toss_threshold`` it is released
-   (``released``) at ``p1`` with velocity ``v1 * (1 + release * N(0, 1))`` per component,
-   drawn from the generator given to ``reset``; else it stays at ``p1`` with velocity ``v1``.
-3. If it was flying: caught (``caught``, held again at ``p1`` with ``v1``) when its vertical
-   velocity is negative and ``|p1 - ball| <= catch_radius``; else ``dropped`` while its
-   centre is below ``floor_z``.
+1. ``h_k = hand_target``; ``v_k = (h_k - h_{k-1}) / dt``,
+   ``a_k = (h_k - 2 h_{k-1} + h_{k-2}) / dt^2`` (the hand rests at the reset position);
+   one ``mj_step`` (time ``k dt``; a flying ball moves along its parabola).
+2. Held ball: released (``released``) at ``h_k`` with velocity ``v_k * f`` if
+   ``release_armed`` and ``a_k[z] < -toss_threshold`` (``f = 1 + release * N(0, 1)`` per
+   component, drawn at reset); else it stays at ``h_k`` with velocity ``v_k``.
+3. Flying ball: once it has been farther than ``catch_radius`` from the hand,
+   ``|h_k - ball| <= catch_radius`` is a catch (``caught``; held again, its state copied
+   from the hand); a flying ball whose centre is below ``floor_z`` is ``dropped`` (sticky
+   until reset; a dropped ball is not caught).
+
+The state's ``hand_pos`` is what the controller observes: the hand plus the episode's
+tracking noise (``JugglingNoise.tracking``); ``hand_vel`` is the true hand's.
 """
 
 from __future__ import annotations
@@ -60,6 +67,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.models.juggling_task import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.models.juggling_world import TRACKING_ROWS, draw_episode_noise
 
 __all__ = ["SCENE_XML", "JugglingScene", "check_task", "load_juggling_model"]
 
@@ -68,15 +76,9 @@ SCENE_XML = "juggling.xml"
 
 
 def check_task(task: Any) -> JugglingTask:
-    """``task`` if it is a :class:`JugglingTask` with finite, positive constants."""
+    """``task`` if it is a :class:`JugglingTask` (which checks its own constants)."""
     if not isinstance(task, JugglingTask):
         raise ValueError(f"task must be a JugglingTask; got {type(task).__name__}")
-    for name in ("gravity", "dt", "ball_radius", "ball_mass", "catch_radius", "toss_threshold"):
-        value = getattr(task, name)
-        if not math.isfinite(value) or value <= 0:
-            raise ValueError(f"task.{name} must be finite and > 0; got {value!r}")
-    if not math.isfinite(task.floor_z):
-        raise ValueError(f"task.floor_z must be finite; got {task.floor_z!r}")
     return task
 
 
@@ -118,82 +120,89 @@ class JugglingScene:
         self.task = check_task(JugglingTask() if task is None else task)
         self.model = load_juggling_model(self.task)
         self.data = mujoco.MjData(self.model)
+        self._bind()
+        self.noise = JugglingNoise()
+        self._factor = (1.0, 1.0)
+        self._track: NDArray[np.float64] | None = None
+        self._k = 0
+        self._hand = (0.0, 0.0)
+        self._prev = (0.0, 0.0)
+        self._held = True
+        self._left = False
+        self._dropped = False
+        self.state: JugglingState | None = None
+
+    def _bind(self) -> None:
         self._mocap = self.data.mocap_pos[0]
         self._qpos = self.data.qpos
         self._qvel = self.data.qvel
-        self._noise = JugglingNoise()
-        self._rng = np.random.default_rng(0)
-        self._hand = (0.0, 0.0)
-        self._hand_vel = (0.0, 0.0)
-        self._held = True
-        self.state: JugglingState | None = None
 
     # -- interface ----------------------------------------------------------------------
     def reset(
         self,
         hand_pos: ArrayLike,
         *,
-        noise: JugglingNoise = JugglingNoise(),  # noqa: B008  (frozen dataclass)
+        noise: JugglingNoise | None = None,
         rng: np.random.Generator | None = None,
     ) -> JugglingState:
-        """Hand at rest at ``hand_pos``, ball held in it, time 0."""
+        """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
         p = _vec2(hand_pos, "hand_pos")
+        noise = JugglingNoise() if noise is None else noise
         if not isinstance(noise, JugglingNoise):
             raise ValueError(f"noise must be a JugglingNoise; got {type(noise).__name__}")
-        self._noise = noise
-        self._rng = np.random.default_rng() if rng is None else rng
+        self.noise = noise
+        factor, self._track = draw_episode_noise(noise, rng)
+        self._factor = (float(factor[0]), float(factor[1]))
         mujoco.mj_resetData(self.model, self.data)
         x, z = float(p[0]), float(p[1])
-        self._hand = (x, z)
-        self._hand_vel = (0.0, 0.0)
-        self._held = True
+        self._hand = self._prev = (x, z)
+        self._k = 0
+        self._held, self._left, self._dropped = True, False, False
         self._mocap[0], self._mocap[2] = x, z
         self._qpos[0], self._qpos[1] = x, z
         mujoco.mj_kinematics(self.model, self.data)
-        self.state = self._make_state(False, False, False)
+        self.state = self._make_state(False, False)
         return self.state
 
     def step(self, hand_target: ArrayLike, release_armed: bool) -> JugglingState:
         """Move the hand to ``hand_target`` over one ``dt``; hold, release, catch or drop."""
         if self.state is None:
             raise RuntimeError("call reset() before step()")
-        tx, tz = hand_target[0], hand_target[1]  # type: ignore[index]
-        x, z = float(tx), float(tz)
+        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index]
         if not (math.isfinite(x) and math.isfinite(z)):
             raise ValueError(f"hand_target must be finite; got {[x, z]}")
         task = self.task
         dt = task.dt
-        x0, z0 = self._hand
-        vx, vz = (x - x0) / dt, (z - z0) / dt
-        az = (vz - self._hand_vel[1]) / dt
+        prev2 = self._prev
+        prev = self._prev = self._hand
         self._hand = (x, z)
-        self._hand_vel = (vx, vz)
+        self._k += 1
+        vx, vz = (x - prev[0]) / dt, (z - prev[1]) / dt
+        az = (z - 2.0 * prev[1] + prev2[1]) / (dt * dt)
         self._mocap[0], self._mocap[2] = x, z
         mujoco.mj_step(self.model, self.data)
+        self.data.time = self._k * dt  # k dt exactly, as BallisticWorld (no summed round-off)
         qpos, qvel = self._qpos, self._qvel
-        released = caught = dropped = False
+        released = caught = False
         if self._held:
             if release_armed and az < -task.toss_threshold:
-                self._held = False
+                self._held = self._left = False
                 released = True
-                r = self._noise.release
-                if r != 0.0:
-                    e = self._rng.standard_normal(2)
-                    qvel[0], qvel[1] = vx * (1.0 + r * e[0]), vz * (1.0 + r * e[1])
-                else:
-                    qvel[0], qvel[1] = vx, vz
+                qvel[0], qvel[1] = vx * self._factor[0], vz * self._factor[1]
             else:
                 qvel[0], qvel[1] = vx, vz
             qpos[0], qpos[1] = x, z
         else:
-            bx, bz = float(qpos[0]), float(qpos[1])
-            if float(qvel[1]) < 0.0 and math.hypot(x - bx, z - bz) <= task.catch_radius:
+            dist = math.hypot(x - float(qpos[0]), z - float(qpos[1]))
+            if self._left and dist <= task.catch_radius and not self._dropped:
                 self._held = caught = True
                 qpos[0], qpos[1] = x, z
                 qvel[0], qvel[1] = vx, vz
-            elif bz < task.floor_z:
-                dropped = True
-        self.state = self._make_state(released, caught, dropped)
+            elif dist > task.catch_radius:
+                self._left = True
+            if not self._held and float(qpos[1]) < task.floor_z:
+                self._dropped = True
+        self.state = self._make_state(released, caught)
         return self.state
 
     # -- helpers ------------------------------------------------------------------------
@@ -202,21 +211,32 @@ class JugglingScene:
         """Whether the ball is in the hand."""
         return self._held
 
+    @property
+    def hand_true(self) -> NDArray[np.float64]:
+        """The hand's true position (without tracking noise)."""
+        return np.array(self._hand)
+
     def sync(self) -> None:
         """Recompute the bodies' poses (``data.xpos``) after the state copies, for drawing."""
         mujoco.mj_kinematics(self.model, self.data)
 
-    def _make_state(self, released: bool, caught: bool, dropped: bool) -> JugglingState:
+    def _make_state(self, released: bool, caught: bool) -> JugglingState:
+        dt = self.task.dt
+        hx, hz = self._hand
+        px, pz = self._prev
+        obs = np.array(self._hand)
+        if self._track is not None:
+            obs += self._track[self._k % TRACKING_ROWS]
         return JugglingState(
             time=float(self.data.time),
-            hand_pos=np.array(self._hand),
-            hand_vel=np.array(self._hand_vel),
+            hand_pos=obs,
+            hand_vel=np.array([(hx - px) / dt, (hz - pz) / dt]),
             ball_pos=self._qpos[:2].copy(),
             ball_vel=self._qvel[:2].copy(),
             held=self._held,
             released=released,
             caught=caught,
-            dropped=dropped,
+            dropped=self._dropped,
         )
 
     def __getstate__(self) -> dict[str, Any]:
@@ -227,6 +247,4 @@ class JugglingScene:
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self._mocap = self.data.mocap_pos[0]
-        self._qpos = self.data.qpos
-        self._qvel = self.data.qvel
+        self._bind()
