@@ -123,9 +123,7 @@ class JugglingNoise:
                 raise ValueError(f"JugglingNoise.{name} must be finite and >= 0; got {value}")
 
 
-def ballistic_position(
-    p0: ArrayLike, v0: ArrayLike, t: ArrayLike, gravity: float
-) -> FloatArray:
+def ballistic_position(p0: ArrayLike, v0: ArrayLike, t: ArrayLike, gravity: float) -> FloatArray:
     """``p0 + v0 t - [0, g t^2 / 2]`` for times ``t`` (scalar or ``(K,)``): ``(2,)`` or ``(K, 2)``."""
     p0 = np.asarray(p0, dtype=np.float64)
     v0 = np.asarray(v0, dtype=np.float64)
