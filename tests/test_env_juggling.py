@@ -16,7 +16,7 @@ from test_env_orientation import _documented_defaults, _fail_on_warnings
 
 import motion_envs
 from motion_envs.envs import juggling as juggling_module
-from motion_envs.envs.juggling import OBS_DIM, JugglingEnv
+from motion_envs.envs.juggling import OBS_DIM, JugglingEnv, cycle_rngs
 from motion_envs.envs.juggling_scene import JugglingScene
 from motion_envs.models.juggling_task import JugglingNoise, JugglingTask
 
@@ -240,59 +240,66 @@ def test_terminates_on_a_drop_and_truncates_after_max_cycles():
     assert env.scene.state.ball_pos[1] < env.task.floor_z
 
 
-def _controller_run(task, noise, seed, n_steps, world):
-    """The analytic juggler alone (as motion-bench juggling runs it), hand path and events."""
+def _controller_run(task, noise, seed, cycle, n_steps, world, continuous):
+    """The analytic juggler alone in ``world``, as motion-bench juggling runs cycle ``cycle``
+    of ``seed`` (to the first catch; ``continuous``: on, redrawing the noise at each toss)."""
     juggler = juggling_module.load_juggler(None, task)
-    rng = np.random.default_rng(seed)
-    state = world.reset(task.home, noise=noise, rng=rng)
-    juggler.reset(state, rng=rng)
-    hands, events = [], []
+    world_rng, juggler_rng = cycle_rngs(seed, cycle + 1)[cycle]
+    home = getattr(juggler, "home_", task.home)
+    state = world.reset(home, noise=noise, rng=world_rng)
+    juggler.reset(state, juggler_rng)
+    hands, events, phase = [], [], juggler.phase
     for _ in range(n_steps):
         target, armed = juggler.command(state)
+        if continuous and juggler.phase != phase and juggler.phase == "toss":
+            world.redraw_noise(world_rng)
+        phase = juggler.phase
         state = world.step(target, armed)
         hands.append(state.hand_pos)
         events.append((state.released, state.caught, state.dropped))
-        if state.dropped:
+        if state.dropped or (state.caught and not continuous):
             break
     return np.array(hands), events
 
 
 @pytest.mark.parametrize("noise", [0.0, 0.05, {"release": 0.1, "tracking": 0.003}])
 @pytest.mark.parametrize("frame_skip", [1, 3])
-def test_zero_action_reproduces_the_analytic_juggler(noise, frame_skip):
+@pytest.mark.parametrize("cycle", [0, 5])
+def test_zero_action_reproduces_the_analytic_juggler(noise, frame_skip, cycle):
     from motion_envs.models.juggling_world import BallisticWorld
 
-    env = JugglingEnv(noise=noise, frame_skip=frame_skip, max_cycles=4)
-    env.reset(seed=21)
-    hands, events = [env.scene.state.hand_pos], []
-    scene_events = []
+    env = JugglingEnv(noise=noise, frame_skip=frame_skip, max_cycles=3)
+    env.reset(seed=21, options={"cycle": cycle})
+    hands, events = [], []
     done = False
+    orig = env.scene.step
+
+    def spy(target, armed):
+        s = orig(target, armed)
+        hands.append(s.hand_pos.copy())
+        events.append((s.released, s.caught, s.dropped))
+        return s
+
+    env.scene.step = spy
     while not done:
-        sub = []
-        orig = env.scene.step
-
-        def spy(target, armed, sub=sub, orig=orig):
-            s = orig(target, armed)
-            sub.append((s.hand_pos.copy(), (s.released, s.caught, s.dropped)))
-            return s
-
-        env.scene.step = spy
         obs, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
-        del env.scene.step
-        for h, e in sub:
-            hands.append(h)
-            scene_events.append(e)
-        np.testing.assert_array_equal(obs[0:2], sub[-1][0].astype(np.float32))
+        np.testing.assert_array_equal(obs[0:2], hands[-1].astype(np.float32))
         done = terminated or truncated
-    hands = np.array(hands[1:])
-    events = scene_events
-    noise_obj = env.noise
-    for world in (JugglingScene(env.task), BallisticWorld(env.task)):
-        ref_hands, ref_events = _controller_run(env.task, noise_obj, 21, len(hands), world)
-        np.testing.assert_allclose(hands, ref_hands, atol=1e-9, rtol=0)
-        assert events == ref_events
-    assert sum(e[1] for e in events) == info["catches"]
-    assert info["catches"] >= 1
+    hands = np.array(hands)
+    assert sum(e[1] for e in events) == info["catches"] >= 1
+    # the whole episode: the juggler alone in the scene, juggling on
+    ref_hands, ref_events = _controller_run(
+        env.task, env.noise, 21, cycle, len(hands), JugglingScene(env.task), True
+    )
+    np.testing.assert_allclose(hands, ref_hands, atol=1e-9, rtol=0)
+    assert events == ref_events
+    # the first cycle, to the catch: motion-bench's cycle in the pure-model world
+    first = next(k for k, e in enumerate(events) if e[1] or e[2]) + 1
+    ref_hands, ref_events = _controller_run(
+        env.task, env.noise, 21, cycle, len(hands), BallisticWorld(env.task), False
+    )
+    np.testing.assert_allclose(hands[:first], ref_hands, atol=1e-9, rtol=0)
+    assert events[:first] == ref_events
 
 
 def test_rgb_array_frames():

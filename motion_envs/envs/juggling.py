@@ -52,6 +52,16 @@ OBS_DIM = 16
 _PHASE_INDEX = {name: i for i, name in enumerate(PHASES)}
 
 
+def cycle_rngs(seed: int, n: int) -> list[tuple[np.random.Generator, np.random.Generator]]:
+    """Per cycle ``i < n`` of a run with ``seed``: (world noise rng, juggler rng), as
+    ``motion-bench juggling`` draws them (``SeedSequence(seed).spawn(n)[i].spawn(2)``)."""
+    out = []
+    for ss in np.random.SeedSequence(seed).spawn(n):
+        a, b = ss.spawn(2)
+        out.append((np.random.default_rng(a), np.random.default_rng(b)))
+    return out
+
+
 def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
     """The analytic juggler fitted as ``motion-bench juggling`` fits it (``data`` None: the
     built-in simulated demonstrations; else the users' juggling CSV)."""
@@ -111,9 +121,10 @@ class JugglingEnv(gym.Env):
     (a seeded generator of a person doing the paper's task): the paper's recordings are not
     public.
 
-    The zero action reproduces the analytic juggler exactly: with ``reset(seed=s)`` the
-    episode is the juggler's run with ``np.random.default_rng(s)`` (same catches, same hand
-    path to 1e-9, as ``motion-bench juggling`` runs it; tested).
+    The zero action reproduces the analytic juggler exactly: the first cycle of the episode
+    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of ``motion-bench juggling
+    --seed S`` in the MuJoCo scene (same release, same catch step, same hand path to 1e-9;
+    tested), and the episode goes on juggling (return, next toss) as the juggler does.
 
     ## Action Space
     The action space is a `Box(-1, 1, (2,), float32)`: the offset of the hand from the
@@ -162,12 +173,16 @@ class JugglingEnv(gym.Env):
     ``phase``, ``held``, ``time`` and ``action_invalid``.
 
     ## Starting State
-    The hand rests at the task's start point ``JugglingTask.home`` with the ball in it, at
-    time 0, in the toss phase. `reset` draws the episode's perturbation with the
-    environment's generator: the release-velocity factor (``1 + release * N(0, 1)`` per
-    component) and the tracking noise of every control period (see
-    ``motion_envs.models.juggling_world.draw_episode_noise``); the juggler may draw from the
-    same generator (its phase durations).
+    The hand rests at the juggler's home (the mean start of the training tosses) with the
+    ball in it, at time 0, in the toss phase. `reset(seed=S, options={"cycle": i})` (``i``
+    default 0) draws the episode's perturbation exactly as ``motion-bench juggling --seed
+    S`` draws its cycle ``i``: two generators ``SeedSequence(S).spawn(i + 1)[i].spawn(2)``,
+    one for the world (the release-velocity factor ``1 + release * N(0, 1)`` per component
+    and the tracking noise of every control period,
+    ``motion_envs.models.juggling_world.draw_episode_noise``), one for the juggler (its
+    random phase end points and durations); so the zero-action episode's first cycle *is*
+    that cycle. Without a seed, ``S`` is drawn from the environment's generator. Each
+    later toss of the episode redraws the world's noise from the world generator.
 
     ## Episode End
     ### Termination
@@ -281,14 +296,24 @@ class JugglingEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        rng = self.np_random
-        state = self.scene.reset(self.task.home, noise=self.noise, rng=rng)
-        self.juggler.reset(state, rng=rng)
+        cycle = 0
+        if options is not None and options.get("cycle") is not None:
+            cycle = options["cycle"]
+            if isinstance(cycle, bool) or not isinstance(cycle, (int, np.integer)) or cycle < 0:
+                raise ValueError(f"options['cycle'] must be an integer >= 0; got {cycle!r}")
+            cycle = int(cycle)
+        base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
+        self._world_rng, juggler_rng = cycle_rngs(base, cycle + 1)[cycle]
+        home = np.asarray(getattr(self.juggler, "home_", self.task.home), dtype=np.float64)
+        state = self.scene.reset(home, noise=self.noise, rng=self._world_rng)
+        self.juggler.reset(state, juggler_rng)
         self._state = state
+        self._phase = self.juggler.phase
         self._done = False
         self._catches = 0
         self._cycles = 0
-        return self._observation(state), {"phase": self.juggler.phase, "time": state.time}
+        info = {"phase": self._phase, "time": state.time, "seed": base, "cycle": cycle}
+        return self._observation(state), info
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
@@ -311,6 +336,11 @@ class JugglingEnv(gym.Env):
         periods = 0
         for _ in range(self.frame_skip):
             target, armed = juggler.command(state)
+            phase = juggler.phase
+            if phase != self._phase:
+                if phase == "toss":  # a new cycle: its own release and tracking noise
+                    scene.redraw_noise(self._world_rng)
+                self._phase = phase
             state = scene.step((float(target[0]) + rx, float(target[1]) + rz), armed)
             periods += 1
             if state.released:

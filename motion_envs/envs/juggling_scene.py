@@ -208,6 +208,12 @@ class JugglingScene:
         self.state = self._make_state(released, caught)
         return self.state
 
+    def redraw_noise(self, rng: np.random.Generator | None) -> None:
+        """Draw a new release factor and tracking noise (as ``reset`` does), keeping the
+        state: a new cycle of a continuous run. Not part of ``BallisticWorld``."""
+        factor, self._track = draw_episode_noise(self.noise, rng)
+        self._factor = (float(factor[0]), float(factor[1]))
+
     # -- helpers ------------------------------------------------------------------------
     @property
     def held(self) -> bool:
