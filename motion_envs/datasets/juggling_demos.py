@@ -4,8 +4,8 @@ The paper's recordings (Polhemus tracker, 200 Hz, one user) are not public. This
 simulates a person performing the virtual task of section III-A, cycle after cycle:
 
 1. **toss**: from rest at home the person plans a minimum-jerk (quintic) reach upward
-   and to the left that stops sharply (zero end velocity, a negative end acceleration of
-   ``brake`` m/s^2); the virtual world releases the ball at the first sample where the
+   and to the left that stops sharply upwards (zero vertical end velocity, a vertical end
+   acceleration of ``brake`` m/s^2, still moving left at ``toss_vx``); the virtual world releases the ball at the first sample where the
    vertical hand acceleration (second backward difference of the tracked signal) falls
    below ``-toss_threshold``; the ball leaves with the hand's velocity;
 2. **go down**: a quintic from the hand's state at the release (position, velocity,
@@ -81,10 +81,16 @@ class JugglingRecording:
     phase: NDArray[np.str_] | None = None
     person: str = ""
 
-    def segments(self, index: int = 0) -> list[PhaseSegment]:
+    def segments(self, index: int = 0, toss_to_top: bool = False) -> list[PhaseSegment]:
         """Every labelled phase example: a run of one label plus the next phase's first
         sample (the shared boundary; the last run ends at the last sample). The cycle
-        counter advances at each toss; runs before the first toss are skipped."""
+        counter advances at each toss; runs before the first toss are skipped.
+
+        ``toss_to_top``: a toss example runs on past the release to the hand's turning
+        point, the first sample where the vertical velocity over 5 samples,
+        ``(z_k - z_{k-5}) / (5 dt)``, is <= 0 (the user "inverts the motion"; the eq. 9
+        plan ends there).
+        """
         if self.phase is None:
             raise ValueError(f"recording {self.name!r} has no phase labels; segment it first")
         lab = self.phase
@@ -96,6 +102,11 @@ class JugglingRecording:
             name = str(lab[s])
             if name == "toss":
                 cycle += 1
+            if name == "toss" and toss_to_top:
+                z = self.hand[:, 1]
+                k = np.arange(max(e, 5), len(z))
+                down = np.flatnonzero(z[k] - z[k - 5] <= 0)
+                e = int(k[down[0]]) if down.size else e
             if name in PHASES and cycle >= 0 and e - s >= 4:
                 out.append(
                     PhaseSegment(
@@ -114,11 +125,11 @@ class JugglingDemos:
     simulated: bool
     task: JugglingTask = field(default_factory=JugglingTask)
 
-    def segments(self, phase: str | None = None) -> list[PhaseSegment]:
+    def segments(self, phase: str | None = None, toss_to_top: bool = False) -> list[PhaseSegment]:
         """All phase examples (of ``phase`` only, if given), recording by recording."""
         if phase is not None and phase not in PHASES:
             raise ValueError(f"phase must be one of {PHASES}; got {phase!r}")
-        out = [s for i, r in enumerate(self.recordings) for s in r.segments(i)]
+        out = [s for i, r in enumerate(self.recordings) for s in r.segments(i, toss_to_top)]
         return [s for s in out if phase is None or s.phase == phase]
 
     def cycles(self) -> list[tuple[int, int]]:
@@ -183,6 +194,7 @@ class PersonStyle:
     bottom: tuple[float, float]  # offset from home
     toss: tuple[float, float]  # toss plan end offset from home (dx < 0: to the left)
     brake: float  # m/s^2, vertical end acceleration of the toss plan (negative)
+    toss_vx: float  # m/s, horizontal end velocity of the toss plan (negative: to the left)
     toss_time: float  # s, toss plan duration
     catch_drop: float  # m, catch height below the apex
     catch_time: float  # s, preferred catch reach
@@ -200,8 +212,9 @@ def draw_person(rng: np.random.Generator) -> PersonStyle:
     return PersonStyle(
         home=(0.2 + u(-0.03, 0.03), 1.0 + u(-0.03, 0.03)),
         bottom=(u(-0.12, -0.04), u(-0.3, -0.22)),
-        toss=(u(-0.2, -0.12), u(0.36, 0.44)),
+        toss=(u(-0.12, -0.06), u(0.36, 0.44)),
         brake=u(-11.0, -8.5),
+        toss_vx=u(-0.4, -0.3),
         toss_time=u(0.9, 0.98) * speed,
         catch_drop=u(0.46, 0.54),
         catch_time=u(0.78, 0.86) * speed,
@@ -256,7 +269,8 @@ class _Session:
         # 1. toss: plan to the top, stop sharply; release at the acceleration threshold
         top = start + (np.asarray(st.toss) * (1 + st.variation * self.rng.standard_normal(2)))
         t_toss = self._vary(st.toss_time)
-        c_toss = quintic(start, z2, z2, top, z2, np.array([0.0, st.brake]), t_toss)
+        v_top = np.array([self._vary(st.toss_vx), 0.0])
+        c_toss = quintic(start, z2, z2, top, v_top, np.array([0.0, st.brake]), t_toss)
         n_plan = int(np.floor(t_toss / dt))
         k = np.arange(k0, k0 + n_plan + 1)
         y = _quintic_eval(c_toss, k * dt - t0) + self._tremor(k * dt)
@@ -282,7 +296,7 @@ class _Session:
         t_c = t_rel + s_catch
         target = ballistic_position(p_rel, v_ball, s_catch, g)
         t_catch_reach = self._vary(st.catch_time)
-        k_bottom = int(round((t_c - t_catch_reach) / dt))
+        k_bottom = round((t_c - t_catch_reach) / dt)
         k_bottom = max(k_bottom, k_rel + int(0.5 / dt))
         s_rel = t_rel - t0
         p_r, v_r, a_r = (_quintic_eval(c_toss, np.array(s_rel), o) for o in range(3))
@@ -317,7 +331,7 @@ class _Session:
         c_last, t_last = (c_fix, t_fix) if t_touch >= t_fix else (c_aim, t_b)
         q = [_quintic_eval(c_last, np.array(t_touch - t_last), o) for o in range(3)]
         home_next = self._point(st.home)
-        k_home = k_touch + int(round(self._vary(st.return_time) / dt))
+        k_home = k_touch + round(self._vary(st.return_time) / dt)
         c_ret = quintic(q[0], q[1], q[2], home_next, z2, z2, (k_home - k_touch) * dt)
         self._append(c_ret, t_touch, k_touch, k_home, "return")
         self.start = home_next

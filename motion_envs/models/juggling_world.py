@@ -34,8 +34,8 @@ __all__ = ["TRACKING_ROWS", "BallisticWorld", "draw_episode_noise"]
 
 FloatArray = NDArray[np.float64]
 
-#: Rows of tracking noise drawn at reset (used cyclically beyond: 20 s at 200 Hz).
-TRACKING_ROWS = 4000
+#: Rows of tracking noise drawn at reset (used cyclically beyond: 10 s at 200 Hz).
+TRACKING_ROWS = 2000
 
 
 def draw_episode_noise(
@@ -60,12 +60,16 @@ def draw_episode_noise(
 
 
 def _vec2(value: ArrayLike, name: str) -> tuple[float, float]:
-    v = np.asarray(value, dtype=np.float64)
-    if v.shape != (2,):
-        raise ValueError(f"{name} must have shape (2,) (x, z); got {v.shape}")
-    if not np.all(np.isfinite(v)):
+    if isinstance(value, np.ndarray) and value.shape == (2,):
+        x, z = float(value[0]), float(value[1])
+    else:
+        v = np.asarray(value, dtype=np.float64)
+        if v.shape != (2,):
+            raise ValueError(f"{name} must have shape (2,) (x, z); got {v.shape}")
+        x, z = float(v[0]), float(v[1])
+    if not (math.isfinite(x) and math.isfinite(z)):
         raise ValueError(f"{name} contains NaN or infinite values")
-    return float(v[0]), float(v[1])
+    return x, z
 
 
 class BallisticWorld:
