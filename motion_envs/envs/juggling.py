@@ -4,6 +4,8 @@
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import os
 from collections.abc import Mapping
@@ -15,6 +17,7 @@ from numpy.typing import NDArray
 
 from motion_envs.envs._common import check_reward_weights, check_scale
 from motion_envs.envs.juggling_scene import JugglingScene
+from motion_envs.models.juggling_run import cycle_rngs
 from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
 
 __all__ = [
@@ -24,6 +27,7 @@ __all__ = [
     "OBS_DIM",
     "POSITION_MARGIN",
     "JugglingEnv",
+    "cycle_rngs",
     "load_juggler",
 ]
 
@@ -52,22 +56,37 @@ OBS_DIM = 16
 _PHASE_INDEX = {name: i for i, name in enumerate(PHASES)}
 
 
-def cycle_rngs(seed: int, n: int) -> list[tuple[np.random.Generator, np.random.Generator]]:
-    """Per cycle ``i < n`` of a run with ``seed``: (world noise rng, juggler rng), as
-    ``motion-bench juggling`` draws them (``SeedSequence(seed).spawn(n)[i].spawn(2)``)."""
-    out = []
-    for ss in np.random.SeedSequence(seed).spawn(n):
-        a, b = ss.spawn(2)
-        out.append((np.random.default_rng(a), np.random.default_rng(b)))
-    return out
+#: Seed, demonstration count and held-out share with which ``motion-bench juggling``
+#: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
+FIT_SEED = 0
+FIT_TEST_FRACTION = 0.25
+
+
+@functools.lru_cache(maxsize=8)
+def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
+    from motion_envs.datasets.juggling_demos import generate_demonstrations
+    from motion_envs.models.juggling_juggler import AnalyticJuggler
+
+    if data is None:
+        demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
+    else:
+        from motion_envs.datasets.juggling_csv import read_juggling_csv
+
+        demos = read_juggling_csv(data, task=task)
+    # the training cycles of motion-bench juggling's split by demonstration
+    cycles = demos.cycles()
+    order = np.random.default_rng(FIT_SEED).permutation(len(cycles))
+    n_test = max(1, round(FIT_TEST_FRACTION * len(cycles)))
+    train = {cycles[i] for i in order[n_test:]}
+    return AnalyticJuggler(task=demos.task).fit(demos, train)
 
 
 def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
-    """The analytic juggler fitted as ``motion-bench juggling`` fits it (``data`` None: the
-    built-in simulated demonstrations; else the users' juggling CSV)."""
-    from motion_envs.models.juggling_controller import fitted_juggler
-
-    return fitted_juggler(data=data, task=task)
+    """A fresh copy of the analytic juggler fitted as ``motion-bench juggling`` fits it:
+    on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
+    the users' juggling CSV; fitted once per process and data (a few seconds)."""
+    key = None if data is None else os.fspath(data)
+    return copy.deepcopy(_fitted_juggler(key, task))
 
 
 def _check_noise(noise: Any) -> JugglingNoise:
