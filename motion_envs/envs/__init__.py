@@ -10,9 +10,10 @@ id                              environment
 ==============================  ===================================================
 ``MotionEnvs/OrientationReach-v0``  :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`
 ``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
+``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
 ==============================  ===================================================
 
-Both come with a native batched-numpy vector environment
+The two reaching environments come with a native batched-numpy vector environment
 (``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``).
 """
 
@@ -32,6 +33,9 @@ _SPECS: dict[str, dict[str, object]] = {
         "entry_point": "motion_envs.envs.position_reach:PositionReachEnv",
         "vector_entry_point": "motion_envs.envs.vector:PositionReachVectorEnv",
         "max_episode_steps": 50,
+    },
+    "MotionEnvs/Juggling-v0": {
+        "entry_point": "motion_envs.envs.juggling:JugglingEnv",
     },
 }
 
