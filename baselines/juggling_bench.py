@@ -48,7 +48,13 @@ from motion_envs.datasets.juggling_demos import (
     generate_demonstrations,
 )
 from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
-from motion_envs.models.juggling_run import cycle_rngs, run_cycle, run_cycles, run_cycles_fast
+from motion_envs.models.juggling_run import (
+    cycle_rngs,
+    fit_juggler,
+    run_cycle,
+    run_cycles,
+    run_cycles_fast,
+)
 from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_world import BallisticWorld
 from motion_envs.models.serialization import atomic_write_text
@@ -101,21 +107,6 @@ def load_demos(config: JugglingConfig) -> JugglingDemos:
     from motion_envs.datasets.juggling_csv import read_juggling_csv
 
     return read_juggling_csv(config.data, task=config.task)
-
-
-def split_cycles(
-    demos: JugglingDemos, test_fraction: float, seed: int
-) -> tuple[set[tuple[int, int]], set[tuple[int, int]]]:
-    """Train and test ``(recording, cycle)`` sets: a seeded split by demonstration."""
-    if not 0 < test_fraction < 1:
-        raise ValueError(f"test_fraction must be in (0, 1); got {test_fraction}")
-    cycles = demos.cycles()
-    if len(cycles) < 8:
-        raise ValueError(f"{demos.name}: {len(cycles)} complete cycles; at least 8 are needed")
-    order = np.random.default_rng(seed).permutation(len(cycles))
-    n_test = max(1, round(test_fraction * len(cycles)))
-    test = {cycles[i] for i in order[:n_test]}
-    return set(cycles) - test, test
 
 
 def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:
@@ -288,9 +279,10 @@ def run(config: JugglingConfig) -> dict[str, Any]:
     t0 = time.perf_counter()
     demos = load_demos(config)
     timing["demonstrations_s"] = time.perf_counter() - t0
-    train, test = split_cycles(demos, config.test_fraction, config.seed)
     t0 = time.perf_counter()
-    juggler = AnalyticJuggler(task=demos.task, n_sines=config.n_sines).fit(demos, train)
+    juggler, train, test = fit_juggler(
+        demos, config.seed, config.test_fraction, n_sines=config.n_sines
+    )
     timing["fit_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     per_phase = phase_errors(

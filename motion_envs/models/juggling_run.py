@@ -20,7 +20,14 @@ from motion_envs.models.juggling_task import PHASES as PHASES_ORDER
 from motion_envs.models.juggling_task import JugglingNoise
 from motion_envs.models.juggling_world import TRACKING_ROWS, BallisticWorld
 
-__all__ = ["CycleResult", "cycle_rngs", "run_cycle", "run_cycles", "run_cycles_fast"]
+__all__ = [
+    "CycleResult",
+    "cycle_rngs",
+    "fit_juggler",
+    "run_cycle",
+    "run_cycles",
+    "run_cycles_fast",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -39,6 +46,26 @@ class CycleResult:
     hand: FloatArray | None = None  # (K, 2) commanded = true hand
     ball: FloatArray | None = None
     phase: NDArray[np.str_] | None = None
+
+
+def fit_juggler(
+    demos: object,
+    seed: int = 0,
+    test_fraction: float = 0.25,
+    **kwargs: object,
+) -> tuple[AnalyticJuggler, set[tuple[int, int]], set[tuple[int, int]]]:
+    """The juggler as ``motion-bench juggling --seed seed`` fits it, and the split.
+
+    ``demos`` (a :class:`~motion_envs.datasets.juggling_demos.JugglingDemos`) is split by
+    demonstration (:func:`~motion_envs.datasets.juggling_demos.split_cycles`); the juggler
+    (``AnalyticJuggler(task=demos.task, **kwargs)``) is fitted on the training cycles only.
+    Returns ``(juggler, train, test)``.
+    """
+    from motion_envs.datasets.juggling_demos import split_cycles
+
+    train, test = split_cycles(demos, test_fraction, seed)  # type: ignore[arg-type]
+    juggler = AnalyticJuggler(task=demos.task, **kwargs).fit(demos, train)  # type: ignore[attr-defined,arg-type]
+    return juggler, train, test
 
 
 def cycle_rngs(seed: int, n: int) -> list[tuple[np.random.Generator, np.random.Generator]]:
