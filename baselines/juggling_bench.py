@@ -598,7 +598,7 @@ def write_mujoco_video(doc: dict[str, Any], path: Path, cycles: int = 1, fps: in
         ImageDraw.Draw(img).text(
             (8, 8), "analytic juggler in the MuJoCo scene (SIMULATED)", fill="black"
         )
-        images.append(img.convert("P", palette=Image.ADAPTIVE))
+        images.append(img.convert("P", palette=Image.Palette.ADAPTIVE))
     tmp = path.with_name(f".{path.name}.tmp")
     images[0].save(
         tmp, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0

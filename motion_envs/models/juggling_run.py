@@ -11,13 +11,14 @@ are independent and a run is reproducible however it is split.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.models.juggling_juggler import AnalyticJuggler
 from motion_envs.models.juggling_task import PHASES as PHASES_ORDER
-from motion_envs.models.juggling_task import JugglingNoise
+from motion_envs.models.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_world import TRACKING_ROWS, BallisticWorld
 
 __all__ = [
@@ -188,7 +189,7 @@ def run_cycles_fast(
         j = copy.copy(juggler)
         j.reset(state, jr)
         jugs.append(j)
-    tracks = None if track[0] is None else np.stack(track)
+    tracks = None if track[0] is None else np.stack([t for t in track if t is not None])
     lmax = max(int(np.ceil(f.duration_range[1] / dt)) + 2 for f in juggler.phases_.values())
     grid = np.empty((n, lmax, 2))
     length = np.empty(n, dtype=np.int64)
@@ -243,7 +244,7 @@ def run_cycles_fast(
             | ((phase == 2) & caught_ev)
             | ((end_k >= 0) & (kj >= end_k))
         )
-        for b in np.flatnonzero(switch):
+        for b in map(int, np.flatnonzero(switch)):
             j = jugs[b]
             if phase[b] == 0:
                 v = (last1[b] - last0[b]) / dt
@@ -261,11 +262,11 @@ def run_cycles_fast(
                 far = np.hypot(px - ends[:, 0], pz - ends[:, 1]) > juggler.correction_tolerance * (
                     1 - 1e-9
                 )
-                for b in np.flatnonzero(cand & far & (s > dt)):
+                for b in map(int, np.flatnonzero(cand & far & (s > dt))):
                     j = jugs[b]
                     j._k = int(kj[b])
                     before = len(j.corrections)
-                    j._correct(_StateView(time_prev, ball[b], ball_v[b]))
+                    j._correct(cast(JugglingState, _StateView(time_prev, ball[b], ball_v[b])))
                     if len(j.corrections) > before:
                         corrections[b] += 1
                         load(b)
