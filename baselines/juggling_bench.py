@@ -335,6 +335,14 @@ def run(config: JugglingConfig) -> dict[str, Any]:
         "catch_rate_detail": detail,
         "catch_rates": rates,
         "per_phase": per_phase,
+        "per_phase_notes": {
+            "grid": f"every example resampled to {config.n_points} points of tau = t / T",
+            "toss": "examples run from the toss start to the hand's turning point (the "
+            "release lies inside; the eq. 9 plan ends there)",
+            "criteria": "median over held-out demonstrations of max_t |error| and of RMSE (m)",
+            "within_person": "median over the person's training demonstrations re-targeted "
+            "to the held-out end points",
+        },
         "validation": checks,
         "targets": targets,
         "timing": timing,

@@ -94,3 +94,9 @@ def test_users_csv(tmp_path, capsys):
 def test_bad_arguments(argv, match, capsys):
     assert main(["juggling", *argv, "--no-progress"]) == 2
     assert match in capsys.readouterr().err
+
+
+def test_motion_bench_all_includes_juggling():
+    from baselines.run_all import JOBS
+
+    assert ("juggling",) in [job[2] for job in JOBS]

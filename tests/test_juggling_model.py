@@ -217,3 +217,24 @@ def test_real_gravity_is_the_same_gesture_faster():
     assert not train & test
     res = run_cycles_fast(juggler, 50, JugglingNoise(), seed=0)
     assert np.mean([r.caught for r in res]) >= 0.95
+
+
+def test_juggler_pickles_mid_cycle(juggler):
+    """Juggling-v0 pickles its juggler: a copy taken mid-cycle continues identically."""
+    import pickle
+
+    world = BallisticWorld(juggler.task)
+    state = world.reset(juggler.home_)
+    juggler.reset(state, np.random.default_rng(3))
+    for _ in range(250):  # into the go-down phase
+        state = world.step(*juggler.command(state))
+    twin = pickle.loads(pickle.dumps(juggler))
+    world2 = pickle.loads(pickle.dumps(world))
+    s1, s2 = state, state
+    for _ in range(200):
+        t1, a1 = juggler.command(s1)
+        t2, a2 = twin.command(s2)
+        np.testing.assert_array_equal(t1, t2)
+        assert a1 == a2
+        s1, s2 = world.step(t1, a1), world2.step(t2, a2)
+    assert juggler.phase == twin.phase
