@@ -7,7 +7,9 @@ Runs, one after the other, with each sub-command's defaults:
 2. ``motion-bench orientation --data cohort``: the same table on the calibrated virtual
    cohort of the paper's design (simulated data);
 3. ``motion-bench position --data lasa``: Lippi et al.'s sine-series regression against
-   the line, the mean residual, DMP and ProMP on the real LASA handwriting set.
+   the line, the mean residual, DMP and ProMP on the real LASA handwriting set;
+4. ``motion-bench juggling``: the analytic juggler of Lippi et al.'s section III-A on
+   SIMULATED demonstrations (catch rates, per-phase errors, validation statistics).
 
 Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
 what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
@@ -19,6 +21,7 @@ result is never left half-written.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import time
@@ -27,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from baselines import options, orientation_bench, position_bench
+from baselines import juggling_bench, options, orientation_bench, position_bench
 from motion_envs._io import atomic_write_text
 
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
@@ -39,12 +42,18 @@ class Job:
 
     folder: str
     title: str
-    config: orientation_bench.OrientationConfig | position_bench.PositionConfig
+    config: (
+        orientation_bench.OrientationConfig
+        | position_bench.PositionConfig
+        | juggling_bench.JugglingConfig
+    )
 
     def command(self, out: Path) -> str:
         """The equivalent ``motion-bench`` command line (recorded in the index)."""
         if isinstance(self.config, orientation_bench.OrientationConfig):
             head = f"orientation --data {self.config.data}"
+        elif isinstance(self.config, juggling_bench.JugglingConfig):
+            head = "juggling"
         else:
             head = f"position --data {self.config.data}"
         return f"motion-bench {head} --out {out / self.folder}"
@@ -67,6 +76,11 @@ JOBS: tuple[Job, ...] = (
         "Position trajectories on LASA handwriting (real data)",
         position_bench.PositionConfig(data="lasa"),
     ),
+    Job(
+        "juggling",
+        "Juggling: the analytic juggler (SIMULATED demonstrations, MuJoCo scene)",
+        juggling_bench.JugglingConfig(),
+    ),
 )
 
 
@@ -86,6 +100,10 @@ def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) ->
         results = orientation_bench.run(config)
         echo(orientation_bench.report(results))
         written = orientation_bench.write(results, out / job.folder)
+    elif isinstance(config, juggling_bench.JugglingConfig):
+        doc = juggling_bench.run(dataclasses.replace(config, progress=progress))
+        echo(juggling_bench.format_report(doc))
+        written = juggling_bench.write_outputs(doc, out / job.folder)
     else:
         position_bench.warn_missing_peers(config.use_peers)
         doc = position_bench.run(
@@ -146,7 +164,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         subparsers,
         "all",
         help="every benchmark on the built-in data (orientation: vr-kitchen and cohort; "
-        "position: LASA)",
+        "position: LASA; juggling: SIMULATED)",
         description=__doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else "",
     )
     p.add_argument(

@@ -21,6 +21,7 @@ def test_scripts_found():
     names = {p.name for p in SCRIPTS}
     assert {"quaternion_ops.py", "bezier_fit.py", "table1_vr_kitchen.py"} <= names
     assert {"env_throughput.py", "position_timing.py", "cohort_scaling.py"} <= names
+    assert "juggling_throughput.py" in names
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)

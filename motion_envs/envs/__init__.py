@@ -10,10 +10,11 @@ id                              environment
 ==============================  ===================================================
 ``MotionEnvs/OrientationReach-v0``  :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`
 ``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
+``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
 ==============================  ===================================================
 
-Both come with a native vector environment (:mod:`motion_envs.envs.vector`), which
-``gym.make_vec(id, num_envs=N)`` builds by default: one compiled loop over the
+The two reaching environments come with a native vector environment
+(:mod:`motion_envs.envs.vector`), which ``gym.make_vec(id, num_envs=N)`` builds by default: one compiled loop over the
 sub-environments (numpy without numba), bit-identical to ``SyncVectorEnv``, with
 ``autoreset_mode=`` ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``. Processes that
 never imported the package (SB3's ``SubprocVecEnv`` workers, ``python -c``) use the
@@ -36,6 +37,9 @@ _SPECS: dict[str, dict[str, object]] = {
         "entry_point": "motion_envs.envs.position_reach:PositionReachEnv",
         "vector_entry_point": "motion_envs.envs.vector:PositionReachVectorEnv",
         "max_episode_steps": 50,
+    },
+    "MotionEnvs/Juggling-v0": {
+        "entry_point": "motion_envs.envs.juggling:JugglingEnv",
     },
 }
 

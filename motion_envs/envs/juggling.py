@@ -1,0 +1,440 @@
+"""``MotionEnvs/Juggling-v0``: act on top of the analytic juggler in the MuJoCo scene."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+import os
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.envs._common import check_reward_weights, check_scale
+from motion_envs.envs.juggling_scene import JugglingScene
+from motion_envs.models.juggling_run import cycle_rngs
+from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
+
+__all__ = [
+    "CYCLE_TIME_LIMIT",
+    "DEFAULT_JUGGLING_REWARD_WEIGHTS",
+    "HAND_SPEED_MARGIN",
+    "OBS_DIM",
+    "POSITION_MARGIN",
+    "JugglingEnv",
+    "cycle_rngs",
+    "load_juggler",
+]
+
+#: Default reward weights (see the class docstring, section Rewards).
+DEFAULT_JUGGLING_REWARD_WEIGHTS: Mapping[str, float] = {
+    "catch": 10.0,
+    "drop": 10.0,
+    "deviation": 1.0,
+    "action": 0.01,
+}
+
+#: Simulated seconds per cycle after which an episode is truncated anyway (a hand that
+#: never tosses); a cycle of the analytic juggler lasts 3 to 4 s at the default gravity.
+CYCLE_TIME_LIMIT = 20.0
+
+#: Half-width (m) of the box of observed positions around the task's start/floor: a
+#: human arm reaches < 1 m and a toss of 4.5 m/s under the default gravity peaks 10 m up.
+POSITION_MARGIN = 10.0
+#: Speed (m/s) a human hand (peak 3-5 m/s) or a tossed ball stays under, times a margin of 2;
+#: the velocity bound adds the largest jump of the offset, ``3 residual_scale / dt``.
+HAND_SPEED_MARGIN = 10.0
+
+#: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
+#: the nominal's next hand position (2).
+OBS_DIM = 16
+_PHASE_INDEX = {name: i for i, name in enumerate(PHASES)}
+
+
+#: Seed, demonstration count and held-out share with which ``motion-bench juggling``
+#: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
+FIT_SEED = 0
+FIT_TEST_FRACTION = 0.25
+
+
+@functools.lru_cache(maxsize=8)
+def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
+    from motion_envs.datasets.juggling_demos import generate_demonstrations
+    from motion_envs.models.juggling_juggler import AnalyticJuggler
+
+    if data is None:
+        demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
+    else:
+        from motion_envs.datasets.juggling_csv import read_juggling_csv
+
+        demos = read_juggling_csv(data, task=task)
+    # the training cycles of motion-bench juggling's split by demonstration
+    cycles = demos.cycles()
+    order = np.random.default_rng(FIT_SEED).permutation(len(cycles))
+    n_test = max(1, round(FIT_TEST_FRACTION * len(cycles)))
+    train = {cycles[i] for i in order[n_test:]}
+    return AnalyticJuggler(task=demos.task).fit(demos, train)
+
+
+def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
+    """A fresh copy of the analytic juggler fitted as ``motion-bench juggling`` fits it:
+    on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
+    the users' juggling CSV; fitted once per process and data (a few seconds)."""
+    key = None if data is None else os.fspath(data)
+    return copy.deepcopy(_fitted_juggler(key, task))
+
+
+def _check_noise(noise: Any) -> JugglingNoise:
+    if isinstance(noise, JugglingNoise):
+        return noise
+    if isinstance(noise, Mapping):
+        unknown = set(noise) - {"release", "tracking"}
+        if unknown:
+            raise ValueError(
+                f"noise has unknown key(s) {sorted(unknown)}; expected 'release', 'tracking'"
+            )
+        values = dict(noise)
+    elif isinstance(noise, (int, float, np.floating)) and not isinstance(noise, bool):
+        values = {"release": float(noise)}
+    else:
+        raise ValueError(
+            "noise must be a number (release-velocity std, relative), a mapping with keys "
+            f"'release'/'tracking', or a JugglingNoise; got {noise!r}"
+        )
+    for key, value in values.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+            raise ValueError(f"noise[{key!r}] must be a number >= 0; got {value!r}")
+        if not math.isfinite(value) or value < 0:
+            raise ValueError(f"noise[{key!r}] must be finite and >= 0; got {value!r}")
+    return JugglingNoise(**{k: float(v) for k, v in values.items()})
+
+
+def _check_int(value: Any, name: str, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}; got {value!r}")
+    return int(value)
+
+
+class JugglingEnv(gym.Env):
+    r"""Toss and catch one ball; the agent corrects the analytic juggler's hand.
+
+    ## Description
+    The juggling task of Lippi, Avizzano & Ruffaldi (2011, section III-A): one ball, one
+    (right) hand, the vertical plane (``x`` horizontal, ``z`` up, metres). A cycle has four
+    phases: **toss** (the hand accelerates up and decelerates; the ball is released when
+    the hand's vertical acceleration falls below ``-toss_threshold`` and leaves with the
+    hand's velocity), **go down** (to a point at the bottom), **catch** (a dynamic reach
+    that meets the falling ball; the ball is caught when it comes within ``catch_radius``
+    of the hand) and **return** (to the start). The *analytic juggler*
+    (``motion_envs.models``: one sine-series regression per phase fitted on demonstrations,
+    chained by the paper's phase criteria, the toss planned with zero final vertical speed,
+    the catch planned from the ball's predicted flight and corrected online) commands the
+    hand every 5 ms; the agent adds a bounded offset to each command. The world is the
+    MuJoCo scene :class:`~motion_envs.envs.juggling_scene.JugglingScene` (a mocap hand, a
+    ball under gravity; see its docstring). The built-in demonstrations are **simulated**
+    (a seeded generator of a person doing the paper's task): the paper's recordings are not
+    public.
+
+    The zero action reproduces the analytic juggler exactly: the first cycle of the episode
+    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of ``motion-bench juggling
+    --seed S`` in the MuJoCo scene (same release, same catch step, same hand path to 1e-9;
+    tested), and the episode goes on juggling (return, next toss) as the juggler does.
+
+    ## Action Space
+    The action space is a `Box(-1, 1, (2,), float32)`: the offset of the hand from the
+    juggler's command in units of `residual_scale` (metres), held for the `frame_skip`
+    control periods of a step: ``hand = target + residual_scale * a``. Entries outside
+    ``[-1, 1]`` are clipped, NaN counts as 0 (no offset); ``info["action_invalid"]`` is
+    True when the action had a non-finite entry. A wrong shape raises `ValueError`.
+
+    | Num | Action                                  | Control Min | Control Max | Type (Unit)               |
+    |-----|-----------------------------------------|-------------|-------------|---------------------------|
+    | 0   | horizontal offset of the hand (``x``)   | -1          | 1           | position (residual_scale m) |
+    | 1   | vertical offset of the hand (``z``)     | -1          | 1           | position (residual_scale m) |
+
+    ## Observation Space
+    The observation space is a `Box(low, high, (16,), float32)` whose bounds depend only
+    on the task's constants and `residual_scale` (no data, no seed): positions within
+    ``POSITION_MARGIN = 10`` m of the start ``(x0, z0) = JugglingTask.home`` horizontally
+    and between ``floor_z - 10`` and ``z0 + 10`` m vertically (an arm reaches less than
+    1 m; a toss at 4.5 m/s under the default gravity peaks 10 m up); speeds below
+    ``V = 10 + 3 residual_scale / dt`` m/s (a hand peaks at 3-5 m/s, times 2, plus the
+    largest jump of the offset between two steps; 40 m/s by default); the phase time below
+    ``max_cycles * CYCLE_TIME_LIMIT``. Values beyond the bounds (only absurd commands
+    reach them) are clipped.
+
+    | Num    | Observation                                                         | Min              | Max          | Type (Unit)    |
+    |--------|---------------------------------------------------------------------|------------------|--------------|----------------|
+    | 0, 1   | hand position ``x, z`` as tracked (with the tracking noise)         | x0-10, floor_z-10 | x0+10, z0+10 | position (m)   |
+    | 2, 3   | hand velocity (backward difference over 5 ms)                        | -V               | V            | velocity (m/s) |
+    | 4, 5   | ball position ``x, z``                                              | x0-10, floor_z-10 | x0+10, z0+10 | position (m)   |
+    | 6, 7   | ball velocity                                                       | -V               | V            | velocity (m/s) |
+    | 8      | 1 if the ball is held, else 0                                       | 0                | 1            | unitless       |
+    | 9..12  | phase one-hot: toss, go_down, catch, return                         | 0                | 1            | unitless       |
+    | 13     | time within the phase                                               | 0                | 20 max_cycles | time (s)      |
+    | 14, 15 | the nominal's next hand position (the juggler's plan, no offset)     | x0-10, floor_z-10 | x0+10, z0+10 | position (m)   |
+
+    ## Rewards
+    ``reward = w_catch * catches - w_drop * dropped - w_deviation * deviation
+    - w_action * |a|^2`` with the weights of `reward_weights` (default ``catch: 10,
+    drop: 10, deviation: 1, action: 0.01``): ``catches`` the number of catches during the
+    step, ``dropped`` 1 on the step the ball falls below the floor, ``deviation`` the mean
+    over the step's control periods of the hand's distance (m) from the juggler's command,
+    the nominal (human-style) hand path (``residual_scale |a|``: the hand is kinematic),
+    and ``|a|^2`` the squared norm of the (clipped) action. `info` holds each weighted
+    term (``reward_catch``, ``reward_drop``, ``reward_deviation``, ``reward_action``;
+    ``reward`` is their sum), ``deviation``, ``catches`` and ``cycles`` (so far),
+    ``phase``, ``held``, ``time`` and ``action_invalid``.
+
+    ## Starting State
+    The hand rests at the juggler's home (the mean start of the training tosses) with the
+    ball in it, at time 0, in the toss phase. `reset(seed=S, options={"cycle": i})` (``i``
+    default 0) draws the episode's perturbation exactly as ``motion-bench juggling --seed
+    S`` draws its cycle ``i``: two generators ``SeedSequence(S).spawn(i + 1)[i].spawn(2)``,
+    one for the world (the release-velocity factor ``1 + release * N(0, 1)`` per component
+    and the tracking noise of every control period,
+    ``motion_envs.models.juggling_world.draw_episode_noise``), one for the juggler (its
+    random phase end points and durations); so the zero-action episode's first cycle *is*
+    that cycle. Without a seed, ``S`` is drawn from the environment's generator. Each
+    later toss of the episode redraws the world's noise from the world generator.
+
+    ## Episode End
+    ### Termination
+    The episode terminates when the ball's centre falls below the floor (``floor_z``): a drop.
+
+    ### Truncation
+    The episode is truncated at the `max_cycles`-th catch, or after
+    ``max_cycles * CYCLE_TIME_LIMIT`` (20 s) of simulated time without it.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/Juggling-v0", noise=0.05, max_cycles=5)
+    ```
+
+    | Parameter        | Type          | Default | Description |
+    |------------------|---------------|---------|-------------|
+    | `noise`          | **float/dict** | `0.0`  | release-velocity std relative to the hand's velocity (0.05 = 5 %), or a dict with keys `release`, `tracking` (tracking: std of the tracked hand position, m) |
+    | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated |
+    | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1 |
+    | `reward_weights` | **dict**      | `None`  | weights of the reward terms, keys `catch`, `drop`, `deviation`, `action` (None: 10, 10, 1, 0.01) |
+    | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them |
+    | `data`           | **str**       | `None`  | None: the built-in simulated demonstrations; or a path to the users' juggling CSV (`t, x, z[, ball_x, ball_z][, phase]`) |
+    | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity |
+    | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`) |
+    | `width`          | **int**       | `480`   | frame width in pixels |
+    | `height`         | **int**       | `480`   | frame height in pixels |
+
+    ## Version History
+    * v0: Initial version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 200}
+
+    def __init__(
+        self,
+        noise: float | Mapping[str, float] = 0.0,
+        max_cycles: int = 10,
+        residual_scale: float = 0.05,
+        reward_weights: Mapping[str, float] | None = None,
+        frame_skip: int = 1,
+        data: str | os.PathLike[str] | None = None,
+        gravity: float | None = None,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        for name, value in (("width", width), ("height", height)):
+            _check_int(value, name, 16)
+        self.noise = _check_noise(noise)
+        self.max_cycles = _check_int(max_cycles, "max_cycles", 1)
+        self.residual_scale = check_scale(residual_scale)
+        self.reward_weights = check_reward_weights(reward_weights, DEFAULT_JUGGLING_REWARD_WEIGHTS)
+        self.frame_skip = _check_int(frame_skip, "frame_skip", 1)
+        if data is not None and not isinstance(data, (str, os.PathLike)):
+            raise ValueError(f"data must be None or a path to a juggling CSV; got {data!r}")
+        if gravity is None:
+            task = JugglingTask()
+        else:
+            if isinstance(gravity, bool) or not isinstance(gravity, (int, float, np.floating)):
+                raise ValueError(f"gravity must be None or a number > 0; got {gravity!r}")
+            if not math.isfinite(gravity) or gravity <= 0:
+                raise ValueError(f"gravity must be finite and > 0; got {gravity!r}")
+            task = JugglingTask(gravity=float(gravity))
+        self.task = task
+        self.data_path = data
+        self.juggler = load_juggler(data, task)
+        self.scene = JugglingScene(task)
+        self.model, self.data = self.scene.model, self.scene.data
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        self._time_limit = self.max_cycles * CYCLE_TIME_LIMIT
+        low, high = self._bounds()
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self._low, self._high = low, high
+        self._renderer: Any = None
+        self._state: JugglingState | None = None
+        self._done = True
+        self._catches = 0
+        self._cycles = 0
+
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """The observation bounds of the docstring (task constants and arguments only)."""
+        (hx, hz), m = self.task.home, POSITION_MARGIN
+        v = HAND_SPEED_MARGIN + 3.0 * self.residual_scale / self.task.dt
+        pos_low, pos_high = [hx - m, self.task.floor_z - m], [hx + m, hz + m]
+        low = np.array(
+            [*pos_low, -v, -v, *pos_low, -v, -v, 0, 0, 0, 0, 0, 0, *pos_low], dtype=np.float32
+        )
+        high = np.array(
+            [*pos_high, v, v, *pos_high, v, v, 1, 1, 1, 1, 1, self._time_limit, *pos_high],
+            dtype=np.float32,
+        )
+        return low, high
+
+    @property
+    def dt(self) -> float:
+        """Seconds of simulated time per environment step (``frame_skip`` control periods)."""
+        return self.task.dt * self.frame_skip
+
+    # -- episode ------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        cycle = 0
+        if options is not None and options.get("cycle") is not None:
+            cycle = options["cycle"]
+            if isinstance(cycle, bool) or not isinstance(cycle, (int, np.integer)) or cycle < 0:
+                raise ValueError(f"options['cycle'] must be an integer >= 0; got {cycle!r}")
+            cycle = int(cycle)
+        base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
+        self._world_rng, juggler_rng = cycle_rngs(base, cycle + 1)[cycle]
+        home = np.asarray(getattr(self.juggler, "home_", self.task.home), dtype=np.float64)
+        state = self.scene.reset(home, noise=self.noise, rng=self._world_rng)
+        self.juggler.reset(state, juggler_rng)
+        self._state = state
+        self._phase = self.juggler.phase
+        self._done = False
+        self._catches = 0
+        self._cycles = 0
+        info = {"phase": self._phase, "time": state.time, "seed": base, "cycle": cycle}
+        return self._observation(state), info
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._done or self._state is None:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != (2,):
+            raise ValueError(f"action must have shape (2,); got shape {a.shape}")
+        ax, az = float(a[0]), float(a[1])
+        invalid = not (math.isfinite(ax) and math.isfinite(az))
+        if invalid:
+            ax = 0.0 if math.isnan(ax) else ax
+            az = 0.0 if math.isnan(az) else az
+        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
+        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+        rx, rz = self.residual_scale * ax, self.residual_scale * az
+        offset = math.hypot(rx, rz)
+        state = self._state
+        juggler, scene = self.juggler, self.scene
+        catches = 0
+        periods = 0
+        for _ in range(self.frame_skip):
+            target, armed = juggler.command(state)
+            phase = juggler.phase
+            if phase != self._phase:
+                if phase == "toss":  # a new cycle: its own release and tracking noise
+                    scene.redraw_noise(self._world_rng)
+                self._phase = phase
+            state = scene.step((float(target[0]) + rx, float(target[1]) + rz), armed)
+            periods += 1
+            if state.released:
+                self._cycles += 1
+            if state.caught:
+                catches += 1
+            if state.dropped:
+                break
+        self._state = state
+        self._catches += catches
+        w = self.reward_weights
+        dropped = state.dropped
+        r_catch = w["catch"] * catches
+        r_drop = -w["drop"] * float(dropped)
+        r_dev = -w["deviation"] * offset
+        r_act = -w["action"] * (ax * ax + az * az)
+        reward = r_catch + r_drop + r_dev + r_act
+        terminated = dropped
+        truncated = not terminated and (
+            self._catches >= self.max_cycles or state.time >= self._time_limit
+        )
+        self._done = terminated or truncated
+        info = {
+            "reward_catch": r_catch,
+            "reward_drop": r_drop,
+            "reward_deviation": r_dev,
+            "reward_action": r_act,
+            "deviation": offset,
+            "catches": self._catches,
+            "cycles": self._cycles,
+            "phase": juggler.phase,
+            "held": state.held,
+            "time": state.time,
+            "action_invalid": invalid,
+        }
+        return self._observation(state), reward, terminated, truncated, info
+
+    def _observation(self, state: JugglingState) -> NDArray[np.float32]:
+        obs = np.zeros(OBS_DIM, dtype=np.float32)
+        obs[0:2] = state.hand_pos
+        obs[2:4] = state.hand_vel
+        obs[4:6] = state.ball_pos
+        obs[6:8] = state.ball_vel
+        obs[8] = state.held
+        obs[9 + _PHASE_INDEX[self.juggler.phase]] = 1.0
+        obs[13] = self.juggler.phase_time
+        obs[14:16] = self.juggler.nominal_next()
+        return np.clip(obs, self._low, self._high, out=obs)
+
+    # -- rendering ----------------------------------------------------------------------
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; pass render_mode='rgb_array' to "
+                "gym.make(...)"
+            )
+            return None
+        if self._state is None:
+            raise RuntimeError("call reset() before render()")
+        if self._renderer is None:
+            import mujoco
+
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
+            self._renderer = mujoco.Renderer(self.model, self.height, self.width)
+        self.scene.sync()
+        self._renderer.update_scene(self.data, camera="side")
+        return self._renderer.render()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state

@@ -1,0 +1,259 @@
+r"""The MuJoCo juggling world: a kinematic hand, a ball under gravity, explicit hold and release.
+
+:class:`JugglingScene` has the interface and the semantics of the pure-model
+``BallisticWorld`` (``motion_envs.models``; notes/JUGGLING-CONTRACT.md): ``reset(hand_pos)``
+puts the ball in the hand, ``step(hand_target, release_armed)`` advances one control period
+``dt``. The scene is ``assets/juggling.xml`` (SI units) with the task's constants written
+into the compiled model (timestep ``dt``, gravity ``(0, 0, -g)``, ball radius and mass,
+catch radius, floor height).
+
+Choices, and why:
+
+* **The hand is a mocap body.** The paper's hand is a tracker reading: a position, set
+  every 5 ms, that nothing in the virtual world pushes back. A mocap body is exactly that:
+  it is at ``hand_target`` after the step, so hand velocity and acceleration are the finite
+  differences of the targets, as in the pure model, and the scene equals ``BallisticWorld``
+  to round-off. The alternative, slide joints driven by position actuators, lags its
+  target. Measured on a 0.4 kg hand following a 200 Hz minimum-jerk toss (0.3 m in 0.4 s,
+  peak 1.4 m/s; ``tests/test_juggling_scene.py``): ``kp = 10^4 N/m``, critical damping,
+  one step per 5 ms: 10.7 mm tracking error and 0.08 m/s velocity error (the release
+  velocity would be the actuator's, not the plan's); ``kp = 10^5`` or ``10^6`` diverge at
+  5 ms (MuJoCo's "simulation is unstable" warning) and with 10 substeps still leave
+  2.2 mm / 0.6 mm and velocity errors of 0.6 / 3.3 m/s (the stiff servo rings on the
+  staircase of targets), at 10 times the cost. Nothing is bought for a hand the task
+  commands kinematically.
+* **The ball has two slide joints (x, z)** and the RK4 integrator. Its flight is the
+  constant-acceleration ODE, which RK4 integrates exactly (the closed form
+
+  .. math:: x(t) = x_0 + v_x t, \qquad z(t) = z_0 + v_z t - g t^2 / 2
+
+  to round-off, tested to 1e-6 m over seconds); semi-implicit Euler would be off by
+  ``g dt t / 2`` (5 mm after 1 s at g = 2).
+* **Holding is a state copy, not a weld.** While held, the ball's ``qpos``/``qvel`` are
+  set to the hand's position and finite-difference velocity after each step, so the ball
+  follows the hand exactly (a weld equality is a soft constraint and would not). A toss
+  sets the ball's velocity to the hand's times ``1 + release noise``; a catch (ball falling,
+  centre within ``catch_radius`` of the hand's) snaps it back into the hand. Contacts are
+  disabled: nothing collides, so ``data.warning`` stays empty whatever the hand does.
+
+Step order: exactly ``BallisticWorld``'s (:mod:`motion_envs.models.juggling_world`),
+whose noise draws (:func:`~motion_envs.models.juggling_world.draw_episode_noise`, at reset)
+the scene reuses, so that for the same hand targets and generator both give the same
+states to round-off (tested to 1e-9):
+
+1. ``h_k = hand_target``; ``v_k = (h_k - h_{k-1}) / dt``,
+   ``a_k = (h_k - 2 h_{k-1} + h_{k-2}) / dt^2`` (the hand rests at the reset position);
+   one ``mj_step`` (time ``k dt``; a flying ball moves along its parabola).
+2. Held ball: released (``released``) at ``h_k`` with velocity ``v_k * f`` if
+   ``release_armed`` and ``a_k[z] < -toss_threshold`` (``f = 1 + release * N(0, 1)`` per
+   component, drawn at reset); else it stays at ``h_k`` with velocity ``v_k``.
+3. Flying ball: once it has been farther than ``catch_radius`` from the hand,
+   ``|h_k - ball| <= catch_radius`` is a catch (``caught``; held again, its state copied
+   from the hand); a flying ball whose centre is below ``floor_z`` is ``dropped`` (sticky
+   until reset; a dropped ball is not caught).
+
+The state's ``hand_pos`` is what the controller observes: the hand plus the episode's
+tracking noise (``JugglingNoise.tracking``); ``hand_vel`` is the true hand's.
+"""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from motion_envs.envs.rendering import _prefer_offscreen_gl
+from motion_envs.models.juggling_task import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.models.juggling_world import TRACKING_ROWS, draw_episode_noise
+
+_prefer_offscreen_gl()  # MUJOCO_GL=egl when headless, before MuJoCo is first imported
+import mujoco  # noqa: E402
+
+__all__ = ["SCENE_XML", "JugglingScene", "check_task", "load_juggling_model"]
+
+#: The scene's MJCF (package data).
+SCENE_XML = "juggling.xml"
+
+
+def check_task(task: Any) -> JugglingTask:
+    """``task`` if it is a :class:`JugglingTask` (which checks its own constants)."""
+    if not isinstance(task, JugglingTask):
+        raise ValueError(f"task must be a JugglingTask; got {type(task).__name__}")
+    return task
+
+
+def load_juggling_model(task: JugglingTask | None = None) -> mujoco.MjModel:
+    """Compile ``assets/juggling.xml`` with the constants of ``task`` (default task)."""
+    task = check_task(JugglingTask() if task is None else task)
+    xml = resources.files("motion_envs.envs").joinpath("assets", SCENE_XML).read_text()
+    model = mujoco.MjModel.from_xml_string(xml)
+    model.opt.timestep = task.dt
+    model.opt.gravity[:] = (0.0, 0.0, -task.gravity)
+    ball = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    hand = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "hand")
+    floor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    model.geom_size[ball, 0] = task.ball_radius
+    model.geom_size[hand, 0] = task.catch_radius
+    model.geom_pos[floor, 2] = task.floor_z
+    model.body_mass[model.geom_bodyid[ball]] = task.ball_mass
+    model.body_inertia[model.geom_bodyid[ball]] = 0.4 * task.ball_mass * task.ball_radius**2
+    return model
+
+
+def _vec2(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != (2,):
+        raise ValueError(f"{name} must have shape (2,) (x, z); got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite; got {arr.tolist()}")
+    return arr
+
+
+class JugglingScene:
+    """The juggling world in MuJoCo (see the module docstring for the semantics).
+
+    Attributes ``model`` and ``data`` are the MuJoCo structures (``data.time`` is the
+    world's time); ``state`` the last :class:`JugglingState`.
+    """
+
+    def __init__(self, task: JugglingTask | None = None) -> None:
+        self.task = check_task(JugglingTask() if task is None else task)
+        self.model = load_juggling_model(self.task)
+        self.data = mujoco.MjData(self.model)
+        self._bind()
+        self.noise = JugglingNoise()
+        self._factor = (1.0, 1.0)
+        self._track: NDArray[np.float64] | None = None
+        self._k = 0
+        self._hand = (0.0, 0.0)
+        self._prev = (0.0, 0.0)
+        self._held = True
+        self._left = False
+        self._dropped = False
+        self.state: JugglingState | None = None
+
+    def _bind(self) -> None:
+        self._mocap = self.data.mocap_pos[0]
+        self._qpos = self.data.qpos
+        self._qvel = self.data.qvel
+
+    # -- interface ----------------------------------------------------------------------
+    def reset(
+        self,
+        hand_pos: ArrayLike,
+        *,
+        noise: JugglingNoise | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> JugglingState:
+        """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
+        p = _vec2(hand_pos, "hand_pos")
+        noise = JugglingNoise() if noise is None else noise
+        if not isinstance(noise, JugglingNoise):
+            raise ValueError(f"noise must be a JugglingNoise; got {type(noise).__name__}")
+        self.noise = noise
+        factor, self._track = draw_episode_noise(noise, rng)
+        self._factor = (float(factor[0]), float(factor[1]))
+        mujoco.mj_resetData(self.model, self.data)
+        x, z = float(p[0]), float(p[1])
+        self._hand = self._prev = (x, z)
+        self._k = 0
+        self._held, self._left, self._dropped = True, False, False
+        self._mocap[0], self._mocap[2] = x, z
+        self._qpos[0], self._qpos[1] = x, z
+        mujoco.mj_kinematics(self.model, self.data)
+        self.state = self._make_state(False, False)
+        return self.state
+
+    def step(self, hand_target: ArrayLike, release_armed: bool) -> JugglingState:
+        """Move the hand to ``hand_target`` over one ``dt``; hold, release, catch or drop."""
+        if self.state is None:
+            raise RuntimeError("call reset() before step()")
+        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index]
+        if not (math.isfinite(x) and math.isfinite(z)):
+            raise ValueError(f"hand_target must be finite; got {[x, z]}")
+        task = self.task
+        dt = task.dt
+        prev2 = self._prev
+        prev = self._prev = self._hand
+        self._hand = (x, z)
+        self._k += 1
+        vx, vz = (x - prev[0]) / dt, (z - prev[1]) / dt
+        az = (z - 2.0 * prev[1] + prev2[1]) / (dt * dt)
+        self._mocap[0], self._mocap[2] = x, z
+        mujoco.mj_step(self.model, self.data)
+        self.data.time = self._k * dt  # k dt exactly, as BallisticWorld (no summed round-off)
+        qpos, qvel = self._qpos, self._qvel
+        released = caught = False
+        if self._held:
+            if release_armed and az < -task.toss_threshold:
+                self._held = self._left = False
+                released = True
+                qvel[0], qvel[1] = vx * self._factor[0], vz * self._factor[1]
+            else:
+                qvel[0], qvel[1] = vx, vz
+            qpos[0], qpos[1] = x, z
+        else:
+            dist = math.hypot(x - float(qpos[0]), z - float(qpos[1]))
+            if self._left and dist <= task.catch_radius and not self._dropped:
+                self._held = caught = True
+                qpos[0], qpos[1] = x, z
+                qvel[0], qvel[1] = vx, vz
+            elif dist > task.catch_radius:
+                self._left = True
+            if not self._held and float(qpos[1]) < task.floor_z:
+                self._dropped = True
+        self.state = self._make_state(released, caught)
+        return self.state
+
+    def redraw_noise(self, rng: np.random.Generator | None) -> None:
+        """Draw a new release factor and tracking noise (as ``reset`` does), keeping the
+        state: a new cycle of a continuous run. Not part of ``BallisticWorld``."""
+        factor, self._track = draw_episode_noise(self.noise, rng)
+        self._factor = (float(factor[0]), float(factor[1]))
+
+    # -- helpers ------------------------------------------------------------------------
+    @property
+    def held(self) -> bool:
+        """Whether the ball is in the hand."""
+        return self._held
+
+    @property
+    def hand_true(self) -> NDArray[np.float64]:
+        """The hand's true position (without tracking noise)."""
+        return np.array(self._hand)
+
+    def sync(self) -> None:
+        """Recompute the bodies' poses (``data.xpos``) after the state copies, for drawing."""
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def _make_state(self, released: bool, caught: bool) -> JugglingState:
+        dt = self.task.dt
+        hx, hz = self._hand
+        px, pz = self._prev
+        obs = np.array(self._hand)
+        if self._track is not None:
+            obs += self._track[self._k % TRACKING_ROWS]
+        return JugglingState(
+            time=float(self.data.time),
+            hand_pos=obs,
+            hand_vel=np.array([(hx - px) / dt, (hz - pz) / dt]),
+            ball_pos=self._qpos[:2].copy(),
+            ball_vel=self._qvel[:2].copy(),
+            held=self._held,
+            released=released,
+            caught=caught,
+            dropped=self._dropped,
+        )
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for key in ("_mocap", "_qpos", "_qvel"):
+            del state[key]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._bind()
