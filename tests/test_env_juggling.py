@@ -300,7 +300,7 @@ def test_rgb_array_frames():
         pytest.skip(f"no MuJoCo OpenGL backend here (MUJOCO_GL=osmesa or egl): {exc}")
     frames = [frame]
     for _ in range(6):
-        for _ in range(10):
+        for _ in range(50):
             env.step(np.zeros(2, np.float32))
         frames.append(env.render())
     for f in frames:

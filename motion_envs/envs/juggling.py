@@ -53,7 +53,7 @@ HAND_SPEED_MARGIN = 10.0
 #: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
 #: the nominal's next hand position (2).
 OBS_DIM = 16
-_PHASE_INDEX = {name: i for i, name in enumerate(PHASES)}
+_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
 
 
 #: Seed, demonstration count and held-out share with which ``motion-bench juggling``
@@ -398,16 +398,15 @@ class JugglingEnv(gym.Env):
         return self._observation(state), reward, terminated, truncated, info
 
     def _observation(self, state: JugglingState) -> NDArray[np.float32]:
-        obs = np.zeros(OBS_DIM, dtype=np.float32)
-        obs[0:2] = state.hand_pos
-        obs[2:4] = state.hand_vel
-        obs[4:6] = state.ball_pos
-        obs[6:8] = state.ball_vel
-        obs[8] = state.held
-        obs[9 + _PHASE_INDEX[self.juggler.phase]] = 1.0
-        obs[13] = self.juggler.phase_time
-        obs[14:16] = self.juggler.nominal_next()
-        return np.clip(obs, self._low, self._high, out=obs)
+        juggler = self.juggler
+        onehot = _ONE_HOT[juggler.phase]
+        nx, nz = juggler.nominal_next().tolist()
+        obs = np.array(
+            (*self.scene.values, float(state.held), *onehot, juggler.phase_time, nx, nz),
+            dtype=np.float32,
+        )
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)
 
     # -- rendering ----------------------------------------------------------------------
     def render(self) -> NDArray[np.uint8] | None:
