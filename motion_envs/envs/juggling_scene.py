@@ -174,7 +174,7 @@ class JugglingScene:
         """Move the hand to ``hand_target`` over one ``dt``; hold, release, catch or drop."""
         if self.state is None:
             raise RuntimeError("call reset() before step()")
-        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index]
+        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index, arg-type]
         if not (math.isfinite(x) and math.isfinite(z)):
             raise ValueError(f"hand_target must be finite; got {[x, z]}")
         task = self.task
