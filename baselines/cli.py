@@ -16,6 +16,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.run_all",
     "baselines.orientation_bench",
     "baselines.position_bench",
+    "baselines.juggling_bench",
     "baselines.calibrate_cohort",
 )
 

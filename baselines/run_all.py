@@ -7,7 +7,9 @@ Runs, one after the other, with each sub-command's defaults:
 2. ``motion-bench orientation --data cohort``: the same table on the calibrated virtual
    cohort of the paper's design (simulated data);
 3. ``motion-bench position --data lasa``: Lippi et al.'s sine-series regression against
-   the line, the mean residual, DMP and ProMP on the real LASA handwriting set.
+   the line, the mean residual, DMP and ProMP on the real LASA handwriting set;
+4. ``motion-bench juggling``: the analytic juggler of Lippi et al.'s section III-A on
+   SIMULATED demonstrations (catch rates, per-phase errors, validation statistics).
 
 Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
 what was written goes to ``OUT/index.json``.
@@ -41,6 +43,11 @@ JOBS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
         "Position trajectories on LASA handwriting (real data)",
         ("position", "--data", "lasa"),
     ),
+    (
+        "juggling",
+        "Juggling: the analytic juggler (SIMULATED demonstrations, pure-model world)",
+        ("juggling",),
+    ),
 )
 
 
@@ -55,7 +62,9 @@ def run(args: argparse.Namespace) -> int:
         if args.only and folder not in args.only:
             continue
         print(f"\n{'=' * 100}\n{title}\n{'=' * 100}", flush=True)
-        extra = ["--no-progress"] if args.no_progress and argv[0] == "position" else []
+        extra = (
+            ["--no-progress"] if args.no_progress and argv[0] in ("position", "juggling") else []
+        )
         t0 = time.perf_counter()
         rc = main([*argv, *extra, "--out", str(out / folder)])
         index["jobs"].append(
@@ -78,7 +87,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "all",
         help="every benchmark on the built-in data (orientation: vr-kitchen and cohort; "
-        "position: LASA)",
+        "position: LASA; juggling: simulated)",
         description=__doc__.split("\n\n", 1)[1] if __doc__ else None,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

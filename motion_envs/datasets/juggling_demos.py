@@ -5,9 +5,10 @@ simulates a person performing the virtual task of section III-A, cycle after cyc
 
 1. **toss**: from rest at home the person plans a minimum-jerk (quintic) reach upward
    and to the left that stops sharply upwards (zero vertical end velocity, a vertical end
-   acceleration of ``brake`` m/s^2, still moving left at ``toss_vx``); the virtual world releases the ball at the first sample where the
-   vertical hand acceleration (second backward difference of the tracked signal) falls
-   below ``-toss_threshold``; the ball leaves with the hand's velocity;
+   acceleration of ``brake`` m/s^2, still moving left at ``toss_vx``); the virtual world
+   releases the ball at the first sample where the vertical hand acceleration (second
+   backward difference of the tracked signal) falls below ``-toss_threshold``; the ball
+   leaves with the hand's velocity;
 2. **go down**: a quintic from the hand's state at the release (position, velocity,
    acceleration) to the person's bottom point, at rest; its duration is chosen so that
    the catch reach will take the person's preferred time;

@@ -73,7 +73,9 @@ def run_cycle(
         phase.append(juggler.phase)
     released = caught = False
     release_velocity = None
-    for k in range(1, max_steps + 1):
+    k = 0
+    while k < max_steps:
+        k += 1
         target, armed = juggler.command(state)
         label = juggler.phase
         state = world.step(target, armed)  # type: ignore[attr-defined]

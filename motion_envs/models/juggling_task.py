@@ -124,7 +124,7 @@ class JugglingNoise:
 
 
 def ballistic_position(p0: ArrayLike, v0: ArrayLike, t: ArrayLike, gravity: float) -> FloatArray:
-    """``p0 + v0 t - [0, g t^2 / 2]`` for times ``t`` (scalar or ``(K,)``): ``(2,)`` or ``(K, 2)``."""
+    """``p0 + v0 t - [0, g t^2 / 2]`` at times ``t`` (scalar or ``(K,)``): ``(2,)``/``(K, 2)``."""
     p0 = np.asarray(p0, dtype=np.float64)
     v0 = np.asarray(v0, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)

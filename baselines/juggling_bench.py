@@ -1,0 +1,586 @@
+"""``motion-bench juggling``: the analytic juggler of Lippi et al. (section III-A).
+
+Demonstrations are SIMULATED by default (:mod:`motion_envs.datasets.juggling_demos`: a
+seeded model of a person; the paper's recordings are not public) or read from the users'
+CSV (``--data PATH.csv``, :mod:`motion_envs.datasets.juggling_csv`). They are split by
+demonstration (cycle): the juggler is fitted on the training cycles only (``N`` per
+phase by cross-validation inside the training cycles) and scored on the held-out ones.
+
+Reported:
+
+* catch rate of ``--cycles`` seeded cycles in the pure-model world, unperturbed and with
+  release-velocity noise (``--noise``, relative std) plus hand tracking noise
+  (``--tracking``, m), each with and without the eq. 10 correction (the same seeded
+  cycles in every condition);
+* per phase, on the held-out demonstrations (all resampled to the same normalised-time
+  grid): the median over demonstrations of the max over time of the position error
+  (the papers' criterion) and of the RMSE, for Lippi's regression, a minimum-jerk movement
+  and a DMP (``movement_primitives``) with the same end points and duration, next to the
+  within-person variability (a training demonstration of the same person re-targeted to
+  the held-out end points, median over the training demonstrations);
+* per phase, the paper's validation of the linear hypothesis on the training cycles
+  (Lilliefors, F-test, 95 % intervals, jackknife spread over the estimates);
+* a Figure-6-style plot and an animation (GIF) of the juggler.
+
+``run(config) -> results`` does the work; argparse, printing and plotting are outside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling_demos import (
+    SIMULATED_LABEL,
+    JugglingDemos,
+    PhaseSegment,
+    generate_demonstrations,
+)
+from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
+from motion_envs.models.juggling_run import run_cycle, run_cycles_fast
+from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
+from motion_envs.models.serialization import atomic_write_text
+
+__all__ = ["JugglingConfig", "format_report", "register", "run", "write_outputs"]
+
+FloatArray = NDArray[np.float64]
+
+#: Targets of issue 9, checked in ``results["targets"]``.
+TARGET_UNPERTURBED = 0.99
+TARGET_NOISE5_CORRECTED = 0.90
+TARGET_VARIABILITY_RATIO = 1.5
+
+
+@dataclass
+class JugglingConfig:
+    """Everything ``motion-bench juggling`` needs (the CLI maps its flags onto this)."""
+
+    cycles: int = 1000
+    noise: tuple[float, ...] = (0.05, 0.10)
+    tracking: float = 0.0005
+    seed: int = 0
+    data: str | None = None
+    demo_cycles: int = 50
+    demo_persons: int = 1
+    test_fraction: float = 0.25
+    n_sines: int | str = "auto"
+    n_points: int = 150
+    dmp_weights: int = 10
+    use_dmp: bool = True
+    figure_cycles: int = 3
+    progress: bool = True
+    task: JugglingTask = field(default_factory=JugglingTask)
+
+
+def load_demos(config: JugglingConfig) -> JugglingDemos:
+    """The SIMULATED demonstrations, or the users' CSV when ``config.data`` is a path."""
+    if config.data is None or config.data == "simulated":
+        return generate_demonstrations(
+            n_cycles=config.demo_cycles,
+            n_persons=config.demo_persons,
+            seed=config.seed,
+            task=config.task,
+        )
+    from motion_envs.datasets.juggling_csv import read_juggling_csv
+
+    return read_juggling_csv(config.data, task=config.task)
+
+
+def split_cycles(
+    demos: JugglingDemos, test_fraction: float, seed: int
+) -> tuple[set[tuple[int, int]], set[tuple[int, int]]]:
+    """Train and test ``(recording, cycle)`` sets: a seeded split by demonstration."""
+    if not 0 < test_fraction < 1:
+        raise ValueError(f"test_fraction must be in (0, 1); got {test_fraction}")
+    cycles = demos.cycles()
+    if len(cycles) < 8:
+        raise ValueError(f"{demos.name}: {len(cycles)} complete cycles; at least 8 are needed")
+    order = np.random.default_rng(seed).permutation(len(cycles))
+    n_test = max(1, round(test_fraction * len(cycles)))
+    test = {cycles[i] for i in order[:n_test]}
+    return set(cycles) - test, test
+
+
+def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:
+    tau = seg.times / seg.times[-1]
+    grid = np.linspace(0.0, 1.0, n_points)
+    return np.column_stack([np.interp(grid, tau, seg.positions[:, d]) for d in range(2)])
+
+
+def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per demonstration: max over time of |error| and RMSE; arrays ``(m, K, 2)``."""
+    err = np.linalg.norm(truth - pred, axis=-1)
+    return err.max(axis=-1), np.sqrt(np.mean(err**2, axis=-1))
+
+
+def _retarget(y: FloatArray, start: FloatArray, end: FloatArray) -> FloatArray:
+    """Keep ``y``'s residual from its line, replace the line by ``start -> end``."""
+    tau = np.linspace(0.0, 1.0, y.shape[0])[:, None]
+    return y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+
+
+def phase_errors(
+    juggler: AnalyticJuggler,
+    demos: JugglingDemos,
+    train: set[tuple[int, int]],
+    test: set[tuple[int, int]],
+    n_points: int,
+    use_dmp: bool,
+    dmp_weights: int,
+) -> dict[str, Any]:
+    """Per phase: criteria of every method on the held-out demonstrations (medians)."""
+    from baselines.peers import DMPPeer, peers_available
+
+    have_dmp = use_dmp and peers_available()
+    out: dict[str, Any] = {}
+    segs = demos.segments(toss_to_top=True)
+    persons = [r.person for r in demos.recordings]
+    tau = np.linspace(0.0, 1.0, n_points)
+    for phase in PHASES:
+        tr = [s for s in segs if s.phase == phase and (s.recording, s.cycle) in train]
+        te = [s for s in segs if s.phase == phase and (s.recording, s.cycle) in test]
+        y_tr = np.stack([_resample(s, n_points) for s in tr])
+        y_te = np.stack([_resample(s, n_points) for s in te])
+        starts, ends = y_te[:, 0], y_te[:, -1]
+        model = juggler.phases_[phase].model
+        q = np.column_stack([starts, ends])
+        p = model.predict_coefficients(q, starts, ends)
+        from motion_envs.geometry import sine_series as ss
+
+        preds = {"lippi": ss.evaluate(p, tau), "minimum_jerk": minimum_jerk(starts, ends, tau)}
+        if have_dmp:
+            dmp = DMPPeer(n_weights_per_dim=dmp_weights).fit(y_tr)
+            preds["dmp"] = np.stack([dmp.predict(a, b) for a, b in zip(starts, ends, strict=True)])
+        # within-person variability: other demonstrations of the same person, re-targeted
+        wp_max, wp_rmse = [], []
+        for i, s in enumerate(te):
+            same = [k for k, r in enumerate(tr) if persons[r.recording] == persons[s.recording]]
+            if not same:
+                continue
+            ret = np.stack([_retarget(y_tr[k], starts[i], ends[i]) for k in same])
+            m, r = _criteria(y_te[i][None], ret)
+            wp_max.append(np.median(m))
+            wp_rmse.append(np.median(r))
+        methods = {}
+        for name, pred in preds.items():
+            m, r = _criteria(y_te, pred)
+            methods[name] = {"max_error": float(np.median(m)), "rmse": float(np.median(r))}
+        within = {
+            "max_error": float(np.median(wp_max)) if wp_max else float("nan"),
+            "rmse": float(np.median(wp_rmse)) if wp_rmse else float("nan"),
+        }
+        out[phase] = {
+            "n_train": len(tr),
+            "n_test": len(te),
+            "n_sines": int(model.n_sines),
+            "duration_range_s": list(juggler.phases_[phase].duration_range),
+            "samples_range": [
+                int(min(len(s.times) for s in tr + te)),
+                int(max(len(s.times) for s in tr + te)),
+            ],
+            "methods": methods,
+            "within_person": within,
+            "lippi_over_within": methods["lippi"]["max_error"] / within["max_error"]
+            if wp_max
+            else float("nan"),
+            "_truth": y_te,
+            "_pred": preds,
+        }
+    return out
+
+
+def validation(juggler: AnalyticJuggler) -> dict[str, list[dict[str, float | int]]]:
+    """The paper's checks of the linear hypothesis, per phase, on the training cycles."""
+    out = {}
+    for phase, fit in juggler.phases_.items():
+        try:
+            out[phase] = fit.model.validate().summary()
+        except ValueError as exc:  # too few examples for the tests
+            out[phase] = [{"error": str(exc)}]  # type: ignore[dict-item]
+    return out
+
+
+def catch_rates(
+    juggler: AnalyticJuggler, config: JugglingConfig
+) -> tuple[float, list[dict[str, Any]]]:
+    """Unperturbed catch rate and the perturbed runs (same seeded cycles in each)."""
+    from tqdm import tqdm
+
+    runs = [(0.0, 0.0, True)] + [
+        (level, config.tracking, corr) for level in config.noise for corr in (False, True)
+    ]
+    rows = []
+    for level, tracking, corr in tqdm(
+        runs, desc="catch-rate runs", file=sys.stderr, disable=not config.progress
+    ):
+        juggler.correction = corr
+        t0 = time.perf_counter()
+        res = run_cycles_fast(juggler, config.cycles, JugglingNoise(level, tracking), config.seed)
+        rows.append(
+            {
+                "noise": level,
+                "tracking": tracking,
+                "correction": corr,
+                "catch_rate": float(np.mean([r.caught for r in res])),
+                "dropped": int(sum(r.dropped for r in res)),
+                "no_release": int(sum(not r.released for r in res)),
+                "mean_corrections": float(np.mean([r.corrections for r in res])),
+                "seconds": time.perf_counter() - t0,
+            }
+        )
+    juggler.correction = True
+    return rows[0]["catch_rate"], rows[1:]
+
+
+def run(config: JugglingConfig) -> dict[str, Any]:
+    """Fit on the training cycles, score on the held-out ones, run the catch-rate cycles.
+
+    Returns the results document (``results.json`` minus keys starting with ``_``, which
+    hold arrays for the plots).
+    """
+    if config.cycles < 1:
+        raise ValueError(f"cycles must be >= 1; got {config.cycles}")
+    for level in config.noise:
+        if not (math.isfinite(level) and 0 <= level < 1):
+            raise ValueError(f"noise levels must be in [0, 1); got {level}")
+    timing: dict[str, float] = {}
+    t0 = time.perf_counter()
+    demos = load_demos(config)
+    timing["demonstrations_s"] = time.perf_counter() - t0
+    train, test = split_cycles(demos, config.test_fraction, config.seed)
+    t0 = time.perf_counter()
+    juggler = AnalyticJuggler(task=demos.task, n_sines=config.n_sines).fit(demos, train)
+    timing["fit_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    per_phase = phase_errors(
+        juggler, demos, train, test, config.n_points, config.use_dmp, config.dmp_weights
+    )
+    timing["phase_errors_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    checks = validation(juggler)
+    timing["validation_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    rate, rates = catch_rates(juggler, config)
+    timing["catch_rates_s"] = time.perf_counter() - t0
+    from motion_envs.models.juggling_run import cycle_rngs
+    from motion_envs.models.juggling_world import BallisticWorld
+
+    traces = [
+        run_cycle(juggler, BallisticWorld(demos.task), JugglingNoise(), r, True, True)
+        for r in cycle_rngs(config.seed + 1, config.figure_cycles)
+    ]
+    five = next((r for r in rates if abs(r["noise"] - 0.05) < 1e-12 and r["correction"]), None)
+    targets = {
+        "unperturbed_catch_rate>=0.99": rate >= TARGET_UNPERTURBED,
+        "noise5_corrected_catch_rate>=0.90": None
+        if five is None
+        else five["catch_rate"] >= TARGET_NOISE5_CORRECTED,
+        "lippi_within_1.5x_within_person": {
+            p: bool(v["lippi_over_within"] <= TARGET_VARIABILITY_RATIO)
+            for p, v in per_phase.items()
+        },
+        "lippi_ahead_of_minimum_jerk": {
+            p: bool(v["methods"]["lippi"]["max_error"] < v["methods"]["minimum_jerk"]["max_error"])
+            for p, v in per_phase.items()
+        },
+    }
+    return {
+        "benchmark": "juggling (Lippi, Avizzano & Ruffaldi 2011, section III-A)",
+        "data": demos.label(),
+        "simulated": demos.simulated,
+        "world": "pure model (BallisticWorld)",
+        "task": asdict(demos.task),
+        "config": {k: v for k, v in asdict(config).items() if k not in ("task", "progress")},
+        "split": {
+            "by": "demonstration (cycle)",
+            "n_train_cycles": len(train),
+            "n_test_cycles": len(test),
+            "seed": config.seed,
+        },
+        "catch_rate": rate,
+        "catch_rates": rates,
+        "per_phase": per_phase,
+        "validation": checks,
+        "targets": targets,
+        "timing": timing,
+        "_demos": demos,
+        "_test": test,
+        "_traces": traces,
+    }
+
+
+# -- printing, files, plots ---------------------------------------------------------------
+def _clean(value: Any) -> Any:
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items() if not str(k).startswith("_")}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return _clean(value.item())
+    return value
+
+
+def format_report(doc: dict[str, Any]) -> str:
+    """The printed catch-rate, per-phase and validation tables."""
+    lines = [
+        f"juggling benchmark: data {doc['data']}",
+        f"world: {doc['world']}; split by demonstration: {doc['split']['n_train_cycles']} "
+        f"train / {doc['split']['n_test_cycles']} test cycles; gravity "
+        f"{doc['task']['gravity']} m/s^2",
+        "",
+        f"catch rate, unperturbed: {doc['catch_rate']:.3f}",
+        f"{'release noise':>14}{'tracking (m)':>14}{'eq. 10':>8}{'catch rate':>12}",
+    ]
+    for r in doc["catch_rates"]:
+        lines.append(
+            f"{r['noise']:>14.2f}{r['tracking']:>14.4f}{'on' if r['correction'] else 'off':>8}"
+            f"{r['catch_rate']:>12.3f}"
+        )
+    methods = list(next(iter(doc["per_phase"].values()))["methods"])
+    lines += [
+        "",
+        "per phase, held-out demonstrations (m): median over demos of max_t |error| (and of RMSE)",
+        f"{'phase':<9}{'N':>3}" + "".join(f"{m:>22}" for m in [*methods, "within-person"]),
+    ]
+    for phase, v in doc["per_phase"].items():
+        cells = [v["methods"][m] for m in methods] + [v["within_person"]]
+        lines.append(
+            f"{phase:<9}{v['n_sines']:>3}"
+            + "".join(f"{c['max_error']:>12.4f} ({c['rmse']:.4f})" for c in cells)
+        )
+    lines += [
+        "",
+        "validation of the linear hypothesis (training cycles), non-exact sine coefficients:",
+        "  normal: share with Lilliefors p > 0.05; F-test: share with p < 0.05; "
+        "CI/|F|, jack/|F|: medians over coefficients",
+        f"{'phase':<9}{'coord':>6}{'n':>4}{'normal':>8}{'F-test':>8}{'CI/|F|':>9}{'jack/|F|':>10}",
+    ]
+    for phase, rows in doc["validation"].items():
+        for row in rows:
+            if "error" in row:
+                lines.append(f"{phase:<9}  {row['error']}")
+                continue
+            lines.append(
+                f"{phase:<9}{'xz'[row['coordinate']]:>6}{row['n_coefficients']:>4}"
+                f"{row['normal_frac']:8.2f}{row['ftest_frac']:8.2f}"
+                f"{row['ci_rel']:9.2f}{row['jack_rel']:10.2f}"
+            )
+    t = doc["targets"]
+    lines += ["", "targets (issue 9):"]
+    lines.append(f"  unperturbed catch rate >= 0.99: {_met(t['unperturbed_catch_rate>=0.99'])}")
+    lines.append(f"  5 % noise with eq. 10 >= 0.90: {_met(t['noise5_corrected_catch_rate>=0.90'])}")
+    for key, text in (
+        ("lippi_within_1.5x_within_person", "Lippi within 1.5x within-person variability"),
+        ("lippi_ahead_of_minimum_jerk", "Lippi ahead of minimum jerk (max error)"),
+    ):
+        lines.append(f"  {text}: " + ", ".join(f"{p} {_met(m)}" for p, m in t[key].items()))
+    if doc["simulated"]:
+        lines.append(f"\nDATA ARE {SIMULATED_LABEL}")
+    return "\n".join(lines)
+
+
+def _met(flag: bool | None) -> str:
+    return "n/a" if flag is None else ("met" if flag else "MISSED")
+
+
+def results_csv(doc: dict[str, Any]) -> str:
+    """``results.csv``: one row per catch-rate run and per (phase, method)."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(
+        ["kind", "phase", "method", "noise", "correction", "catch_rate", "max_error", "rmse"]
+    )
+    w.writerow(
+        ["catch_rate", "", "analytic_juggler", 0.0, True, f"{doc['catch_rate']:.6g}", "", ""]
+    )
+    for r in doc["catch_rates"]:
+        w.writerow(
+            [
+                "catch_rate",
+                "",
+                "analytic_juggler",
+                r["noise"],
+                r["correction"],
+                f"{r['catch_rate']:.6g}",
+                "",
+                "",
+            ]
+        )
+    for phase, v in doc["per_phase"].items():
+        for m, c in [*v["methods"].items(), ("within_person", v["within_person"])]:
+            w.writerow(
+                ["phase_error", phase, m, "", "", "", f"{c['max_error']:.6g}", f"{c['rmse']:.6g}"]
+            )
+    return buf.getvalue()
+
+
+PHASE_COLORS = {"toss": "C3", "go_down": "C0", "catch": "C2", "return": "C1"}
+
+
+def plot_figure6(doc: dict[str, Any], path: Path) -> None:
+    """Demonstrations (left) and generated cycles (right), phases coloured, ball flights."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    demos: JugglingDemos = doc["_demos"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), sharex=True, sharey=True)
+    ax = axes[0]
+    shown = 0
+    for seg in demos.segments():
+        if (seg.recording, seg.cycle) not in doc["_test"] or seg.cycle > 200:
+            continue
+        ax.plot(*seg.positions.T, color=PHASE_COLORS[seg.phase], lw=0.8, alpha=0.8)
+        shown += 1
+    rec = demos.recordings[0]
+    if rec.ball is not None and rec.phase is not None:
+        flying = np.isin(rec.phase, ["go_down", "catch"])
+        ax.plot(*np.where(flying[:, None], rec.ball, np.nan).T, color="0.5", lw=0.5, ls=":")
+    ax.set_title(f"held-out demonstrations ({'SIMULATED' if demos.simulated else 'recorded'})")
+    ax = axes[1]
+    for tr in doc["_traces"]:
+        for phase in PHASES:
+            sel = tr.phase == phase
+            ax.plot(*np.where(sel[:, None], tr.hand, np.nan).T, color=PHASE_COLORS[phase], lw=1)
+        fly = np.isin(tr.phase, ["go_down", "catch"])
+        ax.plot(*np.where(fly[:, None], tr.ball, np.nan).T, color="0.4", lw=0.8, ls="--")
+    ax.set_title("analytic juggler (pure model), ball flights dashed")
+    for a in axes:
+        a.set_xlabel("x (m)")
+        a.set_aspect("equal", adjustable="box")
+        a.grid(alpha=0.3)
+    axes[0].set_ylabel("z (m)")
+    handles = [plt.Line2D([], [], color=c, label=p) for p, c in PHASE_COLORS.items()]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
+    label = "SIMULATED demonstrations" if demos.simulated else demos.name
+    fig.suptitle(f"Juggling, Lippi et al. Fig. 6 style — {label}", fontsize=10)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
+    """A GIF of the first generated cycles (hand, catch circle, ball), labelled SIMULATED."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    tr = doc["_traces"][0]
+    stride = max(1, round(1 / (fps * doc["task"]["dt"])))
+    idx = np.arange(0, len(tr.times), stride)
+    fig, ax = plt.subplots(figsize=(4, 4))
+    lo = np.minimum(tr.hand.min(0), tr.ball.min(0)) - 0.1
+    hi = np.maximum(tr.hand.max(0), tr.ball.max(0)) + 0.1
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_aspect("equal")
+    hand = plt.Circle(tuple(tr.hand[0]), doc["task"]["catch_radius"], color="C1", alpha=0.4)
+    ball = plt.Circle(tuple(tr.ball[0]), doc["task"]["ball_radius"], color="C3")
+    ax.add_patch(hand)
+    ax.add_patch(ball)
+    (path_line,) = ax.plot([], [], color="0.5", lw=0.8)
+    title = ax.set_title("")
+    ax.text(0.02, 0.02, "SIMULATED, pure model", transform=ax.transAxes, fontsize=7)
+
+    def draw(i: int) -> tuple[Any, ...]:
+        hand.center = tuple(tr.hand[i])
+        ball.center = tuple(tr.ball[i])
+        path_line.set_data(tr.hand[: i + 1, 0], tr.hand[: i + 1, 1])
+        title.set_text(f"analytic juggler: {tr.phase[i]}  t = {tr.times[i]:.2f} s")
+        return hand, ball, path_line, title
+
+    anim = FuncAnimation(fig, draw, frames=idx, blit=False)
+    tmp = path.with_suffix(".tmp.gif")
+    anim.save(tmp, writer=PillowWriter(fps=fps))
+    plt.close(fig)
+    tmp.replace(path)
+    return path
+
+
+def write_outputs(doc: dict[str, Any], out: Path, video: bool = True) -> list[Path]:
+    """results.json, results.csv, juggling_fig6.png and (``video``) juggling.gif in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [
+        atomic_write_text(out / "results.json", json.dumps(_clean(doc), indent=2) + "\n"),
+        atomic_write_text(out / "results.csv", results_csv(doc)),
+    ]
+    plot_figure6(doc, out / "juggling_fig6.png")
+    paths.append(out / "juggling_fig6.png")
+    if video:
+        paths.append(write_animation(doc, out / "juggling.gif"))
+    return paths
+
+
+def _levels(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--noise must be comma-separated numbers (e.g. 0.05,0.1); got {text!r}"
+        ) from None
+
+
+def main(args: argparse.Namespace) -> int:
+    """Entry of ``motion-bench juggling``."""
+    config = JugglingConfig(
+        cycles=args.cycles,
+        noise=args.noise,
+        tracking=args.tracking,
+        seed=args.seed,
+        data=args.data,
+        progress=not args.no_progress,
+        use_dmp=not args.no_dmp,
+        task=JugglingTask(gravity=args.gravity),
+    )
+    t0 = time.perf_counter()
+    doc = run(config)
+    doc["timing"]["total_s"] = time.perf_counter() - t0
+    print(format_report(doc))
+    if args.out:
+        paths = write_outputs(doc, Path(args.out), video=not args.no_video)
+        print("wrote " + ", ".join(str(p) for p in paths))
+    print(f"total {doc['timing']['total_s']:.1f} s")
+    return 0
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add the ``juggling`` sub-command."""
+    p = subparsers.add_parser(
+        "juggling",
+        help="the analytic juggler (Lippi et al. III-A): catch rates, per-phase errors vs "
+        "minimum jerk and DMP, validation statistics (SIMULATED demonstrations by default)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--cycles", type=int, default=1000, help="seeded juggling cycles per run")
+    p.add_argument(
+        "--noise",
+        type=_levels,
+        default=(0.05, 0.10),
+        help="release-velocity noise levels (relative std), comma-separated",
+    )
+    p.add_argument("--tracking", type=float, default=0.0005, help="tracking noise std (m)")
+    p.add_argument("--seed", type=int, default=0, help="seed of data, split and cycles")
+    p.add_argument("--data", default=None, help="a juggling CSV (default: SIMULATED demos)")
+    p.add_argument("--gravity", type=float, default=1.0, help="m/s^2 (9.81: real gravity)")
+    p.add_argument("--out", default=None, help="folder for results.json/.csv, plot, GIF")
+    p.add_argument("--no-dmp", action="store_true", help="skip the DMP competitor")
+    p.add_argument("--no-video", action="store_true", help="skip the GIF")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=main)

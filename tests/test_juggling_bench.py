@@ -1,0 +1,82 @@
+"""``motion-bench juggling`` end to end on a small run."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from baselines import juggling_bench as jb
+from baselines.cli import main
+from motion_envs.datasets.juggling_csv import write_juggling_csv
+from motion_envs.datasets.juggling_demos import generate_demonstrations
+
+
+def test_small_run_writes_the_documented_results(tmp_path, capsys):
+    out = tmp_path / "res"
+    rc = main(["juggling", "--cycles", "30", "--seed", "2", "--out", str(out), "--no-progress"])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "SIMULATED" in text and "catch rate, unperturbed" in text
+    assert "median over demos of max_t |error|" in text
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["simulated"] is True and "SIMULATED" in doc["data"]
+    assert 0.0 <= doc["catch_rate"] <= 1.0
+    keys = {(r["noise"], r["correction"]) for r in doc["catch_rates"]}
+    assert keys == {(0.05, False), (0.05, True), (0.1, False), (0.1, True)}
+    for r in doc["catch_rates"]:
+        assert set(r) >= {"noise", "correction", "catch_rate"}
+    for phase in ("toss", "go_down", "catch", "return"):
+        v = doc["per_phase"][phase]
+        assert {"lippi", "minimum_jerk"} <= set(v["methods"])
+        for m in v["methods"].values():
+            assert m["max_error"] >= m["rmse"] > 0
+        assert doc["validation"][phase]
+    assert doc["split"]["n_train_cycles"] + doc["split"]["n_test_cycles"] == 50
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert sum(r["kind"] == "catch_rate" for r in rows) == 5
+    assert (out / "juggling_fig6.png").stat().st_size > 10_000
+    assert (out / "juggling.gif").read_bytes()[:3] == b"GIF"
+
+
+def test_deterministic_under_a_seed():
+    cfg = jb.JugglingConfig(cycles=40, seed=3, progress=False, use_dmp=False, figure_cycles=1)
+    a, b = jb.run(cfg), jb.run(cfg)
+    assert a["catch_rates"] == [
+        {**r, "seconds": a["catch_rates"][i]["seconds"]} for i, r in enumerate(b["catch_rates"])
+    ]
+    assert a["per_phase"]["catch"]["methods"] == b["per_phase"]["catch"]["methods"]
+
+
+def test_test_split_is_not_used_for_fitting(monkeypatch):
+    """The juggler is fitted on the training cycles only (N by CV inside them)."""
+    seen = {}
+    original = jb.AnalyticJuggler.fit
+
+    def spy(self, demos, cycles=None):
+        seen["cycles"] = cycles
+        return original(self, demos, cycles)
+
+    monkeypatch.setattr(jb.AnalyticJuggler, "fit", spy)
+    cfg = jb.JugglingConfig(cycles=5, seed=1, progress=False, use_dmp=False, figure_cycles=1)
+    doc = jb.run(cfg)
+    demos = doc["_demos"]
+    assert seen["cycles"] is not None and not (seen["cycles"] & doc["_test"])
+    assert len(seen["cycles"]) + len(doc["_test"]) == len(demos.cycles())
+
+
+def test_users_csv(tmp_path, capsys):
+    path = write_juggling_csv(generate_demonstrations(n_cycles=16, seed=4), tmp_path / "mine.csv")
+    rc = main(["juggling", "--data", str(path), "--cycles", "10", "--no-progress", "--no-dmp"])
+    assert rc == 0
+    assert "mine.csv" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "match"),
+    [(["--cycles", "0"], "cycles must be"), (["--data", "missing.csv"], "does not exist")],
+)
+def test_bad_arguments(argv, match, capsys):
+    assert main(["juggling", *argv, "--no-progress"]) == 2
+    assert match in capsys.readouterr().err

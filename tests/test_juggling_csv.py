@@ -1,0 +1,105 @@
+"""The users' juggling CSV: bad-input matrix with line numbers, round trip, segmentation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motion_envs.datasets.juggling_csv import read_juggling_csv, write_juggling_csv
+from motion_envs.datasets.juggling_demos import generate_demonstrations
+
+
+@pytest.fixture(scope="module")
+def demos():
+    return generate_demonstrations(n_cycles=10, seed=5)
+
+
+def _boundaries(labels):
+    k = np.flatnonzero(labels[1:] != labels[:-1]) + 1
+    return [(int(i), str(labels[i])) for i in k]
+
+
+def test_round_trip_with_phase(demos, tmp_path):
+    path = write_juggling_csv(demos, tmp_path / "j.csv")
+    back = read_juggling_csv(path)
+    assert not back.simulated  # a file is whatever the user says it is
+    r, s = demos.recordings[0], back.recordings[0]
+    np.testing.assert_array_equal(r.hand, s.hand)
+    np.testing.assert_array_equal(r.ball, s.ball)
+    np.testing.assert_array_equal(r.phase, s.phase)
+    assert back.cycles() == demos.cycles()
+
+
+def test_segmentation_of_an_unlabelled_csv_recovers_the_phases(demos, tmp_path):
+    path = write_juggling_csv(demos, tmp_path / "nolabels.csv", phase=False)
+    back = read_juggling_csv(path)
+    truth = _boundaries(demos.recordings[0].phase)
+    found = _boundaries(back.recordings[0].phase)
+    found = [f for f in found if f[1] != "none"]
+    assert [b[1] for b in found] == [b[1] for b in truth]
+    for (kt, name), (kf, _) in zip(truth, found, strict=True):
+        if name in ("go_down", "return"):  # release and catch events: exact
+            assert kf == kt, (name, kt, kf)
+        else:  # rest reached (speed criterion): a few samples early at most
+            assert -10 <= kf - kt <= 0, (name, kt, kf)
+    assert len(back.cycles()) == len(demos.cycles())
+
+
+GOOD = "t,x,z,ball_x,ball_z,phase\n"
+
+
+def _write(tmp_path, text, name="bad.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _rows(n=25, phase=True):
+    out = []
+    for k in range(n):
+        ph = ["toss", "go_down", "catch", "return"][min(k * 4 // n, 3)]
+        out.append(f"{k * 0.005},{0.1 + k * 1e-3},{1.0},{0.1},{1.0}" + (f",{ph}" if phase else ""))
+    return out
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("t,x\n0,1\n", r"missing column\(s\) \['z'\]"),
+        ("t,x,z\n", "no data rows"),
+        ("t,x,z,ball_x\n" + "\n".join(f"{k},0,0,0" for k in range(25)), "both be present"),
+        (
+            GOOD + "\n".join([*_rows()[:3], "0.015,abc,1,0,1,toss", *_rows()[4:]]),
+            r"non-numeric value .* line\(s\) 5 ",
+        ),
+        (GOOD + "\n".join([*_rows()[:6], "0.03,nan,1,0,1,toss", *_rows()[7:]]), r"line\(s\) 8 "),
+        (
+            GOOD + "\n".join([*_rows()[:9], "0.0,0.1,1,0,1,toss", *_rows()[10:]]),
+            r"time not strictly increasing .* line\(s\) 11 ",
+        ),
+        (
+            GOOD + "\n".join([*_rows()[:4], "0.02,0.1,1,0,1,juggle", *_rows()[5:]]),
+            r"phase must be one of .* line\(s\) 6 ",
+        ),
+        (GOOD + "\n".join(_rows()[:10]), "fewer than 20 samples starts on line"),
+        ("t,x,z\n" + "\n".join(f"{k * 0.005},0,1" for k in range(25)), "need the ball columns"),
+        (GOOD + "\n".join(r.replace("return", "catch") for r in _rows()), "no complete toss"),
+    ],
+)
+def test_bad_input_matrix(tmp_path, text, match):
+    with pytest.raises(ValueError, match=match) as info:
+        read_juggling_csv(_write(tmp_path, text + "\n"))
+    assert "bad.csv" in str(info.value)
+    assert "\n" not in str(info.value)  # one line
+
+
+def test_non_contiguous_recording(tmp_path):
+    rows = ["t,x,z,ball_x,ball_z,phase,recording"]
+    rows += [r + ",a" for r in _rows()] + [r + ",b" for r in _rows()] + [r + ",a" for r in _rows()]
+    with pytest.raises(ValueError, match=r"recording 'a' is not contiguous .* line\(s\) 52 "):
+        read_juggling_csv(_write(tmp_path, "\n".join(rows) + "\n"))
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        read_juggling_csv(tmp_path / "nope.csv")
