@@ -408,3 +408,25 @@ def test_zero_action_cycles_are_motion_bench_juggling_cycles():
         np.testing.assert_allclose(np.array(hands), ref.hand[1:], atol=1e-9, rtol=0)
         outcomes.append(fast[i].caught)
     assert sum(outcomes) >= n // 2  # mostly caught: the comparison covers catches
+
+
+def test_users_csv_as_data(tmp_path):
+    """``data=PATH`` fits the juggler on the users' recordings; bad paths fail clearly."""
+    from motion_envs.datasets.juggling_csv import write_juggling_csv
+    from motion_envs.datasets.juggling_demos import generate_demonstrations
+
+    path = write_juggling_csv(generate_demonstrations(n_cycles=16, seed=8), tmp_path / "me.csv")
+    env = gym.make(ENV_ID, data=str(path), max_cycles=1)
+    default = gym.make(ENV_ID, max_cycles=1)
+    assert env.observation_space == default.observation_space  # bounds ignore the data
+    env.reset(seed=0)
+    done = False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
+        assert env.observation_space.contains(obs)
+        done = terminated or truncated
+    assert info["catches"] == 1
+    home = env.unwrapped.juggler.home_
+    assert not np.allclose(home, default.unwrapped.juggler.home_)  # fitted on the CSV
+    with pytest.raises(FileNotFoundError, match=r"nowhere\.csv"):
+        JugglingEnv(data=str(tmp_path / "nowhere.csv"))
