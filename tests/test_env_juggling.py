@@ -338,7 +338,8 @@ def test_bad_arguments_raise_value_error(kwargs, match):
 
 
 def test_noise_argument_forms():
-    assert JugglingEnv(noise=0.05).noise == JugglingNoise(release=0.05)
+    assert JugglingEnv(noise=0.05).noise == JugglingNoise(release=0.05, tracking=0.0005)
+    assert JugglingEnv(noise=0.0).noise == JugglingNoise()
     assert JugglingEnv(noise={"tracking": 0.01}).noise == JugglingNoise(tracking=0.01)
     try:
         env = JugglingEnv(gravity=9.81)
@@ -430,3 +431,28 @@ def test_users_csv_as_data(tmp_path):
     assert not np.allclose(home, default.unwrapped.juggler.home_)  # fitted on the CSV
     with pytest.raises(FileNotFoundError, match=r"nowhere\.csv"):
         JugglingEnv(data=str(tmp_path / "nowhere.csv"))
+
+
+def test_catch_rates_equal_motion_bench_juggling():
+    """``motion-bench juggling --cycles 40 --noise 0.1 --seed 0`` (its run(config)) and 40
+    zero-action episodes ``reset(seed=0, options={"cycle": i})``: the same catch rates,
+    with and without the eq. 10 correction (which the noise makes matter)."""
+    from baselines.juggling_bench import JugglingConfig, run
+
+    n = 40
+    doc = run(JugglingConfig(cycles=n, noise=(0.1,), use_dmp=False, progress=False))
+    env = JugglingEnv(noise=0.1, max_cycles=1)
+    assert doc["catch_rate"] == 1.0
+    for row in doc["catch_rates"]:
+        env.juggler.correction = row["correction"]
+        caught = 0
+        for i in range(n):
+            env.reset(seed=0, options={"cycle": i})
+            done = False
+            while not done:
+                _, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
+                done = terminated or truncated
+            caught += info["catches"]
+        assert caught / n == row["catch_rate"], row
+    rates = {r["correction"]: r["catch_rate"] for r in doc["catch_rates"]}
+    assert rates[False] < rates[True]  # the comparison covers drops too

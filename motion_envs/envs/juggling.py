@@ -26,6 +26,7 @@ __all__ = [
     "HAND_SPEED_MARGIN",
     "OBS_DIM",
     "POSITION_MARGIN",
+    "TRACKING_NOISE",
     "JugglingEnv",
     "cycle_rngs",
     "load_juggler",
@@ -55,6 +56,10 @@ HAND_SPEED_MARGIN = 10.0
 OBS_DIM = 16
 _ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
 
+
+#: Tracking noise (m) that comes with a release-noise level, as in ``motion-bench juggling
+#: --noise LEVEL`` (its ``--tracking`` default).
+TRACKING_NOISE = 0.0005
 
 #: Seed, demonstration count and held-out share with which ``motion-bench juggling``
 #: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
@@ -100,7 +105,8 @@ def _check_noise(noise: Any) -> JugglingNoise:
             )
         values = dict(noise)
     elif isinstance(noise, (int, float, np.floating)) and not isinstance(noise, bool):
-        values = {"release": float(noise)}
+        level = float(noise)
+        values = {"release": level, "tracking": TRACKING_NOISE if level > 0 else 0.0}
     else:
         raise ValueError(
             "noise must be a number (release-velocity std, relative), a mapping with keys "
@@ -141,9 +147,13 @@ class JugglingEnv(gym.Env):
     public.
 
     The zero action reproduces the analytic juggler exactly: the first cycle of the episode
-    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of ``motion-bench juggling
-    --seed S`` in the MuJoCo scene (same release, same catch step, same hand path to 1e-9;
-    tested), and the episode goes on juggling (return, next toss) as the juggler does.
+    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of the analytic juggler's
+    seeded runner (``motion_envs.models.juggling_run``) with seed ``S``, the runner
+    ``motion-bench juggling`` uses: same release, same catch or drop at the same control
+    step, same hand path to 1e-9 (tested against the pure-model runner and the same runner
+    in the MuJoCo scene; and ``motion-bench juggling --seed 0 --noise LEVEL``'s catch rates
+    over its first cycles equal the zero-action episodes' with ``noise=LEVEL``, seed 0).
+    The episode then goes on juggling (return, next toss) as the juggler does.
 
     ## Action Space
     The action space is a `Box(-1, 1, (2,), float32)`: the offset of the hand from the
@@ -220,7 +230,7 @@ class JugglingEnv(gym.Env):
 
     | Parameter        | Type          | Default | Description |
     |------------------|---------------|---------|-------------|
-    | `noise`          | **float/dict** | `0.0`  | release-velocity std relative to the hand's velocity (0.05 = 5 %), or a dict with keys `release`, `tracking` (tracking: std of the tracked hand position, m) |
+    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m) |
     | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated |
     | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1 |
     | `reward_weights` | **dict**      | `None`  | weights of the reward terms, keys `catch`, `drop`, `deviation`, `action` (None: 10, 10, 1, 0.01) |
