@@ -48,8 +48,15 @@ from motion_envs.datasets.juggling_demos import (
     generate_demonstrations,
 )
 from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
-from motion_envs.models.juggling_run import run_cycle, run_cycles_fast
+from motion_envs.models.juggling_run import (
+    cycle_rngs,
+    fit_juggler,
+    run_cycle,
+    run_cycles,
+    run_cycles_fast,
+)
 from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
+from motion_envs.models.juggling_world import BallisticWorld
 from motion_envs.models.serialization import atomic_write_text
 
 __all__ = ["JugglingConfig", "format_report", "register", "run", "write_outputs"]
@@ -60,6 +67,8 @@ FloatArray = NDArray[np.float64]
 TARGET_UNPERTURBED = 0.99
 TARGET_NOISE5_CORRECTED = 0.90
 TARGET_VARIABILITY_RATIO = 1.5
+
+VIDEO_CAPTION = "analytic juggler in the MuJoCo scene (SIMULATED)"
 
 
 @dataclass
@@ -79,6 +88,9 @@ class JugglingConfig:
     dmp_weights: int = 10
     use_dmp: bool = True
     figure_cycles: int = 3
+    world: str = "mujoco"
+    mujoco_cycles: int = 100
+    mujoco_noise_cycles: int = 25
     progress: bool = True
     task: JugglingTask = field(default_factory=JugglingTask)
 
@@ -95,21 +107,6 @@ def load_demos(config: JugglingConfig) -> JugglingDemos:
     from motion_envs.datasets.juggling_csv import read_juggling_csv
 
     return read_juggling_csv(config.data, task=config.task)
-
-
-def split_cycles(
-    demos: JugglingDemos, test_fraction: float, seed: int
-) -> tuple[set[tuple[int, int]], set[tuple[int, int]]]:
-    """Train and test ``(recording, cycle)`` sets: a seeded split by demonstration."""
-    if not 0 < test_fraction < 1:
-        raise ValueError(f"test_fraction must be in (0, 1); got {test_fraction}")
-    cycles = demos.cycles()
-    if len(cycles) < 8:
-        raise ValueError(f"{demos.name}: {len(cycles)} complete cycles; at least 8 are needed")
-    order = np.random.default_rng(seed).permutation(len(cycles))
-    n_test = max(1, round(test_fraction * len(cycles)))
-    test = {cycles[i] for i in order[:n_test]}
-    return set(cycles) - test, test
 
 
 def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:
@@ -213,7 +210,7 @@ def validation(juggler: AnalyticJuggler) -> dict[str, list[dict[str, float | int
 
 def catch_rates(
     juggler: AnalyticJuggler, config: JugglingConfig
-) -> tuple[float, list[dict[str, Any]]]:
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """Unperturbed catch rate and the perturbed runs (same seeded cycles in each)."""
     from tqdm import tqdm
 
@@ -225,22 +222,44 @@ def catch_rates(
         runs, desc="catch-rate runs", file=sys.stderr, disable=not config.progress
     ):
         juggler.correction = corr
+        noise = JugglingNoise(level, tracking)
         t0 = time.perf_counter()
-        res = run_cycles_fast(juggler, config.cycles, JugglingNoise(level, tracking), config.seed)
-        rows.append(
-            {
-                "noise": level,
-                "tracking": tracking,
-                "correction": corr,
-                "catch_rate": float(np.mean([r.caught for r in res])),
-                "dropped": int(sum(r.dropped for r in res)),
-                "no_release": int(sum(not r.released for r in res)),
-                "mean_corrections": float(np.mean([r.corrections for r in res])),
+        res = run_cycles_fast(juggler, config.cycles, noise, config.seed)
+        row = {
+            "noise": level,
+            "tracking": tracking,
+            "correction": corr,
+            "catch_rate": float(np.mean([r.caught for r in res])),
+            "dropped": int(sum(r.dropped for r in res)),
+            "no_release": int(sum(not r.released for r in res)),
+            "mean_corrections": float(np.mean([r.corrections for r in res])),
+            "seconds": time.perf_counter() - t0,
+        }
+        if config.world == "mujoco":
+            m = min(
+                config.cycles, config.mujoco_cycles if level == 0 else config.mujoco_noise_cycles
+            )
+            t0 = time.perf_counter()
+            mj = run_cycles(juggler, m, noise, config.seed, world=_scene(juggler.task))
+            row["mujoco"] = {
+                "cycles": m,
+                "catch_rate": float(np.mean([r.caught for r in mj])) if m else None,
+                "agrees_with_pure_model": all(
+                    (a.caught, a.dropped, a.steps, a.corrections)
+                    == (b.caught, b.dropped, b.steps, b.corrections)
+                    for a, b in zip(mj, res, strict=False)
+                ),
                 "seconds": time.perf_counter() - t0,
             }
-        )
+        rows.append(row)
     juggler.correction = True
-    return rows[0]["catch_rate"], rows[1:]
+    return rows[0], rows[1:]
+
+
+def _scene(task: JugglingTask) -> Any:
+    from motion_envs.envs.juggling_scene import JugglingScene
+
+    return JugglingScene(task)
 
 
 def run(config: JugglingConfig) -> dict[str, Any]:
@@ -251,6 +270,8 @@ def run(config: JugglingConfig) -> dict[str, Any]:
     """
     if config.cycles < 1:
         raise ValueError(f"cycles must be >= 1; got {config.cycles}")
+    if config.world not in ("mujoco", "model"):
+        raise ValueError(f"world must be 'mujoco' or 'model'; got {config.world!r}")
     for level in config.noise:
         if not (math.isfinite(level) and 0 <= level < 1):
             raise ValueError(f"noise levels must be in [0, 1); got {level}")
@@ -258,9 +279,10 @@ def run(config: JugglingConfig) -> dict[str, Any]:
     t0 = time.perf_counter()
     demos = load_demos(config)
     timing["demonstrations_s"] = time.perf_counter() - t0
-    train, test = split_cycles(demos, config.test_fraction, config.seed)
     t0 = time.perf_counter()
-    juggler = AnalyticJuggler(task=demos.task, n_sines=config.n_sines).fit(demos, train)
+    juggler, train, test = fit_juggler(
+        demos, config.seed, config.test_fraction, n_sines=config.n_sines
+    )
     timing["fit_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     per_phase = phase_errors(
@@ -271,13 +293,12 @@ def run(config: JugglingConfig) -> dict[str, Any]:
     checks = validation(juggler)
     timing["validation_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    rate, rates = catch_rates(juggler, config)
+    detail, rates = catch_rates(juggler, config)
+    rate = detail["catch_rate"]
     timing["catch_rates_s"] = time.perf_counter() - t0
-    from motion_envs.models.juggling_run import cycle_rngs
-    from motion_envs.models.juggling_world import BallisticWorld
-
+    world = _scene(demos.task) if config.world == "mujoco" else BallisticWorld(demos.task)
     traces = [
-        run_cycle(juggler, BallisticWorld(demos.task), JugglingNoise(), r, True, True)
+        run_cycle(juggler, world, JugglingNoise(), r, True, True)
         for r in cycle_rngs(config.seed + 1, config.figure_cycles)
     ]
     five = next((r for r in rates if abs(r["noise"] - 0.05) < 1e-12 and r["correction"]), None)
@@ -299,7 +320,9 @@ def run(config: JugglingConfig) -> dict[str, Any]:
         "benchmark": "juggling (Lippi, Avizzano & Ruffaldi 2011, section III-A)",
         "data": demos.label(),
         "simulated": demos.simulated,
-        "world": "pure model (BallisticWorld)",
+        "world": "MuJoCo scene (JugglingScene) and the equal vectorised pure model"
+        if config.world == "mujoco"
+        else "pure model (BallisticWorld)",
         "task": asdict(demos.task),
         "config": {k: v for k, v in asdict(config).items() if k not in ("task", "progress")},
         "split": {
@@ -309,14 +332,24 @@ def run(config: JugglingConfig) -> dict[str, Any]:
             "seed": config.seed,
         },
         "catch_rate": rate,
+        "catch_rate_detail": detail,
         "catch_rates": rates,
         "per_phase": per_phase,
+        "per_phase_notes": {
+            "grid": f"every example resampled to {config.n_points} points of tau = t / T",
+            "toss": "examples run from the toss start to the hand's turning point (the "
+            "release lies inside; the eq. 9 plan ends there)",
+            "criteria": "median over held-out demonstrations of max_t |error| and of RMSE (m)",
+            "within_person": "median over the person's training demonstrations re-targeted "
+            "to the held-out end points",
+        },
         "validation": checks,
         "targets": targets,
         "timing": timing,
         "_demos": demos,
         "_test": test,
         "_traces": traces,
+        "_juggler": juggler,
     }
 
 
@@ -348,6 +381,15 @@ def format_report(doc: dict[str, Any]) -> str:
         lines.append(
             f"{r['noise']:>14.2f}{r['tracking']:>14.4f}{'on' if r['correction'] else 'off':>8}"
             f"{r['catch_rate']:>12.3f}"
+        )
+    mj = [r for r in [doc.get("catch_rate_detail", {}), *doc["catch_rates"]] if "mujoco" in r]
+    if mj:
+        same = all(r["mujoco"]["agrees_with_pure_model"] for r in mj)
+        n_mj = sum(r["mujoco"]["cycles"] for r in mj)
+        lines.append(
+            f"MuJoCo scene: {n_mj} of these cycles stepped in JugglingScene "
+            f"({'identical outcomes' if same else 'OUTCOMES DIFFER'} from the pure model); "
+            + ", ".join(f"{r['mujoco']['catch_rate']:.3f}" for r in mj)
         )
     methods = list(next(iter(doc["per_phase"].values()))["methods"])
     lines += [
@@ -513,6 +555,66 @@ def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
     return path
 
 
+class _Filming:
+    """A JugglingScene that renders every ``stride``-th step (camera ``side``)."""
+
+    def __init__(self, scene: Any, stride: int, width: int = 480, height: int = 360) -> None:
+        import mujoco
+
+        self.scene, self.stride, self.task = scene, stride, scene.task
+        scene.model.vis.global_.offwidth = max(scene.model.vis.global_.offwidth, width)
+        scene.model.vis.global_.offheight = max(scene.model.vis.global_.offheight, height)
+        self.renderer = mujoco.Renderer(scene.model, height, width)
+        self.frames: list[NDArray[np.uint8]] = []
+        self._k = 0
+
+    def _shoot(self) -> None:
+        self.scene.sync()
+        self.renderer.update_scene(self.scene.data, camera="side")
+        self.frames.append(self.renderer.render().copy())
+
+    def reset(self, hand_pos: Any, **kwargs: Any) -> Any:
+        state = self.scene.reset(hand_pos, **kwargs)
+        self._k = 0
+        self._shoot()
+        return state
+
+    def step(self, hand_target: Any, release_armed: bool) -> Any:
+        state = self.scene.step(hand_target, release_armed)
+        self._k += 1
+        if self._k % self.stride == 0:
+            self._shoot()
+        return state
+
+
+def write_mujoco_video(doc: dict[str, Any], path: Path, cycles: int = 1, fps: int = 20) -> Path:
+    """A GIF of the analytic juggler in the MuJoCo scene (``rgb_array`` frames, camera side).
+
+    Replays the figure's first ``cycles`` cycles (same seeds) with a renderer attached.
+    """
+    from PIL import Image, ImageDraw
+
+    juggler: AnalyticJuggler = doc["_juggler"]
+    task = juggler.task
+    film = _Filming(_scene(task), max(1, round(1 / (fps * task.dt))))
+    for rngs in cycle_rngs(doc["config"]["seed"] + 1, cycles):
+        run_cycle(juggler, film, JugglingNoise(), rngs, through_return=True)
+    film.renderer.close()
+    images = []
+    for frame in film.frames:
+        img = Image.fromarray(frame)
+        ImageDraw.Draw(img).text(
+            (8, 8), "analytic juggler in the MuJoCo scene (SIMULATED)", fill="black"
+        )
+        images.append(img.convert("P", palette=Image.Palette.ADAPTIVE))
+    tmp = path.with_name(f".{path.name}.tmp")
+    images[0].save(
+        tmp, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0
+    )
+    tmp.replace(path)
+    return path
+
+
 def write_outputs(doc: dict[str, Any], out: Path, video: bool = True) -> list[Path]:
     """results.json, results.csv, juggling_fig6.png and (``video``) juggling.gif in ``out``."""
     out.mkdir(parents=True, exist_ok=True)
@@ -523,7 +625,18 @@ def write_outputs(doc: dict[str, Any], out: Path, video: bool = True) -> list[Pa
     plot_figure6(doc, out / "juggling_fig6.png")
     paths.append(out / "juggling_fig6.png")
     if video:
-        paths.append(write_animation(doc, out / "juggling.gif"))
+        target = out / "juggling.gif"
+        if doc["config"]["world"] == "mujoco":
+            try:
+                paths.append(write_mujoco_video(doc, target))
+                return paths
+            except Exception as exc:  # no OpenGL context: draw the same cycles with matplotlib
+                print(
+                    f"motion-bench juggling: MuJoCo rendering unavailable ({exc}); "
+                    "the GIF is drawn with matplotlib",
+                    file=sys.stderr,
+                )
+        paths.append(write_animation(doc, target))
     return paths
 
 
@@ -546,6 +659,9 @@ def main(args: argparse.Namespace) -> int:
         data=args.data,
         progress=not args.no_progress,
         use_dmp=not args.no_dmp,
+        world=args.world,
+        mujoco_cycles=args.mujoco_cycles,
+        mujoco_noise_cycles=args.mujoco_cycles // 4,
         task=JugglingTask(gravity=args.gravity),
     )
     t0 = time.perf_counter()
@@ -580,6 +696,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--data", default=None, help="a juggling CSV (default: SIMULATED demos)")
     p.add_argument("--gravity", type=float, default=1.0, help="m/s^2 (9.81: real gravity)")
     p.add_argument("--out", default=None, help="folder for results.json/.csv, plot, GIF")
+    p.add_argument(
+        "--world",
+        choices=("mujoco", "model"),
+        default="mujoco",
+        help="mujoco: the figure, the video and the first --mujoco-cycles cycles of each run "
+        "in the MuJoCo scene (checked equal to the pure model, which runs all cycles); "
+        "model: pure model only (fast)",
+    )
+    p.add_argument(
+        "--mujoco-cycles",
+        type=int,
+        default=100,
+        help="unperturbed cycles stepped in MuJoCo (a quarter of it per perturbed run)",
+    )
     p.add_argument("--no-dmp", action="store_true", help="skip the DMP competitor")
     p.add_argument("--no-video", action="store_true", help="skip the GIF")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")

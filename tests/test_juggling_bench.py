@@ -15,7 +15,8 @@ from motion_envs.datasets.juggling_demos import generate_demonstrations
 
 def test_small_run_writes_the_documented_results(tmp_path, capsys):
     out = tmp_path / "res"
-    rc = main(["juggling", "--cycles", "30", "--seed", "2", "--out", str(out), "--no-progress"])
+    argv = ["juggling", "--cycles", "30", "--seed", "2", "--mujoco-cycles", "8"]
+    rc = main([*argv, "--out", str(out), "--no-progress"])
     assert rc == 0
     text = capsys.readouterr().out
     assert "SIMULATED" in text and "catch rate, unperturbed" in text
@@ -38,10 +39,16 @@ def test_small_run_writes_the_documented_results(tmp_path, capsys):
     assert sum(r["kind"] == "catch_rate" for r in rows) == 5
     assert (out / "juggling_fig6.png").stat().st_size > 10_000
     assert (out / "juggling.gif").read_bytes()[:3] == b"GIF"
+    # the MuJoCo scene ran the first cycles of every run, with the pure model's outcomes
+    for r in [doc["catch_rate_detail"], *doc["catch_rates"]]:
+        assert r["mujoco"]["agrees_with_pure_model"] is True
+    assert doc["catch_rate_detail"]["mujoco"]["cycles"] == 8
 
 
 def test_deterministic_under_a_seed():
-    cfg = jb.JugglingConfig(cycles=40, seed=3, progress=False, use_dmp=False, figure_cycles=1)
+    cfg = jb.JugglingConfig(
+        cycles=40, seed=3, progress=False, use_dmp=False, figure_cycles=1, world="model"
+    )
     a, b = jb.run(cfg), jb.run(cfg)
     assert a["catch_rates"] == [
         {**r, "seconds": a["catch_rates"][i]["seconds"]} for i, r in enumerate(b["catch_rates"])
@@ -59,7 +66,9 @@ def test_test_split_is_not_used_for_fitting(monkeypatch):
         return original(self, demos, cycles)
 
     monkeypatch.setattr(jb.AnalyticJuggler, "fit", spy)
-    cfg = jb.JugglingConfig(cycles=5, seed=1, progress=False, use_dmp=False, figure_cycles=1)
+    cfg = jb.JugglingConfig(
+        cycles=5, seed=1, progress=False, use_dmp=False, figure_cycles=1, world="model"
+    )
     doc = jb.run(cfg)
     demos = doc["_demos"]
     assert seen["cycles"] is not None and not (seen["cycles"] & doc["_test"])
@@ -68,15 +77,26 @@ def test_test_split_is_not_used_for_fitting(monkeypatch):
 
 def test_users_csv(tmp_path, capsys):
     path = write_juggling_csv(generate_demonstrations(n_cycles=16, seed=4), tmp_path / "mine.csv")
-    rc = main(["juggling", "--data", str(path), "--cycles", "10", "--no-progress", "--no-dmp"])
+    argv = ["juggling", "--data", str(path), "--cycles", "10", "--world", "model", "--no-dmp"]
+    rc = main([*argv, "--no-progress"])
     assert rc == 0
     assert "mine.csv" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(
     ("argv", "match"),
-    [(["--cycles", "0"], "cycles must be"), (["--data", "missing.csv"], "does not exist")],
+    [
+        (["--cycles", "0"], "cycles must be"),
+        (["--data", "missing.csv"], "does not exist"),
+        (["--noise", "0.05,2"], "noise levels must be"),
+    ],
 )
 def test_bad_arguments(argv, match, capsys):
     assert main(["juggling", *argv, "--no-progress"]) == 2
     assert match in capsys.readouterr().err
+
+
+def test_motion_bench_all_includes_juggling():
+    from baselines.run_all import JOBS
+
+    assert ("juggling",) in [job[2] for job in JOBS]

@@ -202,3 +202,39 @@ def test_minimum_jerk_closed_form():
 def test_unfitted_juggler_raises():
     with pytest.raises(ValueError, match="not fitted"):
         AnalyticJuggler().reset(BallisticWorld().reset([0.2, 1.0]))
+
+
+def test_real_gravity_is_the_same_gesture_faster():
+    """Under 9.81 m/s^2 the person's movements are time-scaled; the juggler still catches."""
+    from motion_envs.models.juggling_run import fit_juggler
+
+    task = JugglingTask(gravity=9.81)
+    assert task.toss_threshold == pytest.approx(3.0 * 9.81)
+    demos = generate_demonstrations(n_cycles=30, seed=1, task=task)
+    lengths = [len(s.times) for s in demos.segments("toss")]
+    assert 40 <= np.median(lengths) <= 80  # about sqrt(1 / 9.81) of the default sizes
+    juggler, train, test = fit_juggler(demos, seed=0, n_sines=6)
+    assert not train & test
+    res = run_cycles_fast(juggler, 50, JugglingNoise(), seed=0)
+    assert np.mean([r.caught for r in res]) >= 0.95
+
+
+def test_juggler_pickles_mid_cycle(juggler):
+    """Juggling-v0 pickles its juggler: a copy taken mid-cycle continues identically."""
+    import pickle
+
+    world = BallisticWorld(juggler.task)
+    state = world.reset(juggler.home_)
+    juggler.reset(state, np.random.default_rng(3))
+    for _ in range(250):  # into the go-down phase
+        state = world.step(*juggler.command(state))
+    twin = pickle.loads(pickle.dumps(juggler))
+    world2 = pickle.loads(pickle.dumps(world))
+    s1, s2 = state, state
+    for _ in range(200):
+        t1, a1 = juggler.command(s1)
+        t2, a2 = twin.command(s2)
+        np.testing.assert_array_equal(t1, t2)
+        assert a1 == a2
+        s1, s2 = world.step(t1, a1), world2.step(t2, a2)
+    assert juggler.phase == twin.phase

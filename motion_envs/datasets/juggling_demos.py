@@ -47,6 +47,7 @@ __all__ = [
     "draw_person",
     "generate_demonstrations",
     "quintic",
+    "split_cycles",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -145,6 +146,21 @@ class JugglingDemos:
         return f"{self.name} [{SIMULATED_LABEL}]" if self.simulated else self.name
 
 
+def split_cycles(
+    demos: JugglingDemos, test_fraction: float, seed: int
+) -> tuple[set[tuple[int, int]], set[tuple[int, int]]]:
+    """Train and test ``(recording, cycle)`` sets: a seeded split by demonstration."""
+    if not 0 < test_fraction < 1:
+        raise ValueError(f"test_fraction must be in (0, 1); got {test_fraction}")
+    cycles = demos.cycles()
+    if len(cycles) < 8:
+        raise ValueError(f"{demos.name}: {len(cycles)} complete cycles; at least 8 are needed")
+    order = np.random.default_rng(seed).permutation(len(cycles))
+    n_test = max(1, round(test_fraction * len(cycles)))
+    test = {cycles[i] for i in order[:n_test]}
+    return set(cycles) - test, test
+
+
 # -- quintic (minimum-jerk) boundary-value movements ------------------------------------
 def quintic(
     p0: FloatArray,
@@ -240,6 +256,9 @@ class _Session:
         amps = rng.uniform(0.5e-4, 1.5e-4, size=(2, 2))
         self.tremor = (freqs, phases, amps)
         self.start = np.asarray(style.home, dtype=np.float64)
+        # styles are for the default gravity; under gravity g the same sizes take
+        # sqrt(g0 / g) of the time (lengths fixed: T ~ sqrt(L / g)), the reaction delay not
+        self.time_scale = float(np.sqrt(JugglingTask().gravity / task.gravity))
 
     def _tremor(self, t: FloatArray) -> FloatArray:
         f, ph, a = self.tremor
@@ -269,9 +288,11 @@ class _Session:
         start = self.start
         # 1. toss: plan to the top, stop sharply; release at the acceleration threshold
         top = start + (np.asarray(st.toss) * (1 + st.variation * self.rng.standard_normal(2)))
-        t_toss = self._vary(st.toss_time)
-        v_top = np.array([self._vary(st.toss_vx), 0.0])
-        c_toss = quintic(start, z2, z2, top, v_top, np.array([0.0, st.brake]), t_toss)
+        ts = self.time_scale
+        t_toss = self._vary(st.toss_time) * ts
+        v_top = np.array([self._vary(st.toss_vx) / ts, 0.0])
+        brake = np.array([0.0, st.brake / ts**2])
+        c_toss = quintic(start, z2, z2, top, v_top, brake, t_toss)
         n_plan = int(np.floor(t_toss / dt))
         k = np.arange(k0, k0 + n_plan + 1)
         y = _quintic_eval(c_toss, k * dt - t0) + self._tremor(k * dt)
@@ -296,9 +317,10 @@ class _Session:
         s_catch = (v_ball[1] + np.sqrt(max(disc, 0.0))) / g
         t_c = t_rel + s_catch
         target = ballistic_position(p_rel, v_ball, s_catch, g)
-        t_catch_reach = self._vary(st.catch_time)
+        t_catch_reach = self._vary(st.catch_time) * ts
         k_bottom = round((t_c - t_catch_reach) / dt)
-        k_bottom = max(k_bottom, k_rel + int(0.5 / dt))
+        k_bottom = max(k_bottom, k_rel + int(0.5 * ts / dt))
+        k_bottom = min(k_bottom, int(np.floor(t_c / dt)) - 4)
         s_rel = t_rel - t0
         p_r, v_r, a_r = (_quintic_eval(c_toss, np.array(s_rel), o) for o in range(3))
         bottom = self._point((start[0] + st.bottom[0], start[1] + st.bottom[1]))
@@ -308,7 +330,8 @@ class _Session:
         t_b = k_bottom * dt
         aim = target + st.aim_error * self.rng.standard_normal(2)
         c_aim = quintic(bottom, z2, z2, aim, z2, z2, t_c - t_b)
-        t_fix = t_b + self._vary(st.reaction)
+        # the correction comes after the reaction delay, at the latest 60 % into the reach
+        t_fix = t_b + min(self._vary(st.reaction), 0.6 * (t_c - t_b))
         q = [_quintic_eval(c_aim, np.array(t_fix - t_b), o) for o in range(3)]
         c_fix = quintic(q[0], q[1], q[2], target, z2, z2, t_c - t_fix)
         k_fix = int(np.ceil(t_fix / dt))
@@ -332,7 +355,7 @@ class _Session:
         c_last, t_last = (c_fix, t_fix) if t_touch >= t_fix else (c_aim, t_b)
         q = [_quintic_eval(c_last, np.array(t_touch - t_last), o) for o in range(3)]
         home_next = self._point(st.home)
-        k_home = k_touch + round(self._vary(st.return_time) / dt)
+        k_home = k_touch + round(self._vary(st.return_time) * ts / dt)
         c_ret = quintic(q[0], q[1], q[2], home_next, z2, z2, (k_home - k_touch) * dt)
         self._append(c_ret, t_touch, k_touch, k_home, "return")
         self.start = home_next

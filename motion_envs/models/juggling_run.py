@@ -11,16 +11,24 @@ are independent and a run is reproducible however it is split.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.models.juggling_juggler import AnalyticJuggler
 from motion_envs.models.juggling_task import PHASES as PHASES_ORDER
-from motion_envs.models.juggling_task import JugglingNoise
+from motion_envs.models.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_world import TRACKING_ROWS, BallisticWorld
 
-__all__ = ["CycleResult", "cycle_rngs", "run_cycle", "run_cycles", "run_cycles_fast"]
+__all__ = [
+    "CycleResult",
+    "cycle_rngs",
+    "fit_juggler",
+    "run_cycle",
+    "run_cycles",
+    "run_cycles_fast",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -39,6 +47,26 @@ class CycleResult:
     hand: FloatArray | None = None  # (K, 2) commanded = true hand
     ball: FloatArray | None = None
     phase: NDArray[np.str_] | None = None
+
+
+def fit_juggler(
+    demos: object,
+    seed: int = 0,
+    test_fraction: float = 0.25,
+    **kwargs: object,
+) -> tuple[AnalyticJuggler, set[tuple[int, int]], set[tuple[int, int]]]:
+    """The juggler as ``motion-bench juggling --seed seed`` fits it, and the split.
+
+    ``demos`` (a :class:`~motion_envs.datasets.juggling_demos.JugglingDemos`) is split by
+    demonstration (:func:`~motion_envs.datasets.juggling_demos.split_cycles`); the juggler
+    (``AnalyticJuggler(task=demos.task, **kwargs)``) is fitted on the training cycles only.
+    Returns ``(juggler, train, test)``.
+    """
+    from motion_envs.datasets.juggling_demos import split_cycles
+
+    train, test = split_cycles(demos, test_fraction, seed)  # type: ignore[arg-type]
+    juggler = AnalyticJuggler(task=demos.task, **kwargs).fit(demos, train)  # type: ignore[attr-defined,arg-type]
+    return juggler, train, test
 
 
 def cycle_rngs(seed: int, n: int) -> list[tuple[np.random.Generator, np.random.Generator]]:
@@ -161,7 +189,7 @@ def run_cycles_fast(
         j = copy.copy(juggler)
         j.reset(state, jr)
         jugs.append(j)
-    tracks = None if track[0] is None else np.stack(track)
+    tracks = None if track[0] is None else np.stack([t for t in track if t is not None])
     lmax = max(int(np.ceil(f.duration_range[1] / dt)) + 2 for f in juggler.phases_.values())
     grid = np.empty((n, lmax, 2))
     length = np.empty(n, dtype=np.int64)
@@ -216,7 +244,7 @@ def run_cycles_fast(
             | ((phase == 2) & caught_ev)
             | ((end_k >= 0) & (kj >= end_k))
         )
-        for b in np.flatnonzero(switch):
+        for b in map(int, np.flatnonzero(switch)):
             j = jugs[b]
             if phase[b] == 0:
                 v = (last1[b] - last0[b]) / dt
@@ -234,11 +262,11 @@ def run_cycles_fast(
                 far = np.hypot(px - ends[:, 0], pz - ends[:, 1]) > juggler.correction_tolerance * (
                     1 - 1e-9
                 )
-                for b in np.flatnonzero(cand & far & (s > dt)):
+                for b in map(int, np.flatnonzero(cand & far & (s > dt))):
                     j = jugs[b]
                     j._k = int(kj[b])
                     before = len(j.corrections)
-                    j._correct(_StateView(time_prev, ball[b], ball_v[b]))
+                    j._correct(cast(JugglingState, _StateView(time_prev, ball[b], ball_v[b])))
                     if len(j.corrections) > before:
                         corrections[b] += 1
                         load(b)

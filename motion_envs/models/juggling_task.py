@@ -20,6 +20,7 @@ Ballistic flight (closed form, used everywhere)::
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,7 +58,10 @@ class JugglingTask:
         Hand centre to ball centre distance (m) that counts as a catch.
     toss_threshold:
         m/s^2: the ball is released when the hand's vertical acceleration (second
-        backward difference over ``dt``) drops below ``-toss_threshold``.
+        backward difference over ``dt``) drops below ``-toss_threshold``. Default (NaN):
+        ``3 * gravity`` (3.0 at the default gravity): accelerations of the same movement
+        sizes scale with ``g`` (times with ``1 / sqrt(g)``), so the toss stays the same
+        gesture under real gravity.
     floor_z:
         Ball centre below this height (m) is a drop and ends the cycle.
     home:
@@ -69,7 +73,7 @@ class JugglingTask:
     ball_radius: float = 0.035
     ball_mass: float = 0.13
     catch_radius: float = 0.06
-    toss_threshold: float = 3.0
+    toss_threshold: float = math.nan  # NaN: 3 * gravity
     floor_z: float = 0.5
     home: tuple[float, float] = field(default=(0.2, 1.0))
 
@@ -78,6 +82,8 @@ class JugglingTask:
             value = getattr(self, name)
             if not np.isfinite(value) or value <= 0:
                 raise ValueError(f"JugglingTask.{name} must be finite and > 0; got {value}")
+        if math.isnan(self.toss_threshold):
+            object.__setattr__(self, "toss_threshold", 3.0 * float(self.gravity))
         if not np.isfinite(self.toss_threshold) or self.toss_threshold <= 0:
             raise ValueError(
                 f"JugglingTask.toss_threshold must be finite and > 0; got {self.toss_threshold}"
