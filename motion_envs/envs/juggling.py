@@ -61,7 +61,7 @@ _ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name i
 #: --noise LEVEL`` (its ``--tracking`` default).
 TRACKING_NOISE = 0.0005
 
-#: Seed, demonstration count and held-out share with which ``motion-bench juggling``
+#: Seed (of the demonstrations and the split) and held-out share with which ``motion-bench juggling``
 #: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
 FIT_SEED = 0
 FIT_TEST_FRACTION = 0.25
@@ -70,7 +70,7 @@ FIT_TEST_FRACTION = 0.25
 @functools.lru_cache(maxsize=8)
 def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
     from motion_envs.datasets.juggling_demos import generate_demonstrations
-    from motion_envs.models.juggling_juggler import AnalyticJuggler
+    from motion_envs.models.juggling_run import fit_juggler
 
     if data is None:
         demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
@@ -78,12 +78,8 @@ def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
         from motion_envs.datasets.juggling_csv import read_juggling_csv
 
         demos = read_juggling_csv(data, task=task)
-    # the training cycles of motion-bench juggling's split by demonstration
-    cycles = demos.cycles()
-    order = np.random.default_rng(FIT_SEED).permutation(len(cycles))
-    n_test = max(1, round(FIT_TEST_FRACTION * len(cycles)))
-    train = {cycles[i] for i in order[n_test:]}
-    return AnalyticJuggler(task=demos.task).fit(demos, train)
+    juggler, _, _ = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
+    return juggler
 
 
 def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
