@@ -28,13 +28,14 @@ Choices, and why:
   .. math:: x(t) = x_0 + v_x t, \qquad z(t) = z_0 + v_z t - g t^2 / 2
 
   to round-off, tested to 1e-6 m over seconds); semi-implicit Euler would be off by
-  ``g dt t / 2`` (5 mm after 1 s at g = 2).
+  ``g dt t / 2`` (2.5 mm after 1 s at the default g = 1 m/s^2, 25 mm at 9.81).
 * **Holding is a state copy, not a weld.** While held, the ball's ``qpos``/``qvel`` are
   set to the hand's position and finite-difference velocity after each step, so the ball
   follows the hand exactly (a weld equality is a soft constraint and would not). A toss
-  sets the ball's velocity to the hand's times ``1 + release noise``; a catch (ball falling,
-  centre within ``catch_radius`` of the hand's) snaps it back into the hand. Contacts are
-  disabled: nothing collides, so ``data.warning`` stays empty whatever the hand does.
+  sets the ball's velocity to the hand's times ``1 + release noise``; a catch (the ball,
+  once it has left the hand, back within ``catch_radius`` of it) snaps it into the hand.
+  Contacts are disabled: nothing collides, so ``data.warning`` stays empty whatever the
+  hand does.
 
 Step order: exactly ``BallisticWorld``'s (:mod:`motion_envs.models.juggling_world`),
 whose noise draws (:func:`~motion_envs.models.juggling_world.draw_episode_noise`, at reset)
