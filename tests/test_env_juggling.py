@@ -458,3 +458,13 @@ def test_catch_rates_equal_motion_bench_juggling():
         assert caught / n == row["catch_rate"], row
     rates = {r["correction"]: r["catch_rate"] for r in doc["catch_rates"]}
     assert rates[False] < rates[True]  # the comparison covers drops too
+
+
+def test_sb3_ppo_smoke():
+    """A tiny PPO run on Juggling-v0 (it trains; no claim about what it learns)."""
+    sb3 = pytest.importorskip("stable_baselines3")
+    env = JugglingEnv(max_cycles=1)
+    model = sb3.PPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, device="cpu")
+    model.learn(total_timesteps=128)
+    action, _ = model.predict(env.reset(seed=0)[0], deterministic=True)
+    assert env.action_space.contains(action)
