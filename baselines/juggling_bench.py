@@ -660,6 +660,8 @@ def main(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         use_dmp=not args.no_dmp,
         world=args.world,
+        demo_cycles=args.demo_cycles,
+        demo_persons=args.demo_persons,
         mujoco_cycles=args.mujoco_cycles,
         mujoco_noise_cycles=args.mujoco_cycles // 4,
         task=JugglingTask(gravity=args.gravity),
@@ -694,6 +696,10 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--tracking", type=float, default=0.0005, help="tracking noise std (m)")
     p.add_argument("--seed", type=int, default=0, help="seed of data, split and cycles")
     p.add_argument("--data", default=None, help="a juggling CSV (default: SIMULATED demos)")
+    p.add_argument(
+        "--demo-cycles", type=int, default=50, help="SIMULATED cycles per person (examples)"
+    )
+    p.add_argument("--demo-persons", type=int, default=1, help="SIMULATED persons")
     p.add_argument("--gravity", type=float, default=1.0, help="m/s^2 (9.81: real gravity)")
     p.add_argument("--out", default=None, help="folder for results.json/.csv, plot, GIF")
     p.add_argument(

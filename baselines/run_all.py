@@ -45,7 +45,7 @@ JOBS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ),
     (
         "juggling",
-        "Juggling: the analytic juggler (SIMULATED demonstrations, pure-model world)",
+        "Juggling: the analytic juggler (SIMULATED demonstrations, MuJoCo scene)",
         ("juggling",),
     ),
 )
