@@ -468,3 +468,26 @@ def test_sb3_ppo_smoke():
     model.learn(total_timesteps=128)
     action, _ = model.predict(env.reset(seed=0)[0], deterministic=True)
     assert env.action_space.contains(action)
+
+
+def test_record_video_of_one_cycle(tmp_path):
+    pytest.importorskip("moviepy", reason="RecordVideo needs moviepy (the test extra)")
+    from gymnasium.wrappers import RecordVideo
+
+    env = gym.make(ENV_ID, render_mode="rgb_array", width=96, height=96, frame_skip=8, max_cycles=1)
+    assert env.metadata["render_fps"] == 25
+    try:
+        env.reset(seed=0)
+        env.render()
+    except Exception as exc:  # no OpenGL context on this machine
+        pytest.skip(f"no MuJoCo OpenGL backend here (MUJOCO_GL=osmesa or egl): {exc}")
+    folder = tmp_path / "videos"
+    env = RecordVideo(env, str(folder), episode_trigger=lambda e: e == 0, disable_logger=True)
+    env.reset(seed=0)
+    done = False
+    while not done:
+        _, _, terminated, truncated, _ = env.step(np.zeros(2, np.float32))
+        done = terminated or truncated
+    env.close()
+    videos = list(folder.glob("*.mp4"))
+    assert len(videos) == 1 and videos[0].stat().st_size > 1000
