@@ -136,6 +136,10 @@ class AnalyticJuggler:
         m; re-plan when the predicted intercept moves farther than this from the plan.
     n_folds:
         Folds of the ``N`` cross-validation.
+    cv_tolerance:
+        ``N`` is the smallest candidate whose CV error is within this relative margin of
+        the best (the CV curve of smooth movements is flat past a few terms; the plain
+        argmin then drifts to the largest candidate on differences of 0.1 %).
     reach_tolerance:
         m; go-down and return end when the commanded position is this close to their
         end point (the paper's "position reached").
@@ -155,6 +159,7 @@ class AnalyticJuggler:
         n_folds: int = 5,
         release_after: float = 0.25,
         reach_tolerance: float = 1e-3,
+        cv_tolerance: float = 0.01,
     ) -> None:
         self.task = task or JugglingTask()
         self.n_sines = n_sines
@@ -164,6 +169,7 @@ class AnalyticJuggler:
         self.n_folds = n_folds
         self.release_after = release_after
         self.reach_tolerance = reach_tolerance
+        self.cv_tolerance = cv_tolerance
 
     # -- fitting --------------------------------------------------------------------
     def fit(self, demos: object, cycles: set[tuple[int, int]] | None = None) -> AnalyticJuggler:
@@ -188,7 +194,11 @@ class AnalyticJuggler:
             q = phase_conditions(ys)
             if self.n_sines == "auto":
                 folds = min(self.n_folds, len(segs))
-                n, scores = select_n_sines(ys, q, self.candidates, ts, n_folds=folds)
+                cands = sorted(self.candidates)
+                _, scores = select_n_sines(ys, q, cands, ts, n_folds=folds)
+                # parsimony: the smallest N within cv_tolerance of the best CV score
+                ok = scores <= (1.0 + self.cv_tolerance) * scores.min()
+                n = int(cands[int(np.argmax(ok))])
             else:
                 n, scores = int(self.n_sines), np.full(1, np.nan)
             model = SineSeriesRegression(n_sines=n).fit(ys, q, ts)
