@@ -5,10 +5,12 @@ Single environments (``gym.make``, with the registration's wrappers) step the sa
 pre-sampled uniform actions in ``[-1, 1]^2`` and reset at episode ends; Juggling-v0 is also
 timed under the zero action (the analytic juggler's own run, episodes of ``max_cycles``
 catches). Pure-model mode: the fitted analytic juggler drives
-``motion_envs.models.juggling_world.BallisticWorld`` (no MuJoCo, no Gymnasium) for
-``--cycles`` cycles (a cycle ends with a catch or a drop), and the same cycles in the
-MuJoCo scene (``JugglingScene``). Each figure is the median over ``--repeats`` timed runs
-after one warm-up run; the JSON also holds the best run of each (the machine is shared).
+``motion_envs.models.juggling_world.BallisticWorld`` (no MuJoCo, no Gymnasium) step by step
+for ``--cycles`` cycles (a cycle ends with a catch or a drop; a drop restarts at home), the
+same loop in the MuJoCo scene (``JugglingScene``), and ``run_cycles_fast`` (the vectorised
+pure-model runner of ``motion-bench juggling``: its own seeded cycles, each from home).
+Each figure is the median over ``--repeats`` timed runs after one warm-up run; the JSON
+also holds the best run of each (the machine is shared).
 
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 
@@ -95,6 +97,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from motion_envs.envs.juggling import load_juggler
     from motion_envs.envs.juggling_scene import JugglingScene
+    from motion_envs.models.juggling_run import run_cycles_fast
     from motion_envs.models.juggling_task import JugglingTask
     from motion_envs.models.juggling_world import BallisticWorld
 
@@ -135,6 +138,22 @@ def main(argv: list[str] | None = None) -> int:
             best,
             key,
         )
+    # the vectorised pure-model runner motion-bench juggling uses (same cycles, all at once)
+    key = "pure model, vectorised (run_cycles_fast)"
+    fast_counts: dict[str, int] = {}
+
+    def fast() -> float:
+        t0 = time.perf_counter()
+        res = run_cycles_fast(juggler, args.cycles, seed=args.seed)
+        elapsed = time.perf_counter() - t0
+        caught = sum(r.caught for r in res)
+        fast_counts.update(
+            control_steps=sum(r.steps for r in res), catches=caught, drops=args.cycles - caught
+        )
+        return args.cycles / elapsed
+
+    cycles[key] = _median(fast, args.repeats, best, key)
+    counts[key] = fast_counts
 
     info = machine()
     print_machine(info)

@@ -9,7 +9,7 @@ import functools
 import math
 import os
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -26,6 +26,7 @@ __all__ = [
     "HAND_SPEED_MARGIN",
     "OBS_DIM",
     "POSITION_MARGIN",
+    "TRACKING_NOISE",
     "JugglingEnv",
     "cycle_rngs",
     "load_juggler",
@@ -53,10 +54,14 @@ HAND_SPEED_MARGIN = 10.0
 #: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
 #: the nominal's next hand position (2).
 OBS_DIM = 16
-_PHASE_INDEX = {name: i for i, name in enumerate(PHASES)}
+_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
 
 
-#: Seed, demonstration count and held-out share with which ``motion-bench juggling``
+#: Tracking noise (m) that comes with a release-noise level, as in ``motion-bench juggling
+#: --noise LEVEL`` (its ``--tracking`` default).
+TRACKING_NOISE = 0.0005
+
+#: Seed (of the demonstrations and the split) and held-out share with which ``motion-bench juggling``
 #: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
 FIT_SEED = 0
 FIT_TEST_FRACTION = 0.25
@@ -65,7 +70,7 @@ FIT_TEST_FRACTION = 0.25
 @functools.lru_cache(maxsize=8)
 def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
     from motion_envs.datasets.juggling_demos import generate_demonstrations
-    from motion_envs.models.juggling_juggler import AnalyticJuggler
+    from motion_envs.models.juggling_run import fit_juggler
 
     if data is None:
         demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
@@ -73,12 +78,8 @@ def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
         from motion_envs.datasets.juggling_csv import read_juggling_csv
 
         demos = read_juggling_csv(data, task=task)
-    # the training cycles of motion-bench juggling's split by demonstration
-    cycles = demos.cycles()
-    order = np.random.default_rng(FIT_SEED).permutation(len(cycles))
-    n_test = max(1, round(FIT_TEST_FRACTION * len(cycles)))
-    train = {cycles[i] for i in order[n_test:]}
-    return AnalyticJuggler(task=demos.task).fit(demos, train)
+    juggler, _, _ = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
+    return juggler
 
 
 def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
@@ -100,7 +101,8 @@ def _check_noise(noise: Any) -> JugglingNoise:
             )
         values = dict(noise)
     elif isinstance(noise, (int, float, np.floating)) and not isinstance(noise, bool):
-        values = {"release": float(noise)}
+        level = float(noise)
+        values = {"release": level, "tracking": TRACKING_NOISE if level > 0 else 0.0}
     else:
         raise ValueError(
             "noise must be a number (release-velocity std, relative), a mapping with keys "
@@ -141,9 +143,13 @@ class JugglingEnv(gym.Env):
     public.
 
     The zero action reproduces the analytic juggler exactly: the first cycle of the episode
-    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of ``motion-bench juggling
-    --seed S`` in the MuJoCo scene (same release, same catch step, same hand path to 1e-9;
-    tested), and the episode goes on juggling (return, next toss) as the juggler does.
+    after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of the analytic juggler's
+    seeded runner (``motion_envs.models.juggling_run``) with seed ``S``, the runner
+    ``motion-bench juggling`` uses: same release, same catch or drop at the same control
+    step, same hand path to 1e-9 (tested against the pure-model runner and the same runner
+    in the MuJoCo scene; and ``motion-bench juggling --seed 0 --noise LEVEL``'s catch rates
+    over its first cycles equal the zero-action episodes' with ``noise=LEVEL``, seed 0).
+    The episode then goes on juggling (return, next toss) as the juggler does.
 
     ## Action Space
     The action space is a `Box(-1, 1, (2,), float32)`: the offset of the hand from the
@@ -220,7 +226,7 @@ class JugglingEnv(gym.Env):
 
     | Parameter        | Type          | Default | Description |
     |------------------|---------------|---------|-------------|
-    | `noise`          | **float/dict** | `0.0`  | release-velocity std relative to the hand's velocity (0.05 = 5 %), or a dict with keys `release`, `tracking` (tracking: std of the tracked hand position, m) |
+    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m) |
     | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated |
     | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1 |
     | `reward_weights` | **dict**      | `None`  | weights of the reward terms, keys `catch`, `drop`, `deviation`, `action` (None: 10, 10, 1, 0.01) |
@@ -235,7 +241,7 @@ class JugglingEnv(gym.Env):
     * v0: Initial version.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 200}
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
 
     def __init__(
         self,
@@ -398,16 +404,15 @@ class JugglingEnv(gym.Env):
         return self._observation(state), reward, terminated, truncated, info
 
     def _observation(self, state: JugglingState) -> NDArray[np.float32]:
-        obs = np.zeros(OBS_DIM, dtype=np.float32)
-        obs[0:2] = state.hand_pos
-        obs[2:4] = state.hand_vel
-        obs[4:6] = state.ball_pos
-        obs[6:8] = state.ball_vel
-        obs[8] = state.held
-        obs[9 + _PHASE_INDEX[self.juggler.phase]] = 1.0
-        obs[13] = self.juggler.phase_time
-        obs[14:16] = self.juggler.nominal_next()
-        return np.clip(obs, self._low, self._high, out=obs)
+        juggler = self.juggler
+        onehot = _ONE_HOT[juggler.phase]
+        nx, nz = juggler.nominal_next().tolist()
+        obs = np.array(
+            (*self.scene.values, float(state.held), *onehot, juggler.phase_time, nx, nz),
+            dtype=np.float32,
+        )
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)
 
     # -- rendering ----------------------------------------------------------------------
     def render(self) -> NDArray[np.uint8] | None:

@@ -28,13 +28,14 @@ Choices, and why:
   .. math:: x(t) = x_0 + v_x t, \qquad z(t) = z_0 + v_z t - g t^2 / 2
 
   to round-off, tested to 1e-6 m over seconds); semi-implicit Euler would be off by
-  ``g dt t / 2`` (5 mm after 1 s at g = 2).
+  ``g dt t / 2`` (2.5 mm after 1 s at the default g = 1 m/s^2, 25 mm at 9.81).
 * **Holding is a state copy, not a weld.** While held, the ball's ``qpos``/``qvel`` are
   set to the hand's position and finite-difference velocity after each step, so the ball
   follows the hand exactly (a weld equality is a soft constraint and would not). A toss
-  sets the ball's velocity to the hand's times ``1 + release noise``; a catch (ball falling,
-  centre within ``catch_radius`` of the hand's) snaps it back into the hand. Contacts are
-  disabled: nothing collides, so ``data.warning`` stays empty whatever the hand does.
+  sets the ball's velocity to the hand's times ``1 + release noise``; a catch (the ball,
+  once it has left the hand, back within ``catch_radius`` of it) snaps it into the hand.
+  Contacts are disabled: nothing collides, so ``data.warning`` stays empty whatever the
+  hand does.
 
 Step order: exactly ``BallisticWorld``'s (:mod:`motion_envs.models.juggling_world`),
 whose noise draws (:func:`~motion_envs.models.juggling_world.draw_episode_noise`, at reset)
@@ -43,7 +44,8 @@ states to round-off (tested to 1e-9):
 
 1. ``h_k = hand_target``; ``v_k = (h_k - h_{k-1}) / dt``,
    ``a_k = (h_k - 2 h_{k-1} + h_{k-2}) / dt^2`` (the hand rests at the reset position);
-   one ``mj_step`` (time ``k dt``; a flying ball moves along its parabola).
+   one ``mj_step`` if the ball is flying (it moves along its parabola; a held ball is a
+   copy of the hand, nothing to integrate, so the step is skipped); time ``k dt``.
 2. Held ball: released (``released``) at ``h_k`` with velocity ``v_k * f`` if
    ``release_armed`` and ``a_k[z] < -toss_threshold`` (``f = 1 + release * N(0, 1)`` per
    component, drawn at reset); else it stays at ``h_k`` with velocity ``v_k``.
@@ -134,6 +136,8 @@ class JugglingScene:
         self._left = False
         self._dropped = False
         self.state: JugglingState | None = None
+        #: the last state's tracked hand, hand velocity, ball and ball velocity (8 floats)
+        self.values: tuple[float, ...] = ()
 
     def _bind(self) -> None:
         self._mocap = self.data.mocap_pos[0]
@@ -171,7 +175,7 @@ class JugglingScene:
         """Move the hand to ``hand_target`` over one ``dt``; hold, release, catch or drop."""
         if self.state is None:
             raise RuntimeError("call reset() before step()")
-        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index]
+        x, z = float(hand_target[0]), float(hand_target[1])  # type: ignore[index, arg-type]
         if not (math.isfinite(x) and math.isfinite(z)):
             raise ValueError(f"hand_target must be finite; got {[x, z]}")
         task = self.task
@@ -183,7 +187,8 @@ class JugglingScene:
         vx, vz = (x - prev[0]) / dt, (z - prev[1]) / dt
         az = (z - 2.0 * prev[1] + prev2[1]) / (dt * dt)
         self._mocap[0], self._mocap[2] = x, z
-        mujoco.mj_step(self.model, self.data)
+        if not self._held:  # a held ball is a copy of the hand: nothing to integrate
+            mujoco.mj_step(self.model, self.data)
         self.data.time = self._k * dt  # k dt exactly, as BallisticWorld (no summed round-off)
         qpos, qvel = self._qpos, self._qvel
         released = caught = False
@@ -236,12 +241,15 @@ class JugglingScene:
         obs = np.array(self._hand)
         if self._track is not None:
             obs += self._track[self._k % TRACKING_ROWS]
+        ball_pos, ball_vel = self._qpos[:2].copy(), self._qvel[:2].copy()
+        hand_vel = ((hx - px) / dt, (hz - pz) / dt)
+        self.values = (*obs.tolist(), *hand_vel, *ball_pos.tolist(), *ball_vel.tolist())
         return JugglingState(
             time=float(self.data.time),
             hand_pos=obs,
-            hand_vel=np.array([(hx - px) / dt, (hz - pz) / dt]),
-            ball_pos=self._qpos[:2].copy(),
-            ball_vel=self._qvel[:2].copy(),
+            hand_vel=np.array(hand_vel),
+            ball_pos=ball_pos,
+            ball_vel=ball_vel,
             held=self._held,
             released=released,
             caught=caught,
