@@ -31,6 +31,7 @@ a slerp traversed with a *predicted* speed profile):
 
 from __future__ import annotations
 
+import io
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -56,9 +57,13 @@ __all__ = [
     "ANALYTIC_OBSERVED",
     "ANALYTIC_PREDICTED",
     "LEARNED_ROWS",
+    "ROW_LABELS",
     "LearnedRows",
     "bootstrap_ratio",
+    "compare",
+    "format_reading",
     "learned_orientation_rows",
+    "plot_ratios",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -293,3 +298,136 @@ def bootstrap_ratio(
     point = float(np.median(errors_a) / np.median(errors_b))
     lo, hi = np.percentile(ratios, [2.5, 97.5])
     return point, float(lo), float(hi)
+
+
+#: Printed labels of the rows.
+ROW_LABELS: dict[str, str] = {
+    "null_d2_path_loso": "Null (d=2), path frame, LOSO",
+    "ridge_loso": "Ridge (learned), path frame, LOSO",
+    "mlp_loso": "MLP (learned, torch), path frame, LOSO",
+    "slerp_loso_predicted_timing": "Slerp, predicted timing, LOSO",
+    "null_d2_loso_predicted_timing": "Null (d=2), predicted timing, LOSO",
+    "task_predictor_d2_loso_predicted_timing": "Task predictor (d=2), pred. timing, LOSO",
+    "null_d2_path_loso_predicted_timing": "Null (d=2), path, predicted timing, LOSO",
+    "ridge_loso_predicted_timing": "Ridge (learned), predicted timing, LOSO",
+    "mlp_loso_predicted_timing": "MLP (learned), predicted timing, LOSO",
+}
+
+#: (learned row, analytic rows it is compared with, target ratio or None): the targets
+#: against the paper's rows, and the observed-timing rows against the best analytic row
+#: including the path-frame null.
+COMPARISONS: tuple[tuple[str, tuple[str, ...], float | None], ...] = (
+    ("mlp_loso", ("null_d2_loso", "task_predictor_d2_loso"), 0.90),
+    ("mlp_loso", ANALYTIC_OBSERVED, None),
+    ("mlp_loso_predicted_timing", ANALYTIC_PREDICTED, 0.95),
+)
+
+
+def _per_group_medians(errors: FloatArray, groups: NDArray[np.str_]) -> FloatArray:
+    return np.array([np.median(errors[groups == g]) for g in np.unique(groups)])
+
+
+def compare(rows: LearnedRows, subjects: NDArray, n_boot: int = 2000) -> list[dict[str, Any]]:
+    """The learned-vs-analytic readings: ratio, bootstrap interval, per-subject counts.
+
+    For each of :data:`COMPARISONS` (and the same with ``ridge`` in place of ``mlp``):
+    the best analytic row (least criterion), the ratio ``learned / best``, its 95%
+    interval from resampling subjects, and on how many subjects the learned row's
+    median max error is below the best analytic row's.
+    """
+    subjects = np.asarray(subjects).astype(str)
+    out = []
+    for learned, analytic, target in COMPARISONS:
+        for name in (learned, learned.replace("mlp", "ridge", 1)):
+            if name not in rows.errors:
+                continue
+            best = min(analytic, key=lambda k: float(np.median(rows.errors[k])))
+            ratio, lo, hi = bootstrap_ratio(rows.errors[name], rows.errors[best], subjects, n_boot)
+            a = _per_group_medians(rows.errors[name], subjects)
+            b = _per_group_medians(rows.errors[best], subjects)
+            out.append(
+                {
+                    "learned": name,
+                    "best_analytic": best,
+                    "analytic_rows": list(analytic),
+                    "ratio": ratio,
+                    "ratio_ci95": [lo, hi],
+                    "target_ratio": target if name == learned else None,
+                    "met": bool(ratio <= target) if name == learned and target else None,
+                    "subjects_better": int(np.sum(a < b)),
+                    "n_subjects": int(a.size),
+                    "per_subject_ratio": dict(
+                        zip(np.unique(subjects).tolist(), (a / b).tolist(), strict=True)
+                    ),
+                }
+            )
+    return out
+
+
+def format_reading(rows: LearnedRows, comparisons: list[dict[str, Any]]) -> str:
+    """A short honest reading of the learned rows against the analytic ones."""
+    lines = ["", "learned vs analytic, leave one subject out (ratio < 1: learned is better):"]
+    for c in comparisons:
+        target = (
+            f"; target <= {c['target_ratio']:.2f}: {'MET' if c['met'] else 'MISSED'}"
+            if c["target_ratio"] is not None
+            else ""
+        )
+        lines.append(
+            f"  {c['learned']:<28} / {c['best_analytic']:<40} = {c['ratio']:.3f} "
+            f"(95% CI over subjects {c['ratio_ci95'][0]:.3f}-{c['ratio_ci95'][1]:.3f}); "
+            f"better on {c['subjects_better']}/{c['n_subjects']} subjects{target}"
+        )
+    crit = rows.criteria
+    if np.isfinite(crit.get("null_d2_path_loso", np.nan)):
+        lines.append(
+            "  the path frame alone takes the null model from "
+            f"{np.median(rows.errors['null_d2_loso']):.3f} to "
+            f"{crit['null_d2_path_loso']:.3f} rad; the learned rows work in that frame too."
+        )
+    lines.append(
+        "  predicted timing: the slerp with the training subjects' mean speed profile scores "
+        f"{crit['slerp_loso_predicted_timing']:.3f} rad; timing, not the residual shape, "
+        "dominates the error of a prediction made before the movement."
+    )
+    for k, why in rows.skipped.items():
+        lines.append(f"  {k}: skipped ({why})")
+    if "mlp_training" in rows.seconds:
+        lines.append(
+            f"  torch training of both MLP rows (all folds, nested): "
+            f"{rows.seconds['mlp_training']:.1f} s"
+        )
+    return "\n".join(lines)
+
+
+def plot_ratios(
+    comparisons: list[dict[str, Any]], path: Any, title: str, group: str = "subject"
+) -> Any:
+    """Bar plot of the per-group ratio learned / best analytic (one panel per comparison)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from baselines.learned._atomic import atomic_write_bytes
+
+    n = len(comparisons)
+    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.4), squeeze=False, constrained_layout=True)
+    for ax, c in zip(axes[0], comparisons, strict=True):
+        names = list(c["per_subject_ratio"])
+        vals = np.array([c["per_subject_ratio"][k] for k in names])
+        ax.bar(range(len(names)), vals, color=np.where(vals < 1, "C2", "C3"))
+        ax.axhline(1.0, color="k", lw=0.8)
+        if c.get("target_ratio"):
+            ax.axhline(c["target_ratio"], color="C0", lw=0.8, ls="--", label="target")
+            ax.legend(fontsize=7)
+        ax.set_xticks(range(len(names)))
+        ax.set_xticklabels(names, rotation=90, fontsize=6)
+        ax.set_xlabel(group)
+        ax.set_ylabel("median max error ratio")
+        ax.set_title(f"{c['learned']} /\n{c['best_analytic']}: {c['ratio']:.3f}", fontsize=8)
+    fig.suptitle(title, fontsize=9)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    plt.close(fig)
+    return atomic_write_bytes(path, buf.getvalue())

@@ -35,8 +35,10 @@ _ROW_LABELS = {
 
 
 def _label(name: str) -> str:
-    if name in _ROW_LABELS:
-        return _ROW_LABELS[name]
+    from baselines.learned_rows import ROW_LABELS
+
+    if name in _ROW_LABELS or name in ROW_LABELS:
+        return _ROW_LABELS.get(name) or ROW_LABELS[name]
     base, _, rest = name.partition("_d")
     degree, _, split = rest.partition("_")
     pretty = base.replace("_", " ").capitalize()
@@ -52,15 +54,15 @@ def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
         f"{np.unique(dataset.subjects).size} subjects, {np.unique(dataset.tasks).size} tasks",
         "median over trajectories of the max over time of the tangent-space error, radians",
         "",
-        f"{'criterion':<50} {'name':<28} {'ours':>7} {'paper':>7}",
-        "-" * 96,
+        f"{'criterion':<50} {'name':<40} {'ours':>7} {'paper':>7}",
+        "-" * 108,
     ]
     for name, value in result.criteria.items():
         paper = FARAWAY_CHOE_TABLE1.get(name)
         paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
         ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
         note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
-        lines.append(f"{_label(name):<50} {name:<28} {ours} {paper_s}  {note}".rstrip())
+        lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
     lines.append("")
     lines.append(
         "paper: 1,088 reaches of 20 subjects (hand relative to forearm); rows ending in "
@@ -180,10 +182,52 @@ def _nominal_report(
     }
 
 
+def _learned_rows(
+    args: argparse.Namespace, dataset: OrientationDataset, result: Table1Result
+) -> dict[str, Any] | None:
+    """Add the path-frame, predicted-timing and learned rows (docs/learned.md) to ``result``."""
+    mode = getattr(args, "learned", "full")
+    n_subjects = np.unique(dataset.subjects).size
+    if mode == "off" or n_subjects < 3:
+        if mode != "off":
+            print(f"learned rows skipped: {n_subjects} subjects, at least 3 needed")
+        return None
+    from baselines.learned import torch_missing_reason
+    from baselines.learned_rows import compare, format_reading, learned_orientation_rows
+
+    config = None
+    missing = torch_missing_reason()
+    if missing is None:
+        from baselines.learned.batched_mlp import MLPConfig
+
+        config = MLPConfig() if mode == "full" else MLPConfig(max_epochs=60, weight_decays=(0.1,))
+    rows = learned_orientation_rows(dataset, mlp_config=config, use_torch=missing is None)
+    result.criteria.update(rows.criteria)
+    comparisons = compare(rows, dataset.subjects)
+    reading = format_reading(rows, comparisons)
+    return {
+        "reading": reading,
+        "comparisons": comparisons,
+        "document": {
+            "mode": mode,
+            "comparisons": comparisons,
+            "chosen": rows.chosen,
+            "seconds": rows.seconds,
+            "skipped": rows.skipped,
+        },
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     """Execute ``motion-bench orientation`` with parsed arguments."""
     t0 = time.perf_counter()
-    dataset = load_orientation_dataset(args.data, min_deg=args.min_deg)
+    up = getattr(args, "up", None)
+    if up is not None:
+        try:
+            up = tuple(float(v) for v in up.split(","))
+        except ValueError:
+            raise ValueError(f"--up must be three numbers 'x,y,z'; got {args.up!r}") from None
+    dataset = load_orientation_dataset(args.data, min_deg=args.min_deg, up=up)
     if len(dataset) < 2:
         raise ValueError(
             f"only {len(dataset)} trajectories left after dropping those under "
@@ -194,8 +238,11 @@ def run(args: argparse.Namespace) -> int:
     if split != "all":
         dataset = _split_dataset(args, full)[split == "test"]
     result = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    learned = _learned_rows(args, dataset, result)
     elapsed = time.perf_counter() - t0
     print(format_table1(result, dataset))
+    if learned is not None:
+        print(learned["reading"])
     nominal = None
     if getattr(args, "nominal", None) is not None:
         nominal = _nominal_report(args, full, split)
@@ -211,9 +258,20 @@ def run(args: argparse.Namespace) -> int:
             }
         if nominal is not None:
             doc["nominal"] = nominal
+        if learned is not None:
+            doc["learned"] = learned["document"]
         atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")
         atomic_write_text(out / "results.csv", results_csv(result))
         plot_residuals(result, dataset, out / "residuals.png", task=args.plot_task)
+        if learned is not None and learned["comparisons"]:
+            from baselines.learned_rows import plot_ratios
+
+            plot_ratios(
+                learned["comparisons"],
+                out / "learned_ratio.png",
+                f"per-subject ratio of learned to the best analytic row, {dataset.name}"
+                f"{' (SIMULATED)' if dataset.simulated else ''}, leave one subject out",
+            )
         print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'residuals.png'}")
     return 0
 
@@ -276,4 +334,20 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         ),
     )
     p.add_argument("--degree", type=int, default=2, help="Bezier degree of --nominal")
+    p.add_argument(
+        "--learned",
+        choices=("full", "quick", "off"),
+        default="full",
+        help=(
+            "path-frame, predicted-timing and learned (ridge, torch MLP) LOSO rows "
+            "(docs/learned.md); quick: one weight decay and 60 epochs for the MLP; the MLP "
+            "rows are skipped with a message when torch is not installed"
+        ),
+    )
+    p.add_argument(
+        "--up",
+        default=None,
+        help="the data's vertical axis 'x,y,z' for the path frame (default: the dataset's; "
+        "+z for a CSV, +y for vr-kitchen)",
+    )
     p.set_defaults(func=run)

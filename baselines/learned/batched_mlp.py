@@ -123,7 +123,9 @@ class CurveCriterion:
         K = self.basis.shape[1]
         B, N, m = out.shape
         curves = torch.einsum(
-            "tk,bnkd->bntd", torch.as_tensor(self.basis, dtype=out.dtype), out.reshape(B, N, K, m // K)
+            "tk,bnkd->bntd",
+            torch.as_tensor(self.basis, dtype=out.dtype),
+            out.reshape(B, N, K, m // K),
         )
         dist = torch.linalg.vector_norm(curves - target, dim=3).amax(dim=2)
         return dist * torch.as_tensor(self.scale, dtype=out.dtype)[None, :]
