@@ -356,7 +356,7 @@ def compare(rows: LearnedRows, subjects: NDArray, n_boot: int = 2000) -> list[di
                     "met": bool(ratio <= target) if name == learned and target else None,
                     "subjects_better": int(np.sum(a < b)),
                     "n_subjects": int(a.size),
-                    "per_subject_ratio": dict(
+                    "per_group_ratio": dict(
                         zip(np.unique(subjects).tolist(), (a / b).tolist(), strict=True)
                     ),
                 }
@@ -414,8 +414,8 @@ def plot_ratios(
     n = len(comparisons)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.4), squeeze=False, constrained_layout=True)
     for ax, c in zip(axes[0], comparisons, strict=True):
-        names = list(c["per_subject_ratio"])
-        vals = np.array([c["per_subject_ratio"][k] for k in names])
+        names = list(c["per_group_ratio"])
+        vals = np.array([c["per_group_ratio"][k] for k in names])
         ax.bar(range(len(names)), vals, color=np.where(vals < 1, "C2", "C3"))
         ax.axhline(1.0, color="k", lw=0.8)
         if c.get("target_ratio"):

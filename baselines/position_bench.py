@@ -15,7 +15,11 @@ Methods:
   training demonstrations, such as LASA's end point at the origin, are dropped) and ``N``
   chosen by leave-one-out cross-validation on the training demonstrations
   (``--n-sines auto``);
-* ``dmp``, ``promp``: :mod:`baselines.peers` (``movement_primitives``), same start/goal.
+* ``dmp``, ``promp``: :mod:`baselines.peers` (``movement_primitives``), same start/goal;
+* ``ridge``, ``mlp``: learned residuals (:mod:`baselines.learned.position`, docs/learned.md):
+  ridge and a torch MLP of Lippi's residual on the conditions, hyper-parameters chosen
+  on the training demonstrations only (``mlp`` is skipped without torch or with
+  ``--no-learned``).
 
 Criteria per held-out demonstration: max error (the papers' criterion), RMSE, DTW and
 swept error area (:mod:`motion_envs.models.position_criteria`). Per shape we take the
@@ -58,7 +62,7 @@ __all__ = ["METHODS", "format_table", "register", "run", "run_benchmark"]
 
 FloatArray = NDArray[np.float64]
 
-METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp")
+METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp", "ridge", "mlp")
 PEER_METHODS = ("dmp", "promp")
 CRITERION_TEXT = {
     "max_error": "median over demos of max_t |error|",
@@ -161,6 +165,7 @@ def run_benchmark(
     split: str = "loo",
     test_fraction: float = 0.25,
     split_seed: int = 0,
+    learned: str = "full",
 ) -> dict[str, Any]:
     """Run the benchmark on one split (default leave one out); returns ``results.json``.
 
@@ -174,8 +179,19 @@ def run_benchmark(
 
     kinds = ["start", "end"] if kinds is None else kinds
     position_conditions(np.zeros((1, 2, 1)), np.ones(1), kinds)  # validates the names
+    from baselines.learned import torch_missing_reason
+
     have_peers = use_peers and peers_available()
     methods = [m for m in METHODS if have_peers or m not in PEER_METHODS]
+    learned_skipped = {}
+    if learned == "off":
+        learned_skipped = {"ridge": "--no-learned", "mlp": "--no-learned"}
+    elif torch_missing_reason():
+        learned_skipped = {"mlp": torch_missing_reason()}
+    methods = [m for m in methods if m not in learned_skipped]
+    learned_methods = [m for m in ("ridge", "mlp") if m in methods]
+    learned_chosen: dict[str, Any] = {}
+    mlp_seconds = 0.0
     y_all, dur_all = resample_positions(dataset, n_points)
     timer = _Timer()
     per_shape: dict[str, Any] = {}
@@ -192,6 +208,18 @@ def run_benchmark(
         preds, chosen = predict_folds(
             y_all, dur_all, task_folds, kinds, n_sines, methods, timer, n_weights
         )
+        if learned_methods:
+            from baselines.learned.batched_mlp import MLPConfig
+            from baselines.learned.position import learned_position_predictions
+
+            config = MLPConfig() if learned == "full" else MLPConfig(max_epochs=60)
+            t_l = time.perf_counter()
+            lp, lc = learned_position_predictions(
+                y_all, dur_all, task_folds, kinds, learned_methods, config
+            )
+            mlp_seconds += time.perf_counter() - t_l
+            preds.update(lp)
+            learned_chosen[task] = lc
         y = y_all[scored]
         members = dataset.tasks == task
         n_val = Counter(chosen).most_common(1)[0][0]
@@ -247,6 +275,11 @@ def run_benchmark(
         "per_shape": per_shape,
         "skipped": skipped,
         "timing": timing,
+        "learned": {
+            "skipped": learned_skipped,
+            "chosen": learned_chosen,
+            "seconds_ridge_and_mlp": mlp_seconds,
+        },
         "citation": LASA_CITATION if dataset.name == "lasa" else None,
         "_predictions": predictions,
         "_truth": truths,
@@ -334,7 +367,15 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
     cols = min(6, len(shapes))
     rows = math.ceil(len(shapes) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(2.6 * cols, 2.6 * rows), squeeze=False)
-    colors = {"line": "C7", "null": "C2", "lippi": "C3", "dmp": "C0", "promp": "C1"}
+    colors = {
+        "line": "C7",
+        "null": "C2",
+        "lippi": "C3",
+        "dmp": "C0",
+        "promp": "C1",
+        "ridge": "C4",
+        "mlp": "C5",
+    }
     for ax, shape in zip(axes.ravel(), shapes, strict=False):
         truth = doc["_truth"][shape]
         for y in truth:
@@ -381,8 +422,14 @@ def run(args: argparse.Namespace) -> int:
         split=args.split,
         test_fraction=args.test_fraction,
         split_seed=args.split_seed,
+        learned=getattr(args, "learned", "full"),
     )
     print(format_table(doc))
+    from baselines.learned.position_reading import format_position_reading, position_comparisons
+
+    comparisons = position_comparisons(doc)
+    doc["learned"]["comparisons"] = comparisons
+    print(format_position_reading(doc, comparisons))
     print()
     print(format_validation(doc))
     if doc["timing"]:
@@ -401,6 +448,15 @@ def run(args: argparse.Namespace) -> int:
         atomic_write_text(out / "results.json", json.dumps(_clean(doc), indent=2) + "\n")
         atomic_write_text(out / "results.csv", _csv_text(doc))
         plot_grid(doc, out / "shapes.png")
+        if comparisons:
+            from baselines.learned_rows import plot_ratios
+
+            plot_ratios(
+                comparisons,
+                out / "learned_ratio.png",
+                f"per-shape ratio of learned to the best analytic column, {doc['dataset']}",
+                group="shape",
+            )
         print(f"wrote {out / 'results.json'}, {out / 'results.csv'} and {out / 'shapes.png'}")
     return 0
 
@@ -434,4 +490,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--split-seed", type=int, default=0, help="seed of the per-shape split")
     p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--learned",
+        choices=("full", "quick", "off"),
+        default="full",
+        help="ridge and torch-MLP columns (quick: 60 MLP epochs; the mlp column is skipped "
+        "with a message when torch is not installed)",
+    )
     p.set_defaults(func=run)
