@@ -192,15 +192,20 @@ def _learned_rows(
         if mode != "off":
             print(f"learned rows skipped: {n_subjects} subjects, at least 3 needed")
         return None
-    from baselines.learned import torch_missing_reason
+    from baselines.learned import sklearn_missing_reason, torch_missing_reason
     from baselines.learned_rows import compare, format_reading, learned_orientation_rows
+
+    if sklearn_missing_reason():
+        print(f"learned rows skipped: {sklearn_missing_reason()}")
+        return None
 
     config = None
     missing = torch_missing_reason()
     if missing is None:
+        from baselines.learned import QUICK_MLP
         from baselines.learned.batched_mlp import MLPConfig
 
-        config = MLPConfig() if mode == "full" else MLPConfig(max_epochs=60, weight_decays=(0.1,))
+        config = MLPConfig() if mode == "full" else QUICK_MLP
     rows = learned_orientation_rows(dataset, mlp_config=config, use_torch=missing is None)
     result.criteria.update(rows.criteria)
     comparisons = compare(rows, dataset.subjects)
@@ -340,7 +345,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="full",
         help=(
             "path-frame, predicted-timing and learned (ridge, torch MLP) LOSO rows "
-            "(docs/learned.md); quick: one weight decay and 60 epochs for the MLP; the MLP "
+            "(docs/learned.md); quick: one MLP candidate and 30 epochs (baselines.learned."
+            "QUICK_MLP); the MLP "
             "rows are skipped with a message when torch is not installed"
         ),
     )

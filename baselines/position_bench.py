@@ -179,13 +179,15 @@ def run_benchmark(
 
     kinds = ["start", "end"] if kinds is None else kinds
     position_conditions(np.zeros((1, 2, 1)), np.ones(1), kinds)  # validates the names
-    from baselines.learned import torch_missing_reason
+    from baselines.learned import sklearn_missing_reason, torch_missing_reason
 
     have_peers = use_peers and peers_available()
     methods = [m for m in METHODS if have_peers or m not in PEER_METHODS]
     learned_skipped = {}
     if learned == "off":
         learned_skipped = {"ridge": "--no-learned", "mlp": "--no-learned"}
+    elif sklearn_missing_reason():
+        learned_skipped = {"ridge": sklearn_missing_reason(), "mlp": sklearn_missing_reason()}
     elif torch_missing_reason():
         learned_skipped = {"mlp": torch_missing_reason()}
     methods = [m for m in methods if m not in learned_skipped]
@@ -209,10 +211,11 @@ def run_benchmark(
             y_all, dur_all, task_folds, kinds, n_sines, methods, timer, n_weights
         )
         if learned_methods:
+            from baselines.learned import QUICK_MLP
             from baselines.learned.batched_mlp import MLPConfig
             from baselines.learned.position import learned_position_predictions
 
-            config = MLPConfig() if learned == "full" else MLPConfig(max_epochs=60)
+            config = MLPConfig() if learned == "full" else QUICK_MLP
             t_l = time.perf_counter()
             lp, lc = learned_position_predictions(
                 y_all, dur_all, task_folds, kinds, learned_methods, config
@@ -494,7 +497,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--learned",
         choices=("full", "quick", "off"),
         default="full",
-        help="ridge and torch-MLP columns (quick: 60 MLP epochs; the mlp column is skipped "
+        help="ridge and torch-MLP columns (quick: one MLP candidate, 30 epochs; the mlp column "
+        "is skipped "
         "with a message when torch is not installed)",
     )
     p.set_defaults(func=run)

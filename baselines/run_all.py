@@ -4,8 +4,10 @@ Runs, one after the other, with each sub-command's defaults:
 
 1. ``motion-bench orientation --data vr-kitchen``: Faraway & Choe's Table 1 on real
    hand-held controller orientations (8 people);
-2. ``motion-bench orientation --data cohort``: the same table on the calibrated virtual
-   cohort of the paper's design (simulated data);
+2. ``motion-bench orientation --data cohort --learned off``: the same table on the
+   calibrated virtual cohort of the paper's design (simulated data; without the learned
+   rows, which would train 20 x nested folds on 1,000+ trajectories: run
+   ``motion-bench orientation --data cohort`` for them);
 3. ``motion-bench position --data lasa``: Lippi et al.'s sine-series regression against
    the line, the mean residual, DMP and ProMP on the real LASA handwriting set.
 
@@ -34,7 +36,7 @@ JOBS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     (
         "orientation-cohort",
         "Orientation trajectories on the virtual cohort (SIMULATED data, calibrated to the paper)",
-        ("orientation", "--data", "cohort"),
+        ("orientation", "--data", "cohort", "--learned", "off"),
     ),
     (
         "position-lasa",
@@ -56,6 +58,9 @@ def run(args: argparse.Namespace) -> int:
             continue
         print(f"\n{'=' * 100}\n{title}\n{'=' * 100}", flush=True)
         extra = ["--no-progress"] if args.no_progress and argv[0] == "position" else []
+        learned = getattr(args, "learned", "full")
+        if learned != "full" and "--learned" not in argv:
+            extra += ["--learned", learned]
         t0 = time.perf_counter()
         rc = main([*argv, *extra, "--out", str(out / folder)])
         index["jobs"].append(
@@ -90,4 +95,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="run only these jobs",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument(
+        "--learned",
+        choices=("full", "quick", "off"),
+        default="full",
+        help="budget of the learned rows/columns of every job (quick: fewer MLP candidates "
+        "and epochs; off: none)",
+    )
     p.set_defaults(func=run)

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import importlib.util
 
-__all__ = ["torch_available", "torch_missing_reason"]
+__all__ = ["QUICK_MLP", "sklearn_missing_reason", "torch_available", "torch_missing_reason"]
 
 
 def torch_available() -> bool:
@@ -30,3 +30,19 @@ def torch_missing_reason() -> str | None:
     if torch_available():
         return None
     return "torch is not installed (pip install 'motion-envs[rl]' with a CPU torch build)"
+
+
+def sklearn_missing_reason() -> str | None:
+    """``None`` when scikit-learn is importable, else a one-line reason with the fix."""
+    if importlib.util.find_spec("sklearn") is not None:
+        return None
+    return "scikit-learn is not installed (pip install 'motion-envs[learned]')"
+
+
+def __getattr__(name: str):  # lazy: QUICK_MLP needs torch only when used
+    if name == "QUICK_MLP":
+        from baselines.learned.batched_mlp import MLPConfig
+
+        #: The ``--learned quick`` budget: one candidate, 30 epochs, 2 inner folds.
+        return MLPConfig(max_epochs=30, weight_decays=(0.1,), bases=("mean",), inner_splits=2)
+    raise AttributeError(name)
