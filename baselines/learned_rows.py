@@ -128,7 +128,9 @@ def _residuals_against(
     return out
 
 
-def _subject_folds(subjects: NDArray[np.str_]) -> list[tuple[NDArray[np.int64], ...]]:
+def _subject_folds(
+    subjects: NDArray[np.str_],
+) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
     return [
         (np.flatnonzero(subjects != s), np.flatnonzero(subjects == s)) for s in np.unique(subjects)
     ]

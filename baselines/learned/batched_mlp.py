@@ -265,6 +265,7 @@ def train_networks(
                     err = ((out - Yt) ** 2).sum(dim=2)
                     val = (vm * err).sum(dim=1) / (n_val * m)
                 else:
+                    assert crit_target is not None
                     rows = criterion.row_errors(out, crit_target)
                     val = torch.nanmedian(torch.where(vm > 0, rows, torch.nan), dim=1).values
                 val_loss[:, epoch] = np.where(n_val.numpy() > 0, val.numpy(), np.nan)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,7 +64,7 @@ class NestedResult:
     """
 
     predictions: FloatArray
-    chosen: list[dict[str, float]] = field(default_factory=list)
+    chosen: list[dict[str, Any]] = field(default_factory=list)
     params: list[dict[str, FloatArray]] = field(default_factory=list)
 
 
@@ -136,7 +137,8 @@ def nested_mlp(
     score = sums / counts
     final_masks, final_wd, final_base, stops, chosen = [], [], [], [], []
     for o, (train, _) in enumerate(folds):
-        c, e = np.unravel_index(np.argmin(score[o]), score[o].shape)  # ties: fewest epochs
+        c_, e_ = np.unravel_index(np.argmin(score[o]), score[o].shape)  # ties: fewest epochs
+        c, e = int(c_), int(e_)
         mt = np.zeros(N, bool)
         mt[train] = True
         final_masks.append(mt)

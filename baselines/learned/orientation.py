@@ -91,7 +91,8 @@ def sine_targets(curves: ArrayLike, n_sines: int = DEFAULT_N_SINES) -> FloatArra
     C = np.asarray(curves, dtype=np.float64)
     basis = sine_basis(C.shape[1], n_sines)
     coef = np.linalg.lstsq(basis, C.transpose(1, 0, 2).reshape(C.shape[1], -1), rcond=None)[0]
-    return coef.reshape(n_sines, C.shape[0], 3).transpose(1, 0, 2).reshape(C.shape[0], -1)
+    out = coef.reshape(n_sines, C.shape[0], 3).transpose(1, 0, 2).reshape(C.shape[0], -1)
+    return np.asarray(out, dtype=np.float64)
 
 
 def sine_curves(coefficients: ArrayLike, n_points: int) -> FloatArray:

@@ -36,7 +36,9 @@ def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[s
     better = min(learned, key=lambda m: summary[m]["max_error"])
     analytic = [m for m in _ANALYTIC if m in methods]
     best = min(analytic, key=lambda m: summary[m]["max_error"])
-    pairs = [(better, a, t) for a, t in TARGETS if a in methods]
+    pairs: list[tuple[str, str, float | None]] = [
+        (better, a, t) for a, t in TARGETS if a in methods
+    ]
     pairs += [(m, best, None) for m in learned]
     out = []
     for m, a, target in pairs:

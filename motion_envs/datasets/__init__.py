@@ -51,8 +51,8 @@ def load_orientation_dataset(
 
         from motion_envs.models.path_frame import check_up
 
-        unit = tuple(float(x) for x in check_up(up))
-        return replace(load_orientation_dataset(data, min_deg), up=unit)
+        x, y, z = (float(v) for v in check_up(up))
+        return replace(load_orientation_dataset(data, min_deg), up=(x, y, z))
     if isinstance(data, str) and (data == "cohort" or data.startswith("cohort:")):
         from motion_envs.datasets.cohort import DEFAULT_COHORT, load_cohort
 
