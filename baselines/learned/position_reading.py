@@ -39,7 +39,7 @@ def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[s
     pairs: list[tuple[str, str, float | None]] = [
         (better, a, t) for a, t in TARGETS if a in methods
     ]
-    pairs += [(m, best, None) for m in learned]
+    pairs += [(m, best, None) for m in learned if (m, best) not in {(x, y) for x, y, _ in pairs}]
     out = []
     for m, a, target in pairs:
         va, vb = values(m), values(a)
