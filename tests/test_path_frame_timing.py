@@ -154,3 +154,17 @@ def test_import_motion_envs_does_not_import_torch():
         " sys.exit('torch' in sys.modules)"
     )
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
+
+
+def test_dataset_up_attribute_and_override(tmp_path):
+    from motion_envs.datasets import load_orientation_dataset, load_vr_kitchen
+    from motion_envs.datasets.orientation import DEFAULT_UP, read_orientation_csv
+
+    ds = load_vr_kitchen()
+    assert ds.up == (0.0, 1.0, 0.0)
+    assert load_orientation_dataset("vr-kitchen", up=(0, 0, 2)).up == (0.0, 0.0, 1.0)
+    path = ds.subset(np.arange(5)).to_csv(tmp_path / "five.csv")
+    assert read_orientation_csv(path).up == DEFAULT_UP
+    assert read_orientation_csv(path, up=(1.0, 0.0, 0.0)).up == (1.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="up"):
+        load_orientation_dataset(str(path), up=(0, 0, 0))
