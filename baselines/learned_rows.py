@@ -252,8 +252,7 @@ def learned_orientation_rows(
     errors["ridge_loso_predicted_timing"] = max_errors(R_hat_timing, to_body(coef))
     seconds["ridge"] = time.perf_counter() - t0
 
-    reason = None if use_torch else "disabled (--no-torch)"
-    reason = reason or torch_missing_reason()
+    reason = torch_missing_reason() or (None if use_torch else "disabled (use_torch=False)")
     if reason is None:
         from baselines.learned.batched_mlp import CurveCriterion, MLPConfig
         from baselines.learned.nested import nested_mlp

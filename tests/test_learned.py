@@ -267,3 +267,25 @@ def test_position_learned_columns_on_two_shapes():
             preds[m][:, -1], y[scored, -1]
         )
     assert len(chosen["ridge"]) == len(folds)
+
+
+def test_orientation_cli_without_torch_says_so(tmp_path, capsys, monkeypatch):
+    import json
+
+    import baselines.learned as learned
+    from baselines.cli import main
+    from motion_envs.datasets import load_vr_kitchen
+
+    ds = load_vr_kitchen()
+    keep = np.isin(ds.subjects, np.unique(ds.subjects)[:3]) & (ds.replicates < 2)
+    path = ds.subset(keep).to_csv(tmp_path / "three.csv")
+    reason = "torch is not installed (test)"
+    monkeypatch.setattr(learned, "torch_missing_reason", lambda: reason)
+    out = tmp_path / "o"
+    assert main(["orientation", "--data", str(path), "--up", "0,1,0", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"mlp_loso: skipped ({reason})" in text
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["criteria"]["mlp_loso"] is None and doc["criteria"]["ridge_loso"] > 0
+    assert main(["orientation", "--data", str(path), "--up", "0,1"]) == 2
+    assert "up must be 3 finite numbers" in capsys.readouterr().err
