@@ -18,10 +18,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:  # torch is imported only when the MLP runs
+    from baselines.learned.batched_mlp import CurveCriterion, MLPConfig
 
 __all__ = ["Fold", "NestedResult", "inner_folds", "nested_mlp"]
 
@@ -73,8 +76,8 @@ def nested_mlp(
     Y: FloatArray,
     groups: NDArray,
     folds: Sequence[Fold],
-    config: object,
-    criterion: object | None = None,
+    config: MLPConfig,
+    criterion: CurveCriterion | None = None,
 ) -> NestedResult:
     """Nested selection and prediction with the batched MLP (see the module docstring).
 
@@ -83,16 +86,14 @@ def nested_mlp(
     target of ``criterion`` (a :class:`~baselines.learned.batched_mlp.CurveCriterion`)
     may be ``(n_folds, N, T, D)``.
 
-    Two batched trainings: every (outer fold, weight decay, inner fold) network with its
-    validation curve; then one network per outer fold, on all its training rows, for the
-    chosen epochs with the chosen weight decay.
+    Two batched trainings: every (outer fold, weight decay, base, inner fold) network with
+    its validation curve; then one network per outer fold, on all its training rows, with
+    the chosen weight decay and base for the chosen number of epochs.
     """
     from dataclasses import replace
 
-    from baselines.learned.batched_mlp import CurveCriterion, MLPConfig, train_networks
+    from baselines.learned.batched_mlp import train_networks
 
-    assert isinstance(config, MLPConfig)
-    assert criterion is None or isinstance(criterion, CurveCriterion)
     N = X.shape[0]
     cands = [(wd, base) for wd in config.weight_decays for base in config.bases]
     wds = np.asarray([c[0] for c in cands], dtype=np.float64)
@@ -137,7 +138,8 @@ def nested_mlp(
     score = sums / counts
     final_masks, final_wd, final_base, stops, chosen = [], [], [], [], []
     for o, (train, _) in enumerate(folds):
-        c_, e_ = np.unravel_index(np.argmin(score[o]), score[o].shape)  # ties: fewest epochs
+        # ties: the first candidate in config order, then the fewest epochs
+        c_, e_ = np.unravel_index(np.argmin(score[o]), score[o].shape)
         c, e = int(c_), int(e_)
         mt = np.zeros(N, bool)
         mt[train] = True
