@@ -422,8 +422,14 @@ def plot_ratios(
     from baselines.learned._atomic import atomic_write_bytes
 
     n = len(comparisons)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.4), squeeze=False, constrained_layout=True)
-    for ax, c in zip(axes[0], comparisons, strict=True):
+    cols = min(2, n)
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(5.5 * cols, 3.4 * rows), squeeze=False, constrained_layout=True
+    )
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    for ax, c in zip(axes.ravel(), comparisons, strict=False):
         names = list(c["per_group_ratio"])
         vals = np.array([c["per_group_ratio"][k] for k in names])
         ax.bar(range(len(names)), vals, color=np.where(vals < 1, "C2", "C3"))
