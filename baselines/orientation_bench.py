@@ -1,7 +1,10 @@
 """``motion-bench orientation``: Faraway & Choe's Table 1 on real or the users' data.
 
 Prints every criterion beside the paper's value, writes ``results.json``,
-``results.csv`` and a residual plot in the style of the paper's Figure 5.
+``results.csv`` and a residual plot in the style of the paper's Figure 5. With at least
+3 subjects it adds the path-frame, predicted-timing and learned leave-one-subject-out
+rows of :mod:`baselines.learned_rows` (``--learned``), a reading of learned against
+analytic, and ``learned_ratio.png``.
 """
 
 from __future__ import annotations
