@@ -349,6 +349,8 @@ def compare(rows: LearnedRows, subjects: NDArray, n_boot: int = 2000) -> list[di
             if name not in rows.errors:
                 continue
             best = min(analytic, key=lambda k: float(np.median(rows.errors[k])))
+            if any(c["learned"] == name and c["best_analytic"] == best for c in out):
+                continue  # the best analytic row is already the target's
             ratio, lo, hi = bootstrap_ratio(rows.errors[name], rows.errors[best], subjects, n_boot)
             a = _per_group_medians(rows.errors[name], subjects)
             b = _per_group_medians(rows.errors[best], subjects)
@@ -390,7 +392,7 @@ def format_reading(rows: LearnedRows, comparisons: list[dict[str, Any]]) -> str:
         lines.append(
             "  the path frame alone takes the null model from "
             f"{np.median(rows.errors['null_d2_loso']):.3f} to "
-            f"{crit['null_d2_path_loso']:.3f} rad; the learned rows work in that frame too."
+            f"{crit['null_d2_path_loso']:.3f} rad; the learned rows work in that frame."
         )
     lines.append(
         "  predicted timing: the slerp with the training subjects' mean speed profile scores "
