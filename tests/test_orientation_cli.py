@@ -11,13 +11,14 @@ import numpy as np
 import pytest
 
 from baselines.cli import main
+from baselines.learned_rows import LEARNED_ROWS
 from motion_envs.datasets import load_vr_kitchen
 from motion_envs.models.criteria import criterion_names, table1
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1
 
 
 def test_cli_prints_table_and_writes_results(tmp_path, capsys):
-    assert main(["orientation", "--out", str(tmp_path)]) == 0
+    assert main(["orientation", "--out", str(tmp_path), "--learned", "quick"]) == 0
     out = capsys.readouterr().out
     for name in criterion_names():
         assert name in out
@@ -26,7 +27,11 @@ def test_cli_prints_table_and_writes_results(tmp_path, capsys):
     assert doc["dataset"] == "vr-kitchen"
     assert doc["n_trajectories"] == 252 and doc["n_dropped"] == 148
     assert doc["simulated"] is False
-    assert list(doc["criteria"]) == criterion_names()
+    assert list(doc["criteria"]) == criterion_names() + list(LEARNED_ROWS)
+    for name in LEARNED_ROWS:
+        assert name in out and doc["criteria"][name] > 0
+    assert "95% CI over subjects" in out
+    assert (tmp_path / "learned_ratio.png").read_bytes()[:4] == b"\x89PNG"
     ds = load_vr_kitchen()
     ref = table1(ds.ragged, ds.subjects, ds.tasks).criteria
     for k, v in ref.items():
@@ -69,7 +74,7 @@ def test_console_script_help():
 
 
 def test_cli_writes_results_csv(tmp_path, capsys):
-    assert main(["orientation", "--out", str(tmp_path)]) == 0
+    assert main(["orientation", "--out", str(tmp_path), "--learned", "off"]) == 0
     rows = list(csv.DictReader((tmp_path / "results.csv").open()))
     assert [r["name"] for r in rows] == criterion_names()
     doc = json.loads((tmp_path / "results.json").read_text())
@@ -81,7 +86,8 @@ def test_cli_writes_results_csv(tmp_path, capsys):
 
 def test_all_runs_the_selected_jobs(tmp_path, capsys):
     out = tmp_path / "res"
-    assert main(["all", "--out", str(out), "--only", "orientation-vr-kitchen"]) == 0
+    argv = ["all", "--out", str(out), "--only", "orientation-vr-kitchen", "--learned", "off"]
+    assert main(argv) == 0
     index = json.loads((out / "index.json").read_text())
     assert [j["folder"] for j in index["jobs"]] == ["orientation-vr-kitchen"]
     assert index["jobs"][0]["exit_code"] == 0

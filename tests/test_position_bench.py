@@ -10,6 +10,7 @@ import pytest
 
 from baselines import position_bench as pb
 from baselines.cli import main
+from baselines.learned import torch_available
 from baselines.peers import peers_available
 from motion_envs.datasets.lasa import load_lasa
 from motion_envs.models.nominal import position_folds, resample_positions
@@ -19,16 +20,19 @@ from motion_envs.models.position_criteria import max_error
 def test_cli_lasa_writes_results(tmp_path, capsys):
     out = tmp_path / "res"
     args = ["position", "--shapes", "Line", "Angle", "--n-points", "40", "--n-sines", "4"]
-    rc = main([*args, "--out", str(out), "--no-progress"])
+    rc = main([*args, "--out", str(out), "--no-progress", "--learned", "quick"])
     assert rc == 0
     text = capsys.readouterr().out
+    assert "learned vs analytic" in text and "95% CI over shapes" in text
     assert "median over demos of max_t |error|" in text
     assert "validation of the linear hypothesis" in text
     doc = json.loads((out / "results.json").read_text())
     assert doc["conditions"] == ["start", "end"] and doc["n_points"] == 40
     assert set(doc["per_shape"]) == {"Line", "Angle"}
     expected = ["line", "null", "lippi"] + (["dmp", "promp"] if peers_available() else [])
+    expected += ["ridge"] + (["mlp"] if torch_available() else [])
     assert doc["methods"] == expected
+    assert (out / "learned_ratio.png").stat().st_size > 1000
     for m in expected:
         vals = [doc["per_shape"][s]["criteria"][m]["max_error"] for s in ("Line", "Angle")]
         assert doc["summary_median_across_shapes"][m]["max_error"] == pytest.approx(np.median(vals))

@@ -33,15 +33,26 @@ ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen", "cohort")
 
 
 def load_orientation_dataset(
-    data: str | os.PathLike[str], min_deg: float = DEFAULT_MIN_DEG
+    data: str | os.PathLike[str],
+    min_deg: float = DEFAULT_MIN_DEG,
+    up: tuple[float, float, float] | None = None,
 ) -> OrientationDataset:
     """Load a built-in orientation dataset by name, or the users' CSV at a path.
 
     ``"cohort"`` is the simulated cohort ``faraway2008``; ``"cohort:CONFIG"`` another
     cohort, CONFIG being a name under ``configs/cohorts/`` or a path to a YAML file
     (:mod:`motion_envs.datasets.cohort`). Trajectories rotating less than ``min_deg``
-    degrees from start to end are dropped and counted in ``n_dropped``.
+    degrees from start to end are dropped and counted in ``n_dropped``. ``up`` (the
+    data's vertical axis) overrides the dataset's own (``+z`` for a CSV and the cohort,
+    ``+y`` for vr-kitchen).
     """
+    if up is not None:
+        from dataclasses import replace
+
+        from motion_envs.models.path_frame import check_up
+
+        x, y, z = (float(v) for v in check_up(up))
+        return replace(load_orientation_dataset(data, min_deg), up=(x, y, z))
     if isinstance(data, str) and (data == "cohort" or data.startswith("cohort:")):
         from motion_envs.datasets.cohort import DEFAULT_COHORT, load_cohort
 

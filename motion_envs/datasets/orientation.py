@@ -45,6 +45,8 @@ __all__ = [
 CSV_COLUMNS: tuple[str, ...] = ("trajectory", "subject", "task", "t", "qw", "qx", "qy", "qz")
 #: Accepted deviation of a data quaternion's norm from 1 (then renormalised).
 DATA_UNIT_TOLERANCE = 1e-3
+#: Vertical axis of a dataset when none is given: world ``+z`` (right-handed, z up).
+DEFAULT_UP: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -68,6 +70,11 @@ class OrientationDataset:
         How many trajectories the loader dropped (e.g. rotation below ``min_deg``).
     simulated:
         True for generated (virtual) data, False for real recordings.
+    up:
+        The data's vertical axis in the world frame of the quaternions (used by the
+        path frame, :mod:`motion_envs.models.path_frame`); default :data:`DEFAULT_UP`
+        (``+z``); ``vr-kitchen`` is y-up; a CSV's is given by ``read_orientation_csv(up=)``
+        or ``motion-bench orientation --up``.
     """
 
     name: str
@@ -80,6 +87,7 @@ class OrientationDataset:
     predictors: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     n_dropped: int = 0
     simulated: bool = False
+    up: tuple[float, float, float] = DEFAULT_UP
 
     def __post_init__(self) -> None:
         L = len(self.quaternions)
@@ -155,7 +163,9 @@ class OrientationDataset:
 
 
 def read_orientation_csv(
-    path: str | os.PathLike[str], min_samples: int = MIN_SAMPLES
+    path: str | os.PathLike[str],
+    min_samples: int = MIN_SAMPLES,
+    up: tuple[float, float, float] = DEFAULT_UP,
 ) -> OrientationDataset:
     """Read and validate an orientation CSV (format in the module docstring).
 
@@ -163,7 +173,7 @@ def read_orientation_csv(
     non-numeric values, quaternions whose norm is not within 1e-3 of 1, times that do
     not strictly increase, trajectories with fewer than ``min_samples`` samples, rows of
     one trajectory that are not contiguous, labels or predictors that change within a
-    trajectory.
+    trajectory. ``up`` is the data's vertical axis (stored as the dataset's ``up``).
     """
     table = read_sample_table(path, CSV_COLUMNS[4:], min_samples, kind="orientation")
     q = table.values
@@ -204,4 +214,5 @@ def read_orientation_csv(
         tasks=tasks,
         replicates=replicates,
         predictors=predictors,
+        up=tuple(float(x) for x in up),  # type: ignore[arg-type]
     )

@@ -13,7 +13,8 @@ The logged quaternions are in Unity's left-handed, y-up frame. They are converte
 right-handed frame with ``(w, x, y, z) -> (w, -x, -y, z)`` (the data README's rule), so
 every geodesic angle is unchanged. Trajectories that rotate less than ``min_deg``
 (default 10 degrees) from start to end are dropped (the slerp and the speed profile are
-ill-posed there); the count is in ``n_dropped``. Predictor: ``duration_s``.
+ill-posed there); the count is in ``n_dropped``. Predictor: ``duration_s``. Vertical
+axis (``up``): ``+y`` (Unity is y-up and the conversion keeps y).
 """
 
 from __future__ import annotations
@@ -92,5 +93,6 @@ def load_vr_kitchen(min_deg: float = DEFAULT_MIN_DEG) -> OrientationDataset:
         tasks=tasks.astype(str),
         replicates=replicate_numbers(subjects, tasks),
         predictors={"duration_s": np.array([tt[-1] for tt in times])},
+        up=(0.0, 1.0, 0.0),
     )
     return dataset.drop_small_rotations(min_deg)

@@ -13,6 +13,14 @@ those control points:
   ``vec(P) = b_0 + B x`` on numeric predictors ``x`` (least squares).
 
 ``P_l`` is the least-squares fit of curve ``l`` (:func:`motion_envs.geometry.bezier.fit`).
+
+Frames: with ``frame="body"`` (default, the paper's) the curves are modelled in the
+slerp's body frame as given. With ``frame="path"`` they are first mapped to the path
+frame of :mod:`motion_envs.models.path_frame` (start-to-goal rotation axis, the data's
+``up`` made perpendicular to it, their cross product; divided by the rotation angle):
+``p(tau) = F^T r(tau) / s``; the model is fitted to ``p`` and its predictions are mapped
+back with the exact inverse ``r = s F p``. ``fit`` and ``predict`` then need each
+curve's ``starts`` and ``ends`` (``(L, 4)`` quaternions ``(w, x, y, z)``).
 Because least squares is linear and the grid is shared, the mean of fitted control
 points equals the fit of the mean curve.
 
@@ -31,7 +39,17 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import normalised_grid
 from motion_envs.geometry import bezier
+from motion_envs.models.path_frame import (
+    DEFAULT_UP,
+    FRAMES,
+    check_up,
+    from_path_frame,
+    to_path_frame,
+)
 from motion_envs.models.serialization import SerializableModel, StateSchema
+
+#: Parameters that model files written before the path frame existed lack (body frame).
+_FRAME_PARAMS = frozenset({"frame", "up"})
 
 __all__ = [
     "BezierResidualModel",
@@ -106,12 +124,58 @@ class BezierResidualModel(SerializableModel):
     ----------
     degree:
         Bézier degree ``d >= 1`` (``d - 1`` free interior control points in R^3).
+    frame:
+        ``"body"`` (the paper's) or ``"path"`` (see the module docstring).
+    up:
+        The data's vertical axis in the world frame (``frame="path"`` only); default
+        :data:`motion_envs.models.path_frame.DEFAULT_UP` (``+z``); datasets carry theirs
+        as ``OrientationDataset.up``.
     """
 
-    def __init__(self, degree: int = 2) -> None:
+    def __init__(self, degree: int = 2, frame: str = "body", up: ArrayLike = DEFAULT_UP) -> None:
         if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
             raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+        if frame not in FRAMES:
+            raise ValueError(f"frame must be one of {FRAMES}; got {frame!r}")
         self.degree = int(degree)
+        self.frame = frame
+        self.up = tuple(float(x) for x in check_up(up))
+
+    def _frame_params(self) -> dict[str, Any]:
+        return {"degree": self.degree, "frame": self.frame, "up": list(self.up)}
+
+    def _ends(
+        self, starts: ArrayLike | None, ends: ArrayLike | None, L: int
+    ) -> tuple[FloatArray, FloatArray]:
+        if starts is None or ends is None:
+            raise ValueError("starts and ends (L, 4) are required with frame='path'")
+        S = np.asarray(starts, dtype=np.float64)
+        E = np.asarray(ends, dtype=np.float64)
+        if S.shape != (L, 4) or E.shape != (L, 4):
+            raise ValueError(
+                f"starts and ends must have shape ({L}, 4); got {S.shape} and {E.shape}"
+            )
+        return S, E
+
+    def to_model_frame(
+        self, residuals: ArrayLike, starts: ArrayLike | None = None, ends: ArrayLike | None = None
+    ) -> FloatArray:
+        """Residual curves in the frame the model works in (identity for ``"body"``)."""
+        R = np.asarray(residuals, dtype=np.float64)
+        if self.frame == "body":
+            return R
+        S, E = self._ends(starts, ends, R.shape[0])
+        return to_path_frame(R, S, E, self.up)
+
+    def from_model_frame(
+        self, curves: ArrayLike, starts: ArrayLike | None = None, ends: ArrayLike | None = None
+    ) -> FloatArray:
+        """Inverse of :meth:`to_model_frame`: curves back in the body frame."""
+        C = np.asarray(curves, dtype=np.float64)
+        if self.frame == "body":
+            return C
+        S, E = self._ends(starts, ends, C.shape[0])
+        return from_path_frame(C, S, E, self.up)
 
     # -- to implement -------------------------------------------------------------
     def _fit_points(
@@ -140,13 +204,17 @@ class BezierResidualModel(SerializableModel):
         subjects: ArrayLike | None = None,
         tasks: ArrayLike | None = None,
         predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        starts: ArrayLike | None = None,
+        ends: ArrayLike | None = None,
     ) -> B:
         """Fit to residual curves ``(L, n_points, 3)`` and their labels; returns ``self``.
 
-        Sets ``n_points_`` and the model's own fitted attributes.
+        ``starts``/``ends`` (``(L, 4)``) are needed with ``frame="path"``. Sets
+        ``n_points_`` and the model's own fitted attributes.
         """
         R = _check_curves(residuals)
         L = R.shape[0]
+        R = self.to_model_frame(R, starts, ends)
         points = fit_control_points(R, self.degree)
         subj = None if subjects is None else _labels(subjects, "subjects", L)
         task = None if tasks is None else _labels(tasks, "tasks", L)
@@ -171,11 +239,19 @@ class BezierResidualModel(SerializableModel):
         tasks: ArrayLike | None = None,
         predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
         n_points: int | None = None,
+        starts: ArrayLike | None = None,
+        ends: ArrayLike | None = None,
     ) -> FloatArray:
-        """Predicted residual curves ``(L, n_points, 3)`` on the uniform grid."""
+        """Predicted residual curves ``(L, n_points, 3)`` on the uniform grid (body frame).
+
+        With ``frame="path"`` the control points are path-frame ones (see
+        :meth:`predict_control_points`) and ``starts``/``ends`` map the curves back.
+        """
+        if n is None and starts is not None:
+            n = int(np.asarray(starts).shape[0])
         P = self.predict_control_points(n=n, subjects=subjects, tasks=tasks, predictors=predictors)
         grid = normalised_grid(n_points or self.n_points_)
-        return bezier.evaluate(P, grid, self.degree)
+        return self.from_model_frame(bezier.evaluate(P, grid, self.degree), starts, ends)
 
 
 class NullBezierModel(BezierResidualModel):
@@ -211,13 +287,14 @@ class NullBezierModel(BezierResidualModel):
 
     def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
-            {"degree": self.degree},
+            self._frame_params(),
             {"control_points_": self.control_points_},
             {"n_points_": self.n_points_},
         )
 
     state_schema = StateSchema(
-        params={"degree": "int"},
+        params={"degree": "int", "frame": "str", "up": "float_list"},
+        optional_params=_FRAME_PARAMS,
         arrays={"control_points_": ("float64", 2)},
         attributes={"n_points_": "int"},
     )
@@ -253,8 +330,15 @@ class GroupBezierModel(BezierResidualModel):
     ``global_control_points_`` ``(d - 1, 3)``, ``group_sizes_`` ``(G,)``.
     """
 
-    def __init__(self, degree: int = 2, by: str = "task", unseen: str = "error") -> None:
-        super().__init__(degree)
+    def __init__(
+        self,
+        degree: int = 2,
+        by: str = "task",
+        unseen: str = "error",
+        frame: str = "body",
+        up: ArrayLike = DEFAULT_UP,
+    ) -> None:
+        super().__init__(degree, frame=frame, up=up)
         if by not in ("subject", "task"):
             raise ValueError(f"by must be 'subject' or 'task'; got {by!r}")
         if unseen not in ("error", "global"):
@@ -308,7 +392,7 @@ class GroupBezierModel(BezierResidualModel):
 
     def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
-            {"degree": self.degree, "by": self.by, "unseen": self.unseen},
+            {**self._frame_params(), "by": self.by, "unseen": self.unseen},
             {
                 "control_points_": self.control_points_,
                 "global_control_points_": self.global_control_points_,
@@ -318,7 +402,14 @@ class GroupBezierModel(BezierResidualModel):
         )
 
     state_schema = StateSchema(
-        params={"degree": "int", "by": "str", "unseen": "str"},
+        params={
+            "degree": "int",
+            "frame": "str",
+            "up": "float_list",
+            "by": "str",
+            "unseen": "str",
+        },
+        optional_params=_FRAME_PARAMS,
         arrays={
             "control_points_": ("float64", 3),
             "global_control_points_": ("float64", 2),
@@ -360,15 +451,27 @@ class GroupBezierModel(BezierResidualModel):
 class SubjectBezierModel(GroupBezierModel):
     """The subject predictor: ``P`` = mean of the ``P_l`` of the same subject."""
 
-    def __init__(self, degree: int = 2, unseen: str = "error") -> None:
-        super().__init__(degree, by="subject", unseen=unseen)
+    def __init__(
+        self,
+        degree: int = 2,
+        unseen: str = "error",
+        frame: str = "body",
+        up: ArrayLike = DEFAULT_UP,
+    ) -> None:
+        super().__init__(degree, by="subject", unseen=unseen, frame=frame, up=up)
 
 
 class TaskBezierModel(GroupBezierModel):
     """The task predictor: ``P`` = mean of the ``P_l`` of the same task."""
 
-    def __init__(self, degree: int = 2, unseen: str = "error") -> None:
-        super().__init__(degree, by="task", unseen=unseen)
+    def __init__(
+        self,
+        degree: int = 2,
+        unseen: str = "error",
+        frame: str = "body",
+        up: ArrayLike = DEFAULT_UP,
+    ) -> None:
+        super().__init__(degree, by="task", unseen=unseen, frame=frame, up=up)
 
 
 class LinearBezierModel(BezierResidualModel):
@@ -459,13 +562,14 @@ class LinearBezierModel(BezierResidualModel):
 
     def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
         return (
-            {"degree": self.degree},
+            self._frame_params(),
             {"intercept_": self.intercept_, "coef_": self.coef_},
             {"predictor_names_": list(self.predictor_names_), "n_points_": self.n_points_},
         )
 
     state_schema = StateSchema(
-        params={"degree": "int"},
+        params={"degree": "int", "frame": "str", "up": "float_list"},
+        optional_params=_FRAME_PARAMS,
         arrays={"intercept_": ("float64", 2), "coef_": ("float64", 3)},
         attributes={"predictor_names_": "str_list", "n_points_": "int"},
     )

@@ -94,12 +94,15 @@ class ModelFileError(ValueError):
 class StateSchema:
     """The state a model class saves: the kind of each parameter and attribute
     (one of ``"int"``, ``"float"``, ``"str"``, ``"bool"``, ``"str_list"``,
-    ``"int_or_str"``) and the ``(dtype, ndim)`` of each array (dtype ``"float64"`` or
-    ``"int64"``)."""
+    ``"float_list"``, ``"int_or_str"``) and the ``(dtype, ndim)`` of each array (dtype
+    ``"float64"`` or ``"int64"``). ``optional_params`` may be absent from a file (files
+    written before the parameter existed); the class's ``_from_state`` supplies the
+    default."""
 
     params: Mapping[str, str] = field(default_factory=dict)
     arrays: Mapping[str, tuple[str, int]] = field(default_factory=dict)
     attributes: Mapping[str, str] = field(default_factory=dict)
+    optional_params: frozenset[str] = frozenset()
 
 
 class SerializableModel:
@@ -239,6 +242,10 @@ def _kind_ok(kind: str, value: Any) -> bool:
         return isinstance(value, bool)
     if kind == "str_list":
         return isinstance(value, list) and all(isinstance(v, str) for v in value)
+    if kind == "float_list":
+        return isinstance(value, list) and all(
+            _is_number(v) and math.isfinite(v) for v in value
+        )
     if kind == "int_or_str":
         return _is_int(value) or isinstance(value, str)
     raise AssertionError(f"unknown schema kind {kind!r}")
@@ -316,12 +323,16 @@ def check_document(doc: Any, where: str) -> type[SerializableModel]:
             fail(section, "must be an object")
         expected = getattr(schema, section)
         missing = sorted(set(expected) - set(doc[section]))
+        if section == "params":
+            missing = [key for key in missing if key not in schema.optional_params]
         if missing:
             fail(f"{section}.{missing[0]}", f"is missing ({name} needs {sorted(expected)})")
         unknown = sorted(set(doc[section]) - set(expected))
         if unknown:
             fail(f"{section}.{unknown[0]}", f"is not a field of {name}")
     for key, kind in schema.params.items():
+        if key not in doc["params"]:
+            continue  # an optional parameter (checked above)
         if not _kind_ok(kind, doc["params"][key]):
             fail(f"params.{key}", f"must be of kind {kind}; got {doc['params'][key]!r}"[:200])
     for key, kind in schema.attributes.items():

@@ -1,0 +1,48 @@
+"""Learned-residual regressors competing with the papers' analytic models.
+
+* :mod:`baselines.learned.batched_mlp`: small torch MLPs, many trained at once (one per
+  fold and candidate), with nested selection by group (torch imported only there);
+* :mod:`baselines.learned.nested`: the nested cross-validation bookkeeping (folds by
+  group, selection on inner validation folds only);
+* :mod:`baselines.learned.orientation`: features and targets of the orientation rows,
+  and the ridge regressor (scikit-learn);
+* :mod:`baselines.learned.position`: the ``ridge`` and ``mlp`` columns of LASA;
+* :mod:`baselines.learned.model_file`: safetensors weights with a JSON header.
+
+Importing this package does not import torch; :func:`torch_available` says whether the
+torch rows can run.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+
+__all__ = ["QUICK_MLP", "sklearn_missing_reason", "torch_available", "torch_missing_reason"]
+
+
+def torch_available() -> bool:
+    """True when torch can be imported (the ``rl`` extra)."""
+    return importlib.util.find_spec("torch") is not None
+
+
+def torch_missing_reason() -> str | None:
+    """``None`` when torch is importable, else a one-line reason with the fix."""
+    if torch_available():
+        return None
+    return "torch is not installed (pip install 'motion-envs[rl]' with a CPU torch build)"
+
+
+def sklearn_missing_reason() -> str | None:
+    """``None`` when scikit-learn is importable, else a one-line reason with the fix."""
+    if importlib.util.find_spec("sklearn") is not None:
+        return None
+    return "scikit-learn is not installed (pip install 'motion-envs[learned]')"
+
+
+def __getattr__(name: str):  # lazy: QUICK_MLP needs torch only when used
+    if name == "QUICK_MLP":
+        from baselines.learned.batched_mlp import MLPConfig
+
+        #: The ``--learned quick`` budget: one candidate, 30 epochs, 2 inner folds.
+        return MLPConfig(max_epochs=30, weight_decays=(0.1,), bases=("mean",), inner_splits=2)
+    raise AttributeError(name)
