@@ -297,7 +297,7 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
 
     # -- stepping -----------------------------------------------------------------------
     def step(self, actions: Any) -> _StepResult:
-        a = np.asarray(actions, dtype=np.float64)
+        a = np.ascontiguousarray(actions, dtype=np.float64)  # one compiled layout
         if a.shape != self._action_shape:
             raise ValueError(f"actions must have shape {self._action_shape}; got {a.shape}")
         if not self._started:
