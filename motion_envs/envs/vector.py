@@ -170,7 +170,6 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._sf = np.zeros((N, dim + 2))
         self._final_obs = np.zeros((N, self._obs_dim), dtype=np.float32)
         self._n_out = 3 + len(self._STEP_KEYS)
-        self._step_mask_keys = tuple("_" + key for key in self._STEP_KEYS)
         self._history: NDArray[np.float64] | None = (
             np.zeros((N, n + 1, self._dim)) if self.render_mode is not None else None
         )
@@ -298,7 +297,7 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
 
     # -- stepping -----------------------------------------------------------------------
     def step(self, actions: Any) -> _StepResult:
-        a = np.asarray(actions, dtype=np.float64)
+        a = np.ascontiguousarray(actions, dtype=np.float64)  # one compiled layout
         if a.shape != self._action_shape:
             raise ValueError(f"actions must have shape {self._action_shape}; got {a.shape}")
         if not self._started:
@@ -332,18 +331,14 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self, out_f: NDArray[np.float64], out_b: NDArray[np.bool_], n_term: int, n_reset: int
     ) -> dict[str, Any]:
         """The vector infos of a step from the float and flag outputs (views, no copies)."""
-        keys, mask_keys, t = self._STEP_KEYS, self._step_mask_keys, len(self._STEP_KEYS)
-        info: dict[str, Any] = dict.fromkeys(mask_keys, out_b[2])
-        info.update(zip(keys, out_f[1 : t + 1], strict=True))
+        info = self._step_infos(out_f, out_b[2])
         if not (n_term or n_reset):
             return info
         terminated, reset = out_b[0], out_b[3]
+        t = len(self._STEP_KEYS)
         if self._mode == _SAME:
             if n_reset:
-                final: dict[str, Any] = {}
-                for key, mask_key, row in zip(keys, mask_keys, out_f[1 : t + 1], strict=True):
-                    final[key] = row
-                    final[mask_key] = reset
+                final = self._step_infos(out_f, reset)
                 if n_term:
                     for r, key in enumerate(self._END_KEYS, start=t + 1):
                         final[key] = out_f[r]
@@ -363,6 +358,11 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
             info["trajectory_index"] = np.where(reset, self._si[:, _IDX], 0)
             info["_trajectory_index"] = reset
         return info
+
+    def _step_infos(self, out_f: NDArray[np.float64], mask: NDArray[np.bool_]) -> dict[str, Any]:
+        """The per-step infos: rows ``1 ..`` of ``out_f`` under :attr:`_STEP_KEYS`, each
+        with ``mask`` (a dict literal in each subclass: the fastest way to build it)."""
+        raise NotImplementedError
 
     def _step_numpy(
         self,
@@ -503,6 +503,22 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         weights = (w["residual"], w["geodesic"], w["action"])
         self._setup(num_envs, max_episode_steps, single, autoreset_mode, backend, weights)
 
+    def _step_infos(self, out_f: NDArray[np.float64], mask: NDArray[np.bool_]) -> dict[str, Any]:
+        return {
+            "error": out_f[1],
+            "_error": mask,
+            "geodesic_error": out_f[2],
+            "_geodesic_error": mask,
+            "reward_residual": out_f[3],
+            "_reward_residual": mask,
+            "reward_geodesic": out_f[4],
+            "_reward_geodesic": mask,
+            "reward_action": out_f[5],
+            "_reward_action": mask,
+            "tau": out_f[6],
+            "_tau": mask,
+        }
+
     def _physics_numpy(
         self,
         a: NDArray[np.float64],
@@ -598,6 +614,18 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         w = single.reward_weights
         weights = (w["distance"], w["action"])
         self._setup(num_envs, max_episode_steps, single, autoreset_mode, backend, weights)
+
+    def _step_infos(self, out_f: NDArray[np.float64], mask: NDArray[np.bool_]) -> dict[str, Any]:
+        return {
+            "error": out_f[1],
+            "_error": mask,
+            "reward_distance": out_f[2],
+            "_reward_distance": mask,
+            "reward_action": out_f[3],
+            "_reward_action": mask,
+            "tau": out_f[4],
+            "_tau": mask,
+        }
 
     def _physics_numpy(
         self,
