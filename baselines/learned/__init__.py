@@ -16,6 +16,7 @@ torch rows can run.
 from __future__ import annotations
 
 import importlib.util
+from typing import Any
 
 __all__ = ["QUICK_MLP", "sklearn_missing_reason", "torch_available", "torch_missing_reason"]
 
@@ -39,7 +40,7 @@ def sklearn_missing_reason() -> str | None:
     return "scikit-learn is not installed (pip install 'motion-envs[learned]')"
 
 
-def __getattr__(name: str):  # lazy: QUICK_MLP needs torch only when used
+def __getattr__(name: str) -> Any:  # lazy: QUICK_MLP needs torch only when used
     if name == "QUICK_MLP":
         from baselines.learned.batched_mlp import MLPConfig
 
