@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from baselines import options
+from baselines.learned import LEARNED_MODES
 from baselines.learned_rows import ROW_LABELS, LearnedRows
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import ORIENTATION_DATASETS, OrientationDataset, load_orientation_dataset
@@ -48,10 +49,6 @@ __all__ = [
 ]
 
 SPLITS: tuple[str, ...] = ("all", "train", "test")
-#: Budgets of the learned rows: ``full`` (nested selection over every candidate),
-#: ``quick`` (:data:`baselines.learned.QUICK_MLP`: one candidate, 30 epochs, 2 inner
-#: folds), ``off`` (no path-frame, predicted-timing or learned rows).
-LEARNED_MODES: tuple[str, ...] = ("full", "quick", "off")
 
 
 @dataclass(frozen=True)
@@ -257,21 +254,15 @@ def _learned_rows(
     n_subjects = np.unique(dataset.subjects).size
     if n_subjects < 3:
         return None, f"{n_subjects} subjects, at least 3 needed"
-    from baselines.learned import sklearn_missing_reason, torch_missing_reason
+    from baselines.learned import mlp_config, sklearn_missing_reason, torch_missing_reason
     from baselines.learned_rows import learned_orientation_rows
 
     missing_sklearn = sklearn_missing_reason()
     if missing_sklearn:
         return None, missing_sklearn
-    mlp_config = None
-    missing_torch = torch_missing_reason()
-    if missing_torch is None:
-        from baselines.learned import QUICK_MLP
-        from baselines.learned.batched_mlp import MLPConfig
-
-        mlp_config = MLPConfig() if config.learned == "full" else QUICK_MLP
-    rows = learned_orientation_rows(dataset, mlp_config=mlp_config, use_torch=missing_torch is None)
-    return rows, None
+    use_torch = torch_missing_reason() is None
+    budget = mlp_config(config.learned) if use_torch else None
+    return learned_orientation_rows(dataset, mlp_config=budget, use_torch=use_torch), None
 
 
 def run(config: OrientationConfig) -> OrientationResults:

@@ -50,6 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines import options
+from baselines.learned import LEARNED_MODES
 from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import POSITION_DATASETS, load_position_dataset
@@ -82,9 +83,7 @@ FloatArray = NDArray[np.float64]
 
 METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp", "ridge", "mlp")
 PEER_METHODS = ("dmp", "promp")
-#: Budgets of the learned columns: ``full`` (nested selection over every candidate),
-#: ``quick`` (:data:`baselines.learned.QUICK_MLP`), ``off`` (no ridge or mlp column).
-LEARNED_MODES: tuple[str, ...] = ("full", "quick", "off")
+
 CRITERION_TEXT = {
     "max_error": "median over demos of max_t |error|",
     "rmse": "median over demos of RMSE",
@@ -261,14 +260,12 @@ def run_benchmark(
             y_all, dur_all, task_folds, kinds, n_sines, methods, timer, n_weights
         )
         if learned_methods:
-            from baselines.learned import QUICK_MLP
-            from baselines.learned.batched_mlp import MLPConfig
+            from baselines.learned import mlp_config
             from baselines.learned.position import learned_position_predictions
 
-            config = MLPConfig() if learned == "full" else QUICK_MLP
             t_l = time.perf_counter()
             learned_preds, learned_chosen[task] = learned_position_predictions(
-                y_all, dur_all, task_folds, kinds, learned_methods, config
+                y_all, dur_all, task_folds, kinds, learned_methods, mlp_config(learned)
             )
             learned_seconds += time.perf_counter() - t_l
             preds.update(learned_preds)

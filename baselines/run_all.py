@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from baselines import juggling_bench, options, orientation_bench, position_bench
+from baselines.learned import LEARNED_MODES
 from motion_envs._io import atomic_write_text
 
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
@@ -142,10 +143,10 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
     files. ``echo`` receives the text the CLI prints. A job failing on bad data is
     recorded with ``exit_code`` 2 and its message, and the next job runs.
     """
-    if config.learned not in orientation_bench.LEARNED_MODES:
+    if config.learned not in LEARNED_MODES:
         raise options.ConfigError(
             "learned",
-            f"expected one of {list(orientation_bench.LEARNED_MODES)}; got {config.learned!r}",
+            f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}",
         )
     out = Path(config.out)
     index: dict[str, Any] = {"jobs": [], "complete": False}
@@ -212,7 +213,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument(
         "--learned",
-        choices=orientation_bench.LEARNED_MODES,
+        choices=LEARNED_MODES,
         default="full",
         help="budget of the learned rows and columns of every job (quick: one MLP candidate "
         "and 30 epochs; off: none); the cohort job runs with the learned rows off",
