@@ -31,14 +31,15 @@ a slerp traversed with a *predicted* speed profile):
 
 from __future__ import annotations
 
-import io
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._io import save_figure
 from motion_envs.datasets import OrientationDataset
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import NullBezierModel, TaskBezierModel
@@ -285,7 +286,7 @@ def learned_orientation_rows(
 def bootstrap_ratio(
     errors_a: FloatArray,
     errors_b: FloatArray,
-    groups: NDArray,
+    groups: NDArray[Any],
     n_boot: int = 2000,
     seed: int = 0,
 ) -> tuple[float, float, float]:
@@ -334,7 +335,7 @@ def _per_group_medians(errors: FloatArray, groups: NDArray[np.str_]) -> FloatArr
     return np.array([np.median(errors[groups == g]) for g in np.unique(groups)])
 
 
-def compare(rows: LearnedRows, subjects: NDArray, n_boot: int = 2000) -> list[dict[str, Any]]:
+def compare(rows: LearnedRows, subjects: NDArray[Any], n_boot: int = 2000) -> list[dict[str, Any]]:
     """The learned-vs-analytic readings: ratio, bootstrap interval, per-subject counts.
 
     For each of :data:`COMPARISONS` (and the same with ``ridge`` in place of ``mlp``):
@@ -343,7 +344,7 @@ def compare(rows: LearnedRows, subjects: NDArray, n_boot: int = 2000) -> list[di
     median max error is below the best analytic row's.
     """
     subjects = np.asarray(subjects).astype(str)
-    out = []
+    out: list[dict[str, Any]] = []
     for learned, analytic, target in COMPARISONS:
         for name in (learned, learned.replace("mlp", "ridge", 1)):
             if name not in rows.errors:
@@ -413,22 +414,19 @@ def format_reading(rows: LearnedRows, comparisons: list[dict[str, Any]]) -> str:
 
 
 def plot_ratios(
-    comparisons: list[dict[str, Any]], path: Any, title: str, group: str = "subject"
-) -> Any:
-    """Bar plot of the per-group ratio learned / best analytic (one panel per comparison)."""
-    import matplotlib
+    comparisons: list[dict[str, Any]], path: str | Path, title: str, group: str = "subject"
+) -> Path:
+    """Bar plot of the per-group ratio learned / best analytic (one panel per comparison).
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from baselines.learned._atomic import atomic_write_bytes
+    Written atomically to ``path`` (:func:`motion_envs._io.save_figure`); returns it.
+    """
+    from matplotlib.figure import Figure
 
     n = len(comparisons)
     cols = min(2, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(5.5 * cols, 3.4 * rows), squeeze=False, constrained_layout=True
-    )
+    fig = Figure(figsize=(5.5 * cols, 3.4 * rows), constrained_layout=True)
+    axes = fig.subplots(rows, cols, squeeze=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     for ax, c in zip(axes.ravel(), comparisons, strict=False):
@@ -445,7 +443,4 @@ def plot_ratios(
         ax.set_ylabel("median max error ratio")
         ax.set_title(f"{c['learned']} /\n{c['best_analytic']}: {c['ratio']:.3f}", fontsize=8)
     fig.suptitle(title, fontsize=9)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return save_figure(fig, path, dpi=100)

@@ -3,7 +3,10 @@
 :func:`run` computes (a pure function of an :class:`OrientationConfig`); :func:`report`
 is the printed table, every criterion beside the paper's value; :func:`write` writes
 ``results.json``, ``results.csv`` and a residual plot in the style of the paper's
-Figure 5. :func:`register` adds the sub-command to ``motion-bench``.
+Figure 5. With at least 3 subjects, ``run`` adds the path-frame, predicted-timing and
+learned leave-one-subject-out rows of :mod:`baselines.learned_rows` (``--learned``,
+docs/learned.md); ``report`` prints a reading of learned against analytic and ``write``
+adds ``learned_ratio.png``. :func:`register` adds the sub-command to ``motion-bench``.
 """
 
 from __future__ import annotations
@@ -14,15 +17,18 @@ import io
 import json
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from baselines import options
+from baselines.learned import LEARNED_MODES
+from baselines.learned_rows import ROW_LABELS, LearnedRows
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import ORIENTATION_DATASETS, OrientationDataset, load_orientation_dataset
+from motion_envs.datasets.orientation import check_up
 from motion_envs.datasets.splits import split_by_subject
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.criteria import Table1Result, table1
@@ -61,6 +67,12 @@ class OrientationConfig:
         Also score this nominal model (fitted on the train split) on ``split``.
     plot_task:
         Task whose residuals :func:`write` draws (None: the most frequent).
+    learned:
+        Budget of the path-frame, predicted-timing and learned rows, one of
+        :data:`LEARNED_MODES`.
+    up:
+        The data's vertical axis for the path frame (None: the dataset's own, ``+y`` for
+        vr-kitchen, ``+z`` for a CSV and the cohort).
     """
 
     data: str = "vr-kitchen"
@@ -71,17 +83,28 @@ class OrientationConfig:
     nominal: str | None = None
     degree: int = 2
     plot_task: str | None = None
+    learned: str = "full"
+    up: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
 class OrientationResults:
-    """What :func:`run` returns: the scored dataset, Table 1, the nominal's criterion."""
+    """What :func:`run` returns: the scored dataset, Table 1 (with the learned rows
+    appended to ``table.criteria``), the nominal's criterion and the learned rows.
+
+    ``learned`` is None when the rows were not computed, ``learned_note`` then says why
+    (None for ``--learned off``); ``comparisons`` are
+    :func:`baselines.learned_rows.compare`'s readings.
+    """
 
     config: OrientationConfig
     dataset: OrientationDataset
     table: Table1Result
     nominal: dict[str, Any] | None
     seconds: float
+    learned: LearnedRows | None = None
+    comparisons: list[dict[str, Any]] = field(default_factory=list)
+    learned_note: str | None = None
 
 
 _ROW_LABELS = {
@@ -96,6 +119,8 @@ _ROW_LABELS = {
 def _label(name: str) -> str:
     if name in _ROW_LABELS:
         return _ROW_LABELS[name]
+    if name in ROW_LABELS:
+        return ROW_LABELS[name]
     base, _, rest = name.partition("_d")
     degree, _, split = rest.partition("_")
     pretty = base.replace("_", " ").capitalize()
@@ -111,15 +136,15 @@ def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
         f"{np.unique(dataset.subjects).size} subjects, {np.unique(dataset.tasks).size} tasks",
         "median over trajectories of the max over time of the tangent-space error, radians",
         "",
-        f"{'criterion':<50} {'name':<28} {'ours':>7} {'paper':>7}",
-        "-" * 96,
+        f"{'criterion':<50} {'name':<40} {'ours':>7} {'paper':>7}",
+        "-" * 108,
     ]
     for name, value in result.criteria.items():
         paper = FARAWAY_CHOE_TABLE1.get(name)
         paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
         ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
         note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
-        lines.append(f"{_label(name):<50} {name:<28} {ours} {paper_s}  {note}".rstrip())
+        lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
     lines.append("")
     lines.append(
         "paper: 1,088 reaches of 20 subjects (hand relative to forearm); rows ending in "
@@ -219,14 +244,46 @@ def _nominal_criterion(config: OrientationConfig, dataset: OrientationDataset) -
     }
 
 
+def _learned_rows(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> tuple[LearnedRows | None, str | None]:
+    """The rows of :mod:`baselines.learned_rows` at ``config.learned``'s budget, or None
+    and the reason they are skipped (too few subjects, scikit-learn missing)."""
+    if config.learned == "off":
+        return None, None
+    n_subjects = np.unique(dataset.subjects).size
+    if n_subjects < 3:
+        return None, f"{n_subjects} subjects, at least 3 needed"
+    from baselines.learned import mlp_config, sklearn_missing_reason, torch_missing_reason
+    from baselines.learned_rows import learned_orientation_rows
+
+    missing_sklearn = sklearn_missing_reason()
+    if missing_sklearn:
+        return None, missing_sklearn
+    use_torch = torch_missing_reason() is None
+    budget = mlp_config(config.learned) if use_torch else None
+    return learned_orientation_rows(dataset, mlp_config=budget, use_torch=use_torch), None
+
+
 def run(config: OrientationConfig) -> OrientationResults:
-    """Table 1 (and the nominal's criterion) for ``config``; no printing, no files.
+    """Table 1, the learned rows (and the nominal's criterion) for ``config``; no
+    printing, no files.
 
     Raises ``ValueError`` for unusable data and :class:`~baselines.options.ConfigError`
-    (naming the field) for a ``plot_task`` the data does not have, before computing.
+    (naming the field) for a ``plot_task`` the data does not have or an ``up`` or
+    ``learned`` that is not valid, before computing.
     """
+    if config.learned not in LEARNED_MODES:
+        raise options.ConfigError(
+            "learned", f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}"
+        )
+    if config.up is not None:
+        try:
+            check_up(config.up)
+        except ValueError as exc:
+            raise options.ConfigError("up", str(exc)) from None
     t0 = time.perf_counter()
-    dataset = load_orientation_dataset(config.data, min_deg=config.min_deg)
+    dataset = load_orientation_dataset(config.data, min_deg=config.min_deg, up=config.up)
     if len(dataset) < 2:
         raise options.ConfigError(
             "min_deg",
@@ -243,9 +300,16 @@ def run(config: OrientationConfig) -> OrientationResults:
             f"{sorted(set(dataset.tasks.tolist()))}",
         )
     table = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    learned, note = _learned_rows(config, dataset)
+    comparisons: list[dict[str, Any]] = []
+    if learned is not None:
+        from baselines.learned_rows import compare
+
+        table.criteria.update(learned.criteria)
+        comparisons = compare(learned, dataset.subjects)
     elapsed = time.perf_counter() - t0
     nominal = _nominal_criterion(config, full) if config.nominal is not None else None
-    return OrientationResults(config, dataset, table, nominal, elapsed)
+    return OrientationResults(config, dataset, table, nominal, elapsed, learned, comparisons, note)
 
 
 def _nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
@@ -266,6 +330,12 @@ def _nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
 def report(results: OrientationResults) -> str:
     """The text ``motion-bench orientation`` prints."""
     parts = [format_table1(results.table, results.dataset)]
+    if results.learned is not None:
+        from baselines.learned_rows import format_reading
+
+        parts.append(format_reading(results.learned, results.comparisons))
+    elif results.learned_note is not None:
+        parts.append(f"\nlearned rows skipped: {results.learned_note}")
     if results.nominal is not None:
         parts.append(_nominal_text(results.config, results.nominal))
     parts.append(f"\ncomputed in {results.seconds:.2f} s")
@@ -284,19 +354,42 @@ def document(results: OrientationResults) -> dict[str, Any]:
         }
     if results.nominal is not None:
         doc["nominal"] = results.nominal
+    if results.learned is not None:
+        doc["learned"] = {
+            "mode": config.learned,
+            "up": list(results.dataset.up),
+            "comparisons": results.comparisons,
+            "chosen": results.learned.chosen,
+            "seconds": results.learned.seconds,
+            "skipped": results.learned.skipped,
+        }
     return doc
 
 
 def write(results: OrientationResults, out: str | Path) -> list[Path]:
-    """Write ``results.json``, ``results.csv`` and ``residuals.png`` into ``out`` (atomic)."""
+    """Write ``results.json``, ``results.csv``, ``residuals.png`` and, with the learned
+    rows, ``learned_ratio.png`` into ``out`` (atomic)."""
     folder = Path(out)
-    return [
+    written = [
         atomic_write_text(folder / "results.json", json.dumps(document(results), indent=2) + "\n"),
         atomic_write_text(folder / "results.csv", results_csv(results.table)),
         plot_residuals(
             results.table, results.dataset, folder / "residuals.png", task=results.config.plot_task
         ),
     ]
+    if results.comparisons:
+        from baselines.learned_rows import plot_ratios
+
+        dataset = results.dataset
+        written.append(
+            plot_ratios(
+                results.comparisons,
+                folder / "learned_ratio.png",
+                f"per-subject ratio of learned to the best analytic row, {dataset.name}"
+                f"{' (SIMULATED)' if dataset.simulated else ''}, leave one subject out",
+            )
+        )
+    return written
 
 
 def main(args: argparse.Namespace) -> int:
@@ -310,6 +403,8 @@ def main(args: argparse.Namespace) -> int:
         nominal=args.nominal,
         degree=args.degree,
         plot_task=args.plot_task,
+        learned=args.learned,
+        up=args.up,
     )
     results = run(config)
     print(report(results))
@@ -329,6 +424,20 @@ def orientation_data(text: str) -> str:
             f"{text} does not exist"
         )
     return str(options.input_file(text))
+
+
+def up_option(text: str) -> tuple[float, float, float]:
+    """``--up``: three finite numbers ``x,y,z``, not all zero (the data's vertical axis)."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(v) for v in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected three finite numbers 'x,y,z'; got {text!r}")
+    if not any(values):
+        raise argparse.ArgumentTypeError(f"expected a non-zero vector 'x,y,z'; got {text!r}")
+    return (values[0], values[1], values[2])
 
 
 def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
@@ -400,5 +509,24 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     )
     p.add_argument(
         "--degree", type=options.positive_int, default=2, help="Bezier degree of --nominal"
+    )
+    p.add_argument(
+        "--learned",
+        choices=LEARNED_MODES,
+        default="full",
+        help=(
+            "path-frame, predicted-timing and learned (ridge, torch MLP) leave-one-subject-"
+            "out rows (docs/learned.md); quick: one MLP candidate, 30 epochs, 2 inner folds; "
+            "off: none; the MLP rows are skipped with a message when torch is not installed"
+        ),
+    )
+    p.add_argument(
+        "--up",
+        type=up_option,
+        default=None,
+        metavar="X,Y,Z",
+        help="the data's vertical axis for the path frame (default: the dataset's; "
+        "+z for a CSV and the cohort, +y for vr-kitchen); write --up=-1,0,0 when the first "
+        "value is negative",
     )
     p.set_defaults(func=main)

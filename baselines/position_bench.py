@@ -15,11 +15,17 @@ Methods:
   training demonstrations, such as LASA's end point at the origin, are dropped) and ``N``
   chosen by leave-one-out cross-validation on the training demonstrations
   (``--n-sines auto``);
-* ``dmp``, ``promp``: :mod:`baselines.peers` (``movement_primitives``), same start/goal.
+* ``dmp``, ``promp``: :mod:`baselines.peers` (``movement_primitives``), same start/goal;
+* ``ridge``, ``mlp``: learned residuals (:mod:`baselines.learned.position`, docs/learned.md):
+  ridge and a torch MLP of Lippi's residual on the conditions, hyper-parameters chosen
+  on the training demonstrations only (``mlp`` is skipped without torch; both with
+  ``--learned off``).
 
 Criteria per held-out demonstration: max error (the papers' criterion), RMSE, DTW and
 swept error area (:mod:`motion_envs.models.position_criteria`). Per shape we take the
-median over its demonstrations; the printed table is the median across shapes.
+median over its demonstrations; the printed table is the median across shapes. The
+reading compares the learned columns with the analytic ones (ratios, a bootstrap over
+shapes, per-shape counts; ``learned_ratio.png``).
 
 :func:`run` computes (a pure function of a :class:`PositionConfig`), :func:`report` is
 the printed text, :func:`write` writes ``results.json``, ``results.csv`` and
@@ -44,6 +50,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines import options
+from baselines.learned import LEARNED_MODES
 from baselines.peers import DMPPeer, ProMPPeer, peers_available, peers_missing_reason
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import POSITION_DATASETS, load_position_dataset
@@ -74,8 +81,9 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp")
+METHODS: tuple[str, ...] = ("line", "null", "lippi", "dmp", "promp", "ridge", "mlp")
 PEER_METHODS = ("dmp", "promp")
+
 CRITERION_TEXT = {
     "max_error": "median over demos of max_t |error|",
     "rmse": "median over demos of RMSE",
@@ -90,7 +98,8 @@ class PositionConfig:
 
     ``data`` is ``"lasa"`` or a position CSV path, ``shapes`` the tasks kept (None: all);
     the other fields are :func:`run_benchmark`'s arguments (``n_sines=None``: chosen by
-    cross-validation; ``use_peers``: the DMP and ProMP columns when installed).
+    cross-validation; ``use_peers``: the DMP and ProMP columns when installed;
+    ``learned``: the budget of the ridge and mlp columns, one of :data:`LEARNED_MODES`).
     """
 
     data: str = "lasa"
@@ -104,6 +113,7 @@ class PositionConfig:
     split_seed: int = 0
     use_peers: bool = True
     progress: bool = True
+    learned: str = "full"
 
 
 class _Timer:
@@ -199,8 +209,11 @@ def run_benchmark(
     split: str = "loo",
     test_fraction: float = 0.25,
     split_seed: int = 0,
+    learned: str = "full",
 ) -> dict[str, Any]:
     """Run the benchmark on one split (default leave one out); returns ``results.json``.
+
+    ``learned`` is the budget of the ``ridge`` and ``mlp`` columns (:data:`LEARNED_MODES`).
 
     ``split="loo"`` predicts every demonstration from the others of its shape;
     ``"test"``/``"train"`` fit on each shape's training demonstrations of
@@ -212,8 +225,24 @@ def run_benchmark(
 
     kinds = ["start", "end"] if kinds is None else kinds
     position_conditions(np.zeros((1, 2, 1)), np.ones(1), kinds)  # validates the names
+    if learned not in LEARNED_MODES:
+        raise ValueError(f"learned must be one of {list(LEARNED_MODES)}; got {learned!r}")
+    from baselines.learned import sklearn_missing_reason, torch_missing_reason
+
     have_peers = use_peers and peers_available()
     methods = [m for m in METHODS if have_peers or m not in PEER_METHODS]
+    learned_skipped: dict[str, str] = {}
+    missing_sklearn, missing_torch = sklearn_missing_reason(), torch_missing_reason()
+    if learned == "off":
+        learned_skipped = {"ridge": "--learned off", "mlp": "--learned off"}
+    elif missing_sklearn:
+        learned_skipped = {"ridge": missing_sklearn, "mlp": missing_sklearn}
+    elif missing_torch:
+        learned_skipped = {"mlp": missing_torch}
+    methods = [m for m in methods if m not in learned_skipped]
+    learned_methods = [m for m in ("ridge", "mlp") if m in methods]
+    learned_chosen: dict[str, Any] = {}
+    learned_seconds = 0.0
     y_all, dur_all = resample_positions(dataset, n_points)
     timer = _Timer()
     per_shape: dict[str, Any] = {}
@@ -230,6 +259,16 @@ def run_benchmark(
         preds, chosen = predict_folds(
             y_all, dur_all, task_folds, kinds, n_sines, methods, timer, n_weights
         )
+        if learned_methods:
+            from baselines.learned import mlp_config
+            from baselines.learned.position import learned_position_predictions
+
+            t_l = time.perf_counter()
+            learned_preds, learned_chosen[task] = learned_position_predictions(
+                y_all, dur_all, task_folds, kinds, learned_methods, mlp_config(learned)
+            )
+            learned_seconds += time.perf_counter() - t_l
+            preds.update(learned_preds)
         y = y_all[scored]
         members = dataset.tasks == task
         n_val = Counter(chosen).most_common(1)[0][0]
@@ -285,6 +324,11 @@ def run_benchmark(
         "per_shape": per_shape,
         "skipped": skipped,
         "timing": timing,
+        "learned": {
+            "skipped": learned_skipped,
+            "chosen": learned_chosen,
+            "seconds_ridge_and_mlp": learned_seconds,
+        },
         "citation": LASA_CITATION if dataset.name == "lasa" else None,
         "_predictions": predictions,
         "_truth": truths,
@@ -373,7 +417,15 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
     rows = math.ceil(len(shapes) / cols)
     fig = Figure(figsize=(2.6 * cols, 2.6 * rows))
     axes = fig.subplots(rows, cols, squeeze=False)
-    colors = {"line": "C7", "null": "C2", "lippi": "C3", "dmp": "C0", "promp": "C1"}
+    colors = {
+        "line": "C7",
+        "null": "C2",
+        "lippi": "C3",
+        "dmp": "C0",
+        "promp": "C1",
+        "ridge": "C4",
+        "mlp": "C5",
+    }
     for ax, shape in zip(axes.ravel(), shapes, strict=False):
         truth = doc["_truth"][shape]
         for y in truth:
@@ -398,10 +450,17 @@ def plot_grid(doc: dict[str, Any], path: Path) -> None:
 
 def run(config: PositionConfig) -> dict[str, Any]:
     """The benchmark of ``config``: the ``results.json`` document (plus the predictions
-    under ``_predictions``/``_truth`` for :func:`plot_grid`); no files, no printing
-    except the progress bar on stderr when ``config.progress``."""
+    under ``_predictions``/``_truth`` for :func:`plot_grid`) with the learned columns'
+    comparisons under ``learned.comparisons``; no files, no printing except the progress
+    bar on stderr when ``config.progress``."""
+    from baselines.learned.position_reading import position_comparisons
+
+    if config.learned not in LEARNED_MODES:
+        raise options.ConfigError(
+            "learned", f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}"
+        )
     dataset = load_position_dataset(config.data, config.shapes)
-    return run_benchmark(
+    doc = run_benchmark(
         dataset,
         n_points=config.n_points,
         kinds=list(config.conditions),
@@ -412,12 +471,21 @@ def run(config: PositionConfig) -> dict[str, Any]:
         split=config.split,
         test_fraction=config.test_fraction,
         split_seed=config.split_seed,
+        learned=config.learned,
     )
+    doc["learned"]["comparisons"] = position_comparisons(doc)
+    return doc
 
 
 def report(doc: dict[str, Any]) -> str:
-    """The text ``motion-bench position`` prints: table, validation, timing."""
-    parts = [format_table(doc), "", format_validation(doc)]
+    """The text ``motion-bench position`` prints: table, learned reading, validation,
+    timing."""
+    from baselines.learned.position_reading import format_position_reading
+
+    parts = [format_table(doc)]
+    if doc["learned"]["comparisons"] or doc["learned"]["skipped"]:
+        parts.append(format_position_reading(doc, doc["learned"]["comparisons"]))
+    parts += ["", format_validation(doc)]
     if doc["timing"]:
         parts += [
             "",
@@ -434,14 +502,28 @@ def report(doc: dict[str, Any]) -> str:
 
 
 def write(doc: dict[str, Any], out: str | Path) -> list[Path]:
-    """Write ``results.json``, ``results.csv`` and ``shapes.png`` into ``out`` (atomic)."""
+    """Write ``results.json``, ``results.csv``, ``shapes.png`` and, with learned columns,
+    ``learned_ratio.png`` into ``out`` (atomic)."""
     folder = Path(out)
     written = [
         atomic_write_text(folder / "results.json", json.dumps(_clean(doc), indent=2) + "\n"),
         atomic_write_text(folder / "results.csv", _csv_text(doc)),
     ]
     plot_grid(doc, folder / "shapes.png")
-    return [*written, folder / "shapes.png"]
+    written.append(folder / "shapes.png")
+    comparisons = doc["learned"]["comparisons"]
+    if comparisons:
+        from baselines.learned_rows import plot_ratios
+
+        written.append(
+            plot_ratios(
+                comparisons,
+                folder / "learned_ratio.png",
+                f"per-shape ratio of learned to the best analytic column, {doc['dataset']}",
+                group="shape",
+            )
+        )
+    return written
 
 
 def warn_missing_peers(use_peers: bool) -> None:
@@ -470,6 +552,7 @@ def main(args: argparse.Namespace) -> int:
         split_seed=args.split_seed,
         use_peers=not args.no_peers,
         progress=not args.no_progress,
+        learned=args.learned,
     )
     doc = run(config)
     print(report(doc))
@@ -527,7 +610,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
             "regression on --conditions, N by leave-one-out cross-validation), dmp and promp\n"
             "(movement_primitives, same start and goal). Criteria: max error (the papers'),\n"
             "RMSE, DTW, swept error area; median over a shape's demonstrations, then across\n"
-            "shapes."
+            "shapes. ridge and mlp: learned residuals (ridge, torch MLP) of the conditions,\n"
+            "every hyper-parameter chosen on the training demonstrations only (--learned)."
         ),
     )
     p.add_argument(
@@ -576,4 +660,12 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     )
     p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--learned",
+        choices=LEARNED_MODES,
+        default="full",
+        help="budget of the learned ridge and torch-MLP columns (docs/learned.md); quick: one "
+        "MLP candidate, 30 epochs, 2 inner folds; off: neither column; the mlp column is "
+        "skipped with a message when torch is not installed",
+    )
     p.set_defaults(func=main)

@@ -4,12 +4,18 @@ Runs, one after the other, with each sub-command's defaults:
 
 1. ``motion-bench orientation --data vr-kitchen``: Faraway & Choe's Table 1 on real
    hand-held controller orientations (8 people);
-2. ``motion-bench orientation --data cohort``: the same table on the calibrated virtual
-   cohort of the paper's design (simulated data);
+2. ``motion-bench orientation --data cohort --learned off``: the same table on the
+   calibrated virtual cohort of the paper's design (simulated data; without the learned
+   rows, which would train 20 x nested folds on 1,000+ trajectories: run
+   ``motion-bench orientation --data cohort`` for them);
 3. ``motion-bench position --data lasa``: Lippi et al.'s sine-series regression against
    the line, the mean residual, DMP and ProMP on the real LASA handwriting set;
 4. ``motion-bench juggling``: the analytic juggler of Lippi et al.'s section III-A on
    SIMULATED demonstrations (catch rates, per-phase errors, validation statistics).
+
+The orientation and position jobs include the learned rows and columns
+(docs/learned.md) at the full budget; ``--learned quick`` or ``off`` lowers the budget of
+every job.
 
 Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
 what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
@@ -31,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from baselines import juggling_bench, options, orientation_bench, position_bench
+from baselines.learned import LEARNED_MODES
 from motion_envs._io import atomic_write_text
 
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
@@ -56,7 +63,20 @@ class Job:
             head = "juggling"
         else:
             head = f"position --data {self.config.data}"
+        if not isinstance(self.config, juggling_bench.JugglingConfig):
+            if self.config.learned != "full":
+                head += f" --learned {self.config.learned}"
         return f"motion-bench {head} --out {out / self.folder}"
+
+    def with_learned(self, learned: str) -> Job:
+        """This job with the learned budget lowered to ``learned`` (``full`` leaves it;
+        a job already at ``off`` stays off; the juggling job has no learned rows)."""
+        config = self.config
+        if isinstance(config, juggling_bench.JugglingConfig) or learned == "full":
+            return self
+        if config.learned == "off":
+            return self
+        return dataclasses.replace(self, config=dataclasses.replace(config, learned=learned))
 
 
 #: The jobs, in order.
@@ -69,7 +89,7 @@ JOBS: tuple[Job, ...] = (
     Job(
         "orientation-cohort",
         "Orientation trajectories on the virtual cohort (SIMULATED data, calibrated to the paper)",
-        orientation_bench.OrientationConfig(data="cohort"),
+        orientation_bench.OrientationConfig(data="cohort", learned="off"),
     ),
     Job(
         "position-lasa",
@@ -87,11 +107,13 @@ JOBS: tuple[Job, ...] = (
 @dataclass(frozen=True)
 class AllConfig:
     """``out``: the results folder; ``only``: job folders to run (None: all);
-    ``progress``: progress bars of the position job."""
+    ``progress``: progress bars of the position job; ``learned``: the budget of the
+    learned rows and columns of every job (``full``, ``quick`` or ``off``)."""
 
     out: Path = Path("results")
     only: tuple[str, ...] | None = None
     progress: bool = True
+    learned: str = "full"
 
 
 def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) -> None:
@@ -121,9 +143,14 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
     files. ``echo`` receives the text the CLI prints. A job failing on bad data is
     recorded with ``exit_code`` 2 and its message, and the next job runs.
     """
+    if config.learned not in LEARNED_MODES:
+        raise options.ConfigError(
+            "learned",
+            f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}",
+        )
     out = Path(config.out)
     index: dict[str, Any] = {"jobs": [], "complete": False}
-    for job in JOBS:
+    for job in (job.with_learned(config.learned) for job in JOBS):
         if config.only and job.folder not in config.only:
             continue
         echo(f"\n{'=' * 100}\n{job.title}\n{'=' * 100}")
@@ -152,7 +179,10 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
 def main(args: argparse.Namespace) -> int:
     """``motion-bench all`` with parsed arguments; the first failing job's code, else 0."""
     config = AllConfig(
-        out=args.out, only=tuple(args.only) if args.only else None, progress=not args.no_progress
+        out=args.out,
+        only=tuple(args.only) if args.only else None,
+        progress=not args.no_progress,
+        learned=args.learned,
     )
     index = run(config, echo=lambda text: print(text, flush=True))
     return next((job["exit_code"] for job in index["jobs"] if job["exit_code"]), 0)
@@ -181,4 +211,11 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help=f"run only these jobs, among {', '.join(job.folder for job in JOBS)} (default: all)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument(
+        "--learned",
+        choices=LEARNED_MODES,
+        default="full",
+        help="budget of the learned rows and columns of every job (quick: one MLP candidate "
+        "and 30 epochs; off: none); the cohort job runs with the learned rows off",
+    )
     p.set_defaults(func=main)

@@ -140,6 +140,7 @@ def test_every_file_is_written_through_io():
 def test_two_motion_bench_runs_on_the_same_out_both_finish(tmp_path):
     out = tmp_path / "same"
     cmd = [sys.executable, "-m", "baselines.cli", "orientation", "--out", str(out)]
+    cmd += ["--learned", "off"]
     procs = [
         subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
         for _ in range(2)
@@ -169,6 +170,8 @@ def test_motion_bench_all_interrupted_exits_130_and_keeps_results(tmp_path):
             "orientation-vr-kitchen",
             "position-lasa",
             "--no-progress",
+            "--learned",
+            "off",
         ],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,

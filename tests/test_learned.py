@@ -288,4 +288,4 @@ def test_orientation_cli_without_torch_says_so(tmp_path, capsys, monkeypatch):
     doc = json.loads((out / "results.json").read_text())
     assert doc["criteria"]["mlp_loso"] is None and doc["criteria"]["ridge_loso"] > 0
     assert main(["orientation", "--data", str(path), "--up", "0,1"]) == 2
-    assert "up must be 3 finite numbers" in capsys.readouterr().err
+    assert "argument --up: expected three finite numbers" in capsys.readouterr().err

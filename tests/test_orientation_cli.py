@@ -10,8 +10,10 @@ import sys
 import numpy as np
 import pytest
 
+from baselines import orientation_bench, run_all
 from baselines.cli import main
 from baselines.learned_rows import LEARNED_ROWS
+from baselines.options import ConfigError
 from motion_envs.datasets import load_vr_kitchen
 from motion_envs.models.criteria import criterion_names, table1
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1
@@ -94,3 +96,26 @@ def test_all_runs_the_selected_jobs(tmp_path, capsys):
     assert (out / "orientation-vr-kitchen" / "results.json").exists()
     assert not (out / "position-lasa").exists()
     assert "real data" in capsys.readouterr().out
+
+
+def test_up_and_learned_reach_run():
+    config = orientation_bench.OrientationConfig(learned="off", up=(0.0, 0.0, 2.0))
+    results = orientation_bench.run(config)
+    assert results.dataset.up == (0.0, 0.0, 1.0)  # normalised; vr-kitchen's own is +y
+    assert results.learned is None and results.learned_note is None
+    assert "learned" not in orientation_bench.document(results)
+    for bad in ({"learned": "fast"}, {"up": (0.0, 0.0, 0.0)}):
+        with pytest.raises(ConfigError) as info:
+            orientation_bench.run(orientation_bench.OrientationConfig(**bad))
+        assert info.value.field == next(iter(bad))
+
+
+def test_all_lowers_the_learned_budget_of_every_job(tmp_path):
+    jobs = {job.folder: job.with_learned("quick") for job in run_all.JOBS}
+    assert jobs["orientation-vr-kitchen"].config.learned == "quick"
+    assert jobs["position-lasa"].config.learned == "quick"
+    assert jobs["orientation-cohort"].config.learned == "off"  # never trained in `all`
+    assert "--learned quick" in jobs["position-lasa"].command(tmp_path)
+    assert "--learned off" in jobs["orientation-cohort"].command(tmp_path)
+    assert "--learned" not in run_all.JOBS[0].command(tmp_path)
+    assert all(job.with_learned("full") is job for job in run_all.JOBS)

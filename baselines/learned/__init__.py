@@ -16,8 +16,21 @@ torch rows can run.
 from __future__ import annotations
 
 import importlib.util
+from typing import Any
 
-__all__ = ["QUICK_MLP", "sklearn_missing_reason", "torch_available", "torch_missing_reason"]
+__all__ = [
+    "LEARNED_MODES",
+    "QUICK_MLP",
+    "mlp_config",
+    "sklearn_missing_reason",
+    "torch_available",
+    "torch_missing_reason",
+]
+
+#: Budgets of the learned rows and columns (``--learned``): ``full`` (nested selection
+#: over every candidate), ``quick`` (:data:`QUICK_MLP`: one candidate, 30 epochs, 2
+#: inner folds), ``off`` (none).
+LEARNED_MODES: tuple[str, ...] = ("full", "quick", "off")
 
 
 def torch_available() -> bool:
@@ -39,7 +52,19 @@ def sklearn_missing_reason() -> str | None:
     return "scikit-learn is not installed (pip install 'motion-envs[learned]')"
 
 
-def __getattr__(name: str):  # lazy: QUICK_MLP needs torch only when used
+def mlp_config(mode: str) -> Any:
+    """The :class:`~baselines.learned.batched_mlp.MLPConfig` of budget ``mode``
+    (``full`` or ``quick``; imports torch)."""
+    from baselines.learned.batched_mlp import MLPConfig
+
+    if mode == "full":
+        return MLPConfig()
+    if mode == "quick":
+        return __getattr__("QUICK_MLP")
+    raise ValueError(f"learned budget must be 'full' or 'quick'; got {mode!r}")
+
+
+def __getattr__(name: str) -> Any:  # lazy: QUICK_MLP needs torch only when used
     if name == "QUICK_MLP":
         from baselines.learned.batched_mlp import MLPConfig
 

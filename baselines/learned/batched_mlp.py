@@ -128,7 +128,8 @@ class CurveCriterion:
             out.reshape(B, N, K, m // K),
         )
         dist = torch.linalg.vector_norm(curves - target, dim=3).amax(dim=2)
-        return dist * torch.as_tensor(self.scale, dtype=out.dtype)[None, :]
+        scaled: torch.Tensor = dist * torch.as_tensor(self.scale, dtype=out.dtype)[None, :]
+        return scaled
 
 
 @dataclass

@@ -17,7 +17,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from baselines.learned.model_file import _fail, data_hash, read_model_file, write_model_file
+from baselines.learned.model_file import (
+    data_hash,
+    model_file_error,
+    read_model_file,
+    write_model_file,
+)
 
 __all__ = ["KIND", "ResidualMLP"]
 
@@ -112,7 +117,7 @@ class ResidualMLP:
         p = str(path)
         missing = [k for k in _TENSORS if k not in tensors]
         if missing:
-            raise _fail(p, f"tensors {missing} are missing")
+            raise model_file_error(p, f"tensors {missing} are missing")
         arch = header["architecture"]
         expected = {
             "n_inputs": tensors["W1"].shape[0],
@@ -121,13 +126,15 @@ class ResidualMLP:
         }
         for field, value in expected.items():
             if arch.get(field) != value:
-                raise _fail(
+                raise model_file_error(
                     p,
                     f"field 'architecture.{field}' is {arch.get(field)!r} but the weights "
                     f"have {value}",
                 )
         if arch.get("activation") != "tanh":
-            raise _fail(p, f"field 'architecture.activation' is {arch.get('activation')!r}")
+            raise model_file_error(
+                p, f"field 'architecture.activation' is {arch.get('activation')!r}"
+            )
         model = cls(features=header.get("features"))
         model.params_ = {k: tensors[k] for k in _TENSORS}
         model.chosen_ = header.get("extra", {}).get("chosen", {})

@@ -20,7 +20,7 @@ holds one entry, ``"motion_envs"``, a JSON document::
 the field: a missing file, a truncated or corrupt file (bad length prefix, bad JSON,
 tensor bytes that do not match ``weights_sha256``), another format, another
 ``format_version``, and an architecture that does not match the tensors' shapes.
-Writes are atomic (temporary file in the same folder, then ``os.replace``).
+Writes are atomic (:func:`motion_envs._io.atomic_write_bytes`).
 """
 
 from __future__ import annotations
@@ -34,13 +34,14 @@ from typing import Any
 
 import numpy as np
 
-from baselines.learned._atomic import atomic_write_bytes
+from motion_envs._io import atomic_write_bytes
 
 __all__ = [
     "FORMAT",
     "FORMAT_VERSION",
     "LearnedModelFileError",
     "data_hash",
+    "model_file_error",
     "read_model_file",
     "write_model_file",
 ]
@@ -90,7 +91,8 @@ def write_model_file(
     return atomic_write_bytes(path, data)
 
 
-def _fail(path: str, msg: str) -> LearnedModelFileError:
+def model_file_error(path: str, msg: str) -> LearnedModelFileError:
+    """The error for file ``path``: ``"{path}: {msg}"`` (raise it)."""
     return LearnedModelFileError(f"{path}: {msg}")
 
 
@@ -106,25 +108,27 @@ def read_model_file(
     except FileNotFoundError:
         raise LearnedModelFileError(f"model file {p} does not exist") from None
     if len(data) < 8:
-        raise _fail(p, f"truncated: {len(data)} bytes, not a safetensors file")
+        raise model_file_error(p, f"truncated: {len(data)} bytes, not a safetensors file")
     (n,) = struct.unpack("<Q", data[:8])
     if n > _MAX_HEADER or 8 + n > len(data):
-        raise _fail(p, f"truncated or corrupt: header length {n} exceeds the file size")
+        raise model_file_error(p, f"truncated or corrupt: header length {n} exceeds the file size")
     try:
         raw = json.loads(data[8 : 8 + n].decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise _fail(p, f"corrupt safetensors header ({exc})") from None
+        raise model_file_error(p, f"corrupt safetensors header ({exc})") from None
     meta = raw.get("__metadata__") if isinstance(raw, dict) else None
     if not isinstance(meta, dict) or "motion_envs" not in meta:
-        raise _fail(p, "not a motion-envs learned model (no 'motion_envs' metadata)")
+        raise model_file_error(p, "not a motion-envs learned model (no 'motion_envs' metadata)")
     try:
         header = json.loads(meta["motion_envs"])
     except json.JSONDecodeError as exc:
-        raise _fail(p, f"corrupt 'motion_envs' metadata ({exc})") from None
+        raise model_file_error(p, f"corrupt 'motion_envs' metadata ({exc})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise _fail(p, f"field 'format' is {header.get('format')!r}, expected {FORMAT!r}")
+        raise model_file_error(
+            p, f"field 'format' is {header.get('format')!r}, expected {FORMAT!r}"
+        )
     if header.get("format_version") != FORMAT_VERSION:
-        raise _fail(
+        raise model_file_error(
             p,
             f"field 'format_version' is {header.get('format_version')!r}; this motion-envs "
             f"reads version {FORMAT_VERSION}",
@@ -132,14 +136,16 @@ def read_model_file(
     try:
         tensors = load(data)
     except Exception as exc:  # safetensors raises its own error type
-        raise _fail(p, f"corrupt tensor data ({exc})") from None
+        raise model_file_error(p, f"corrupt tensor data ({exc})") from None
     if _weights_hash(tensors) != header.get("weights_sha256"):
-        raise _fail(p, "field 'weights_sha256' does not match the tensor bytes (corrupt file)")
+        raise model_file_error(
+            p, "field 'weights_sha256' does not match the tensor bytes (corrupt file)"
+        )
     arch = header.get("architecture")
     if not isinstance(arch, dict):
-        raise _fail(p, "field 'architecture' is missing")
+        raise model_file_error(p, "field 'architecture' is missing")
     if expected_kind is not None and arch.get("kind") != expected_kind:
-        raise _fail(
+        raise model_file_error(
             p, f"field 'architecture.kind' is {arch.get('kind')!r}, expected {expected_kind!r}"
         )
     return tensors, header

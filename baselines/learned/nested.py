@@ -35,7 +35,7 @@ IntArray = NDArray[np.int64]
 Fold = tuple[IntArray, IntArray]
 
 
-def inner_folds(train: IntArray, groups: NDArray, n_splits: int) -> list[Fold]:
+def inner_folds(train: IntArray, groups: NDArray[Any], n_splits: int) -> list[Fold]:
     """Inner ``(fit, validation)`` row indices by group, from the training rows only.
 
     ``GroupKFold`` over the groups of ``train``; ``k = min(n_splits, n_groups)``; raises
@@ -74,7 +74,7 @@ class NestedResult:
 def nested_mlp(
     X: FloatArray,
     Y: FloatArray,
-    groups: NDArray,
+    groups: NDArray[Any],
     folds: Sequence[Fold],
     config: MLPConfig,
     criterion: CurveCriterion | None = None,

@@ -102,13 +102,14 @@ def sine_curves(coefficients: ArrayLike, n_points: int) -> FloatArray:
     out = np.einsum("tk,lkc->ltc", sine_basis(n_points, K), c.reshape(-1, K, 3))
     out[:, 0] = 0.0
     out[:, -1] = 0.0
-    return out
+    curves: FloatArray = out
+    return curves
 
 
 def ridge_nested(
     X: FloatArray,
     Y: FloatArray,
-    groups: NDArray,
+    groups: NDArray[Any],
     folds: Sequence[tuple[NDArray[np.int64], NDArray[np.int64]]],
     alphas: Sequence[float] = RIDGE_ALPHAS,
     inner_splits: int = 4,

@@ -49,7 +49,7 @@ def load_orientation_dataset(
     if up is not None:
         from dataclasses import replace
 
-        from motion_envs.models.path_frame import check_up
+        from motion_envs.datasets.orientation import check_up
 
         x, y, z = (float(v) for v in check_up(up))
         return replace(load_orientation_dataset(data, min_deg), up=(x, y, z))

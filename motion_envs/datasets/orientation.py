@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import MIN_SAMPLES, RaggedTrajectories
 from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
@@ -37,7 +37,9 @@ from motion_envs.geometry import quaternion as quat
 __all__ = [
     "CSV_COLUMNS",
     "DATA_UNIT_TOLERANCE",
+    "DEFAULT_UP",
     "OrientationDataset",
+    "check_up",
     "read_orientation_csv",
 ]
 
@@ -47,6 +49,17 @@ CSV_COLUMNS: tuple[str, ...] = ("trajectory", "subject", "task", "t", "qw", "qx"
 DATA_UNIT_TOLERANCE = 1e-3
 #: Vertical axis of a dataset when none is given: world ``+z`` (right-handed, z up).
 DEFAULT_UP: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+
+def check_up(up: ArrayLike, name: str = "up") -> NDArray[np.float64]:
+    """``up`` as a unit float vector ``(3,)``; ``ValueError`` if not 3 finite non-zero values."""
+    arr = np.asarray(up, dtype=np.float64)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be 3 finite numbers (x, y, z); got {up!r}")
+    norm = float(np.linalg.norm(arr))
+    if norm < 1e-12:
+        raise ValueError(f"{name} must not be the zero vector")
+    return arr / norm
 
 
 @dataclass(frozen=True)

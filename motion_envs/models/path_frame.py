@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.datasets.orientation import DEFAULT_UP
+from motion_envs.datasets.orientation import DEFAULT_UP, check_up
 from motion_envs.geometry import quaternion as quat
 
 __all__ = [
@@ -57,17 +57,6 @@ FRAMES: tuple[str, ...] = ("body", "path")
 MIN_SCALE = 1e-3
 _AXIS_TOL = 1e-9
 _VERTICAL_TOL = 1e-6
-
-
-def check_up(up: ArrayLike, name: str = "up") -> FloatArray:
-    """``up`` as a unit float vector ``(3,)``; ``ValueError`` if not 3 finite non-zero values."""
-    arr = np.asarray(up, dtype=np.float64)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be 3 finite numbers (x, y, z); got {up!r}")
-    norm = float(np.linalg.norm(arr))
-    if norm < 1e-12:
-        raise ValueError(f"{name} must not be the zero vector")
-    return arr / norm
 
 
 def _most_perpendicular(v: FloatArray) -> FloatArray:

@@ -162,7 +162,12 @@ class SpeedProfileModel(SerializableModel):
         )
 
     @classmethod
-    def _from_state(cls, params, arrays, attributes):
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> SpeedProfileModel:
         model = cls(**params)
         for key in ("intercept_", "coef_", "mean_", "scale_"):
             setattr(model, key, arrays[key])
