@@ -47,6 +47,7 @@ from motion_envs.datasets.juggling_demos import (
     PhaseSegment,
     generate_demonstrations,
 )
+from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
 from motion_envs.models.juggling_run import (
     cycle_rngs,
@@ -55,7 +56,6 @@ from motion_envs.models.juggling_run import (
     run_cycles,
     run_cycles_fast,
 )
-from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_world import BallisticWorld
 from motion_envs.models.serialization import atomic_write_text
 
@@ -104,9 +104,9 @@ def load_demos(config: JugglingConfig) -> JugglingDemos:
             seed=config.seed,
             task=config.task,
         )
-    from motion_envs.datasets.juggling_csv import read_juggling_csv
+    from motion_envs.models.juggling_segmentation import load_juggling_csv
 
-    return read_juggling_csv(config.data, task=config.task)
+    return load_juggling_csv(config.data, task=config.task)
 
 
 def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:

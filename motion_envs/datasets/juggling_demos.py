@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.models.juggling_task import PHASES, JugglingTask, ballistic_position
+from motion_envs.datasets.juggling_task import PHASES, JugglingTask, ballistic_position
 
 __all__ = [
     "SIMULATED_LABEL",

@@ -22,14 +22,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CurveRenderer", "HandFrameRenderer"]
+__all__ = ["CurveRenderer", "HandFrameRenderer", "prefer_offscreen_gl"]
 
 # axis lengths of the hand frame (pointing, medium, short), as in the MJCF
 _AXES = np.array([0.8, 0.45, 0.25])
 _COLORS = {"human": (0.1, 0.65, 0.2), "nominal": (0.5, 0.5, 0.5), "agent": (0.95, 0.5, 0.05)}
 
 
-def _prefer_offscreen_gl() -> None:
+def prefer_offscreen_gl() -> None:
+    """Set ``MUJOCO_GL=egl`` when MuJoCo is not imported yet, ``MUJOCO_GL`` is unset and
+    there is no display (X11 or Wayland); otherwise change nothing. Call it before the
+    first ``import mujoco`` of a module that renders offscreen."""
     if "mujoco" not in sys.modules and "MUJOCO_GL" not in os.environ:
         if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
             os.environ["MUJOCO_GL"] = "egl"
@@ -80,7 +83,7 @@ class HandFrameRenderer:
                     ) from exc
 
     def _init_mujoco(self) -> None:
-        _prefer_offscreen_gl()
+        prefer_offscreen_gl()
         import mujoco
 
         xml = (resources.files("motion_envs.envs") / "assets" / "hand_frames.xml").read_text()

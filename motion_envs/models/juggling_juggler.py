@@ -34,13 +34,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.geometry import sine_series as ss
-from motion_envs.models.juggling_task import (
+from motion_envs.datasets.juggling_task import (
     PHASES,
     JugglingState,
     JugglingTask,
     ballistic_position,
 )
+from motion_envs.geometry import sine_series as ss
 from motion_envs.models.sine_regression import SineSeriesRegression, select_n_sines
 
 __all__ = [

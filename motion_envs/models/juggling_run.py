@@ -16,9 +16,9 @@ from typing import cast
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling_task import PHASES as PHASES_ORDER
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_juggler import AnalyticJuggler
-from motion_envs.models.juggling_task import PHASES as PHASES_ORDER
-from motion_envs.models.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_world import TRACKING_ROWS, BallisticWorld
 
 __all__ = [
