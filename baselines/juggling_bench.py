@@ -138,7 +138,8 @@ def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArr
 def _retarget(y: FloatArray, start: FloatArray, end: FloatArray) -> FloatArray:
     """Keep ``y``'s residual from its line, replace the line by ``start -> end``."""
     tau = np.linspace(0.0, 1.0, y.shape[0])[:, None]
-    return y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+    out: FloatArray = y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+    return out
 
 
 def phase_errors(
@@ -583,7 +584,7 @@ def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
     stride = max(1, round(1 / (fps * doc["task"]["dt"])))
     idx = np.arange(0, len(tr.times), stride)
     fig = Figure(figsize=(4, 4))
-    canvas = FigureCanvasAgg(fig)
+    canvas: Any = FigureCanvasAgg(fig)  # matplotlib's canvas methods are untyped
     ax = fig.subplots()
     lo = np.minimum(tr.hand.min(0), tr.ball.min(0)) - 0.1
     hi = np.maximum(tr.hand.max(0), tr.ball.max(0)) + 0.1
@@ -604,9 +605,9 @@ def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
         path_line.set_data(tr.hand[: i + 1, 0], tr.hand[: i + 1, 1])
         title.set_text(f"analytic juggler: {tr.phase[i]}  t = {tr.times[i]:.2f} s")
         canvas.draw()
-        frame = Image.fromarray(np.asarray(canvas.buffer_rgba()).copy(), mode="RGBA")
+        rgba = np.asarray(canvas.buffer_rgba()).copy()
         # opaque frames as RGB: they quantise to the GIF palette better (as PillowWriter)
-        images.append(frame if frame.getextrema()[3][0] < 255 else frame.convert("RGB"))
+        images.append(Image.fromarray(rgba[..., :3] if rgba[..., 3].min() == 255 else rgba))
     return _save_gif(images, path, fps)
 
 

@@ -90,7 +90,7 @@ def check_task(task: Any) -> JugglingTask:
 def load_juggling_model(task: JugglingTask | None = None) -> mujoco.MjModel:
     """Compile ``assets/juggling.xml`` with the constants of ``task`` (default task)."""
     task = check_task(JugglingTask() if task is None else task)
-    xml = resources.files("motion_envs.envs").joinpath("assets", SCENE_XML).read_text()
+    xml = resources.files("motion_envs.envs").joinpath("assets").joinpath(SCENE_XML).read_text()
     model = mujoco.MjModel.from_xml_string(xml)
     model.opt.timestep = task.dt
     model.opt.gravity[:] = (0.0, 0.0, -task.gravity)

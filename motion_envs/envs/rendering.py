@@ -42,7 +42,8 @@ def _rotations(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(n, 3, 3)`` rotation matrices of scalar-first quaternions (normalised first)."""
     from motion_envs.geometry import quaternion as quat
 
-    return quat.to_rotation(quat.normalize(q)).as_matrix()
+    rotations: NDArray[np.float64] = quat.to_rotation(quat.normalize(q)).as_matrix()
+    return rotations
 
 
 def _new_figure(width: int, height: int) -> Any:
@@ -57,7 +58,8 @@ def _new_figure(width: int, height: int) -> Any:
 
 def _figure_to_array(fig: Any) -> NDArray[np.uint8]:
     fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    rgb: NDArray[np.uint8] = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    return rgb
 
 
 class HandFrameRenderer:
@@ -112,7 +114,10 @@ class HandFrameRenderer:
         return self._render_matplotlib(current, tips_h, tips_a, k)
 
     def _render_mujoco(
-        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray
+        self,
+        current: dict[str, NDArray[np.float64]],
+        tips_h: NDArray[np.float64],
+        tips_a: NDArray[np.float64],
     ) -> NDArray[np.uint8]:
         mj = self._mj
         for name, q in current.items():
@@ -134,10 +139,15 @@ class HandFrameRenderer:
                     np.array([*rgb, 0.9], dtype=np.float32),
                 )
                 scene.ngeom += 1
-        return self._renderer.render().copy()
+        frame: NDArray[np.uint8] = self._renderer.render().copy()
+        return frame
 
     def _render_matplotlib(
-        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray, k: int
+        self,
+        current: dict[str, NDArray[np.float64]],
+        tips_h: NDArray[np.float64],
+        tips_a: NDArray[np.float64],
+        k: int,
     ) -> NDArray[np.uint8]:
         if self._fig is None:
             self._fig = _new_figure(self.width, self.height)
@@ -169,7 +179,9 @@ class HandFrameRenderer:
 class CurveRenderer:
     """Draw position curves: human (black), nominal (grey dashed), agent (orange)."""
 
-    def __init__(self, width: int, height: int, low: NDArray, high: NDArray) -> None:
+    def __init__(
+        self, width: int, height: int, low: NDArray[np.float64], high: NDArray[np.float64]
+    ) -> None:
         self.width, self.height = int(width), int(height)
         self._fig = _new_figure(self.width, self.height)
         self._lim = (float(low[0]), float(high[0]))
