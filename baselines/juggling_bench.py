@@ -22,7 +22,10 @@ Reported:
   (Lilliefors, F-test, 95 % intervals, jackknife spread over the estimates);
 * a Figure-6-style plot and an animation (GIF) of the juggler.
 
-``run(config) -> results`` does the work; argparse, printing and plotting are outside.
+:func:`run` computes (a pure function of a frozen :class:`JugglingConfig`: no argparse,
+no printing, no files), :func:`report` is the printed text, :func:`write` writes
+``results.json``, ``results.csv``, ``juggling_fig6.png`` and ``juggling.gif`` (every file
+through :mod:`motion_envs._io`, atomically); :func:`register` adds the sub-command.
 """
 
 from __future__ import annotations
@@ -41,12 +44,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from baselines import options
+from motion_envs._io import atomic_write, atomic_write_text, save_figure
 from motion_envs.datasets.juggling_demos import (
     SIMULATED_LABEL,
     JugglingDemos,
     PhaseSegment,
     generate_demonstrations,
 )
+from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
 from motion_envs.models.juggling_run import (
     cycle_rngs,
@@ -55,11 +61,9 @@ from motion_envs.models.juggling_run import (
     run_cycles,
     run_cycles_fast,
 )
-from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_world import BallisticWorld
-from motion_envs.models.serialization import atomic_write_text
 
-__all__ = ["JugglingConfig", "format_report", "register", "run", "write_outputs"]
+__all__ = ["JugglingConfig", "main", "register", "report", "run", "write"]
 
 FloatArray = NDArray[np.float64]
 
@@ -71,9 +75,19 @@ TARGET_VARIABILITY_RATIO = 1.5
 VIDEO_CAPTION = "analytic juggler in the MuJoCo scene (SIMULATED)"
 
 
-@dataclass
+#: Complete cycles a run needs (:func:`~motion_envs.datasets.juggling_demos.split_cycles`).
+MIN_CYCLES = 8
+
+
+@dataclass(frozen=True)
 class JugglingConfig:
-    """Everything ``motion-bench juggling`` needs (the CLI maps its flags onto this)."""
+    """Everything ``motion-bench juggling`` needs (the CLI maps its flags onto this).
+
+    ``data``: None (or ``"simulated"``) for the SIMULATED demonstrations, else the path of
+    a juggling CSV. ``noise``: release-velocity noise levels (relative std), each in
+    [0, 1); ``tracking``: hand tracking noise std (m). ``world``: ``"mujoco"`` or
+    ``"model"``.
+    """
 
     cycles: int = 1000
     noise: tuple[float, ...] = (0.05, 0.10)
@@ -104,9 +118,9 @@ def load_demos(config: JugglingConfig) -> JugglingDemos:
             seed=config.seed,
             task=config.task,
         )
-    from motion_envs.datasets.juggling_csv import read_juggling_csv
+    from motion_envs.models.juggling_segmentation import load_juggling_csv
 
-    return read_juggling_csv(config.data, task=config.task)
+    return load_juggling_csv(config.data, task=config.task)
 
 
 def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:
@@ -124,7 +138,8 @@ def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArr
 def _retarget(y: FloatArray, start: FloatArray, end: FloatArray) -> FloatArray:
     """Keep ``y``'s residual from its line, replace the line by ``start -> end``."""
     tau = np.linspace(0.0, 1.0, y.shape[0])[:, None]
-    return y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+    out: FloatArray = y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+    return out
 
 
 def phase_errors(
@@ -262,19 +277,44 @@ def _scene(task: JugglingTask) -> Any:
     return JugglingScene(task)
 
 
+def check_config(config: JugglingConfig) -> None:
+    """Raise :class:`baselines.options.ConfigError` naming the first field out of range.
+
+    Called by :func:`run` before any computation (the CLI's checkers catch the same values
+    earlier, naming the option).
+    """
+    if config.cycles < 1:
+        raise options.ConfigError("cycles", f"must be >= 1; got {config.cycles}")
+    if config.world not in ("mujoco", "model"):
+        raise options.ConfigError("world", f"must be 'mujoco' or 'model'; got {config.world!r}")
+    for level in config.noise:
+        if not (math.isfinite(level) and 0 <= level < 1):
+            raise options.ConfigError("noise", f"levels must be in [0, 1); got {level}")
+    if not (math.isfinite(config.tracking) and config.tracking >= 0):
+        raise options.ConfigError("tracking", f"must be finite and >= 0; got {config.tracking}")
+    if config.seed < 0:
+        raise options.ConfigError("seed", f"must be >= 0; got {config.seed}")
+    for name in ("demo_persons", "figure_cycles", "n_points", "dmp_weights"):
+        if getattr(config, name) < 1:
+            raise options.ConfigError(name, f"must be >= 1; got {getattr(config, name)}")
+    for name in ("mujoco_cycles", "mujoco_noise_cycles"):
+        if getattr(config, name) < 0:
+            raise options.ConfigError(name, f"must be >= 0; got {getattr(config, name)}")
+    if config.data in (None, "simulated") and config.demo_cycles * config.demo_persons < MIN_CYCLES:
+        raise options.ConfigError(
+            "demo_cycles",
+            f"{config.demo_cycles} cycle(s) x {config.demo_persons} person(s) of SIMULATED "
+            f"demonstrations; at least {MIN_CYCLES} complete cycles are needed",
+        )
+
+
 def run(config: JugglingConfig) -> dict[str, Any]:
     """Fit on the training cycles, score on the held-out ones, run the catch-rate cycles.
 
     Returns the results document (``results.json`` minus keys starting with ``_``, which
     hold arrays for the plots).
     """
-    if config.cycles < 1:
-        raise ValueError(f"cycles must be >= 1; got {config.cycles}")
-    if config.world not in ("mujoco", "model"):
-        raise ValueError(f"world must be 'mujoco' or 'model'; got {config.world!r}")
-    for level in config.noise:
-        if not (math.isfinite(level) and 0 <= level < 1):
-            raise ValueError(f"noise levels must be in [0, 1); got {level}")
+    check_config(config)
     timing: dict[str, float] = {}
     t0 = time.perf_counter()
     demos = load_demos(config)
@@ -366,7 +406,7 @@ def _clean(value: Any) -> Any:
     return value
 
 
-def format_report(doc: dict[str, Any]) -> str:
+def report(doc: dict[str, Any]) -> str:
     """The printed catch-rate, per-phase and validation tables."""
     lines = [
         f"juggling benchmark: data {doc['data']}",
@@ -472,15 +512,14 @@ def results_csv(doc: dict[str, Any]) -> str:
 PHASE_COLORS = {"toss": "C3", "go_down": "C0", "catch": "C2", "return": "C1"}
 
 
-def plot_figure6(doc: dict[str, Any], path: Path) -> None:
+def plot_figure6(doc: dict[str, Any], path: Path) -> Path:
     """Demonstrations (left) and generated cycles (right), phases coloured, ball flights."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     demos: JugglingDemos = doc["_demos"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), sharex=True, sharey=True)
+    fig = Figure(figsize=(11, 4.8))
+    axes = fig.subplots(1, 2, sharex=True, sharey=True)
     ax = axes[0]
     shown = 0
     for seg in demos.segments():
@@ -506,53 +545,70 @@ def plot_figure6(doc: dict[str, Any], path: Path) -> None:
         a.set_aspect("equal", adjustable="box")
         a.grid(alpha=0.3)
     axes[0].set_ylabel("z (m)")
-    handles = [plt.Line2D([], [], color=c, label=p) for p, c in PHASE_COLORS.items()]
+    handles = [Line2D([], [], color=c, label=p) for p, c in PHASE_COLORS.items()]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
     label = "SIMULATED demonstrations" if demos.simulated else demos.name
     fig.suptitle(f"Juggling, Lippi et al. Fig. 6 style — {label}", fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return save_figure(fig, path, dpi=100)
+
+
+def _save_gif(images: list[Any], path: Path, fps: int) -> Path:
+    """PIL images as a looping GIF at ``fps``, written atomically (:mod:`motion_envs._io`)."""
+    return atomic_write(
+        path,
+        lambda fh: images[0].save(
+            fh,
+            format="GIF",
+            save_all=True,
+            append_images=images[1:],
+            duration=int(1000 / fps),
+            loop=0,
+        ),
+        binary=True,
+    )
 
 
 def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
-    """A GIF of the first generated cycles (hand, catch circle, ball), labelled SIMULATED."""
-    import matplotlib
+    """A GIF of the first generated cycles (hand, catch circle, ball), labelled SIMULATED.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.animation import FuncAnimation, PillowWriter
+    Drawn on a matplotlib ``Figure`` with its own Agg canvas (no pyplot), one RGBA frame
+    every ``1 / fps`` s of the trace.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle
+    from PIL import Image
 
     tr = doc["_traces"][0]
     stride = max(1, round(1 / (fps * doc["task"]["dt"])))
     idx = np.arange(0, len(tr.times), stride)
-    fig, ax = plt.subplots(figsize=(4, 4))
+    fig = Figure(figsize=(4, 4))
+    canvas: Any = FigureCanvasAgg(fig)  # matplotlib's canvas methods are untyped
+    ax = fig.subplots()
     lo = np.minimum(tr.hand.min(0), tr.ball.min(0)) - 0.1
     hi = np.maximum(tr.hand.max(0), tr.ball.max(0)) + 0.1
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
-    hand = plt.Circle(tuple(tr.hand[0]), doc["task"]["catch_radius"], color="C1", alpha=0.4)
-    ball = plt.Circle(tuple(tr.ball[0]), doc["task"]["ball_radius"], color="C3")
+    hand = Circle(tuple(tr.hand[0]), doc["task"]["catch_radius"], color="C1", alpha=0.4)
+    ball = Circle(tuple(tr.ball[0]), doc["task"]["ball_radius"], color="C3")
     ax.add_patch(hand)
     ax.add_patch(ball)
     (path_line,) = ax.plot([], [], color="0.5", lw=0.8)
     title = ax.set_title("")
     ax.text(0.02, 0.02, "SIMULATED, pure model", transform=ax.transAxes, fontsize=7)
-
-    def draw(i: int) -> tuple[Any, ...]:
+    images = []
+    for i in idx:
         hand.center = tuple(tr.hand[i])
         ball.center = tuple(tr.ball[i])
         path_line.set_data(tr.hand[: i + 1, 0], tr.hand[: i + 1, 1])
         title.set_text(f"analytic juggler: {tr.phase[i]}  t = {tr.times[i]:.2f} s")
-        return hand, ball, path_line, title
-
-    anim = FuncAnimation(fig, draw, frames=idx, blit=False)
-    tmp = path.with_suffix(".tmp.gif")
-    anim.save(tmp, writer=PillowWriter(fps=fps))
-    plt.close(fig)
-    tmp.replace(path)
-    return path
+        canvas.draw()
+        rgba = np.asarray(canvas.buffer_rgba()).copy()
+        # opaque frames as RGB: they quantise to the GIF palette better (as PillowWriter)
+        images.append(Image.fromarray(rgba[..., :3] if rgba[..., 3].min() == 255 else rgba))
+    return _save_gif(images, path, fps)
 
 
 class _Filming:
@@ -607,23 +663,20 @@ def write_mujoco_video(doc: dict[str, Any], path: Path, cycles: int = 1, fps: in
             (8, 8), "analytic juggler in the MuJoCo scene (SIMULATED)", fill="black"
         )
         images.append(img.convert("P", palette=Image.Palette.ADAPTIVE))
-    tmp = path.with_name(f".{path.name}.tmp")
-    images[0].save(
-        tmp, format="GIF", save_all=True, append_images=images[1:], duration=1000 // fps, loop=0
-    )
-    tmp.replace(path)
-    return path
+    return _save_gif(images, path, fps)
 
 
-def write_outputs(doc: dict[str, Any], out: Path, video: bool = True) -> list[Path]:
-    """results.json, results.csv, juggling_fig6.png and (``video``) juggling.gif in ``out``."""
-    out.mkdir(parents=True, exist_ok=True)
+def write(doc: dict[str, Any], out: str | Path, video: bool = True) -> list[Path]:
+    """results.json, results.csv, juggling_fig6.png and (``video``) juggling.gif in ``out``.
+
+    Every file is written atomically through :mod:`motion_envs._io`.
+    """
+    out = Path(out)
     paths = [
         atomic_write_text(out / "results.json", json.dumps(_clean(doc), indent=2) + "\n"),
         atomic_write_text(out / "results.csv", results_csv(doc)),
+        plot_figure6(doc, out / "juggling_fig6.png"),
     ]
-    plot_figure6(doc, out / "juggling_fig6.png")
-    paths.append(out / "juggling_fig6.png")
     if video:
         target = out / "juggling.gif"
         if doc["config"]["world"] == "mujoco":
@@ -640,17 +693,8 @@ def write_outputs(doc: dict[str, Any], out: Path, video: bool = True) -> list[Pa
     return paths
 
 
-def _levels(text: str) -> tuple[float, ...]:
-    try:
-        return tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"--noise must be comma-separated numbers (e.g. 0.05,0.1); got {text!r}"
-        ) from None
-
-
 def main(args: argparse.Namespace) -> int:
-    """Entry of ``motion-bench juggling``."""
+    """``motion-bench juggling`` with parsed arguments: run, print, write."""
     config = JugglingConfig(
         cycles=args.cycles,
         noise=args.noise,
@@ -664,44 +708,131 @@ def main(args: argparse.Namespace) -> int:
         demo_persons=args.demo_persons,
         mujoco_cycles=args.mujoco_cycles,
         mujoco_noise_cycles=args.mujoco_cycles // 4,
-        task=JugglingTask(gravity=args.gravity),
+        task=args.gravity,
     )
     t0 = time.perf_counter()
     doc = run(config)
     doc["timing"]["total_s"] = time.perf_counter() - t0
-    print(format_report(doc))
+    print(report(doc))
     if args.out:
-        paths = write_outputs(doc, Path(args.out), video=not args.no_video)
+        paths = write(doc, args.out, video=not args.no_video)
         print("wrote " + ", ".join(str(p) for p in paths))
     print(f"total {doc['timing']['total_s']:.1f} s")
     return 0
 
 
-def register(subparsers: argparse._SubParsersAction) -> None:
+def noise_levels(text: str) -> tuple[float, ...]:
+    """``--noise``: a comma list of finite numbers in [0, 1) (relative std)."""
+    what = f"a comma list of numbers in [0, 1) (e.g. 0.05,0.1); got {text!r}"
+    try:
+        levels = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}") from None
+    if not levels or not all(math.isfinite(v) and 0 <= v < 1 for v in levels):
+        raise argparse.ArgumentTypeError(f"expected {what}")
+    return levels
+
+
+def gravity_task(text: str) -> JugglingTask:
+    """``--gravity``: a finite number > 0 (m/s^2), as the task it defines."""
+    value = options.non_negative_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0; got {text!r}")
+    try:
+        return JugglingTask(gravity=value)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def juggling_data(text: str) -> str:
+    """``--data``: ``simulated`` or an existing, readable juggling CSV with ``t,x,z``.
+
+    Only the header line is read here (the rows are checked when the run loads them).
+    """
+    if text == "simulated":
+        return text
+    path = options.input_file(text)
+    try:
+        with path.open(encoding="utf-8", newline="") as fh:
+            header = next(csv.reader([fh.readline()]), [])
+    except UnicodeDecodeError:
+        raise argparse.ArgumentTypeError(f"{text} is not a UTF-8 text CSV") from None
+    missing = [c for c in ("t", "x", "z") if c not in [h.strip() for h in header]]
+    if missing:
+        raise argparse.ArgumentTypeError(
+            f"{text}: line 1: missing column(s) {missing}; expected header "
+            "t,x,z[,ball_x,ball_z][,phase][,recording]"
+        )
+    return str(path)
+
+
+DESCRIPTION = """\
+The analytic juggler of Lippi, Avizzano & Ruffaldi (section III-A). Demonstrations are
+SIMULATED by default (a seeded model of a person; the paper's recordings are not public)
+or read from a juggling CSV (--data). They are split by demonstration (cycle): the
+juggler is fitted on the training cycles only (N per phase by cross-validation inside
+them) and scored on the held-out ones.
+
+Reported: the catch rate of --cycles seeded cycles, unperturbed and with release noise
+(--noise) plus tracking noise (--tracking), each with and without the eq. 10
+correction; per phase, on the held-out demonstrations, the median over demonstrations of
+the max over time of the position error (and of the RMSE) for Lippi's regression,
+minimum jerk and a DMP, next to the within-person variability; the paper's validation of
+the linear hypothesis; a Figure-6-style plot and a GIF of the juggler (with --out)."""
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     """Add the ``juggling`` sub-command."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "juggling",
         help="the analytic juggler (Lippi et al. III-A): catch rates, per-phase errors vs "
         "minimum jerk and DMP, validation statistics (SIMULATED demonstrations by default)",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description=DESCRIPTION,
     )
-    p.add_argument("--cycles", type=int, default=1000, help="seeded juggling cycles per run")
+    p.add_argument(
+        "--cycles", type=options.positive_int, default=1000, help="seeded juggling cycles per run"
+    )
     p.add_argument(
         "--noise",
-        type=_levels,
-        default=(0.05, 0.10),
+        type=noise_levels,
+        default="0.05,0.10",
         help="release-velocity noise levels (relative std), comma-separated",
     )
-    p.add_argument("--tracking", type=float, default=0.0005, help="tracking noise std (m)")
-    p.add_argument("--seed", type=int, default=0, help="seed of data, split and cycles")
-    p.add_argument("--data", default=None, help="a juggling CSV (default: SIMULATED demos)")
     p.add_argument(
-        "--demo-cycles", type=int, default=50, help="SIMULATED cycles per person (examples)"
+        "--tracking", type=options.non_negative_float, default=0.0005, help="tracking noise std (m)"
     )
-    p.add_argument("--demo-persons", type=int, default=1, help="SIMULATED persons")
-    p.add_argument("--gravity", type=float, default=1.0, help="m/s^2 (9.81: real gravity)")
-    p.add_argument("--out", default=None, help="folder for results.json/.csv, plot, GIF")
+    p.add_argument(
+        "--seed",
+        type=options.non_negative_int,
+        default=0,
+        help="seed of data, split and cycles (default: 0)",
+    )
+    p.add_argument(
+        "--data",
+        type=juggling_data,
+        default=None,
+        help="a juggling CSV, or 'simulated' (default: SIMULATED demonstrations)",
+    )
+    p.add_argument(
+        "--demo-cycles",
+        type=options.positive_int,
+        default=50,
+        help="SIMULATED cycles per person (examples)",
+    )
+    p.add_argument("--demo-persons", type=options.positive_int, default=1, help="SIMULATED persons")
+    p.add_argument(
+        "--gravity",
+        type=gravity_task,
+        default="1.0",
+        help="m/s^2 (9.81: real gravity)",
+    )
+    p.add_argument(
+        "--out",
+        type=options.output_folder,
+        default=None,
+        help="folder for results.json/.csv, plot, GIF (nothing written without it)",
+    )
     p.add_argument(
         "--world",
         choices=("mujoco", "model"),
@@ -712,7 +843,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--mujoco-cycles",
-        type=int,
+        type=options.non_negative_int,
         default=100,
         help="unperturbed cycles stepped in MuJoCo (a quarter of it per perturbed run)",
     )

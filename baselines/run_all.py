@@ -124,8 +124,8 @@ def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) ->
         written = orientation_bench.write(results, out / job.folder)
     elif isinstance(config, juggling_bench.JugglingConfig):
         doc = juggling_bench.run(dataclasses.replace(config, progress=progress))
-        echo(juggling_bench.format_report(doc))
-        written = juggling_bench.write_outputs(doc, out / job.folder)
+        echo(juggling_bench.report(doc))
+        written = juggling_bench.write(doc, out / job.folder)
     else:
         position_bench.warn_missing_peers(config.use_peers)
         doc = position_bench.run(

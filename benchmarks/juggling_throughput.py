@@ -95,10 +95,10 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1")
 
+    from motion_envs.datasets.juggling_task import JugglingTask
     from motion_envs.envs.juggling import load_juggler
     from motion_envs.envs.juggling_scene import JugglingScene
     from motion_envs.models.juggling_run import run_cycles_fast
-    from motion_envs.models.juggling_task import JugglingTask
     from motion_envs.models.juggling_world import BallisticWorld
 
     rng = np.random.default_rng(args.seed)

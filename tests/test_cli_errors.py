@@ -11,7 +11,13 @@ from pathlib import Path
 
 import pytest
 
-from baselines import calibrate_cohort, orientation_bench, position_bench, run_all
+from baselines import (
+    calibrate_cohort,
+    juggling_bench,
+    orientation_bench,
+    position_bench,
+    run_all,
+)
 from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
 from motion_envs import __version__
 
@@ -27,6 +33,7 @@ def paths(tmp_path):
     ro.mkdir()
     ro.chmod(0o555)
     (tmp_path / "bad.json").write_text("{not json")
+    (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00t,x,z\n")
     yield tmp_path
     ro.chmod(0o755)
 
@@ -41,6 +48,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(orientation_bench, "table1", started)
     monkeypatch.setattr(position_bench, "run_benchmark", started)
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
+    monkeypatch.setattr(juggling_bench, "load_demos", started)
 
 
 # (argv with {tmp} for the fixture folder, expected fragment of the one error line)
@@ -76,6 +84,30 @@ CASES = [
     (["position", "--conditions", "speed"], "argument --conditions: expected a comma list"),
     (["position", "--n-point", "50"], "unrecognized arguments: --n-point"),
     (["position", "--learned", "none"], "argument --learned: invalid choice: 'none'"),
+    (["juggling", "--data", "{tmp}/missing.csv"], "argument --data: {tmp}/missing.csv does not"),
+    (["juggling", "--data", "{tmp}/folder"], "argument --data: {tmp}/folder is a folder"),
+    (["juggling", "--data", "{tmp}/file.txt"], "argument --data: {tmp}/file.txt: line 1: missing"),
+    (
+        ["juggling", "--data", "{tmp}/binary.csv"],
+        "argument --data: {tmp}/binary.csv is not a UTF-8",
+    ),
+    (["juggling", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
+    (["juggling", "--out", "{tmp}/file.txt/sub"], "argument --out:"),
+    (["juggling", "--cycles", "0"], "argument --cycles: expected an integer >= 1"),
+    (["juggling", "--cycles", "1e3"], "argument --cycles: expected an integer >= 1"),
+    (["juggling", "--noise", "0.05,x"], "argument --noise: expected a comma list of numbers"),
+    (["juggling", "--noise", "1.5"], "argument --noise: expected a comma list of numbers"),
+    (["juggling", "--noise", ","], "argument --noise: expected a comma list of numbers"),
+    (["juggling", "--tracking", "inf"], "argument --tracking: expected a finite number >= 0"),
+    (["juggling", "--tracking", "-0.1"], "argument --tracking: expected a finite number >= 0"),
+    (["juggling", "--gravity", "0"], "argument --gravity: expected a finite number > 0"),
+    (["juggling", "--gravity", "nan"], "argument --gravity: expected a finite number"),
+    (["juggling", "--seed", "-1"], "argument --seed: expected an integer >= 0"),
+    (["juggling", "--demo-persons", "0"], "argument --demo-persons: expected an integer >= 1"),
+    (["juggling", "--demo-cycles", "2"], "argument --demo-cycles: 2 cycle(s) x 1 person(s)"),
+    (["juggling", "--mujoco-cycles", "-3"], "argument --mujoco-cycles: expected an integer"),
+    (["juggling", "--world", "moon"], "argument --world: invalid choice"),
+    (["juggling", "--cycle", "5"], "unrecognized arguments: --cycle"),
     (["all", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
     (["all", "--only", "nothing"], "argument --only: invalid choice"),
     (["all", "--ou", "x"], "unrecognized arguments: --ou"),
@@ -165,8 +197,15 @@ def _helps() -> dict[str, str]:
 
 
 def test_every_subcommand_is_registered():
-    assert set(_helps()) == {"motion-bench", "all", "orientation", "position", "calibrate-cohort"}
-    assert len(SUBCOMMAND_MODULES) == 4
+    assert set(_helps()) == {
+        "motion-bench",
+        "all",
+        "orientation",
+        "position",
+        "juggling",
+        "calibrate-cohort",
+    }
+    assert len(SUBCOMMAND_MODULES) == 5
 
 
 @pytest.mark.parametrize(

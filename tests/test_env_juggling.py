@@ -15,10 +15,10 @@ import pytest
 from test_env_orientation import _documented_defaults, _fail_on_warnings
 
 import motion_envs
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingTask
 from motion_envs.envs import juggling as juggling_module
 from motion_envs.envs.juggling import OBS_DIM, JugglingEnv, cycle_rngs
 from motion_envs.envs.juggling_scene import JugglingScene
-from motion_envs.models.juggling_task import JugglingNoise, JugglingTask
 
 ENV_ID = "MotionEnvs/Juggling-v0"
 

@@ -8,6 +8,7 @@ import json
 import pytest
 
 from baselines import juggling_bench as jb
+from baselines import options
 from baselines.cli import main
 from motion_envs.datasets.juggling_csv import write_juggling_csv
 from motion_envs.datasets.juggling_demos import generate_demonstrations
@@ -86,9 +87,10 @@ def test_users_csv(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "match"),
     [
-        (["--cycles", "0"], "cycles must be"),
-        (["--data", "missing.csv"], "does not exist"),
-        (["--noise", "0.05,2"], "noise levels must be"),
+        (["--cycles", "0"], "argument --cycles: expected an integer >= 1"),
+        (["--data", "missing.csv"], "argument --data: missing.csv does not exist"),
+        (["--noise", "0.05,2"], "argument --noise: expected a comma list of numbers in [0, 1)"),
+        (["--demo-cycles", "3"], "argument --demo-cycles: 3 cycle(s) x 1 person(s)"),
     ],
 )
 def test_bad_arguments(argv, match, capsys):
@@ -96,7 +98,29 @@ def test_bad_arguments(argv, match, capsys):
     assert match in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("cycles", 0), ("noise", (0.05, 1.0)), ("tracking", float("nan")), ("world", "moon")],
+)
+def test_run_rejects_a_bad_config_before_computing(field, value, monkeypatch):
+    def started(*args, **kwargs):
+        raise AssertionError("the computation started before the config was checked")
+
+    monkeypatch.setattr(jb, "load_demos", started)
+    cfg = jb.JugglingConfig(progress=False, **{field: value})
+    with pytest.raises(options.ConfigError) as info:
+        jb.run(cfg)
+    assert info.value.field == field
+
+
+def test_config_is_frozen():
+    from dataclasses import FrozenInstanceError
+
+    with pytest.raises(FrozenInstanceError):
+        jb.JugglingConfig().cycles = 3  # type: ignore[misc]
+
+
 def test_motion_bench_all_includes_juggling():
     from baselines.run_all import JOBS
 
-    assert ("juggling",) in [job[2] for job in JOBS]
+    assert "juggling" in [job.folder for job in JOBS]

@@ -7,6 +7,7 @@ import pytest
 
 from motion_envs.datasets.juggling_csv import read_juggling_csv, write_juggling_csv
 from motion_envs.datasets.juggling_demos import generate_demonstrations
+from motion_envs.models.juggling_segmentation import load_juggling_csv
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +33,9 @@ def test_round_trip_with_phase(demos, tmp_path):
 
 def test_segmentation_of_an_unlabelled_csv_recovers_the_phases(demos, tmp_path):
     path = write_juggling_csv(demos, tmp_path / "nolabels.csv", phase=False)
-    back = read_juggling_csv(path)
+    raw = read_juggling_csv(path)  # the datasets layer: raw recordings, no labels
+    assert all(r.phase is None for r in raw.recordings)
+    back = load_juggling_csv(path)
     truth = _boundaries(demos.recordings[0].phase)
     found = _boundaries(back.recordings[0].phase)
     found = [f for f in found if f[1] != "none"]
@@ -86,9 +89,10 @@ def _rows(n=25, phase=True):
         (GOOD + "\n".join(r.replace("return", "catch") for r in _rows()), "no complete toss"),
     ],
 )
-def test_bad_input_matrix(tmp_path, text, match):
+@pytest.mark.parametrize("reader", [read_juggling_csv, load_juggling_csv])
+def test_bad_input_matrix(tmp_path, text, match, reader):
     with pytest.raises(ValueError, match=match) as info:
-        read_juggling_csv(_write(tmp_path, text + "\n"))
+        reader(_write(tmp_path, text + "\n"))
     assert "bad.csv" in str(info.value)
     assert "\n" not in str(info.value)  # one line
 
@@ -103,3 +107,11 @@ def test_non_contiguous_recording(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(FileNotFoundError, match="does not exist"):
         read_juggling_csv(tmp_path / "nope.csv")
+
+
+def test_unlabelled_csv_without_any_cycle_names_the_file(tmp_path):
+    rows = "\n".join(f"{k * 0.005},0.2,1.0,0.2,1.0" for k in range(40))
+    path = _write(tmp_path, "t,x,z,ball_x,ball_z\n" + rows + "\n")
+    assert read_juggling_csv(path).recordings[0].phase is None
+    with pytest.raises(ValueError, match=r"bad\.csv: no complete toss"):
+        load_juggling_csv(path)

@@ -14,7 +14,7 @@ from motion_envs.datasets.juggling_demos import (
     generate_demonstrations,
     quintic,
 )
-from motion_envs.models.juggling_task import PHASES, JugglingTask
+from motion_envs.datasets.juggling_task import PHASES, JugglingTask
 
 ROOT = Path(motion_envs.__file__).parent
 

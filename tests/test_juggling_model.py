@@ -7,10 +7,10 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from motion_envs.datasets.juggling_demos import generate_demonstrations
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingTask, ballistic_position
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk, plan_catch
 from motion_envs.models.juggling_run import cycle_rngs, run_cycle, run_cycles, run_cycles_fast
-from motion_envs.models.juggling_task import JugglingNoise, JugglingTask, ballistic_position
 from motion_envs.models.juggling_world import BallisticWorld
 
 

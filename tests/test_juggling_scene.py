@@ -10,8 +10,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState, JugglingTask
 from motion_envs.envs.juggling_scene import JugglingScene, load_juggling_model
-from motion_envs.models.juggling_task import JugglingNoise, JugglingState, JugglingTask
 
 TASK = JugglingTask()
 

@@ -10,8 +10,9 @@ Format (one row per sample, header required, extra columns ignored)::
 * ``ball_x, ball_z`` (optional, both or neither): the (virtual) ball's centre in m; while
   the ball is held it equals the hand position the virtual world saw.
 * ``phase`` (optional): ``toss``, ``go_down``, ``catch`` or ``return`` on every row.
-  Without it the recording is segmented by the paper's online criteria
-  (:func:`segment_juggling`), which needs the ball columns.
+  Without it :func:`read_juggling_csv` returns the raw recordings (``phase`` None) and
+  :func:`motion_envs.models.juggling_segmentation.load_juggling_csv` segments them by
+  the paper's online criteria, which need the ball columns.
 * ``recording`` (optional): an identifier; the rows of one recording are contiguous.
 
 Errors are one line naming the file and the line numbers (the header is line 1).
@@ -27,11 +28,10 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling_demos import JugglingDemos, JugglingRecording
+from motion_envs.datasets.juggling_task import PHASES, JugglingTask
 from motion_envs.datasets.sample_table import read_csv_exact, write_csv
-from motion_envs.models.juggling_task import PHASES, JugglingTask
-from motion_envs.models.segmentation import EventOccurred, SpeedBelow, segment
 
-__all__ = ["JUGGLING_COLUMNS", "read_juggling_csv", "segment_juggling", "write_juggling_csv"]
+__all__ = ["JUGGLING_COLUMNS", "MIN_SAMPLES", "read_juggling_csv", "write_juggling_csv"]
 
 FloatArray = NDArray[np.float64]
 
@@ -48,74 +48,16 @@ def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> None:
     raise ValueError(f"{path}: {what} on line(s) {shown} ({bad.size} row(s))")
 
 
-def _smooth(y: FloatArray, width: int) -> FloatArray:
-    """Causal moving average over ``width`` samples (shorter at the start)."""
-    c = np.cumsum(np.vstack([np.zeros((1, y.shape[1])), y]), axis=0)
-    k = np.arange(1, len(y) + 1)
-    lo = np.maximum(k - width, 0)
-    return (c[k] - c[lo]) / (k - lo)[:, None]
-
-
-def segment_juggling(
-    t: FloatArray,
-    hand: FloatArray,
-    ball: FloatArray,
-    task: JugglingTask | None = None,
-    rest_speed: float = 0.02,
-    min_elapsed: float = 0.3,
-    smooth: int = 5,
-) -> NDArray[np.str_]:
-    """Phase labels ``(K,)`` of a recording by the paper's online criteria.
-
-    Events, computed causally: ``release`` at sample ``k`` when the held ball's (= the
-    tracked hand's) vertical acceleration ``(b_k - 2 b_{k-1} + b_{k-2}) / dt^2`` drops
-    below ``-toss_threshold``; ``catch`` when the ball enters the catch radius of the
-    hand (``|h_k - b_k| <= catch_radius < |h_{k-1} - b_{k-1}|``). Phases, with
-    :func:`motion_envs.models.segmentation.segment`: toss ends at ``release``; go-down
-    ends when the hand's speed (on a causal ``smooth``-sample moving average) is below
-    ``rest_speed`` after ``min_elapsed`` s; catch ends at ``catch``; return ends like
-    go-down. Samples after the last complete phase are labelled ``"none"``.
-    """
-    task = task or JugglingTask()
-    t = np.asarray(t, dtype=np.float64)
-    hand = np.asarray(hand, dtype=np.float64)
-    ball = np.asarray(ball, dtype=np.float64)
-    dt = np.diff(t)
-    az = np.full(len(t), np.inf)
-    az[2:] = (ball[2:, 1] - 2 * ball[1:-1, 1] + ball[:-2, 1]) / (dt[1:] * dt[:-1])
-    dist = np.linalg.norm(hand - ball, axis=1)
-    enter = np.zeros(len(t), dtype=bool)
-    enter[1:] = (dist[1:] <= task.catch_radius) & (dist[:-1] > task.catch_radius)
-    events: dict[int, set[str]] = {}
-    for k in np.flatnonzero(az < -task.toss_threshold):
-        events.setdefault(int(k), set()).add("release")
-    for k in np.flatnonzero(enter):
-        events.setdefault(int(k), set()).add("catch")
-    rest = SpeedBelow(threshold=rest_speed, min_elapsed=min_elapsed)
-    segs = segment(
-        t,
-        _smooth(hand, smooth),
-        [
-            ("toss", EventOccurred(name="release")),
-            ("go_down", rest),
-            ("catch", EventOccurred(name="catch")),
-            ("return", rest),
-        ],
-        events=events,
-    )
-    labels = np.full(len(t), "none", dtype="<U7")
-    for s in segs:
-        labels[s.start : s.stop] = s.name
-    return labels
-
-
 def read_juggling_csv(
     path: str | os.PathLike[str], task: JugglingTask | None = None
 ) -> JugglingDemos:
-    """Read, check and (without ``phase``) segment a juggling CSV (format above).
+    """Read and check a juggling CSV (format above): the recordings as they are.
 
-    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file and
-    the line numbers of the bad rows.
+    Without a ``phase`` column the recordings are returned unlabelled (``phase`` None);
+    :func:`motion_envs.models.juggling_segmentation.load_juggling_csv` reads and segments
+    them by the paper's online criteria. Raises ``FileNotFoundError`` for a missing file
+    and ``ValueError`` naming the file and the line numbers of the bad rows (or, for a
+    labelled file, that it holds no complete cycle).
     """
     task = task or JugglingTask()
     p = Path(path)
@@ -172,17 +114,14 @@ def read_juggling_csv(
         t = data[s:e, 0]
         hand = data[s:e, 1:3]
         ball = data[s:e, 3:5] if all(has_ball) else None
-        if "phase" in frame.columns:
-            phase = frame["phase"].to_numpy(dtype=str)[s:e]
-        else:
-            phase = segment_juggling(t, hand, ball, task)  # type: ignore[arg-type]
+        phase = frame["phase"].to_numpy(dtype=str)[s:e] if "phase" in frame.columns else None
         recordings.append(
             JugglingRecording(
                 name=str(name), t=t - t[0], hand=hand, ball=ball, phase=phase, person=str(name)
             )
         )
     demos = JugglingDemos(name=p.name, recordings=tuple(recordings), simulated=False, task=task)
-    if not demos.cycles():
+    if "phase" in frame.columns and not demos.cycles():
         raise ValueError(f"{p}: no complete toss, go_down, catch, return cycle found")
     return demos
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.models.juggling_task import PHASES, JugglingTask, ballistic_position
+from motion_envs.datasets.juggling_task import PHASES, JugglingTask, ballistic_position
 
 __all__ = [
     "SIMULATED_LABEL",
@@ -189,7 +189,7 @@ def quintic(
         dtype=np.float64,
     )
     rhs = np.stack([p0, v0, a0, p1, v1, a1]).astype(np.float64)
-    return np.linalg.solve(m, rhs)
+    return np.linalg.solve(m, rhs).astype(np.float64, copy=False)
 
 
 def _quintic_eval(c: FloatArray, t: FloatArray, order: int = 0) -> FloatArray:
@@ -268,7 +268,7 @@ class _Session:
     def _append(self, c: FloatArray, t0: float, k_from: int, k_to: int, phase: str) -> None:
         dt = self.task.dt
         k = np.arange(k_from, k_to)
-        t = k * dt
+        t = k.astype(np.float64) * dt
         y = _quintic_eval(c, t - t0) + self._tremor(t)
         self.hand.extend(y)
         self.phase.extend([phase] * len(k))
@@ -295,7 +295,8 @@ class _Session:
         c_toss = quintic(start, z2, z2, top, v_top, brake, t_toss)
         n_plan = int(np.floor(t_toss / dt))
         k = np.arange(k0, k0 + n_plan + 1)
-        y = _quintic_eval(c_toss, k * dt - t0) + self._tremor(k * dt)
+        tk = k.astype(np.float64) * dt
+        y = _quintic_eval(c_toss, tk - t0) + self._tremor(tk)
         prev = np.asarray(self.hand[-2:]) if k0 >= 2 else np.repeat(y[:1], 2, axis=0)
         full = np.concatenate([prev, y])
         az = (full[2:, 1] - 2 * full[1:-1, 1] + full[:-2, 1]) / dt**2
@@ -402,7 +403,7 @@ def generate_demonstrations(
             else:  # the person tries again with a sharper stop
                 session.style = replace(session.style, brake=session.style.brake * 1.1)
         hand = np.asarray(session.hand)
-        t = np.arange(len(hand)) * task.dt
+        t = np.arange(len(hand), dtype=np.float64) * task.dt
         recorded = hand + sensor_noise * rng.standard_normal(hand.shape)
         recordings.append(
             JugglingRecording(

@@ -14,8 +14,9 @@ id                              environment
 ==============================  ===================================================
 
 The two reaching environments come with a native vector environment
-(:mod:`motion_envs.envs.vector`), which ``gym.make_vec(id, num_envs=N)`` builds by default: one compiled loop over the
-sub-environments (numpy without numba), bit-identical to ``SyncVectorEnv``, with
+(:mod:`motion_envs.envs.vector`), which ``gym.make_vec(id, num_envs=N)`` builds by
+default: one compiled loop over the sub-environments (numpy without numba), bit-identical
+to ``SyncVectorEnv``, with
 ``autoreset_mode=`` ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``. Processes that
 never imported the package (SB3's ``SubprocVecEnv`` workers, ``python -c``) use the
 ``motion_envs:MotionEnvs/...`` form of an id.

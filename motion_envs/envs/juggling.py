@@ -15,10 +15,10 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
 from motion_envs.envs._common import check_reward_weights, check_scale
 from motion_envs.envs.juggling_scene import JugglingScene
 from motion_envs.models.juggling_run import cycle_rngs
-from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
 
 __all__ = [
     "CYCLE_TIME_LIMIT",
@@ -75,9 +75,9 @@ def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
     if data is None:
         demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
     else:
-        from motion_envs.datasets.juggling_csv import read_juggling_csv
+        from motion_envs.models.juggling_segmentation import load_juggling_csv
 
-        demos = read_juggling_csv(data, task=task)
+        demos = load_juggling_csv(data, task=task)
     juggler, _, _ = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
     return juggler
 

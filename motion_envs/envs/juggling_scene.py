@@ -67,11 +67,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.envs.rendering import _prefer_offscreen_gl
-from motion_envs.models.juggling_task import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.envs.rendering import prefer_offscreen_gl
 from motion_envs.models.juggling_world import TRACKING_ROWS, draw_episode_noise
 
-_prefer_offscreen_gl()  # MUJOCO_GL=egl when headless, before MuJoCo is first imported
+prefer_offscreen_gl()  # MUJOCO_GL=egl when headless, before MuJoCo is first imported
 import mujoco  # noqa: E402
 
 __all__ = ["SCENE_XML", "JugglingScene", "check_task", "load_juggling_model"]
@@ -90,7 +90,7 @@ def check_task(task: Any) -> JugglingTask:
 def load_juggling_model(task: JugglingTask | None = None) -> mujoco.MjModel:
     """Compile ``assets/juggling.xml`` with the constants of ``task`` (default task)."""
     task = check_task(JugglingTask() if task is None else task)
-    xml = resources.files("motion_envs.envs").joinpath("assets", SCENE_XML).read_text()
+    xml = resources.files("motion_envs.envs").joinpath("assets").joinpath(SCENE_XML).read_text()
     model = mujoco.MjModel.from_xml_string(xml)
     model.opt.timestep = task.dt
     model.opt.gravity[:] = (0.0, 0.0, -task.gravity)

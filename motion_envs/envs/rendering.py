@@ -22,14 +22,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CurveRenderer", "HandFrameRenderer"]
+__all__ = ["CurveRenderer", "HandFrameRenderer", "prefer_offscreen_gl"]
 
 # axis lengths of the hand frame (pointing, medium, short), as in the MJCF
 _AXES = np.array([0.8, 0.45, 0.25])
 _COLORS = {"human": (0.1, 0.65, 0.2), "nominal": (0.5, 0.5, 0.5), "agent": (0.95, 0.5, 0.05)}
 
 
-def _prefer_offscreen_gl() -> None:
+def prefer_offscreen_gl() -> None:
+    """Set ``MUJOCO_GL=egl`` when MuJoCo is not imported yet, ``MUJOCO_GL`` is unset and
+    there is no display (X11 or Wayland); otherwise change nothing. Call it before the
+    first ``import mujoco`` of a module that renders offscreen."""
     if "mujoco" not in sys.modules and "MUJOCO_GL" not in os.environ:
         if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
             os.environ["MUJOCO_GL"] = "egl"
@@ -39,7 +42,8 @@ def _rotations(q: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(n, 3, 3)`` rotation matrices of scalar-first quaternions (normalised first)."""
     from motion_envs.geometry import quaternion as quat
 
-    return quat.to_rotation(quat.normalize(q)).as_matrix()
+    rotations: NDArray[np.float64] = quat.to_rotation(quat.normalize(q)).as_matrix()
+    return rotations
 
 
 def _new_figure(width: int, height: int) -> Any:
@@ -54,7 +58,8 @@ def _new_figure(width: int, height: int) -> Any:
 
 def _figure_to_array(fig: Any) -> NDArray[np.uint8]:
     fig.canvas.draw()
-    return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    rgb: NDArray[np.uint8] = np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+    return rgb
 
 
 class HandFrameRenderer:
@@ -80,7 +85,7 @@ class HandFrameRenderer:
                     ) from exc
 
     def _init_mujoco(self) -> None:
-        _prefer_offscreen_gl()
+        prefer_offscreen_gl()
         import mujoco
 
         xml = (resources.files("motion_envs.envs") / "assets" / "hand_frames.xml").read_text()
@@ -109,7 +114,10 @@ class HandFrameRenderer:
         return self._render_matplotlib(current, tips_h, tips_a, k)
 
     def _render_mujoco(
-        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray
+        self,
+        current: dict[str, NDArray[np.float64]],
+        tips_h: NDArray[np.float64],
+        tips_a: NDArray[np.float64],
     ) -> NDArray[np.uint8]:
         mj = self._mj
         for name, q in current.items():
@@ -131,10 +139,15 @@ class HandFrameRenderer:
                     np.array([*rgb, 0.9], dtype=np.float32),
                 )
                 scene.ngeom += 1
-        return self._renderer.render().copy()
+        frame: NDArray[np.uint8] = self._renderer.render().copy()
+        return frame
 
     def _render_matplotlib(
-        self, current: dict[str, NDArray[np.float64]], tips_h: NDArray, tips_a: NDArray, k: int
+        self,
+        current: dict[str, NDArray[np.float64]],
+        tips_h: NDArray[np.float64],
+        tips_a: NDArray[np.float64],
+        k: int,
     ) -> NDArray[np.uint8]:
         if self._fig is None:
             self._fig = _new_figure(self.width, self.height)
@@ -166,7 +179,9 @@ class HandFrameRenderer:
 class CurveRenderer:
     """Draw position curves: human (black), nominal (grey dashed), agent (orange)."""
 
-    def __init__(self, width: int, height: int, low: NDArray, high: NDArray) -> None:
+    def __init__(
+        self, width: int, height: int, low: NDArray[np.float64], high: NDArray[np.float64]
+    ) -> None:
         self.width, self.height = int(width), int(height)
         self._fig = _new_figure(self.width, self.height)
         self._lim = (float(low[0]), float(high[0]))

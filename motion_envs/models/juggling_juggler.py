@@ -34,13 +34,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.geometry import sine_series as ss
-from motion_envs.models.juggling_task import (
+from motion_envs.datasets.juggling_demos import JugglingDemos
+from motion_envs.datasets.juggling_task import (
     PHASES,
     JugglingState,
     JugglingTask,
     ballistic_position,
 )
+from motion_envs.geometry import sine_series as ss
 from motion_envs.models.sine_regression import SineSeriesRegression, select_n_sines
 
 __all__ = [
@@ -172,12 +173,14 @@ class AnalyticJuggler:
         self.cv_tolerance = cv_tolerance
 
     # -- fitting --------------------------------------------------------------------
-    def fit(self, demos: object, cycles: set[tuple[int, int]] | None = None) -> AnalyticJuggler:
+    def fit(
+        self, demos: JugglingDemos, cycles: set[tuple[int, int]] | None = None
+    ) -> AnalyticJuggler:
         """Fit every phase on ``demos`` (a :class:`JugglingDemos`), only ``cycles`` if given.
 
         ``cycles`` holds ``(recording, cycle)`` pairs (the training split).
         """
-        segments = demos.segments(toss_to_top=True)  # type: ignore[attr-defined]
+        segments = demos.segments(toss_to_top=True)
         self.phases_: dict[str, PhaseFit] = {}
         for phase in PHASES:
             segs = [

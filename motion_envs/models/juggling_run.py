@@ -16,9 +16,10 @@ from typing import cast
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling_demos import JugglingDemos, split_cycles
+from motion_envs.datasets.juggling_task import PHASES as PHASES_ORDER
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_juggler import AnalyticJuggler
-from motion_envs.models.juggling_task import PHASES as PHASES_ORDER
-from motion_envs.models.juggling_task import JugglingNoise, JugglingState
 from motion_envs.models.juggling_world import TRACKING_ROWS, BallisticWorld
 
 __all__ = [
@@ -50,7 +51,7 @@ class CycleResult:
 
 
 def fit_juggler(
-    demos: object,
+    demos: JugglingDemos,
     seed: int = 0,
     test_fraction: float = 0.25,
     **kwargs: object,
@@ -62,10 +63,8 @@ def fit_juggler(
     (``AnalyticJuggler(task=demos.task, **kwargs)``) is fitted on the training cycles only.
     Returns ``(juggler, train, test)``.
     """
-    from motion_envs.datasets.juggling_demos import split_cycles
-
-    train, test = split_cycles(demos, test_fraction, seed)  # type: ignore[arg-type]
-    juggler = AnalyticJuggler(task=demos.task, **kwargs).fit(demos, train)  # type: ignore[attr-defined,arg-type]
+    train, test = split_cycles(demos, test_fraction, seed)
+    juggler = AnalyticJuggler(task=demos.task, **kwargs).fit(demos, train)  # type: ignore[arg-type]
     return juggler, train, test
 
 

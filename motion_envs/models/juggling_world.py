@@ -28,7 +28,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.models.juggling_task import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState, JugglingTask
 
 __all__ = ["TRACKING_ROWS", "BallisticWorld", "draw_episode_noise"]
 
