@@ -278,6 +278,8 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
     ) -> None:
         from motion_envs.envs.orientation_reach import OrientationReachEnv
 
@@ -294,6 +296,8 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
             render_mode=render_mode,
             width=width,
             height=height,
+            val_fraction=val_fraction,
+            observe_timing=observe_timing,
         )
         self._setup(num_envs, max_episode_steps, single)
         self._max_geodesic = np.zeros(self.num_envs)
@@ -374,6 +378,8 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
     ) -> None:
         from motion_envs.envs.position_reach import PositionReachEnv
 
@@ -390,6 +396,8 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
             render_mode=render_mode,
             width=width,
             height=height,
+            val_fraction=val_fraction,
+            observe_timing=observe_timing,
         )
         self._setup(num_envs, max_episode_steps, single)
         self._D = self.task.n_dims
