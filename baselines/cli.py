@@ -17,6 +17,8 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.orientation_bench",
     "baselines.position_bench",
     "baselines.calibrate_cohort",
+    "baselines.agents.train",
+    "baselines.agents.evaluate",
 )
 
 
