@@ -103,7 +103,7 @@ def test_bad_files_raise_one_line_errors_naming_file_and_line(tmp_path, text, ma
 
 
 def test_td3_rejects_log_std_init_and_missing_file(tmp_path):
-    with pytest.raises(ValueError, match="log_std_init.*unknown key"):
+    with pytest.raises(ValueError, match=r"log_std_init.*unknown key"):
         validate_hyperparams("td3", {"policy_kwargs": {"log_std_init": -2.0}})
     with pytest.raises(FileNotFoundError, match="does not exist"):
         load_hyperparams(tmp_path / "nope.yaml", "ppo", ORIENTATION)

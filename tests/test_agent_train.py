@@ -16,12 +16,12 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from baselines.agents.evaluate import AgentConfig, episode_max_errors  # noqa: E402
-from baselines.agents.evaluate import run as evaluate_run  # noqa: E402
-from baselines.agents.rundir import file_sha256, load_run  # noqa: E402
-from baselines.agents.train import TrainConfig  # noqa: E402
-from baselines.agents.train import run as train_run  # noqa: E402
-from baselines.cli import main  # noqa: E402
+from baselines.agents.evaluate import AgentConfig, episode_max_errors
+from baselines.agents.evaluate import run as evaluate_run
+from baselines.agents.rundir import file_sha256, load_run
+from baselines.agents.train import TrainConfig
+from baselines.agents.train import run as train_run
+from baselines.cli import main
 
 pytestmark = pytest.mark.filterwarnings("ignore:.*out of date.*:DeprecationWarning")
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -197,6 +198,8 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
 
 
 def _cli(args: argparse.Namespace) -> int:
+    # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
+    warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
     if args.episodes is not None and args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1; got {args.episodes}")
     config = AgentConfig(str(args.run_dir), args.split, args.episodes, args.checkpoint)

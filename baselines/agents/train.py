@@ -26,6 +26,7 @@ import math
 import shlex
 import sys
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -296,6 +297,8 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
 
 
 def _cli(args: argparse.Namespace) -> int:
+    # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
+    warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
     config = TrainConfig(
         algo=args.algo,
         env_id=args.env,
