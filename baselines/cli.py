@@ -19,6 +19,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.calibrate_cohort",
     "baselines.agents.train",
     "baselines.agents.evaluate",
+    "baselines.agents.sweep",
 )
 
 
