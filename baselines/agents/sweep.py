@@ -261,7 +261,6 @@ def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
                 overrides=cfg["overrides"],
                 progress=False,
                 tensorboard=True,
-                command=_command(cfg, seed, sweep, run_dir),
             ),
             on_evaluation=report,
         )
@@ -283,32 +282,6 @@ def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
             "resumed": result is None,
         },
         checkpoint=tune.Checkpoint.from_directory(str(run_dir)),
-    )
-
-
-def _command(
-    cfg: Mapping[str, Any], seed: int, sweep: SweepConfig, run_dir: Path
-) -> tuple[str, ...]:
-    """The ``motion-bench train`` command line equivalent to a trial."""
-    cmd = [
-        "motion-bench",
-        "train",
-        "--algo",
-        cfg["algo"],
-        "--env",
-        cfg["env_id"],
-        "--seed",
-        str(seed),
-    ]
-    if sweep.timesteps is not None:
-        cmd += ["--timesteps", str(sweep.timesteps)]
-    if sweep.n_envs is not None:
-        cmd += ["--n-envs", str(sweep.n_envs)]
-    return (
-        *cmd,
-        "--out",
-        str(run_dir),
-        f"# sweep {sweep.path}, overrides {json.dumps(cfg['overrides'])}",
     )
 
 

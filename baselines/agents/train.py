@@ -22,12 +22,13 @@ train`` and every trial of ``motion-bench sweep`` call it):
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import shlex
 import sys
 import time
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,7 +37,7 @@ import numpy as np
 
 from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
 
-__all__ = ["TrainConfig", "TrainResult", "register", "run"]
+__all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
 
 #: Called after every validation: ``{"timesteps", "val_criterion", "best_val_criterion",
 #: "is_best", "run_dir"}``.
@@ -259,7 +260,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
         f.write("timesteps,val_criterion\n")
         for e in validation.evaluations:
             f.write(f"{e['timesteps']},{e['val_criterion']!r}\n")
-    command = list(config.command) or ["motion-bench", "train", "--algo", config.algo]
+    command = list(config.command) or equivalent_command(config)
     write_manifest(
         run_dir,
         {
@@ -294,6 +295,24 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
         steps_per_second=steps / seconds if seconds > 0 else float("nan"),
         hyperparams=hp,
     )
+
+
+def equivalent_command(config: TrainConfig) -> list[str]:
+    """The ``motion-bench train`` command line of ``config`` (hyper-parameter overrides,
+    which the command line cannot set, follow as a comment)."""
+    cmd = ["motion-bench", "train", "--algo", config.algo, "--env", config.env_id]
+    cmd += ["--seed", str(config.seed), "--out", str(config.out)]
+    if config.config_path is not None:
+        cmd += ["--config", str(config.config_path)]
+    if config.timesteps is not None:
+        cmd += ["--timesteps", str(config.timesteps)]
+    if config.n_envs is not None:
+        cmd += ["--n-envs", str(config.n_envs)]
+    if config.env_kwargs:
+        cmd += ["--env-kwargs", *(f"{k}={json.dumps(v)}" for k, v in config.env_kwargs.items())]
+    if config.overrides:
+        cmd.append(f"# overrides {json.dumps(dict(config.overrides), sort_keys=True)}")
+    return cmd
 
 
 def _cli(args: argparse.Namespace) -> int:
@@ -354,9 +373,3 @@ def register(subparsers: Any) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-tensorboard", action="store_true", help="no TensorBoard logs")
     p.set_defaults(func=_cli)
-
-
-def main(argv: Sequence[str] | None = None) -> int:  # pragma: no cover
-    from baselines.cli import main as cli_main
-
-    return cli_main(["train", *(argv or [])])
