@@ -4,10 +4,11 @@ Single environments (``gym.make``, with the registration's wrappers): steps per 
 of ``MotionEnvs/OrientationReach-v0`` and ``MotionEnvs/PositionReach-v0`` against
 ``Pendulum-v1`` and ``Reacher-v5``, each stepping the same pre-sampled uniform actions in
 ``[-1, 1]`` (cut to its action dimension) and resetting at episode ends. Vector
-environments: the native batched-numpy vector envs
-(``gym.make_vec(..., vectorization_mode="vector_entry_point")``) at N = 1, 64, 1024,
-against ``Reacher-v5`` under ``SyncVectorEnv`` with 8 copies, in env-steps per second
-(N x vector steps / s). Each figure is the median over ``--repeats`` timed runs, after
+environments: the native vector envs
+(``gym.make_vec(..., vectorization_mode="vector_entry_point")``) at N = 1, 8, 64, 1024
+against, in the same run, the same env's single environment and its ``SyncVectorEnv``
+(N = 1, 8, 64) and ``Reacher-v5`` under ``SyncVectorEnv`` with 8 copies, in env-steps
+per second (N x vector steps / s). Each figure is the median over ``--repeats`` timed runs, after
 one warm-up run; the JSON also holds the best run of each (the machine is shared, so the
 spread says how much other load there was). Reacher-v5 needs ``imageio``
 (``pip install "gymnasium[mujoco]"``).
@@ -37,7 +38,8 @@ import motion_envs  # noqa: F401  (registers the environments)
 
 OURS = ("MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0")
 ANCHORS = ("Pendulum-v1", "Reacher-v5")
-VECTOR_SIZES = (1, 64, 1024)
+VECTOR_SIZES = (1, 8, 64, 1024)
+SYNC_SIZES = (1, 8, 64)
 
 
 def _single_rate(env: gym.Env, actions: np.ndarray) -> float:
@@ -105,6 +107,17 @@ def main(argv: list[str] | None = None) -> int:
             f"{env_id} N={n}",
         )
         venv.close()
+    sync: dict[str, dict[str, float]] = {env_id: {} for env_id in OURS}
+    jobs = [(env_id, n) for env_id in OURS for n in SYNC_SIZES]
+    for env_id, n in tqdm(jobs, desc="SyncVectorEnv", file=sys.stderr):
+        venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync")
+        sync[env_id][str(n)] = _median_rate(
+            lambda venv=venv: _vector_rate(venv, vector_actions[: max(20, 2000 // n)]),
+            args.repeats,
+            best,
+            f"{env_id} Sync N={n}",
+        )
+        venv.close()
     reacher = gym.make_vec("Reacher-v5", num_envs=8, vectorization_mode="sync")
     reacher_sync8 = _median_rate(
         lambda: _vector_rate(reacher, vector_actions), args.repeats, best, "Reacher-v5 Sync N=8"
@@ -118,11 +131,18 @@ def main(argv: list[str] | None = None) -> int:
     for env_id, rate in single.items():
         print(f"{env_id:<34} {rate:>12,.0f} {rate / pendulum:>14.2f}")
     print()
-    print(f"{'vector environment':<34} {'N':>6} {'env-steps/s':>14} {'/ Reacher Sync x8':>18}")
+    head = f"{'vector environment':<34} {'N':>6} {'env-steps/s':>14} {'/ single':>9}"
+    print(f"{head} {'/ Sync':>7} {'/ Reacher Sync x8':>18}")
     for env_id in OURS:
-        for n, rate in vector[env_id].items():
-            print(f"{env_id + ' (native)':<34} {n:>6} {rate:>14,.0f} {rate / reacher_sync8:>18.1f}")
-    print(f"{'Reacher-v5 (SyncVectorEnv)':<34} {8:>6} {reacher_sync8:>14,.0f} {1.0:>18.1f}")
+        for kind, rates in (("native", vector[env_id]), ("Sync", sync[env_id])):
+            for n, rate in rates.items():
+                ref = sync[env_id].get(n)
+                vs_sync = f"{rate / ref:>7.2f}" if ref else f"{'':>7}"
+                print(
+                    f"{env_id + f' ({kind})':<34} {n:>6} {rate:>14,.0f} "
+                    f"{rate / single[env_id]:>9.2f} {vs_sync} {rate / reacher_sync8:>18.1f}"
+                )
+    print(f"{'Reacher-v5 (SyncVectorEnv)':<34} {8:>6} {reacher_sync8:>14,.0f} {1.0:>37.1f}")
     doc = {
         "benchmark": "env_throughput",
         "date": datetime.now(timezone.utc).date().isoformat(),
@@ -136,6 +156,11 @@ def main(argv: list[str] | None = None) -> int:
         "single_steps_per_s": single,
         "single_over_pendulum": {k: v / pendulum for k, v in single.items()},
         "vector_env_steps_per_s": vector,
+        "sync_env_steps_per_s": sync,
+        "vector_over_single": {
+            env_id: {n: r / single[env_id] for n, r in rates.items()}
+            for env_id, rates in vector.items()
+        },
         "reacher_sync8_env_steps_per_s": reacher_sync8,
         "vector_over_reacher_sync8": {
             env_id: {n: r / reacher_sync8 for n, r in rates.items()}
@@ -144,7 +169,14 @@ def main(argv: list[str] | None = None) -> int:
         "best_run_steps_per_s": best,
         "targets": {
             "single_at_least_pendulum": {env_id: single[env_id] >= pendulum for env_id in OURS},
-            "vector_1024_above_1e6": {env_id: vector[env_id]["1024"] > 1e6 for env_id in OURS},
+            "vector_1_at_least_single": {
+                env_id: vector[env_id]["1"] >= single[env_id] for env_id in OURS
+            },
+            "vector_64_at_least_1e6": {env_id: vector[env_id]["64"] >= 1e6 for env_id in OURS},
+            "vector_1024_at_least_3e6_orientation_1e7_position": {
+                env_id: vector[env_id]["1024"] >= (3e6 if "Orientation" in env_id else 1e7)
+                for env_id in OURS
+            },
         },
     }
     print(json.dumps(doc))

@@ -14,6 +14,20 @@ same arithmetic as :func:`orientation_step` with :data:`SCALAR`, inlined by hand
 
 The formulas are those of :mod:`motion_envs.geometry.quaternion` (``expmap``,
 ``multiply``, ``logmap``, ``angle``), which the tests use as the oracle.
+
+The rewards (:func:`orientation_reward`, :func:`position_reward`) are written once, in
+plain arithmetic, and serve every backend: floats (single environments), ``(N,)`` arrays
+(the numpy vector path) and, compiled, the numba vector path.
+
+Backends, declared here and nowhere else:
+
+* :data:`SCALAR`: Python floats, the single environments;
+* :data:`BATCH`: numpy arrays, the vector environments' ``backend="numpy"``;
+* ``"numba"`` (:data:`VECTOR_BACKENDS`): :func:`orientation_step_scalar`,
+  :func:`position_step_scalar` and the rewards compiled by numba and looped over the
+  sub-environments in :mod:`motion_envs.envs._fused`, the vector environments' default
+  when numba is installed (the ``fast`` extra). All three evaluate the same expressions
+  in the same order, so they agree bit for bit (tested).
 """
 
 from __future__ import annotations
@@ -28,14 +42,20 @@ import numpy as np
 __all__ = [
     "BATCH",
     "SCALAR",
+    "VECTOR_BACKENDS",
     "expmap",
     "geodesic",
     "half_angle",
     "logmap",
     "multiply",
+    "numba_available",
+    "orientation_reward",
     "orientation_step",
     "orientation_step_scalar",
+    "position_reward",
     "position_step",
+    "position_step_scalar",
+    "resolve_vector_backend",
 ]
 
 _SMALL_ANGLE = 1e-4  # as motion_envs.geometry.quaternion._SMALL_ANGLE
@@ -297,6 +317,70 @@ def position_step(
         d = q[i] - h[i]
         acc = acc + d * d
     return q, m.sqrt(acc)
+
+
+def position_step_scalar(row: Any, a: Any, scale: float, q: Any) -> float:
+    """:func:`position_step` for one environment, written into ``q``: ``q_i = n_i + scale
+    a_i`` and the distance ``|q - h|`` (same expressions, same order). ``row`` holds the
+    nominal ``n`` (``D`` values) then the human ``h`` (``D``); ``a`` and ``q`` hold ``D``
+    (lists or arrays; numba compiles it unchanged)."""
+    D = len(a)
+    acc = 0.0
+    for i in range(D):
+        v = row[i] + scale * a[i]
+        q[i] = v
+        d = v - row[D + i]
+        acc = d * d if i == 0 else acc + d * d
+    return math.sqrt(acc)
+
+
+def orientation_reward(
+    err: Any, geo: Any, ax: Any, ay: Any, az: Any, w_res: float, w_geo: float, w_act: float
+) -> tuple[Any, Any, Any, Any]:
+    """The orientation reward terms and their sum, for floats or ``(N,)`` arrays:
+    ``r_res = -w_res err``, ``r_geo = -w_geo geo``, ``r_act = -w_act |a|^2`` and
+    ``r_res + r_geo + r_act`` (left to right)."""
+    r_res = -w_res * err
+    r_geo = -w_geo * geo
+    r_act = -w_act * (ax * ax + ay * ay + az * az)
+    return r_res, r_geo, r_act, r_res + r_geo + r_act
+
+
+def position_reward(err: Any, sq: Any, w_dist: float, w_act: float) -> tuple[Any, Any, Any]:
+    """The position reward terms and their sum, for floats or ``(N,)`` arrays:
+    ``r_dist = -w_dist err``, ``r_act = -w_act sq`` (``sq = |a|^2``, summed over the
+    components left to right from 0) and ``r_dist + r_act``."""
+    r_dist = -w_dist * err
+    r_act = -w_act * sq
+    return r_dist, r_act, r_dist + r_act
+
+
+#: Backends of the native vector environments (``backend=`` argument; ``"auto"`` picks
+#: the first available).
+VECTOR_BACKENDS: tuple[str, ...] = ("numba", "numpy")
+
+
+def numba_available() -> bool:
+    """Whether numba can be imported (the optional ``fast`` extra)."""
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def resolve_vector_backend(backend: str) -> str:
+    """``"auto"`` -> ``"numba"`` if installed else ``"numpy"``; a named backend is checked."""
+    if backend == "auto":
+        return "numba" if numba_available() else "numpy"
+    if backend not in VECTOR_BACKENDS:
+        choices = ["auto", *VECTOR_BACKENDS]
+        raise ValueError(f"backend must be one of {choices}; got {backend!r}")
+    if backend == "numba" and not numba_available():
+        raise ValueError(
+            "backend='numba' needs numba: pip install 'motion-envs[fast]' (or use backend='numpy')"
+        )
+    return backend
 
 
 SCALAR.multiply = multiply

@@ -348,10 +348,9 @@ class OrientationReachEnv(ReplayEnv):
         az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
         q, err, geo = K.orientation_step_scalar(self._steps[k], ax, ay, az, self.residual_scale)
         w = self.reward_weights
-        r_res = -w["residual"] * err
-        r_geo = -w["geodesic"] * geo
-        r_act = -w["action"] * (ax * ax + ay * ay + az * az)
-        reward = r_res + r_geo + r_act
+        r_res, r_geo, r_act, reward = K.orientation_reward(
+            err, geo, ax, ay, az, w["residual"], w["geodesic"], w["action"]
+        )
         self._current = q
         if geo > self._max_geodesic:
             self._max_geodesic = geo

@@ -326,15 +326,13 @@ class PositionReachEnv(ReplayEnv):
             if not math.isfinite(v):
                 raise ValueError(f"action must be finite; got {acts}")
         acts = [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
-        row = self._steps[k]
-        q, err = K.position_step(K.SCALAR, row[:D], row[D:], acts, self.residual_scale)
+        q = [0.0] * D
+        err = K.position_step_scalar(self._steps[k], acts, self.residual_scale, q)
         w = self.reward_weights
         sq = 0.0
         for v in acts:
             sq = sq + v * v
-        r_dist = -w["distance"] * err
-        r_act = -w["action"] * sq
-        reward = r_dist + r_act
+        r_dist, r_act, reward = K.position_reward(err, sq, w["distance"], w["action"])
         info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
         obs, terminated = self._end_step(k, tuple(q), err, info)
         return obs, reward, terminated, False, info

@@ -1,18 +1,37 @@
-"""Native vector environments: ``N`` episodes stepped together in batched numpy.
+"""Native vector environments: ``N`` episodes stepped together, in one compiled loop.
 
-``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")`` builds these.
+``gym.make_vec(id, num_envs=N)`` builds these (the registration's
+``vector_entry_point``; ``vectorization_mode="vector_entry_point"`` says so explicitly).
 Sub-environment ``i`` is bit-identical to a single environment made with the same
 arguments and seeded with ``seed + i`` (as :class:`gymnasium.vector.SyncVectorEnv` seeds
-its copies): the step arithmetic is the same kernel
-(:mod:`motion_envs.envs._kernels`) evaluated on arrays, each sub-environment draws its
-trajectories from its own generator, and episodes end and restart as under
-``SyncVectorEnv`` with Gymnasium's default ``AutoresetMode.NEXT_STEP`` (the step after
-an episode's end resets that sub-environment, ignores its action and returns reward 0).
-``max_episode_steps`` (from the registration) truncates like ``TimeLimit``.
+its copies): the step arithmetic and the reward are the same kernels
+(:mod:`motion_envs.envs._kernels`), each sub-environment draws its trajectories from its
+own generator (the same sequence as ``Generator.integers`` one call per reset), and
+episodes end and restart as under ``SyncVectorEnv`` with the same ``autoreset_mode``:
+
+* ``AutoresetMode.NEXT_STEP`` (default): the step after an episode's end resets that
+  sub-environment, ignores its action and returns reward 0, not terminated/truncated;
+* ``AutoresetMode.SAME_STEP``: the step that ends an episode returns the first
+  observation of the next one; the last observation and infos are in
+  ``infos["final_obs"]`` (object array) and ``infos["final_info"]`` (masked by
+  ``infos["_final_obs"]``/``infos["_final_info"]``), as CleanRL-style loops expect;
+* ``AutoresetMode.DISABLED``: no autoreset; reset ended sub-environments with
+  ``reset(options={"reset_mask": mask})`` before stepping them again.
+
+Pass the mode as ``gym.make_vec(id, N, autoreset_mode=AutoresetMode.SAME_STEP)`` (or
+its value ``"SameStep"``); Gymnasium forwards only keyword arguments, not
+``vector_kwargs``, to a ``vector_entry_point``. ``max_episode_steps`` (from the
+registration) truncates like ``TimeLimit``.
+
+Backends (``backend=``, see :mod:`motion_envs.envs._kernels`): ``"numba"`` runs the
+whole step as one compiled loop (:mod:`motion_envs.envs._fused`), ``"numpy"`` as
+batched numpy calls; ``"auto"`` (default) takes numba when installed. Both are
+bit-identical to ``SyncVectorEnv`` (tested).
 
 ``infos`` follow the vector convention: ``infos[key]`` is an ``(N,)`` array and
 ``infos["_" + key]`` marks the sub-environments it applies to (entries outside the mask
-are unspecified, not necessarily 0 as under ``SyncVectorEnv``).
+are unspecified, not necessarily 0 as under ``SyncVectorEnv``); a reset reports
+``trajectory_index``. Observations, rewards, flags and infos are new arrays every step.
 """
 
 from __future__ import annotations
@@ -33,14 +52,19 @@ from motion_envs.envs._common import N_STEPS
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
-# Below this many sub-environments the orientation step runs the scalar kernel per
-# environment (numpy's per-call overhead dominates small batches).
-_SCALAR_BELOW = 8
-
 # observations, rewards, terminations, truncations, infos
 _StepResult = tuple[
     NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
 ]
+
+_MODES = {AutoresetMode.NEXT_STEP: 0, AutoresetMode.SAME_STEP: 1, AutoresetMode.DISABLED: 2}
+_NEXT, _SAME, _DISABLED = 0, 1, 2
+_IDX, _K, _ELAPSED, _AUTORESET, _PTR = 0, 1, 2, 3, 4  # columns of the integer state
+# Below this many sub-environments the numpy backend runs the orientation step as the
+# scalar kernel per environment (numpy's per-call overhead dominates small batches).
+_SCALAR_BELOW = 8
+_POOL_AT = 5  # first column of the trajectory pool in the integer state
+_POOL = 64  # trajectory draws per sub-environment taken from its generator at once
 
 
 def _check_num_envs(num_envs: int) -> int:
@@ -61,16 +85,44 @@ def _check_max_steps(max_episode_steps: int | None, n_steps: int) -> int:
     return int(max_episode_steps)
 
 
+def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
+    try:
+        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
+    except ValueError:
+        values = [m.value for m in AutoresetMode]
+        raise ValueError(
+            f"autoreset_mode must be a gymnasium.vector.AutoresetMode or one of {values}; "
+            f"got {mode!r}"
+        ) from None
+
+
 class _ReplayVectorEnv(gym.vector.VectorEnv):
-    """Shared episode bookkeeping of the native vector environments."""
+    """Shared episode bookkeeping of the native vector environments.
+
+    A subclass sets ``_KIND`` (the :mod:`~motion_envs.envs._fused` kind), ``_STEP_KEYS``
+    (the info keys of rows ``1 ..`` of the float outputs, ending with ``"tau"``),
+    ``_END_KEYS`` (the keys of the two rows after ``tau``, set at termination) and
+    implements :meth:`_physics_numpy`.
+    """
 
     metadata: ClassVar[dict[str, Any]] = {
         "render_modes": ["rgb_array"],
         "render_fps": 25,
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
+    _KIND: ClassVar[int]
+    _STEP_KEYS: ClassVar[tuple[str, ...]]
+    _END_KEYS: ClassVar[tuple[str, ...]]
 
-    def _setup(self, num_envs: int, max_episode_steps: int | None, single: Any) -> None:
+    def _setup(
+        self,
+        num_envs: int,
+        max_episode_steps: int | None,
+        single: Any,
+        autoreset_mode: AutoresetMode | str,
+        backend: str,
+        weights: tuple[float, ...],
+    ) -> None:
         """Set up ``num_envs`` copies of ``single`` (a ``_common.ReplayEnv``, already checked)."""
         task = single.task
         self.task = task
@@ -78,33 +130,78 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         self._n_traj = task.n_trajectories
         self.num_envs = _check_num_envs(num_envs)
         self._max_steps = _check_max_steps(max_episode_steps, self._n_steps)
+        self.autoreset_mode = _check_autoreset_mode(autoreset_mode)
+        self._mode = _MODES[self.autoreset_mode]
+        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        self.backend = K.resolve_vector_backend(backend)
         self.single = single  # validated arguments, spaces and rendering
         self.residual_scale = single.residual_scale
         self.reward_weights = single.reward_weights
+        self._weights = np.asarray(weights, dtype=np.float64)
         self.single_action_space = single.action_space
         self.single_observation_space = single.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.render_mode = single.render_mode
         N = self.num_envs
+        self._action_shape = (N, *self.single_action_space.shape)
         self._rngs: list[np.random.Generator | None] = [None] * N
-        self._index = np.zeros(N, dtype=np.int64)
-        self._k = np.zeros(N, dtype=np.int64)
-        self._elapsed = np.zeros(N, dtype=np.int64)
-        self._max_error = np.zeros(N)
-        self._autoreset = np.zeros(N, dtype=bool)
         self._started = False
         self._arange = np.arange(N)
         L, n, width = task.steps.shape
-        self._table = np.ascontiguousarray(task.steps.reshape(L * n, width).T)  # (width, L n)
-        self._obs_table = task.obs.reshape(L * (n + 1), task.obs_dim)
-        self._starts = single._starts
+        self._table = np.ascontiguousarray(task.steps.reshape(L * n, width).T)  # numpy path
+        self._obs_table = np.ascontiguousarray(task.obs)  # (L, n + 1, obs_dim)
+        self._obs_dim = task.obs_dim
+        self._starts = np.ascontiguousarray(single._starts, dtype=np.float64)
         self._cur = single._cur  # the observation's slice of the current state
-        dim = self._cur.stop - self._cur.start
-        self._current = np.zeros((N, dim))
+        self._cur_lo = self._cur.start
+        self._dim = dim = self._cur.stop - self._cur.start
+        # the compiled loop's table: the step rows, then a row with the start and parameters
+        params = (self.residual_scale, *weights)
+        self._steps = np.zeros((L, n + 1, max(width, dim + len(params))))
+        self._steps[:, :n, :width] = task.steps
+        self._steps[:, n, :dim] = self._starts
+        self._steps[:, n, dim : dim + len(params)] = params
+        self._si = np.zeros((N, _POOL_AT + _POOL), dtype=np.int64)
+        self._pool = self._si[:, _POOL_AT:]  # a view: the compiled loop reads the pool in si
+        self._sf = np.zeros((N, dim + 2))
+        self._final_obs = np.zeros((N, self._obs_dim), dtype=np.float32)
+        self._n_out = 3 + len(self._STEP_KEYS)
+        self._step_mask_keys = tuple("_" + key for key in self._STEP_KEYS)
         self._history: NDArray[np.float64] | None = (
-            np.zeros((N, n + 1, dim)) if self.render_mode is not None else None
+            np.zeros((N, n + 1, self._dim)) if self.render_mode is not None else None
         )
+        self._link_backend()
+
+    def _link_backend(self) -> None:
+        """The compiled step and its fixed leading arguments (numba backend), else None."""
+        self._run: Any = None
+        if self.backend == "numba":
+            from motion_envs.envs import _fused
+
+            self._run = _fused.batch_step
+            # the same array objects every step (state is updated in place)
+            self._run_args = (
+                self._KIND,
+                self._mode,
+                self._max_steps,
+                self._cur_lo,
+                self._steps,
+                self._obs_table,
+                self._si,
+                self._sf,
+                self._final_obs,
+            )
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_run"] = state["_run_args"] = None  # linked again on unpickling
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._pool = self._si[:, _POOL_AT:]  # pickling does not keep views
+        self._link_backend()
 
     # -- seeding and resets -------------------------------------------------------------
     def _seed_rngs(self, seed: int | Sequence[int | None] | None) -> None:
@@ -120,18 +217,35 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         for i, s in enumerate(seeds):
             if s is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(s)
+                self._refill(i)
 
-    def _draw(self, envs: NDArray[np.int64], trajectories: Any = None) -> None:
-        """Start new episodes in sub-environments ``envs`` (trajectory from each rng)."""
-        for j, i in enumerate(envs.tolist()):
-            if trajectories is not None:
-                self._index[i] = int(trajectories[j])
-            else:
-                self._index[i] = int(self._rngs[i].integers(self._n_traj))  # type: ignore[union-attr]
-        self._k[envs] = 0
-        self._elapsed[envs] = 0
-        self._max_error[envs] = 0.0
-        self._reset_state(envs)
+    def _refill(self, i: int) -> None:
+        """Draw the next :data:`_POOL` trajectories of sub-environment ``i``: the same
+        sequence as one ``integers(L)`` per reset (numpy's bounded integers take 32-bit
+        halves of the generator's 64-bit outputs in turn either way; tested)."""
+        self._pool[i] = self._rngs[i].integers(self._n_traj, size=_POOL)  # type: ignore[union-attr]
+        self._si[i, _PTR] = 0
+
+    def _refill_exhausted(self) -> None:
+        for i in np.flatnonzero(self._si[:, _PTR] >= _POOL).tolist():
+            self._refill(i)
+
+    def _reset_envs(self, envs: NDArray[np.int64], trajectories: Any = None) -> None:
+        """Start new episodes in sub-environments ``envs`` (next trajectory of each pool,
+        or ``trajectories``)."""
+        si, sf, dim = self._si, self._sf, self._dim
+        if trajectories is None:
+            idx = self._pool[envs, si[envs, _PTR]]
+            si[envs, _PTR] += 1
+            self._refill_exhausted()
+        else:
+            idx = np.asarray(trajectories, dtype=np.int64)
+        si[envs, _IDX] = idx
+        si[envs, _K] = 0
+        si[envs, _ELAPSED] = 0
+        si[envs, _AUTORESET] = 0
+        sf[envs, :dim] = self._starts[idx]
+        sf[envs, dim:] = 0.0
 
     def reset(
         self,
@@ -156,69 +270,157 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
             traj = np.broadcast_to(np.asarray(traj), (self.num_envs,))[envs]
             if traj.dtype.kind not in "iu" or np.any((traj < 0) | (traj >= self._n_traj)):
                 raise ValueError(f"options['trajectory'] must hold integers in [0, {self._n_traj})")
-        self._draw(envs, traj)
-        self._autoreset[envs] = False
+        self._reset_envs(envs, traj)
         self._started = True
-        obs = self._observe(self._arange, reset=np.isin(self._arange, envs))
-        return obs, self._reset_infos(envs)
+        obs = self._observe()
+        self._record_history()
+        reset = np.zeros(self.num_envs, dtype=bool)
+        reset[envs] = True
+        return obs, {
+            "trajectory_index": np.where(reset, self._si[:, _IDX], 0),
+            "_trajectory_index": reset,
+        }
 
-    def _reset_infos(self, envs: NDArray[np.int64]) -> dict[str, Any]:
-        mask = np.zeros(self.num_envs, dtype=bool)
-        mask[envs] = True
-        idx = np.where(mask, self._index, 0)
-        return {"trajectory_index": idx, "_trajectory_index": mask}
+    def _observe(self) -> NDArray[np.float32]:
+        si = self._si
+        obs = self._obs_table[si[:, _IDX], si[:, _K]]
+        obs[:, self._cur] = self._sf[:, : self._dim]
+        return obs
 
-    def _check_actions(
-        self, actions: Any, dim: int
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The clipped ``(N, dim)`` actions and the step table's columns of the grid points."""
+    def _record_history(self) -> None:
+        if self._history is not None:
+            # after a step, every sub-environment's current state is at its grid point k
+            # (0 right after a reset)
+            self._history[self._arange, self._si[:, _K]] = self._sf[:, : self._dim]
+
+    # -- stepping -----------------------------------------------------------------------
+    def step(self, actions: Any) -> _StepResult:
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != self._action_shape:
+            raise ValueError(f"actions must have shape {self._action_shape}; got {a.shape}")
         if not self._started:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != (self.num_envs, dim):
-            raise ValueError(f"actions must have shape ({self.num_envs}, {dim}); got {a.shape}")
-        if not np.isfinite(a).all():
-            raise ValueError("actions must be finite; got NaN or infinite entries")
-        n = self._n_steps
-        k = np.minimum(self._k, n - 1)
-        return np.clip(a, -1.0, 1.0), self._table[:, self._index * n + k]
-
-    def _finish_step(
-        self,
-        q: Sequence[NDArray[np.float64]],
-        err: NDArray[np.float64],
-        reward: NDArray[np.float64],
-        info: dict[str, Any],
-    ) -> _StepResult:
-        """Record the states ``q`` (components), advance the counters, handle episode ends
-        and autoresets, build the outputs."""
-        resetting = self._autoreset
-        active = ~resetting
-        qs = np.stack(q, axis=1)
-        self._current = np.where(active[:, None], qs, self._current)
+        N = self.num_envs
+        obs = np.empty((N, self._obs_dim), dtype=np.float32)
+        out_f = np.empty((self._n_out, N))
+        out_b = np.empty((4, N), dtype=bool)
+        run = self._run
+        if run is not None:
+            status, n_term, n_reset, n_exhausted = run(*self._run_args, a, obs, out_f, out_b)
+            if n_exhausted:
+                self._refill_exhausted()
+        else:
+            status, n_term, n_reset = self._step_numpy(a, obs, out_f, out_b)
+        if status:
+            self._raise_step_error(status, n_term, a)
         if self._history is not None:
-            rows_a = np.flatnonzero(active)
-            self._history[rows_a, self._k[rows_a] + 1] = qs[rows_a]
-        self._k += active
-        self._elapsed += active
-        np.maximum(self._max_error, np.where(active, err, 0.0), out=self._max_error)
-        terminated = active & (self._k == self._n_steps)
-        truncated = active & (self._elapsed >= self._max_steps)
-        reward = np.where(active, reward, 0.0)
-        for key in list(info):
-            info["_" + key] = active  # entries outside the mask are unspecified
-        info["tau"] = (self._k - 1) / (self._n_steps - 1)
-        info["_tau"] = active
-        if terminated.any():
-            self._end_infos(info, terminated)
-        reset_envs = np.flatnonzero(resetting)
-        if reset_envs.size:
-            self._draw(reset_envs)
-            for key, value in self._reset_infos(reset_envs).items():
-                info[key] = value
-        obs = self._observe(self._arange, reset=resetting)
-        self._autoreset = terminated | truncated
-        return obs, reward, terminated, truncated, info
+            self._record_history()
+        return obs, out_f[0], out_b[0], out_b[1], self._infos(out_f, out_b, n_term, n_reset)
+
+    def _raise_step_error(self, status: int, i: int, a: NDArray[np.float64]) -> None:
+        if status == 1:
+            raise ValueError(f"actions must be finite; got {a[i].tolist()} at index {i}")
+        raise RuntimeError(
+            f"sub-environment {i} has ended and autoreset_mode is DISABLED; call "
+            "reset(options={'reset_mask': mask}) for the ended sub-environments first"
+        )
+
+    def _infos(
+        self, out_f: NDArray[np.float64], out_b: NDArray[np.bool_], n_term: int, n_reset: int
+    ) -> dict[str, Any]:
+        """The vector infos of a step from the float and flag outputs (views, no copies)."""
+        keys, mask_keys, t = self._STEP_KEYS, self._step_mask_keys, len(self._STEP_KEYS)
+        info: dict[str, Any] = dict.fromkeys(mask_keys, out_b[2])
+        info.update(zip(keys, out_f[1 : t + 1], strict=True))
+        if not (n_term or n_reset):
+            return info
+        terminated, reset = out_b[0], out_b[3]
+        if self._mode == _SAME:
+            if n_reset:
+                final: dict[str, Any] = {}
+                for key, mask_key, row in zip(keys, mask_keys, out_f[1 : t + 1], strict=True):
+                    final[key] = row
+                    final[mask_key] = reset
+                if n_term:
+                    for r, key in enumerate(self._END_KEYS, start=t + 1):
+                        final[key] = out_f[r]
+                        final["_" + key] = terminated
+                final_obs = np.full(self.num_envs, None, dtype=object)
+                for i in np.flatnonzero(reset).tolist():
+                    final_obs[i] = self._final_obs[i].copy()
+                info["final_obs"] = final_obs
+                info["_final_obs"] = reset
+                info["final_info"] = final
+                info["_final_info"] = reset
+        elif n_term:
+            for r, key in enumerate(self._END_KEYS, start=t + 1):
+                info[key] = out_f[r]
+                info["_" + key] = terminated
+        if n_reset:
+            info["trajectory_index"] = np.where(reset, self._si[:, _IDX], 0)
+            info["_trajectory_index"] = reset
+        return info
+
+    def _step_numpy(
+        self,
+        a: NDArray[np.float64],
+        obs: NDArray[np.float32],
+        out_f: NDArray[np.float64],
+        out_b: NDArray[np.bool_],
+    ) -> tuple[int, int, int]:
+        """:func:`motion_envs.envs._fused.batch_step` in batched numpy (same results)."""
+        si, sf, dim, n = self._si, self._sf, self._dim, self._n_steps
+        autoreset = si[:, _AUTORESET] != 0
+        if self._mode == _DISABLED and autoreset.any():
+            return 2, int(np.flatnonzero(autoreset)[0]), 0
+        finite = np.isfinite(a).all(axis=1)
+        if not finite.all():
+            return 1, int(np.flatnonzero(~finite)[0]), 0
+        a = np.clip(a, -1.0, 1.0)
+        resetting = autoreset if self._mode == _NEXT else np.zeros(self.num_envs, dtype=bool)
+        active = ~resetting
+        k = si[:, _K].copy()
+        rows = self._table[:, si[:, _IDX] * n + np.minimum(k, n - 1)]
+        q, err = self._physics_numpy(a, rows, out_f, active)
+        sf[active, :dim] = q[active]
+        np.maximum(sf[:, dim], np.where(active, err, 0.0), out=sf[:, dim])
+        si[:, _K] += active
+        si[:, _ELAPSED] += active
+        terminated = active & (si[:, _K] == n)
+        truncated = active & (si[:, _ELAPSED] >= self._max_steps)
+        t = len(self._STEP_KEYS)
+        out_f[0] = np.where(active, out_f[0], 0.0)
+        out_f[t] = k / (n - 1)
+        out_f[t + 1] = sf[:, dim]
+        out_f[t + 2] = sf[:, dim + 1]
+        out_b[0] = terminated
+        out_b[1] = truncated
+        ended = terminated | truncated
+        if self._mode == _SAME:
+            obs[:] = self._observe()
+            self._final_obs[ended] = obs[ended]
+            reset = ended
+            out_b[2] = ~ended
+        else:
+            reset = resetting
+            out_b[2] = active
+            si[:, _AUTORESET] = ended
+        out_b[3] = reset
+        envs = np.flatnonzero(reset)
+        if envs.size:
+            self._reset_envs(envs)
+        obs[:] = self._observe()
+        return 0, int(np.count_nonzero(terminated)), int(envs.size)
+
+    def _physics_numpy(
+        self,
+        a: NDArray[np.float64],
+        rows: NDArray[np.float64],
+        out_f: NDArray[np.float64],
+        active: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """States ``(N, dim)`` and errors of one step; fills reward and info rows."""
+        raise NotImplementedError
 
     def close_extras(self, **kwargs: Any) -> None:
         self.single.close()
@@ -229,38 +431,35 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
             return None
         return tuple(self._render_env(i) for i in range(self.num_envs))
 
-    # -- per environment kind (overridden to add state) ---------------------------------
-    def _reset_state(self, envs: NDArray[np.int64]) -> None:
-        self._current[envs] = self._starts[self._index[envs]]
-        if self._history is not None:
-            self._history[envs, 0] = self._current[envs]
-
-    def _observe(self, envs: NDArray[np.int64], reset: NDArray[np.bool_]) -> NDArray[np.float32]:
-        obs = self._obs_table[self._index * (self._n_steps + 1) + self._k]
-        obs[:, self._cur] = self._current
-        return obs
-
-    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
-        info["max_error"] = np.where(ended, self._max_error, 0.0)
-        info["_max_error"] = ended
-
     def _render_env(self, i: int) -> NDArray[np.uint8]:
         single = self.single
-        single._index = int(self._index[i])
+        single._index = int(self._si[i, _IDX])
         assert self._history is not None
-        single._history = [tuple(q) for q in self._history[i, : self._k[i] + 1]]
+        single._history = [tuple(q) for q in self._history[i, : self._si[i, _K] + 1]]
         return single.render()  # type: ignore[return-value]
 
 
 class OrientationReachVectorEnv(_ReplayVectorEnv):
     """``num_envs`` copies of :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`.
 
-    Takes the single environment's keyword arguments plus ``num_envs`` and
-    ``max_episode_steps`` (default: the registration's 50). Observations, rewards,
-    terminations and truncations are bit-identical to ``SyncVectorEnv`` of single
-    environments with the same seeds; ``infos`` carry the same per-step terms and, at an
-    episode's end, ``max_error`` and ``max_geodesic_error``.
+    Takes the single environment's keyword arguments plus ``num_envs``,
+    ``max_episode_steps`` (default: the registration's 50), ``autoreset_mode`` (default
+    ``NEXT_STEP``) and ``backend`` (``"auto"``, ``"numba"``, ``"numpy"``). Observations,
+    rewards, terminations and truncations are bit-identical to ``SyncVectorEnv`` of single
+    environments with the same seeds and autoreset mode; ``infos`` carry the same
+    per-step terms and, at an episode's end, ``max_error`` and ``max_geodesic_error``.
     """
+
+    _KIND: ClassVar[int] = 0
+    _STEP_KEYS: ClassVar[tuple[str, ...]] = (
+        "error",
+        "geodesic_error",
+        "reward_residual",
+        "reward_geodesic",
+        "reward_action",
+        "tau",
+    )
+    _END_KEYS: ClassVar[tuple[str, ...]] = ("max_error", "max_geodesic_error")
 
     def __init__(
         self,
@@ -280,6 +479,8 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         height: int = 480,
         val_fraction: float = 0.0,
         observe_timing: bool = False,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        backend: str = "auto",
     ) -> None:
         from motion_envs.envs.orientation_reach import OrientationReachEnv
 
@@ -299,15 +500,17 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
             val_fraction=val_fraction,
             observe_timing=observe_timing,
         )
-        self._setup(num_envs, max_episode_steps, single)
-        self._max_geodesic = np.zeros(self.num_envs)
+        w = single.reward_weights
+        weights = (w["residual"], w["geodesic"], w["action"])
+        self._setup(num_envs, max_episode_steps, single, autoreset_mode, backend, weights)
 
-    def _reset_state(self, envs: NDArray[np.int64]) -> None:
-        super()._reset_state(envs)
-        self._max_geodesic[envs] = 0.0
-
-    def step(self, actions: Any) -> _StepResult:
-        a, rows = self._check_actions(actions, 3)
+    def _physics_numpy(
+        self,
+        a: NDArray[np.float64],
+        rows: NDArray[np.float64],
+        out_f: NDArray[np.float64],
+        active: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
         if self.num_envs < _SCALAR_BELOW:
             # few environments: the scalar kernel (same arithmetic, bit-identical) is faster
@@ -332,35 +535,31 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
                 az,
                 self.residual_scale,
             )
-        w = self.reward_weights
-        r_res = -w["residual"] * err
-        r_geo = -w["geodesic"] * geo
-        r_act = -w["action"] * (ax * ax + ay * ay + az * az)
-        reward = r_res + r_geo + r_act
-        active = ~self._autoreset
-        np.maximum(self._max_geodesic, np.where(active, geo, 0.0), out=self._max_geodesic)
-        info = {
-            "error": err,
-            "geodesic_error": geo,
-            "reward_residual": r_res,
-            "reward_geodesic": r_geo,
-            "reward_action": r_act,
-        }
-        return self._finish_step(q, err, reward, info)
-
-    def _end_infos(self, info: dict[str, Any], ended: NDArray[np.bool_]) -> None:
-        super()._end_infos(info, ended)
-        info["max_geodesic_error"] = np.where(ended, self._max_geodesic, 0.0)
-        info["_max_geodesic_error"] = ended
+        w = self._weights
+        r_res, r_geo, r_act, reward = K.orientation_reward(err, geo, ax, ay, az, *w.tolist())
+        out_f[0] = reward
+        out_f[1] = err
+        out_f[2] = geo
+        out_f[3] = r_res
+        out_f[4] = r_geo
+        out_f[5] = r_act
+        dim = self._dim
+        np.maximum(self._sf[:, dim + 1], np.where(active, geo, 0.0), out=self._sf[:, dim + 1])
+        return np.stack(q, axis=1), err
 
 
 class PositionReachVectorEnv(_ReplayVectorEnv):
     """``num_envs`` copies of :class:`~motion_envs.envs.position_reach.PositionReachEnv`.
 
-    Takes the single environment's keyword arguments plus ``num_envs`` and
-    ``max_episode_steps`` (default: the registration's 50); bit-identical to
-    ``SyncVectorEnv`` of single environments with the same seeds.
+    Takes the single environment's keyword arguments plus ``num_envs``,
+    ``max_episode_steps`` (default: the registration's 50), ``autoreset_mode`` and
+    ``backend`` (as :class:`OrientationReachVectorEnv`); bit-identical to
+    ``SyncVectorEnv`` of single environments with the same seeds and autoreset mode.
     """
+
+    _KIND: ClassVar[int] = 1
+    _STEP_KEYS: ClassVar[tuple[str, ...]] = ("error", "reward_distance", "reward_action", "tau")
+    _END_KEYS: ClassVar[tuple[str, ...]] = ("max_error",)
 
     def __init__(
         self,
@@ -380,6 +579,8 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         height: int = 480,
         val_fraction: float = 0.0,
         observe_timing: bool = False,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        backend: str = "auto",
     ) -> None:
         from motion_envs.envs.position_reach import PositionReachEnv
 
@@ -399,20 +600,27 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
             val_fraction=val_fraction,
             observe_timing=observe_timing,
         )
-        self._setup(num_envs, max_episode_steps, single)
-        self._D = self.task.n_dims
+        w = single.reward_weights
+        weights = (w["distance"], w["action"])
+        self._setup(num_envs, max_episode_steps, single, autoreset_mode, backend, weights)
 
-    def step(self, actions: Any) -> _StepResult:
-        D = self._D
-        a, rows = self._check_actions(actions, D)
+    def _physics_numpy(
+        self,
+        a: NDArray[np.float64],
+        rows: NDArray[np.float64],
+        out_f: NDArray[np.float64],
+        active: NDArray[np.bool_],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        D = self._dim
         cols = [a[:, i] for i in range(D)]
         q, err = K.position_step(K.BATCH, rows[:D], rows[D:], cols, self.residual_scale)
-        w = self.reward_weights
         sq = 0.0
         for c in cols:
             sq = sq + c * c
-        r_dist = -w["distance"] * err
-        r_act = -w["action"] * sq
-        reward = r_dist + r_act
-        info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
-        return self._finish_step(q, err, reward, info)
+        r_dist, r_act, reward = K.position_reward(err, sq, *self._weights.tolist())
+        out_f[0] = reward
+        out_f[1] = err
+        out_f[2] = r_dist
+        out_f[3] = r_act
+        self._sf[:, D + 1] = 0.0
+        return np.stack(q, axis=1), err
