@@ -44,7 +44,7 @@ import os
 import time
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -85,7 +85,6 @@ class SweepConfig:
     num_cpus: int | None = None
     resume: bool = False
     progress: bool = False
-    extra: Mapping[str, Any] = field(default_factory=dict)
 
 
 def _draw(value: Any, rng: np.random.Generator, where: str) -> Any:
