@@ -441,24 +441,29 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
+    import textwrap
+
     import matplotlib.pyplot as plt
 
     rows = results["configurations"]
-    fig, ax = plt.subplots(figsize=(max(5.0, 1.6 * len(rows) + 2), 4.2))
+    fig, ax = plt.subplots(figsize=(max(6.0, 2.2 * len(rows) + 1.5), 4.5))
     for i, r in enumerate(rows):
         ratios = np.asarray(r["test_criteria"]) / r["test_nominal_criterion"]
-        ax.bar(
-            i, r["test_ratio_median"], color="C1" if r["best_on_validation"] else "C0", alpha=0.5
-        )
-        ax.scatter(np.full(ratios.size, i), ratios, color="k", s=12, zorder=3)
+        color = "C1" if r["best_on_validation"] else "C0"
+        ax.bar(i, r["test_ratio_median"], color=color, alpha=0.5, width=0.6)
+        ax.scatter(np.full(ratios.size, i), ratios, color="k", s=14, zorder=3)
     ax.axhline(1.0, color="k", ls="--", lw=1, label="zero-action nominal")
     ax.set_xticks(range(len(rows)))
-    ax.set_xticklabels([r["label"] for r in rows], rotation=20, ha="right", fontsize=8)
-    ax.set_ylabel(f"{results['test_split']} criterion / nominal")
-    ax.set_title("sweep: median over seeds (bars), seeds (points); orange = best on validation")
-    lo = min(min(np.asarray(r["test_criteria"]) / r["test_nominal_criterion"]) for r in rows)
-    ax.set_ylim(min(0.8, lo - 0.02), None)
-    ax.legend(loc="upper right")
+    ax.set_xticklabels([textwrap.fill(r["label"], 24) for r in rows], fontsize=8)
+    ax.set_ylabel(f"{results['test_split']} criterion / nominal's")
+    ax.set_title("median over seeds (bar), each seed (dot); orange: best on validation", fontsize=9)
+    all_ratios = np.concatenate(
+        [np.asarray(r["test_criteria"]) / r["test_nominal_criterion"] for r in rows]
+    )
+    lo, hi = float(all_ratios.min()), float(all_ratios.max())
+    pad = max(0.02, 0.1 * (max(hi, 1.0) - min(lo, 1.0)))
+    ax.set_ylim(min(lo, 1.0) - pad, max(hi, 1.0) + pad)
+    ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
