@@ -79,6 +79,25 @@ def test_two_trial_sweep_equals_the_single_run_command(local_ray, tmp_path):
     assert row["test_criterion_min"] == min(single)
 
 
+def test_optuna_sweep_trains_each_proposal_on_every_seed(local_ray, tmp_path):
+    pytest.importorskip("optuna")
+    from baselines.agents.sweep import run as sweep_run
+
+    path = tmp_path / "optuna.yaml"
+    path.write_text(
+        TINY.read_text()
+        .replace("search: grid", "search: optuna\nnum_samples: 1")
+        .replace("n_epochs: [2]", "n_epochs: {randint: [1, 2]}")
+    )
+    sweep = load_sweep(path, out=str(tmp_path / "out"))
+    assert sweep.search == "optuna" and sweep.space["hyperparams.n_epochs"] == {"randint": [1, 2]}
+    results = sweep_run(sweep)
+    assert results["n_trials"] == 2  # one proposal x 2 seeds
+    (row,) = results["configurations"]
+    assert row["seeds"] == [0, 1] and row["overrides"]["n_epochs"] in (1, 2)
+    assert row["best_on_validation"]
+
+
 def test_best_configuration_is_chosen_on_validation_only():
     sweep = load_sweep(TINY, out="unused")
     sweep = type(sweep)(**{**sweep.__dict__, "configurations": sweep.configurations * 2})

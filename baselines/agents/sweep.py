@@ -4,9 +4,9 @@ A sweep file (``configs/sweeps/NAME.yaml``, plain YAML) names a search over algo
 environment ids, hyper-parameters and environment kwargs, and the seeds every
 configuration is trained with::
 
-    search: grid              # grid (every combination) or random (num_samples draws)
-    num_samples: 4            # random only
-    random_seed: 0            # random only: draws from numpy.random.default_rng(random_seed)
+    search: grid              # grid (every combination), random or optuna (num_samples)
+    num_samples: 4            # random, optuna: configurations to try
+    random_seed: 0            # random: numpy.random.default_rng(random_seed); optuna: TPE seed
     seeds: [0, 1, 2, 3, 4]
     timesteps: 100000         # optional overrides of the agent config
     n_envs: 8
@@ -20,7 +20,11 @@ configuration is trained with::
 Grid values are lists; a random search also takes ``{uniform: [lo, hi]}``,
 ``{loguniform: [lo, hi]}`` and ``{randint: [lo, hi]}`` (inclusive) and draws
 ``num_samples`` configurations up front, so every seed of a configuration trains the same
-hyper-parameters. Each (configuration, seed) is one Ray Tune trial that calls
+hyper-parameters. ``search: optuna`` takes the same space and lets Optuna's TPE sampler
+(Ray Tune's ``OptunaSearch``) propose ``num_samples`` configurations one after another,
+each trial training its configuration on every seed in turn and minimising the median
+validation criterion over seeds. Otherwise each (configuration, seed) is one Ray Tune
+trial that calls
 :func:`baselines.agents.train.run`, the code path of ``motion-bench train`` (runs in
 ``OUT/runs/``), reports the validation criterion after every evaluation with the run
 folder as its checkpoint, and at the end scores the best-on-validation policy on the test
@@ -67,6 +71,8 @@ _TOP_KEYS = {
     "description",
 }
 _SPACE_KEYS = {"algo", "env_id", "hyperparams", "env_kwargs"}
+#: Searches of a sweep file.
+SEARCHES: tuple[str, ...] = ("grid", "random", "optuna")
 
 
 @dataclass(frozen=True)
@@ -85,6 +91,10 @@ class SweepConfig:
     num_cpus: int | None = None
     resume: bool = False
     progress: bool = False
+    search: str = "grid"
+    num_samples: int = 1
+    random_seed: int = 0
+    space: Mapping[str, Any] | None = None  # optuna: the flat space, keys "hyperparams.lr"
 
 
 def _draw(value: Any, rng: np.random.Generator, where: str) -> Any:
@@ -132,8 +142,8 @@ def _flat_space(space: Mapping[str, Any], path: str) -> dict[tuple[str, ...], An
 def expand_configurations(doc: Mapping[str, Any], path: str = "sweep") -> list[dict[str, Any]]:
     """The configurations of a sweep document (grid: every combination; random: draws)."""
     search = doc.get("search", "grid")
-    if search not in ("grid", "random"):
-        raise ValueError(f"{path}: search must be 'grid' or 'random'; got {search!r}")
+    if search not in SEARCHES:
+        raise ValueError(f"{path}: search must be one of {list(SEARCHES)}; got {search!r}")
     flat = _flat_space(doc.get("space") or {}, path)
     points: list[dict[tuple[str, ...], Any]] = []
     if search == "grid":
@@ -145,35 +155,52 @@ def expand_configurations(doc: Mapping[str, Any], path: str = "sweep") -> list[d
     else:
         n = doc.get("num_samples")
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"{path}: num_samples must be an integer >= 1 for a random search")
+            raise ValueError(f"{path}: num_samples must be an integer >= 1 for a {search} search")
         rng = np.random.default_rng(int(doc.get("random_seed", 0)))
         for _ in range(n):
             points.append(
                 {k: _draw(v, rng, f"{path}: space.{'.'.join(k)}") for k, v in flat.items()}
             )
-    configs: list[dict[str, Any]] = []
-    for point in points:
-        algo, env_id = point[("algo",)], point[("env_id",)]
-        if algo not in ALGOS:
-            raise ValueError(f"{path}: space.algo {algo!r} is not one of {list(ALGOS)}")
-        overrides: dict[str, Any] = {}
-        env_kwargs: dict[str, Any] = {}
-        for key, value in point.items():
-            if key[0] == "hyperparams":
-                overrides[key[1]] = value
-            elif key[0] == "env_kwargs":
-                env_kwargs[key[1]] = value
-        if env_kwargs:
-            overrides["env_kwargs"] = env_kwargs
-        validate_hyperparams(algo, overrides, f"{path}: {algo} {env_id}")
-        label = " ".join(
-            [algo, str(env_id).split("/")[-1]]
-            + [f"{k[-1]}={v}" for k, v in point.items() if k[0] != "algo" and k[0] != "env_id"]
-        )
-        configs.append(
-            {"algo": algo, "env_id": str(env_id), "overrides": overrides, "label": label}
-        )
-    return configs
+    # optuna: the draws only validate the space; Optuna's sampler proposes the trials
+    return [configuration(point, path) for point in points]
+
+
+def configuration(point: Mapping[tuple[str, ...], Any], path: str = "sweep") -> dict[str, Any]:
+    """One configuration (``algo``, ``env_id``, ``overrides``, ``label``) from a point of
+    the flat space (keys ``("algo",)``, ``("env_id",)``, ``("hyperparams", name)``,
+    ``("env_kwargs", name)``), validated."""
+    algo, env_id = point[("algo",)], point[("env_id",)]
+    if algo not in ALGOS:
+        raise ValueError(f"{path}: space.algo {algo!r} is not one of {list(ALGOS)}")
+    overrides: dict[str, Any] = {}
+    env_kwargs: dict[str, Any] = {}
+    for key, value in point.items():
+        if key[0] == "hyperparams":
+            overrides[key[1]] = value
+        elif key[0] == "env_kwargs":
+            env_kwargs[key[1]] = value
+    if env_kwargs:
+        overrides["env_kwargs"] = env_kwargs
+    validate_hyperparams(algo, overrides, f"{path}: {algo} {env_id}")
+    label = " ".join(
+        [algo, str(env_id).split("/")[-1]]
+        + [f"{k[-1]}={v}" for k, v in point.items() if k[0] != "algo" and k[0] != "env_id"]
+    )
+    return {"algo": algo, "env_id": str(env_id), "overrides": overrides, "label": label}
+
+
+def _tune_domain(value: Any) -> Any:
+    """A Ray Tune domain of a (validated) random-search value, for Optuna's sampler."""
+    from ray import tune
+
+    if isinstance(value, list):
+        return tune.choice(value)
+    ((kind, (lo, hi)),) = value.items()
+    if kind == "uniform":
+        return tune.uniform(lo, hi)
+    if kind == "loguniform":
+        return tune.loguniform(lo, hi)
+    return tune.randint(int(lo), int(hi) + 1)
 
 
 def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
@@ -207,9 +234,18 @@ def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
     split = doc.get("test_split", "test")
     if split not in ("test", "val", "train"):
         raise ValueError(f"{p}: test_split must be 'test', 'val' or 'train'; got {split!r}")
+    search = doc.get("search", "grid")
+    space = None
+    if search == "optuna":
+        flat = _flat_space(doc["space"], str(p))
+        space = {".".join(k): v for k, v in flat.items()}
     return SweepConfig(
         path=str(p),
         configurations=tuple(configs),
+        search=search,
+        num_samples=int(doc.get("num_samples", 1)),
+        random_seed=int(doc.get("random_seed", 0)),
+        space=space,
         seeds=tuple(int(s) for s in seeds),
         test_split=split,
         timesteps=doc.get("timesteps"),
@@ -218,8 +254,11 @@ def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
     )
 
 
-def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
-    """One Ray Tune trial: ``train.run`` for one configuration and seed, then the test split."""
+def _train_and_score(
+    cfg: Mapping[str, Any], seed: int, run_dir: Path, sweep: SweepConfig, intermediate: bool
+) -> dict[str, Any]:
+    """``train.run`` for one configuration and seed (unless ``run_dir`` already holds a
+    finished run), then the test split; the trial's metrics."""
     from ray import tune
 
     import motion_envs  # noqa: F401  (registers the environments inside the worker)
@@ -230,26 +269,18 @@ def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
 
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
     t0 = time.perf_counter()
-    index, seed = int(params["config_index"]), int(params["seed"])
-    cfg = sweep.configurations[index]
-    run_dir = Path(sweep.out) / "runs" / f"config{index:03d}-seed{seed}"
-    if (run_dir / "run.json").exists():  # finished before an interruption: score it again
-        result = None
-    else:
+    resumed = (run_dir / "run.json").exists()  # finished before an interruption: rescore it
+    if not resumed:
         if run_dir.exists():  # an interrupted trial: start it over
             import shutil
 
             shutil.rmtree(run_dir)
 
         def report(ev: dict[str, Any]) -> None:
-            metrics = {
-                "timesteps": ev["timesteps"],
-                "val_criterion": ev["val_criterion"],
-                "best_val_criterion": ev["best_val_criterion"],
-            }
-            tune.report(metrics)
+            keys = ("timesteps", "val_criterion", "best_val_criterion")
+            tune.report({k: ev[k] for k in keys})
 
-        result = train(
+        train(
             TrainConfig(
                 algo=cfg["algo"],
                 env_id=cfg["env_id"],
@@ -261,26 +292,58 @@ def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
                 progress=False,
                 tensorboard=True,
             ),
-            on_evaluation=report,
+            on_evaluation=report if intermediate else None,
         )
     test = evaluate(AgentConfig(str(run_dir), sweep.test_split))
     manifest = json.loads((run_dir / "run.json").read_text())
+    return {
+        "seed": seed,
+        "timesteps": manifest["timesteps"],
+        "best_val_criterion": manifest["best_val_criterion"],
+        "val_nominal_criterion": manifest["val_nominal_criterion"],
+        "test_criterion": test["criterion"],
+        "test_nominal_criterion": test["nominal_criterion"],
+        "test_ratio": test["ratio"],
+        "train_seconds": manifest["train_seconds"],
+        "trial_seconds": time.perf_counter() - t0,
+        "run_dir": str(run_dir),
+        "resumed": resumed,
+    }
+
+
+def _trial(params: dict[str, Any], sweep: SweepConfig) -> None:
+    """One Ray Tune trial of a grid or random sweep: one configuration, one seed."""
+    from ray import tune
+
+    index, seed = int(params["config_index"]), int(params["seed"])
+    run_dir = Path(sweep.out) / "runs" / f"config{index:03d}-seed{seed}"
+    metrics = _train_and_score(sweep.configurations[index], seed, run_dir, sweep, True)
+    tune.report(
+        {"config_index": index, **metrics},
+        checkpoint=tune.Checkpoint.from_directory(str(run_dir)),
+    )
+
+
+def _optuna_trial(params: dict[str, Any], sweep: SweepConfig) -> None:
+    """One Ray Tune trial of an Optuna sweep: the proposed configuration on every seed
+    (in turn); the objective is the median over seeds of the validation criterion."""
+    from ray import tune
+
+    point = {tuple(k.split(".", 1)): v for k, v in params.items()}
+    cfg = configuration(point, sweep.path)
+    trial_id = tune.get_context().get_trial_id()
+    per_seed = [
+        _train_and_score(
+            cfg, seed, Path(sweep.out) / "runs" / f"{trial_id}-seed{seed}", sweep, False
+        )
+        for seed in sweep.seeds
+    ]
     tune.report(
         {
-            "config_index": index,
-            "seed": seed,
-            "timesteps": manifest["timesteps"],
-            "best_val_criterion": manifest["best_val_criterion"],
-            "val_nominal_criterion": manifest["val_nominal_criterion"],
-            "test_criterion": test["criterion"],
-            "test_nominal_criterion": test["nominal_criterion"],
-            "test_ratio": test["ratio"],
-            "train_seconds": manifest["train_seconds"],
-            "trial_seconds": time.perf_counter() - t0,
-            "run_dir": str(run_dir),
-            "resumed": result is None,
-        },
-        checkpoint=tune.Checkpoint.from_directory(str(run_dir)),
+            "val_criterion_median": float(np.median([m["best_val_criterion"] for m in per_seed])),
+            "configuration": json.dumps(cfg),
+            "per_seed": json.dumps(per_seed),
+        }
     )
 
 
@@ -345,10 +408,31 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         started_here = True
     t0 = time.perf_counter()
     try:
-        trainable = tune.with_resources(tune.with_parameters(_trial, sweep=sweep), {"cpu": 1})
+        optuna = sweep.search == "optuna"
+        fn = _optuna_trial if optuna else _trial
+        trainable = tune.with_resources(tune.with_parameters(fn, sweep=sweep), {"cpu": 1})
         name = "tune"
+        run_config = tune.RunConfig(
+            name=name, storage_path=str(out), verbose=1 if sweep.progress else 0
+        )
         if sweep.resume and tune.Tuner.can_restore(str(out / name)):
             tuner = tune.Tuner.restore(str(out / name), trainable, resume_errored=True)
+        elif optuna:
+            from ray.tune.search.optuna import OptunaSearch
+
+            assert sweep.space is not None
+            metric = "val_criterion_median"
+            tuner = tune.Tuner(
+                trainable,
+                param_space={k: _tune_domain(v) for k, v in sweep.space.items()},
+                tune_config=tune.TuneConfig(
+                    search_alg=OptunaSearch(metric=metric, mode="min", seed=sweep.random_seed),
+                    num_samples=sweep.num_samples,
+                    metric=metric,
+                    mode="min",
+                ),
+                run_config=run_config,
+            )
         else:
             tuner = tune.Tuner(
                 trainable,
@@ -357,9 +441,7 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
                     "seed": tune.grid_search(list(sweep.seeds)),
                 },
                 tune_config=tune.TuneConfig(metric="best_val_criterion", mode="min"),
-                run_config=tune.RunConfig(
-                    name=name, storage_path=str(out), verbose=1 if sweep.progress else 0
-                ),
+                run_config=run_config,
             )
         grid = tuner.fit()
     finally:
@@ -367,11 +449,19 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         if started_here:
             ray.shutdown()
     trials = []
+    # optuna: the configurations are the ones the sampler proposed, one per trial
+    configurations = [] if sweep.search == "optuna" else list(sweep.configurations)
     for result in grid:
         if result.error is not None:
             raise RuntimeError(f"a sweep trial failed: {result.error}")
         m = result.metrics
-        trials.append({k: m[k] for k in _TRIAL_KEYS})
+        if sweep.search == "optuna":  # one configuration per trial, every seed inside
+            configurations.append(json.loads(m["configuration"]))
+            for t in json.loads(m["per_seed"]):
+                trials.append({"config_index": len(configurations) - 1, **t})
+        else:
+            trials.append({k: m[k] for k in _TRIAL_KEYS})
+    sweep = SweepConfig(**{**sweep.__dict__, "configurations": tuple(configurations)})
     trials.sort(key=lambda t: (t["config_index"], t["seed"]))
     summary = summarize(trials, sweep)
     return {
