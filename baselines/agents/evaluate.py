@@ -75,7 +75,7 @@ def episode_max_errors(
     import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
 
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
-    probe = gym.make(env_id, split=split, **kwargs).unwrapped
+    probe: Any = gym.make(env_id, split=split, **kwargs).unwrapped
     n_traj = probe.task.n_trajectories
     n = n_traj if episodes is None else min(int(episodes), n_traj)
     if n < 1:
@@ -84,7 +84,7 @@ def episode_max_errors(
         env_id, num_envs=n, vectorization_mode="vector_entry_point", split=split, **kwargs
     )
     obs, _ = venv.reset(seed=0, options={"trajectory": np.arange(n)})
-    shape = (n, *venv.single_action_space.shape)
+    shape = (n, *(venv.single_action_space.shape or ()))
     maxima = np.full(n, np.nan)
     done = np.zeros(n, dtype=bool)
     while not done.all():

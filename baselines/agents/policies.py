@@ -62,7 +62,7 @@ def build_model(
             kwargs[key] = make_schedule(kwargs[key])
     kwargs["policy_kwargs"] = _policy_kwargs(algo, hp.get("policy_kwargs", {}))
     if algo == "td3":
-        dim = int(np.prod(env.action_space.shape))
+        dim = int(np.prod(env.action_space.shape or (1,)))
         sigma = float(hp.get("action_noise_sigma", 0.1))
         kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), sigma * np.ones(dim))
     model = cls(

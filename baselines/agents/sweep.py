@@ -451,10 +451,11 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     trials = []
     # optuna: the configurations are the ones the sampler proposed, one per trial
     configurations = [] if sweep.search == "optuna" else list(sweep.configurations)
-    for result in grid:
+    for i in range(len(grid)):
+        result = grid[i]
         if result.error is not None:
             raise RuntimeError(f"a sweep trial failed: {result.error}")
-        m = result.metrics
+        m: dict[str, Any] = result.metrics or {}
         if sweep.search == "optuna":  # one configuration per trial, every seed inside
             configurations.append(json.loads(m["configuration"]))
             for t in json.loads(m["per_seed"]):
