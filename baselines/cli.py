@@ -23,6 +23,9 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.position_bench",
     "baselines.juggling_bench",
     "baselines.calibrate_cohort",
+    "baselines.agents.train",
+    "baselines.agents.evaluate",
+    "baselines.agents.sweep",
 )
 
 

@@ -1,4 +1,7 @@
-"""MotionEnvs/OrientationReach-v0: contract, reliability and the zero-action invariant."""
+"""MotionEnvs/OrientationReach-v0 and -v1: contract, reliability, the zero-action invariant.
+
+Every test runs on both versions (the autouse fixture ``env_version`` sets ``ENV_ID``).
+"""
 
 from __future__ import annotations
 
@@ -18,11 +21,25 @@ import motion_envs
 from motion_envs.envs.orientation_reach import N_STEPS, OrientationReachEnv
 
 ENV_ID = "MotionEnvs/OrientationReach-v0"
+VERSIONS = ("v0", "v1")
+
+
+@pytest.fixture(autouse=True, params=VERSIONS)
+def env_version(request, monkeypatch):
+    """Run every test of this module on each registered version."""
+    monkeypatch.setitem(globals(), "ENV_ID", f"MotionEnvs/OrientationReach-{request.param}")
+    return request.param
+
 
 # Warnings the checkers may raise that say nothing about the environment's correctness:
 # SB3 recommends a symmetric, normalised observation space; ours has [0, 1] entries
 # (tau, one-hot) by design.
-ALLOWED_WARNINGS = (r".*(symmetric|normaliz|normalis).*observation.*",)
+# gym.make of a -v0 id notes that a newer version (-v1) is registered (Gymnasium's own
+# deprecation notice, as for every outdated version of its environments).
+ALLOWED_WARNINGS = (
+    r".*(symmetric|normaliz|normalis).*observation.*",
+    r".*is out of date\. You should consider upgrading to version.*",
+)
 
 
 def _fail_on_warnings(record: list[warnings.WarningMessage]) -> None:

@@ -1,4 +1,7 @@
-"""MotionEnvs/PositionReach-v0: contract, reliability and the zero-action invariant."""
+"""MotionEnvs/PositionReach-v0 and -v1: contract, reliability, the zero-action invariant.
+
+Every test runs on both versions (the autouse fixture ``env_version`` sets ``ENV_ID``).
+"""
 
 from __future__ import annotations
 
@@ -18,6 +21,14 @@ from motion_envs.envs.position_reach import PositionReachEnv
 
 ENV_ID = "MotionEnvs/PositionReach-v0"
 SHAPES = ["Angle", "CShape", "GShape"]
+VERSIONS = ("v0", "v1")
+
+
+@pytest.fixture(autouse=True, params=VERSIONS)
+def env_version(request, monkeypatch):
+    """Run every test of this module on each registered version."""
+    monkeypatch.setitem(globals(), "ENV_ID", f"MotionEnvs/PositionReach-{request.param}")
+    return request.param
 
 
 def make(**kwargs):
@@ -30,13 +41,14 @@ def actions() -> np.ndarray:
     return np.random.default_rng(5).uniform(-1, 1, size=(120, 2)).astype(np.float32)
 
 
-def test_registered_and_module_form():
+def test_registered_and_module_form(env_version):
     assert ENV_ID in motion_envs.ENV_IDS
     env = gym.make("motion_envs:" + ENV_ID, shapes=SHAPES)
     assert isinstance(env.unwrapped, PositionReachEnv)
     assert env.spec.max_episode_steps == N_STEPS
     assert env.action_space.shape == (2,)
-    assert env.observation_space.shape == (4 * 2 + 1 + 3,)
+    timing = 2 if env_version == "v1" else 0  # v1: duration and elapsed time
+    assert env.observation_space.shape == (4 * 2 + 1 + 3 + timing,)
 
 
 def test_gymnasium_and_sb3_check_env_without_warnings():

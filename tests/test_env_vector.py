@@ -18,6 +18,8 @@ VECTOR_CASES = [
     (ORIENTATION, {"split": "test", "reward_weights": {"geodesic": 0.5, "action": 0.1}}),
     (POSITION, {"shapes": SHAPES}),
     (POSITION, {"shapes": SHAPES, "split": "test", "reward_weights": {"action": 0.3}}),
+    ("MotionEnvs/OrientationReach-v1", {"split": "val", "val_fraction": 0.2}),
+    ("MotionEnvs/PositionReach-v1", {"shapes": SHAPES, "split": "val", "val_fraction": 0.2}),
 ]
 
 

@@ -10,6 +10,8 @@ id                              environment
 ==============================  ===================================================
 ``MotionEnvs/OrientationReach-v0``  :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`
 ``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
+``MotionEnvs/OrientationReach-v1``  the same, observing duration and elapsed time
+``MotionEnvs/PositionReach-v1``     the same, observing duration and elapsed time
 ``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
 ==============================  ===================================================
 
@@ -38,6 +40,19 @@ _SPECS: dict[str, dict[str, object]] = {
         "entry_point": "motion_envs.envs.position_reach:PositionReachEnv",
         "vector_entry_point": "motion_envs.envs.vector:PositionReachVectorEnv",
         "max_episode_steps": 50,
+    },
+    # v1: the observation also holds the movement's duration and the elapsed time
+    "MotionEnvs/OrientationReach-v1": {
+        "entry_point": "motion_envs.envs.orientation_reach:OrientationReachEnv",
+        "vector_entry_point": "motion_envs.envs.vector:OrientationReachVectorEnv",
+        "max_episode_steps": 50,
+        "kwargs": {"observe_timing": True},
+    },
+    "MotionEnvs/PositionReach-v1": {
+        "entry_point": "motion_envs.envs.position_reach:PositionReachEnv",
+        "vector_entry_point": "motion_envs.envs.vector:PositionReachVectorEnv",
+        "max_episode_steps": 50,
+        "kwargs": {"observe_timing": True},
     },
     "MotionEnvs/Juggling-v0": {
         "entry_point": "motion_envs.envs.juggling:JugglingEnv",

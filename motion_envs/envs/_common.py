@@ -27,6 +27,8 @@ __all__ = [
     "check_choice",
     "check_reward_weights",
     "check_scale",
+    "check_val_fraction",
+    "timing_bounds",
 ]
 
 #: Steps per episode: the 50 points of the normalised-time grid.
@@ -69,6 +71,28 @@ def check_scale(residual_scale: float) -> float:
     if not math.isfinite(residual_scale) or residual_scale <= 0:
         raise ValueError(f"residual_scale must be finite and > 0; got {residual_scale!r}")
     return float(residual_scale)
+
+
+def check_val_fraction(val_fraction: float, split: str) -> float:
+    """``val_fraction`` as a ``float`` in ``[0, 1)``; ``split="val"`` needs it ``> 0``.
+
+    The validation split holds out this share of the *training* subjects (orientation)
+    or demonstrations (position), so hyper-parameters and checkpoints can be chosen
+    without touching the test split.
+    """
+    if isinstance(val_fraction, bool) or not isinstance(val_fraction, (int, float, np.floating)):
+        raise ValueError(f"val_fraction must be a number in [0, 1); got {val_fraction!r}")
+    if not 0.0 <= float(val_fraction) < 1.0:
+        raise ValueError(f"val_fraction must be in [0, 1); got {val_fraction!r}")
+    if split == "val" and val_fraction == 0:
+        raise ValueError("split='val' needs val_fraction > 0 (the share of training data held out)")
+    return float(val_fraction)
+
+
+def timing_bounds(max_duration: float) -> tuple[float, float]:
+    """Bounds ``(0, high)`` of the v1 timing observations (duration, elapsed; seconds):
+    the dataset's longest movement, padded, so they hold on every split."""
+    return 0.0, float(np.float32(max_duration * 1.001 + 1e-6))
 
 
 class ReplayTask:

@@ -1,4 +1,4 @@
-"""``MotionEnvs/OrientationReach-v0``: act on top of an analytic orientation trajectory."""
+"""``MotionEnvs/OrientationReach-v0``/``-v1``: act on top of an analytic orientation trajectory."""
 
 # ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
 
@@ -16,7 +16,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS, ReplayEnv, ReplayTask, check_choice
+from motion_envs.envs._common import (
+    N_STEPS,
+    ReplayEnv,
+    ReplayTask,
+    check_choice,
+    check_val_fraction,
+    timing_bounds,
+)
 
 __all__ = [
     "DEFAULT_REWARD_WEIGHTS",
@@ -28,7 +35,7 @@ __all__ = [
 
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
-_SPLITS = ("train", "test")
+_SPLITS = ("train", "val", "test")
 
 # Observation layout
 _START, _GOAL, _CURRENT, _TAU, _NOMINAL, _TASK = 0, 4, 8, 12, 13, 17
@@ -57,6 +64,7 @@ class OrientationTask(ReplayTask):
     task_names: tuple[str, ...]
     criterion: float
     grids: Any  # motion_envs.models.nominal.OrientationGrids
+    max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
 
 
 def _build_task(
@@ -67,6 +75,8 @@ def _build_task(
     test_fraction: float,
     split_seed: int,
     min_deg: float,
+    val_fraction: float = 0.0,
+    observe_timing: bool = False,
 ) -> OrientationTask:
     from motion_envs.datasets import load_orientation_dataset
     from motion_envs.datasets.splits import split_by_subject
@@ -79,6 +89,10 @@ def _build_task(
     train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
     model = OrientationNominal(nominal, degree, N_STEPS).fit(train)
     part = train if split == "train" else test
+    if val_fraction > 0 and split != "test":  # validation subjects carved from training
+        fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
+        model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
+        part = fit if split == "train" else val
     g = model.grids(part)
     L, n = g.n_trajectories, N_STEPS
     steps = np.concatenate(
@@ -95,6 +109,12 @@ def _build_task(
     task_index = np.searchsorted(np.asarray(task_names), part.tasks)
     obs[np.arange(L), :, _TASK + task_index] = 1.0
     np.clip(obs, -1.0, 1.0, out=obs)
+    max_duration = float(max(t[-1] - t[0] for t in dataset.times))
+    if observe_timing:  # v1: the movement's duration T and the elapsed time tau T (s)
+        durations = np.array([t[-1] - t[0] for t in part.times])
+        elapsed = durations[:, None] * obs[:, :, _TAU].astype(np.float64)
+        timing = np.stack([np.broadcast_to(durations[:, None], elapsed.shape), elapsed], axis=2)
+        obs = np.concatenate([obs, timing.astype(np.float32)], axis=2)
     for arr in (steps, obs, *vars(g).values()):
         arr.flags.writeable = False  # shared by every environment built from the cache
     return OrientationTask(
@@ -110,6 +130,7 @@ def _build_task(
         task_names=task_names,
         criterion=g.criterion(),
         grids=g,
+        max_duration=max_duration,
     )
 
 
@@ -124,6 +145,8 @@ def load_orientation_task(
     test_fraction: float = 0.25,
     split_seed: int = 0,
     min_deg: float = 10.0,
+    val_fraction: float = 0.0,
+    observe_timing: bool = False,
 ) -> OrientationTask:
     """Build (or reuse) the precomputed episodes of a split; built-in data is cached."""
     from motion_envs.datasets import ORIENTATION_DATASETS
@@ -133,17 +156,22 @@ def load_orientation_task(
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
         raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+    val_fraction = check_val_fraction(val_fraction, split)
     args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
+    args += (val_fraction, bool(observe_timing))
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
     return _build_task(*args)
 
 
-def _observation_space(task: OrientationTask) -> gym.spaces.Box:
+def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.spaces.Box:
     low = np.full(task.obs_dim, -1.0, dtype=np.float32)
+    high = np.ones(task.obs_dim, dtype=np.float32)
     low[_TAU] = 0.0
     low[_TASK:] = 0.0
-    return gym.spaces.Box(low, np.ones(task.obs_dim, dtype=np.float32), dtype=np.float32)
+    if observe_timing:
+        low[-2:], high[-2:] = timing_bounds(task.max_duration)
+    return gym.spaces.Box(low, high, dtype=np.float32)
 
 
 class OrientationReachEnv(ReplayEnv):
@@ -190,6 +218,12 @@ class OrientationReachEnv(ReplayEnv):
     | 12      | ``tau`` of the grid point the next action sets (1 after the last) | 0   | 1   | normalised time  |
     | 13-16   | the nominal's orientation at that grid point ``n_k``          | -1  | 1   | unit quaternion  |
     | 17-...  | one-hot task over the dataset's sorted task names             | 0   | 1   | unitless         |
+    | -2 (v1) | the movement's duration ``T`` (a pre-movement condition)      | 0   | ``T_max`` | time (s)   |
+    | -1 (v1) | elapsed time ``tau T`` at that grid point                      | 0   | ``T_max`` | time (s)   |
+
+    ``-v1`` (``observe_timing=True``) appends the last two entries (29 values for
+    ``"vr-kitchen"``); ``T_max`` is the longest movement of the whole dataset (padded by
+    0.1 %), so the bounds do not depend on the split. Everything else is as in ``-v0``.
 
     The subject is not observed: a split by subject holds whole people out, so a
     subject encoding would be meaningless on the test split.
@@ -236,7 +270,7 @@ class OrientationReachEnv(ReplayEnv):
     | Parameter        | Type         | Default        | Description |
     |------------------|--------------|----------------|-------------|
     | `data`           | **str**      | `"vr-kitchen"` | built-in dataset name or a path to the users' orientation CSV |
-    | `split`          | **str**      | `"train"`      | `"train"` or `"test"`: the subjects of a split by subject |
+    | `split`          | **str**      | `"train"`      | `"train"`, `"val"` or `"test"`: the subjects of a split by subject |
     | `nominal`        | **str**      | `"slerp"`      | `"slerp"`, `"bezier-null"`, `"bezier-task"` or `"bezier-subject"` (unseen subjects fall back to the null model) |
     | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals |
     | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1 |
@@ -247,8 +281,12 @@ class OrientationReachEnv(ReplayEnv):
     | `render_mode`    | **str**      | `None`         | `None` or `"rgb_array"` |
     | `width`          | **int**      | `480`          | frame width in pixels |
     | `height`         | **int**      | `480`          | frame height in pixels |
+    | `val_fraction`   | **float**    | `0.0`          | share of the *training* subjects held out as `split="val"`; with it `"train"` holds the others and its nominal is fitted on them only (`"test"` is unchanged) |
+    | `observe_timing` | **bool**     | `False`        | append the duration and the elapsed time to the observation (`True` in `-v1`) |
 
     ## Version History
+    * v1: the observation also holds the movement's duration and the elapsed time
+      (``observe_timing=True``); the zero-action invariant and everything else as in v0.
     * v0: Initial version.
     """
 
@@ -268,15 +306,18 @@ class OrientationReachEnv(ReplayEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, DEFAULT_REWARD_WEIGHTS
         )
         self.task = load_orientation_task(
-            data, split, nominal, degree, test_fraction, split_seed, min_deg
-        )
+            data, split, nominal, degree, test_fraction, split_seed, min_deg,
+            val_fraction, observe_timing,
+        )  # fmt: skip
         self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
-        self.observation_space = _observation_space(self.task)
+        self.observation_space = _observation_space(self.task, bool(observe_timing))
         self._starts = self.task.grids.starts
         self._cur = slice(_CURRENT, _TAU)
         self._current: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)

@@ -1,4 +1,4 @@
-"""``MotionEnvs/PositionReach-v0``: act on top of an analytic position trajectory."""
+"""``MotionEnvs/PositionReach-v0``/``-v1``: act on top of an analytic position trajectory."""
 
 # ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
 
@@ -16,7 +16,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS, ReplayEnv, ReplayTask
+from motion_envs.envs._common import (
+    N_STEPS,
+    ReplayEnv,
+    ReplayTask,
+    check_val_fraction,
+    timing_bounds,
+)
 
 __all__ = [
     "DEFAULT_POSITION_REWARD_WEIGHTS",
@@ -94,15 +100,25 @@ def _build_task(
     test_fraction: float,
     split_seed: int,
     residual_scale: float,
+    val_fraction: float = 0.0,
+    observe_timing: bool = False,
 ) -> PositionTask:
     from motion_envs.datasets import load_position_dataset
+    from motion_envs.datasets.splits import split_by_replicate
     from motion_envs.models.nominal import position_grids
 
     dataset = load_position_dataset(data, shapes)
-    g = position_grids(dataset, split, nominal, n_sines, test_fraction, split_seed, N_STEPS)
+    full = dataset  # observation bounds and task names come from the whole dataset
+    all_durations = np.array([t[-1] - t[0] for t in dataset.times])
+    if val_fraction > 0 and split in ("train", "val"):  # validation carved from training
+        dataset, _ = split_by_replicate(dataset, test_fraction=test_fraction, seed=split_seed)
+        inner = "train" if split == "train" else "test"
+        g = position_grids(dataset, inner, nominal, n_sines, val_fraction, split_seed, N_STEPS)
+    else:
+        g = position_grids(dataset, split, nominal, n_sines, test_fraction, split_seed, N_STEPS)
     L, n, D = g.human.shape
     steps = np.concatenate([g.nominal, g.human], axis=2)
-    task_names = tuple(sorted(set(np.asarray(dataset.tasks).astype(str).tolist())))
+    task_names = tuple(sorted(set(np.asarray(full.tasks).astype(str).tolist())))
     starts, goals = g.human[:, 0], g.human[:, -1]
     # plot extents of this split (rendering only): every position an agent can reach is a
     # nominal + residual
@@ -111,7 +127,7 @@ def _build_task(
     pad = 1e-3 * max(1.0, abs(lo), abs(hi))
     low = np.full(D, lo - pad, dtype=np.float32)
     high = np.full(D, hi + pad, dtype=np.float32)
-    low64, high64 = _observation_bounds(dataset, D, len(task_names), residual_scale)
+    low64, high64 = _observation_bounds(full, D, len(task_names), residual_scale)
     obs_low, obs_high = low64.astype(np.float32), high64.astype(np.float32)
     obs = np.zeros((L, n + 1, obs_low.size), dtype=np.float32)
     obs[:, :, 0:D] = starts[:, None]
@@ -123,6 +139,14 @@ def _build_task(
     task_index = np.searchsorted(np.asarray(task_names), g.tasks)
     obs[np.arange(L), :, 4 * D + 1 + task_index] = 1.0
     np.clip(obs, obs_low, obs_high, out=obs)  # a diverged nominal (see the class docstring)
+    if observe_timing:  # v1: the movement's duration T and the elapsed time tau T (s)
+        durations = np.array([t[-1] - t[0] for t in dataset.times])[g.index]
+        elapsed = durations[:, None] * obs[:, :, 3 * D].astype(np.float64)
+        timing = np.stack([np.broadcast_to(durations[:, None], elapsed.shape), elapsed], axis=2)
+        obs = np.concatenate([obs, timing.astype(np.float32)], axis=2)
+        t_low, t_high = timing_bounds(float(all_durations.max()))
+        obs_low = np.concatenate([obs_low, np.full(2, t_low, dtype=np.float32)])
+        obs_high = np.concatenate([obs_high, np.full(2, t_high, dtype=np.float32)])
     for arr in (steps, obs, starts, *vars(g).values()):
         arr.flags.writeable = False  # shared by every environment built from the cache
     return PositionTask(
@@ -160,12 +184,16 @@ def load_position_task(
     test_fraction: float = 0.25,
     split_seed: int = 0,
     residual_scale: float = 5.0,
+    val_fraction: float = 0.0,
+    observe_timing: bool = False,
 ) -> PositionTask:
     """Build (or reuse) the precomputed episodes of a split; LASA is cached."""
     from motion_envs.models.nominal import POSITION_NOMINALS, POSITION_SPLITS, PositionNominal
 
-    if split not in POSITION_SPLITS:
-        raise ValueError(f"split must be one of {list(POSITION_SPLITS)}; got {split!r}")
+    splits = (*POSITION_SPLITS, "val")
+    if split not in splits:
+        raise ValueError(f"split must be one of {list(splits)}; got {split!r}")
+    val_fraction = check_val_fraction(val_fraction, split)
     PositionNominal(nominal, n_sines)  # validates nominal and n_sines
     assert nominal in POSITION_NOMINALS
     if shapes is not None:
@@ -173,6 +201,7 @@ def load_position_task(
             raise ValueError(f"shapes must be a list of shape names or None; got {shapes!r}")
         shapes = tuple(shapes)
     args = (data, shapes, split, nominal, n_sines, float(test_fraction), split_seed, residual_scale)
+    args += (val_fraction, bool(observe_timing))
     if isinstance(data, str) and data == "lasa":
         return _build_task_cached(*args)
     return _build_task(*args)
@@ -232,6 +261,11 @@ class PositionReachEnv(ReplayEnv):
     | 3D              | ``tau`` of the grid point the next action sets (1 after the last) | 0         | 1         | normalised time |
     | 3D+1 .. 4D      | the nominal's position at that grid point ``n_k``            | lo_d - m_d | hi_d + m_d | position        |
     | 4D+1 ..         | one-hot task (shape) over the sorted task names              | 0         | 1         | unitless        |
+    | -2 (v1)         | the movement's duration ``T`` (a pre-movement condition)     | 0         | ``T_max`` | time (s)        |
+    | -1 (v1)         | elapsed time ``tau T`` at that grid point                     | 0         | ``T_max`` | time (s)        |
+
+    ``-v1`` (``observe_timing=True``) appends the last two entries (41 values for LASA);
+    ``T_max`` is the longest demonstration of the data (padded by 0.1 %).
 
     ## Rewards
     The reward is ``-(w_distance |y_k - h_k| + w_action |a_k|^2)`` with ``h_k`` the
@@ -264,7 +298,7 @@ class PositionReachEnv(ReplayEnv):
     |------------------|--------------|-----------|-------------|
     | `data`           | **str**      | `"lasa"`  | `"lasa"` or a path to the users' position CSV |
     | `shapes`         | **list**     | `None`    | shapes (LASA) or tasks (CSV) to use; None: all |
-    | `split`          | **str**      | `"train"` | `"train"`, `"test"` (held-out demonstrations of each task, `split_by_replicate`) or `"loo"` (every demonstration, nominal fitted on the others) |
+    | `split`          | **str**      | `"train"` | `"train"`, `"val"`, `"test"` (held-out demonstrations of each task, `split_by_replicate`) or `"loo"` (every demonstration, nominal fitted on the others) |
     | `nominal`        | **str**      | `"sine"`  | `"line"`, `"null"` (line + mean residual) or `"sine"` (Lippi's regression) |
     | `n_sines`        | **int/str**  | `"auto"`  | number of sines of `"sine"`, or `"auto"` (leave-one-out CV, 0..15) |
     | `residual_scale` | **float**    | `5.0`     | offset of an action of 1, in the data's unit (mm for LASA) |
@@ -274,8 +308,12 @@ class PositionReachEnv(ReplayEnv):
     | `render_mode`    | **str**      | `None`    | `None` or `"rgb_array"` |
     | `width`          | **int**      | `480`     | frame width in pixels |
     | `height`         | **int**      | `480`     | frame height in pixels |
+    | `val_fraction`   | **float**    | `0.0`     | share of each task's *training* demonstrations held out as `split="val"`; with it `"train"` holds the others and the nominals are fitted on them only (`"test"`, `"loo"` unchanged) |
+    | `observe_timing` | **bool**     | `False`   | append the duration and the elapsed time to the observation (`True` in `-v1`) |
 
     ## Version History
+    * v1: the observation also holds the movement's duration and the elapsed time
+      (``observe_timing=True``); the zero-action invariant and everything else as in v0.
     * v0: Initial version.
     """
 
@@ -295,6 +333,8 @@ class PositionReachEnv(ReplayEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
     ) -> None:
         self._check_arguments(
             render_mode,
@@ -305,8 +345,9 @@ class PositionReachEnv(ReplayEnv):
             DEFAULT_POSITION_REWARD_WEIGHTS,
         )
         self.task = load_position_task(
-            data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale
-        )
+            data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale,
+            val_fraction, observe_timing,
+        )  # fmt: skip
         D = self.task.n_dims
         self._D = D
         self.action_space = gym.spaces.Box(-1.0, 1.0, (D,), dtype=np.float32)

@@ -480,6 +480,8 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         backend: str = "auto",
     ) -> None:
@@ -498,6 +500,8 @@ class OrientationReachVectorEnv(_ReplayVectorEnv):
             render_mode=render_mode,
             width=width,
             height=height,
+            val_fraction=val_fraction,
+            observe_timing=observe_timing,
         )
         w = single.reward_weights
         weights = (w["residual"], w["geodesic"], w["action"])
@@ -592,6 +596,8 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        val_fraction: float = 0.0,
+        observe_timing: bool = False,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         backend: str = "auto",
     ) -> None:
@@ -610,6 +616,8 @@ class PositionReachVectorEnv(_ReplayVectorEnv):
             render_mode=render_mode,
             width=width,
             height=height,
+            val_fraction=val_fraction,
+            observe_timing=observe_timing,
         )
         w = single.reward_weights
         weights = (w["distance"], w["action"])

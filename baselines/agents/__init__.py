@@ -1,0 +1,13 @@
+"""Agents on top of the analytic nominals: zoo-style configs, training, evaluation, sweeps.
+
+* :mod:`~baselines.agents.config`: hyper-parameters from ``configs/agents/ALGO.yaml``
+  (keyed by environment id plus ``default``; plain YAML only), validated;
+* :mod:`~baselines.agents.train`: ``motion-bench train`` (``run(TrainConfig)``);
+* :mod:`~baselines.agents.rundir`: the run folder (SB3 zip, normalisation statistics as
+  ``.npz``, resolved config, manifest with checksums) and loading it back;
+* :mod:`~baselines.agents.evaluate`: the papers' criterion of a policy on a split and
+  ``motion-bench agent`` (``run(AgentConfig)``);
+* :mod:`~baselines.agents.sweep`: ``motion-bench sweep`` on Ray Tune.
+
+Needs the ``rl`` extra (and ``sweep`` for sweeps); ``import baselines.agents`` is light.
+"""

@@ -1,0 +1,458 @@
+"""Agent hyper-parameters from zoo-style YAML files, validated (plain YAML values only).
+
+``configs/agents/ALGO.yaml`` maps environment ids (and ``default``) to blocks of
+hyper-parameters, as rl-baselines3-zoo does. An id's block overrides ``default`` key by key
+(mappings such as ``env_kwargs``, ``policy_kwargs`` and ``normalize`` are merged one level
+deep); ids without a block use ``default`` alone. Unlike the zoo, nothing is evaluated:
+a learning-rate schedule is ``{kind: linear, start: 3.0e-4, end: 0.0}`` (linear in the
+remaining progress, ``start`` at the beginning), an activation is a name (``tanh``,
+``relu``, ...), a network is ``net_arch: [64, 64]`` or ``{pi: [64], vf: [64]}``. Unknown
+keys, wrong types and strings that look like Python code raise ``ValueError`` naming the
+file, the line and the key.
+
+Keys of every algorithm: ``n_timesteps``, ``n_envs``, ``policy`` (``MlpPolicy``),
+``env_kwargs`` (keyword arguments of the environment, plain values; not ``split``),
+``normalize`` (``{obs: bool, reward: bool, clip_obs: float}``; VecNormalize),
+``policy_kwargs`` (``net_arch``, ``activation``, ``log_std_init`` (PPO, SAC),
+``ortho_init`` (PPO)), ``action_head_scale`` (the policy's action head is multiplied by
+this at the start, 0 = the policy starts at the nominal, as residual policy learning
+does), ``eval_freq`` (environment steps between validation evaluations),
+``eval_episodes`` (validation episodes, null = every validation trajectory),
+``torch_threads``, ``learning_rate``, ``gamma`` and the algorithm's own keys (see
+:data:`ALGO_KEYS`).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import re
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+__all__ = [
+    "ACTIVATIONS",
+    "ALGOS",
+    "ALGO_KEYS",
+    "COMMON_KEYS",
+    "DEFAULT_CONFIG_DIR",
+    "default_config_path",
+    "load_hyperparams",
+    "make_schedule",
+    "parse_env_kwargs",
+    "resolve_hyperparams",
+    "validate_hyperparams",
+]
+
+#: Algorithms ``motion-bench train`` knows.
+ALGOS: tuple[str, ...] = ("ppo", "sac", "td3")
+#: ``configs/agents`` of the repository.
+DEFAULT_CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "agents"
+#: Activation names and their ``torch.nn`` classes.
+ACTIVATIONS: tuple[str, ...] = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
+
+# A checker takes (value, where) and returns the cleaned value or raises ValueError.
+Checker = Callable[[Any, str], Any]
+
+_PYTHON = re.compile(r"(\(|\)|lambda|\bnn\.|\bth\.|torch\.|__|import|dict\(|\blin_)")
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that also reads ``1e-4`` (YAML 1.2 floats) as a float."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+        |\.[0-9_]+(?:[eE][-+][0-9]+)?
+        |[-+]?\.(?:inf|Inf|INF)
+        |\.(?:nan|NaN|NAN))$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def _fail(where: str, message: str) -> ValueError:
+    return ValueError(f"{where}: {message}")
+
+
+def _no_python(value: Any, where: str) -> None:
+    if isinstance(value, str) and _PYTHON.search(value):
+        raise _fail(
+            where,
+            f"{value!r} looks like Python code; write plain YAML values "
+            "(e.g. learning_rate: {kind: linear, start: 3.0e-4}, activation: relu)",
+        )
+
+
+def _int(lo: int = 0) -> Checker:
+    def check(v: Any, where: str) -> int:
+        _no_python(v, where)
+        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
+            raise _fail(where, f"must be an integer >= {lo}; got {v!r}")
+        return int(v)
+
+    return check
+
+
+def _float(lo: float = -math.inf, hi: float = math.inf) -> Checker:
+    def check(v: Any, where: str) -> float:
+        _no_python(v, where)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise _fail(where, f"must be a finite number; got {v!r}")
+        if not lo <= v <= hi:
+            raise _fail(where, f"must be in [{lo}, {hi}]; got {v!r}")
+        return float(v)
+
+    return check
+
+
+def _bool(v: Any, where: str) -> bool:
+    _no_python(v, where)
+    if not isinstance(v, bool):
+        raise _fail(where, f"must be true or false; got {v!r}")
+    return v
+
+
+def _optional(check: Checker) -> Checker:
+    return lambda v, where: None if v is None else check(v, where)
+
+
+def _choice(*choices: str) -> Checker:
+    def check(v: Any, where: str) -> str:
+        _no_python(v, where)
+        if v not in choices:
+            raise _fail(where, f"must be one of {list(choices)}; got {v!r}")
+        return str(v)
+
+    return check
+
+
+def _schedule_or(check_value: Checker) -> Checker:
+    """A number, or ``{kind: linear|constant, start: x, end: y}``."""
+
+    def check(v: Any, where: str) -> Any:
+        if not isinstance(v, Mapping):
+            return check_value(v, where)
+        extra = set(v) - {"kind", "start", "end"}
+        if extra:
+            raise _fail(where, f"unknown schedule keys {sorted(extra)}; expected kind, start, end")
+        kind = _choice("linear", "constant")(v.get("kind"), f"{where}.kind")
+        if "start" not in v:
+            raise _fail(where, "a schedule needs 'start'")
+        out: dict[str, Any] = {"kind": kind, "start": check_value(v["start"], f"{where}.start")}
+        if kind == "linear":
+            out["end"] = check_value(v.get("end", 0.0), f"{where}.end")
+        elif "end" in v:
+            raise _fail(where, "a constant schedule has no 'end'")
+        return out
+
+    return check
+
+
+def _net_arch(v: Any, where: str) -> Any:
+    def layers(x: Any, w: str) -> list[int]:
+        if not isinstance(x, list) or not all(
+            isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in x
+        ):
+            raise _fail(w, f"must be a list of positive layer sizes; got {x!r}")
+        return [int(n) for n in x]
+
+    _no_python(v, where)
+    if isinstance(v, Mapping):
+        extra = set(v) - {"pi", "vf", "qf"}
+        if extra:
+            raise _fail(where, f"unknown keys {sorted(extra)}; expected pi, vf (PPO) or pi, qf")
+        return {k: layers(x, f"{where}.{k}") for k, x in v.items()}
+    return layers(v, where)
+
+
+def _plain_mapping(v: Any, where: str) -> dict[str, Any]:
+    """A mapping of plain YAML values (numbers, strings, booleans, lists, mappings)."""
+    if not isinstance(v, Mapping):
+        raise _fail(where, f"must be a mapping; got {v!r}")
+
+    def walk(x: Any, w: str) -> Any:
+        if isinstance(x, Mapping):
+            return {str(k): walk(y, f"{w}.{k}") for k, y in x.items()}
+        if isinstance(x, list):
+            return [walk(y, f"{w}[{i}]") for i, y in enumerate(x)]
+        if x is None or isinstance(x, (bool, int, float)):
+            return x
+        if isinstance(x, str):
+            _no_python(x, w)
+            return x
+        raise _fail(w, f"must be a plain YAML value; got {type(x).__name__}")
+
+    return walk(v, where)
+
+
+def _env_kwargs(v: Any, where: str) -> dict[str, Any]:
+    out = _plain_mapping(v, where)
+    for key in ("split", "render_mode"):
+        if key in out:
+            raise _fail(
+                f"{where}.{key}", "is set by the command (train: 'train', validation: 'val')"
+            )
+    return out
+
+
+def _sub(schema: Mapping[str, Checker]) -> Checker:
+    def check(v: Any, where: str) -> dict[str, Any]:
+        _no_python(v, where)
+        if not isinstance(v, Mapping):
+            raise _fail(where, f"must be a mapping; got {v!r}")
+        extra = [k for k in v if k not in schema]
+        if extra:
+            raise _fail(f"{where}.{extra[0]}", f"unknown key; expected one of {sorted(schema)}")
+        return {k: schema[k](x, f"{where}.{k}") for k, x in v.items()}
+
+    return check
+
+
+_LR = _schedule_or(_float(0.0, 1.0))
+
+#: Keys every algorithm takes.
+COMMON_KEYS: dict[str, Checker] = {
+    "n_timesteps": _int(1),
+    "n_envs": _int(1),
+    "policy": _choice("MlpPolicy"),
+    "env_kwargs": _env_kwargs,
+    "normalize": _sub(
+        {"obs": _bool, "reward": _bool, "clip_obs": _float(0.0), "gamma": _float(0, 1)}
+    ),
+    "action_head_scale": _float(0.0, 1.0),
+    "eval_freq": _int(1),
+    "eval_episodes": _optional(_int(1)),
+    "torch_threads": _int(1),
+    "learning_rate": _LR,
+    "gamma": _float(0.0, 1.0),
+    "batch_size": _int(1),
+}
+
+_OFF_POLICY: dict[str, Checker] = {
+    "buffer_size": _int(1),
+    "learning_starts": _int(0),
+    "tau": _float(0.0, 1.0),
+    "train_freq": _int(1),
+    "gradient_steps": _int(-1),
+}
+
+#: Keys of each algorithm (beyond :data:`COMMON_KEYS`).
+ALGO_KEYS: dict[str, dict[str, Checker]] = {
+    "ppo": {
+        "n_steps": _int(2),
+        "n_epochs": _int(1),
+        "gae_lambda": _float(0.0, 1.0),
+        "clip_range": _schedule_or(_float(0.0)),
+        "ent_coef": _float(0.0),
+        "vf_coef": _float(0.0),
+        "max_grad_norm": _float(0.0),
+        "target_kl": _optional(_float(0.0)),
+        "normalize_advantage": _bool,
+        "policy_kwargs": _sub(
+            {
+                "net_arch": _net_arch,
+                "activation": _choice(*ACTIVATIONS),
+                "log_std_init": _float(-20.0, 2.0),
+                "ortho_init": _bool,
+            }
+        ),
+    },
+    "sac": {
+        **_OFF_POLICY,
+        "ent_coef": lambda v, w: v if v == "auto" else _float(0.0)(v, w),
+        "target_entropy": lambda v, w: v if v == "auto" else _float()(v, w),
+        "policy_kwargs": _sub(
+            {
+                "net_arch": _net_arch,
+                "activation": _choice(*ACTIVATIONS),
+                "log_std_init": _float(-20.0, 2.0),
+            }
+        ),
+    },
+    "td3": {
+        **_OFF_POLICY,
+        "policy_delay": _int(1),
+        "target_policy_noise": _float(0.0),
+        "target_noise_clip": _float(0.0),
+        "action_noise_sigma": _float(0.0),
+        "policy_kwargs": _sub({"net_arch": _net_arch, "activation": _choice(*ACTIVATIONS)}),
+    },
+}
+
+#: Keys the training command consumes itself (not passed to the SB3 constructor).
+COMMAND_KEYS: tuple[str, ...] = (
+    "n_timesteps",
+    "n_envs",
+    "policy",
+    "env_kwargs",
+    "normalize",
+    "action_head_scale",
+    "eval_freq",
+    "eval_episodes",
+    "torch_threads",
+    "action_noise_sigma",
+)
+
+#: Values of the command keys when no block sets them.
+COMMAND_DEFAULTS: dict[str, Any] = {
+    "n_timesteps": 100_000,
+    "n_envs": 8,
+    "policy": "MlpPolicy",
+    "env_kwargs": {},
+    "normalize": {},
+    "action_head_scale": 0.0,
+    "eval_freq": 10_000,
+    "eval_episodes": None,
+    "torch_threads": 1,
+}
+
+
+def default_config_path(algo: str) -> Path:
+    """``configs/agents/ALGO.yaml``."""
+    return DEFAULT_CONFIG_DIR / f"{algo}.yaml"
+
+
+def _key_lines(node: yaml.Node, prefix: tuple[str, ...] = ()) -> dict[tuple[str, ...], int]:
+    """1-based line of every mapping key of a composed YAML document, by key path."""
+    lines: dict[tuple[str, ...], int] = {}
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            path = (*prefix, str(key.value))
+            lines[path] = key.start_mark.line + 1
+            lines.update(_key_lines(value, path))
+    return lines
+
+
+def validate_hyperparams(algo: str, block: Any, where: str = "config") -> dict[str, Any]:
+    """Check one block of hyper-parameters of ``algo``; the cleaned dict.
+
+    ``where`` prefixes the errors (``"FILE, line N: KEY: ..."`` when called by
+    :func:`load_hyperparams`).
+    """
+    if algo not in ALGOS:
+        raise ValueError(f"algo must be one of {list(ALGOS)}; got {algo!r}")
+    if block is None:
+        return {}
+    if not isinstance(block, Mapping):
+        raise _fail(where, f"must be a mapping of hyper-parameters; got {block!r}")
+    schema = {**COMMON_KEYS, **ALGO_KEYS[algo]}
+    out: dict[str, Any] = {}
+    for key, value in block.items():
+        if key not in schema:
+            raise _fail(
+                f"{where}: {key}", f"unknown key for {algo}; expected one of {sorted(schema)}"
+            )
+        out[str(key)] = schema[key](value, f"{where}: {key}")
+    return out
+
+
+def _merge(base: Mapping[str, Any], over: Mapping[str, Any]) -> dict[str, Any]:
+    out = copy.deepcopy(dict(base))
+    for key, value in over.items():
+        if isinstance(value, Mapping) and isinstance(out.get(key), Mapping):
+            out[key] = {**out[key], **copy.deepcopy(dict(value))}
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def load_hyperparams(path: str | Path, algo: str, env_id: str) -> dict[str, Any]:
+    """The validated ``default`` block of ``path`` merged with ``env_id``'s block.
+
+    Errors name the file and the line of the offending key.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"config file {path} does not exist")
+    text = path.read_text(encoding="utf-8")
+    try:
+        node = yaml.compose(text, Loader=_Loader)
+        doc = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML: {exc}".replace("\n", " ")) from None
+    if doc is None:
+        doc = {}
+    if not isinstance(doc, Mapping):
+        raise ValueError(f"{path}: must map environment ids (and 'default') to hyper-parameters")
+    lines = _key_lines(node) if node is not None else {}
+    blocks: dict[str, dict[str, Any]] = {}
+    for name, block in doc.items():
+        name = str(name)
+        if name != "default" and not re.fullmatch(r"[\w.:/-]+-v\d+", name):
+            raise ValueError(
+                f"{path}, line {lines.get((name,), '?')}: top-level key {name!r} is neither "
+                "'default' nor an environment id (NAMESPACE/Name-vN)"
+            )
+        try:
+            blocks[name] = validate_hyperparams(algo, block, name)
+        except ValueError as exc:
+            key = str(exc).split(":")[1].strip() if ":" in str(exc) else ""
+            line = lines.get((name, key), lines.get((name,), "?"))
+            raise ValueError(f"{path}, line {line}: {exc}") from None
+    return _merge(blocks.get("default", {}), blocks.get(env_id, {}))
+
+
+def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
+    """``["k=v", ...]`` from the command line; values read as plain YAML scalars/lists.
+
+    ``nominal=bezier-null`` gives a string, ``val_fraction=0.2`` a float,
+    ``shapes=[Angle, GShape]`` a list; ``nominal=null`` the string ``"null"``.
+    """
+    out: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, raw = item.partition("=")
+        if not sep or not key.isidentifier():
+            raise ValueError(f"--env-kwargs: expected KEY=VALUE; got {item!r}")
+        try:
+            value = yaml.load(raw, Loader=_Loader)
+        except yaml.YAMLError:
+            raise ValueError(f"--env-kwargs: cannot read the value of {item!r}") from None
+        out[key] = raw if value is None and raw else value  # nominal=null is the null model
+    return _env_kwargs(out, "--env-kwargs")
+
+
+def resolve_hyperparams(
+    algo: str,
+    env_id: str,
+    config_path: str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The complete hyper-parameters of a run: command defaults, the file's ``default``
+    and ``env_id`` blocks, then ``overrides`` (validated, ``env_kwargs`` merged)."""
+    path = default_config_path(algo) if config_path is None else Path(config_path)
+    hp = _merge(COMMAND_DEFAULTS, load_hyperparams(path, algo, env_id))
+    if overrides:
+        hp = _merge(hp, validate_hyperparams(algo, dict(overrides), "overrides"))
+    return hp
+
+
+def make_schedule(value: Any) -> float | Callable[[float], float]:
+    """A number, or SB3's schedule ``f(progress_remaining)`` of a validated schedule.
+
+    ``linear``: ``end + progress_remaining (start - end)`` (``start`` when training starts).
+    """
+    if not isinstance(value, Mapping):
+        return float(value)
+    start = float(value["start"])
+    if value["kind"] == "constant":
+        return start
+    end = float(value["end"])
+    return _Linear(start, end)
+
+
+class _Linear:
+    """``end + p (start - end)`` for the remaining progress ``p`` (a picklable callable)."""
+
+    def __init__(self, start: float, end: float) -> None:
+        self.start, self.end = start, end
+
+    def __call__(self, progress_remaining: float) -> float:
+        return self.end + progress_remaining * (self.start - self.end)

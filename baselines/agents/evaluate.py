@@ -1,0 +1,231 @@
+"""The papers' criterion of a policy on a split, and ``motion-bench agent``.
+
+:func:`episode_max_errors` plays one episode per trajectory of a split (trajectories
+``0 .. episodes-1``, all by default) on the native vector environment, all at once, with
+a deterministic policy, and returns ``info["max_error"]`` of each: the per-trajectory
+maximum over time of the error. The criterion is their median (Faraway & Choe's
+"median over trajectories of the max over time"). The validation callback of
+``motion-bench train`` and ``motion-bench agent`` both call it, so their numbers agree.
+
+``motion-bench agent DIR [--split test] [--episodes N] [--out DIR]`` scores the saved
+agent and the zero action (the analytic nominal) on the same episodes and writes
+``results.json`` (``criterion``, ``nominal_criterion``, their ratio, the per-episode
+values), ``results.csv`` (one row per episode) and ``agent_vs_nominal.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "AgentConfig",
+    "EpisodeErrors",
+    "episode_max_errors",
+    "register",
+    "run",
+]
+
+Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
+
+
+@dataclass(frozen=True)
+class EpisodeErrors:
+    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks."""
+
+    max_errors: NDArray[np.float64]
+    trajectory_ids: NDArray[np.str_]
+    tasks: NDArray[np.str_]
+
+    @property
+    def criterion(self) -> float:
+        """Median over episodes of the per-episode max error."""
+        return float(np.median(self.max_errors))
+
+    @property
+    def median_of_task_medians(self) -> float:
+        """Median over tasks of the median over the task's episodes (motion-bench position)."""
+        return float(
+            np.median([np.median(self.max_errors[self.tasks == t]) for t in np.unique(self.tasks)])
+        )
+
+
+def episode_max_errors(
+    policy: Policy | None,
+    env_id: str,
+    env_kwargs: Mapping[str, Any],
+    split: str,
+    episodes: int | None = None,
+) -> EpisodeErrors:
+    """``info["max_error"]`` of one deterministic episode per trajectory of ``split``.
+
+    ``policy`` maps a batch of raw observations ``(N, obs_dim)`` to actions; None is the
+    zero action (the nominal). ``episodes`` takes the first trajectories only.
+    """
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
+
+    kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
+    probe: Any = gym.make(env_id, split=split, **kwargs).unwrapped
+    n_traj = probe.task.n_trajectories
+    n = n_traj if episodes is None else min(int(episodes), n_traj)
+    if n < 1:
+        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
+    venv = gym.make_vec(
+        env_id, num_envs=n, vectorization_mode="vector_entry_point", split=split, **kwargs
+    )
+    obs, _ = venv.reset(seed=0, options={"trajectory": np.arange(n)})
+    shape = (n, *(venv.single_action_space.shape or ()))
+    maxima = np.full(n, np.nan)
+    done = np.zeros(n, dtype=bool)
+    while not done.all():
+        actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
+        obs, _, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.float32))
+        ended = (np.asarray(terminated) | np.asarray(truncated)) & ~done
+        if "max_error" in info:
+            got = ended & info["_max_error"]
+            maxima[got] = info["max_error"][got]
+        done |= ended
+    venv.close()
+    if np.isnan(maxima).any():
+        raise RuntimeError(f"{env_id}: some episodes ended without info['max_error']")
+    return EpisodeErrors(
+        maxima,
+        np.asarray(probe.task.trajectory_ids[:n]).astype(str),
+        np.asarray(probe.task.tasks[:n]).astype(str),
+    )
+
+
+# -- motion-bench agent ------------------------------------------------------------------
+@dataclass(frozen=True)
+class AgentConfig:
+    """What ``motion-bench agent`` evaluates."""
+
+    run_dir: str
+    split: str = "test"
+    episodes: int | None = None
+    which: str = "best"
+
+
+def run(config: AgentConfig) -> dict[str, Any]:
+    """Score the saved agent and the zero-action nominal on the same episodes."""
+    from baselines.agents.rundir import load_run
+
+    if config.split not in ("train", "val", "test"):
+        raise ValueError(f"split must be 'train', 'val' or 'test'; got {config.split!r}")
+    loaded = load_run(config.run_dir, config.which)
+    kwargs = loaded.env_kwargs
+    agent = episode_max_errors(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
+    nominal = episode_max_errors(None, loaded.env_id, kwargs, config.split, config.episodes)
+    results: dict[str, Any] = {
+        "run_dir": str(config.run_dir),
+        "algo": loaded.config["algo"],
+        "env_id": loaded.env_id,
+        "env_kwargs": kwargs,
+        "seed": loaded.config["seed"],
+        "split": config.split,
+        "checkpoint": config.which,
+        "n_episodes": int(agent.max_errors.size),
+        "criterion": agent.criterion,
+        "nominal_criterion": nominal.criterion,
+        "ratio": agent.criterion / nominal.criterion,
+        "median_of_task_medians": agent.median_of_task_medians,
+        "nominal_median_of_task_medians": nominal.median_of_task_medians,
+        "best_val_criterion": loaded.manifest.get("best_val_criterion"),
+        "episodes": {
+            "trajectory_id": agent.trajectory_ids.tolist(),
+            "task": agent.tasks.tolist(),
+            "agent_max_error": agent.max_errors.tolist(),
+            "nominal_max_error": nominal.max_errors.tolist(),
+        },
+    }
+    return results
+
+
+def write_results(results: Mapping[str, Any], out: Path) -> None:
+    """results.json, results.csv and agent_vs_nominal.png in ``out``."""
+    import pandas as pd
+
+    from baselines.agents.rundir import write_json
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "results.json", dict(results))
+    table = pd.DataFrame(results["episodes"])
+    tmp = out / ".results.csv.tmp"
+    table.to_csv(tmp, index=False, float_format="%.17g")
+    os.replace(tmp, out / "results.csv")
+    plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
+
+
+def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
+    """Per-episode max error, agent against nominal (one point per episode) and sorted."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ep = results["episodes"]
+    a = np.asarray(ep["agent_max_error"])
+    n = np.asarray(ep["nominal_max_error"])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    hi = float(max(a.max(), n.max())) * 1.05
+    ax1.scatter(n, a, s=14, alpha=0.8)
+    ax1.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
+    ax1.set_xlim(0, hi)
+    ax1.set_ylim(0, hi)
+    ax1.set_xlabel("nominal (zero action): max error")
+    ax1.set_ylabel(f"agent ({results['algo']}): max error")
+    ax1.set_title(f"{results['env_id']}, {results['split']} split, per episode")
+    ax1.legend(loc="upper left")
+    order = np.argsort(n)
+    ax2.plot(n[order], "o-", ms=3, label=f"nominal (median {results['nominal_criterion']:.4g})")
+    ax2.plot(a[order], "o-", ms=3, label=f"agent (median {results['criterion']:.4g})")
+    ax2.set_xlabel("episode (sorted by the nominal's error)")
+    ax2.set_ylabel("max error over the episode")
+    ax2.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _cli(args: argparse.Namespace) -> int:
+    # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
+    warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
+    if args.episodes is not None and args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1; got {args.episodes}")
+    config = AgentConfig(str(args.run_dir), args.split, args.episodes, args.checkpoint)
+    results = run(config)
+    out = Path(args.out) if args.out else Path(args.run_dir) / f"eval-{args.split}"
+    write_results(results, out)
+    print(
+        f"{results['env_id']} {results['algo']} ({results['split']}, {results['n_episodes']} "
+        f"episodes): agent {results['criterion']:.6g}, nominal {results['nominal_criterion']:.6g}, "
+        f"ratio {results['ratio']:.4f}"
+    )
+    print(f"wrote {out / 'results.json'}, results.csv, agent_vs_nominal.png")
+    return 0
+
+
+def register(subparsers: Any) -> None:
+    """Add ``motion-bench agent``."""
+    p = subparsers.add_parser(
+        "agent",
+        help="evaluate a saved agent against the zero-action nominal (papers' criterion)",
+        description=__doc__.split("\n\n")[0],
+    )
+    p.add_argument("run_dir", metavar="DIR", help="run folder written by motion-bench train")
+    p.add_argument("--split", default="test", choices=("train", "val", "test"))
+    p.add_argument("--episodes", type=int, default=None, help="first N trajectories (default all)")
+    p.add_argument("--checkpoint", default="best", choices=("best", "final"),
+                   help="best on validation (agent.zip) or the final policy")  # fmt: skip
+    p.add_argument("--out", default=None, help="output folder (default DIR/eval-SPLIT)")
+    p.set_defaults(func=_cli)

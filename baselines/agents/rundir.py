@@ -1,0 +1,260 @@
+"""The run folder of ``motion-bench train`` and loading it back, checked.
+
+A run folder holds
+
+* ``agent.zip``: the policy chosen on the validation split (SB3's own format);
+  ``final_agent.zip``: the policy at the end of training;
+* ``normalization.npz`` / ``final_normalization.npz``: VecNormalize's running statistics
+  of the observations and returns at that checkpoint (plain arrays, read with
+  ``allow_pickle=False``), absent without normalisation;
+* ``config.json``: the resolved hyper-parameters, algorithm, environment id and kwargs;
+* ``run.json``: the manifest: format, motion-envs and SB3 versions, the command, the seed,
+  the validation results and the SHA-256 of every file above;
+* ``evaluations.csv`` and ``tb/`` (TensorBoard).
+
+:func:`load_run` rebuilds the model from ``config.json`` and loads only the network
+weights from the zip (:meth:`~stable_baselines3.common.base_class.BaseAlgorithm.set_parameters`,
+``torch.load(weights_only=True)``), so nothing is unpickled; a modified file, a missing
+file or a run written by another motion-envs version raises ``ValueError`` naming the
+folder and the file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "FORMAT",
+    "LoadedRun",
+    "ObsNormalizer",
+    "file_sha256",
+    "load_run",
+    "write_json",
+    "write_manifest",
+]
+
+#: ``run.json["format"]`` of the folders this module writes.
+FORMAT = "motion-envs-agent/1"
+
+
+def write_json(path: Path, obj: Any) -> None:
+    """Write ``obj`` as indented JSON atomically (temporary file, then rename)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    with os.fdopen(fd, "w", encoding="utf-8") as f:
+        json.dump(obj, f, indent=2, sort_keys=False)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
+def file_sha256(path: Path) -> str:
+    """Hex SHA-256 of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+@dataclass(frozen=True)
+class ObsNormalizer:
+    """VecNormalize's observation transform at one checkpoint:
+    ``clip((obs - mean) / sqrt(var + epsilon), -clip_obs, clip_obs)``; identity when
+    ``mean`` is None."""
+
+    mean: NDArray[np.float64] | None = None
+    var: NDArray[np.float64] | None = None
+    epsilon: float = 1e-8
+    clip_obs: float = 10.0
+
+    def __call__(self, obs: NDArray[np.floating]) -> NDArray[np.float32]:
+        if self.mean is None or self.var is None:
+            return np.asarray(obs, dtype=np.float32)
+        out = np.clip(
+            (obs - self.mean) / np.sqrt(self.var + self.epsilon), -self.clip_obs, self.clip_obs
+        )
+        return out.astype(np.float32)
+
+    @classmethod
+    def from_vec_normalize(cls, venv: Any) -> ObsNormalizer:
+        """A snapshot (copies) of a ``VecNormalize``'s observation statistics, or identity."""
+        if venv is None or not venv.norm_obs:
+            return cls()
+        return cls(
+            venv.obs_rms.mean.copy(),
+            venv.obs_rms.var.copy(),
+            float(venv.epsilon),
+            float(venv.clip_obs),
+        )
+
+    @staticmethod
+    def save_vec_normalize(venv: Any, path: Path) -> None:
+        """All running statistics of a ``VecNormalize`` as a plain ``.npz`` (atomic)."""
+        arrays = {
+            "obs_mean": venv.obs_rms.mean,
+            "obs_var": venv.obs_rms.var,
+            "obs_count": np.float64(venv.obs_rms.count),
+            "ret_mean": np.asarray(venv.ret_rms.mean, dtype=np.float64),
+            "ret_var": np.asarray(venv.ret_rms.var, dtype=np.float64),
+            "ret_count": np.float64(venv.ret_rms.count),
+            "epsilon": np.float64(venv.epsilon),
+            "clip_obs": np.float64(venv.clip_obs),
+            "clip_reward": np.float64(venv.clip_reward),
+            "norm_obs": np.bool_(venv.norm_obs),
+            "norm_reward": np.bool_(venv.norm_reward),
+        }
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".npz")
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+        os.replace(tmp, path)
+
+    @classmethod
+    def load(cls, path: Path) -> ObsNormalizer:
+        """The observation transform stored by :meth:`save_vec_normalize`."""
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if not bool(z["norm_obs"]):
+                    return cls()
+                return cls(
+                    z["obs_mean"].astype(np.float64),
+                    z["obs_var"].astype(np.float64),
+                    float(z["epsilon"]),
+                    float(z["clip_obs"]),
+                )
+        except (OSError, KeyError, ValueError) as exc:
+            raise ValueError(
+                f"{path}: not a normalisation file of motion-bench train ({exc})"
+            ) from None
+
+
+def write_manifest(run_dir: Path, manifest: Mapping[str, Any], files: list[str]) -> None:
+    """``run.json``: ``manifest`` plus the format, versions and the files' SHA-256."""
+    import stable_baselines3
+
+    import motion_envs
+
+    doc = {
+        "format": FORMAT,
+        "motion_envs_version": motion_envs.__version__,
+        "stable_baselines3_version": stable_baselines3.__version__,
+        **manifest,
+        "files": {name: file_sha256(run_dir / name) for name in files if (run_dir / name).exists()},
+    }
+    write_json(run_dir / "run.json", doc)
+
+
+@dataclass(frozen=True)
+class LoadedRun:
+    """A run folder loaded back: the model, its observation transform, config, manifest."""
+
+    run_dir: Path
+    model: Any
+    normalizer: ObsNormalizer
+    config: dict[str, Any]
+    manifest: dict[str, Any]
+
+    @property
+    def env_id(self) -> str:
+        return str(self.config["env_id"])
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        return dict(self.config["hyperparams"]["env_kwargs"])
+
+    def predict(self, obs: NDArray[np.floating]) -> NDArray[np.float32]:
+        """Deterministic (mean) actions of a batch of raw observations."""
+        actions, _ = self.model.predict(self.normalizer(obs), deterministic=True)
+        return np.asarray(actions, dtype=np.float32)
+
+
+def _read_json(path: Path, run_dir: Path) -> dict[str, Any]:
+    if not path.is_file():
+        raise ValueError(
+            f"run folder {run_dir}: {path.name} is missing (not a motion-bench train run?)"
+        )
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"run folder {run_dir}: {path.name} is not valid JSON ({exc})") from None
+    if not isinstance(doc, dict):
+        raise ValueError(f"run folder {run_dir}: {path.name} must hold a JSON object")
+    return doc
+
+
+def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
+    """Load a run folder (``which="best"``: ``agent.zip``, ``"final"``: ``final_agent.zip``).
+
+    Checks the manifest's format and motion-envs version and every file's SHA-256 before
+    reading anything else.
+    """
+    import gymnasium as gym
+
+    import motion_envs
+    from baselines.agents.config import validate_hyperparams
+    from baselines.agents.policies import build_model
+    from baselines.sb3 import GymnasiumVecEnv
+
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise FileNotFoundError(f"run folder {run_dir} does not exist")
+    manifest = _read_json(run_dir / "run.json", run_dir)
+    if manifest.get("format") != FORMAT:
+        raise ValueError(
+            f"run folder {run_dir}: run.json format {manifest.get('format')!r} is not {FORMAT!r}"
+        )
+    version = manifest.get("motion_envs_version")
+    if version != motion_envs.__version__:
+        raise ValueError(
+            f"run folder {run_dir} was written by motion-envs {version}; this is "
+            f"{motion_envs.__version__} (environments may differ): retrain, or install {version}"
+        )
+    files = manifest.get("files")
+    if not isinstance(files, dict):
+        raise ValueError(f"run folder {run_dir}: run.json lists no files")
+    prefix = "" if which == "best" else "final_"
+    needed = ["config.json", f"{prefix}agent.zip"]
+    for name in needed:
+        if name not in files:
+            raise ValueError(f"run folder {run_dir}: run.json does not list {name}")
+    for name, digest in files.items():
+        path = run_dir / name
+        if not path.is_file():
+            raise ValueError(f"run folder {run_dir}: {name} is missing")
+        if file_sha256(path) != digest:
+            raise ValueError(
+                f"run folder {run_dir}: {name} does not match its SHA-256 in run.json "
+                "(modified after training)"
+            )
+    config = _read_json(run_dir / "config.json", run_dir)
+    for key in ("algo", "env_id", "seed"):
+        if config.get(key) != manifest.get(key):
+            raise ValueError(f"run folder {run_dir}: config.json and run.json disagree on {key!r}")
+    hp = validate_hyperparams(config["algo"], config.get("hyperparams"), f"{run_dir}/config.json")
+    stats = run_dir / f"{prefix}normalization.npz"
+    if hp.get("normalize", {}).get("obs") and f"{prefix}normalization.npz" not in files:
+        raise ValueError(f"run folder {run_dir}: {stats.name} is missing (normalize.obs is true)")
+    normalizer = ObsNormalizer.load(stats) if stats.name in files else ObsNormalizer()
+    venv = gym.make_vec(
+        config["env_id"], num_envs=1, vectorization_mode="vector_entry_point", split="val"
+        if hp["env_kwargs"].get("val_fraction", 0) > 0 else "train", **hp["env_kwargs"],
+    )  # fmt: skip
+    env = GymnasiumVecEnv(venv)
+    model = build_model(config["algo"], hp, env, int(config["seed"]))
+    try:
+        model.set_parameters(str(run_dir / f"{prefix}agent.zip"), exact_match=True, device="cpu")
+    except (RuntimeError, ValueError, KeyError) as exc:
+        raise ValueError(
+            f"run folder {run_dir}: {prefix}agent.zip does not fit config.json's network ({exc})"
+        ) from None
+    env.close()
+    return LoadedRun(run_dir, model, normalizer, config, manifest)

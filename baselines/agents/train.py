@@ -1,0 +1,375 @@
+"""``motion-bench train``: train an SB3 agent on top of the nominal, choose it on validation.
+
+``run(TrainConfig) -> TrainResult`` is the one training code path (``motion-bench
+train`` and every trial of ``motion-bench sweep`` call it):
+
+1. hyper-parameters from ``configs/agents/ALGO.yaml`` (or ``--config``), the command's
+   overrides on top (:func:`~baselines.agents.config.resolve_hyperparams`);
+2. the native vector environment of ``split="train"``
+   (``gym.make_vec(..., vectorization_mode="vector_entry_point")``) through
+   :class:`baselines.sb3.GymnasiumVecEnv`, ``VecMonitor`` and, where the config says so,
+   ``VecNormalize``;
+3. the model starts at the nominal (:func:`~baselines.agents.policies.start_at_nominal`);
+4. every ``eval_freq`` steps (and at the start and the end) the deterministic policy is
+   scored on the *validation* split (``split="val"``: training subjects/demonstrations
+   held out by ``val_fraction``) with the papers' criterion, the median over episodes of
+   ``info["max_error"]``; the best policy so far is saved as ``agent.zip``. The test split
+   is never touched;
+5. the run folder (:mod:`baselines.agents.rundir`) gets the final policy, the resolved
+   config, the manifest and TensorBoard logs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import shlex
+import sys
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
+
+__all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
+
+#: Called after every validation: ``{"timesteps", "val_criterion", "best_val_criterion",
+#: "is_best", "run_dir"}``.
+EvaluationHook = Callable[[dict[str, Any]], None]
+
+
+@dataclass(frozen=True)
+class TrainConfig:
+    """Everything ``motion-bench train`` needs (None: from the config file)."""
+
+    algo: str
+    env_id: str
+    out: str
+    seed: int = 0
+    config_path: str | None = None
+    timesteps: int | None = None
+    n_envs: int | None = None
+    env_kwargs: Mapping[str, Any] = field(default_factory=dict)
+    overrides: Mapping[str, Any] = field(default_factory=dict)
+    progress: bool = True
+    tensorboard: bool = True
+    command: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    """What a training run produced (also in ``DIR/run.json``)."""
+
+    run_dir: str
+    best_val_criterion: float
+    best_timesteps: int
+    val_nominal_criterion: float
+    evaluations: list[dict[str, float]]
+    timesteps: int
+    train_seconds: float
+    steps_per_second: float
+    hyperparams: dict[str, Any]
+
+
+def _check_config(config: TrainConfig) -> None:
+    if config.algo not in ALGOS:
+        raise ValueError(f"--algo must be one of {list(ALGOS)}; got {config.algo!r}")
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
+
+    if config.env_id not in gym.registry:
+        raise ValueError(f"--env {config.env_id!r} is not a registered environment id")
+    if isinstance(config.seed, bool) or not isinstance(config.seed, int) or config.seed < 0:
+        raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
+
+
+def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
+    import gymnasium as gym
+    from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
+
+    from baselines.sb3 import GymnasiumVecEnv
+
+    venv = gym.make_vec(
+        env_id,
+        num_envs=hp["n_envs"],
+        vectorization_mode="vector_entry_point",
+        split="train",
+        **hp["env_kwargs"],
+    )
+    env: Any = VecMonitor(GymnasiumVecEnv(venv))
+    norm = hp.get("normalize", {})
+    if norm.get("obs") or norm.get("reward"):
+        env = VecNormalize(
+            env,
+            norm_obs=bool(norm.get("obs", False)),
+            norm_reward=bool(norm.get("reward", False)),
+            clip_obs=float(norm.get("clip_obs", 10.0)),
+            gamma=float(norm.get("gamma", hp.get("gamma", 0.99))),
+        )
+    return env
+
+
+def _validation_callback(
+    env_id: str,
+    hp: Mapping[str, Any],
+    run_dir: Path,
+    on_evaluation: EvaluationHook | None,
+) -> Any:
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from baselines.agents.evaluate import episode_max_errors
+    from baselines.agents.rundir import ObsNormalizer
+
+    class ValidationCallback(BaseCallback):
+        """Papers' criterion on the validation split; keeps the best policy as agent.zip."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            self.eval_freq = int(hp["eval_freq"])
+            self.episodes = hp.get("eval_episodes")
+            self.best = math.inf
+            self.best_timesteps = 0
+            self.evaluations: list[dict[str, float]] = []
+            self._next = 0
+
+        def _evaluate(self) -> None:
+            vn = self.model.get_vec_normalize_env()
+            normalizer = ObsNormalizer.from_vec_normalize(vn)
+            model = self.model
+
+            def policy(obs: np.ndarray) -> np.ndarray:
+                return model.predict(normalizer(obs), deterministic=True)[0]
+
+            errs = episode_max_errors(policy, env_id, hp["env_kwargs"], "val", self.episodes)
+            crit = errs.criterion
+            is_best = crit < self.best
+            if is_best:
+                self.best, self.best_timesteps = crit, self.num_timesteps
+                tmp = run_dir / ".agent.tmp.zip"
+                self.model.save(tmp)
+                tmp.replace(run_dir / "agent.zip")
+                if vn is not None:
+                    ObsNormalizer.save_vec_normalize(vn, run_dir / "normalization.npz")
+            self.evaluations.append({"timesteps": self.num_timesteps, "val_criterion": crit})
+            self.logger.record("eval/val_criterion", crit)
+            self.logger.record("eval/best_val_criterion", self.best)
+            if on_evaluation is not None:
+                on_evaluation(
+                    {
+                        "timesteps": self.num_timesteps,
+                        "val_criterion": crit,
+                        "best_val_criterion": self.best,
+                        "is_best": is_best,
+                        "run_dir": str(run_dir),
+                    }
+                )
+
+        def _on_training_start(self) -> None:
+            self._evaluate()  # the nominal itself when the action head starts at zero
+            self._next = self.num_timesteps + self.eval_freq
+
+        def _on_step(self) -> bool:
+            if self.num_timesteps >= self._next:
+                self._evaluate()
+                self._next = self.num_timesteps + self.eval_freq
+            return True
+
+        def _on_training_end(self) -> None:
+            if self.evaluations[-1]["timesteps"] != self.num_timesteps:
+                self._evaluate()
+
+    return ValidationCallback()
+
+
+def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> TrainResult:
+    """Train, validate, save the run folder; see the module docstring."""
+    import torch
+    from stable_baselines3.common.utils import set_random_seed
+
+    from baselines.agents.evaluate import episode_max_errors
+    from baselines.agents.policies import build_model
+    from baselines.agents.rundir import ObsNormalizer, write_json, write_manifest
+    from baselines.sb3 import TqdmCallback
+
+    _check_config(config)
+    overrides: dict[str, Any] = dict(config.overrides)
+    if config.timesteps is not None:
+        overrides["n_timesteps"] = config.timesteps
+    if config.n_envs is not None:
+        overrides["n_envs"] = config.n_envs
+    if config.env_kwargs:
+        overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
+    hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
+    if not hp["env_kwargs"].get("val_fraction", 0) > 0:
+        raise ValueError(
+            "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
+            "carved from the training data, never on the test split"
+        )
+    run_dir = Path(config.out)
+    if (run_dir / "run.json").exists():
+        raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
+    run_dir.mkdir(parents=True, exist_ok=True)
+
+    torch.set_num_threads(int(hp["torch_threads"]))
+    set_random_seed(config.seed)
+    env = _make_train_env(config.env_id, hp)
+    tb = None
+    if config.tensorboard:
+        try:
+            import tensorboard  # noqa: F401
+
+            tb = str(run_dir / "tb")
+        except ImportError:
+            print(
+                "motion-bench train: tensorboard is not installed; no TensorBoard logs",
+                file=sys.stderr,
+            )
+    model = build_model(config.algo, hp, env, config.seed, tensorboard_log=tb)
+    val_nominal = episode_max_errors(
+        None, config.env_id, hp["env_kwargs"], "val", hp.get("eval_episodes")
+    ).criterion
+    validation = _validation_callback(config.env_id, hp, run_dir, on_evaluation)
+    callbacks: list[Any] = [validation]
+    total = int(hp["n_timesteps"])
+    if config.progress:
+        callbacks.append(TqdmCallback(total, f"{config.algo} {config.env_id.split('/')[-1]}"))
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=total, callback=callbacks, tb_log_name=config.algo)
+    seconds = time.perf_counter() - t0
+    steps = int(model.num_timesteps)
+
+    tmp = run_dir / ".final_agent.tmp.zip"
+    model.save(tmp)
+    tmp.replace(run_dir / "final_agent.zip")
+    vn = model.get_vec_normalize_env()
+    if vn is not None:
+        ObsNormalizer.save_vec_normalize(vn, run_dir / "final_normalization.npz")
+    env.close()
+    write_json(
+        run_dir / "config.json",
+        {"algo": config.algo, "env_id": config.env_id, "seed": config.seed, "hyperparams": hp},
+    )
+    with open(run_dir / "evaluations.csv", "w", encoding="utf-8") as f:
+        f.write("timesteps,val_criterion\n")
+        for e in validation.evaluations:
+            f.write(f"{e['timesteps']},{e['val_criterion']!r}\n")
+    command = list(config.command) or equivalent_command(config)
+    write_manifest(
+        run_dir,
+        {
+            "algo": config.algo,
+            "env_id": config.env_id,
+            "seed": config.seed,
+            "command": shlex.join(command),
+            "torch_version": torch.__version__,
+            "timesteps": steps,
+            "train_seconds": seconds,
+            "best_val_criterion": validation.best,
+            "best_timesteps": validation.best_timesteps,
+            "val_nominal_criterion": val_nominal,
+        },
+        [
+            "config.json",
+            "agent.zip",
+            "normalization.npz",
+            "final_agent.zip",
+            "final_normalization.npz",
+            "evaluations.csv",
+        ],
+    )
+    return TrainResult(
+        run_dir=str(run_dir),
+        best_val_criterion=validation.best,
+        best_timesteps=validation.best_timesteps,
+        val_nominal_criterion=val_nominal,
+        evaluations=validation.evaluations,
+        timesteps=steps,
+        train_seconds=seconds,
+        steps_per_second=steps / seconds if seconds > 0 else float("nan"),
+        hyperparams=hp,
+    )
+
+
+def equivalent_command(config: TrainConfig) -> list[str]:
+    """The ``motion-bench train`` command line of ``config`` (hyper-parameter overrides,
+    which the command line cannot set, follow as a comment)."""
+    cmd = ["motion-bench", "train", "--algo", config.algo, "--env", config.env_id]
+    cmd += ["--seed", str(config.seed), "--out", str(config.out)]
+    if config.config_path is not None:
+        cmd += ["--config", str(config.config_path)]
+    if config.timesteps is not None:
+        cmd += ["--timesteps", str(config.timesteps)]
+    if config.n_envs is not None:
+        cmd += ["--n-envs", str(config.n_envs)]
+    if config.env_kwargs:
+        cmd += ["--env-kwargs", *(f"{k}={json.dumps(v)}" for k, v in config.env_kwargs.items())]
+    if config.overrides:
+        cmd.append(f"# overrides {json.dumps(dict(config.overrides), sort_keys=True)}")
+    return cmd
+
+
+def _cli(args: argparse.Namespace) -> int:
+    # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
+    warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
+    config = TrainConfig(
+        algo=args.algo,
+        env_id=args.env,
+        out=args.out or f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}",
+        seed=args.seed,
+        config_path=args.config,
+        timesteps=args.timesteps,
+        n_envs=args.n_envs,
+        env_kwargs=parse_env_kwargs(args.env_kwargs),
+        progress=not args.no_progress,
+        tensorboard=not args.no_tensorboard,
+        command=("motion-bench", *sys.argv[1:]) if sys.argv[1:2] == ["train"] else (),
+    )
+    result = run(config)
+    print(
+        f"{config.algo} on {config.env_id}, seed {config.seed}: {result.timesteps} steps in "
+        f"{result.train_seconds:.0f} s ({result.steps_per_second:.0f} steps/s); validation "
+        f"criterion {result.best_val_criterion:.6g} at step {result.best_timesteps} "
+        f"(nominal {result.val_nominal_criterion:.6g}, ratio "
+        f"{result.best_val_criterion / result.val_nominal_criterion:.4f})"
+    )
+    print(
+        f"wrote {result.run_dir} (evaluate on the test split: motion-bench agent {result.run_dir})"
+    )
+    return 0
+
+
+def register(subparsers: Any) -> None:
+    """Add ``motion-bench train``."""
+    p = subparsers.add_parser(
+        "train",
+        help="train an SB3 agent (ppo, sac, td3) on top of the nominal; zoo-style YAML configs",
+        description=__doc__.split("\n\n")[0],
+    )
+    p.add_argument("--algo", required=True, choices=ALGOS)
+    p.add_argument("--env", required=True, metavar="ID", help="e.g. MotionEnvs/OrientationReach-v1")
+    p.add_argument(
+        "--config", default=None, metavar="PATH", help="default configs/agents/ALGO.yaml"
+    )
+    p.add_argument("--timesteps", type=int, default=None, help="override n_timesteps")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    p.add_argument(
+        "--env-kwargs",
+        nargs="*",
+        default=None,
+        metavar="K=V",
+        help="environment kwargs (plain YAML values), e.g. nominal=bezier-task",
+    )
+    p.add_argument(
+        "--out", default=None, metavar="DIR", help="run folder (default runs/ALGO-ENV-seedS)"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-tensorboard", action="store_true", help="no TensorBoard logs")
+    p.set_defaults(func=_cli)
