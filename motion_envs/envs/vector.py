@@ -29,7 +29,13 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS
+from motion_envs.envs._common import (
+    N_STEPS,
+    as_action,
+    check_max_episode_steps,
+    check_num_envs,
+    reset_labels,
+)
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
@@ -41,24 +47,6 @@ _SCALAR_BELOW = 8
 _StepResult = tuple[
     NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
 ]
-
-
-def _check_num_envs(num_envs: int) -> int:
-    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-        raise ValueError(f"num_envs must be an integer >= 1; got {num_envs!r}")
-    return int(num_envs)
-
-
-def _check_max_steps(max_episode_steps: int | None, n_steps: int) -> int:
-    if max_episode_steps is None:
-        return n_steps
-    if (
-        isinstance(max_episode_steps, bool)
-        or not isinstance(max_episode_steps, (int, np.integer))
-        or max_episode_steps < 1
-    ):
-        raise ValueError(f"max_episode_steps must be an integer >= 1; got {max_episode_steps!r}")
-    return int(max_episode_steps)
 
 
 class _ReplayVectorEnv(gym.vector.VectorEnv):
@@ -76,8 +64,8 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         self.task = task
         self._n_steps = N_STEPS
         self._n_traj = task.n_trajectories
-        self.num_envs = _check_num_envs(num_envs)
-        self._max_steps = _check_max_steps(max_episode_steps, self._n_steps)
+        self.num_envs = check_num_envs(num_envs)
+        self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
         self.single = single  # validated arguments, spaces and rendering
         self.residual_scale = single.residual_scale
         self.reward_weights = single.reward_weights
@@ -163,10 +151,26 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         return obs, self._reset_infos(envs)
 
     def _reset_infos(self, envs: NDArray[np.int64]) -> dict[str, Any]:
+        """The single environments' reset infos, batched as ``SyncVectorEnv`` does: the
+        same keys, integers in an int array (0 outside the mask), text in an object
+        array (None outside the mask)."""
         mask = np.zeros(self.num_envs, dtype=bool)
         mask[envs] = True
-        idx = np.where(mask, self._index, 0)
-        return {"trajectory_index": idx, "_trajectory_index": mask}
+        infos: dict[str, Any] = {"trajectory_index": np.where(mask, self._index, 0)}
+        for key, labels in self._reset_labels.items():
+            column = np.full(self.num_envs, None, dtype=object)
+            column[envs] = labels[self._index[envs]]
+            infos[key] = column
+        for key in list(infos):
+            infos["_" + key] = mask.copy()
+        return infos
+
+    @property
+    def _reset_labels(self) -> dict[str, NDArray[np.object_]]:
+        """Text reset infos of the single environment: key -> label of each trajectory."""
+        if getattr(self, "_labels", None) is None:
+            self._labels = reset_labels(self.task)
+        return self._labels
 
     def _check_actions(
         self, actions: Any, dim: int
@@ -174,9 +178,7 @@ class _ReplayVectorEnv(gym.vector.VectorEnv):
         """The clipped ``(N, dim)`` actions and the step table's columns of the grid points."""
         if not self._started:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != (self.num_envs, dim):
-            raise ValueError(f"actions must have shape ({self.num_envs}, {dim}); got {a.shape}")
+        a = as_action(actions, (self.num_envs, dim), "actions")
         if not np.isfinite(a).all():
             raise ValueError("actions must be finite; got NaN or infinite entries")
         n = self._n_steps
