@@ -1,0 +1,253 @@
+"""Figures of the benchmarks, for a paper or a report: functions from results to figures.
+
+Every function takes result arrays or documents and returns a
+:class:`matplotlib.figure.Figure` on its own Agg canvas (no pyplot, no global backend
+switch, so a user's interactive backend is left alone); :func:`save_figure` writes one
+as PNG atomically (temporary file in the target folder, then a rename).
+
+* :func:`residual_figure`: Faraway & Choe's Figure 5 view of one task's slerp residual
+  curves (three orthogonal projections, radians) with the fitted task and null models
+  drawn over the data and an axis range that ignores the extreme 2 % of samples.
+* :func:`shapes_figure`: per shape, the held-out demonstrations and each method's
+  prediction of them (``line`` included), one method per panel column block, axes in
+  the data's unit and one legend outside the panels.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "METHOD_STYLE",
+    "new_figure",
+    "png_bytes",
+    "residual_figure",
+    "save_figure",
+    "shapes_figure",
+]
+
+#: Colour, line style and legend label of each position method.
+METHOD_STYLE: dict[str, dict[str, Any]] = {
+    "line": {"color": "0.45", "ls": ":", "label": "line (start to end)"},
+    "null": {"color": "C2", "ls": "-", "label": "null (line + mean residual)"},
+    "lippi": {"color": "C3", "ls": "-", "label": "Lippi et al. (sine regression)"},
+    "dmp": {"color": "C0", "ls": "--", "label": "DMP"},
+    "promp": {"color": "C1", "ls": "--", "label": "ProMP"},
+}
+
+
+def new_figure(width: float, height: float) -> Any:
+    """A ``width`` x ``height`` inch figure on its own Agg canvas (no pyplot)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def png_bytes(fig: Any, dpi: int = 110) -> bytes:
+    """The figure as PNG bytes."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> Path:
+    """Write ``fig`` as PNG to ``path`` atomically (temporary file, then rename; 0644)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    data = png_bytes(fig, dpi)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return target
+
+
+def _robust_limit(points: NDArray[np.float64], quantile: float = 0.98) -> float:
+    """Half-width of a square axis range holding ``quantile`` of the coordinates."""
+    if points.size == 0:
+        return 1.0
+    lim = float(np.quantile(np.abs(points), quantile)) * 1.15
+    return lim if lim > 0 else 1.0
+
+
+def residual_figure(
+    residuals: NDArray[np.float64],
+    tasks: Sequence[str] | NDArray[np.str_],
+    task: str | None = None,
+    degree: int = 2,
+    dataset: str = "",
+    simulated: bool = False,
+) -> Any:
+    """Three orthogonal views of one task's residual curves with the fitted models.
+
+    ``residuals`` is ``(L, n, 3)`` (radians), ``tasks`` the ``(L,)`` task labels; ``task``
+    (default: the most frequent) selects the curves drawn. Drawn over them: the task
+    model (Bézier curve of ``degree`` through the mean control points of the task) and
+    the null model (mean control points of all curves), both fitted by
+    :mod:`motion_envs.models.bezier_models` on every curve shown. The axes hold 98 % of
+    the task's samples (a few extreme curves may leave the frame; the caption says how
+    far the farthest goes).
+    """
+    from motion_envs.models.bezier_models import NullBezierModel, TaskBezierModel
+
+    R = np.asarray(residuals, dtype=np.float64)
+    labels = np.asarray(tasks).astype(str)
+    names, counts = np.unique(labels, return_counts=True)
+    chosen = str(names[np.argmax(counts)]) if task is None else str(task)
+    if chosen not in names:
+        raise ValueError(f"task must be one of {names.tolist()}; got {chosen!r}")
+    mine = R[labels == chosen]
+    task_curve = TaskBezierModel(degree).fit(R, tasks=labels).predict(tasks=[chosen])[0]
+    null_curve = NullBezierModel(degree).fit(R).predict(n=1)[0]
+    lim = max(_robust_limit(mine), 1.1 * float(np.abs(task_curve).max()))
+    farthest = float(np.linalg.norm(mine, axis=2).max())
+
+    fig = new_figure(12.5, 4.6)
+    axes = fig.subplots(1, 3)
+    for ax, (i, j) in zip(axes, [(0, 1), (0, 2), (1, 2)], strict=True):
+        for k, curve in enumerate(mine):
+            ax.plot(
+                curve[:, i],
+                curve[:, j],
+                color="0.55",
+                lw=0.7,
+                alpha=0.55,
+                label=f"trajectories of task {chosen!r} (n = {len(mine)})" if k == 0 else None,
+            )
+        ax.plot(
+            task_curve[:, i],
+            task_curve[:, j],
+            color="C3",
+            lw=2.4,
+            label=f"task model, d = {degree}",
+        )
+        ax.plot(
+            null_curve[:, i],
+            null_curve[:, j],
+            color="C0",
+            lw=2.0,
+            ls="--",
+            label=f"null model, d = {degree}",
+        )
+        ax.plot(0, 0, "k+", ms=11, mew=1.5, label="origin (start and end)")
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_xlabel(f"residual {'xyz'[i]} (rad)")
+        ax.set_ylabel(f"residual {'xyz'[j]} (rad)")
+        ax.set_title(f"{'xyz'[i]}-{'xyz'[j]} view", fontsize=10)
+        ax.grid(alpha=0.3)
+    handles, names_ = axes[0].get_legend_handles_labels()
+    fig.legend(handles, names_, loc="outside lower center", ncols=4, fontsize=9, frameon=False)
+    sim = " (SIMULATED data)" if simulated else ""
+    fig.suptitle(
+        f"Empirical slerp residuals, {dataset}{sim}, task {chosen!r}: axes hold 98 % of the "
+        f"samples; farthest point {farthest:.2f} rad from the origin",
+        fontsize=11,
+    )
+    return fig
+
+
+def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None) -> Any:
+    """Per shape, the held-out demonstrations (black) and each method's predictions.
+
+    ``doc`` is :func:`baselines.position_bench.run_benchmark`'s result (with its
+    ``_truth`` and ``_predictions``). One row per shape (``shapes``, default up to 8 shapes
+    spread over the benchmark), one panel per method, so a panel holds only the
+    demonstrations and one method's prediction of them. Axes are in the data's unit;
+    one legend below the panels.
+    """
+    all_shapes = list(doc["_truth"])
+    if shapes is None:
+        step = max(1, math.ceil(len(all_shapes) / 8))
+        shapes = all_shapes[::step][:8]
+    methods = list(doc["methods"])
+    unit = doc.get("unit") or "data unit"
+    fig = new_figure(2.3 * len(methods) + 0.6, 2.15 * len(shapes) + 0.9)
+    axes = np.atleast_2d(fig.subplots(len(shapes), len(methods), squeeze=False))
+    for r, shape in enumerate(shapes):
+        truth = doc["_truth"][shape]
+        preds = doc["_predictions"][shape]
+        pts = np.concatenate(
+            [truth.reshape(-1, truth.shape[-1])]
+            + [p.reshape(-1, truth.shape[-1]) for p in preds.values()]
+        )
+        lo = np.quantile(pts[:, :2], 0.005, axis=0)
+        hi = np.quantile(pts[:, :2], 0.995, axis=0)
+        pad = 0.08 * float(np.max(hi - lo) or 1.0)
+        for c, method in enumerate(methods):
+            ax = axes[r, c]
+            style = METHOD_STYLE.get(method, {"color": "C4", "ls": "-", "label": method})
+            for k, y in enumerate(truth):
+                ax.plot(
+                    y[:, 0],
+                    y[:, 1],
+                    color="black",
+                    lw=1.6,
+                    alpha=0.8,
+                    label="held-out demonstration" if k == 0 else None,
+                )
+            for k, y in enumerate(preds[method]):
+                ax.plot(
+                    y[:, 0],
+                    y[:, 1],
+                    color=style["color"],
+                    ls=style["ls"],
+                    lw=1.3,
+                    label=style["label"] if k == 0 else None,
+                )
+            ax.plot(*truth[0, 0, :2], "k^", ms=5)
+            ax.plot(*truth[0, -1, :2], "k*", ms=7)
+            ax.set_xlim(lo[0] - pad, hi[0] + pad)
+            ax.set_ylim(lo[1] - pad, hi[1] + pad)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.25)
+            if r == 0:
+                ax.set_title(method, fontsize=10, color=style["color"])
+            if c == 0:
+                ax.set_ylabel(f"{shape}\ny ({unit})", fontsize=8)
+            if r == len(shapes) - 1:
+                ax.set_xlabel(f"x ({unit})", fontsize=8)
+    handles: list[Any] = []
+    labels: list[str] = []
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    handles.append(axes[0, 0].plot([], [], "k^", ms=5)[0])
+    labels.append("start")
+    handles.append(axes[0, 0].plot([], [], "k*", ms=7)[0])
+    labels.append("end")
+    fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
+    split = doc.get("split", {}).get("split", "loo")
+    scored = "leave one demonstration out" if split == "loo" else f"{split} split"
+    fig.suptitle(
+        f"{doc.get('dataset', '')}: held-out demonstrations and each method's prediction "
+        f"from their start, end and duration ({scored}; {len(shapes)} of "
+        f"{len(all_shapes)} shapes)",
+        fontsize=10,
+    )
+    return fig
