@@ -10,7 +10,9 @@ Runs, one after the other, with each sub-command's defaults:
    the line, the mean residual, DMP and ProMP on the real LASA handwriting set.
 
 Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
-what was written goes to ``OUT/index.json``.
+what was written goes to ``OUT/index.json`` and one self-contained page with every
+table, the papers' values, the plots and a reading of each benchmark to
+``OUT/report.html``.
 """
 
 from __future__ import annotations
@@ -69,7 +71,10 @@ def run(args: argparse.Namespace) -> int:
         )
         status = status or rc
     atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
-    print(f"\nall results are in {out}/ (index: {out / 'index.json'})")
+    from baselines.report import write_report
+
+    report = write_report(out)
+    print(f"\nall results are in {out}/ (index: {out / 'index.json'}; one page: {report})")
     return status
 
 
