@@ -211,3 +211,13 @@ def test_make_close_200_times_keeps_memory_flat(env_id, kwargs):
     tracemalloc.stop()
     assert traced_1 - traced_0 < 160 * 1024, f"Python memory grew {traced_1 - traced_0} bytes"
     assert rss_1 - rss_0 < 24 * 2**20, f"RSS grew {(rss_1 - rss_0) / 2**20:.1f} MiB"
+
+
+def test_hand_frames_are_labelled_human_nominal_agent():
+    from motion_envs.envs.rendering import HandFrameRenderer
+
+    renderer = HandFrameRenderer(120, 120, backend="matplotlib")
+    q = np.tile([1.0, 0.0, 0.0, 0.0], (50, 1))
+    renderer.render(q, q, q[:2], 1)
+    legend = renderer._fig.axes[0].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == ["human", "nominal", "agent"]

@@ -3,15 +3,15 @@
 * :class:`HandFrameRenderer` (orientation): a MuJoCo scene
   (``assets/hand_frames.xml``) with three hand frames at the origin, the human's
   (green), the nominal's (translucent grey) and the agent's (orange), each with a long
-  pointing axis, a medium and a short axis; dots trace the tip of the human's and the
-  agent's pointing axis so far. MuJoCo renders through the OpenGL backend the user
-  chose with ``MUJOCO_GL`` (``egl`` or ``osmesa`` offscreen; ``glfw``, the default, needs
-  a display). This module never writes ``os.environ``. Without a working backend
-  (e.g. ``glfw`` or no ``MUJOCO_GL`` on a machine without a display) the same scene is
-  drawn with matplotlib's Agg canvas instead (``backend`` says which is used, and one
-  warning says why). The outcome of the first attempt is remembered for the process:
-  a failed OpenGL backend is never tried twice (a second GLFW initialisation without a
-  display can abort the interpreter).
+  pointing axis, a medium and a short axis, labelled with its name; dots trace the tip
+  of the human's and the agent's pointing axis so far. MuJoCo renders through the
+  OpenGL backend the user chose with ``MUJOCO_GL`` (``egl`` or ``osmesa`` offscreen;
+  ``glfw``, the default, needs a display). This module never writes ``os.environ``.
+  Without a working backend (e.g. ``glfw`` or no ``MUJOCO_GL`` on a machine without a
+  display) the same scene is drawn with matplotlib's Agg canvas instead (``backend``
+  says which is used, and one warning says why). The outcome of the first attempt is
+  remembered for the process: a failed OpenGL backend is never tried twice (a second
+  GLFW initialisation without a display can abort the interpreter).
 * :class:`CurveRenderer` (position): the human demonstration, the nominal and the
   agent's positions so far as curves (matplotlib Agg; first two coordinates).
 """
@@ -157,6 +157,22 @@ class HandFrameRenderer:
                     np.array([*rgb, 0.9], dtype=np.float32),
                 )
                 scene.ngeom += 1
+        # a text label at the tip of each frame's pointing axis
+        for name, q in current.items():
+            if scene.ngeom >= scene.maxgeom:
+                break
+            tip = _rotations(q[None])[0][:, 0] * _AXES[0] * 0.6
+            geom = scene.geoms[scene.ngeom]
+            mj.mjv_initGeom(
+                geom,
+                mj.mjtGeom.mjGEOM_LABEL,
+                np.zeros(3),
+                tip,
+                eye,
+                np.array([*_COLORS[name], 1.0], dtype=np.float32),
+            )
+            geom.label = name
+            scene.ngeom += 1
         return self._renderer.render().copy()
 
     def _render_matplotlib(
@@ -164,6 +180,8 @@ class HandFrameRenderer:
     ) -> NDArray[np.uint8]:
         if self._fig is None:
             self._fig = _new_figure(self.width, self.height)
+        from matplotlib.lines import Line2D
+
         fig = self._fig
         fig.clear()
         ax = fig.add_subplot(projection="3d")
@@ -179,7 +197,12 @@ class HandFrameRenderer:
         ax.plot(*tips_a.T, ".", color=_COLORS["agent"], ms=3)
         for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
             setter(-0.85, 0.85)
-        ax.set_title(f"human (green), nominal (grey), agent (orange); step {k}", fontsize=8)
+        handles = [
+            Line2D([], [], color=_COLORS[name], lw=3, alpha=0.35 if name == "nominal" else 1.0)
+            for name in ("human", "nominal", "agent")
+        ]
+        ax.legend(handles, ["human", "nominal", "agent"], loc="upper left", fontsize=8)
+        ax.set_title(f"hand frames, step {k}", fontsize=8)
         return _figure_to_array(fig)
 
     def close(self) -> None:
@@ -201,9 +224,7 @@ _warned: set[str] = set()
 def _warn_once(reason: str) -> None:
     if reason not in _warned:
         _warned.add(reason)
-        warnings.warn(
-            f"hand frames are drawn with matplotlib: {reason}", UserWarning, stacklevel=3
-        )
+        warnings.warn(f"hand frames are drawn with matplotlib: {reason}", UserWarning, stacklevel=3)
 
 
 class CurveRenderer:
