@@ -116,14 +116,19 @@ def _orientation_section(folder: Path, job: dict[str, Any]) -> Section:
         "that between subjects ("
         f"{_fmt(get('between_subject'))} rad). The slerp with the observed speed profile "
         f"({_fmt(get('slerp_empirical'))}) is {cmp('slerp_empirical', 'slerp_average')} the "
-        f"slerp with the training mean profile ({_fmt(get('slerp_average'))}), the timing "
-        "assumption that predictions must make. Approximating each curve by its own Bézier "
+        f"slerp with the mean speed profile of the data ({_fmt(get('slerp_average'))}), the "
+        "timing a prediction must assume. Approximating each curve by its own Bézier "
         f"fit gives {', '.join(_fmt(a) for a in approx)} rad for d = 2, 3, 4"
         f"{' (decreasing, as least squares must)' if approx[0] >= approx[1] >= approx[2] else ''}. "
         f"In sample the task model improves on the null model by {_fmt(gain_in)} rad (d = 2); "
-        f"with each subject left out the gain is {_fmt(gain_out)} rad, so most of the "
-        "in-sample gain does not carry to new people. The paper's d = 3 null (0.371, worse "
-        f"than d = 2) cannot follow from its procedure; see {MODELS_DOC}."
+        f"with each subject left out the gain is {_fmt(gain_out)} rad"
+        + (
+            ", so most of the in-sample gain does not carry to new people. "
+            if math.isfinite(gain_out) and gain_out < 0.5 * gain_in
+            else ". "
+        )
+        + "The paper's d = 3 null (0.371, worse than d = 2) cannot follow from its "
+        f"procedure; see {MODELS_DOC}."
     )
     return Section(
         title=job.get("title", folder.name),
@@ -190,18 +195,34 @@ def _position_section(folder: Path, job: dict[str, Any]) -> Section:
         f"{len(per_shape)} shapes; every method predicts each held-out demonstration from "
         f"its start, end and duration. The lowest median max error is {best}'s "
         f"({_fmt(summary[best]['max_error'])} {unit}); the straight line's is "
-        f"{_fmt(summary['line']['max_error'])} {unit}, so every method that learns the shape "
-        "helps by a wide margin. "
+        f"{_fmt(summary['line']['max_error'])} {unit}"
+        + (
+            ", so every method that learns the shape helps by a wide margin. "
+            if all(
+                summary[m]["max_error"] < 0.5 * summary["line"]["max_error"]
+                for m in methods
+                if m != "line"
+            )
+            else ". "
+        )
         + (
             f"Lippi et al.'s regression beats the mean residual (null) on "
-            f"{wins['null']} of {len(per_shape)} shapes: "
+            f"{wins['null']} of {len(per_shape)} shapes"
             if "null" in wins
             else ""
         )
-        + "with few demonstrations per shape and every LASA demonstration ending at the "
-        "origin, the boundary conditions explain little of the shape, and the regression "
-        "adds variance the plain mean does not have. Lippi et al. published no LASA figures "
-        f"(their data was a juggling task), so the 'paper' column is empty; see {MODELS_DOC}."
+        + (
+            ": with few demonstrations per shape the boundary conditions explain little of "
+            "the shape, and the regression adds variance the plain mean does not have"
+            + (" (every LASA demonstration ends at the origin)" if doc["dataset"] == "lasa" else "")
+            + ". "
+            if "null" in wins and wins["null"] < len(per_shape) / 2
+            else (". " if "null" in wins else "")
+        )
+        + (
+            "Lippi et al. published no figures on this data set (their data was a juggling "
+            f"task), so the 'paper' column is empty; see {MODELS_DOC}."
+        )
     )
     return Section(
         title=job.get("title", folder.name),
