@@ -129,3 +129,12 @@ def test_a_failed_or_unknown_job_is_reported_not_raised(results, tmp_path):
     page = _Collector()
     page.feed(build_report(tmp_path))
     assert page.h2[-2:] == ["Juggling", "Missing"]
+
+
+def test_motion_bench_all_writes_the_report(tmp_path):
+    out = tmp_path / "res"
+    assert main(["all", "--out", str(out), "--only", "orientation-vr-kitchen"]) == 0
+    page = _Collector()
+    page.feed((out / "report.html").read_text())
+    assert len(page.h2) == 1 and "vr-kitchen" in page.h2[0]
+    assert len(page.tables) == 1 and len(page.images) == 1
