@@ -83,13 +83,15 @@ def _sign_of(w: FloatArray, out: FloatArray) -> FloatArray:
     return np.copysign(1.0, out, out=out)
 
 
-def _checked(x: ArrayLike, name: str, width: int) -> FloatArray:
+def _checked(x: ArrayLike, name: str, width: int, finite: bool = True) -> FloatArray:
     """``x`` as a float64 array whose last axis has length ``width``, every entry finite.
 
     The one input check of :func:`multiply`, :func:`conjugate`, :func:`expmap`,
     :func:`logmap` (and, through :func:`_as_quaternion_array`, of the validating
     functions). Raises ``ValueError`` naming ``name`` for a non-numeric (string, object,
-    complex) input, a scalar or a wrong last axis, and NaN or infinite entries.
+    complex) input, a scalar or a wrong last axis, and (unless ``finite=False``, for a
+    caller whose next check reads every entry anyway, like :func:`as_unit`) NaN or
+    infinite entries.
 
     Small inputs are tested with ``isfinite(x).all()``. Large ones with one pairwise sum
     (no temporary array): a finite sum implies every entry is finite, since NaN and inf
@@ -108,6 +110,8 @@ def _checked(x: ArrayLike, name: str, width: int) -> FloatArray:
         raise ValueError(
             f"{name} must have a last axis of length {width} {axes}; got shape {arr.shape}"
         )
+    if not finite:
+        return arr
     if arr.size < _FINITE_BY_REDUCTION:
         finite = bool(np.isfinite(arr).all())
     else:
@@ -310,9 +314,9 @@ def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     infinite input raises ``ValueError`` always; ``validate=False`` skips only the check
     that the quaternions are unit.
     """
-    q = _checked(q, name, 4)
+    q = _checked(q, name, 4, finite=not validate)
     if validate:
-        q = as_unit(q, name)
+        q = as_unit(q, name)  # NaN/inf fail its unit check
     batch = q.shape[:-1]
     qf = q.reshape(-1, 4)
     n = qf.shape[0]
