@@ -8,9 +8,9 @@ as PNG atomically (temporary file in the target folder, then a rename).
 * :func:`residual_figure`: Faraway & Choe's Figure 5 view of one task's slerp residual
   curves (three orthogonal projections, radians) with the fitted task and null models
   drawn over the data and an axis range that ignores the extreme 2 % of samples.
-* :func:`shapes_figure`: per shape, the held-out demonstrations and each method's
-  prediction of them (``line`` included), one method per panel column block, axes in
-  the data's unit and one legend outside the panels.
+* :func:`shapes_figure`: one panel per shape with one held-out demonstration and each
+  method's prediction of it (``line`` included), axes in the data's unit and one legend
+  outside the panels.
 """
 
 from __future__ import annotations
@@ -169,85 +169,63 @@ def residual_figure(
     return fig
 
 
-def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None) -> Any:
-    """Per shape, the held-out demonstrations (black) and each method's predictions.
+def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None, demo: int = 0) -> Any:
+    """One panel per shape: one held-out demonstration and each method's prediction of it.
 
     ``doc`` is :func:`baselines.position_bench.run_benchmark`'s result (with its
-    ``_truth`` and ``_predictions``). One row per shape (``shapes``, default up to 8 shapes
-    spread over the benchmark), one panel per method, so a panel holds only the
-    demonstrations and one method's prediction of them. Axes are in the data's unit;
-    one legend below the panels.
+    ``_truth`` and ``_predictions``); ``shapes`` defaults to every scored shape; ``demo``
+    picks which of each shape's scored demonstrations is drawn (the first by default,
+    not chosen by any method's error). A panel holds that demonstration (black) and the
+    prediction of every method, ``line`` included; axes are in the data's unit; one
+    legend below the panels.
     """
-    all_shapes = list(doc["_truth"])
-    if shapes is None:
-        step = max(1, math.ceil(len(all_shapes) / 8))
-        shapes = all_shapes[::step][:8]
+    shapes = list(doc["_truth"]) if shapes is None else list(shapes)
     methods = list(doc["methods"])
     unit = doc.get("unit") or "data unit"
-    fig = new_figure(2.3 * len(methods) + 0.6, 2.15 * len(shapes) + 0.9)
-    axes = np.atleast_2d(fig.subplots(len(shapes), len(methods), squeeze=False))
-    for r, shape in enumerate(shapes):
+    cols = min(6, len(shapes))
+    rows = math.ceil(len(shapes) / cols)
+    fig = new_figure(2.35 * cols + 0.4, 2.3 * rows + 1.0)
+    axes = np.atleast_2d(fig.subplots(rows, cols, squeeze=False))
+    for ax, shape in zip(axes.ravel(), shapes, strict=False):
         truth = doc["_truth"][shape]
-        preds = doc["_predictions"][shape]
-        pts = np.concatenate(
-            [truth.reshape(-1, truth.shape[-1])]
-            + [p.reshape(-1, truth.shape[-1]) for p in preds.values()]
-        )
-        lo = np.quantile(pts[:, :2], 0.005, axis=0)
-        hi = np.quantile(pts[:, :2], 0.995, axis=0)
-        pad = 0.08 * float(np.max(hi - lo) or 1.0)
-        for c, method in enumerate(methods):
-            ax = axes[r, c]
+        k = min(demo, truth.shape[0] - 1)
+        y = truth[k]
+        ax.plot(y[:, 0], y[:, 1], color="black", lw=2.2, label="held-out demonstration")
+        for method in methods:
             style = METHOD_STYLE.get(method, {"color": "C4", "ls": "-", "label": method})
-            for k, y in enumerate(truth):
-                ax.plot(
-                    y[:, 0],
-                    y[:, 1],
-                    color="black",
-                    lw=1.6,
-                    alpha=0.8,
-                    label="held-out demonstration" if k == 0 else None,
-                )
-            for k, y in enumerate(preds[method]):
-                ax.plot(
-                    y[:, 0],
-                    y[:, 1],
-                    color=style["color"],
-                    ls=style["ls"],
-                    lw=1.3,
-                    label=style["label"] if k == 0 else None,
-                )
-            ax.plot(*truth[0, 0, :2], "k^", ms=5)
-            ax.plot(*truth[0, -1, :2], "k*", ms=7)
-            ax.set_xlim(lo[0] - pad, hi[0] + pad)
-            ax.set_ylim(lo[1] - pad, hi[1] + pad)
-            ax.set_aspect("equal", adjustable="datalim")
-            ax.tick_params(labelsize=7)
-            ax.grid(alpha=0.25)
-            if r == 0:
-                ax.set_title(method, fontsize=10, color=style["color"])
-            if c == 0:
-                ax.set_ylabel(f"{shape}\ny ({unit})", fontsize=8)
-            if r == len(shapes) - 1:
-                ax.set_xlabel(f"x ({unit})", fontsize=8)
-    handles: list[Any] = []
-    labels: list[str] = []
-    for ax in axes[0]:
-        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-    handles.append(axes[0, 0].plot([], [], "k^", ms=5)[0])
-    labels.append("start")
-    handles.append(axes[0, 0].plot([], [], "k*", ms=7)[0])
-    labels.append("end")
+            pred = doc["_predictions"][shape][method][k]
+            ax.plot(
+                pred[:, 0],
+                pred[:, 1],
+                color=style["color"],
+                ls=style["ls"],
+                lw=1.3,
+                label=style["label"],
+            )
+        ax.plot(*y[0, :2], "k^", ms=5, label="start")
+        ax.plot(*y[-1, :2], "k*", ms=8, label="end")
+        # a square window around the demonstration, a quarter of its extent wider
+        lo, hi = y[:, :2].min(axis=0), y[:, :2].max(axis=0)
+        centre, half = (lo + hi) / 2, 0.75 * float(np.max(hi - lo) or 1.0)
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_title(shape, fontsize=9)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.25)
+    for ax in axes.ravel()[len(shapes) :]:
+        ax.axis("off")
+    for ax in axes[:, 0]:
+        ax.set_ylabel(f"y ({unit})", fontsize=8)
+    for ax in axes[-1, :]:
+        ax.set_xlabel(f"x ({unit})", fontsize=8)
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
     split = doc.get("split", {}).get("split", "loo")
     scored = "leave one demonstration out" if split == "loo" else f"{split} split"
     fig.suptitle(
-        f"{doc.get('dataset', '')}: held-out demonstrations and each method's prediction "
-        f"from their start, end and duration ({scored}; {len(shapes)} of "
-        f"{len(all_shapes)} shapes)",
+        f"{doc.get('dataset', '')}: one held-out demonstration per shape and each method's "
+        f"prediction of it from its start, end and duration ({scored})",
         fontsize=10,
     )
     return fig
