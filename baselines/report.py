@@ -15,6 +15,7 @@ of its folder name before the first ``-`` (``orientation-vr-kitchen`` ->
 from __future__ import annotations
 
 import base64
+import csv
 import html
 import json
 import math
@@ -74,15 +75,18 @@ def _images(folder: Path, names: Sequence[tuple[str, str]]) -> list[tuple[str, b
 
 
 def _orientation_section(folder: Path, job: dict[str, Any]) -> Section:
-    from baselines.orientation_bench import _label
     from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
 
     doc = json.loads((folder / "results.json").read_text())
+    labels: dict[str, str] = {}
+    if (folder / "results.csv").exists():
+        with open(folder / "results.csv", newline="", encoding="utf-8") as fh:
+            labels = {row["name"]: row["label"] for row in csv.DictReader(fh)}
     c = doc["criteria"]
     paper = doc.get("paper") or FARAWAY_CHOE_TABLE1
     rows = [
         [
-            html.escape(_label(name)),
+            html.escape(labels.get(name, name)),
             f"<code>{html.escape(name)}</code>",
             _fmt(value),
             _fmt(paper.get(name)),
