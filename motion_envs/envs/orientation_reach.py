@@ -16,7 +16,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS, ReplayEnv, ReplayTask, check_choice
+from motion_envs.envs._common import (
+    N_STEPS,
+    ReplayEnv,
+    ReplayTask,
+    as_action,
+    check_choice,
+    check_integer,
+    check_number,
+)
 
 __all__ = [
     "DEFAULT_REWARD_WEIGHTS",
@@ -25,6 +33,11 @@ __all__ = [
     "OrientationTask",
     "load_orientation_task",
 ]
+
+#: Largest Bézier degree of the ``bezier-*`` nominals (the paper uses 2 to 4).
+MAX_DEGREE = 12
+#: Largest ``residual_scale`` in radians (a half turn).
+MAX_RESIDUAL_SCALE = math.pi
 
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
@@ -131,8 +144,8 @@ def load_orientation_task(
 
     check_choice(split, "split", _SPLITS)
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
-    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
-        raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+    check_integer(degree, "degree", 1, MAX_DEGREE)
+    check_number(min_deg, "min_deg", 0.0, 180.0)
     args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
@@ -238,15 +251,19 @@ class OrientationReachEnv(ReplayEnv):
     | `data`           | **str**      | `"vr-kitchen"` | built-in dataset name or a path to the users' orientation CSV |
     | `split`          | **str**      | `"train"`      | `"train"` or `"test"`: the subjects of a split by subject |
     | `nominal`        | **str**      | `"slerp"`      | `"slerp"`, `"bezier-null"`, `"bezier-task"` or `"bezier-subject"` (unseen subjects fall back to the null model) |
-    | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals |
-    | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1 |
+    | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals, 1 to 12 |
+    | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1, in (0, pi] |
     | `reward_weights` | **dict**     | `None`         | weights of the reward terms, keys `residual`, `geodesic`, `action` (None: 1, 0, 0) |
-    | `test_fraction`  | **float**    | `0.25`         | share of subjects held out for the test split |
-    | `split_seed`     | **int**      | `0`            | seed of the subject permutation (`split_by_subject`) |
-    | `min_deg`        | **float**    | `10.0`         | drop trajectories rotating less than this (degrees) |
+    | `test_fraction`  | **float**    | `0.25`         | share of subjects held out for the test split, in (0, 1) |
+    | `split_seed`     | **int**      | `0`            | seed of the subject permutation (`split_by_subject`), >= 0 |
+    | `min_deg`        | **float**    | `10.0`         | drop trajectories rotating less than this (degrees), in [0, 180] |
     | `render_mode`    | **str**      | `None`         | `None` or `"rgb_array"` |
-    | `width`          | **int**      | `480`          | frame width in pixels |
-    | `height`         | **int**      | `480`          | frame height in pixels |
+    | `width`          | **int**      | `480`          | frame width in pixels, 16 to 4096 |
+    | `height`         | **int**      | `480`          | frame height in pixels, 16 to 4096 |
+
+    A bad argument raises `ValueError` naming it (the same in the vector environment);
+    reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
+    is not an array of real numbers (a dict, a string, complex numbers).
 
     ## Version History
     * v0: Initial version.
@@ -270,7 +287,15 @@ class OrientationReachEnv(ReplayEnv):
         height: int = 480,
     ) -> None:
         self._check_arguments(
-            render_mode, width, height, residual_scale, reward_weights, DEFAULT_REWARD_WEIGHTS
+            render_mode,
+            width,
+            height,
+            residual_scale,
+            reward_weights,
+            DEFAULT_REWARD_WEIGHTS,
+            MAX_RESIDUAL_SCALE,
+            test_fraction,
+            split_seed,
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg
@@ -296,9 +321,7 @@ class OrientationReachEnv(ReplayEnv):
         if k >= N_STEPS:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         # the action checks, unrolled for three components (hot path)
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (3,):
-            raise ValueError(f"action must have shape (3,); got shape {a.shape}")
+        a = as_action(action, (3,))
         ax, ay, az = a.tolist()
         if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
             raise ValueError(f"action must be finite; got {a.tolist()}")
