@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets.juggling_demos import (
     SIMULATED_LABEL,
     JugglingDemos,
@@ -57,7 +58,6 @@ from motion_envs.models.juggling_run import (
 )
 from motion_envs.models.juggling_task import PHASES, JugglingNoise, JugglingTask
 from motion_envs.models.juggling_world import BallisticWorld
-from motion_envs.models.serialization import atomic_write_text
 
 __all__ = ["JugglingConfig", "format_report", "register", "run", "write_outputs"]
 
@@ -474,13 +474,14 @@ PHASE_COLORS = {"toss": "C3", "go_down": "C0", "catch": "C2", "return": "C1"}
 
 def plot_figure6(doc: dict[str, Any], path: Path) -> None:
     """Demonstrations (left) and generated cycles (right), phases coloured, ball flights."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     demos: JugglingDemos = doc["_demos"]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), sharex=True, sharey=True)
+    fig = Figure(figsize=(11, 4.8))  # its own Agg canvas: no pyplot, no global backend
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, 2, sharex=True, sharey=True)
     ax = axes[0]
     shown = 0
     for seg in demos.segments():
@@ -506,34 +507,34 @@ def plot_figure6(doc: dict[str, Any], path: Path) -> None:
         a.set_aspect("equal", adjustable="box")
         a.grid(alpha=0.3)
     axes[0].set_ylabel("z (m)")
-    handles = [plt.Line2D([], [], color=c, label=p) for p, c in PHASE_COLORS.items()]
+    handles = [Line2D([], [], color=c, label=p) for p, c in PHASE_COLORS.items()]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
     label = "SIMULATED demonstrations" if demos.simulated else demos.name
     fig.suptitle(f"Juggling, Lippi et al. Fig. 6 style — {label}", fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path, dpi=100)
 
 
 def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
     """A GIF of the first generated cycles (hand, catch circle, ball), labelled SIMULATED."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle
 
     tr = doc["_traces"][0]
     stride = max(1, round(1 / (fps * doc["task"]["dt"])))
     idx = np.arange(0, len(tr.times), stride)
-    fig, ax = plt.subplots(figsize=(4, 4))
+    fig = Figure(figsize=(4, 4))
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
     lo = np.minimum(tr.hand.min(0), tr.ball.min(0)) - 0.1
     hi = np.maximum(tr.hand.max(0), tr.ball.max(0)) + 0.1
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_aspect("equal")
-    hand = plt.Circle(tuple(tr.hand[0]), doc["task"]["catch_radius"], color="C1", alpha=0.4)
-    ball = plt.Circle(tuple(tr.ball[0]), doc["task"]["ball_radius"], color="C3")
+    hand = Circle(tuple(tr.hand[0]), doc["task"]["catch_radius"], color="C1", alpha=0.4)
+    ball = Circle(tuple(tr.ball[0]), doc["task"]["ball_radius"], color="C3")
     ax.add_patch(hand)
     ax.add_patch(ball)
     (path_line,) = ax.plot([], [], color="0.5", lw=0.8)
@@ -550,7 +551,6 @@ def write_animation(doc: dict[str, Any], path: Path, fps: int = 25) -> Path:
     anim = FuncAnimation(fig, draw, frames=idx, blit=False)
     tmp = path.with_suffix(".tmp.gif")
     anim.save(tmp, writer=PillowWriter(fps=fps))
-    plt.close(fig)
     tmp.replace(path)
     return path
 
@@ -559,12 +559,12 @@ class _Filming:
     """A JugglingScene that renders every ``stride``-th step (camera ``side``)."""
 
     def __init__(self, scene: Any, stride: int, width: int = 480, height: int = 360) -> None:
-        import mujoco
+        from motion_envs.envs.rendering import new_mujoco_renderer
 
         self.scene, self.stride, self.task = scene, stride, scene.task
         scene.model.vis.global_.offwidth = max(scene.model.vis.global_.offwidth, width)
         scene.model.vis.global_.offheight = max(scene.model.vis.global_.offheight, height)
-        self.renderer = mujoco.Renderer(scene.model, height, width)
+        self.renderer = new_mujoco_renderer(scene.model, height, width)
         self.frames: list[NDArray[np.uint8]] = []
         self._k = 0
 

@@ -27,7 +27,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CurveRenderer", "HandFrameRenderer", "mujoco_rendering_failure"]
+__all__ = [
+    "CurveRenderer",
+    "HandFrameRenderer",
+    "mujoco_rendering_failure",
+    "new_mujoco_renderer",
+]
 
 # axis lengths of the hand frame (pointing, medium, short), as in the MJCF
 _AXES = np.array([0.8, 0.45, 0.25])
@@ -59,6 +64,24 @@ def _display_problem() -> str | None:
 def mujoco_rendering_failure() -> str | None:
     """Why MuJoCo rendering is unavailable in this process, or None if not known to fail."""
     return _mujoco_failure or _display_problem()
+
+
+def new_mujoco_renderer(model: Any, height: int, width: int) -> Any:
+    """A ``mujoco.Renderer(model, height, width)``, or ``RuntimeError`` saying why MuJoCo
+    rendering is unavailable in this process.
+
+    Uses the process-wide record of :func:`mujoco_rendering_failure` (and adds to it), so
+    a failed OpenGL backend is never tried twice; never writes ``os.environ``.
+    """
+    failure = mujoco_rendering_failure()
+    if failure is None:
+        import mujoco
+
+        try:
+            return mujoco.Renderer(model, height, width)
+        except Exception as exc:  # the backend's import or context creation
+            failure = _remember_failure(f"{type(exc).__name__}: {exc}")
+    raise RuntimeError(f"MuJoCo offscreen rendering is unavailable: {failure}")
 
 
 def _rotations(q: NDArray[np.float64]) -> NDArray[np.float64]:
