@@ -31,7 +31,6 @@ a slerp traversed with a *predicted* speed profile):
 
 from __future__ import annotations
 
-import io
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -416,19 +415,18 @@ def plot_ratios(
     comparisons: list[dict[str, Any]], path: Any, title: str, group: str = "subject"
 ) -> Any:
     """Bar plot of the per-group ratio learned / best analytic (one panel per comparison)."""
-    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from baselines.learned._atomic import atomic_write_bytes
+    from motion_envs._io import save_figure
 
     n = len(comparisons)
     cols = min(2, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(5.5 * cols, 3.4 * rows), squeeze=False, constrained_layout=True
-    )
+    # its own Agg canvas: no pyplot, no global backend switch
+    fig = Figure(figsize=(5.5 * cols, 3.4 * rows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(rows, cols, squeeze=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     for ax, c in zip(axes.ravel(), comparisons, strict=False):
@@ -445,7 +443,4 @@ def plot_ratios(
         ax.set_ylabel("median max error ratio")
         ax.set_title(f"{c['learned']} /\n{c['best_analytic']}: {c['ratio']:.3f}", fontsize=8)
     fig.suptitle(title, fontsize=9)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    plt.close(fig)
-    return atomic_write_bytes(path, buf.getvalue())
+    return save_figure(fig, path, dpi=100)
