@@ -138,3 +138,37 @@ def test_motion_bench_all_writes_the_report(tmp_path):
     page.feed((out / "report.html").read_text())
     assert len(page.h2) == 1 and "vr-kitchen" in page.h2[0]
     assert len(page.tables) == 1 and len(page.images) == 1
+
+
+def test_juggling_section_has_catch_rates_per_phase_errors_and_the_figure(tmp_path):
+    folder = tmp_path / "juggling"
+    argv = ["juggling", "--cycles", "12", "--world", "model", "--no-video", "--no-progress"]
+    assert main([*argv, "--out", str(folder)]) == 0
+    job = {"folder": "juggling", "title": "Juggling (SIMULATED)", "exit_code": 0}
+    (tmp_path / "index.json").write_text(json.dumps({"jobs": [job]}))
+    page = _Collector()
+    page.feed(write_report(tmp_path).read_text())
+    doc = json.loads((folder / "results.json").read_text())
+    assert page.h2 == ["Juggling (SIMULATED)"]
+    catch, phases = page.tables
+    # one row per catch-rate run: the unperturbed one, then each noise level off/on
+    rates = [r for r in catch["rows"] if r]
+    assert len(rates) == 1 + len(doc["catch_rates"])
+    assert rates[0][3] == f"{doc['catch_rate']:.3f}"
+    for row, run in zip(rates[1:], doc["catch_rates"], strict=True):
+        assert row[2] == ("on" if run["correction"] else "off")
+        assert row[3] == f"{run['catch_rate']:.3f}"
+    # one row per phase: each method's max error (RMSE), within-person, the ratio
+    methods = list(next(iter(doc["per_phase"].values()))["methods"])
+    assert phases["header"] == ["phase", "N (sines)", *methods, "within-person", "lippi / within"]
+    body = [r for r in phases["rows"] if r]
+    assert [r[0] for r in body] == list(doc["per_phase"])
+    for row, v in zip(body, doc["per_phase"].values(), strict=True):
+        assert row[2] == (
+            f"{v['methods']['lippi']['max_error']:.4f} ({v['methods']['lippi']['rmse']:.4f})"
+        )
+    # simulated data labelled as such in every table and the figure
+    assert doc["simulated"]
+    assert all("SIMULATED" in t["caption"] for t in page.tables)
+    assert len(page.images) == 1 and "SIMULATED" in page.images[0]["alt"]
+    assert base64.b64decode(page.images[0]["src"].split(",", 1)[1])[:4] == b"\x89PNG"
