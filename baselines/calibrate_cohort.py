@@ -13,7 +13,7 @@ log spread)`` within bounds, minimising ``sum_c rho_c(x)^2`` with the relative m
 ``log(value_c / lo_c)`` below it and 0 inside (a point target has ``lo = hi``). The
 cohort's seed is held fixed (common random numbers), so the objective is a
 deterministic, piecewise smooth function of ``x``. The targets are the paper's rows
-that the issue asks to match; the d = 3 and d = 4 rows are not targets (MODELS.md
+that the issue asks to match; the d = 3 and d = 4 rows are not targets (docs/models.md
 explains why the paper's d = 3 null cannot follow from its procedure).
 
 :func:`run` fits (a pure function of a :class:`CalibrateConfig`), :func:`report` is the

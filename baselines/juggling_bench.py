@@ -615,12 +615,12 @@ class _Filming:
     """A JugglingScene that renders every ``stride``-th step (camera ``side``)."""
 
     def __init__(self, scene: Any, stride: int, width: int = 480, height: int = 360) -> None:
-        import mujoco
+        from motion_envs.envs.rendering import new_mujoco_renderer
 
         self.scene, self.stride, self.task = scene, stride, scene.task
         scene.model.vis.global_.offwidth = max(scene.model.vis.global_.offwidth, width)
         scene.model.vis.global_.offheight = max(scene.model.vis.global_.offheight, height)
-        self.renderer = mujoco.Renderer(scene.model, height, width)
+        self.renderer = new_mujoco_renderer(scene.model, height, width)
         self.frames: list[NDArray[np.uint8]] = []
         self._k = 0
 

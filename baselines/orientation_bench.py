@@ -184,34 +184,14 @@ def results_csv(result: Table1Result) -> str:
 def plot_residuals(
     result: Table1Result, dataset: OrientationDataset, path: Path, task: str | None = None
 ) -> Path:
-    """Figure 5 style: three orthogonal, equally scaled views of one task's residual curves.
+    """Figure 5 style residual plot with the fitted models (see :mod:`baselines.plots`).
 
     Written atomically to ``path``; returns it.
     """
-    from matplotlib.figure import Figure
+    from baselines.plots import residual_figure
 
-    tasks, counts = np.unique(dataset.tasks, return_counts=True)
-    chosen = task if task is not None else str(tasks[np.argmax(counts)])
-    if chosen not in tasks:
-        raise ValueError(f"task must be one of {tasks.tolist()}; got {chosen!r}")
-    R = result.residuals[dataset.tasks == chosen]
-    lim = float(np.abs(R).max()) * 1.05 or 1.0
-    fig = Figure(figsize=(12, 4.2), constrained_layout=True)
-    axes = fig.subplots(1, 3)
-    for ax, (i, j) in zip(axes, [(0, 1), (0, 2), (1, 2)], strict=True):
-        for curve in R:
-            ax.plot(curve[:, i], curve[:, j], lw=0.8, alpha=0.7)
-        ax.plot(0, 0, "k+", ms=10)
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.set_xlabel("xyz"[i] + " (rad)")
-        ax.set_ylabel("xyz"[j] + " (rad)")
-        ax.grid(alpha=0.3)
-    fig.suptitle(
-        f"Empirical slerp residuals, {dataset.name}"
-        f"{' (SIMULATED)' if dataset.simulated else ''}, task {chosen!r}: {len(R)} trajectories; "
-        f"max distance from origin {np.linalg.norm(R, axis=2).max():.2f} rad"
+    fig = residual_figure(
+        result.residuals, dataset.tasks, task, dataset=dataset.name, simulated=dataset.simulated
     )
     return save_figure(fig, path, dpi=110)
 

@@ -405,47 +405,12 @@ def _csv_text(doc: dict[str, Any]) -> str:
     return buf.getvalue()
 
 
-def plot_grid(doc: dict[str, Any], path: Path) -> None:
-    """Every shape: scored demonstrations (grey) and each method's predictions of them.
+def plot_grid(doc: dict[str, Any], path: Path) -> Path:
+    """Held-out demonstrations and each method's predictions (see :mod:`baselines.plots`),
+    written atomically to ``path``."""
+    from baselines.plots import shapes_figure
 
-    Written atomically to ``path``.
-    """
-    from matplotlib.figure import Figure
-
-    shapes = list(doc["per_shape"])
-    cols = min(6, len(shapes))
-    rows = math.ceil(len(shapes) / cols)
-    fig = Figure(figsize=(2.6 * cols, 2.6 * rows))
-    axes = fig.subplots(rows, cols, squeeze=False)
-    colors = {
-        "line": "C7",
-        "null": "C2",
-        "lippi": "C3",
-        "dmp": "C0",
-        "promp": "C1",
-        "ridge": "C4",
-        "mlp": "C5",
-    }
-    for ax, shape in zip(axes.ravel(), shapes, strict=False):
-        truth = doc["_truth"][shape]
-        for y in truth:
-            ax.plot(y[:, 0], y[:, 1], color="0.6", lw=2.0)
-        for m, pred in doc["_predictions"][shape].items():
-            if m == "line":
-                continue
-            for k, y in enumerate(pred):
-                ax.plot(y[:, 0], y[:, 1], color=colors[m], lw=0.7, label=m if k == 0 else None)
-        ax.set_title(shape, fontsize=8)
-        ax.set_xticks([])
-        ax.set_yticks([])
-        ax.set_aspect("equal", adjustable="datalim")
-    for ax in axes.ravel()[len(shapes) :]:
-        ax.axis("off")
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower right", fontsize=8)
-    fig.suptitle(f"demonstrations (grey) and predictions, {_split_text(doc['split'])}", fontsize=10)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=90)
+    return save_figure(shapes_figure(doc), path, dpi=100)
 
 
 def run(config: PositionConfig) -> dict[str, Any]:

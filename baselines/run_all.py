@@ -21,7 +21,9 @@ Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an ind
 what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
 false`` until the last one is done), so an interrupted run leaves an index that lists
 exactly the jobs whose files are new. Every file is written atomically: a previous
-result is never left half-written.
+result is never left half-written. After the last job, one self-contained page with
+every table, the papers' values, the plots and a reading of each benchmark goes to
+``OUT/report.html``.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from typing import Any
 
 from baselines import juggling_bench, options, orientation_bench, position_bench
 from baselines.learned import LEARNED_MODES
+from baselines.report import write_report
 from motion_envs._io import atomic_write_text
 
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
@@ -172,7 +175,8 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
         atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
     index["complete"] = True
     atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
-    echo(f"\nall results are in {out}/ (index: {out / 'index.json'})")
+    report = write_report(out)
+    echo(f"\nall results are in {out}/ (index: {out / 'index.json'}; one page: {report})")
     return index
 
 

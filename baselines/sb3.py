@@ -4,7 +4,10 @@
   native batched-numpy environments from
   ``gym.make_vec(id, num_envs=N, vectorization_mode="vector_entry_point")``), so PPO,
   SAC, ... train on thousands of environments without one Python object per copy;
-* :class:`TqdmCallback`: a progress bar (stderr) with the latest mean episode return.
+* :class:`TqdmCallback`: a progress bar (stderr) over the steps ``learn`` really takes
+  (PPO rounds up to whole rollouts), kept moving during policy updates, with the
+  latest mean episode return. SB3's own ``progress_bar=True`` (rich) and
+  ``tensorboard_log`` work too: the ``rl`` extra installs ``rich`` and ``tensorboard``.
 
 Needs the ``rl`` extra (stable-baselines3, torch); importing this module imports SB3.
 
@@ -21,6 +24,7 @@ termination, as SB3's own wrappers do.
 from __future__ import annotations
 
 import sys
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -99,16 +103,79 @@ class GymnasiumVecEnv(VecEnv):
 
 
 class TqdmCallback(BaseCallback):
-    """A tqdm progress bar over ``total`` environment steps, on stderr, showing the mean
-    return of the latest episodes (SB3's ``ep_info_buffer``, filled by ``VecMonitor``)."""
+    """A tqdm progress bar over the environment steps ``learn`` will really take.
 
-    def __init__(self, total: int, desc: str = "training") -> None:
+    The bar's total is what SB3 runs, not what was asked: an on-policy algorithm (PPO,
+    A2C) collects whole rollouts of ``n_steps * n_envs`` steps, so ``learn(T)`` takes
+    ``ceil(T / (n_steps n_envs)) n_steps n_envs`` steps; others take whole vector steps,
+    ``ceil(T / n_envs) n_envs``. The rate is the average over the whole run (tqdm
+    ``smoothing=0``: environment steps per wall-clock second, gradient updates
+    included), and a background thread redraws the bar every ``refresh_seconds`` so the
+    elapsed time and the rate keep moving while the policy is being updated (the
+    postfix says ``collecting`` or ``updating``). The postfix also shows the mean return
+    of the latest episodes (SB3's ``ep_info_buffer``, filled by ``VecMonitor``).
+
+    Parameters
+    ----------
+    total:
+        The ``total_timesteps`` given to ``learn`` (None: read from ``learn`` itself).
+    desc:
+        The bar's label.
+    refresh_seconds:
+        Redraw interval while no step happens (``0`` disables the thread).
+    file:
+        Where the bar is drawn (default ``sys.stderr``).
+    """
+
+    def __init__(
+        self,
+        total: int | None = None,
+        desc: str = "training",
+        refresh_seconds: float = 1.0,
+        file: Any = None,
+    ) -> None:
         super().__init__()
-        self.total = int(total)
+        self.total = None if total is None else int(total)
         self.desc = desc
+        self.refresh_seconds = float(refresh_seconds)
+        self.file = file
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._postfix: dict[str, str] = {}
+
+    def real_total(self, requested: int) -> int:
+        """Steps ``learn(requested)`` takes from the model's current ``num_timesteps``."""
+        n_envs = int(self.training_env.num_envs)
+        n_steps = getattr(self.model, "n_steps", None)
+        chunk = n_envs * int(n_steps) if isinstance(n_steps, int) else n_envs
+        return -(-max(int(requested), 0) // chunk) * chunk
 
     def _on_training_start(self) -> None:
-        self.bar = tqdm(total=self.total, desc=self.desc, unit="step", file=sys.stderr)
+        target = int(self.locals.get("total_timesteps", 0))  # after SB3's _setup_learn
+        requested = target - int(self.model.num_timesteps) if target else self.total or 0
+        self.bar = tqdm(
+            total=self.real_total(requested),
+            desc=self.desc,
+            unit="step",
+            file=self.file if self.file is not None else sys.stderr,
+            smoothing=0,
+            dynamic_ncols=True,
+        )
+        if self.refresh_seconds > 0:
+            self._stop.clear()
+            self._thread = threading.Thread(target=self._refresh_loop, daemon=True)
+            self._thread.start()
+
+    def _refresh_loop(self) -> None:
+        while not self._stop.wait(self.refresh_seconds):
+            self.bar.refresh()
+
+    def _set_postfix(self, **items: str) -> None:
+        self._postfix.update(items)
+        self.bar.set_postfix(self._postfix, refresh=True)
+
+    def _on_rollout_start(self) -> None:
+        self._set_postfix(phase="collecting")
 
     def _on_step(self) -> bool:
         self.bar.update(self.training_env.num_envs)
@@ -117,7 +184,15 @@ class TqdmCallback(BaseCallback):
     def _on_rollout_end(self) -> None:
         buf = self.model.ep_info_buffer
         if buf:
-            self.bar.set_postfix(ep_return=f"{np.mean([e['r'] for e in buf]):.3g}")
+            self._postfix["ep_return"] = f"{np.mean([e['r'] for e in buf]):.3g}"
+        if getattr(self.model, "n_steps", None) is not None:
+            self._set_postfix(phase="updating")
 
     def _on_training_end(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        self._postfix.pop("phase", None)
+        self.bar.set_postfix(self._postfix, refresh=False)
         self.bar.close()

@@ -18,8 +18,6 @@ CASES = [
     (POSITION, {"shapes": SHAPES, "reward_weights": {"action": 0.3}}),
 ]
 BACKENDS = [b for b in K.VECTOR_BACKENDS if b != "numba" or K.numba_available()]
-# strings of the single environments' reset infos, which the native envs do not repeat
-_SINGLE_ONLY = {"trajectory_id", "task", "subject"}
 
 
 def _actions(env: gym.vector.VectorEnv, steps: int, seed: int = 0) -> np.ndarray:
@@ -29,10 +27,10 @@ def _actions(env: gym.vector.VectorEnv, steps: int, seed: int = 0) -> np.ndarray
 
 
 def assert_same_infos(native: dict, reference: dict, where: str = "infos") -> None:
-    """Every key of the reference (but the single envs' strings) with the same mask and
+    """Every key of the reference (the reset infos' strings too) with the same mask and
     the same values under the mask; ``final_obs`` entry by entry; ``final_info`` recursively."""
     for key, value in reference.items():
-        if key.startswith("_") or key in _SINGLE_ONLY:
+        if key.startswith("_"):
             continue
         assert key in native, f"{where}: {key!r} missing"
         mask = reference["_" + key]

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -300,3 +302,74 @@ def test_malformed_shapes_raise_value_error():
             func(*args)
     with pytest.raises(ValueError, match="q0"):
         quat.slerp(np.ones(3), quat.IDENTITY, 0.5, validate=False)
+
+
+# --- the one shared input check of expmap / logmap / conjugate / multiply --------------
+
+_Q = quat.IDENTITY
+_V = np.zeros(3)
+_BAD_QUATERNIONS = {
+    "nan": np.array([1.0, np.nan, 0.0, 0.0]),
+    "inf": np.array([np.inf, 0.0, 0.0, 0.0]),
+    "-inf in a batch": np.vstack([np.tile(_Q, (5, 1)), [[1.0, 0.0, -np.inf, 0.0]]]),
+    "nan in a large batch": np.vstack([np.tile(_Q, (5000, 1)), [[1.0, 0.0, np.nan, 0.0]]]),
+    "inf in a large batch": np.vstack([[[1.0, 0.0, np.inf, 0.0]], np.tile(_Q, (5000, 1))]),
+    "-inf in a large batch": np.vstack([np.tile(_Q, (5000, 1)), [[-np.inf, 0.0, 0.0, 0.0]]]),
+    "opposite infinities": np.array([[np.inf, -np.inf, 0.0, 0.0]]),
+    "scalar": np.float64(1.0),
+    "last axis 3": np.ones(3),
+    "last axis 5": np.ones((2, 5)),
+    "strings": np.array(["1", "0", "0", "0"]),
+    "complex": np.array([1.0 + 1j, 0, 0, 0]),
+    "object": np.array([{}, 0, 0, 0], dtype=object),
+}
+_BAD_VECTORS = {
+    "nan": np.array([np.nan, 0.0, 0.0]),
+    "inf": np.array([[0.0, np.inf, 0.0]]),
+    "scalar": 0.5,
+    "last axis 4": np.zeros(4),
+    "strings": ["a", "b", "c"],
+    "complex": np.array([1j, 0.0, 0.0]),
+}
+
+
+def _calls(kind: str, bad: object):
+    if kind == "v":
+        return [(quat.expmap, (bad,), "v")]
+    return [
+        (quat.logmap, (bad,), "q"),
+        (functools.partial(quat.logmap, validate=False), (bad,), "q"),
+        (quat.conjugate, (bad,), "q"),
+        (quat.multiply, (bad, _Q), "p"),
+        (quat.multiply, (_Q, bad), "q"),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("kind", "case"),
+    [("q", c) for c in _BAD_QUATERNIONS] + [("v", c) for c in _BAD_VECTORS],
+)
+def test_geometry_rejects_nan_inf_and_wrong_shapes(kind, case):
+    bad = (_BAD_QUATERNIONS if kind == "q" else _BAD_VECTORS)[case]
+    for func, args, name in _calls(kind, bad):
+        with pytest.raises(ValueError, match=rf"^{name} (must|contains)"):
+            func(*args)
+
+
+def test_finite_values_whose_sum_overflows_are_accepted():
+    # the fast finiteness test sums; a finite input summing beyond float64 must pass
+    big = np.array([[1e308, 1e308, 1e308, 1e308]])
+    np.testing.assert_array_equal(quat.conjugate(big), [[1e308, -1e308, -1e308, -1e308]])
+    many = np.full((5000, 4), 1e308)
+    np.testing.assert_array_equal(quat.conjugate(many)[:, 1:], -1e308)
+
+
+def test_empty_batches_pass_the_check():
+    assert quat.conjugate(np.empty((0, 4))).shape == (0, 4)
+    assert quat.expmap(np.empty((0, 3))).shape == (0, 4)
+
+
+def test_integer_and_float32_input_still_accepted():
+    np.testing.assert_array_equal(quat.conjugate([1, 0, 0, 0]), [1.0, 0.0, 0.0, 0.0])
+    out = quat.multiply(np.float32([1, 0, 0, 0]), _Q)
+    assert out.dtype == np.float64

@@ -12,10 +12,12 @@ CSV format (one row per sample, header required, extra columns allowed)::
 * ``replicate`` (optional): integer replicate number within the (subject, task) pair;
   without it replicates are numbered 0, 1, ... in file order within each pair.
 * any other **numeric** column is a per-trajectory predictor (e.g. age, height); it must
-  be constant within a trajectory.
+  be constant within a trajectory and at most ``MAX_ABS_VALUE`` (10^12) in absolute value.
 
-Each trajectory needs at least 5 samples. Errors name the file and the line number (the header is
-line 1).
+Each trajectory needs at least 5 samples; ``|t|`` is at most 10^10 s. Errors name the
+file and the line number (the header is line 1; blank lines and multi-line quoted fields
+are counted); an empty, binary or non-UTF-8 file names the file. Labels such as ``NA``,
+``None`` or ``null`` are labels, not missing values.
 """
 
 from __future__ import annotations
@@ -31,7 +33,12 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import MIN_SAMPLES, RaggedTrajectories
-from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
+from motion_envs.datasets.sample_table import (
+    MAX_ABS_VALUE,
+    read_sample_table,
+    replicate_numbers,
+    write_csv,
+)
 from motion_envs.geometry import quaternion as quat
 
 __all__ = [
@@ -199,9 +206,9 @@ def read_orientation_csv(
     subjects, tasks = table.subjects, table.tasks
     if "replicate" in df.columns:
         rep = pd.to_numeric(df["replicate"], errors="coerce").to_numpy(dtype=np.float64)
-        bad_rep = ~np.isfinite(rep) | (rep != np.round(rep)) | (rep < 0)
+        bad_rep = ~np.isfinite(rep) | (rep != np.round(rep)) | (rep < 0) | (rep > 1e9)
         if bad_rep.any():
-            table.fail(bad_rep, "'replicate' must be a non-negative integer")
+            table.fail(bad_rep, "'replicate' must be a non-negative integer (at most 10^9)")
         replicates = table.per_trajectory("replicate").astype(np.int64)
     else:
         replicates = replicate_numbers(subjects, tasks)
@@ -214,6 +221,11 @@ def read_orientation_csv(
         col_values = df[col].to_numpy(dtype=np.float64)
         if not np.all(np.isfinite(col_values)):
             table.fail(~np.isfinite(col_values), f"NaN in predictor column {col!r}")
+        if np.any(np.abs(col_values) > MAX_ABS_VALUE):
+            table.fail(
+                np.abs(col_values) > MAX_ABS_VALUE,
+                f"predictor {col!r} beyond the plausible range |value| <= {MAX_ABS_VALUE:g}",
+            )
         predictors[col] = table.per_trajectory(col).astype(np.float64)
 
     quats = tuple(quat.make_continuous(q[s:e]) for s, e in table.segments())

@@ -8,11 +8,16 @@ CSV format (one row per sample, header required, extra columns ignored)::
 * ``subject``, ``task``: labels (any text); constant within a trajectory. For the
   position benchmark a *task* is one shape/phase, its trajectories the replicates.
 * ``t``: time in seconds, strictly increasing within a trajectory.
-* ``x, y`` and optionally ``z``: positions (any unit, the same for every row).
+* ``x, y`` and optionally ``z``: positions (any unit, the same for every row), at most
+  :data:`MAX_ABS_POSITION` (10^9) in absolute value: a larger value is a corrupt or
+  mis-scaled file (its squares would approach float64's range in the criteria).
 
 Each trajectory needs at least 5 samples. Errors name the file and the line numbers
-(the header is line 1): missing columns, NaN or non-numeric values, unsorted times,
-too few samples, non-contiguous trajectories, labels changing within a trajectory.
+(the header is line 1; blank lines and multi-line quoted fields counted): missing
+columns, NaN or non-numeric values, a time or position beyond its plausible range,
+unsorted times, too few samples, non-contiguous trajectories, labels changing within a
+trajectory; an empty, binary or non-UTF-8 file names the file. Labels such as ``NA``
+or ``null`` are labels, not missing values.
 """
 
 from __future__ import annotations
@@ -29,10 +34,13 @@ from numpy.typing import NDArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.datasets.sample_table import read_sample_table, replicate_numbers, write_csv
 
-__all__ = ["CSV_COLUMNS", "PositionDataset", "read_position_csv"]
+__all__ = ["CSV_COLUMNS", "MAX_ABS_POSITION", "PositionDataset", "read_position_csv"]
 
 #: Required columns of the users' position CSV (``z`` is optional).
 CSV_COLUMNS: tuple[str, ...] = ("trajectory", "subject", "task", "t", "x", "y")
+
+#: Largest plausible ``|x|``, ``|y|``, ``|z|`` of a position CSV (in the file's unit).
+MAX_ABS_POSITION = 1e9
 
 
 @dataclass(frozen=True)
@@ -119,7 +127,13 @@ def read_position_csv(
     Raises ``ValueError`` naming the file and line numbers of the bad rows.
     """
     table = read_sample_table(
-        path, CSV_COLUMNS[4:], min_samples, kind="position", optional_value_columns=("z",)
+        path,
+        CSV_COLUMNS[4:],
+        min_samples,
+        kind="position",
+        optional_value_columns=("z",),
+        max_abs_value=MAX_ABS_POSITION,
+        value_unit="(in the file's unit)",
     )
     return PositionDataset(
         name=table.path.name,

@@ -9,10 +9,25 @@ trajectory; ``subject`` and ``task`` are constant within it. :func:`read_sample_
 checks all of that and raises ``ValueError`` naming the file and the offending line
 numbers (the header is line 1); the format-specific loaders add their own checks with
 :meth:`SampleTable.fail` and :meth:`SampleTable.per_trajectory`.
+
+Line numbers are the physical lines of the file: blank lines (which are skipped) and
+quoted fields spanning several lines are counted, so the number shown is the line a
+text editor shows. The file must be UTF-8 text (a byte-order mark is allowed);
+compressed files (``.gz``, ``.bz2``, ``.xz``, ``.zip``, ``.zst``) are read as pandas does.
+
+Missing values: only an empty label is missing (``NA``, ``None``, ``null`` are valid
+labels); in numeric columns the empty string and :data:`NA_STRINGS` are missing (and
+rejected as such).
+
+Plausible ranges: ``|t|`` at most :data:`MAX_ABS_TIME` seconds (10^10 s covers Unix
+time stamps until the year 2286) and every numeric value at most the loader's
+``max_abs_value`` in absolute value (:data:`MAX_ABS_VALUE` by default); anything
+beyond is a corrupt or mis-scaled file, rejected with its line.
 """
 
 from __future__ import annotations
 
+import csv
 import gzip
 import os
 from collections.abc import Sequence
@@ -28,6 +43,9 @@ from motion_envs._io import atomic_write_bytes, atomic_write_text
 
 __all__ = [
     "LABEL_COLUMNS",
+    "MAX_ABS_TIME",
+    "MAX_ABS_VALUE",
+    "NA_STRINGS",
     "SampleTable",
     "read_csv_exact",
     "read_sample_table",
@@ -37,6 +55,37 @@ __all__ = [
 
 #: Label columns every sample CSV starts with.
 LABEL_COLUMNS: tuple[str, ...] = ("trajectory", "subject", "task")
+
+#: Largest accepted ``|t|`` in seconds (10^10 s: Unix time stamps until the year 2286).
+MAX_ABS_TIME = 1e10
+
+#: Default largest accepted ``|value|`` of a numeric column (any unit).
+MAX_ABS_VALUE = 1e12
+
+#: Cells read as missing in numeric columns (pandas' defaults); labels only miss when empty.
+NA_STRINGS: tuple[str, ...] = (
+    "",
+    "#N/A",
+    "#N/A N/A",
+    "#NA",
+    "-1.#IND",
+    "-1.#QNAN",
+    "-NaN",
+    "-nan",
+    "1.#IND",
+    "1.#QNAN",
+    "<NA>",
+    "N/A",
+    "NA",
+    "NULL",
+    "NaN",
+    "None",
+    "n/a",
+    "nan",
+    "null",
+)
+
+_COMPRESSED = (".gz", ".bz2", ".xz", ".zip", ".zst", ".tar")
 
 
 def replicate_numbers(subjects: NDArray[np.str_], tasks: NDArray[np.str_]) -> NDArray[np.int64]:
@@ -60,10 +109,81 @@ def read_csv_exact(path: str | os.PathLike[str], **kwargs: Any) -> pd.DataFrame:
     return pd.read_csv(path, **kwargs)
 
 
+def _record_lines(path: Path) -> list[int] | None:
+    """Physical line number (1-based) where each data row of ``path`` starts.
+
+    Counts what pandas skips (blank lines) and quoted fields spanning several lines, so
+    row ``i`` of the frame starts on line ``lines[i]``. None for compressed files or when
+    the file cannot be re-read as text (then rows are numbered as if one per line).
+    """
+    if path.suffix.lower() in _COMPRESSED:
+        return None
+    try:
+        with open(path, encoding="utf-8-sig", newline="") as fh:
+            reader = csv.reader(fh)
+            lines: list[int] = []
+            previous_end = 0
+            for record in reader:
+                start = previous_end + 1
+                previous_end = reader.line_num
+                if not record or (len(record) == 1 and not record[0].strip()):
+                    continue  # a blank line: pandas skips it
+                lines.append(start)
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return None
+    return lines[1:]  # the first record is the header
+
+
 def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
-    bad = np.flatnonzero(mask) + 2  # the header is line 1
+    rows = np.flatnonzero(mask)
+    lines = _record_lines(path)
+    if lines is not None and len(lines) >= mask.size:
+        bad = np.asarray(lines)[rows]
+    else:
+        bad = rows + 2  # the header is line 1
     shown = ", ".join(str(b) for b in bad[:10]) + (" ..." if bad.size > 10 else "")
     raise ValueError(f"{path}: {what} on line(s) {shown} ({bad.size} row(s))")
+
+
+def _read_frame(path: Path, kind: str) -> pd.DataFrame:
+    """The raw table; ``ValueError`` naming the file for an empty, binary, non-UTF-8 or
+    malformed file. Labels are text; only an empty label is missing."""
+    if path.is_dir():
+        raise ValueError(f"{kind} CSV {path} is a folder, not a file")
+    if path.suffix.lower() not in _COMPRESSED:
+        with open(path, "rb") as fh:
+            head = fh.read(65536)
+        if not head.strip():
+            raise ValueError(f"{path}: empty file; expected a header line and data rows")
+        if b"\0" in head:
+            raise ValueError(f"{path}: binary file (NUL bytes), not a CSV text file")
+        try:
+            head.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            if exc.end < len(head) - 3:  # not merely a character cut at the chunk's end
+                raise _encoding_error(path, exc) from None
+    try:
+        header = read_csv_exact(path, nrows=0).columns
+        na = {c: ([""] if c in LABEL_COLUMNS else list(NA_STRINGS)) for c in header}
+        return read_csv_exact(
+            path,
+            dtype={c: str for c in LABEL_COLUMNS if c in header},
+            keep_default_na=False,
+            na_values=na,
+        )
+    except pd.errors.EmptyDataError:
+        raise ValueError(f"{path}: empty file; expected a header line and data rows") from None
+    except UnicodeDecodeError as exc:
+        raise _encoding_error(path, exc) from None
+    except pd.errors.ParserError as exc:
+        raise ValueError(f"{path}: not a well-formed CSV file: {exc}") from None
+
+
+def _encoding_error(path: Path, exc: UnicodeDecodeError) -> ValueError:
+    return ValueError(
+        f"{path}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start}); "
+        "save the CSV as UTF-8"
+    )
 
 
 def _per_trajectory(
@@ -129,6 +249,8 @@ def read_sample_table(
     min_samples: int,
     kind: str,
     optional_value_columns: Sequence[str] = (),
+    max_abs_value: float = MAX_ABS_VALUE,
+    value_unit: str = "",
 ) -> SampleTable:
     """Read a sample CSV and check the layout shared by every format.
 
@@ -144,17 +266,23 @@ def read_sample_table(
         Word used in messages (``"orientation"``, ``"position"``).
     optional_value_columns:
         Numeric columns appended to ``values`` when the file has them (e.g. ``z``).
+    max_abs_value:
+        Largest plausible ``|value|`` of the value columns.
+    value_unit:
+        Unit named in the message when a value is beyond ``max_abs_value``.
 
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file
-    and line numbers for: missing columns, empty labels, NaN/inf/non-numeric values,
-    non-contiguous trajectories, too few samples, times that do not strictly increase,
-    subject or task labels changing within a trajectory.
+    for a folder, an empty, binary or non-UTF-8 file, and naming the file and the line
+    numbers for: missing columns, empty labels, NaN/inf/non-numeric values, a time
+    beyond :data:`MAX_ABS_TIME` or a value beyond ``max_abs_value``, non-contiguous
+    trajectories, too few samples, times that do not strictly increase, subject or task
+    labels changing within a trajectory.
     """
     p = Path(path)
     if not p.exists():
         raise FileNotFoundError(f"{kind} CSV {p} does not exist")
     required = (*LABEL_COLUMNS, "t", *value_columns)
-    frame = read_csv_exact(p, dtype={c: str for c in LABEL_COLUMNS})
+    frame = _read_frame(p, kind)
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise ValueError(f"{p}: missing column(s) {missing}; expected header {','.join(required)}")
@@ -169,6 +297,18 @@ def read_sample_table(
     nonfinite = ~np.isfinite(data).all(axis=1)
     if nonfinite.any():
         _fail(p, nonfinite, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
+    absurd_t = np.abs(data[:, 0]) > MAX_ABS_TIME
+    if absurd_t.any():
+        _fail(p, absurd_t, f"time 't' beyond the plausible range |t| <= {MAX_ABS_TIME:g} s")
+    huge = (np.abs(data[:, 1:]) > max_abs_value).any(axis=1)
+    if huge.any():
+        unit = f" {value_unit}" if value_unit else ""
+        _fail(
+            p,
+            huge,
+            f"value in {'/'.join(numeric[1:])} beyond the plausible range "
+            f"|value| <= {max_abs_value:g}{unit}",
+        )
 
     traj = frame["trajectory"].to_numpy(dtype=str)
     starts = np.flatnonzero(np.concatenate([[True], traj[1:] != traj[:-1]]))

@@ -20,19 +20,109 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = [
+    "MAX_FRAME_SIZE",
+    "MAX_NUM_ENVS",
+    "MAX_REWARD_WEIGHT",
     "N_STEPS",
     "JsonSpecMixin",
     "ReplayEnv",
     "ReplayTask",
+    "as_action",
     "check_choice",
+    "check_fraction",
+    "check_integer",
+    "check_max_episode_steps",
+    "check_num_envs",
+    "check_number",
     "check_reward_weights",
     "check_scale",
+    "check_seed",
     "check_val_fraction",
+    "reset_labels",
     "timing_bounds",
 ]
 
 #: Steps per episode: the 50 points of the normalised-time grid.
 N_STEPS = 50
+
+#: Largest accepted reward weight (keeps every reward finite: errors are bounded).
+MAX_REWARD_WEIGHT = 1e6
+
+#: Largest accepted frame ``width`` / ``height`` in pixels.
+MAX_FRAME_SIZE = 4096
+
+#: Largest accepted ``num_envs`` of a native vector environment.
+MAX_NUM_ENVS = 2**24
+
+# The checks below are shared by the single and the native vector environments (the
+# vector environments build a single one first), so the same bad argument raises the
+# same ValueError in both.
+
+
+def check_number(value: Any, name: str, low: float, high: float, low_open: bool = False) -> float:
+    """``value`` as a finite ``float`` in ``[low, high]`` (``(low, high]`` if ``low_open``).
+
+    Bools, strings, complex and NaN/inf are rejected with ``ValueError`` naming ``name``.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be a real number; got {value!r}")
+    v = float(value)
+    below = v <= low if low_open else v < low
+    if not math.isfinite(v) or below or v > high:
+        bracket = "(" if low_open else "["
+        raise ValueError(f"{name} must be finite and in {bracket}{low:g}, {high:g}]; got {value!r}")
+    return v
+
+
+def check_integer(value: Any, name: str, low: int, high: int) -> int:
+    """``value`` as an ``int`` in ``[low, high]``; ``ValueError`` naming ``name`` else."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {value!r}")
+    if not low <= value <= high:
+        raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {value!r}")
+    return int(value)
+
+
+def check_fraction(test_fraction: Any) -> float:
+    """``test_fraction`` as a float strictly between 0 and 1."""
+    v = check_number(test_fraction, "test_fraction", 0.0, 1.0, low_open=True)
+    if v >= 1.0:
+        raise ValueError(f"test_fraction must be finite and in (0, 1); got {test_fraction!r}")
+    return v
+
+
+def check_seed(value: Any, name: str = "split_seed") -> int:
+    """A seed: an integer in ``[0, 2**63 - 1]``."""
+    return check_integer(value, name, 0, 2**63 - 1)
+
+
+def check_num_envs(num_envs: Any) -> int:
+    """``num_envs`` of a native vector environment: an integer in ``[1, MAX_NUM_ENVS]``."""
+    return check_integer(num_envs, "num_envs", 1, MAX_NUM_ENVS)
+
+
+def check_max_episode_steps(max_episode_steps: Any, default: int) -> int:
+    """``max_episode_steps`` (``None``: ``default``): an integer ``>= 1``."""
+    if max_episode_steps is None:
+        return default
+    return check_integer(max_episode_steps, "max_episode_steps", 1, 2**62)
+
+
+def as_action(action: Any, shape: tuple[int, ...], name: str = "action") -> NDArray[np.float64]:
+    """``action`` as a float64 array of ``shape``.
+
+    ``ValueError`` for a non-numeric action (a dict, a string, complex numbers, objects)
+    or a wrong shape; finiteness and clipping are left to the caller's hot path.
+    """
+    a = np.asarray(action)
+    if a.dtype.kind not in "fiu":
+        raise ValueError(
+            f"{name} must be an array of real numbers; got {type(action).__name__} "
+            f"(dtype {a.dtype})"
+        )
+    if a.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}; got shape {a.shape}")
+    return a.astype(np.float64, copy=False)
 
 
 def check_choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
@@ -56,21 +146,33 @@ def check_reward_weights(
             raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
         if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
             raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"reward_weights[{key!r}] must be finite and >= 0; got {value!r}")
+        if not math.isfinite(value) or not 0 <= value <= MAX_REWARD_WEIGHT:
+            raise ValueError(
+                f"reward_weights[{key!r}] must be finite and in [0, {MAX_REWARD_WEIGHT:g}]; "
+                f"got {value!r}"
+            )
         out[key] = float(value)
     return out
 
 
-def check_scale(residual_scale: float) -> float:
-    """``residual_scale`` as a finite ``float > 0``."""
-    if isinstance(residual_scale, bool) or not isinstance(
-        residual_scale, (int, float, np.floating)
-    ):
-        raise ValueError(f"residual_scale must be a number > 0; got {residual_scale!r}")
-    if not math.isfinite(residual_scale) or residual_scale <= 0:
-        raise ValueError(f"residual_scale must be finite and > 0; got {residual_scale!r}")
-    return float(residual_scale)
+def check_scale(residual_scale: Any, maximum: float = math.inf) -> float:
+    """``residual_scale`` as a finite ``float`` in ``(0, maximum]``."""
+    return check_number(residual_scale, "residual_scale", 0.0, maximum, low_open=True)
+
+
+def reset_labels(task: Any) -> dict[str, NDArray[np.object_]]:
+    """The text entries of a single environment's reset ``info``, for every trajectory.
+
+    ``trajectory_id`` and ``task`` (and ``subject`` when the task has subjects) ->
+    ``(L,)`` object array of ``str``; the native vector environments batch these exactly
+    as ``SyncVectorEnv`` batches the single environments' reset infos.
+    """
+    fields = {"trajectory_id": "trajectory_ids", "task": "tasks", "subject": "subjects"}
+    return {
+        key: np.asarray(getattr(task, attr)).astype(str).astype(object)
+        for key, attr in fields.items()
+        if hasattr(task, attr)
+    }
 
 
 def check_val_fraction(val_fraction: float, split: str) -> float:
@@ -157,17 +259,26 @@ class ReplayEnv(JsonSpecMixin, gym.Env):
         residual_scale: float,
         reward_weights: Mapping[str, float] | None,
         default_weights: Mapping[str, float],
+        max_scale: float = math.inf,
+        test_fraction: float = 0.25,
+        split_seed: int = 0,
     ) -> None:
-        """Check and store the arguments every replay environment takes; no episode yet."""
+        """Check and store the arguments every replay environment takes; no episode yet.
+
+        ``residual_scale`` must lie in ``(0, max_scale]``, ``test_fraction`` in ``(0, 1)``,
+        ``split_seed`` be an integer ``>= 0``, ``width`` and ``height`` integers in
+        ``[16, MAX_FRAME_SIZE]``, reward weights in ``[0, MAX_REWARD_WEIGHT]``.
+        """
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
                 f"render_mode must be None or one of {self.metadata['render_modes']}; "
                 f"got {render_mode!r}"
             )
         for name, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 16:
-                raise ValueError(f"{name} must be an integer >= 16; got {value!r}")
-        self.residual_scale = check_scale(residual_scale)
+            check_integer(value, name, 16, MAX_FRAME_SIZE)
+        self.residual_scale = check_scale(residual_scale, max_scale)
+        check_fraction(test_fraction)
+        check_seed(split_seed)
         self.reward_weights = check_reward_weights(reward_weights, default_weights)
         self.render_mode = render_mode
         self.width, self.height = int(width), int(height)

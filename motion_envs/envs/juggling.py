@@ -425,11 +425,11 @@ class JugglingEnv(gym.Env):
         if self._state is None:
             raise RuntimeError("call reset() before render()")
         if self._renderer is None:
-            import mujoco
+            from motion_envs.envs.rendering import new_mujoco_renderer
 
             self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
             self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
-            self._renderer = mujoco.Renderer(self.model, self.height, self.width)
+            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
         self.scene.sync()
         self._renderer.update_scene(self.data, camera="side")
         return self._renderer.render()

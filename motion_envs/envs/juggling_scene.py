@@ -64,15 +64,12 @@ import math
 from importlib import resources
 from typing import Any
 
+import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs.rendering import prefer_offscreen_gl
 from motion_envs.models.juggling_world import TRACKING_ROWS, draw_episode_noise
-
-prefer_offscreen_gl()  # MUJOCO_GL=egl when headless, before MuJoCo is first imported
-import mujoco  # noqa: E402
 
 __all__ = ["SCENE_XML", "JugglingScene", "check_task", "load_juggling_model"]
 

@@ -20,7 +20,10 @@ from motion_envs.envs._common import (
     N_STEPS,
     ReplayEnv,
     ReplayTask,
+    as_action,
     check_choice,
+    check_integer,
+    check_number,
     check_val_fraction,
     timing_bounds,
 )
@@ -32,6 +35,11 @@ __all__ = [
     "OrientationTask",
     "load_orientation_task",
 ]
+
+#: Largest Bézier degree of the ``bezier-*`` nominals (the paper uses 2 to 4).
+MAX_DEGREE = 12
+#: Largest ``residual_scale`` in radians (a half turn).
+MAX_RESIDUAL_SCALE = math.pi
 
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
@@ -154,8 +162,8 @@ def load_orientation_task(
 
     check_choice(split, "split", _SPLITS)
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
-    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
-        raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+    check_integer(degree, "degree", 1, MAX_DEGREE)
+    check_number(min_deg, "min_deg", 0.0, 180.0)
     val_fraction = check_val_fraction(val_fraction, split)
     args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
     args += (val_fraction, bool(observe_timing))
@@ -272,17 +280,21 @@ class OrientationReachEnv(ReplayEnv):
     | `data`           | **str**      | `"vr-kitchen"` | built-in dataset name or a path to the users' orientation CSV |
     | `split`          | **str**      | `"train"`      | `"train"`, `"val"` or `"test"`: the subjects of a split by subject |
     | `nominal`        | **str**      | `"slerp"`      | `"slerp"`, `"bezier-null"`, `"bezier-task"` or `"bezier-subject"` (unseen subjects fall back to the null model) |
-    | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals |
-    | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1 |
+    | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals, 1 to 12 |
+    | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1, in (0, pi] |
     | `reward_weights` | **dict**     | `None`         | weights of the reward terms, keys `residual`, `geodesic`, `action` (None: 1, 0, 0) |
-    | `test_fraction`  | **float**    | `0.25`         | share of subjects held out for the test split |
-    | `split_seed`     | **int**      | `0`            | seed of the subject permutation (`split_by_subject`) |
-    | `min_deg`        | **float**    | `10.0`         | drop trajectories rotating less than this (degrees) |
+    | `test_fraction`  | **float**    | `0.25`         | share of subjects held out for the test split, in (0, 1) |
+    | `split_seed`     | **int**      | `0`            | seed of the subject permutation (`split_by_subject`), >= 0 |
+    | `min_deg`        | **float**    | `10.0`         | drop trajectories rotating less than this (degrees), in [0, 180] |
     | `render_mode`    | **str**      | `None`         | `None` or `"rgb_array"` |
     | `width`          | **int**      | `480`          | frame width in pixels |
     | `height`         | **int**      | `480`          | frame height in pixels |
     | `val_fraction`   | **float**    | `0.0`          | share of the *training* subjects held out as `split="val"`; with it `"train"` holds the others and its nominal is fitted on them only (`"test"` is unchanged) |
     | `observe_timing` | **bool**     | `False`        | append the duration and the elapsed time to the observation (`True` in `-v1`) |
+
+    A bad argument raises `ValueError` naming it (the same in the vector environment);
+    reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
+    is not an array of real numbers (a dict, a string, complex numbers).
 
     ## Version History
     * v1: the observation also holds the movement's duration and the elapsed time
@@ -310,7 +322,15 @@ class OrientationReachEnv(ReplayEnv):
         observe_timing: bool = False,
     ) -> None:
         self._check_arguments(
-            render_mode, width, height, residual_scale, reward_weights, DEFAULT_REWARD_WEIGHTS
+            render_mode,
+            width,
+            height,
+            residual_scale,
+            reward_weights,
+            DEFAULT_REWARD_WEIGHTS,
+            MAX_RESIDUAL_SCALE,
+            test_fraction,
+            split_seed,
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg,
@@ -337,9 +357,7 @@ class OrientationReachEnv(ReplayEnv):
         if k >= N_STEPS:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         # the action checks, unrolled for three components (hot path)
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (3,):
-            raise ValueError(f"action must have shape (3,); got shape {a.shape}")
+        a = as_action(action, (3,))
         ax, ay, az = a.tolist()
         if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
             raise ValueError(f"action must be finite; got {a.tolist()}")

@@ -20,6 +20,8 @@ from motion_envs.envs._common import (
     N_STEPS,
     ReplayEnv,
     ReplayTask,
+    as_action,
+    check_integer,
     check_val_fraction,
     timing_bounds,
 )
@@ -30,6 +32,12 @@ __all__ = [
     "PositionTask",
     "load_position_task",
 ]
+
+#: Largest ``residual_scale`` (the data's unit): the CSV loader's largest position, so
+#: the observation bounds stay finite in float32.
+MAX_POSITION_RESIDUAL_SCALE = 1e9
+#: Largest ``n_sines``: the interior points of the 50-point grid.
+MAX_N_SINES = N_STEPS - 2
 
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_POSITION_REWARD_WEIGHTS: Mapping[str, float] = {"distance": 1.0, "action": 0.0}
@@ -194,6 +202,8 @@ def load_position_task(
     if split not in splits:
         raise ValueError(f"split must be one of {list(splits)}; got {split!r}")
     val_fraction = check_val_fraction(val_fraction, split)
+    if n_sines != "auto":
+        check_integer(n_sines, "n_sines", 0, MAX_N_SINES)
     PositionNominal(nominal, n_sines)  # validates nominal and n_sines
     assert nominal in POSITION_NOMINALS
     if shapes is not None:
@@ -300,16 +310,20 @@ class PositionReachEnv(ReplayEnv):
     | `shapes`         | **list**     | `None`    | shapes (LASA) or tasks (CSV) to use; None: all |
     | `split`          | **str**      | `"train"` | `"train"`, `"val"`, `"test"` (held-out demonstrations of each task, `split_by_replicate`) or `"loo"` (every demonstration, nominal fitted on the others) |
     | `nominal`        | **str**      | `"sine"`  | `"line"`, `"null"` (line + mean residual) or `"sine"` (Lippi's regression) |
-    | `n_sines`        | **int/str**  | `"auto"`  | number of sines of `"sine"`, or `"auto"` (leave-one-out CV, 0..15) |
-    | `residual_scale` | **float**    | `5.0`     | offset of an action of 1, in the data's unit (mm for LASA) |
+    | `n_sines`        | **int/str**  | `"auto"`  | number of sines of `"sine"` (0 to 48), or `"auto"` (leave-one-out CV, 0..15) |
+    | `residual_scale` | **float**    | `5.0`     | offset of an action of 1, in the data's unit (mm for LASA), in (0, 1e9] |
     | `reward_weights` | **dict**     | `None`    | weights of the reward terms, keys `distance`, `action` (None: 1, 0) |
-    | `test_fraction`  | **float**    | `0.25`    | share of each task's demonstrations held out for the test split |
-    | `split_seed`     | **int**      | `0`       | seed of the split (`split_by_replicate`) |
+    | `test_fraction`  | **float**    | `0.25`    | share of each task's demonstrations held out for the test split, in (0, 1) |
+    | `split_seed`     | **int**      | `0`       | seed of the split (`split_by_replicate`), >= 0 |
     | `render_mode`    | **str**      | `None`    | `None` or `"rgb_array"` |
     | `width`          | **int**      | `480`     | frame width in pixels |
     | `height`         | **int**      | `480`     | frame height in pixels |
     | `val_fraction`   | **float**    | `0.0`     | share of each task's *training* demonstrations held out as `split="val"`; with it `"train"` holds the others and the nominals are fitted on them only (`"test"`, `"loo"` unchanged) |
     | `observe_timing` | **bool**     | `False`   | append the duration and the elapsed time to the observation (`True` in `-v1`) |
+
+    A bad argument raises `ValueError` naming it (the same in the vector environment);
+    reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
+    is not an array of real numbers (a dict, a string, complex numbers).
 
     ## Version History
     * v1: the observation also holds the movement's duration and the elapsed time
@@ -343,6 +357,9 @@ class PositionReachEnv(ReplayEnv):
             residual_scale,
             reward_weights,
             DEFAULT_POSITION_REWARD_WEIGHTS,
+            MAX_POSITION_RESIDUAL_SCALE,
+            test_fraction,
+            split_seed,
         )
         self.task = load_position_task(
             data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale,
@@ -365,10 +382,7 @@ class PositionReachEnv(ReplayEnv):
         if k >= N_STEPS:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         D = self._D
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (D,):
-            raise ValueError(f"action must have shape ({D},); got shape {a.shape}")
-        acts = a.tolist()
+        acts = as_action(action, (D,)).tolist()
         for v in acts:
             if not math.isfinite(v):
                 raise ValueError(f"action must be finite; got {acts}")

@@ -3,11 +3,15 @@
 * :class:`HandFrameRenderer` (orientation): a MuJoCo scene
   (``assets/hand_frames.xml``) with three hand frames at the origin, the human's
   (green), the nominal's (translucent grey) and the agent's (orange), each with a long
-  pointing axis, a medium and a short axis; dots trace the tip of the human's and the
-  agent's pointing axis so far. MuJoCo renders offscreen through EGL or OSMesa: when
-  ``MUJOCO_GL`` is unset and there is no display, ``MUJOCO_GL=egl`` is set before MuJoCo
-  is first imported. Without a working OpenGL backend the same scene is drawn with
-  matplotlib's Agg canvas instead (``backend`` says which is used).
+  pointing axis, a medium and a short axis, labelled with its name; dots trace the tip
+  of the human's and the agent's pointing axis so far. MuJoCo renders through the
+  OpenGL backend the user chose with ``MUJOCO_GL`` (``egl`` or ``osmesa`` offscreen;
+  ``glfw``, the default, needs a display). This module never writes ``os.environ``.
+  Without a working backend (e.g. ``glfw`` or no ``MUJOCO_GL`` on a machine without a
+  display) the same scene is drawn with matplotlib's Agg canvas instead (``backend``
+  says which is used, and one warning says why). The outcome of the first attempt is
+  remembered for the process: a failed OpenGL backend is never tried twice (a second
+  GLFW initialisation without a display can abort the interpreter).
 * :class:`CurveRenderer` (position): the human demonstration, the nominal and the
   agent's positions so far as curves (matplotlib Agg; first two coordinates).
 """
@@ -16,26 +20,68 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from importlib import resources
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["CurveRenderer", "HandFrameRenderer", "prefer_offscreen_gl"]
+__all__ = [
+    "CurveRenderer",
+    "HandFrameRenderer",
+    "mujoco_rendering_failure",
+    "new_mujoco_renderer",
+]
 
 # axis lengths of the hand frame (pointing, medium, short), as in the MJCF
 _AXES = np.array([0.8, 0.45, 0.25])
 _COLORS = {"human": (0.1, 0.65, 0.2), "nominal": (0.5, 0.5, 0.5), "agent": (0.95, 0.5, 0.05)}
 
 
-def prefer_offscreen_gl() -> None:
-    """Set ``MUJOCO_GL=egl`` when MuJoCo is not imported yet, ``MUJOCO_GL`` is unset and
-    there is no display (X11 or Wayland); otherwise change nothing. Call it before the
-    first ``import mujoco`` of a module that renders offscreen."""
-    if "mujoco" not in sys.modules and "MUJOCO_GL" not in os.environ:
+# Why MuJoCo rendering is unavailable in this process (None: not known to fail). Set
+# once, by the first HandFrameRenderer that tries, and never retried.
+_mujoco_failure: str | None = None
+
+_NEEDS_DISPLAY = ("", "glfw", "glx", "enable", "enabled", "on", "true", "1")
+
+
+def _display_problem() -> str | None:
+    """Why MuJoCo's OpenGL backend cannot work here without trying it, or None."""
+    gl = os.environ.get("MUJOCO_GL")
+    value = "" if gl is None else gl.lower().strip()
+    if sys.platform.startswith("linux") and value in _NEEDS_DISPLAY:
         if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-            os.environ["MUJOCO_GL"] = "egl"
+            shown = "unset" if gl is None else repr(gl)
+            return (
+                f"MUJOCO_GL is {shown}, which needs a display, and there is none; set "
+                "MUJOCO_GL=egl (libegl) or MUJOCO_GL=osmesa (libosmesa6) for offscreen "
+                "rendering"
+            )
+    return None
+
+
+def mujoco_rendering_failure() -> str | None:
+    """Why MuJoCo rendering is unavailable in this process, or None if not known to fail."""
+    return _mujoco_failure or _display_problem()
+
+
+def new_mujoco_renderer(model: Any, height: int, width: int) -> Any:
+    """A ``mujoco.Renderer(model, height, width)``, or ``RuntimeError`` saying why MuJoCo
+    rendering is unavailable in this process.
+
+    Uses the process-wide record of :func:`mujoco_rendering_failure` (and adds to it), so
+    a failed OpenGL backend is never tried twice; never writes ``os.environ``.
+    """
+    failure = mujoco_rendering_failure()
+    if failure is None:
+        import mujoco
+
+        try:
+            return mujoco.Renderer(model, height, width)
+        except Exception as exc:  # the backend's import or context creation
+            failure = _remember_failure(f"{type(exc).__name__}: {exc}")
+    raise RuntimeError(f"MuJoCo offscreen rendering is unavailable: {failure}")
 
 
 def _rotations(q: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -73,19 +119,19 @@ class HandFrameRenderer:
         self._fig: Any = None
         self.backend = "matplotlib"
         if backend in ("auto", "mujoco"):
-            try:
-                self._init_mujoco()
-                self.backend = "mujoco"
-            except Exception as exc:
+            failure = mujoco_rendering_failure()
+            if failure is None:
+                try:
+                    self._init_mujoco()
+                    self.backend = "mujoco"
+                except Exception as exc:  # the backend's import or context creation
+                    failure = _remember_failure(f"{type(exc).__name__}: {exc}")
+            if failure is not None:
                 if backend == "mujoco":
-                    raise RuntimeError(
-                        "MuJoCo offscreen rendering is unavailable; install libegl-mesa0 and "
-                        "set MUJOCO_GL=egl (or libosmesa6 and MUJOCO_GL=osmesa): "
-                        f"{type(exc).__name__}: {exc}"
-                    ) from exc
+                    raise RuntimeError(f"MuJoCo offscreen rendering is unavailable: {failure}")
+                _warn_once(failure)
 
     def _init_mujoco(self) -> None:
-        prefer_offscreen_gl()
         import mujoco
 
         xml = (resources.files("motion_envs.envs") / "assets" / "hand_frames.xml").read_text()
@@ -139,8 +185,23 @@ class HandFrameRenderer:
                     np.array([*rgb, 0.9], dtype=np.float32),
                 )
                 scene.ngeom += 1
-        frame: NDArray[np.uint8] = self._renderer.render().copy()
-        return frame
+        # a text label at the tip of each frame's pointing axis
+        for name, q in current.items():
+            if scene.ngeom >= scene.maxgeom:
+                break
+            tip = _rotations(q[None])[0][:, 0] * _AXES[0] * 0.6
+            geom = scene.geoms[scene.ngeom]
+            mj.mjv_initGeom(
+                geom,
+                mj.mjtGeom.mjGEOM_LABEL,
+                np.zeros(3),
+                tip,
+                eye,
+                np.array([*_COLORS[name], 1.0], dtype=np.float32),
+            )
+            geom.label = name
+            scene.ngeom += 1
+        return self._renderer.render().copy()
 
     def _render_matplotlib(
         self,
@@ -151,6 +212,8 @@ class HandFrameRenderer:
     ) -> NDArray[np.uint8]:
         if self._fig is None:
             self._fig = _new_figure(self.width, self.height)
+        from matplotlib.lines import Line2D
+
         fig = self._fig
         fig.clear()
         ax = fig.add_subplot(projection="3d")
@@ -166,7 +229,12 @@ class HandFrameRenderer:
         ax.plot(*tips_a.T, ".", color=_COLORS["agent"], ms=3)
         for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
             setter(-0.85, 0.85)
-        ax.set_title(f"human (green), nominal (grey), agent (orange); step {k}", fontsize=8)
+        handles = [
+            Line2D([], [], color=_COLORS[name], lw=3, alpha=0.35 if name == "nominal" else 1.0)
+            for name in ("human", "nominal", "agent")
+        ]
+        ax.legend(handles, ["human", "nominal", "agent"], loc="upper left", fontsize=8)
+        ax.set_title(f"hand frames, step {k}", fontsize=8)
         return _figure_to_array(fig)
 
     def close(self) -> None:
@@ -174,6 +242,21 @@ class HandFrameRenderer:
             self._renderer.close()
             self._renderer = None
         self._fig = None
+
+
+def _remember_failure(reason: str) -> str:
+    global _mujoco_failure
+    _mujoco_failure = " ".join(reason.split())
+    return _mujoco_failure
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(reason: str) -> None:
+    if reason not in _warned:
+        _warned.add(reason)
+        warnings.warn(f"hand frames are drawn with matplotlib: {reason}", UserWarning, stacklevel=3)
 
 
 class CurveRenderer:

@@ -30,8 +30,15 @@ bit-identical to ``SyncVectorEnv`` (tested).
 
 ``infos`` follow the vector convention: ``infos[key]`` is an ``(N,)`` array and
 ``infos["_" + key]`` marks the sub-environments it applies to (entries outside the mask
-are unspecified, not necessarily 0 as under ``SyncVectorEnv``); a reset reports
-``trajectory_index``. Observations, rewards, flags and infos are new arrays every step.
+are unspecified, not necessarily 0 as under ``SyncVectorEnv``). A reset (and an
+autoreset, in the step's infos) reports the single environments' reset keys as
+``SyncVectorEnv`` batches them: ``trajectory_index`` (int64, 0 outside the mask) and
+``trajectory_id``, ``task`` (and ``subject`` for orientation) as object arrays of
+``str`` (None outside the mask); steps without a reset carry none of them.
+Observations, rewards, flags and infos are new arrays every step. Bad arguments raise
+the same ``ValueError`` as the single environment's (the checks of
+:mod:`motion_envs.envs._common`); a non-numeric ``actions`` (dict, string, complex)
+raises ``ValueError``.
 """
 
 from __future__ import annotations
@@ -48,7 +55,14 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import N_STEPS, JsonSpecMixin
+from motion_envs.envs._common import (
+    N_STEPS,
+    JsonSpecMixin,
+    as_action,
+    check_max_episode_steps,
+    check_num_envs,
+    reset_labels,
+)
 
 __all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv"]
 
@@ -65,24 +79,6 @@ _IDX, _K, _ELAPSED, _AUTORESET, _PTR = 0, 1, 2, 3, 4  # columns of the integer s
 _SCALAR_BELOW = 8
 _POOL_AT = 5  # first column of the trajectory pool in the integer state
 _POOL = 64  # trajectory draws per sub-environment taken from its generator at once
-
-
-def _check_num_envs(num_envs: int) -> int:
-    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
-        raise ValueError(f"num_envs must be an integer >= 1; got {num_envs!r}")
-    return int(num_envs)
-
-
-def _check_max_steps(max_episode_steps: int | None, n_steps: int) -> int:
-    if max_episode_steps is None:
-        return n_steps
-    if (
-        isinstance(max_episode_steps, bool)
-        or not isinstance(max_episode_steps, (int, np.integer))
-        or max_episode_steps < 1
-    ):
-        raise ValueError(f"max_episode_steps must be an integer >= 1; got {max_episode_steps!r}")
-    return int(max_episode_steps)
 
 
 def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -128,8 +124,8 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self.task = task
         self._n_steps = N_STEPS
         self._n_traj = task.n_trajectories
-        self.num_envs = _check_num_envs(num_envs)
-        self._max_steps = _check_max_steps(max_episode_steps, self._n_steps)
+        self.num_envs = check_num_envs(num_envs)
+        self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
         self.autoreset_mode = _check_autoreset_mode(autoreset_mode)
         self._mode = _MODES[self.autoreset_mode]
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
@@ -146,6 +142,8 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         N = self.num_envs
         self._action_shape: tuple[int, ...] = (N, *self.single_action_space.shape)  # type: ignore[misc]
         self._rngs: list[np.random.Generator | None] = [None] * N
+        # text entries of the single environments' reset infos, per trajectory
+        self._labels = reset_labels(task)
         self._started = False
         self._arange = np.arange(N)
         L, n, width = task.steps.shape
@@ -278,10 +276,23 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._record_history()
         reset = np.zeros(self.num_envs, dtype=bool)
         reset[envs] = True
-        return obs, {
-            "trajectory_index": np.where(reset, self._si[:, _IDX], 0),
-            "_trajectory_index": reset,
-        }
+        info: dict[str, Any] = {}
+        self._add_reset_infos(info, reset)
+        return obs, info
+
+    def _add_reset_infos(self, info: dict[str, Any], reset: NDArray[np.bool_]) -> None:
+        """Add the reset infos of the sub-environments under ``reset`` to ``info``,
+        batched as ``SyncVectorEnv`` batches the single environments' reset infos
+        (called only when some sub-environment was reset: no per-step work)."""
+        idx = self._si[:, _IDX]
+        info["trajectory_index"] = np.where(reset, idx, 0)
+        info["_trajectory_index"] = reset
+        envs = np.flatnonzero(reset)
+        for key, labels in self._labels.items():
+            column = np.full(self.num_envs, None, dtype=object)
+            column[envs] = labels[idx[envs]]
+            info[key] = column
+            info["_" + key] = reset
 
     def _observe(self) -> NDArray[np.float32]:
         si = self._si
@@ -297,7 +308,10 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
 
     # -- stepping -----------------------------------------------------------------------
     def step(self, actions: Any) -> _StepResult:
-        a = np.ascontiguousarray(actions, dtype=np.float64)  # one compiled layout
+        if type(actions) is np.ndarray and actions.dtype.kind == "f":
+            a = np.ascontiguousarray(actions, dtype=np.float64)  # one compiled layout
+        else:  # lists, integers; a dict, string or complex raise ValueError
+            a = np.ascontiguousarray(as_action(actions, self._action_shape, "actions"))
         if a.shape != self._action_shape:
             raise ValueError(f"actions must have shape {self._action_shape}; got {a.shape}")
         if not self._started:
@@ -355,8 +369,7 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
                 info[key] = out_f[r]
                 info["_" + key] = terminated
         if n_reset:
-            info["trajectory_index"] = np.where(reset, self._si[:, _IDX], 0)
-            info["_trajectory_index"] = reset
+            self._add_reset_infos(info, reset)
         return info
 
     def _step_infos(self, out_f: NDArray[np.float64], mask: NDArray[np.bool_]) -> dict[str, Any]:

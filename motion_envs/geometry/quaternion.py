@@ -16,6 +16,7 @@ References: Faraway & Choe (2008), section 3.2; Shoemake (1985); Grassia (1998).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 
 import numpy as np
@@ -55,6 +56,9 @@ _SMALL_ANGLE = 1e-4
 # plain whole-array formulas to rounding (~1e-16); see benchmarks/quaternion_ops.py.
 _BLOCK = 8192
 
+# Inputs with at least this many entries are tested for NaN/inf by a sum first.
+_FINITE_BY_REDUCTION = 4096
+
 
 def _blocks(n: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` of consecutive blocks covering ``range(n)``."""
@@ -80,16 +84,50 @@ def _sign_of(w: FloatArray, out: FloatArray) -> FloatArray:
     return np.copysign(1.0, out, out=out)
 
 
-def _as_quaternion_array(q: ArrayLike, name: str) -> FloatArray:
-    """Return ``q`` as a float64 array with last axis 4, finite, or raise ``ValueError``."""
-    arr = np.asarray(q, dtype=np.float64)
-    if arr.ndim == 0 or arr.shape[-1] != 4:
+def _checked(x: ArrayLike, name: str, width: int, finite: bool = True) -> FloatArray:
+    """``x`` as a float64 array whose last axis has length ``width``, every entry finite.
+
+    The one input check of :func:`multiply`, :func:`conjugate`, :func:`expmap`,
+    :func:`logmap` (and, through :func:`_as_quaternion_array`, of the validating
+    functions). Raises ``ValueError`` naming ``name`` for a non-numeric (string, object,
+    complex) input, a scalar or a wrong last axis, and (unless ``finite=False``, for a
+    caller whose next check reads every entry anyway, like :func:`as_unit`) NaN or
+    infinite entries.
+
+    Small inputs are tested with ``isfinite(x).all()``. Large ones with one pairwise sum
+    (no temporary array): a finite sum implies every entry is finite, since NaN and inf
+    propagate through ``+``; only a non-finite sum (a NaN, an inf, or finite values summing
+    beyond float64's range) pays for the exact element-wise test.
+    """
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "fiub":
         raise ValueError(
-            f"{name} must have a last axis of length 4 (w, x, y, z); got shape {arr.shape}"
+            f"{name} must hold real numbers; got an array of dtype {arr.dtype} ({type(x).__name__})"
         )
-    if not np.all(np.isfinite(arr)):
+    if arr.dtype != np.float64:
+        arr = arr.astype(np.float64)
+    if arr.ndim == 0 or arr.shape[-1] != width:
+        axes = "(w, x, y, z)" if width == 4 else "(x, y, z)"
+        raise ValueError(
+            f"{name} must have a last axis of length {width} {axes}; got shape {arr.shape}"
+        )
+    if not finite:
+        return arr
+    if arr.size < _FINITE_BY_REDUCTION:
+        finite = bool(np.isfinite(arr).all())
+    else:
+        with np.errstate(over="ignore", invalid="ignore"):
+            finite = math.isfinite(np.add.reduce(arr, axis=None))
+        if not finite:
+            finite = bool(np.isfinite(arr).all())
+    if not finite:
         raise ValueError(f"{name} contains NaN or infinite values")
     return arr
+
+
+def _as_quaternion_array(q: ArrayLike, name: str) -> FloatArray:
+    """Return ``q`` as a float64 array with last axis 4, finite, or raise ``ValueError``."""
+    return _checked(q, name, 4)
 
 
 def _all_unit_fast(flat: FloatArray, tol: float) -> bool:
@@ -164,14 +202,10 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
         p * q = [w1 v2 + w2 v1 + v1 x v2,  w1 w2 - v1 . v2]
 
     As rotations, ``p * q`` applies ``q`` first, then ``p`` (same as scipy's ``P * Q``).
+    A wrong last axis, non-numeric, NaN or infinite input raises ``ValueError``.
     """
-    p = np.asarray(p, dtype=np.float64)
-    q = np.asarray(q, dtype=np.float64)
-    for name, arr in (("p", p), ("q", q)):
-        if arr.ndim == 0 or arr.shape[-1] != 4:
-            raise ValueError(
-                f"{name} must have a last axis of length 4 (w, x, y, z); got shape {arr.shape}"
-            )
+    p = _checked(p, "p", 4)
+    q = _checked(q, "q", 4)
     batch = np.broadcast_shapes(p.shape[:-1], q.shape[:-1])
     pf = _flatten(p, batch, (4,))
     qf = _flatten(q, batch, (4,))
@@ -205,8 +239,11 @@ def multiply(p: ArrayLike, q: ArrayLike) -> FloatArray:
 
 
 def conjugate(q: ArrayLike) -> FloatArray:
-    """Conjugate ``q* = (w, -x, -y, -z)``; the inverse of a unit quaternion."""
-    out = np.array(q, dtype=np.float64, copy=True)
+    """Conjugate ``q* = (w, -x, -y, -z)``; the inverse of a unit quaternion.
+
+    Raises ``ValueError`` for a wrong last axis, non-numeric, NaN or infinite input.
+    """
+    out = np.array(_checked(q, "q", 4), copy=True)
     out[..., 1:] *= -1.0
     return out
 
@@ -221,11 +258,10 @@ def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
     i.e. the rotation by ``theta`` about ``v/theta`` (equal to scipy's
     ``Rotation.from_rotvec(v)``). ``sin(theta/2)/theta`` is evaluated by its series
     ``1/2 - theta^2/48 + theta^4/3840`` for small ``theta`` so nothing divides by a tiny
-    number. Returns shape ``v.shape[:-1] + (4,)``.
+    number. Returns shape ``v.shape[:-1] + (4,)``. A wrong last axis, non-numeric, NaN or
+    infinite input raises ``ValueError`` naming ``name``.
     """
-    v = np.asarray(v, dtype=np.float64)
-    if v.ndim == 0 or v.shape[-1] != 3:
-        raise ValueError(f"{name} must have a last axis of length 3; got shape {v.shape}")
+    v = _checked(v, name, 3)
     batch = v.shape[:-1]
     vf = v.reshape(-1, 3)
     n = vf.shape[0]
@@ -275,13 +311,13 @@ def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
 
     ``theta / sin(theta/2)`` is evaluated by its series ``2 + theta^2/12`` near 0, and
     the ``atan2`` form stays accurate near ``theta = pi`` where ``arccos(w)`` would not.
-    Returns shape ``q.shape[:-1] + (3,)``.
+    Returns shape ``q.shape[:-1] + (3,)``. A wrong last axis, non-numeric, NaN or
+    infinite input raises ``ValueError`` always; ``validate=False`` skips only the check
+    that the quaternions are unit.
     """
-    q = as_unit(q, name) if validate else np.asarray(q, dtype=np.float64)
-    if q.ndim == 0 or q.shape[-1] != 4:
-        raise ValueError(
-            f"{name} must have a last axis of length 4 (w, x, y, z); got shape {q.shape}"
-        )
+    q = _checked(q, name, 4, finite=not validate)
+    if validate:
+        q = as_unit(q, name)  # NaN/inf fail its unit check
     batch = q.shape[:-1]
     qf = q.reshape(-1, 4)
     n = qf.shape[0]

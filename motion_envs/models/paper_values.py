@@ -32,5 +32,5 @@ FARAWAY_CHOE_TABLE1: dict[str, float] = {
 
 FARAWAY_CHOE_TABLE1_NOTES: dict[str, str] = {
     "between_subject": "0.242 in the text, 0.265 in the table",
-    "null_d3": "cannot follow from the stated procedure (see MODELS.md)",
+    "null_d3": "cannot follow from the stated procedure (see docs/models.md)",
 }

@@ -1,0 +1,69 @@
+"""baselines.plots: the figures carry what a reader needs, and the fitted model drawn is
+the model (oracle: the Bézier fit of the task's mean curve, by linearity of least squares)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from baselines.plots import METHOD_STYLE, residual_figure, save_figure, shapes_figure
+from motion_envs.geometry import bezier
+
+
+def _curves(rng: np.random.Generator, n: int, scale: float) -> np.ndarray:
+    tau = np.linspace(0.0, 1.0, 50)
+    bump = np.sin(np.pi * tau)[None, :, None]
+    return scale * bump * rng.normal(size=(n, 1, 3)) + 0.01 * rng.normal(size=(n, 50, 3)) * bump
+
+
+def test_residual_figure_draws_the_task_model_over_the_data_with_a_robust_range(tmp_path):
+    rng = np.random.default_rng(0)
+    R = np.concatenate([_curves(rng, 40, 0.1), _curves(rng, 30, 0.1)])
+    R[5] *= 40.0  # one wild curve (about 4 rad) must not set the axis range
+    tasks = np.array(["a"] * 40 + ["b"] * 30)
+    fig = residual_figure(R, tasks, degree=2, dataset="synthetic")
+    axes = fig.axes
+    assert len(axes) == 3
+    for ax in axes:
+        assert ax.get_xlabel().endswith("(rad)") and ax.get_ylabel().endswith("(rad)")
+        lim = ax.get_xlim()[1]
+        assert lim < 1.0 < np.abs(R[5]).max()  # robust: the outlier is outside the frame
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[1:] == ["task model, d = 2", "null model, d = 2", "origin (start and end)"]
+    assert labels[0].startswith("trajectories of task 'a' (n = 40)")
+    # the red curve is the degree-2 fit of task a's mean curve (x-y view)
+    tau = np.linspace(0.0, 1.0, 50)
+    P = bezier.fit(R[tasks == "a"].mean(axis=0), tau, 2)
+    expected = bezier.evaluate(P, tau, 2)
+    task_line = next(ln for ln in axes[0].get_lines() if ln.get_label() == "task model, d = 2")
+    np.testing.assert_allclose(task_line.get_xdata(), expected[:, 0], atol=1e-12)
+    np.testing.assert_allclose(task_line.get_ydata(), expected[:, 1], atol=1e-12)
+    path = save_figure(fig, tmp_path / "r.png")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (path.stat().st_mode & 0o777) != 0o600
+
+
+def test_shapes_figure_one_demonstration_and_every_method_per_panel():
+    rng = np.random.default_rng(1)
+    methods = ["line", "null", "lippi"]
+    truth = {s: rng.normal(size=(3, 20, 2)).cumsum(axis=1) for s in ("A", "B", "C")}
+    preds = {s: {m: truth[s] + rng.normal(size=truth[s].shape) for m in methods} for s in truth}
+    doc = {
+        "dataset": "toy",
+        "unit": "mm",
+        "methods": methods,
+        "split": {"split": "loo"},
+        "_truth": truth,
+        "_predictions": preds,
+    }
+    fig = shapes_figure(doc)
+    panels = [ax for ax in fig.axes if ax.get_title()]
+    assert [ax.get_title() for ax in panels] == ["A", "B", "C"]
+    for ax, shape in zip(panels, truth, strict=True):
+        curves = [ln for ln in ax.get_lines() if ln.get_label() not in ("start", "end")]
+        assert len(curves) == 1 + len(methods)
+        np.testing.assert_array_equal(curves[0].get_xdata(), truth[shape][0][:, 0])
+        np.testing.assert_array_equal(curves[1].get_ydata(), preds[shape]["line"][0][:, 1])
+    assert panels[0].get_xlabel() == "x (mm)" and panels[0].get_ylabel() == "y (mm)"
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert labels[0] == "held-out demonstration"
+    assert [METHOD_STYLE[m]["label"] for m in methods] == labels[1 : 1 + len(methods)]
