@@ -243,9 +243,7 @@ def _kind_ok(kind: str, value: Any) -> bool:
     if kind == "str_list":
         return isinstance(value, list) and all(isinstance(v, str) for v in value)
     if kind == "float_list":
-        return isinstance(value, list) and all(
-            _is_number(v) and math.isfinite(v) for v in value
-        )
+        return isinstance(value, list) and all(_is_number(v) and math.isfinite(v) for v in value)
     if kind == "int_or_str":
         return _is_int(value) or isinstance(value, str)
     raise AssertionError(f"unknown schema kind {kind!r}")
