@@ -16,7 +16,6 @@ values), ``results.csv`` (one row per episode) and ``agent_vs_nominal.png``.
 from __future__ import annotations
 
 import argparse
-import os
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -25,6 +24,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = [
     "AgentConfig",
@@ -160,9 +161,7 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "results.json", dict(results))
     table = pd.DataFrame(results["episodes"])
-    tmp = out / ".results.csv.tmp"
-    table.to_csv(tmp, index=False, float_format="%.17g")
-    os.replace(tmp, out / "results.csv")
+    atomic_write_text(out / "results.csv", table.to_csv(index=False, float_format="%.17g"))
     plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
 
 
@@ -193,7 +192,7 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     ax2.set_ylabel("max error over the episode")
     ax2.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

@@ -56,6 +56,7 @@ import numpy as np
 import yaml
 
 from baselines.agents.config import ALGOS, validate_hyperparams
+from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = ["SweepConfig", "expand_configurations", "load_sweep", "register", "run"]
 
@@ -205,13 +206,13 @@ def _tune_domain(value: Any) -> Any:
 
 def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
     """Read and validate a sweep file; ``kwargs`` set the run options (``out``, ...)."""
-    from baselines.agents.config import _Loader
+    from baselines.agents.config import YamlLoader
 
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"sweep file {p} does not exist")
     try:
-        doc = yaml.load(p.read_text(encoding="utf-8"), Loader=_Loader)
+        doc = yaml.load(p.read_text(encoding="utf-8"), Loader=YamlLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
     if not isinstance(doc, Mapping):
@@ -518,12 +519,13 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     from baselines.agents.rundir import write_json
 
     write_json(out / "results.json", dict(results))
-    pd.DataFrame(results["trials"]).to_csv(out / "trials.csv", index=False, float_format="%.17g")
+    trials = pd.DataFrame(results["trials"]).to_csv(index=False, float_format="%.17g")
+    atomic_write_text(out / "trials.csv", trials)
     table = pd.DataFrame(results["configurations"]).drop(
         columns=["overrides", "test_criteria", "seeds"]
     )
-    table.to_csv(out / "table.csv", index=False, float_format="%.17g")
-    (out / "table.md").write_text(format_table(results) + "\n", encoding="utf-8")
+    atomic_write_text(out / "table.csv", table.to_csv(index=False, float_format="%.17g"))
+    atomic_write_text(out / "table.md", format_table(results) + "\n")
     plot_sweep(results, out / "sweep.png")
 
 
@@ -556,7 +558,7 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     ax.set_ylim(min(lo, 1.0) - pad, max(hi, 1.0) + pad)
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
+from motion_envs._io import atomic_write_text
 
 __all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
 
@@ -125,7 +126,7 @@ def _validation_callback(
     from stable_baselines3.common.callbacks import BaseCallback
 
     from baselines.agents.evaluate import episode_max_errors
-    from baselines.agents.rundir import ObsNormalizer
+    from baselines.agents.rundir import ObsNormalizer, save_model
 
     class ValidationCallback(BaseCallback):
         """Papers' criterion on the validation split; keeps the best policy as agent.zip."""
@@ -152,9 +153,7 @@ def _validation_callback(
             is_best = crit < self.best
             if is_best:
                 self.best, self.best_timesteps = crit, self.num_timesteps
-                tmp = run_dir / ".agent.tmp.zip"
-                self.model.save(tmp)
-                tmp.replace(run_dir / "agent.zip")
+                save_model(self.model, run_dir / "agent.zip")
                 if vn is not None:
                     ObsNormalizer.save_vec_normalize(vn, run_dir / "normalization.npz")
             self.evaluations.append({"timesteps": self.num_timesteps, "val_criterion": crit})
@@ -195,7 +194,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
 
     from baselines.agents.evaluate import episode_max_errors
     from baselines.agents.policies import build_model
-    from baselines.agents.rundir import ObsNormalizer, write_json, write_manifest
+    from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
     from baselines.sb3 import TqdmCallback
 
     _check_config(config)
@@ -245,9 +244,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     seconds = time.perf_counter() - t0
     steps = int(model.num_timesteps)
 
-    tmp = run_dir / ".final_agent.tmp.zip"
-    model.save(tmp)
-    tmp.replace(run_dir / "final_agent.zip")
+    save_model(model, run_dir / "final_agent.zip")
     vn = model.get_vec_normalize_env()
     if vn is not None:
         ObsNormalizer.save_vec_normalize(vn, run_dir / "final_normalization.npz")
@@ -256,10 +253,8 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
         run_dir / "config.json",
         {"algo": config.algo, "env_id": config.env_id, "seed": config.seed, "hyperparams": hp},
     )
-    with open(run_dir / "evaluations.csv", "w", encoding="utf-8") as f:
-        f.write("timesteps,val_criterion\n")
-        for e in validation.evaluations:
-            f.write(f"{e['timesteps']},{e['val_criterion']!r}\n")
+    rows = [f"{e['timesteps']},{e['val_criterion']!r}\n" for e in validation.evaluations]
+    atomic_write_text(run_dir / "evaluations.csv", "timesteps,val_criterion\n" + "".join(rows))
     command = list(config.command) or equivalent_command(config)
     write_manifest(
         run_dir,
