@@ -55,6 +55,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from baselines import options
+from baselines.agents import checks
 from baselines.agents.config import ALGOS, validate_hyperparams
 from motion_envs._io import atomic_write_text, save_figure
 
@@ -564,14 +566,12 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
 
 def _cli(args: argparse.Namespace) -> int:
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
-    if args.num_cpus is not None and args.num_cpus < 1:
-        raise ValueError(f"--num-cpus must be >= 1; got {args.num_cpus}")
     if args.address is not None and args.num_cpus is not None:
-        raise ValueError("--num-cpus applies to a local Ray only; omit it with --address")
+        raise options.ConfigError("num_cpus", "applies to a local Ray only; omit it with --address")
     name = Path(args.config).stem
     sweep = load_sweep(
         args.config,
-        out=args.out or f"sweeps/{name}",
+        out=str(args.out) if args.out is not None else f"sweeps/{name}",
         address=args.address,
         num_cpus=args.num_cpus,
         resume=args.resume,
@@ -590,15 +590,25 @@ def _cli(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add ``motion-bench sweep``."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "sweep",
         help="configurations x seeds of motion-bench train on Ray Tune (local or a cluster)",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
-    p.add_argument("--config", required=True, metavar="PATH", help="configs/sweeps/NAME.yaml")
+    p.add_argument(
+        "--config", required=True, type=checks.yaml_file, metavar="PATH",
+        help="sweep file, e.g. configs/sweeps/orientation_ppo.yaml",
+    )  # fmt: skip
     p.add_argument("--address", default=None, help="existing Ray cluster (e.g. auto)")
-    p.add_argument("--num-cpus", type=int, default=None, help="local Ray's CPUs (default: all)")
-    p.add_argument("--out", default=None, metavar="DIR", help="default sweeps/NAME")
+    p.add_argument(
+        "--num-cpus", type=options.positive_int, default=None,
+        help="local Ray's CPUs (default: all)",
+    )  # fmt: skip
+    p.add_argument(
+        "--out", default=None, type=options.output_folder, metavar="DIR",
+        help="results folder (default: sweeps/NAME)",
+    )  # fmt: skip
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
     p.add_argument("--no-progress", action="store_true", help="no Ray Tune status table")
     p.set_defaults(func=_cli)

@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from baselines import options
+from baselines.agents import checks
 from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
 from motion_envs._io import atomic_write_text
 
@@ -206,7 +208,10 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     if config.env_kwargs:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    if not hp["env_kwargs"].get("val_fraction", 0) > 0:
+    val_fraction = hp["env_kwargs"].get("val_fraction", 0)
+    if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):
+        raise ValueError(f"env_kwargs.val_fraction must be a number; got {val_fraction!r}")
+    if not val_fraction > 0:
         raise ValueError(
             "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
             "carved from the training data, never on the test split"
@@ -313,15 +318,21 @@ def equivalent_command(config: TrainConfig) -> list[str]:
 def _cli(args: argparse.Namespace) -> int:
     # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
+    try:
+        env_kwargs = parse_env_kwargs(args.env_kwargs)
+    except ValueError as exc:
+        raise options.ConfigError("env_kwargs", str(exc).removeprefix("--env-kwargs: ")) from None
+    checks.check_env_kwargs(args.env, env_kwargs)
+    default_out = f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     config = TrainConfig(
         algo=args.algo,
         env_id=args.env,
-        out=args.out or f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}",
+        out=str(args.out) if args.out is not None else default_out,
         seed=args.seed,
-        config_path=args.config,
+        config_path=None if args.config is None else str(args.config),
         timesteps=args.timesteps,
         n_envs=args.n_envs,
-        env_kwargs=parse_env_kwargs(args.env_kwargs),
+        env_kwargs=env_kwargs,
         progress=not args.no_progress,
         tensorboard=not args.no_tensorboard,
         command=("motion-bench", *sys.argv[1:]) if sys.argv[1:2] == ["train"] else (),
@@ -342,29 +353,38 @@ def _cli(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add ``motion-bench train``."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "train",
         help="train an SB3 agent (ppo, sac, td3) on top of the nominal; zoo-style YAML configs",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
     p.add_argument("--algo", required=True, choices=ALGOS)
-    p.add_argument("--env", required=True, metavar="ID", help="e.g. MotionEnvs/OrientationReach-v1")
     p.add_argument(
-        "--config", default=None, metavar="PATH", help="default configs/agents/ALGO.yaml"
+        "--env", required=True, type=checks.env_id, metavar="ID",
+        help="e.g. MotionEnvs/OrientationReach-v1",
+    )  # fmt: skip
+    p.add_argument(
+        "--config", default=None, type=checks.yaml_file, metavar="PATH",
+        help="hyper-parameters (default: configs/agents/ALGO.yaml)",
+    )  # fmt: skip
+    p.add_argument(
+        "--timesteps", type=options.positive_int, default=None, help="override n_timesteps"
     )
-    p.add_argument("--timesteps", type=int, default=None, help="override n_timesteps")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    p.add_argument("--seed", type=options.non_negative_int, default=0)
+    p.add_argument("--n-envs", type=options.positive_int, default=None, help="override n_envs")
     p.add_argument(
         "--env-kwargs",
         nargs="*",
+        type=checks.env_kwarg,
         default=None,
         metavar="K=V",
         help="environment kwargs (plain YAML values), e.g. nominal=bezier-task",
     )
     p.add_argument(
-        "--out", default=None, metavar="DIR", help="run folder (default runs/ALGO-ENV-seedS)"
-    )
+        "--out", default=None, type=options.output_folder, metavar="DIR",
+        help="run folder (default: runs/ALGO-ENV-seedS)",
+    )  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-tensorboard", action="store_true", help="no TensorBoard logs")
     p.set_defaults(func=_cli)
