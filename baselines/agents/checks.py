@@ -85,6 +85,8 @@ def check_env_kwargs(env_id: str, kwargs: dict[str, object]) -> None:
 
     entry = gym.spec(env_id).entry_point
     creator = load_env_creator(entry) if isinstance(entry, str) else entry
+    if creator is None:
+        return
     params = inspect.signature(creator).parameters
     if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
         return

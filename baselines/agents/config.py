@@ -61,7 +61,7 @@ Checker = Callable[[Any, str], Any]
 _PYTHON = re.compile(r"(\(|\)|lambda|\bnn\.|\bth\.|torch\.|__|import|dict\(|\blin_)")
 
 
-class YamlLoader(yaml.SafeLoader):
+class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no type stubs
     """SafeLoader that also reads ``1e-4`` (YAML 1.2 floats) as a float."""
 
 
@@ -191,7 +191,8 @@ def _plain_mapping(v: Any, where: str) -> dict[str, Any]:
             return x
         raise _fail(w, f"must be a plain YAML value; got {type(x).__name__}")
 
-    return walk(v, where)
+    out: dict[str, Any] = walk(v, where)
+    return out
 
 
 def _env_kwargs(v: Any, where: str) -> dict[str, Any]:
