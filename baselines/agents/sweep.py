@@ -37,6 +37,12 @@ Ray: by default a local instance with ``--num-cpus`` (default: the machine's cor
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
 ``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
 mount). ``--resume`` continues an interrupted sweep in the same ``--out``.
+
+Files: every file motion-envs writes (each trial's run folder, results.json, trials.csv,
+table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic replace).
+Ray Tune's own experiment state, trial results and checkpoint copies under ``--out`` are
+written by Ray itself (its storage layer); their consistency on interruption is Ray's
+business, which is what ``--resume`` (``Tuner.restore``) relies on.
 """
 
 from __future__ import annotations
