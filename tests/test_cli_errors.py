@@ -18,6 +18,9 @@ from baselines import (
     position_bench,
     run_all,
 )
+from baselines.agents import evaluate as agent_evaluate
+from baselines.agents import sweep as agent_sweep
+from baselines.agents import train as agent_train
 from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
 from motion_envs import __version__
 
@@ -33,6 +36,11 @@ def paths(tmp_path):
     ro.mkdir()
     ro.chmod(0o555)
     (tmp_path / "bad.json").write_text("{not json")
+    (tmp_path / "bad.yaml").write_text("default:\n  n_envs: [1\n")
+    (tmp_path / "list.yaml").write_text("- 1\n- 2\n")
+    (tmp_path / "ok.yaml").write_text("seeds: [0]\n")
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "run.json").write_text("{}\n")
     (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00t,x,z\n")
     yield tmp_path
     ro.chmod(0o755)
@@ -49,6 +57,10 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(position_bench, "run_benchmark", started)
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
     monkeypatch.setattr(juggling_bench, "load_demos", started)
+    monkeypatch.setattr(agent_train, "run", started)
+    monkeypatch.setattr(agent_evaluate, "run", started)
+    monkeypatch.setattr(agent_sweep, "load_sweep", started)
+    monkeypatch.setattr(agent_sweep, "run", started)
 
 
 # (argv with {tmp} for the fixture folder, expected fragment of the one error line)
@@ -124,6 +136,171 @@ CASES = [
         "argument --replace-shipped: not allowed with argument --out",
     ),
     (["calibrate-cohort", "--check-seeds", "-1"], "argument --check-seeds: expected"),
+    (
+        ["train", "--algo", "dqn", "--env", "MotionEnvs/OrientationReach-v1"],
+        "argument --algo: invalid choice",
+    ),
+    (["train", "--algo", "ppo", "--env", "CartPole-v1"], "argument --env: expected one of"),
+    (["train", "--algo", "ppo"], "the following arguments are required: --env"),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--timesteps", "0"],
+        "argument --timesteps: expected an integer >= 1",
+    ),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--timesteps", "1e3"],
+        "argument --timesteps: expected an integer >= 1",
+    ),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--seed", "-1"],
+        "argument --seed: expected an integer >= 0",
+    ),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--n-envs", "0"],
+        "argument --n-envs: expected an integer >= 1",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--config",
+            "{tmp}/missing.yaml",
+        ],
+        "argument --config: {tmp}/missing.yaml does not",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--config",
+            "{tmp}/folder",
+        ],
+        "argument --config: {tmp}/folder is a folder",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--config",
+            "{tmp}/bad.yaml",
+        ],
+        "argument --config: {tmp}/bad.yaml: line 3: not",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--config",
+            "{tmp}/list.yaml",
+        ],
+        "argument --config: {tmp}/list.yaml: expected a",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--config",
+            "{tmp}/binary.csv",
+        ],
+        "argument --config: {tmp}/binary.csv: not",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--env-kwargs",
+            "nominal",
+        ],
+        "argument --env-kwargs: expected KEY=VALUE",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--env-kwargs",
+            "x-y=1",
+        ],
+        "argument --env-kwargs: expected KEY=VALUE",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--env-kwargs",
+            "shapes=[1",
+        ],
+        "argument --env-kwargs: cannot read the value",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--env-kwargs",
+            "no_such_kwarg=1",
+        ],
+        "argument --env-kwargs:",
+    ),
+    (
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--out",
+            "{tmp}/file.txt",
+        ],
+        "argument --out: {tmp}/file.txt is a file",
+    ),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--timestep", "5"],
+        "unrecognized arguments: --timestep",
+    ),
+    (["agent"], "the following arguments are required: DIR"),
+    (["agent", "{tmp}/missing"], "argument DIR: {tmp}/missing does not exist"),
+    (["agent", "{tmp}/file.txt"], "argument DIR: {tmp}/file.txt is a file"),
+    (["agent", "{tmp}/folder"], "argument DIR: {tmp}/folder holds no run.json"),
+    (["agent", "{tmp}/run", "--split", "middle"], "argument --split: invalid choice"),
+    (["agent", "{tmp}/run", "--episodes", "0"], "argument --episodes: expected an integer"),
+    (["agent", "{tmp}/run", "--checkpoint", "x"], "argument --checkpoint: invalid choice"),
+    (["agent", "{tmp}/run", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt"),
+    (["agent", "{tmp}/run", "--episode", "3"], "unrecognized arguments: --episode"),
+    (["sweep"], "the following arguments are required: --config"),
+    (["sweep", "--config", "{tmp}/missing.yaml"], "argument --config: {tmp}/missing.yaml does"),
+    (["sweep", "--config", "{tmp}/bad.yaml"], "argument --config: {tmp}/bad.yaml: line 3"),
+    (["sweep", "--config", "{tmp}/ok.yaml", "--num-cpus", "0"], "argument --num-cpus: expected"),
+    (
+        ["sweep", "--config", "{tmp}/ok.yaml", "--num-cpus", "2", "--address", "auto"],
+        "argument --num-cpus: applies to a local Ray only",
+    ),
+    (["sweep", "--config", "{tmp}/ok.yaml", "--out", "{tmp}/file.txt"], "argument --out:"),
+    (["sweep", "--config", "{tmp}/ok.yaml", "--num-cpu", "2"], "unrecognized arguments: --num"),
     (["nonsense"], "argument COMMAND: invalid choice"),
     (["--vers", "all"], "unrecognized arguments: --vers"),
 ]
@@ -159,6 +336,15 @@ def test_unwritable_out_is_reported_first(paths, capsys):
     ro = _unwritable_folder(paths)
     for argv in (
         ["orientation", "--out", str(ro / "new")],
+        [
+            "train",
+            "--algo",
+            "ppo",
+            "--env",
+            "MotionEnvs/OrientationReach-v1",
+            "--out",
+            str(ro / "r"),
+        ],
         ["all", "--out", str(ro / "new" / "sub")],
         ["calibrate-cohort", "--out", str(ro / "cohort.yaml")],
     ):
@@ -204,12 +390,25 @@ def test_every_subcommand_is_registered():
         "position",
         "juggling",
         "calibrate-cohort",
+        "train",
+        "agent",
+        "sweep",
     }
-    assert len(SUBCOMMAND_MODULES) == 5
+    assert len(SUBCOMMAND_MODULES) == 8
 
 
 @pytest.mark.parametrize(
-    "name", ["motion-bench", "all", "orientation", "position", "calibrate-cohort"]
+    "name",
+    [
+        "motion-bench",
+        "all",
+        "orientation",
+        "position",
+        "calibrate-cohort",
+        "train",
+        "agent",
+        "sweep",
+    ],
 )
 def test_help_is_plain_text_with_each_default_once(name):
     text = _helps()[name]

@@ -38,6 +38,22 @@ def test_spaces_equal_on_every_split_and_seed(env_id):
     assert all(v.single_observation_space == ref.observation_space for v in vec.values())
 
 
+@pytest.mark.parametrize("version", ["v0", "v1"])
+@pytest.mark.parametrize("env_id", [ORIENTATION, POSITION])
+def test_spaces_equal_with_and_without_a_validation_split(env_id, version):
+    """Carving a validation split (val_fraction > 0) from the training data changes no
+    space: 'val', 'train' and 'test' with val_fraction equal the spaces without it."""
+    env_id = env_id.replace("-v0", f"-{version}")
+    ref = gym.make(env_id, **BASE[env_id.replace(f"-{version}", "-v0")])
+    base = BASE[env_id.replace(f"-{version}", "-v0")]
+    for split in ("train", "val", "test"):
+        for extra in ({"val_fraction": 0.2}, {"val_fraction": 0.5, "split_seed": 3}):
+            env = gym.make(env_id, split=split, **base, **extra)
+            assert _spaces(env) == _spaces(ref), (split, extra)
+            np.testing.assert_array_equal(env.observation_space.low, ref.observation_space.low)
+            np.testing.assert_array_equal(env.observation_space.high, ref.observation_space.high)
+
+
 def test_position_start_and_goal_bounds_are_the_whole_datasets_extent():
     """Oracle: the per-coordinate extent of every demonstration of the chosen shapes,
     taken from the splits' own episodes (train and test together are the whole dataset)."""

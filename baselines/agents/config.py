@@ -39,6 +39,7 @@ __all__ = [
     "ALGO_KEYS",
     "COMMON_KEYS",
     "DEFAULT_CONFIG_DIR",
+    "YamlLoader",
     "default_config_path",
     "load_hyperparams",
     "make_schedule",
@@ -60,11 +61,11 @@ Checker = Callable[[Any, str], Any]
 _PYTHON = re.compile(r"(\(|\)|lambda|\bnn\.|\bth\.|torch\.|__|import|dict\(|\blin_)")
 
 
-class _Loader(yaml.SafeLoader):
+class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no type stubs
     """SafeLoader that also reads ``1e-4`` (YAML 1.2 floats) as a float."""
 
 
-_Loader.add_implicit_resolver(
+YamlLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
     re.compile(
         r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
@@ -190,7 +191,8 @@ def _plain_mapping(v: Any, where: str) -> dict[str, Any]:
             return x
         raise _fail(w, f"must be a plain YAML value; got {type(x).__name__}")
 
-    return walk(v, where)
+    out: dict[str, Any] = walk(v, where)
+    return out
 
 
 def _env_kwargs(v: Any, where: str) -> dict[str, Any]:
@@ -374,8 +376,8 @@ def load_hyperparams(path: str | Path, algo: str, env_id: str) -> dict[str, Any]
         raise FileNotFoundError(f"config file {path} does not exist")
     text = path.read_text(encoding="utf-8")
     try:
-        node = yaml.compose(text, Loader=_Loader)
-        doc = yaml.load(text, Loader=_Loader)
+        node = yaml.compose(text, Loader=YamlLoader)
+        doc = yaml.load(text, Loader=YamlLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {exc}".replace("\n", " ")) from None
     if doc is None:
@@ -412,7 +414,7 @@ def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
         if not sep or not key.isidentifier():
             raise ValueError(f"--env-kwargs: expected KEY=VALUE; got {item!r}")
         try:
-            value = yaml.load(raw, Loader=_Loader)
+            value = yaml.load(raw, Loader=YamlLoader)
         except yaml.YAMLError:
             raise ValueError(f"--env-kwargs: cannot read the value of {item!r}") from None
         out[key] = raw if value is None and raw else value  # nominal=null is the null model

@@ -16,7 +16,6 @@ values), ``results.csv`` (one row per episode) and ``agent_vs_nominal.png``.
 from __future__ import annotations
 
 import argparse
-import os
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -25,6 +24,10 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from baselines import options
+from baselines.agents import checks
+from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = [
     "AgentConfig",
@@ -160,9 +163,7 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "results.json", dict(results))
     table = pd.DataFrame(results["episodes"])
-    tmp = out / ".results.csv.tmp"
-    table.to_csv(tmp, index=False, float_format="%.17g")
-    os.replace(tmp, out / "results.csv")
+    atomic_write_text(out / "results.csv", table.to_csv(index=False, float_format="%.17g"))
     plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
 
 
@@ -193,15 +194,13 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     ax2.set_ylabel("max error over the episode")
     ax2.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
 def _cli(args: argparse.Namespace) -> int:
     # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
-    if args.episodes is not None and args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1; got {args.episodes}")
     config = AgentConfig(str(args.run_dir), args.split, args.episodes, args.checkpoint)
     results = run(config)
     out = Path(args.out) if args.out else Path(args.run_dir) / f"eval-{args.split}"
@@ -217,15 +216,25 @@ def _cli(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add ``motion-bench agent``."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "agent",
         help="evaluate a saved agent against the zero-action nominal (papers' criterion)",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
-    p.add_argument("run_dir", metavar="DIR", help="run folder written by motion-bench train")
+    p.add_argument(
+        "run_dir", type=checks.run_folder, metavar="DIR",
+        help="run folder written by motion-bench train",
+    )  # fmt: skip
     p.add_argument("--split", default="test", choices=("train", "val", "test"))
-    p.add_argument("--episodes", type=int, default=None, help="first N trajectories (default all)")
+    p.add_argument(
+        "--episodes", type=options.positive_int, default=None,
+        help="first N trajectories (default: all)",
+    )  # fmt: skip
     p.add_argument("--checkpoint", default="best", choices=("best", "final"),
                    help="best on validation (agent.zip) or the final policy")  # fmt: skip
-    p.add_argument("--out", default=None, help="output folder (default DIR/eval-SPLIT)")
+    p.add_argument(
+        "--out", default=None, type=options.output_folder, metavar="DIR",
+        help="output folder (default: DIR/eval-SPLIT)",
+    )  # fmt: skip
     p.set_defaults(func=_cli)

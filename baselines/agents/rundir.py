@@ -24,7 +24,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,12 +32,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._io import atomic_write, atomic_write_text
+
 __all__ = [
     "FORMAT",
     "LoadedRun",
     "ObsNormalizer",
     "file_sha256",
     "load_run",
+    "save_model",
     "write_json",
     "write_manifest",
 ]
@@ -49,12 +51,17 @@ FORMAT = "motion-envs-agent/1"
 
 def write_json(path: Path, obj: Any) -> None:
     """Write ``obj`` as indented JSON atomically (temporary file, then rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        json.dump(obj, f, indent=2, sort_keys=False)
-        f.write("\n")
-    os.replace(tmp, path)
+    atomic_write_text(path, json.dumps(obj, indent=2, sort_keys=False) + "\n")
+
+
+def save_model(model: Any, path: Path) -> None:
+    """Save an SB3 model's zip to ``path`` atomically.
+
+    SB3's ``save`` accepts an open binary file; it writes into the temporary file that
+    :func:`motion_envs._io.atomic_write` creates in the same folder, which then replaces
+    ``path``, so a run folder never holds a half-written agent.
+    """
+    atomic_write(path, model.save, binary=True)
 
 
 def file_sha256(path: Path) -> str:
@@ -113,10 +120,7 @@ class ObsNormalizer:
             "norm_obs": np.bool_(venv.norm_obs),
             "norm_reward": np.bool_(venv.norm_reward),
         }
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".npz")
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-        os.replace(tmp, path)
+        atomic_write(path, lambda fh: np.savez(fh, **arrays), binary=True)
 
     @classmethod
     def load(cls, path: Path) -> ObsNormalizer:

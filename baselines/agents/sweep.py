@@ -37,6 +37,12 @@ Ray: by default a local instance with ``--num-cpus`` (default: the machine's cor
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
 ``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
 mount). ``--resume`` continues an interrupted sweep in the same ``--out``.
+
+Files: every file motion-envs writes (each trial's run folder, results.json, trials.csv,
+table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic replace).
+Ray Tune's own experiment state, trial results and checkpoint copies under ``--out`` are
+written by Ray itself (its storage layer); their consistency on interruption is Ray's
+business, which is what ``--resume`` (``Tuner.restore``) relies on.
 """
 
 from __future__ import annotations
@@ -55,7 +61,10 @@ from typing import Any
 import numpy as np
 import yaml
 
+from baselines import options
+from baselines.agents import checks
 from baselines.agents.config import ALGOS, validate_hyperparams
+from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = ["SweepConfig", "expand_configurations", "load_sweep", "register", "run"]
 
@@ -205,13 +214,13 @@ def _tune_domain(value: Any) -> Any:
 
 def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
     """Read and validate a sweep file; ``kwargs`` set the run options (``out``, ...)."""
-    from baselines.agents.config import _Loader
+    from baselines.agents.config import YamlLoader
 
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"sweep file {p} does not exist")
     try:
-        doc = yaml.load(p.read_text(encoding="utf-8"), Loader=_Loader)
+        doc = yaml.load(p.read_text(encoding="utf-8"), Loader=YamlLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{p}: not valid YAML: {exc}".replace("\n", " ")) from None
     if not isinstance(doc, Mapping):
@@ -518,12 +527,13 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     from baselines.agents.rundir import write_json
 
     write_json(out / "results.json", dict(results))
-    pd.DataFrame(results["trials"]).to_csv(out / "trials.csv", index=False, float_format="%.17g")
+    trials = pd.DataFrame(results["trials"]).to_csv(index=False, float_format="%.17g")
+    atomic_write_text(out / "trials.csv", trials)
     table = pd.DataFrame(results["configurations"]).drop(
         columns=["overrides", "test_criteria", "seeds"]
     )
-    table.to_csv(out / "table.csv", index=False, float_format="%.17g")
-    (out / "table.md").write_text(format_table(results) + "\n", encoding="utf-8")
+    atomic_write_text(out / "table.csv", table.to_csv(index=False, float_format="%.17g"))
+    atomic_write_text(out / "table.md", format_table(results) + "\n")
     plot_sweep(results, out / "sweep.png")
 
 
@@ -556,20 +566,18 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     ax.set_ylim(min(lo, 1.0) - pad, max(hi, 1.0) + pad)
     ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
 
 
 def _cli(args: argparse.Namespace) -> int:
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
-    if args.num_cpus is not None and args.num_cpus < 1:
-        raise ValueError(f"--num-cpus must be >= 1; got {args.num_cpus}")
     if args.address is not None and args.num_cpus is not None:
-        raise ValueError("--num-cpus applies to a local Ray only; omit it with --address")
+        raise options.ConfigError("num_cpus", "applies to a local Ray only; omit it with --address")
     name = Path(args.config).stem
     sweep = load_sweep(
         args.config,
-        out=args.out or f"sweeps/{name}",
+        out=str(args.out) if args.out is not None else f"sweeps/{name}",
         address=args.address,
         num_cpus=args.num_cpus,
         resume=args.resume,
@@ -588,15 +596,25 @@ def _cli(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add ``motion-bench sweep``."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "sweep",
         help="configurations x seeds of motion-bench train on Ray Tune (local or a cluster)",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
-    p.add_argument("--config", required=True, metavar="PATH", help="configs/sweeps/NAME.yaml")
+    p.add_argument(
+        "--config", required=True, type=checks.yaml_file, metavar="PATH",
+        help="sweep file, e.g. configs/sweeps/orientation_ppo.yaml",
+    )  # fmt: skip
     p.add_argument("--address", default=None, help="existing Ray cluster (e.g. auto)")
-    p.add_argument("--num-cpus", type=int, default=None, help="local Ray's CPUs (default: all)")
-    p.add_argument("--out", default=None, metavar="DIR", help="default sweeps/NAME")
+    p.add_argument(
+        "--num-cpus", type=options.positive_int, default=None,
+        help="local Ray's CPUs (default: all)",
+    )  # fmt: skip
+    p.add_argument(
+        "--out", default=None, type=options.output_folder, metavar="DIR",
+        help="results folder (default: sweeps/NAME)",
+    )  # fmt: skip
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
     p.add_argument("--no-progress", action="store_true", help="no Ray Tune status table")
     p.set_defaults(func=_cli)

@@ -35,7 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from baselines import options
+from baselines.agents import checks
 from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
+from motion_envs._io import atomic_write_text
 
 __all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
 
@@ -125,7 +128,7 @@ def _validation_callback(
     from stable_baselines3.common.callbacks import BaseCallback
 
     from baselines.agents.evaluate import episode_max_errors
-    from baselines.agents.rundir import ObsNormalizer
+    from baselines.agents.rundir import ObsNormalizer, save_model
 
     class ValidationCallback(BaseCallback):
         """Papers' criterion on the validation split; keeps the best policy as agent.zip."""
@@ -152,9 +155,7 @@ def _validation_callback(
             is_best = crit < self.best
             if is_best:
                 self.best, self.best_timesteps = crit, self.num_timesteps
-                tmp = run_dir / ".agent.tmp.zip"
-                self.model.save(tmp)
-                tmp.replace(run_dir / "agent.zip")
+                save_model(self.model, run_dir / "agent.zip")
                 if vn is not None:
                     ObsNormalizer.save_vec_normalize(vn, run_dir / "normalization.npz")
             self.evaluations.append({"timesteps": self.num_timesteps, "val_criterion": crit})
@@ -195,7 +196,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
 
     from baselines.agents.evaluate import episode_max_errors
     from baselines.agents.policies import build_model
-    from baselines.agents.rundir import ObsNormalizer, write_json, write_manifest
+    from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
     from baselines.sb3 import TqdmCallback
 
     _check_config(config)
@@ -207,7 +208,10 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     if config.env_kwargs:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    if not hp["env_kwargs"].get("val_fraction", 0) > 0:
+    val_fraction = hp["env_kwargs"].get("val_fraction", 0)
+    if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):
+        raise ValueError(f"env_kwargs.val_fraction must be a number; got {val_fraction!r}")
+    if not val_fraction > 0:
         raise ValueError(
             "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
             "carved from the training data, never on the test split"
@@ -245,9 +249,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     seconds = time.perf_counter() - t0
     steps = int(model.num_timesteps)
 
-    tmp = run_dir / ".final_agent.tmp.zip"
-    model.save(tmp)
-    tmp.replace(run_dir / "final_agent.zip")
+    save_model(model, run_dir / "final_agent.zip")
     vn = model.get_vec_normalize_env()
     if vn is not None:
         ObsNormalizer.save_vec_normalize(vn, run_dir / "final_normalization.npz")
@@ -256,10 +258,8 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
         run_dir / "config.json",
         {"algo": config.algo, "env_id": config.env_id, "seed": config.seed, "hyperparams": hp},
     )
-    with open(run_dir / "evaluations.csv", "w", encoding="utf-8") as f:
-        f.write("timesteps,val_criterion\n")
-        for e in validation.evaluations:
-            f.write(f"{e['timesteps']},{e['val_criterion']!r}\n")
+    rows = [f"{e['timesteps']},{e['val_criterion']!r}\n" for e in validation.evaluations]
+    atomic_write_text(run_dir / "evaluations.csv", "timesteps,val_criterion\n" + "".join(rows))
     command = list(config.command) or equivalent_command(config)
     write_manifest(
         run_dir,
@@ -318,15 +318,21 @@ def equivalent_command(config: TrainConfig) -> list[str]:
 def _cli(args: argparse.Namespace) -> int:
     # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
+    try:
+        env_kwargs = parse_env_kwargs(args.env_kwargs)
+    except ValueError as exc:
+        raise options.ConfigError("env_kwargs", str(exc).removeprefix("--env-kwargs: ")) from None
+    checks.check_env_kwargs(args.env, env_kwargs)
+    default_out = f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     config = TrainConfig(
         algo=args.algo,
         env_id=args.env,
-        out=args.out or f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}",
+        out=str(args.out) if args.out is not None else default_out,
         seed=args.seed,
-        config_path=args.config,
+        config_path=None if args.config is None else str(args.config),
         timesteps=args.timesteps,
         n_envs=args.n_envs,
-        env_kwargs=parse_env_kwargs(args.env_kwargs),
+        env_kwargs=env_kwargs,
         progress=not args.no_progress,
         tensorboard=not args.no_tensorboard,
         command=("motion-bench", *sys.argv[1:]) if sys.argv[1:2] == ["train"] else (),
@@ -347,29 +353,38 @@ def _cli(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add ``motion-bench train``."""
-    p = subparsers.add_parser(
+    p = options.add_subcommand(
+        subparsers,
         "train",
         help="train an SB3 agent (ppo, sac, td3) on top of the nominal; zoo-style YAML configs",
-        description=__doc__.split("\n\n")[0],
+        description=__doc__.split("\n\n")[0].replace("``", ""),
     )
     p.add_argument("--algo", required=True, choices=ALGOS)
-    p.add_argument("--env", required=True, metavar="ID", help="e.g. MotionEnvs/OrientationReach-v1")
     p.add_argument(
-        "--config", default=None, metavar="PATH", help="default configs/agents/ALGO.yaml"
+        "--env", required=True, type=checks.env_id, metavar="ID",
+        help="e.g. MotionEnvs/OrientationReach-v1",
+    )  # fmt: skip
+    p.add_argument(
+        "--config", default=None, type=checks.yaml_file, metavar="PATH",
+        help="hyper-parameters (default: configs/agents/ALGO.yaml)",
+    )  # fmt: skip
+    p.add_argument(
+        "--timesteps", type=options.positive_int, default=None, help="override n_timesteps"
     )
-    p.add_argument("--timesteps", type=int, default=None, help="override n_timesteps")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--n-envs", type=int, default=None, help="override n_envs")
+    p.add_argument("--seed", type=options.non_negative_int, default=0)
+    p.add_argument("--n-envs", type=options.positive_int, default=None, help="override n_envs")
     p.add_argument(
         "--env-kwargs",
         nargs="*",
+        type=checks.env_kwarg,
         default=None,
         metavar="K=V",
         help="environment kwargs (plain YAML values), e.g. nominal=bezier-task",
     )
     p.add_argument(
-        "--out", default=None, metavar="DIR", help="run folder (default runs/ALGO-ENV-seedS)"
-    )
+        "--out", default=None, type=options.output_folder, metavar="DIR",
+        help="run folder (default: runs/ALGO-ENV-seedS)",
+    )  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-tensorboard", action="store_true", help="no TensorBoard logs")
     p.set_defaults(func=_cli)
