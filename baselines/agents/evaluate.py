@@ -169,15 +169,13 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
 
 def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     """Per-episode max error, agent against nominal (one point per episode) and sorted."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from baselines.plots import new_figure
 
     ep = results["episodes"]
     a = np.asarray(ep["agent_max_error"])
     n = np.asarray(ep["nominal_max_error"])
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2))
+    fig = new_figure(10, 4.2)
+    ax1, ax2 = fig.subplots(1, 2)
     hi = float(max(a.max(), n.max())) * 1.05
     ax1.scatter(n, a, s=14, alpha=0.8)
     ax1.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
@@ -193,9 +191,7 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     ax2.set_xlabel("episode (sorted by the nominal's error)")
     ax2.set_ylabel("max error over the episode")
     ax2.legend()
-    fig.tight_layout()
     save_figure(fig, path, dpi=120)
-    plt.close(fig)
 
 
 def _cli(args: argparse.Namespace) -> int:

@@ -539,15 +539,13 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
 
 def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     """Test criterion / nominal per seed (points) and median (bar) for each configuration."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import textwrap
 
-    import matplotlib.pyplot as plt
+    from baselines.plots import new_figure
 
     rows = results["configurations"]
-    fig, ax = plt.subplots(figsize=(max(6.0, 2.2 * len(rows) + 1.5), 4.5))
+    fig = new_figure(max(6.0, 2.2 * len(rows) + 1.5), 4.5)
+    ax = fig.subplots()
     for i, r in enumerate(rows):
         ratios = np.asarray(r["test_criteria"]) / r["test_nominal_criterion"]
         color = "C1" if r["best_on_validation"] else "C0"
@@ -565,9 +563,7 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     pad = max(0.02, 0.1 * (max(hi, 1.0) - min(lo, 1.0)))
     ax.set_ylim(min(lo, 1.0) - pad, max(hi, 1.0) + pad)
     ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
     save_figure(fig, path, dpi=120)
-    plt.close(fig)
 
 
 def _cli(args: argparse.Namespace) -> int:
