@@ -57,10 +57,11 @@ class GymnasiumVecEnv(VecEnv):
 
     def reset(self) -> np.ndarray:
         seeds = None if all(s is None for s in self._seeds) else list(self._seeds)
-        obs, _ = self.venv.reset(seed=seeds)
+        # Gymnasium's vector envs take a list of per-env seeds; its stubs say int only
+        obs, _ = self.venv.reset(seed=seeds)  # type: ignore[arg-type]
         self._reset_seeds()
         self._reset_options()
-        return obs
+        return np.asarray(obs)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions
@@ -98,7 +99,7 @@ class GymnasiumVecEnv(VecEnv):
         return [False for _ in self._get_indices(indices)]
 
     def get_images(self) -> Sequence[np.ndarray | None]:
-        frames = self.venv.render()
+        frames: Any = self.venv.render()  # a tuple of frames; Gymnasium's stubs are wider
         return list(frames) if frames is not None else [None] * self.num_envs
 
 

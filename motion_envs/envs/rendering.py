@@ -201,7 +201,8 @@ class HandFrameRenderer:
             )
             geom.label = name
             scene.ngeom += 1
-        return self._renderer.render().copy()
+        frame: NDArray[np.uint8] = self._renderer.render().copy()
+        return frame
 
     def _render_matplotlib(
         self,
