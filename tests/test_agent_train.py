@@ -94,6 +94,9 @@ def test_callback_criterion_equals_motion_bench_agent(ppo_run, tmp_path):
     assert doc["criterion"] == result.best_val_criterion
     assert doc["nominal_criterion"] == result.val_nominal_criterion
     assert (tmp_path / "results.csv").is_file() and (tmp_path / "agent_vs_nominal.png").is_file()
+    header = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
+    assert header[-1] == "learned_max_error"
+    assert doc["learned_ratio"] == doc["criterion"] / doc["learned_criterion"]
     assert any((out / "tb").rglob("events.out.tfevents.*"))
 
 
@@ -110,6 +113,22 @@ def test_agent_on_test_split_scores_the_nominal_like_the_env(ppo_run):
     few = evaluate_run(AgentConfig(str(out), "test", episodes=5))
     assert few["n_episodes"] == 5
     assert few["episodes"]["agent_max_error"] == res["episodes"]["agent_max_error"][:5]
+    # the learned regressor on the same episodes, the same criterion
+    learned = res["episodes"]["learned_max_error"]
+    assert len(learned) == res["n_episodes"]
+    assert res["learned_criterion"] == float(np.median(learned))
+    assert few["episodes"]["learned_max_error"] == learned[:5]
+
+
+def test_agent_without_scikit_learn_skips_the_learned_row(ppo_run, monkeypatch, capsys):
+    import baselines.learned
+
+    out, _ = ppo_run
+    reason = "scikit-learn is not installed (pip install 'motion-envs[learned]')"
+    monkeypatch.setattr(baselines.learned, "sklearn_missing_reason", lambda: reason)
+    res = evaluate_run(AgentConfig(str(out), "val", episodes=3))
+    assert res["learned_criterion"] is None and res["learned_skipped"] == reason
+    assert "learned_max_error" not in res["episodes"]
 
 
 def _copy(ppo_run, tmp_path):

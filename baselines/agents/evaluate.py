@@ -8,9 +8,14 @@ maximum over time of the error. The criterion is their median (Faraway & Choe's
 ``motion-bench train`` and ``motion-bench agent`` both call it, so their numbers agree.
 
 ``motion-bench agent DIR [--split test] [--episodes N] [--out DIR]`` scores the saved
-agent and the zero action (the analytic nominal) on the same episodes and writes
-``results.json`` (``criterion``, ``nominal_criterion``, their ratio, the per-episode
-values), ``results.csv`` (one row per episode) and ``agent_vs_nominal.png``.
+agent, the zero action (the analytic nominal) and, for the reaching environments, the
+learned ridge regressor fitted on the environment's training data
+(:mod:`baselines.agents.learned_criterion`) on the same episodes with the same
+criterion, and writes ``results.json`` (``criterion``, ``nominal_criterion``,
+``learned_criterion``, ``ratio = criterion / nominal_criterion``, ``learned_ratio =
+criterion / learned_criterion``, the per-episode values), ``results.csv`` (one row per
+episode) and ``agent_vs_nominal.png``. Without scikit-learn (or for an environment
+without a regressor) the learned values are null and ``learned_skipped`` says why.
 """
 
 from __future__ import annotations
@@ -129,6 +134,7 @@ def run(config: AgentConfig) -> dict[str, Any]:
     kwargs = loaded.env_kwargs
     agent = episode_max_errors(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
     nominal = episode_max_errors(None, loaded.env_id, kwargs, config.split, config.episodes)
+    learned_entries, learned = _learned(loaded.env_id, kwargs, config.split, config.episodes)
     results: dict[str, Any] = {
         "run_dir": str(config.run_dir),
         "algo": loaded.config["algo"],
@@ -144,6 +150,7 @@ def run(config: AgentConfig) -> dict[str, Any]:
         "median_of_task_medians": agent.median_of_task_medians,
         "nominal_median_of_task_medians": nominal.median_of_task_medians,
         "best_val_criterion": loaded.manifest.get("best_val_criterion"),
+        **learned_entries,
         "episodes": {
             "trajectory_id": agent.trajectory_ids.tolist(),
             "task": agent.tasks.tolist(),
@@ -151,7 +158,36 @@ def run(config: AgentConfig) -> dict[str, Any]:
             "nominal_max_error": nominal.max_errors.tolist(),
         },
     }
+    if learned is not None:
+        if not np.array_equal(learned.trajectory_ids, agent.trajectory_ids):
+            raise RuntimeError("the learned regressor was scored on other episodes")
+        results["learned_ratio"] = agent.criterion / learned.criterion
+        results["episodes"]["learned_max_error"] = learned.max_errors.tolist()
     return results
+
+
+def _learned(
+    env_id: str, kwargs: Mapping[str, Any], split: str, episodes: int | None
+) -> tuple[dict[str, Any], EpisodeErrors | None]:
+    """``learned_*`` entries of results.json (null with ``learned_skipped`` when there is
+    no regressor) and the regressor's per-episode errors."""
+    from baselines.agents.learned_criterion import learned_episode_errors, learned_skip_reason
+
+    reason = learned_skip_reason(env_id)
+    if reason is not None:
+        entries: dict[str, Any] = {
+            "learned_criterion": None,
+            "learned_ratio": None,
+            "learned_skipped": reason,
+        }
+        return entries, None
+    got = learned_episode_errors(env_id, kwargs, split, episodes)
+    entries = {
+        "learned_criterion": got.errors.criterion,
+        "learned_model": got.model,
+        "learned_chosen": got.chosen,
+    }
+    return entries, got.errors
 
 
 def write_results(results: Mapping[str, Any], out: Path) -> None:
@@ -168,7 +204,8 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
 
 
 def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
-    """Per-episode max error, agent against nominal (one point per episode) and sorted."""
+    """Per-episode max error, agent against nominal (one point per episode) and sorted
+    (with the learned regressor's, when there is one)."""
     from baselines.plots import new_figure
 
     ep = results["episodes"]
@@ -188,6 +225,12 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     order = np.argsort(n)
     ax2.plot(n[order], "o-", ms=3, label=f"nominal (median {results['nominal_criterion']:.4g})")
     ax2.plot(a[order], "o-", ms=3, label=f"agent (median {results['criterion']:.4g})")
+    if "learned_max_error" in ep:
+        lrn = np.asarray(ep["learned_max_error"])
+        ax2.plot(
+            lrn[order], "o-", ms=3,
+            label=f"learned regressor (median {results['learned_criterion']:.4g})",
+        )  # fmt: skip
     ax2.set_xlabel("episode (sorted by the nominal's error)")
     ax2.set_ylabel("max error over the episode")
     ax2.legend()
@@ -206,6 +249,13 @@ def _cli(args: argparse.Namespace) -> int:
         f"episodes): agent {results['criterion']:.6g}, nominal {results['nominal_criterion']:.6g}, "
         f"ratio {results['ratio']:.4f}"
     )
+    if results["learned_criterion"] is not None:
+        print(
+            f"learned regressor {results['learned_criterion']:.6g}, "
+            f"agent / learned {results['learned_ratio']:.4f}"
+        )
+    else:
+        print(f"learned regressor: skipped ({results['learned_skipped']})")
     print(f"wrote {out / 'results.json'}, results.csv, agent_vs_nominal.png")
     return 0
 

@@ -34,6 +34,8 @@ __all__ = [
     "OrientationReachEnv",
     "OrientationTask",
     "load_orientation_task",
+    "orientation_max_errors",
+    "orientation_split_parts",
 ]
 
 #: Largest Bézier degree of the ``bezier-*`` nominals (the paper uses 2 to 4).
@@ -75,6 +77,36 @@ class OrientationTask(ReplayTask):
     max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
 
 
+def orientation_split_parts(
+    data: str | os.PathLike[str],
+    split: str,
+    test_fraction: float,
+    split_seed: int,
+    min_deg: float,
+    val_fraction: float = 0.0,
+) -> tuple[Any, Any, Any]:
+    """``(dataset, fit, part)``: the whole dataset, the subjects the environment's nominal
+    is fitted on, and the trajectories of ``split`` (in episode order).
+
+    ``fit`` is the training split (by subject); with ``val_fraction > 0`` and a
+    ``"train"``/``"val"`` split, the training subjects minus the validation ones.
+    Anything else fitted "on the environment's training data" (the learned regressor
+    of ``motion-bench agent``) uses this same ``fit``.
+    """
+    from motion_envs.datasets import load_orientation_dataset
+    from motion_envs.datasets.splits import split_by_subject
+
+    dataset = load_orientation_dataset(data, min_deg=min_deg)
+    if len(dataset) < 2:
+        raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
+    train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
+    fit, part = train, (train if split == "train" else test)
+    if val_fraction > 0 and split != "test":  # validation subjects carved from training
+        fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
+        part = fit if split == "train" else val
+    return dataset, fit, part
+
+
 def _build_task(
     data: str | os.PathLike[str],
     split: str,
@@ -86,21 +118,13 @@ def _build_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
 ) -> OrientationTask:
-    from motion_envs.datasets import load_orientation_dataset
-    from motion_envs.datasets.splits import split_by_subject
     from motion_envs.geometry import quaternion as quat
     from motion_envs.models.nominal import OrientationNominal
 
-    dataset = load_orientation_dataset(data, min_deg=min_deg)
-    if len(dataset) < 2:
-        raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
-    train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
-    model = OrientationNominal(nominal, degree, N_STEPS).fit(train)
-    part = train if split == "train" else test
-    if val_fraction > 0 and split != "test":  # validation subjects carved from training
-        fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
-        model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
-        part = fit if split == "train" else val
+    dataset, fit, part = orientation_split_parts(
+        data, split, test_fraction, split_seed, min_deg, val_fraction
+    )
+    model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
     g = model.grids(part)
     L, n = g.n_trajectories, N_STEPS
     steps = np.concatenate(
@@ -180,6 +204,47 @@ def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.space
     if observe_timing:
         low[-2:], high[-2:] = timing_bounds(task.max_duration)
     return gym.spaces.Box(low, high, dtype=np.float32)
+
+
+def orientation_max_errors(
+    task: Any, predicted_residuals: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(L,)`` ``max_k |logmap(expmap(rhat_lk)) - r_lk|`` of an orientation task's episodes.
+
+    ``predicted_residuals`` ``(L, n, 3)`` is a residual curve ``rhat`` per episode of
+    ``task`` (:class:`~motion_envs.envs.orientation_reach.OrientationTask`); the
+    trajectory ``e_k expmap(rhat_k)`` is scored by the environment's step kernel with a
+    zero action (the human residual ``r`` and orientation ``h`` from ``task.steps``).
+    """
+    from motion_envs.geometry import quaternion as quat
+
+    rhat = np.asarray(predicted_residuals, dtype=np.float64)
+    steps = task.steps
+    if rhat.shape != (*steps.shape[:2], 3):
+        raise ValueError(
+            f"predicted_residuals must have shape {(*steps.shape[:2], 3)}; got {rhat.shape}"
+        )
+    chart = quat.expmap(rhat)  # as the environment's steps[..., 0:4]
+    nominal = quat.multiply(task.grids.base, chart)
+    zero = np.zeros(steps.shape[0])
+    errors = np.empty(steps.shape[:2])
+    for k in range(steps.shape[1]):
+        s, e, n = steps[:, k], chart[:, k], nominal[:, k]
+        _, errors[:, k], _ = K.orientation_step(
+            K.BATCH,
+            (e[:, 0], e[:, 1], e[:, 2], e[:, 3]),
+            (n[:, 0], n[:, 1], n[:, 2], n[:, 3]),
+            (s[:, 8], s[:, 9], s[:, 10], s[:, 11]),
+            s[:, 12],
+            s[:, 13],
+            s[:, 14],
+            zero,
+            zero,
+            zero,
+            1.0,
+        )
+    out: NDArray[np.float64] = errors.max(axis=1)
+    return out
 
 
 class OrientationReachEnv(ReplayEnv):

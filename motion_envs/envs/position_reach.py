@@ -31,6 +31,8 @@ __all__ = [
     "PositionReachEnv",
     "PositionTask",
     "load_position_task",
+    "position_max_errors",
+    "position_split_source",
 ]
 
 #: Largest ``residual_scale`` (the data's unit): the CSV loader's largest position, so
@@ -99,6 +101,34 @@ def _observation_bounds(
     return low, high
 
 
+def position_split_source(
+    data: str | os.PathLike[str],
+    shapes: Sequence[str] | None,
+    split: str,
+    test_fraction: float,
+    split_seed: int,
+    val_fraction: float = 0.0,
+) -> tuple[Any, Any, str, float]:
+    """``(full, dataset, inner_split, fraction)``: the environment's episodes of ``split``
+    are ``position_grids(dataset, inner_split, ..., fraction, split_seed)``.
+
+    ``full`` is the whole dataset (observation bounds and task names); ``dataset`` the
+    demonstrations the split is drawn from (with ``val_fraction > 0`` and a
+    ``"train"``/``"val"`` split, the training demonstrations, split again). The folds of
+    :func:`~motion_envs.models.nominal.position_folds` on these arguments give every
+    task's training demonstrations, which anything else fitted "on the environment's
+    training data" (the learned regressor of ``motion-bench agent``) uses too.
+    """
+    from motion_envs.datasets import load_position_dataset
+    from motion_envs.datasets.splits import split_by_replicate
+
+    full = load_position_dataset(data, None if shapes is None else tuple(shapes))
+    if val_fraction > 0 and split in ("train", "val"):  # validation carved from training
+        dataset, _ = split_by_replicate(full, test_fraction=test_fraction, seed=split_seed)
+        return full, dataset, ("train" if split == "train" else "test"), val_fraction
+    return full, full, split, test_fraction
+
+
 def _build_task(
     data: str | os.PathLike[str],
     shapes: tuple[str, ...] | None,
@@ -111,19 +141,13 @@ def _build_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
 ) -> PositionTask:
-    from motion_envs.datasets import load_position_dataset
-    from motion_envs.datasets.splits import split_by_replicate
     from motion_envs.models.nominal import position_grids
 
-    dataset = load_position_dataset(data, shapes)
-    full = dataset  # observation bounds and task names come from the whole dataset
-    all_durations = np.array([t[-1] - t[0] for t in dataset.times])
-    if val_fraction > 0 and split in ("train", "val"):  # validation carved from training
-        dataset, _ = split_by_replicate(dataset, test_fraction=test_fraction, seed=split_seed)
-        inner = "train" if split == "train" else "test"
-        g = position_grids(dataset, inner, nominal, n_sines, val_fraction, split_seed, N_STEPS)
-    else:
-        g = position_grids(dataset, split, nominal, n_sines, test_fraction, split_seed, N_STEPS)
+    full, dataset, inner, fraction = position_split_source(
+        data, shapes, split, test_fraction, split_seed, val_fraction
+    )
+    all_durations = np.array([t[-1] - t[0] for t in full.times])
+    g = position_grids(dataset, inner, nominal, n_sines, fraction, split_seed, N_STEPS)
     L, n, D = g.human.shape
     steps = np.concatenate([g.nominal, g.human], axis=2)
     task_names = tuple(sorted(set(np.asarray(full.tasks).astype(str).tolist())))
@@ -215,6 +239,28 @@ def load_position_task(
     if isinstance(data, str) and data == "lasa":
         return _build_task_cached(*args)
     return _build_task(*args)
+
+
+def position_max_errors(task: Any, predicted_positions: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(L,)`` ``max_k |yhat_lk - y_lk|`` of a position task's episodes.
+
+    ``predicted_positions`` ``(L, n, D)``; scored by the environment's step kernel with a
+    zero action (the demonstration ``y`` from ``task.steps``).
+    """
+    yhat = np.asarray(predicted_positions, dtype=np.float64)
+    steps = task.steps
+    D = task.n_dims
+    if yhat.shape != (*steps.shape[:2], D):
+        raise ValueError(
+            f"predicted_positions must have shape {(*steps.shape[:2], D)}; got {yhat.shape}"
+        )
+    zero = [np.zeros(steps.shape[0])] * D
+    errors = np.empty(steps.shape[:2])
+    for k in range(steps.shape[1]):
+        h = steps[:, k, D:].T
+        _, errors[:, k] = K.position_step(K.BATCH, list(yhat[:, k].T), list(h), zero, 1.0)
+    out: NDArray[np.float64] = errors.max(axis=1)
+    return out
 
 
 class PositionReachEnv(ReplayEnv):
