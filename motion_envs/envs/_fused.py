@@ -94,7 +94,7 @@ def _write_current(i, sf, extra, dim, cur_lo, out_obs):  # type: ignore[no-untyp
 
 
 @_jit
-def batch_step(
+def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at compile time
     kind,
     mode,
     max_steps,

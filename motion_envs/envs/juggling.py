@@ -432,7 +432,8 @@ class JugglingEnv(gym.Env):
             self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
         self.scene.sync()
         self._renderer.update_scene(self.data, camera="side")
-        return self._renderer.render()
+        frame: NDArray[np.uint8] = self._renderer.render()
+        return frame
 
     def close(self) -> None:
         if self._renderer is not None:

@@ -9,7 +9,7 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -189,8 +189,8 @@ def load_orientation_task(
     check_integer(degree, "degree", 1, MAX_DEGREE)
     check_number(min_deg, "min_deg", 0.0, 180.0)
     val_fraction = check_val_fraction(val_fraction, split)
-    args = (data, split, nominal, int(degree), float(test_fraction), int(split_seed), min_deg)
-    args += (val_fraction, bool(observe_timing))
+    args: tuple[Any, ...] = (data, split, nominal, int(degree), float(test_fraction))
+    args += (int(split_seed), min_deg, val_fraction, bool(observe_timing))
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
     return _build_task(*args)
@@ -367,7 +367,7 @@ class OrientationReachEnv(ReplayEnv):
     * v0: Initial version.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
 
     def __init__(
         self,
@@ -457,9 +457,10 @@ class OrientationReachEnv(ReplayEnv):
             self._renderer = HandFrameRenderer(self.width, self.height)
         g = self.task.grids
         k = len(self._history) - 1
-        return self._renderer.render(
+        frame: NDArray[np.uint8] = self._renderer.render(
             human=g.human[self._index],
             nominal=g.nominal[self._index],
             agent=np.asarray(self._history),
             step=k,
         )
+        return frame

@@ -9,7 +9,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -234,8 +234,8 @@ def load_position_task(
         if isinstance(shapes, str) or not all(isinstance(s, str) for s in shapes):
             raise ValueError(f"shapes must be a list of shape names or None; got {shapes!r}")
         shapes = tuple(shapes)
-    args = (data, shapes, split, nominal, n_sines, float(test_fraction), split_seed, residual_scale)
-    args += (val_fraction, bool(observe_timing))
+    args: tuple[Any, ...] = (data, shapes, split, nominal, n_sines, float(test_fraction))
+    args += (split_seed, residual_scale, val_fraction, bool(observe_timing))
     if isinstance(data, str) and data == "lasa":
         return _build_task_cached(*args)
     return _build_task(*args)
@@ -377,7 +377,7 @@ class PositionReachEnv(ReplayEnv):
     * v0: Initial version.
     """
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 25}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
 
     def __init__(
         self,
@@ -450,9 +450,10 @@ class PositionReachEnv(ReplayEnv):
 
             self._renderer = CurveRenderer(self.width, self.height, self.task.low, self.task.high)
         g = self.task.grids
-        return self._renderer.render(
+        frame: NDArray[np.uint8] = self._renderer.render(
             human=g.human[self._index],
             nominal=g.nominal[self._index],
             agent=np.asarray(self._history),
             title=f"{self.task.tasks[self._index]}  step {len(self._history) - 1}/{N_STEPS}",
         )
+        return frame

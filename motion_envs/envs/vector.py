@@ -452,7 +452,9 @@ class _ReplayVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         single._index = int(self._si[i, _IDX])
         assert self._history is not None
         single._history = [tuple(q) for q in self._history[i, : self._si[i, _K] + 1]]
-        return single.render()  # type: ignore[return-value]
+        frame = single.render()
+        assert frame is not None  # render_mode is "rgb_array"
+        return np.asarray(frame, dtype=np.uint8)
 
 
 class OrientationReachVectorEnv(_ReplayVectorEnv):
