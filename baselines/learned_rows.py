@@ -62,6 +62,7 @@ __all__ = [
     "LearnedRows",
     "bootstrap_ratio",
     "compare",
+    "format_comparison",
     "format_reading",
     "learned_orientation_rows",
     "plot_ratios",
@@ -374,20 +375,26 @@ def compare(rows: LearnedRows, subjects: NDArray[Any], n_boot: int = 2000) -> li
     return out
 
 
+def format_comparison(c: dict[str, Any], group: str, widths: tuple[int, int]) -> str:
+    """One line of a reading: ``learned / best analytic = ratio (CI); better on k/n``,
+    with the target's verdict where the comparison has one; ``group`` names what the
+    ratio is taken over (``"subjects"``, ``"shapes"``)."""
+    target = (
+        f"; target <= {c['target_ratio']:.2f}: {'MET' if c['met'] else 'MISSED'}"
+        if c["target_ratio"] is not None
+        else ""
+    )
+    return (
+        f"  {c['learned']:<{widths[0]}} / {c['best_analytic']:<{widths[1]}} = {c['ratio']:.3f} "
+        f"(95% CI over {group} {c['ratio_ci95'][0]:.3f}-{c['ratio_ci95'][1]:.3f}); "
+        f"better on {c['subjects_better']}/{c['n_subjects']} {group}{target}"
+    )
+
+
 def format_reading(rows: LearnedRows, comparisons: list[dict[str, Any]]) -> str:
     """A short honest reading of the learned rows against the analytic ones."""
     lines = ["", "learned vs analytic, leave one subject out (ratio < 1: learned is better):"]
-    for c in comparisons:
-        target = (
-            f"; target <= {c['target_ratio']:.2f}: {'MET' if c['met'] else 'MISSED'}"
-            if c["target_ratio"] is not None
-            else ""
-        )
-        lines.append(
-            f"  {c['learned']:<28} / {c['best_analytic']:<40} = {c['ratio']:.3f} "
-            f"(95% CI over subjects {c['ratio_ci95'][0]:.3f}-{c['ratio_ci95'][1]:.3f}); "
-            f"better on {c['subjects_better']}/{c['n_subjects']} subjects{target}"
-        )
+    lines += [format_comparison(c, "subjects", (28, 40)) for c in comparisons]
     crit = rows.criteria
     if np.isfinite(crit.get("null_d2_path_loso", np.nan)):
         lines.append(

@@ -62,21 +62,13 @@ def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[s
 
 def format_position_reading(doc: dict[str, Any], comparisons: list[dict[str, Any]]) -> str:
     """A short honest reading of the learned columns (max error criterion)."""
+    from baselines.learned_rows import format_comparison
+
     lines = [
         "",
         "learned vs analytic (max error, median across shapes; ratio < 1: learned better):",
     ]
-    for c in comparisons:
-        target = (
-            f"; target <= {c['target_ratio']:.2f}: {'MET' if c['met'] else 'MISSED'}"
-            if c["target_ratio"] is not None
-            else ""
-        )
-        lines.append(
-            f"  {c['learned']:<6} / {c['best_analytic']:<6} = {c['ratio']:.3f} "
-            f"(95% CI over shapes {c['ratio_ci95'][0]:.3f}-{c['ratio_ci95'][1]:.3f}); "
-            f"better on {c['subjects_better']}/{c['n_subjects']} shapes{target}"
-        )
+    lines += [format_comparison(c, "shapes", (6, 6)) for c in comparisons]
     for m, why in doc["learned"]["skipped"].items():
         lines.append(f"  {m}: skipped ({why})")
     lines.append(

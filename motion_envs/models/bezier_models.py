@@ -31,7 +31,7 @@ attributes end in ``_``; ``save``/``load`` use the JSON model format of
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, TypeVar
 
 import numpy as np
@@ -161,21 +161,26 @@ class BezierResidualModel(SerializableModel):
         self, residuals: ArrayLike, starts: ArrayLike | None = None, ends: ArrayLike | None = None
     ) -> FloatArray:
         """Residual curves in the frame the model works in (identity for ``"body"``)."""
-        R = np.asarray(residuals, dtype=np.float64)
-        if self.frame == "body":
-            return R
-        S, E = self._ends(starts, ends, R.shape[0])
-        return to_path_frame(R, S, E, self.up)
+        return self._change_frame(to_path_frame, residuals, starts, ends)
 
     def from_model_frame(
         self, curves: ArrayLike, starts: ArrayLike | None = None, ends: ArrayLike | None = None
     ) -> FloatArray:
         """Inverse of :meth:`to_model_frame`: curves back in the body frame."""
+        return self._change_frame(from_path_frame, curves, starts, ends)
+
+    def _change_frame(
+        self,
+        transform: Callable[..., FloatArray],
+        curves: ArrayLike,
+        starts: ArrayLike | None,
+        ends: ArrayLike | None,
+    ) -> FloatArray:
         C = np.asarray(curves, dtype=np.float64)
         if self.frame == "body":
             return C
         S, E = self._ends(starts, ends, C.shape[0])
-        return from_path_frame(C, S, E, self.up)
+        return transform(C, S, E, self.up)
 
     # -- to implement -------------------------------------------------------------
     def _fit_points(
