@@ -16,6 +16,14 @@ criterion, and writes ``results.json`` (``criterion``, ``nominal_criterion``,
 criterion / learned_criterion``, the per-episode values), ``results.csv`` (one row per
 episode) and ``agent_vs_nominal.png``. Without scikit-learn (or for an environment
 without a regressor) the learned values are null and ``learned_skipped`` says why.
+
+``Juggling-v0`` has no trajectories to replay: its splits are seed ranges and its
+criterion the drop rate per toss (:mod:`baselines.agents.juggling_score`, which
+:func:`split_criterion` dispatches to). ``motion-bench agent`` then reports the catch
+rates of the agent and of the zero action (the analytic juggler) on the same seeds and
+the hand's deviation from the demonstrations (held-out ones on ``--split test``):
+``catch_rate``, ``nominal_catch_rate``, ``deviation``, ``nominal_deviation``,
+``deviation_ratio``, per phase, and per episode in results.csv.
 """
 
 from __future__ import annotations
@@ -40,6 +48,7 @@ __all__ = [
     "episode_max_errors",
     "register",
     "run",
+    "split_criterion",
 ]
 
 Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
@@ -113,6 +122,24 @@ def episode_max_errors(
     )
 
 
+def split_criterion(
+    policy: Policy | None,
+    env_id: str,
+    env_kwargs: Mapping[str, Any],
+    split: str,
+    episodes: int | None = None,
+) -> float:
+    """The criterion checkpoints are chosen by (lower is better): for the reaching
+    environments the papers' criterion (:func:`episode_max_errors`), for Juggling-v0 the
+    drop rate per toss on the split's seeds
+    (:func:`~baselines.agents.juggling_score.juggling_episodes`)."""
+    from baselines.agents.juggling_score import is_juggling, juggling_episodes
+
+    if is_juggling(env_id):
+        return juggling_episodes(policy, env_id, env_kwargs, split, episodes).criterion
+    return episode_max_errors(policy, env_id, env_kwargs, split, episodes).criterion
+
+
 # -- motion-bench agent ------------------------------------------------------------------
 @dataclass(frozen=True)
 class AgentConfig:
@@ -132,17 +159,15 @@ def run(config: AgentConfig) -> dict[str, Any]:
         raise ValueError(f"split must be 'train', 'val' or 'test'; got {config.split!r}")
     loaded = load_run(config.run_dir, config.which)
     kwargs = loaded.env_kwargs
+    from baselines.agents.juggling_score import is_juggling
+
+    if is_juggling(loaded.env_id):
+        return _run_juggling(loaded, config)
     agent = episode_max_errors(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
     nominal = episode_max_errors(None, loaded.env_id, kwargs, config.split, config.episodes)
     learned_entries, learned = _learned(loaded.env_id, kwargs, config.split, config.episodes)
     results: dict[str, Any] = {
-        "run_dir": str(config.run_dir),
-        "algo": loaded.config["algo"],
-        "env_id": loaded.env_id,
-        "env_kwargs": kwargs,
-        "seed": loaded.config["seed"],
-        "split": config.split,
-        "checkpoint": config.which,
+        **_run_entries(loaded, config),
         "n_episodes": int(agent.max_errors.size),
         "criterion": agent.criterion,
         "nominal_criterion": nominal.criterion,
@@ -164,6 +189,64 @@ def run(config: AgentConfig) -> dict[str, Any]:
         results["learned_ratio"] = agent.criterion / learned.criterion
         results["episodes"]["learned_max_error"] = learned.max_errors.tolist()
     return results
+
+
+def _run_entries(loaded: Any, config: AgentConfig) -> dict[str, Any]:
+    """The first entries of results.json: which run, environment, split and checkpoint."""
+    return {
+        "run_dir": str(config.run_dir),
+        "algo": loaded.config["algo"],
+        "env_id": loaded.env_id,
+        "env_kwargs": loaded.env_kwargs,
+        "seed": loaded.config["seed"],
+        "split": config.split,
+        "checkpoint": config.which,
+    }
+
+
+def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
+    """``motion-bench agent`` on Juggling-v0: catch rate and the hand's deviation from the
+    demonstrations (held-out ones on ``test``), agent and zero action on the same seeds."""
+    from baselines.agents.juggling_score import juggling_episodes
+
+    kwargs = loaded.env_kwargs
+    agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
+    nominal = juggling_episodes(None, loaded.env_id, kwargs, config.split, config.episodes)
+    phases = sorted(set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist()))
+    return {
+        **_run_entries(loaded, config),
+        "n_episodes": int(agent.seeds.size),
+        "criterion": agent.criterion,
+        "nominal_criterion": nominal.criterion,
+        "ratio": agent.criterion / nominal.criterion if nominal.criterion > 0 else None,
+        "catch_rate": agent.catch_rate,
+        "nominal_catch_rate": nominal.catch_rate,
+        "tosses": int(agent.tosses.sum()),
+        "nominal_tosses": int(nominal.tosses.sum()),
+        "deviation": agent.deviation,
+        "nominal_deviation": nominal.deviation,
+        "deviation_ratio": agent.deviation / nominal.deviation,
+        "phase_deviation": {p: agent.phase_deviation(p) for p in phases},
+        "nominal_phase_deviation": {p: nominal.phase_deviation(p) for p in phases},
+        "deviation_reference": (
+            "held-out demonstrations" if config.split == "test" else "training demonstrations"
+        ),
+        "best_val_criterion": loaded.manifest.get("best_val_criterion"),
+        "learned_criterion": None,
+        "learned_ratio": None,
+        "learned_skipped": f"{loaded.env_id} has no learned regressor",
+        "episodes": {
+            "seed": agent.seeds.tolist(),
+            "agent_tosses": agent.tosses.tolist(),
+            "agent_catches": agent.catches.tolist(),
+            "agent_dropped": agent.dropped.tolist(),
+            "agent_deviation": agent.episode_deviation().tolist(),
+            "nominal_tosses": nominal.tosses.tolist(),
+            "nominal_catches": nominal.catches.tolist(),
+            "nominal_dropped": nominal.dropped.tolist(),
+            "nominal_deviation": nominal.episode_deviation().tolist(),
+        },
+    }
 
 
 def _learned(
@@ -200,7 +283,10 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     write_json(out / "results.json", dict(results))
     table = pd.DataFrame(results["episodes"])
     atomic_write_text(out / "results.csv", table.to_csv(index=False, float_format="%.17g"))
-    plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
+    if "agent_deviation" in results["episodes"]:
+        plot_juggling_agent_vs_nominal(results, out / "agent_vs_nominal.png")
+    else:
+        plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
 
 
 def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
@@ -237,6 +323,44 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     save_figure(fig, path, dpi=120)
 
 
+def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
+    """Juggling: per-episode deviation from the demonstrations, agent against nominal, and
+    the median deviation per phase with the catch rates in the legend."""
+    from baselines.plots import new_figure
+
+    ep = results["episodes"]
+    a = np.asarray(ep["agent_deviation"], dtype=float) * 1000.0
+    n = np.asarray(ep["nominal_deviation"], dtype=float) * 1000.0
+    fig = new_figure(10, 4.2)
+    ax1, ax2 = fig.subplots(1, 2)
+    ok = np.isfinite(a) & np.isfinite(n)
+    hi = float(max(np.max(a[ok], initial=1.0), np.max(n[ok], initial=1.0))) * 1.05
+    ax1.scatter(n[ok], a[ok], s=14, alpha=0.8)
+    ax1.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
+    ax1.set_xlim(0, hi)
+    ax1.set_ylim(0, hi)
+    ax1.set_xlabel("nominal (zero action): deviation (mm)")
+    ax1.set_ylabel(f"agent ({results['algo']}): deviation (mm)")
+    ax1.set_title(
+        f"{results['env_id']} [SIMULATED demonstrations], {results['split']}, per episode",
+        fontsize=9,
+    )
+    ax1.legend(loc="upper left")
+    phases = list(results["phase_deviation"])
+    x = np.arange(len(phases))
+    agent_mm = [1000.0 * results["phase_deviation"][p] for p in phases]
+    nominal_mm = [1000.0 * results["nominal_phase_deviation"][p] for p in phases]
+    ax2.bar(
+        x - 0.2, nominal_mm, 0.4, label=f"nominal (catch rate {results['nominal_catch_rate']:.3f})"
+    )
+    ax2.bar(x + 0.2, agent_mm, 0.4, label=f"agent (catch rate {results['catch_rate']:.3f})")
+    ax2.set_xticks(x, [p.replace("_", " ") for p in phases])
+    ax2.set_ylabel(f"median deviation from {results['deviation_reference']} (mm)")
+    ax2.set_title("hand path vs nearest demonstration, per phase", fontsize=9)
+    ax2.legend()
+    save_figure(fig, path, dpi=120)
+
+
 def _cli(args: argparse.Namespace) -> int:
     # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
@@ -244,11 +368,21 @@ def _cli(args: argparse.Namespace) -> int:
     results = run(config)
     out = Path(args.out) if args.out else Path(args.run_dir) / f"eval-{args.split}"
     write_results(results, out)
-    print(
-        f"{results['env_id']} {results['algo']} ({results['split']}, {results['n_episodes']} "
-        f"episodes): agent {results['criterion']:.6g}, nominal {results['nominal_criterion']:.6g}, "
-        f"ratio {results['ratio']:.4f}"
-    )
+    if "catch_rate" in results:
+        print(
+            f"{results['env_id']} {results['algo']} ({results['split']}, {results['n_episodes']} "
+            f"episodes): catch rate agent {results['catch_rate']:.4f} ({results['tosses']} "
+            f"tosses), nominal {results['nominal_catch_rate']:.4f}; deviation from "
+            f"{results['deviation_reference']} agent {1000 * results['deviation']:.2f} mm, "
+            f"nominal {1000 * results['nominal_deviation']:.2f} mm, ratio "
+            f"{results['deviation_ratio']:.4f}"
+        )
+    else:
+        print(
+            f"{results['env_id']} {results['algo']} ({results['split']}, "
+            f"{results['n_episodes']} episodes): agent {results['criterion']:.6g}, nominal "
+            f"{results['nominal_criterion']:.6g}, ratio {results['ratio']:.4f}"
+        )
     if results["learned_criterion"] is not None:
         print(
             f"learned regressor {results['learned_criterion']:.6g}, "

@@ -201,12 +201,10 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     Checks the manifest's format and motion-envs version and every file's SHA-256 before
     reading anything else.
     """
-    import gymnasium as gym
-
     import motion_envs
     from baselines.agents.config import validate_hyperparams
     from baselines.agents.policies import build_model
-    from baselines.sb3 import GymnasiumVecEnv
+    from baselines.agents.vec import make_sb3_vec_env
 
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
@@ -248,11 +246,8 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     if hp.get("normalize", {}).get("obs") and f"{prefix}normalization.npz" not in files:
         raise ValueError(f"run folder {run_dir}: {stats.name} is missing (normalize.obs is true)")
     normalizer = ObsNormalizer.load(stats) if stats.name in files else ObsNormalizer()
-    venv = gym.make_vec(
-        config["env_id"], num_envs=1, vectorization_mode="vector_entry_point", split="val"
-        if hp["env_kwargs"].get("val_fraction", 0) > 0 else "train", **hp["env_kwargs"],
-    )  # fmt: skip
-    env = GymnasiumVecEnv(venv)
+    split = "val" if hp["env_kwargs"].get("val_fraction", 0) > 0 else "train"
+    env = make_sb3_vec_env(config["env_id"], 1, hp["env_kwargs"], split)
     model = build_model(config["algo"], hp, env, int(config["seed"]))
     try:
         model.set_parameters(str(run_dir / f"{prefix}agent.zip"), exact_match=True, device="cpu")

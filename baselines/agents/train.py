@@ -14,7 +14,9 @@ train`` and every trial of ``motion-bench sweep`` call it):
    scored on the *validation* split (``split="val"``: training subjects/demonstrations
    held out by ``val_fraction``) with the papers' criterion, the median over episodes of
    ``info["max_error"]``; the best policy so far is saved as ``agent.zip``. The test split
-   is never touched;
+   is never touched. ``Juggling-v0`` (no native vector environment: SB3's
+   ``DummyVecEnv``) is validated on its own seed range by the drop rate per toss
+   (:mod:`baselines.agents.juggling_score`);
 5. the run folder (:mod:`baselines.agents.rundir`) gets the final policy, the resolved
    config, the manifest and TensorBoard logs.
 """
@@ -93,20 +95,30 @@ def _check_config(config: TrainConfig) -> None:
         raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
 
 
+def _check_validation_split(env_id: str, env_kwargs: Mapping[str, Any]) -> None:
+    """A data-split environment needs ``val_fraction > 0`` (its validation split is carved
+    from the training data); the juggling environment's splits are seed ranges
+    (:mod:`baselines.agents.juggling_score`) and need nothing."""
+    from baselines.agents.vec import takes_keyword
+
+    if not takes_keyword(env_id, "val_fraction"):
+        return
+    val_fraction = env_kwargs.get("val_fraction", 0)
+    if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):
+        raise ValueError(f"env_kwargs.val_fraction must be a number; got {val_fraction!r}")
+    if not val_fraction > 0:
+        raise ValueError(
+            "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
+            "carved from the training data, never on the test split"
+        )
+
+
 def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
-    import gymnasium as gym
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
-    from baselines.sb3 import GymnasiumVecEnv
+    from baselines.agents.vec import make_sb3_vec_env
 
-    venv = gym.make_vec(
-        env_id,
-        num_envs=hp["n_envs"],
-        vectorization_mode="vector_entry_point",
-        split="train",
-        **hp["env_kwargs"],
-    )
-    env: Any = VecMonitor(GymnasiumVecEnv(venv))
+    env: Any = VecMonitor(make_sb3_vec_env(env_id, hp["n_envs"], hp["env_kwargs"], "train"))
     norm = hp.get("normalize", {})
     if norm.get("obs") or norm.get("reward"):
         env = VecNormalize(
@@ -127,7 +139,7 @@ def _validation_callback(
 ) -> Any:
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from baselines.agents.evaluate import episode_max_errors
+    from baselines.agents.evaluate import split_criterion
     from baselines.agents.rundir import ObsNormalizer, save_model
 
     class ValidationCallback(BaseCallback):
@@ -150,8 +162,7 @@ def _validation_callback(
             def policy(obs: np.ndarray) -> np.ndarray:
                 return model.predict(normalizer(obs), deterministic=True)[0]
 
-            errs = episode_max_errors(policy, env_id, hp["env_kwargs"], "val", self.episodes)
-            crit = errs.criterion
+            crit = split_criterion(policy, env_id, hp["env_kwargs"], "val", self.episodes)
             is_best = crit < self.best
             if is_best:
                 self.best, self.best_timesteps = crit, self.num_timesteps
@@ -194,7 +205,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     import torch
     from stable_baselines3.common.utils import set_random_seed
 
-    from baselines.agents.evaluate import episode_max_errors
+    from baselines.agents.evaluate import split_criterion
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
     from baselines.sb3 import TqdmCallback
@@ -208,14 +219,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     if config.env_kwargs:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    val_fraction = hp["env_kwargs"].get("val_fraction", 0)
-    if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):
-        raise ValueError(f"env_kwargs.val_fraction must be a number; got {val_fraction!r}")
-    if not val_fraction > 0:
-        raise ValueError(
-            "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
-            "carved from the training data, never on the test split"
-        )
+    _check_validation_split(config.env_id, hp["env_kwargs"])
     run_dir = Path(config.out)
     if (run_dir / "run.json").exists():
         raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
@@ -236,9 +240,9 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
                 file=sys.stderr,
             )
     model = build_model(config.algo, hp, env, config.seed, tensorboard_log=tb)
-    val_nominal = episode_max_errors(
+    val_nominal = split_criterion(
         None, config.env_id, hp["env_kwargs"], "val", hp.get("eval_episodes")
-    ).criterion
+    )
     validation = _validation_callback(config.env_id, hp, run_dir, on_evaluation)
     callbacks: list[Any] = [validation]
     total = int(hp["n_timesteps"])
@@ -338,12 +342,13 @@ def _cli(args: argparse.Namespace) -> int:
         command=("motion-bench", *sys.argv[1:]) if sys.argv[1:2] == ["train"] else (),
     )
     result = run(config)
+    nominal = result.val_nominal_criterion
+    ratio = f", ratio {result.best_val_criterion / nominal:.4f}" if nominal > 0 else ""
     print(
         f"{config.algo} on {config.env_id}, seed {config.seed}: {result.timesteps} steps in "
         f"{result.train_seconds:.0f} s ({result.steps_per_second:.0f} steps/s); validation "
         f"criterion {result.best_val_criterion:.6g} at step {result.best_timesteps} "
-        f"(nominal {result.val_nominal_criterion:.6g}, ratio "
-        f"{result.best_val_criterion / result.val_nominal_criterion:.4f})"
+        f"(nominal {nominal:.6g}{ratio})"
     )
     print(
         f"wrote {result.run_dir} (evaluate on the test split: motion-bench agent {result.run_dir})"

@@ -29,6 +29,7 @@ __all__ = [
     "TRACKING_NOISE",
     "JugglingEnv",
     "cycle_rngs",
+    "juggler_demonstrations",
     "load_juggler",
 ]
 
@@ -68,7 +69,7 @@ FIT_TEST_FRACTION = 0.25
 
 
 @functools.lru_cache(maxsize=8)
-def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
+def _demos_and_juggler(data: str | None, task: JugglingTask) -> tuple[Any, Any, Any, Any]:
     from motion_envs.datasets.juggling_demos import generate_demonstrations
     from motion_envs.models.juggling_run import fit_juggler
 
@@ -78,8 +79,18 @@ def _fitted_juggler(data: str | None, task: JugglingTask) -> Any:
         from motion_envs.models.juggling_segmentation import load_juggling_csv
 
         demos = load_juggling_csv(data, task=task)
-    juggler, _, _ = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
-    return juggler
+    juggler, train, test = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
+    return demos, frozenset(train), frozenset(test), juggler
+
+
+def juggler_demonstrations(
+    data: str | os.PathLike[str] | None, task: JugglingTask
+) -> tuple[Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]]]:
+    """The demonstrations Juggling-v0's juggler is fitted on and their split: ``(demos,
+    train, test)`` with ``train``/``test`` sets of ``(recording, cycle)``; the juggler saw
+    the ``train`` cycles only (``motion-bench juggling``'s split, seed ``FIT_SEED``)."""
+    demos, train, test, _ = _demos_and_juggler(None if data is None else os.fspath(data), task)
+    return demos, train, test
 
 
 def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
@@ -87,7 +98,7 @@ def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any
     on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
     the users' juggling CSV; fitted once per process and data (a few seconds)."""
     key = None if data is None else os.fspath(data)
-    return copy.deepcopy(_fitted_juggler(key, task))
+    return copy.deepcopy(_demos_and_juggler(key, task)[3])
 
 
 def _check_noise(noise: Any) -> JugglingNoise:
@@ -195,7 +206,9 @@ class JugglingEnv(gym.Env):
     and ``|a|^2`` the squared norm of the (clipped) action. `info` holds each weighted
     term (``reward_catch``, ``reward_drop``, ``reward_deviation``, ``reward_action``;
     ``reward`` is their sum), ``deviation``, ``catches`` and ``cycles`` (so far),
-    ``phase``, ``held``, ``time`` and ``action_invalid``.
+    ``phase``, ``held``, ``time``, ``hand`` (the hand's true position ``(x, z)`` in m at
+    the end of the step, without the observation's tracking noise) and
+    ``action_invalid``.
 
     ## Starting State
     The hand rests at the juggler's home (the mean start of the training tosses) with the
@@ -238,7 +251,8 @@ class JugglingEnv(gym.Env):
     | `height`         | **int**       | `480`   | frame height in pixels |
 
     ## Version History
-    * v0: Initial version.
+    * v0: Initial version (``info["hand"]`` added later; observations, rewards and
+      dynamics unchanged).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
@@ -337,7 +351,13 @@ class JugglingEnv(gym.Env):
         self._done = False
         self._catches = 0
         self._cycles = 0
-        info = {"phase": self._phase, "time": state.time, "seed": base, "cycle": cycle}
+        info = {
+            "phase": self._phase,
+            "time": state.time,
+            "hand": np.array(state.hand_pos, dtype=np.float64),
+            "seed": base,
+            "cycle": cycle,
+        }
         return self._observation(state), info
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
@@ -399,6 +419,7 @@ class JugglingEnv(gym.Env):
             "phase": juggler.phase,
             "held": state.held,
             "time": state.time,
+            "hand": np.array(state.hand_pos, dtype=np.float64),
             "action_invalid": invalid,
         }
         return self._observation(state), reward, terminated, truncated, info

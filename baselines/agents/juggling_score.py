@@ -1,0 +1,271 @@
+"""Juggling-v0's criteria for agents: catch rate, and the hand's distance from people.
+
+The reaching environments score a policy by the papers' criterion on trajectories of a
+data split. Juggling-v0 has no trajectories to replay: an episode is a seeded run of the
+juggling world (release noise, tracking noise, the juggler's random phase ends). Its
+splits are therefore *seed ranges*, disjoint from any seed training uses:
+
+* ``"val"``: episodes reset with seeds ``VAL_SEED + i``; the hand is compared with the
+  *training* demonstrations (those the analytic juggler was fitted on);
+* ``"test"``: seeds ``TEST_SEED + i``; the hand is compared with the *held-out*
+  demonstrations (the juggler never saw them);
+* ``"train"``: seeds ``TRAIN_SEED + i`` (a sample of what training sees), training
+  demonstrations.
+
+``motion-bench train`` resets its environments with seeds ``seed .. seed + n_envs - 1``
+(SB3's ``VecEnv.seed``) and then with seeds drawn from the environments' generators;
+``VAL_SEED`` and ``TEST_SEED`` lie above any seed the command line accepts for training
+runs of practical size (< 10^9), so validation and test episodes are never trained on.
+
+For each episode :func:`juggling_episodes` records
+
+* ``tosses`` (releases) and ``catches``; the **catch rate** is ``sum(catches) /
+  sum(tosses)`` over the episodes and the **criterion** (lower is better, as the reaching
+  criterion) is the drop rate ``1 - catch rate``;
+* the hand's path, cut into phase segments by the juggler's phase labels (a run of one
+  label plus the first sample of the next, as the demonstrations are cut); each complete
+  segment is resampled to ``N_POINTS`` points of normalised time ``tau_k`` and compared
+  with every demonstration segment of the same phase (also resampled) *retargeted* to
+  the segment's own start and end (the demonstration's departure from its straight line,
+  added to the segment's straight line; ``motion-bench juggling`` retargets the same
+  way). The retargeted demonstration and the segment share their end points, so the
+  comparison is of shape, not of where the release noise sent the ball: with ``r(y)_k =
+  y_k - (y_0 + tau_k (y_N - y_0))`` a path's departure from its line, the segment's
+  **deviation** is the distance to the *nearest* demonstration, ``min_j max_k |r(hand)_k
+  - r(demo_j)_k|`` (Lippi's max-over-time error against the closest human movement). The
+  **deviation** of a policy is the median over all complete segments of all episodes, in
+  metres.
+
+The nominal (zero action) is scored on the same seeds, so ``deviation_ratio = deviation /
+nominal deviation`` is the issue's "hand deviation from held-out demonstrations relative
+to the nominal's".
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "DEFAULT_EPISODES",
+    "JUGGLING_ENV_IDS",
+    "N_POINTS",
+    "SPLIT_SEEDS",
+    "JugglingEpisodes",
+    "demonstration_paths",
+    "departure_from_line",
+    "is_juggling",
+    "juggling_episodes",
+    "segment_deviations",
+]
+
+FloatArray = NDArray[np.float64]
+Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
+
+#: Environment ids scored by this module.
+JUGGLING_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Juggling-v0",)
+#: First reset seed of each split's episodes.
+SPLIT_SEEDS: Mapping[str, int] = {
+    "train": 0,
+    "val": 1_000_000_000,
+    "test": 2_000_000_000,
+}
+#: Episodes per split when not given.
+DEFAULT_EPISODES: Mapping[str, int] = {"train": 20, "val": 20, "test": 50}
+#: Points of normalised time a phase segment is resampled to.
+N_POINTS = 50
+
+
+def is_juggling(env_id: str) -> bool:
+    """True for the environments this module scores."""
+    return env_id in JUGGLING_ENV_IDS
+
+
+def _resample(times: FloatArray, positions: FloatArray, n_points: int = N_POINTS) -> FloatArray:
+    """``positions (n, 2)`` at ``n_points`` equally spaced points of normalised time."""
+    tau = (times - times[0]) / (times[-1] - times[0])
+    grid = np.linspace(0.0, 1.0, n_points)
+    return np.column_stack([np.interp(grid, tau, positions[:, d]) for d in range(2)])
+
+
+def departure_from_line(paths: FloatArray) -> FloatArray:
+    """``r(y)_k = y_k - (y_0 + tau_k (y_last - y_0))`` of paths ``(..., n, 2)`` sampled at
+    equally spaced ``tau_k = k / (n - 1)``; zero at both ends."""
+    n = paths.shape[-2]
+    tau = np.linspace(0.0, 1.0, n)[:, None]
+    first, last = paths[..., :1, :], paths[..., -1:, :]
+    out: FloatArray = paths - (first + tau * (last - first))
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _demonstration_paths(
+    data: str | None, gravity: float | None, split: str
+) -> dict[str, FloatArray]:
+    from motion_envs.datasets.juggling_task import PHASES, JugglingTask
+    from motion_envs.envs.juggling import juggler_demonstrations
+
+    task = JugglingTask() if gravity is None else JugglingTask(gravity=float(gravity))
+    demos, train, test = juggler_demonstrations(data, task)
+    keep = test if split == "test" else train
+    out: dict[str, FloatArray] = {}
+    for phase in PHASES:
+        segs = [s for s in demos.segments(phase) if (s.recording, s.cycle) in keep]
+        out[phase] = departure_from_line(np.stack([_resample(s.times, s.positions) for s in segs]))
+    return out
+
+
+def demonstration_paths(env_kwargs: Mapping[str, Any], split: str) -> dict[str, FloatArray]:
+    """Per phase, the departures from their lines (:func:`departure_from_line`) of the
+    demonstration segments ``(m, N_POINTS, 2)`` a split is compared with: held-out
+    demonstrations for ``"test"``, training ones otherwise."""
+    if split not in SPLIT_SEEDS:
+        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
+    data = env_kwargs.get("data")
+    gravity = env_kwargs.get("gravity")
+    return _demonstration_paths(
+        None if data is None else str(data), None if gravity is None else float(gravity), split
+    )
+
+
+def segment_deviations(
+    times: FloatArray, hand: FloatArray, phases: list[str], demos: Mapping[str, FloatArray]
+) -> list[tuple[str, float]]:
+    """``(phase, deviation)`` of every complete phase segment of one episode's hand path.
+
+    ``times (n,)``, ``hand (n, 2)`` and ``phases`` (n labels) are sampled at the episode's
+    steps, sample 0 being the reset state. A segment is a run of one label plus the first
+    sample of the next label; the last run (not followed by another label) is incomplete
+    and skipped, as is a run of fewer than 3 samples. ``demos`` maps a phase to the
+    demonstrations' departures from their lines (:func:`demonstration_paths`).
+    """
+    out: list[tuple[str, float]] = []
+    start = 0
+    for k in range(1, len(phases) + 1):
+        if k < len(phases) and phases[k] == phases[start]:
+            continue
+        if k == len(phases):
+            break
+        stop = k  # the first sample of the next phase closes the segment
+        if stop - start >= 2 and phases[start] in demos:
+            path = departure_from_line(_resample(times[start : stop + 1], hand[start : stop + 1]))
+            dist = np.linalg.norm(demos[phases[start]] - path[None], axis=-1)  # (m, N)
+            out.append((phases[start], float(dist.max(axis=1).min())))
+        start = k
+    return out
+
+
+@dataclass(frozen=True)
+class JugglingEpisodes:
+    """Per-episode counts and per-segment deviations of a policy on a split."""
+
+    seeds: NDArray[np.int64]
+    tosses: NDArray[np.int64]
+    catches: NDArray[np.int64]
+    dropped: NDArray[np.bool_]
+    segment_phase: NDArray[np.str_]
+    segment_episode: NDArray[np.int64]
+    segment_deviation: FloatArray
+
+    @property
+    def catch_rate(self) -> float:
+        """Catches per toss over all episodes."""
+        return float(self.catches.sum() / max(int(self.tosses.sum()), 1))
+
+    @property
+    def criterion(self) -> float:
+        """Drop rate per toss, ``1 - catch_rate`` (lower is better)."""
+        return 1.0 - self.catch_rate
+
+    @property
+    def deviation(self) -> float:
+        """Median over complete phase segments of the distance (m) to the nearest
+        demonstration of the split."""
+        return float(np.median(self.segment_deviation))
+
+    def phase_deviation(self, phase: str) -> float:
+        """:attr:`deviation` over the segments of one phase."""
+        return float(np.median(self.segment_deviation[self.segment_phase == phase]))
+
+    def episode_deviation(self) -> FloatArray:
+        """Per episode, the median deviation of its segments (NaN without segments)."""
+        out = np.full(self.seeds.size, np.nan)
+        for i in range(self.seeds.size):
+            d = self.segment_deviation[self.segment_episode == i]
+            if d.size:
+                out[i] = np.median(d)
+        return out
+
+
+def juggling_episodes(
+    policy: Policy | None,
+    env_id: str,
+    env_kwargs: Mapping[str, Any],
+    split: str,
+    episodes: int | None = None,
+) -> JugglingEpisodes:
+    """Play ``episodes`` (default :data:`DEFAULT_EPISODES`) deterministic episodes of
+    ``split`` (seeds ``SPLIT_SEEDS[split] + i``), all at once in a ``SyncVectorEnv``;
+    ``policy`` maps raw observations ``(N, obs_dim)`` to actions, None is the zero action
+    (the analytic juggler)."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
+
+    if not is_juggling(env_id):
+        raise ValueError(f"{env_id} is not a juggling environment")
+    if split not in SPLIT_SEEDS:
+        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
+    n = DEFAULT_EPISODES[split] if episodes is None else int(episodes)
+    if n < 1:
+        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
+    kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
+    demos = demonstration_paths(kwargs, split)
+    seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
+    obs, info = venv.reset(seed=seeds.tolist())
+    times = [[float(t)] for t in info["time"]]
+    hands = [[np.asarray(h, dtype=np.float64)] for h in info["hand"]]
+    phases = [[str(p)] for p in info["phase"]]
+    tosses = np.zeros(n, dtype=np.int64)
+    catches = np.zeros(n, dtype=np.int64)
+    dropped = np.zeros(n, dtype=bool)
+    done = np.zeros(n, dtype=bool)
+    shape = (n, *(venv.single_action_space.shape or ()))
+    while not done.all():
+        actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
+        obs, _, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.float32))
+        for i in np.flatnonzero(~done).tolist():
+            times[i].append(float(info["time"][i]))
+            hands[i].append(np.asarray(info["hand"][i], dtype=np.float64))
+            phases[i].append(str(info["phase"][i]))
+            if terminated[i] or truncated[i]:
+                tosses[i] = int(info["cycles"][i])
+                catches[i] = int(info["catches"][i])
+                dropped[i] = bool(terminated[i])
+                done[i] = True
+    venv.close()
+    seg_phase: list[str] = []
+    seg_episode: list[int] = []
+    seg_dev: list[float] = []
+    for i in range(n):
+        for phase, dev in segment_deviations(
+            np.asarray(times[i]), np.stack(hands[i]), phases[i], demos
+        ):
+            seg_phase.append(phase)
+            seg_episode.append(i)
+            seg_dev.append(dev)
+    return JugglingEpisodes(
+        seeds=seeds,
+        tosses=tosses,
+        catches=catches,
+        dropped=dropped,
+        segment_phase=np.asarray(seg_phase, dtype=str),
+        segment_episode=np.asarray(seg_episode, dtype=np.int64),
+        segment_deviation=np.asarray(seg_dev, dtype=np.float64),
+    )
