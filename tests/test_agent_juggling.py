@@ -186,3 +186,16 @@ def test_a_juggling_sweep_is_refused_with_a_reason(tmp_path):
     )
     with pytest.raises(ValueError, match="cannot be swept yet"):
         load_sweep(path, out=str(tmp_path / "out"))
+
+
+def test_training_seeds_stay_below_the_validation_seeds(tmp_path):
+    from baselines.agents.train import TrainConfig
+    from baselines.agents.train import run as train_run
+
+    config = TrainConfig(
+        algo="ppo", env_id=ENV, out=str(tmp_path / "r"), seed=SPLIT_SEEDS["val"] - 1,
+        timesteps=100, n_envs=2, progress=False, tensorboard=False,
+    )  # fmt: skip
+    with pytest.raises(ValueError, match="would reset on the validation seeds"):
+        train_run(config)
+    assert not (tmp_path / "r").exists()

@@ -5,8 +5,12 @@
 * :mod:`~baselines.agents.train`: ``motion-bench train`` (``run(TrainConfig)``);
 * :mod:`~baselines.agents.rundir`: the run folder (SB3 zip, normalisation statistics as
   ``.npz``, resolved config, manifest with checksums) and loading it back;
+* :mod:`~baselines.agents.vec`: the SB3 vector environment of a run (native where the
+  environment has one, ``DummyVecEnv`` otherwise);
 * :mod:`~baselines.agents.evaluate`: the papers' criterion of a policy on a split and
   ``motion-bench agent`` (``run(AgentConfig)``);
+* :mod:`~baselines.agents.juggling_score`: Juggling-v0's seed-range splits, catch rate and
+  the hand's deviation from the demonstrations;
 * :mod:`~baselines.agents.sweep`: ``motion-bench sweep`` on Ray Tune.
 
 Needs the ``rl`` extra (and ``sweep`` for sweeps); ``import baselines.agents`` is light.

@@ -95,12 +95,24 @@ def _check_config(config: TrainConfig) -> None:
         raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
 
 
-def _check_validation_split(env_id: str, env_kwargs: Mapping[str, Any]) -> None:
+def _check_validation_split(
+    env_id: str, env_kwargs: Mapping[str, Any], seed: int, n_envs: int
+) -> None:
     """A data-split environment needs ``val_fraction > 0`` (its validation split is carved
     from the training data); the juggling environment's splits are seed ranges
-    (:mod:`baselines.agents.juggling_score`) and need nothing."""
+    (:mod:`baselines.agents.juggling_score`) that the training seeds ``seed .. seed +
+    n_envs - 1`` must stay below."""
+    from baselines.agents.juggling_score import SPLIT_SEEDS, is_juggling
     from baselines.agents.vec import takes_keyword
 
+    if is_juggling(env_id):
+        if seed + n_envs > SPLIT_SEEDS["val"]:
+            raise ValueError(
+                f"--seed {seed} with {n_envs} environments would reset on the validation "
+                f"seeds of {env_id} (from {SPLIT_SEEDS['val']}); use a seed below "
+                f"{SPLIT_SEEDS['val'] - n_envs}"
+            )
+        return
     if not takes_keyword(env_id, "val_fraction"):
         return
     val_fraction = env_kwargs.get("val_fraction", 0)
@@ -219,7 +231,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     if config.env_kwargs:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    _check_validation_split(config.env_id, hp["env_kwargs"])
+    _check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
     run_dir = Path(config.out)
     if (run_dir / "run.json").exists():
         raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
