@@ -1,4 +1,4 @@
-"""motion-bench train / agent: tiny runs of every algorithm on both reaching envs.
+"""motion-bench train / agent: tiny runs of every algorithm on every environment.
 
 Each run starts at the nominal (its first validation equals the zero action's), saves a
 run folder that reloads without unpickling to the same actions as SB3's own loader, and
@@ -27,8 +27,10 @@ pytestmark = pytest.mark.filterwarnings("ignore:.*out of date.*:DeprecationWarni
 
 SHAPES = ["Angle", "GShape"]
 ENVS = {
+    "MotionEnvs/OrientationReach-v0": {},
     "MotionEnvs/OrientationReach-v1": {},
     "MotionEnvs/PositionReach-v0": {"shapes": SHAPES},
+    "MotionEnvs/PositionReach-v1": {"shapes": SHAPES},
     # no native vector env (SB3's DummyVecEnv); validated on its own seed range
     "MotionEnvs/Juggling-v0": {"max_cycles": 1},
 }
