@@ -356,6 +356,10 @@ def _optuna_trial(params: dict[str, Any], sweep: SweepConfig) -> None:
     )
 
 
+class SweepInterrupted(RuntimeError):
+    """The sweep stopped (Ctrl-C) before every trial finished; ``--resume`` continues it."""
+
+
 def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[str, Any]:
     """One row per configuration: median and spread over seeds; best by median validation."""
     rows = []
@@ -457,14 +461,26 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         wall = time.perf_counter() - t0
         if started_here:
             ray.shutdown()
+    if grid.errors:
+        raise RuntimeError(
+            f"a sweep trial failed: {grid.errors[0]}; once fixed, --resume --out {out} "
+            "runs the failed trials again"
+        )
+    # Ctrl-C: Ray Tune saves its state, stops the running trials and returns; a trial
+    # finished if it made its last report (Ray marks the stopped ones terminated too)
+    expected = sweep.num_samples if optuna else len(sweep.configurations) * len(sweep.seeds)
+    last = "per_seed" if optuna else "config_index"
+    finished = sum(last in (grid[i].metrics or {}) for i in range(len(grid)))
+    if finished != expected:
+        raise SweepInterrupted(
+            f"the sweep was interrupted with {finished} of {expected} trials finished; "
+            f"continue it with --resume --out {out}"
+        )
     trials = []
     # optuna: the configurations are the ones the sampler proposed, one per trial
     configurations = [] if sweep.search == "optuna" else list(sweep.configurations)
     for i in range(len(grid)):
-        result = grid[i]
-        if result.error is not None:
-            raise RuntimeError(f"a sweep trial failed: {result.error}")
-        m: dict[str, Any] = result.metrics or {}
+        m: dict[str, Any] = grid[i].metrics or {}
         if sweep.search == "optuna":  # one configuration per trial, every seed inside
             configurations.append(json.loads(m["configuration"]))
             for t in json.loads(m["per_seed"]):
@@ -499,6 +515,7 @@ _TRIAL_KEYS = (
     "train_seconds",
     "trial_seconds",
     "run_dir",
+    "resumed",
 )
 
 
@@ -579,7 +596,10 @@ def _cli(args: argparse.Namespace) -> int:
         resume=args.resume,
         progress=not args.no_progress,
     )
-    results = run(sweep)
+    try:
+        results = run(sweep)
+    except SweepInterrupted as exc:
+        return options.fail("motion-bench sweep", str(exc), status=130)
     out = Path(sweep.out)
     write_results(results, out)
     print(format_table(results))
