@@ -36,10 +36,16 @@ zero-action nominal; the configuration marked ``best`` has the lowest median
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
 ``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
-mount). ``--resume`` continues an interrupted sweep in the same ``--out``.
+mount). ``--resume`` continues an interrupted sweep (Ctrl-C, which ends the command with
+that advice, or a crash) in the same ``--out``: Ray Tune keeps its finished trials as they
+are and starts the unfinished ones over (a trial whose run folder was finished is only
+scored again: ``resumed`` in trials.csv); on an ``--out`` with no sweep it starts one.
+Without ``--resume`` an ``--out`` that holds a sweep is refused, and ``--resume`` refuses a
+sweep file whose settings differ from the ones recorded in ``OUT/sweep.json``.
 
-Files: every file motion-envs writes (each trial's run folder, results.json, trials.csv,
-table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic replace).
+Files: every file motion-envs writes (each trial's run folder, sweep.json, results.json,
+trials.csv, table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic
+replace).
 Ray Tune's own experiment state, trial results and checkpoint copies under ``--out`` are
 written by Ray itself (its storage layer); their consistency on interruption is Ray's
 business, which is what ``--resume`` (``Tuner.restore``) relies on.
@@ -400,6 +406,32 @@ def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[s
     }
 
 
+def _settings(sweep: SweepConfig) -> dict[str, Any]:
+    """What a sweep trains (not where or how it runs), as JSON: ``OUT/sweep.json``."""
+    keys = "configurations seeds timesteps n_envs test_split search num_samples random_seed space"
+    settings: dict[str, Any] = json.loads(json.dumps({k: getattr(sweep, k) for k in keys.split()}))
+    return settings
+
+
+def _claim_out(sweep: SweepConfig, out: Path) -> None:
+    """Refuse an ``out`` that holds a sweep unless resuming it with the same settings
+    (its finished run folders would be reused as they are); record them in sweep.json."""
+    stored = out / "sweep.json"
+    settings = _settings(sweep)
+    if not sweep.resume and ((out / "tune").exists() or (out / "runs").exists()):
+        raise options.ConfigError(
+            "out",
+            f"{out} already holds a sweep; continue it with --resume or choose another folder",
+        )
+    if sweep.resume and stored.is_file() and json.loads(stored.read_text()) != settings:
+        raise options.ConfigError(
+            "config",
+            f"{sweep.path} is not the sweep in --out {out} (its settings differ from "
+            f"{stored.name}'s); resume with the same sweep file or choose another --out",
+        )
+    atomic_write_text(stored, json.dumps(settings, indent=2) + "\n")
+
+
 def run(sweep: SweepConfig) -> dict[str, Any]:
     """Run (or resume) the sweep on Ray Tune; the summary and every trial's metrics."""
     import ray
@@ -408,6 +440,7 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     out = Path(sweep.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     sweep = SweepConfig(**{**sweep.__dict__, "out": str(out)})
+    _claim_out(sweep, out)
     started_here = False
     if not ray.is_initialized():
         if sweep.address is not None:
@@ -631,6 +664,9 @@ def register(subparsers: Any) -> None:
         "--out", default=None, type=options.output_folder, metavar="DIR",
         help="results folder (default: sweeps/NAME)",
     )  # fmt: skip
-    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
+    p.add_argument(
+        "--resume", action="store_true",
+        help="continue the interrupted sweep in --out (or start it if --out holds none)",
+    )  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no Ray Tune status table")
     p.set_defaults(func=_cli)
