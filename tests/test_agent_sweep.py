@@ -1,12 +1,19 @@
 """motion-bench sweep on a local Ray (2 CPUs): a two-trial, tiny-budget sweep.
 
 Its per-configuration table must equal what ``motion-bench train`` + ``motion-bench agent``
-give for the same configuration and seeds, run in this process.
+give for the same configuration and seeds, run in this process. ``--resume`` after a
+Ctrl-C keeps the finished trial's run folder as it is and trains the other one again, to
+the same numbers as an uninterrupted sweep.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import signal
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -148,3 +155,144 @@ def test_random_search_draws_once_per_configuration():
     for c in a:
         assert 1e-5 <= c["overrides"]["learning_rate"] <= 1e-3
         assert c["overrides"]["n_epochs"] in (1, 2, 3, 4)
+
+
+# ---------------------------------------------------------------- --resume
+
+
+def _files(folder: Path) -> dict[str, tuple[str, int]]:
+    """Every file under ``folder``: its SHA-256 and modification time (ns)."""
+    return {
+        str(f.relative_to(folder)): (
+            hashlib.sha256(f.read_bytes()).hexdigest(),
+            f.stat().st_mtime_ns,
+        )
+        for f in sorted(folder.rglob("*"))
+        if f.is_file()
+    }
+
+
+def _numbers(trial: dict) -> dict:
+    """A trial's metrics without the timings and the run folder's path."""
+    return {
+        k: v for k, v in trial.items() if k not in ("train_seconds", "trial_seconds", "run_dir")
+    }
+
+
+def _sweep(out: Path, *extra: str, config: Path = TINY) -> int:
+    from baselines.cli import main
+
+    return main(["sweep", "--config", str(config), "--out", str(out), "--no-progress", *extra])
+
+
+@pytest.fixture(scope="module")
+def finished_sweep(local_ray, tmp_path_factory):
+    """The tiny sweep run to the end; ``--resume`` on an ``--out`` with no sweep starts one."""
+    out = tmp_path_factory.mktemp("finished") / "sweep"
+    assert _sweep(out, "--resume") == 0
+    return out
+
+
+def test_resume_with_no_sweep_in_out_starts_one(finished_sweep):
+    doc = json.loads((finished_sweep / "results.json").read_text())
+    assert doc["n_trials"] == 2 and doc["configurations"][0]["seeds"] == [0, 1]
+    assert [t["resumed"] for t in doc["trials"]] == [False, False]
+    settings = json.loads((finished_sweep / "sweep.json").read_text())
+    assert settings["seeds"] == [0, 1] and settings["timesteps"] == 2000
+
+
+def test_an_out_holding_a_sweep_is_refused_unless_resumed_with_the_same_file(
+    finished_sweep, tmp_path, capsys
+):
+    before = _files(finished_sweep)
+    # without --resume the finished run folders would be scored again as this sweep's
+    assert _sweep(finished_sweep) == 2
+    err = capsys.readouterr().err
+    assert f"argument --out: {finished_sweep} already holds a sweep" in err and "--resume" in err
+    # --resume with other settings would mix 1,000-step trials with 2,000-step ones
+    other = tmp_path / "other.yaml"
+    other.write_text(TINY.read_text().replace("timesteps: 2000", "timesteps: 1000"))
+    assert _sweep(finished_sweep, "--resume", config=other) == 2
+    err = capsys.readouterr().err
+    assert f"argument --config: {other} is not the sweep in --out {finished_sweep}" in err
+    assert _files(finished_sweep) == before
+
+
+def test_resume_continues_an_interrupted_sweep_to_the_same_results(
+    finished_sweep, local_ray, tmp_path, capsys
+):
+    from baselines.agents.sweep import _train_and_score
+
+    out = tmp_path / "sweep"
+    runs = out / "runs"
+
+    @ray.remote(num_cpus=1)
+    class Hold:  # takes one of the 2 CPUs: the two trials run one after the other
+        def ready(self) -> bool:
+            return True
+
+    hold = Hold.remote()
+    ray.get(hold.ready.remote())
+    done = threading.Event()
+
+    def ctrl_c_when_the_second_trial_starts() -> None:
+        deadline = time.monotonic() + 300
+        while not done.is_set() and time.monotonic() < deadline:
+            if runs.is_dir() and len(list(runs.iterdir())) == 2:
+                os.kill(os.getpid(), signal.SIGINT)  # Ray Tune's handler: save and stop
+                return
+            time.sleep(0.02)
+
+    watcher = threading.Thread(target=ctrl_c_when_the_second_trial_starts, daemon=True)
+    watcher.start()
+    try:
+        code = _sweep(out)
+    finally:
+        done.set()
+        watcher.join()
+        ray.kill(hold)
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert f"interrupted with 1 of 2 trials finished; continue it with --resume --out {out}" in err
+    assert not (out / "results.json").exists()
+    finished = [d for d in sorted(runs.iterdir()) if (d / "run.json").is_file()]
+    assert len(finished) == 1, "the second trial must be cut short"
+    (kept,) = finished
+    (cut,) = set(runs.iterdir()) - {kept}
+    assert any(cut.iterdir())  # a partial run folder: the second trial had started training
+    kept_files = _files(kept)
+
+    assert _sweep(out, "--resume") == 0
+    assert _files(kept) == kept_files  # not trained (nor written) again
+    assert (cut / "run.json").is_file()
+    ref = json.loads((finished_sweep / "results.json").read_text())
+    doc = json.loads((out / "results.json").read_text())
+    # the finished trial's result is Ray Tune's stored one (a rerun would say resumed);
+    # the cut one was trained again from scratch
+    assert [t["resumed"] for t in doc["trials"]] == [False, False]
+    assert [_numbers(t) for t in doc["trials"]] == [_numbers(t) for t in ref["trials"]]
+    assert doc["configurations"] == ref["configurations"]
+    # training is deterministic for a seed on CPU: the same validation curve, step by step;
+    # the seeds' curves differ (at 2,000 steps the best policy is the initial one, so the
+    # criteria above are the same for both seeds and alone would not show this)
+    curves = {d.name: (d / "evaluations.csv").read_text() for d in (kept, cut)}
+    assert curves == {
+        n: (finished_sweep / "runs" / n / "evaluations.csv").read_text() for n in curves
+    }
+    assert curves[kept.name] != curves[cut.name]
+
+    # a trial restarted after its run folder was finished only scores it again
+    sweep = load_sweep(TINY, out=str(out))
+    trial = next(t for t in doc["trials"] if Path(t["run_dir"]).name == kept.name)
+    again = _train_and_score(sweep.configurations[0], trial["seed"], kept, sweep, True)
+    assert {"config_index": trial["config_index"], **_numbers(again)} == {
+        **_numbers(trial),
+        "resumed": True,
+    }
+    assert _files(kept) == kept_files
+
+    # resuming a finished sweep trains nothing and gives the same results
+    every_run = _files(runs)
+    assert _sweep(out, "--resume") == 0
+    assert _files(runs) == every_run
+    assert json.loads((out / "results.json").read_text())["trials"] == doc["trials"]

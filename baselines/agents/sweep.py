@@ -36,10 +36,16 @@ zero-action nominal; the configuration marked ``best`` has the lowest median
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
 ``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
-mount). ``--resume`` continues an interrupted sweep in the same ``--out``.
+mount). ``--resume`` continues an interrupted sweep (Ctrl-C, which ends the command with
+that advice, or a crash) in the same ``--out``: Ray Tune keeps its finished trials as they
+are and starts the unfinished ones over (a trial whose run folder was finished is only
+scored again: ``resumed`` in trials.csv); on an ``--out`` with no sweep it starts one.
+Without ``--resume`` an ``--out`` that holds a sweep is refused, and ``--resume`` refuses a
+sweep file whose settings differ from the ones recorded in ``OUT/sweep.json``.
 
-Files: every file motion-envs writes (each trial's run folder, results.json, trials.csv,
-table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic replace).
+Files: every file motion-envs writes (each trial's run folder, sweep.json, results.json,
+trials.csv, table.csv, table.md, sweep.png) goes through :mod:`motion_envs._io` (atomic
+replace).
 Ray Tune's own experiment state, trial results and checkpoint copies under ``--out`` are
 written by Ray itself (its storage layer); their consistency on interruption is Ray's
 business, which is what ``--resume`` (``Tuner.restore``) relies on.
@@ -363,6 +369,10 @@ def _optuna_trial(params: dict[str, Any], sweep: SweepConfig) -> None:
     )
 
 
+class SweepInterrupted(RuntimeError):
+    """The sweep stopped (Ctrl-C) before every trial finished; ``--resume`` continues it."""
+
+
 def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[str, Any]:
     """One row per configuration: median and spread over seeds; best by median validation."""
     rows = []
@@ -403,6 +413,32 @@ def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[s
     }
 
 
+def _settings(sweep: SweepConfig) -> dict[str, Any]:
+    """What a sweep trains (not where or how it runs), as JSON: ``OUT/sweep.json``."""
+    keys = "configurations seeds timesteps n_envs test_split search num_samples random_seed space"
+    settings: dict[str, Any] = json.loads(json.dumps({k: getattr(sweep, k) for k in keys.split()}))
+    return settings
+
+
+def _claim_out(sweep: SweepConfig, out: Path) -> None:
+    """Refuse an ``out`` that holds a sweep unless resuming it with the same settings
+    (its finished run folders would be reused as they are); record them in sweep.json."""
+    stored = out / "sweep.json"
+    settings = _settings(sweep)
+    if not sweep.resume and ((out / "tune").exists() or (out / "runs").exists()):
+        raise options.ConfigError(
+            "out",
+            f"{out} already holds a sweep; continue it with --resume or choose another folder",
+        )
+    if sweep.resume and stored.is_file() and json.loads(stored.read_text()) != settings:
+        raise options.ConfigError(
+            "config",
+            f"{sweep.path} is not the sweep in --out {out} (its settings differ from "
+            f"{stored.name}'s); resume with the same sweep file or choose another --out",
+        )
+    atomic_write_text(stored, json.dumps(settings, indent=2) + "\n")
+
+
 def run(sweep: SweepConfig) -> dict[str, Any]:
     """Run (or resume) the sweep on Ray Tune; the summary and every trial's metrics."""
     import ray
@@ -411,6 +447,7 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     out = Path(sweep.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     sweep = SweepConfig(**{**sweep.__dict__, "out": str(out)})
+    _claim_out(sweep, out)
     started_here = False
     if not ray.is_initialized():
         if sweep.address is not None:
@@ -464,14 +501,26 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         wall = time.perf_counter() - t0
         if started_here:
             ray.shutdown()
+    if grid.errors:
+        raise RuntimeError(
+            f"a sweep trial failed: {grid.errors[0]}; once fixed, --resume --out {out} "
+            "runs the failed trials again"
+        )
+    # Ctrl-C: Ray Tune saves its state, stops the running trials and returns; a trial
+    # finished if it made its last report (Ray marks the stopped ones terminated too)
+    expected = sweep.num_samples if optuna else len(sweep.configurations) * len(sweep.seeds)
+    last = "per_seed" if optuna else "config_index"
+    finished = sum(last in (grid[i].metrics or {}) for i in range(len(grid)))
+    if finished != expected:
+        raise SweepInterrupted(
+            f"the sweep was interrupted with {finished} of {expected} trials finished; "
+            f"continue it with --resume --out {out}"
+        )
     trials = []
     # optuna: the configurations are the ones the sampler proposed, one per trial
     configurations = [] if sweep.search == "optuna" else list(sweep.configurations)
     for i in range(len(grid)):
-        result = grid[i]
-        if result.error is not None:
-            raise RuntimeError(f"a sweep trial failed: {result.error}")
-        m: dict[str, Any] = result.metrics or {}
+        m: dict[str, Any] = grid[i].metrics or {}
         if sweep.search == "optuna":  # one configuration per trial, every seed inside
             configurations.append(json.loads(m["configuration"]))
             for t in json.loads(m["per_seed"]):
@@ -506,6 +555,7 @@ _TRIAL_KEYS = (
     "train_seconds",
     "trial_seconds",
     "run_dir",
+    "resumed",
 )
 
 
@@ -586,7 +636,10 @@ def _cli(args: argparse.Namespace) -> int:
         resume=args.resume,
         progress=not args.no_progress,
     )
-    results = run(sweep)
+    try:
+        results = run(sweep)
+    except SweepInterrupted as exc:
+        return options.fail("motion-bench sweep", str(exc), status=130)
     out = Path(sweep.out)
     write_results(results, out)
     print(format_table(results))
@@ -618,6 +671,9 @@ def register(subparsers: Any) -> None:
         "--out", default=None, type=options.output_folder, metavar="DIR",
         help="results folder (default: sweeps/NAME)",
     )  # fmt: skip
-    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
+    p.add_argument(
+        "--resume", action="store_true",
+        help="continue the interrupted sweep in --out (or start it if --out holds none)",
+    )  # fmt: skip
     p.add_argument("--no-progress", action="store_true", help="no Ray Tune status table")
     p.set_defaults(func=_cli)
