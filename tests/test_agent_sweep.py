@@ -60,7 +60,7 @@ def test_two_trial_sweep_equals_the_single_run_command(local_ray, tmp_path):
 
     sweep = load_sweep(TINY, out=str(out))
     cfg = sweep.configurations[0]
-    single = []
+    single, curves = [], []
     for seed in sweep.seeds:
         run_dir = tmp_path / f"single{seed}"
         result = train(
@@ -81,7 +81,19 @@ def test_two_trial_sweep_equals_the_single_run_command(local_ray, tmp_path):
         assert trial["best_val_criterion"] == result.best_val_criterion
         assert trial["test_criterion"] == test["criterion"]
         assert trial["test_nominal_criterion"] == test["nominal_criterion"]
+        # the kept checkpoint may be the initial policy for both; the validation curve and
+        # the final policy are where the two seeds differ, so compare those too
+        trial_dir = Path(trial["run_dir"])
+        curve = (run_dir / "evaluations.csv").read_text()
+        assert (trial_dir / "evaluations.csv").read_text() == curve
+        curves.append(curve)
+        finals = [
+            evaluate(AgentConfig(str(d), "test", episodes=5, which="final"))["criterion"]
+            for d in (trial_dir, run_dir)
+        ]
+        assert finals[0] == finals[1]
         single.append(test["criterion"])
+    assert curves[0] != curves[1]
     assert row["test_criterion_median"] == float(np.median(single))
     assert row["test_criterion_min"] == min(single)
 
