@@ -282,6 +282,14 @@ CASES = [
         ["train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--timestep", "5"],
         "unrecognized arguments: --timestep",
     ),
+    (
+        ["train", "--algo", "ppo", "--env", "MotionEnvs/Juggling-v0", "--seed", "999999999"],
+        "argument --seed: 999999999 with 4 environments would reset on the validation seeds",
+    ),
+    (
+        ["train", "--algo", "sac", "--env", "MotionEnvs/Juggling-v0", "--env-kwargs", "split=val"],
+        "argument --env-kwargs:",
+    ),
     (["agent"], "the following arguments are required: DIR"),
     (["agent", "{tmp}/missing"], "argument DIR: {tmp}/missing does not exist"),
     (["agent", "{tmp}/file.txt"], "argument DIR: {tmp}/file.txt is a file"),

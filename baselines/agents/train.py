@@ -107,10 +107,11 @@ def _check_validation_split(
 
     if is_juggling(env_id):
         if seed + n_envs > SPLIT_SEEDS["val"]:
-            raise ValueError(
-                f"--seed {seed} with {n_envs} environments would reset on the validation "
-                f"seeds of {env_id} (from {SPLIT_SEEDS['val']}); use a seed below "
-                f"{SPLIT_SEEDS['val'] - n_envs}"
+            raise options.ConfigError(
+                "seed",
+                f"{seed} with {n_envs} environments would reset on the validation seeds of "
+                f"{env_id} (from {SPLIT_SEEDS['val']}); use a seed below "
+                f"{SPLIT_SEEDS['val'] - n_envs + 1}",
             )
         return
     if not takes_keyword(env_id, "val_fraction"):
@@ -339,6 +340,12 @@ def _cli(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise options.ConfigError("env_kwargs", str(exc).removeprefix("--env-kwargs: ")) from None
     checks.check_env_kwargs(args.env, env_kwargs)
+    from baselines.agents.juggling_score import is_juggling
+
+    if is_juggling(args.env):  # its seed range, checked before anything is built
+        hp = resolve_hyperparams(args.algo, args.env, args.config)
+        n_envs = args.n_envs if args.n_envs is not None else int(hp["n_envs"])
+        _check_validation_split(args.env, {}, args.seed, n_envs)
     default_out = f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     config = TrainConfig(
         algo=args.algo,
