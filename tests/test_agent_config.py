@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
+from baselines.agents.checks import check_env_kwargs
 from baselines.agents.config import (
     ALGOS,
     load_hyperparams,
@@ -38,6 +41,34 @@ def test_committed_configs_resolve_for_every_env(algo, env_id):
     assert hp["action_head_scale"] == 0.0  # the policy starts at the nominal
     if "Position" in env_id:
         assert hp["env_kwargs"]["nominal"] == "null"  # the string, not YAML's null
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_committed_juggling_config_builds_the_env(algo):
+    """Juggling-v0 has its own block: keywords its constructor takes (no val_fraction:
+    its validation split is a seed range), the issue's 5 % release noise."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401
+
+    hp = resolve_hyperparams(algo, "MotionEnvs/Juggling-v0")
+    assert "val_fraction" not in hp["env_kwargs"] and hp["env_kwargs"]["noise"] == 0.05
+    assert hp["action_head_scale"] == 0.0
+    check_env_kwargs("MotionEnvs/Juggling-v0", hp["env_kwargs"])
+    gym.make("MotionEnvs/Juggling-v0", **hp["env_kwargs"]).close()
+
+
+@pytest.mark.parametrize(
+    "path", sorted(Path(__file__).parents[1].glob("configs/sweeps/*.yaml")), ids=lambda p: p.name
+)
+def test_committed_sweep_files_load(path, tmp_path):
+    from baselines.agents.sweep import load_sweep
+
+    sweep = load_sweep(path, out=str(tmp_path))
+    assert sweep.configurations and sweep.seeds
+    for cfg in sweep.configurations:
+        hp = resolve_hyperparams(cfg["algo"], cfg["env_id"], overrides=cfg["overrides"])
+        check_env_kwargs(cfg["env_id"], hp["env_kwargs"])
 
 
 def test_env_block_overrides_default_key_by_key(tmp_path):
