@@ -82,6 +82,8 @@ def test_rate_and_elapsed_keep_moving_during_updates():
     assert cb._thread is None  # the refresh thread stopped
 
 
+# SB3's own bar is tqdm.rich, which tqdm flags as experimental on every use
+@pytest.mark.filterwarnings("ignore::tqdm.TqdmExperimentalWarning")
 def test_sb3_progress_bar_and_tensorboard_log(tmp_path, capsys):
     """The rl extra's rich and tensorboard make SB3's own options work."""
     pytest.importorskip("rich", reason="the rl extra installs rich")
