@@ -8,6 +8,7 @@ Modified, mismatched or foreign run folders raise one-line errors.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 
@@ -203,3 +204,39 @@ def test_train_refuses_to_overwrite_and_needs_a_validation_split(ppo_run, tmp_pa
     with pytest.raises(ValueError, match="val_fraction must be > 0"):
         train_run(cfg)
     assert main(["train", "--algo", "ppo", "--env", "Nope-v0", "--out", str(tmp_path)]) == 2
+
+
+@pytest.mark.parametrize("env_id", ["MotionEnvs/PositionReach-v1", "MotionEnvs/Juggling-v0"])
+def test_training_never_touches_the_test_split(tmp_path, monkeypatch, env_id):
+    """Out of sample: the environments train builds and the splits its callback scores
+    are "train" and "val" only (the juggling scorer's split picks its seed range)."""
+    import gymnasium as gym
+
+    import baselines.agents.evaluate as evaluate_module
+    import baselines.agents.juggling_score as juggling_module
+
+    seen: list[str] = []
+    for module, name in (
+        (evaluate_module, "episode_max_errors"),
+        (juggling_module, "juggling_episodes"),
+    ):
+        original = getattr(module, name)
+
+        def spy(policy, env, kwargs, split, episodes=None, _original=original):
+            seen.append(split)
+            return _original(policy, env, kwargs, split, episodes)
+
+        monkeypatch.setattr(module, name, spy)
+    for name in ("make", "make_vec"):
+        original = getattr(gym, name)
+
+        def spy_make(*args, _original=original, **kwargs):
+            seen.append(kwargs.get("split", "(none)"))
+            return _original(*args, **kwargs)
+
+        monkeypatch.setattr(gym, name, spy_make)
+    config = tiny_config("ppo", env_id, tmp_path / "run")
+    train_run(dataclasses.replace(config, timesteps=400))
+    assert "val" in seen and "test" not in seen, seen
+    if env_id != "MotionEnvs/Juggling-v0":
+        assert "train" in seen
