@@ -177,17 +177,6 @@ def test_motion_bench_agent_on_juggling(juggling_run, tmp_path):
     assert (tmp_path / "agent_vs_nominal.png").stat().st_size > 10_000
 
 
-def test_a_juggling_sweep_is_refused_with_a_reason(tmp_path):
-    from baselines.agents.sweep import load_sweep
-
-    path = tmp_path / "j.yaml"
-    path.write_text(
-        f"search: grid\nseeds: [0]\ntimesteps: 1000\nspace:\n  algo: [ppo]\n  env_id: [{ENV}]\n"
-    )
-    with pytest.raises(ValueError, match="cannot be swept yet"):
-        load_sweep(path, out=str(tmp_path / "out"))
-
-
 def test_training_seeds_stay_below_the_validation_seeds(tmp_path):
     from baselines.agents.train import TrainConfig
     from baselines.agents.train import run as train_run

@@ -131,6 +131,75 @@ def test_best_configuration_is_chosen_on_validation_only():
     assert summary["best_config_index"] == 0
 
 
+def test_a_juggling_sweep_reports_catch_rates_where_no_ratio_exists(local_ray, tmp_path):
+    """Juggling-v0's nominal drops nothing (criterion 0), so criterion / nominal has no
+    value: the table says n/a and adds catch rates and the deviation ratio, which equal
+    motion-bench agent's on the same run folder; the plot shows the criterion itself."""
+    from baselines.agents.sweep import format_table
+    from baselines.cli import main
+
+    path = tmp_path / "juggling.yaml"
+    path.write_text(
+        "search: grid\nseeds: [0]\ntimesteps: 512\nn_envs: 2\ntest_split: val\nspace:\n"
+        "  algo: [ppo]\n  env_id: [MotionEnvs/Juggling-v0]\n"
+        "  env_kwargs: {max_cycles: [1]}\n"
+        "  hyperparams: {n_steps: [128], batch_size: [128], n_epochs: [1], eval_freq: [256],"
+        " eval_episodes: [2]}\n"
+    )
+    out = tmp_path / "out"
+    assert main(["sweep", "--config", str(path), "--out", str(out), "--no-progress"]) == 0
+    doc = json.loads((out / "results.json").read_text())
+    (trial,) = doc["trials"]
+    agent = evaluate(AgentConfig(trial["run_dir"], "val"))
+    assert trial["test_catch_rate"] == agent["catch_rate"]
+    assert trial["test_nominal_catch_rate"] == agent["nominal_catch_rate"]
+    assert trial["test_deviation_ratio"] == agent["deviation_ratio"]
+    (row,) = doc["configurations"]
+    assert row["test_catch_rate_median"] == agent["catch_rate"]
+    assert agent["nominal_criterion"] == 0  # the juggler catches all 20 validation balls
+    assert trial["test_ratio"] is None and row["test_ratio_median"] is None
+    assert "| n/a |" in (out / "table.md").read_text()
+    assert "nominal catch rate" in format_table(doc)
+    assert (out / "sweep.png").stat().st_size > 5_000
+
+
+def test_tables_of_reaching_and_juggling_rows_side_by_side(tmp_path):
+    from baselines.agents.sweep import format_table, plot_sweep
+
+    sweep = load_sweep(TINY, out="unused")
+    sweep = type(sweep)(**{**sweep.__dict__, "configurations": sweep.configurations * 2})
+    reach = {
+        "best_val_criterion": 0.2,
+        "test_criterion": 0.45,
+        "test_ratio": 0.9,
+        "test_nominal_criterion": 0.5,
+        "test_catch_rate": None,
+        "test_nominal_catch_rate": None,
+        "test_deviation_ratio": None,
+    }
+    juggle = {
+        "best_val_criterion": 0.0,
+        "test_criterion": 0.0,
+        "test_ratio": None,
+        "test_nominal_criterion": 0.0,
+        "test_catch_rate": 1.0,
+        "test_nominal_catch_rate": 1.0,
+        "test_deviation_ratio": 1.25,
+    }
+    trials = [{"config_index": 0, "seed": s, **reach} for s in (0, 1)] + [
+        {"config_index": 1, "seed": s, **juggle} for s in (0, 1)
+    ]  # fmt: skip
+    summary = summarize(trials, sweep)
+    first, second = summary["configurations"]
+    assert first["test_ratio_median"] == 0.9 and first["test_catch_rate_median"] is None
+    assert second["test_ratio_median"] is None and second["test_deviation_ratio_max"] == 1.25
+    table = format_table(summary).splitlines()
+    assert table[2].endswith("| 0.900 (0.900-0.900) | n/a | n/a | n/a |")
+    assert table[3].endswith("| n/a | 1.000 (1.000-1.000) | 1.000 | 1.250 (1.250-1.250) |")
+    plot_sweep({**summary, "test_split": "test"}, tmp_path / "mixed.png")
+    assert (tmp_path / "mixed.png").stat().st_size > 5_000
+
+
 @pytest.mark.parametrize(
     ("doc", "match"),
     [

@@ -30,8 +30,11 @@ trial that calls
 folder as its checkpoint, and at the end scores the best-on-validation policy on the test
 split (:func:`baselines.agents.evaluate.run`). The summary table has one row per
 configuration: median and spread over seeds of the test criterion and of its ratio to the
-zero-action nominal; the configuration marked ``best`` has the lowest median
-*validation* criterion (the test split plays no part in the choice).
+zero-action nominal (``n/a`` where the nominal's criterion is 0: the analytic juggler of
+``Juggling-v0`` drops nothing at 5 % noise; juggling rows add the catch rates and the
+hand's deviation ratio, and the plot then shows the criterion itself); the configuration
+marked ``best`` has the lowest median *validation* criterion (the test split plays no
+part in the choice).
 
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
@@ -70,7 +73,6 @@ import yaml
 from baselines import options
 from baselines.agents import checks
 from baselines.agents.config import ALGOS, validate_hyperparams
-from baselines.agents.juggling_score import JUGGLING_ENV_IDS
 from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = ["SweepConfig", "expand_configurations", "load_sweep", "register", "run"]
@@ -188,12 +190,6 @@ def configuration(point: Mapping[tuple[str, ...], Any], path: str = "sweep") -> 
     algo, env_id = point[("algo",)], point[("env_id",)]
     if algo not in ALGOS:
         raise ValueError(f"{path}: space.algo {algo!r} is not one of {list(ALGOS)}")
-    if str(env_id) in JUGGLING_ENV_IDS:
-        raise ValueError(
-            f"{path}: space.env_id {env_id} cannot be swept yet: the sweep's table is criterion "
-            "/ nominal's, and the analytic juggler's drop rate is 0 under the default noise; "
-            "train it with motion-bench train and score it with motion-bench agent"
-        )
     overrides: dict[str, Any] = {}
     env_kwargs: dict[str, Any] = {}
     for key, value in point.items():
@@ -325,7 +321,11 @@ def _train_and_score(
         "val_nominal_criterion": manifest["val_nominal_criterion"],
         "test_criterion": test["criterion"],
         "test_nominal_criterion": test["nominal_criterion"],
-        "test_ratio": test["ratio"],
+        "test_ratio": test["ratio"],  # None where the nominal's criterion is 0
+        # Juggling-v0 (None for the reaching environments)
+        "test_catch_rate": test.get("catch_rate"),
+        "test_nominal_catch_rate": test.get("nominal_catch_rate"),
+        "test_deviation_ratio": test.get("deviation_ratio"),
         "train_seconds": manifest["train_seconds"],
         "trial_seconds": time.perf_counter() - t0,
         "run_dir": str(run_dir),
@@ -373,6 +373,15 @@ class SweepInterrupted(RuntimeError):
     """The sweep stopped (Ctrl-C) before every trial finished; ``--resume`` continues it."""
 
 
+def _spread(values: Sequence[float | None]) -> tuple[float | None, float | None, float | None]:
+    """Median, min and max over seeds; None when any seed has no value (a ratio to a
+    nominal criterion of 0, or a juggling-only metric of a reaching run)."""
+    if not values or any(v is None for v in values):
+        return None, None, None
+    a = np.asarray(values, dtype=float)
+    return float(np.median(a)), float(a.min()), float(a.max())
+
+
 def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[str, Any]:
     """One row per configuration: median and spread over seeds; best by median validation."""
     rows = []
@@ -381,8 +390,8 @@ def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[s
         if not mine:
             continue
         test = np.array([t["test_criterion"] for t in mine])
-        ratio = np.array([t["test_ratio"] for t in mine])
         val = np.array([t["best_val_criterion"] for t in mine])
+        ratio = _spread([t["test_ratio"] for t in mine])
         rows.append(
             {
                 "config_index": index,
@@ -398,12 +407,15 @@ def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[s
                 "test_criterion_max": float(test.max()),
                 "test_criterion_iqr": float(np.subtract(*np.percentile(test, [75, 25]))),
                 "test_nominal_criterion": float(mine[0]["test_nominal_criterion"]),
-                "test_ratio_median": float(np.median(ratio)),
-                "test_ratio_min": float(ratio.min()),
-                "test_ratio_max": float(ratio.max()),
+                "test_ratio_median": ratio[0],
+                "test_ratio_min": ratio[1],
+                "test_ratio_max": ratio[2],
                 "test_criteria": test.tolist(),
             }
         )
+        for key in ("test_catch_rate", "test_nominal_catch_rate", "test_deviation_ratio"):
+            median, lo, hi = _spread([t.get(key) for t in mine])
+            rows[-1].update({f"{key}_median": median, f"{key}_min": lo, f"{key}_max": hi})
     best = min(rows, key=lambda r: r["val_criterion_median"]) if rows else None
     for r in rows:
         r["best_on_validation"] = best is not None and r["config_index"] == best["config_index"]
@@ -552,6 +564,9 @@ _TRIAL_KEYS = (
     "test_criterion",
     "test_nominal_criterion",
     "test_ratio",
+    "test_catch_rate",
+    "test_nominal_catch_rate",
+    "test_deviation_ratio",
     "train_seconds",
     "trial_seconds",
     "run_dir",
@@ -561,19 +576,39 @@ _TRIAL_KEYS = (
 
 def format_table(results: Mapping[str, Any]) -> str:
     """The summary as a Markdown table (the README's agent table)."""
-    lines = [
+    rows = results["configurations"]
+    juggling = any(r.get("test_catch_rate_median") is not None for r in rows)
+    head = (
         "| configuration | seeds | val median | test median | test min-max | nominal (test) | "
-        "x nominal (median, min-max) |",
-        "|---|--:|--:|--:|--:|--:|--:|",
-    ]
-    for r in results["configurations"]:
+        "x nominal (median, min-max) |"
+    )
+    rule = "|---|--:|--:|--:|--:|--:|--:|"
+    if juggling:
+        head += " catch rate (median, min-max) | nominal catch rate | deviation x nominal |"
+        rule += "--:|--:|--:|"
+    lines = [head, rule]
+
+    def spread(r: Mapping[str, Any], key: str) -> str:
+        if r.get(f"{key}_median") is None:
+            return "n/a"
+        return f"{r[f'{key}_median']:.3f} ({r[f'{key}_min']:.3f}-{r[f'{key}_max']:.3f})"
+
+    for r in rows:
         mark = " **(best on val)**" if r["best_on_validation"] else ""
-        lines.append(
+        line = (
             f"| {r['label']}{mark} | {r['n_seeds']} | {r['val_criterion_median']:.4f} | "
             f"{r['test_criterion_median']:.4f} | {r['test_criterion_min']:.4f}-"
             f"{r['test_criterion_max']:.4f} | {r['test_nominal_criterion']:.4f} | "
-            f"{r['test_ratio_median']:.3f} ({r['test_ratio_min']:.3f}-{r['test_ratio_max']:.3f}) |"
+            f"{spread(r, 'test_ratio')} |"
         )
+        if juggling:
+            nominal = r.get("test_nominal_catch_rate_median")
+            line += (
+                f" {spread(r, 'test_catch_rate')} | "
+                f"{'n/a' if nominal is None else f'{nominal:.3f}'} | "
+                f"{spread(r, 'test_deviation_ratio')} |"
+            )
+        lines.append(line)
     return "\n".join(lines)
 
 
@@ -603,6 +638,10 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     rows = results["configurations"]
     fig = new_figure(max(6.0, 2.2 * len(rows) + 1.5), 4.5)
     ax = fig.subplots()
+    if any(r["test_ratio_median"] is None for r in rows):
+        _plot_criteria(ax, rows, results["test_split"])
+        save_figure(fig, path, dpi=120)
+        return
     for i, r in enumerate(rows):
         ratios = np.asarray(r["test_criteria"]) / r["test_nominal_criterion"]
         color = "C1" if r["best_on_validation"] else "C0"
@@ -621,6 +660,26 @@ def plot_sweep(results: Mapping[str, Any], path: Path) -> None:
     ax.set_ylim(min(lo, 1.0) - pad, max(hi, 1.0) + pad)
     ax.legend(loc="upper right", fontsize=8)
     save_figure(fig, path, dpi=120)
+
+
+def _plot_criteria(ax: Any, rows: Sequence[Mapping[str, Any]], split: str) -> None:
+    """The test criterion itself per seed and configuration, with the nominal's: where a
+    nominal's criterion is 0 (the analytic juggler drops nothing) there is no ratio."""
+    import textwrap
+
+    for i, r in enumerate(rows):
+        crit = np.asarray(r["test_criteria"], dtype=float)
+        color = "C1" if r["best_on_validation"] else "C0"
+        ax.bar(i, r["test_criterion_median"], color=color, alpha=0.5, width=0.6)
+        ax.scatter(np.full(crit.size, i), crit, color="k", s=14, zorder=3)
+        label = "zero-action nominal" if i == 0 else None
+        ax.plot([i - 0.4, i + 0.4], [r["test_nominal_criterion"]] * 2, "k--", lw=1, label=label)
+    ax.set_xticks(range(len(rows)))
+    ax.set_xticklabels([textwrap.fill(r["label"], 24) for r in rows], fontsize=8)
+    ax.set_ylabel(f"{split} criterion (lower is better; Juggling-v0: drop rate per toss)")
+    ax.set_title("median over seeds (bar), each seed (dot); orange: best on validation", fontsize=9)
+    ax.set_ylim(bottom=0.0, top=max(0.05, 1.1 * max(max(r["test_criteria"]) for r in rows)))
+    ax.legend(loc="upper right", fontsize=8)
 
 
 def _cli(args: argparse.Namespace) -> int:
