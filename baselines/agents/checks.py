@@ -76,23 +76,14 @@ def run_folder(text: str) -> Path:
 def check_env_kwargs(env_id: str, kwargs: dict[str, object]) -> None:
     """Raise :class:`~baselines.options.ConfigError` (``--env-kwargs``) naming any keyword
     the environment's constructor does not take, before anything is built."""
-    import inspect
+    from baselines.agents.vec import constructor_keywords
 
-    import gymnasium as gym
-    from gymnasium.envs.registration import load_env_creator
-
-    import motion_envs  # noqa: F401  (registers the environments)
-
-    entry = gym.spec(env_id).entry_point
-    creator = load_env_creator(entry) if isinstance(entry, str) else entry
-    if creator is None:
+    keywords = constructor_keywords(env_id)
+    if keywords is None:
         return
-    params = inspect.signature(creator).parameters
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
-        return
-    unknown = sorted(set(kwargs) - set(params))
+    unknown = sorted(set(kwargs) - keywords)
     if unknown:
-        known = sorted(k for k in params if k not in ("self", "render_mode"))
+        known = sorted(keywords - {"render_mode"})
         raise options.ConfigError(
             "env_kwargs", f"{env_id} takes no {unknown}; its keywords are {known}"
         )

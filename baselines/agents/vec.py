@@ -12,7 +12,7 @@ import inspect
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["has_native_vector_env", "make_sb3_vec_env", "takes_keyword"]
+__all__ = ["constructor_keywords", "has_native_vector_env", "make_sb3_vec_env", "takes_keyword"]
 
 
 def has_native_vector_env(env_id: str) -> bool:
@@ -24,9 +24,9 @@ def has_native_vector_env(env_id: str) -> bool:
     return gym.spec(env_id).vector_entry_point is not None
 
 
-def takes_keyword(env_id: str, name: str) -> bool:
-    """True when the constructor of ``env_id`` takes the keyword ``name`` (``split``,
-    ``val_fraction``)."""
+def constructor_keywords(env_id: str) -> frozenset[str] | None:
+    """The keyword arguments the constructor of ``env_id`` takes (``self`` left out), or
+    None when it takes any (``**kwargs``) or cannot be inspected."""
     import gymnasium as gym
     from gymnasium.envs.registration import load_env_creator
 
@@ -35,9 +35,18 @@ def takes_keyword(env_id: str, name: str) -> bool:
     entry = gym.spec(env_id).entry_point
     creator = load_env_creator(entry) if isinstance(entry, str) else entry
     if creator is None:
-        return False
+        return None
     params = inspect.signature(creator).parameters
-    return name in params or any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return None
+    return frozenset(k for k in params if k != "self")
+
+
+def takes_keyword(env_id: str, name: str) -> bool:
+    """True when the constructor of ``env_id`` takes the keyword ``name`` (``split``,
+    ``val_fraction``)."""
+    keywords = constructor_keywords(env_id)
+    return keywords is None or name in keywords
 
 
 def make_sb3_vec_env(
