@@ -212,7 +212,10 @@ def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
     kwargs = loaded.env_kwargs
     agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
     nominal = juggling_episodes(None, loaded.env_id, kwargs, config.split, config.episodes)
-    phases = sorted(set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist()))
+    from motion_envs.datasets.juggling_task import PHASES
+
+    both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
+    phases = [p for p in PHASES if p in both]  # in the task's order
     return {
         **_run_entries(loaded, config),
         "n_episodes": int(agent.seeds.size),
@@ -289,6 +292,19 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
         plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
 
 
+def _agent_against_nominal(ax: Any, nominal: NDArray[Any], agent: NDArray[Any], what: str,
+                           algo: str) -> None:  # fmt: skip
+    """One point per episode, the agent's value against the nominal's, and the diagonal."""
+    hi = float(max(np.max(agent, initial=1e-9), np.max(nominal, initial=1e-9))) * 1.05
+    ax.scatter(nominal, agent, s=14, alpha=0.8)
+    ax.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
+    ax.set_xlim(0, hi)
+    ax.set_ylim(0, hi)
+    ax.set_xlabel(f"nominal (zero action): {what}")
+    ax.set_ylabel(f"agent ({algo}): {what}")
+    ax.legend(loc="upper left")
+
+
 def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     """Per-episode max error, agent against nominal (one point per episode) and sorted
     (with the learned regressor's, when there is one)."""
@@ -299,15 +315,8 @@ def plot_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
     n = np.asarray(ep["nominal_max_error"])
     fig = new_figure(10, 4.2)
     ax1, ax2 = fig.subplots(1, 2)
-    hi = float(max(a.max(), n.max())) * 1.05
-    ax1.scatter(n, a, s=14, alpha=0.8)
-    ax1.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
-    ax1.set_xlim(0, hi)
-    ax1.set_ylim(0, hi)
-    ax1.set_xlabel("nominal (zero action): max error")
-    ax1.set_ylabel(f"agent ({results['algo']}): max error")
+    _agent_against_nominal(ax1, n, a, "max error", results["algo"])
     ax1.set_title(f"{results['env_id']}, {results['split']} split, per episode")
-    ax1.legend(loc="upper left")
     order = np.argsort(n)
     ax2.plot(n[order], "o-", ms=3, label=f"nominal (median {results['nominal_criterion']:.4g})")
     ax2.plot(a[order], "o-", ms=3, label=f"agent (median {results['criterion']:.4g})")
@@ -333,19 +342,12 @@ def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> No
     n = np.asarray(ep["nominal_deviation"], dtype=float) * 1000.0
     fig = new_figure(10, 4.2)
     ax1, ax2 = fig.subplots(1, 2)
-    ok = np.isfinite(a) & np.isfinite(n)
-    hi = float(max(np.max(a[ok], initial=1.0), np.max(n[ok], initial=1.0))) * 1.05
-    ax1.scatter(n[ok], a[ok], s=14, alpha=0.8)
-    ax1.plot([0, hi], [0, hi], "k--", lw=1, label="agent = nominal")
-    ax1.set_xlim(0, hi)
-    ax1.set_ylim(0, hi)
-    ax1.set_xlabel("nominal (zero action): deviation (mm)")
-    ax1.set_ylabel(f"agent ({results['algo']}): deviation (mm)")
+    ok = np.isfinite(a) & np.isfinite(n)  # an episode without a complete phase has none
+    _agent_against_nominal(ax1, n[ok], a[ok], "deviation (mm)", results["algo"])
     ax1.set_title(
         f"{results['env_id']} [SIMULATED demonstrations], {results['split']}, per episode",
         fontsize=9,
     )
-    ax1.legend(loc="upper left")
     phases = list(results["phase_deviation"])
     x = np.arange(len(phases))
     agent_mm = [1000.0 * results["phase_deviation"][p] for p in phases]
@@ -357,7 +359,8 @@ def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> No
     ax2.set_xticks(x, [p.replace("_", " ") for p in phases])
     ax2.set_ylabel(f"median deviation from {results['deviation_reference']} (mm)")
     ax2.set_title("hand path vs nearest demonstration, per phase", fontsize=9)
-    ax2.legend()
+    ax2.set_ylim(0, 1.3 * max(*agent_mm, *nominal_mm, 1.0))  # room for the legend
+    ax2.legend(loc="upper left", fontsize=8)
     save_figure(fig, path, dpi=120)
 
 
