@@ -6,9 +6,9 @@ checkpoint chosen on the *validation* seeds (drop rate), then ``motion-bench age
 the *test* seeds: catch rate of the agent and of the zero action (the analytic juggler)
 on the same episodes, and the hand's deviation from the *held-out* demonstrations
 relative to the zero action's (``baselines/agents/juggling_score.py``); the same for the
-final policy (``final_*``; not chosen on anything, shown to see what training did). The demonstrations
-are SIMULATED. Prints one row per run, the medians over seeds, the target verdicts and,
-last, a JSON line.
+final policy (``final_*``; not chosen on anything, shown to see what training did). The
+demonstrations are SIMULATED. Prints one row per run, the medians over seeds, the target
+verdicts and, last, a JSON line.
 
     python benchmarks/juggling_agents.py [--algos ppo sac] [--seeds 0 1 2 3 4]
         [--timesteps 100000] [--noise 0.05] [--test-episodes 50] [--out DIR]

@@ -188,3 +188,31 @@ def test_training_seeds_stay_below_the_validation_seeds(tmp_path):
     with pytest.raises(ValueError, match=r"seed: .* would reset on the validation seeds"):
         train_run(config)
     assert not (tmp_path / "r").exists()
+
+
+def test_subproc_vec_env_trains_exactly_as_dummy(tmp_path):
+    """``vec_env: subproc`` (one process per copy) plays the same episodes as the default
+    ``DummyVecEnv``: the same validation curve and the same final policy. (Reward
+    normalisation off: SB3's DummyVecEnv holds rewards in float32, SubprocVecEnv in
+    float64, so VecNormalize's running reward statistics round differently.)"""
+    from baselines.agents.rundir import load_run
+    from baselines.agents.train import TrainConfig
+    from baselines.agents.train import run as train_run
+
+    curves, actions = [], []
+    obs = np.random.default_rng(1).normal(size=(16, 16)).astype(np.float32)
+    for kind in ("dummy", "subproc"):
+        out = tmp_path / kind
+        config = TrainConfig(
+            algo="ppo", env_id=ENV, out=str(out), timesteps=512, n_envs=2,
+            env_kwargs={"max_cycles": 1},
+            overrides={"n_steps": 128, "batch_size": 128, "n_epochs": 1, "eval_freq": 256,
+                       "eval_episodes": 2, "vec_env": kind,
+                       "normalize": {"obs": True, "reward": False}},
+            progress=False, tensorboard=False,
+        )  # fmt: skip
+        train_run(config)
+        curves.append((out / "evaluations.csv").read_text())
+        actions.append(load_run(out, "final").model.predict(obs, deterministic=True)[0])
+    assert curves[0] == curves[1]
+    np.testing.assert_array_equal(actions[0], actions[1])

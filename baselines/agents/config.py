@@ -18,8 +18,10 @@ Keys of every algorithm: ``n_timesteps``, ``n_envs``, ``policy`` (``MlpPolicy``)
 this at the start, 0 = the policy starts at the nominal, as residual policy learning
 does), ``eval_freq`` (environment steps between validation evaluations),
 ``eval_episodes`` (validation episodes, null = every validation trajectory),
-``torch_threads``, ``learning_rate``, ``gamma`` and the algorithm's own keys (see
-:data:`ALGO_KEYS`).
+``torch_threads``, ``vec_env`` (``dummy`` or ``subproc``: SB3's vector environment for
+an environment without a native one, Juggling-v0; ``subproc`` steps each copy in its own
+process, rl-zoo's ``vec_env_type``; ignored where the native vector env is used),
+``learning_rate``, ``gamma`` and the algorithm's own keys (see :data:`ALGO_KEYS`).
 """
 
 from __future__ import annotations
@@ -233,6 +235,7 @@ COMMON_KEYS: dict[str, Checker] = {
     "eval_freq": _int(1),
     "eval_episodes": _optional(_int(1)),
     "torch_threads": _int(1),
+    "vec_env": _choice("dummy", "subproc"),
     "learning_rate": _LR,
     "gamma": _float(0.0, 1.0),
     "batch_size": _int(1),
@@ -300,6 +303,7 @@ COMMAND_KEYS: tuple[str, ...] = (
     "eval_freq",
     "eval_episodes",
     "torch_threads",
+    "vec_env",
     "action_noise_sigma",
 )
 
@@ -314,6 +318,7 @@ COMMAND_DEFAULTS: dict[str, Any] = {
     "eval_freq": 10_000,
     "eval_episodes": None,
     "torch_threads": 1,
+    "vec_env": "dummy",
 }
 
 

@@ -131,7 +131,9 @@ def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
 
     from baselines.agents.vec import make_sb3_vec_env
 
-    env: Any = VecMonitor(make_sb3_vec_env(env_id, hp["n_envs"], hp["env_kwargs"], "train"))
+    env: Any = VecMonitor(
+        make_sb3_vec_env(env_id, hp["n_envs"], hp["env_kwargs"], "train", hp["vec_env"])
+    )
     norm = hp.get("normalize", {})
     if norm.get("obs") or norm.get("reward"):
         env = VecNormalize(

@@ -8,6 +8,7 @@ all sub-environments) are used through :class:`baselines.sb3.GymnasiumVecEnv`; t
 
 from __future__ import annotations
 
+import functools
 import inspect
 from collections.abc import Mapping
 from typing import Any
@@ -50,10 +51,16 @@ def takes_keyword(env_id: str, name: str) -> bool:
 
 
 def make_sb3_vec_env(
-    env_id: str, n_envs: int, env_kwargs: Mapping[str, Any], split: str = "train"
+    env_id: str,
+    n_envs: int,
+    env_kwargs: Mapping[str, Any],
+    split: str = "train",
+    vec_env: str = "dummy",
 ) -> Any:
     """An SB3 ``VecEnv`` of ``n_envs`` copies of ``env_id`` (``split`` passed to the
-    environments that take one)."""
+    environments that take one). Without a native vector env: ``DummyVecEnv``
+    (``vec_env="dummy"``) or ``SubprocVecEnv`` (``"subproc"``, one process per copy,
+    started with ``forkserver``; the same episodes as ``DummyVecEnv``)."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401
@@ -68,9 +75,20 @@ def make_sb3_vec_env(
             env_id, num_envs=n_envs, vectorization_mode="vector_entry_point", **kwargs
         )
         return GymnasiumVecEnv(venv)
-    from stable_baselines3.common.vec_env import DummyVecEnv
+    if vec_env not in ("dummy", "subproc"):
+        raise ValueError(f"vec_env must be 'dummy' or 'subproc'; got {vec_env!r}")
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    def factory() -> Any:
-        return gym.make(env_id, **kwargs)
-
+    factory = functools.partial(_make_registered, env_id, kwargs)
+    if vec_env == "subproc" and n_envs > 1:
+        return SubprocVecEnv([factory] * n_envs, start_method="forkserver")
     return DummyVecEnv([factory] * n_envs)
+
+
+def _make_registered(env_id: str, kwargs: Mapping[str, Any]) -> Any:
+    """``gym.make`` after registering the ids (also inside a fresh worker process)."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401
+
+    return gym.make(env_id, **kwargs)
