@@ -2,13 +2,15 @@
 
 Every file the project writes (results JSON/CSV, plots, model files, cohort configs)
 goes through :func:`atomic_write`: the content is written to a *unique* temporary file
-in the target folder (``tempfile.mkstemp``), flushed and ``fsync``-ed, given the
-permissions a plain ``open(path, "w")`` would give (``0o666 & ~umask``, i.e. 0644 under
-the default umask 022; ``mkstemp`` alone would leave 0600), then renamed over the target
-with ``os.replace``. Hence:
+in the target folder (``.NAME.<16 random hex digits>.tmp``, created exclusively), flushed
+and ``fsync``-ed, with the permissions a plain ``open(path, "w")`` would give (``0o666 &
+~umask``, i.e. 0644 under the default umask 022), then renamed over the target with
+``os.replace``. Hence:
 
 * an interrupted write (Ctrl-C, a killed process, a full disk) leaves the previous file
-  complete and no partial target; the temporary file is removed when Python can;
+  complete and no partial target; the temporary file is removed whenever Python gets to
+  run (Ctrl-C at any moment, an exception); only a process killed outright (SIGKILL, a
+  power cut) can leave a ``.NAME.*.tmp`` behind;
 * two processes writing the same path both finish and the target holds one of the two
   complete versions (the last rename wins); neither sees a half-written file.
 
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
@@ -31,6 +33,9 @@ __all__ = [
     "current_umask",
     "save_figure",
 ]
+
+
+_O_BINARY = getattr(os, "O_BINARY", 0)  # Windows: no newline translation at the fd level
 
 
 def current_umask() -> int:
@@ -59,9 +64,12 @@ def atomic_write(
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    # The temporary name is known before the file exists and the file is created inside
+    # the ``try``: a Ctrl-C at any point (even right after the file appears) removes it.
+    tmp = target.parent / f".{target.name}.{secrets.token_hex(8)}.tmp"
     try:
-        os.fchmod(fd, 0o666 & ~current_umask())
+        # 0o666 minus the umask (applied by the kernel), as a plain open(path, "w") gives
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_BINARY, 0o666)
         mode = "wb" if binary else "w"
         kwargs: dict[str, Any] = {} if binary else {"encoding": "utf-8", "newline": ""}
         with os.fdopen(fd, mode, **kwargs) as fh:
