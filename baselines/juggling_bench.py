@@ -49,7 +49,7 @@ from motion_envs._io import atomic_write, atomic_write_text, save_figure
 from motion_envs.datasets.juggling_demos import (
     SIMULATED_LABEL,
     JugglingDemos,
-    PhaseSegment,
+    departure_from_line,
     generate_demonstrations,
 )
 from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingTask
@@ -123,12 +123,6 @@ def load_demos(config: JugglingConfig) -> JugglingDemos:
     return load_juggling_csv(config.data, task=config.task)
 
 
-def _resample(seg: PhaseSegment, n_points: int) -> FloatArray:
-    tau = seg.times / seg.times[-1]
-    grid = np.linspace(0.0, 1.0, n_points)
-    return np.column_stack([np.interp(grid, tau, seg.positions[:, d]) for d in range(2)])
-
-
 def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Per demonstration: max over time of |error| and RMSE; arrays ``(m, K, 2)``."""
     err = np.linalg.norm(truth - pred, axis=-1)
@@ -138,7 +132,7 @@ def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArr
 def _retarget(y: FloatArray, start: FloatArray, end: FloatArray) -> FloatArray:
     """Keep ``y``'s residual from its line, replace the line by ``start -> end``."""
     tau = np.linspace(0.0, 1.0, y.shape[0])[:, None]
-    out: FloatArray = y - (y[0] + tau * (y[-1] - y[0])) + (start + tau * (end - start))
+    out: FloatArray = departure_from_line(y) + (start + tau * (end - start))
     return out
 
 
@@ -162,8 +156,8 @@ def phase_errors(
     for phase in PHASES:
         tr = [s for s in segs if s.phase == phase and (s.recording, s.cycle) in train]
         te = [s for s in segs if s.phase == phase and (s.recording, s.cycle) in test]
-        y_tr = np.stack([_resample(s, n_points) for s in tr])
-        y_te = np.stack([_resample(s, n_points) for s in te])
+        y_tr = np.stack([s.resampled(n_points) for s in tr])
+        y_te = np.stack([s.resampled(n_points) for s in te])
         starts, ends = y_te[:, 0], y_te[:, -1]
         model = juggler.phases_[phase].model
         q = np.column_stack([starts, ends])

@@ -51,6 +51,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling_demos import departure_from_line, resample_path
+
 __all__ = [
     "DEFAULT_EPISODES",
     "JUGGLING_ENV_IDS",
@@ -86,23 +88,6 @@ def is_juggling(env_id: str) -> bool:
     return env_id in JUGGLING_ENV_IDS
 
 
-def _resample(times: FloatArray, positions: FloatArray, n_points: int = N_POINTS) -> FloatArray:
-    """``positions (n, 2)`` at ``n_points`` equally spaced points of normalised time."""
-    tau = (times - times[0]) / (times[-1] - times[0])
-    grid = np.linspace(0.0, 1.0, n_points)
-    return np.column_stack([np.interp(grid, tau, positions[:, d]) for d in range(2)])
-
-
-def departure_from_line(paths: FloatArray) -> FloatArray:
-    """``r(y)_k = y_k - (y_0 + tau_k (y_last - y_0))`` of paths ``(..., n, 2)`` sampled at
-    equally spaced ``tau_k = k / (n - 1)``; zero at both ends."""
-    n = paths.shape[-2]
-    tau = np.linspace(0.0, 1.0, n)[:, None]
-    first, last = paths[..., :1, :], paths[..., -1:, :]
-    out: FloatArray = paths - (first + tau * (last - first))
-    return out
-
-
 @functools.lru_cache(maxsize=8)
 def _demonstration_paths(
     data: str | None, gravity: float | None, split: str
@@ -116,7 +101,7 @@ def _demonstration_paths(
     out: dict[str, FloatArray] = {}
     for phase in PHASES:
         segs = [s for s in demos.segments(phase) if (s.recording, s.cycle) in keep]
-        out[phase] = departure_from_line(np.stack([_resample(s.times, s.positions) for s in segs]))
+        out[phase] = departure_from_line(np.stack([s.resampled(N_POINTS) for s in segs]))
     return out
 
 
@@ -153,7 +138,8 @@ def segment_deviations(
             break
         stop = k  # the first sample of the next phase closes the segment
         if stop - start >= 2 and phases[start] in demos:
-            path = departure_from_line(_resample(times[start : stop + 1], hand[start : stop + 1]))
+            path = resample_path(times[start : stop + 1], hand[start : stop + 1], N_POINTS)
+            path = departure_from_line(path)
             dist = np.linalg.norm(demos[phases[start]] - path[None], axis=-1)  # (m, N)
             out.append((phases[start], float(dist.max(axis=1).min())))
         start = k

@@ -44,9 +44,11 @@ __all__ = [
     "JugglingRecording",
     "PersonStyle",
     "PhaseSegment",
+    "departure_from_line",
     "draw_person",
     "generate_demonstrations",
     "quintic",
+    "resample_path",
     "split_cycles",
 ]
 
@@ -54,6 +56,25 @@ FloatArray = NDArray[np.float64]
 
 #: The label every generated set carries in code, CLI output, results and plots.
 SIMULATED_LABEL = "SIMULATED (seeded model of a person; not human recordings)"
+
+
+def resample_path(times: FloatArray, positions: FloatArray, n_points: int) -> FloatArray:
+    """``positions (n, 2)`` sampled at ``times`` (increasing), linearly interpolated at
+    ``n_points`` equally spaced points of normalised time ``(t - t_0) / (t_last - t_0)``."""
+    tau = (times - times[0]) / (times[-1] - times[0])
+    grid = np.linspace(0.0, 1.0, n_points)
+    return np.column_stack([np.interp(grid, tau, positions[:, d]) for d in range(2)])
+
+
+def departure_from_line(paths: FloatArray) -> FloatArray:
+    """``r(y)_k = y_k - (y_0 + tau_k (y_last - y_0))`` of paths ``(..., n, 2)`` sampled at
+    equally spaced ``tau_k = k / (n - 1)``: the path minus the straight line between its
+    ends (zero at both ends)."""
+    n = paths.shape[-2]
+    tau = np.linspace(0.0, 1.0, n)[:, None]
+    first, last = paths[..., :1, :], paths[..., -1:, :]
+    out: FloatArray = paths - (first + tau * (last - first))
+    return out
 
 
 @dataclass(frozen=True)
@@ -70,6 +91,11 @@ class PhaseSegment:
     def duration(self) -> float:
         """``t_last - t_first`` in s."""
         return float(self.times[-1] - self.times[0])
+
+    def resampled(self, n_points: int) -> FloatArray:
+        """The positions at ``n_points`` equally spaced points of normalised time
+        (:func:`resample_path`)."""
+        return resample_path(self.times, self.positions, n_points)
 
 
 @dataclass(frozen=True)
