@@ -25,6 +25,7 @@ __all__ = [
     "MAX_REWARD_WEIGHT",
     "N_STEPS",
     "JsonSpecMixin",
+    "LazyRendererMixin",
     "ReplayEnv",
     "ReplayTask",
     "as_action",
@@ -235,7 +236,25 @@ class JsonSpecMixin:
         self._spec = json_safe_spec(value)
 
 
-class ReplayEnv(JsonSpecMixin, gym.Env):
+class LazyRendererMixin:
+    """``close`` and pickling for an environment that opens its renderer (``_renderer``)
+    on the first ``render()``: ``close`` releases it, a pickled copy leaves it out (a
+    copy opens its own)."""
+
+    _renderer: Any = None
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        return state
+
+
+class ReplayEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     """Episode mechanics of a single replay environment.
 
     A subclass sets ``task`` (``n_trajectories``, ``steps``, ``obs``, ``trajectory_ids``,
@@ -354,13 +373,3 @@ class ReplayEnv(JsonSpecMixin, gym.Env):
 
     def _render_frame(self) -> NDArray[np.uint8]:
         raise NotImplementedError
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state

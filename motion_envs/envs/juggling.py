@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs._common import check_reward_weights, check_scale
+from motion_envs.envs._common import LazyRendererMixin, check_reward_weights, check_scale
 from motion_envs.envs.juggling_scene import JugglingScene
 from motion_envs.models.juggling_run import cycle_rngs
 
@@ -133,7 +133,7 @@ def _check_int(value: Any, name: str, low: int) -> int:
     return int(value)
 
 
-class JugglingEnv(gym.Env):
+class JugglingEnv(LazyRendererMixin, gym.Env):
     r"""Toss and catch one ball; the agent corrects the analytic juggler's hand.
 
     ## Description
@@ -455,13 +455,3 @@ class JugglingEnv(gym.Env):
         self._renderer.update_scene(self.data, camera="side")
         frame: NDArray[np.uint8] = self._renderer.render()
         return frame
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        state["_renderer"] = None
-        return state
