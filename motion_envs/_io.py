@@ -1,4 +1,4 @@
-"""The one way motion-envs writes files: atomically, with the usual permissions.
+"""The one way motion-envs writes files (atomically) and reads user files (bounded).
 
 Every file the project writes (results JSON/CSV, plots, model files, cohort configs)
 goes through :func:`atomic_write`: the content is written to a *unique* temporary file
@@ -14,24 +14,38 @@ and ``fsync``-ed, with the permissions a plain ``open(path, "w")`` would give (`
 * two processes writing the same path both finish and the target holds one of the two
   complete versions (the last rename wins); neither sees a half-written file.
 
+Reading a file a user names (a model file, a config) goes through
+:func:`read_regular_file`: only a regular file is read (a folder, a FIFO, ``/dev/zero`` or
+another device is refused before any byte is read, so nothing blocks or fills memory), and
+at most ``max_bytes`` bytes, counted while reading rather than trusted from ``st_size``.
+:func:`strict_json_loads` parses JSON that a program wrote: a duplicate key, ``NaN`` /
+``Infinity`` or nesting deeper than Python's recursion limit is an error, not a silent
+choice. Both raise :class:`UserFileError` (a ``ValueError``) whose message names the file;
+callers re-raise it as their own documented error type.
+
 This module is the bottom of the layer order: it imports only the standard library.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import secrets
+import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
 __all__ = [
+    "UserFileError",
     "atomic_write",
     "atomic_write_bytes",
     "atomic_write_text",
     "current_umask",
+    "read_regular_file",
     "save_figure",
+    "strict_json_loads",
 ]
 
 
@@ -103,3 +117,97 @@ def save_figure(fig: Any, path: str | os.PathLike[str], **savefig_kwargs: Any) -
     """
     fmt = Path(path).suffix.lstrip(".").lower() or "png"
     return atomic_write(path, lambda fh: fig.savefig(fh, format=fmt, **savefig_kwargs), binary=True)
+
+
+class UserFileError(ValueError):
+    """A file a user named cannot be read as asked; the message names the file."""
+
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def read_regular_file(path: str | os.PathLike[str], *, max_bytes: int) -> bytes:
+    """The bytes of the regular file ``path``, at most ``max_bytes`` of them.
+
+    Raises :class:`UserFileError` naming ``path`` when it does not exist, cannot be
+    opened, is not a regular file (folder, FIFO, device, socket: checked on the open
+    descriptor, which is opened non-blocking so that a FIFO without a writer does not
+    block), or holds more than ``max_bytes`` bytes (counted while reading, so a file that
+    grows or lies about its size is still bounded).
+    """
+    p = os.fspath(path)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | _O_BINARY
+    try:
+        fd = os.open(p, flags)
+    except FileNotFoundError:
+        raise UserFileError(f"{p} does not exist") from None
+    except IsADirectoryError:
+        raise UserFileError(f"{p} is a directory, not a file") from None
+    except OSError as exc:
+        raise UserFileError(f"{p} cannot be read: {exc.strerror or exc}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        for test, kind in _KINDS:
+            if test(mode):
+                raise UserFileError(f"{p} is {kind}, not a regular file")
+        chunks: list[bytes] = []
+        size = 0
+        while True:
+            try:
+                chunk = os.read(fd, min(1 << 20, max_bytes + 1 - size))
+            except OSError as exc:
+                raise UserFileError(f"{p} cannot be read: {exc.strerror or exc}") from None
+            if not chunk:
+                return b"".join(chunks)
+            size += len(chunk)
+            if size > max_bytes:
+                raise UserFileError(f"{p} is larger than {max_bytes} bytes")
+            chunks.append(chunk)
+    finally:
+        os.close(fd)
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    doc: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in doc:
+            raise ValueError(f"duplicate key {key!r}")
+        doc[key] = value
+    return doc
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not allowed")
+
+
+def strict_json_loads(text: str | bytes, where: str, **kwargs: Any) -> Any:
+    """Parse JSON ``text``; :class:`UserFileError` naming ``where`` for anything odd.
+
+    Refused: invalid JSON, a duplicate key in any object, ``NaN``/``Infinity``, nesting
+    deeper than the interpreter's recursion limit. ``kwargs`` go to :func:`json.loads`
+    (e.g. ``parse_float``; ``object_pairs_hook`` and ``parse_constant`` are this
+    function's).
+    """
+    try:
+        return json.loads(
+            text,
+            object_pairs_hook=_no_duplicates,
+            parse_constant=kwargs.pop("parse_constant", _no_constant),
+            **kwargs,
+        )
+    except json.JSONDecodeError as exc:
+        raise UserFileError(
+            f"{where} is corrupt or truncated: not valid JSON ({exc.msg} at line {exc.lineno})"
+        ) from None
+    except RecursionError:
+        raise UserFileError(f"{where}: JSON nested deeper than the parser's limit") from None
+    except UnicodeDecodeError:
+        raise UserFileError(f"{where}: not UTF-8 text") from None
+    except ValueError as exc:
+        raise UserFileError(f"{where}: {exc}") from None

@@ -30,6 +30,20 @@ KIND = "residual-mlp"
 _TENSORS = ("W1", "b1", "W2", "b2", "x_mean", "x_scale", "y_base", "y_scale")
 
 
+def _tensor_shapes(n_in: int, hidden: int, n_out: int) -> dict[str, tuple[int, ...]]:
+    """The shape of every tensor of a network with these sizes (what ``fit`` stores)."""
+    return {
+        "W1": (n_in, hidden),
+        "b1": (hidden,),
+        "W2": (hidden, n_out),
+        "b2": (n_out,),
+        "x_mean": (n_in,),
+        "x_scale": (n_in,),
+        "y_base": (n_out,),
+        "y_scale": (1,),
+    }
+
+
 class ResidualMLP:
     """One residual MLP (architecture in :mod:`baselines.learned.batched_mlp`).
 
@@ -119,11 +133,13 @@ class ResidualMLP:
         if missing:
             raise model_file_error(p, f"tensors {missing} are missing")
         arch = header["architecture"]
-        expected = {
-            "n_inputs": tensors["W1"].shape[0],
-            "hidden": tensors["W1"].shape[1],
-            "n_outputs": tensors["W2"].shape[1],
-        }
+        for name in ("W1", "W2"):
+            if tensors[name].ndim != 2:
+                raise model_file_error(
+                    p, f"tensor {name!r} has shape {tensors[name].shape}, expected a matrix"
+                )
+        (n_in, hidden), n_out = tensors["W1"].shape, tensors["W2"].shape[1]
+        expected = {"n_inputs": n_in, "hidden": hidden, "n_outputs": n_out}
         for field, value in expected.items():
             if arch.get(field) != value:
                 raise model_file_error(
@@ -131,6 +147,15 @@ class ResidualMLP:
                     f"field 'architecture.{field}' is {arch.get(field)!r} but the weights "
                     f"have {value}",
                 )
+        for name, shape in _tensor_shapes(n_in, hidden, n_out).items():
+            if tensors[name].shape != shape or tensors[name].dtype != np.float32:
+                raise model_file_error(
+                    p,
+                    f"tensor {name!r} is {tensors[name].dtype}{list(tensors[name].shape)}, "
+                    f"expected float32{list(shape)}",
+                )
+        if not (tensors["x_scale"] > 0).all():
+            raise model_file_error(p, "tensor 'x_scale' must be positive")
         if arch.get("activation") != "tanh":
             raise model_file_error(
                 p, f"field 'architecture.activation' is {arch.get('activation')!r}"

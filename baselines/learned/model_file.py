@@ -17,9 +17,12 @@ holds one entry, ``"motion_envs"``, a JSON document::
     }
 
 :func:`read_model_file` rejects, with :class:`LearnedModelFileError` naming the file and
-the field: a missing file, a truncated or corrupt file (bad length prefix, bad JSON,
-tensor bytes that do not match ``weights_sha256``), another format, another
-``format_version``, and an architecture that does not match the tensors' shapes.
+the field: a missing file, a folder, a FIFO or device (never read: it could block or
+never end), a file over :data:`MAX_FILE_BYTES`, a truncated or corrupt file (bad length
+prefix, bad JSON, duplicate JSON keys, a header of the wrong JSON types, tensor bytes that
+do not match ``weights_sha256``), a tensor that is not a float or holds NaN/inf, another
+format, another ``format_version``, and an architecture that does not match the tensors'
+shapes (checked per tensor by the model that loads it).
 Writes are atomic (:func:`motion_envs._io.atomic_write_bytes`).
 """
 
@@ -34,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from motion_envs._io import atomic_write_bytes
+from motion_envs._io import UserFileError, atomic_write_bytes, read_regular_file, strict_json_loads
 
 __all__ = [
     "FORMAT",
@@ -49,6 +52,8 @@ __all__ = [
 FORMAT = "motion-envs-learned"
 FORMAT_VERSION = 1
 _MAX_HEADER = 100_000_000
+#: Largest model file read (bytes): the learned models are kilobytes; this bounds a mistake.
+MAX_FILE_BYTES = 1 << 30
 
 
 class LearnedModelFileError(ValueError):
@@ -104,25 +109,24 @@ def read_model_file(
 
     p = str(path)
     try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise LearnedModelFileError(f"model file {p} does not exist") from None
+        data = read_regular_file(path, max_bytes=MAX_FILE_BYTES)
+    except UserFileError as exc:
+        raise LearnedModelFileError(f"model file {exc}") from None
     if len(data) < 8:
         raise model_file_error(p, f"truncated: {len(data)} bytes, not a safetensors file")
     (n,) = struct.unpack("<Q", data[:8])
     if n > _MAX_HEADER or 8 + n > len(data):
         raise model_file_error(p, f"truncated or corrupt: header length {n} exceeds the file size")
     try:
-        raw = json.loads(data[8 : 8 + n].decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise model_file_error(p, f"corrupt safetensors header ({exc})") from None
-    meta = raw.get("__metadata__") if isinstance(raw, dict) else None
-    if not isinstance(meta, dict) or "motion_envs" not in meta:
-        raise model_file_error(p, "not a motion-envs learned model (no 'motion_envs' metadata)")
-    try:
-        header = json.loads(meta["motion_envs"])
-    except json.JSONDecodeError as exc:
-        raise model_file_error(p, f"corrupt 'motion_envs' metadata ({exc})") from None
+        raw = strict_json_loads(data[8 : 8 + n], f"{p}: safetensors header")
+        meta = raw.get("__metadata__") if isinstance(raw, dict) else None
+        if not isinstance(meta, dict) or not isinstance(meta.get("motion_envs"), str):
+            raise model_file_error(p, "not a motion-envs learned model (no 'motion_envs' metadata)")
+        header = strict_json_loads(meta["motion_envs"], f"{p}: 'motion_envs' metadata")
+    except UserFileError as exc:
+        raise LearnedModelFileError(str(exc)) from None
+    if not isinstance(header, dict):
+        raise model_file_error(p, "the 'motion_envs' metadata is not a JSON object")
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise model_file_error(
             p, f"field 'format' is {header.get('format')!r}, expected {FORMAT!r}"
@@ -141,6 +145,14 @@ def read_model_file(
         raise model_file_error(
             p, "field 'weights_sha256' does not match the tensor bytes (corrupt file)"
         )
+    for name, tensor in tensors.items():
+        if tensor.dtype.kind != "f":
+            raise model_file_error(p, f"tensor {name!r} has dtype {tensor.dtype}, not a float")
+        if not np.isfinite(tensor).all():
+            raise model_file_error(p, f"tensor {name!r} holds NaN or infinite values")
+    for field in ("features", "extra", "normalisation"):
+        if not isinstance(header.get(field, {}), dict):
+            raise model_file_error(p, f"field {field!r} is not a JSON object")
     arch = header.get("architecture")
     if not isinstance(arch, dict):
         raise model_file_error(p, "field 'architecture' is missing")

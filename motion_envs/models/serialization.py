@@ -51,7 +51,7 @@ from typing import Any, ClassVar, NoReturn, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs._io import atomic_write_text
+from motion_envs._io import UserFileError, atomic_write_text, read_regular_file, strict_json_loads
 
 __all__ = [
     "FORMAT_NAME",
@@ -386,18 +386,15 @@ def save_model(model: SerializableModel, path: str | os.PathLike[str]) -> Path:
 
 def _parse(text: str, where: str) -> Any:
     try:
-        return json.loads(
+        return strict_json_loads(
             text,
+            where,
             parse_float=_parse_float,
             parse_int=_parse_int,
             parse_constant=_parse_constant,
         )
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(
-            f"{where} is corrupt or truncated: not valid JSON ({exc.msg} at line {exc.lineno})"
-        ) from None
-    except RecursionError:
-        raise ModelFileError(f"{where}: JSON nested deeper than {MAX_DEPTH} levels") from None
+    except UserFileError as exc:
+        raise ModelFileError(str(exc)) from None
 
 
 def load_model(path: str | os.PathLike[str]) -> SerializableModel:
@@ -408,17 +405,10 @@ def load_model(path: str | os.PathLike[str]) -> SerializableModel:
     No other exception escapes for a bad file.
     """
     p = str(path)
-    target = Path(path)
     try:
-        if target.is_dir():
-            raise ModelFileError(f"{p} is a directory, not a model file")
-        if not target.exists():
-            raise ModelFileError(f"model file {p} does not exist")
-        if target.stat().st_size > MAX_BYTES:
-            raise ModelFileError(f"{p} is larger than {MAX_BYTES} bytes; not a model file")
-        raw = target.read_bytes()
-    except OSError as exc:
-        raise ModelFileError(f"cannot read model file {p}: {exc.strerror or exc}") from None
+        raw = read_regular_file(path, max_bytes=MAX_BYTES)
+    except UserFileError as exc:
+        raise ModelFileError(f"model file {exc}") from None
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
