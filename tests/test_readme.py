@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -29,12 +31,24 @@ def test_ci_runs_the_readme_test_command():
     assert tail in (ROOT / ".ci" / "run").read_text()
 
 
-def test_python_examples_run(tmp_path, monkeypatch):
-    """Every ```python block of the README runs as shown (in a scratch folder)."""
-    text = (ROOT / "README.md").read_text()
+PAGES = [
+    page
+    for page in [
+        "README.md",
+        *sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "docs").glob("*.md")),
+    ]
+    if "```python" in (ROOT / page).read_text()
+]
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_python_examples_run(tmp_path, monkeypatch, page):
+    """Every ```python block of the README and of each docs page runs as shown."""
+    text = (ROOT / page).read_text()
     blocks = re.findall(r"```python\n(.*?)\n```", text, flags=re.S)
-    assert len(blocks) >= 3
     monkeypatch.chdir(tmp_path)
+    namespace = {"__name__": "docs_example"}
     for block in blocks:
-        exec(compile(block, "README.md", "exec"), {"__name__": "readme_example"})
-    assert (tmp_path / "task_d2.json").exists()
+        exec(compile(block, page, "exec"), namespace)
+    if page == "docs/results.md":
+        assert (tmp_path / "task_d2.json").exists()

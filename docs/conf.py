@@ -1,0 +1,59 @@
+"""Sphinx configuration of the motion-envs documentation (MyST Markdown, furo, gallery)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(DOCS / "_ext"))
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+project = "motion-envs"
+author = "motion-envs developers"
+copyright = "2026, motion-envs developers"  # noqa: A001
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "sphinx_gallery.gen_gallery",
+    "env_pages",
+]
+
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+exclude_patterns = ["_build", "README.md", "**/README.txt"]
+templates_path = ["_templates"]
+# A name re-exported by its package (``motion_envs.datasets.OrientationDataset`` and
+# ``motion_envs.datasets.orientation.OrientationDataset``) is one object with two paths;
+# type-hint cross-references to it are ambiguous but resolve to the same page.
+suppress_warnings = ["ref.python"]
+
+autosummary_generate = True
+autosummary_imported_members = False
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_mock_imports: list[str] = []
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+napoleon_use_rtype = False
+
+html_theme = "furo"
+html_title = "motion-envs"
+
+sphinx_gallery_conf = {
+    "examples_dirs": [str(ROOT / "examples")],
+    "gallery_dirs": ["auto_examples"],
+    "filename_pattern": r"/plot_|/[a-z]",
+    "plot_gallery": os.environ.get("MOTION_ENVS_DOCS_RUN_EXAMPLES", "1") == "1",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+}
