@@ -14,7 +14,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 project = "motion-envs"
 author = "motion-envs developers"
-copyright = "2026, motion-envs developers"  # noqa: A001
+copyright = "2026, motion-envs developers"
 
 extensions = [
     "myst_parser",

@@ -60,8 +60,8 @@ def _page(env_id: str, out: Path) -> str:
             ("Entry point", f"`{spec.entry_point}`"),
             ("Action space", f"`{env.action_space}`"),
             ("Observation space", f"`{env.observation_space}`"),
-            ("Episode limit", f"{spec.max_episode_steps} steps" if spec.max_episode_steps else "-"),
-            ("Native vector env", f"`{spec.vector_entry_point}`" if spec.vector_entry_point else "no"),
+            ("Episode limit", f"{spec.max_episode_steps or '-'} steps"),
+            ("Native vector env", f"`{spec.vector_entry_point or 'no'}`"),
             ("Registered kwargs", f"`{spec.kwargs}`" if spec.kwargs else "-"),
         ]
     finally:
