@@ -13,14 +13,14 @@ import pytest
 
 from baselines import (
     calibrate_cohort,
-    juggling_bench,
     orientation_bench,
     position_bench,
     run_all,
 )
 from baselines.agents import evaluate as agent_evaluate
-from baselines.agents import sweep as agent_sweep
+from baselines.agents.sweep import cli as agent_sweep
 from baselines.agents import train as agent_train
+from baselines.juggling_bench import runner as juggling_runner
 from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
 from motion_envs import __version__
 
@@ -56,7 +56,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(orientation_bench, "table1", started)
     monkeypatch.setattr(position_bench, "run_benchmark", started)
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
-    monkeypatch.setattr(juggling_bench, "load_demos", started)
+    monkeypatch.setattr(juggling_runner, "load_demos", started)
     monkeypatch.setattr(agent_train, "run", started)
     monkeypatch.setattr(agent_evaluate, "run", started)
     monkeypatch.setattr(agent_sweep, "load_sweep", started)
