@@ -50,7 +50,7 @@ def test_leave_one_out_matches_hand_computation():
     folds = position_folds(ds, "loo")
     assert [f[2].tolist() for f in folds] == [[i] for i in range(7)]
     preds, chosen = pb.predict_folds(
-        y, dur, folds, ["start", "end"], 3, ["line", "null"], pb._Timer()
+        y, dur, folds, ["start", "end"], 3, ["line", "null"], pb.scoring._Timer()
     )
     assert chosen == []
     tau = np.linspace(0, 1, 30)[:, None]

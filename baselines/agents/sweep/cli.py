@@ -9,11 +9,21 @@ from typing import Any
 
 from baselines import options
 from baselines.agents import checks
+from baselines.agents.config import SWEEP_CONFIG_DIR
 from baselines.agents.sweep.driver import SweepInterrupted, run
 from baselines.agents.sweep.space import load_sweep
 from baselines.agents.sweep.summary import format_table, write_results
 
 DESCRIPTION = "motion-bench sweep: many configurations x seeds of motion-bench train on Ray Tune."
+
+
+def sweep_file(text: str) -> Path:
+    """``--config``: a sweep YAML file, or the name of a shipped one (``NAME`` for
+    ``configs/sweeps/NAME.yaml``, packaged with ``baselines``) where no such file exists."""
+    packaged = SWEEP_CONFIG_DIR / f"{text}.yaml"
+    if "/" not in text and not Path(text).exists() and packaged.is_file():
+        return checks.yaml_file(str(packaged))
+    return checks.yaml_file(text)
 
 
 def _cli(args: argparse.Namespace) -> int:
@@ -52,8 +62,9 @@ def register(subparsers: Any) -> None:
         description=DESCRIPTION,
     )
     p.add_argument(
-        "--config", required=True, type=checks.yaml_file, metavar="PATH",
-        help="sweep file, e.g. configs/sweeps/orientation_ppo.yaml",
+        "--config", required=True, type=sweep_file, metavar="PATH",
+        help="sweep file, e.g. configs/sweeps/orientation_ppo.yaml (or the name of a shipped "
+        "one: orientation_ppo)",
     )  # fmt: skip
     p.add_argument("--address", default=None, help="existing Ray cluster (e.g. auto)")
     p.add_argument(
