@@ -17,6 +17,7 @@ from baselines.agents.callbacks import (
     SaveBestCallback,
     ValidationCallback,
 )
+from baselines.agents.evaluate import split_criterion
 from baselines.agents.juggling_score import SPLIT_SEEDS, juggling_episodes
 from baselines.agents.reaching_score import episode_max_errors
 from baselines.agents.scorers import (
@@ -58,11 +59,11 @@ def test_unknown_family_and_second_registration_are_refused():
     assert SCORERS["MotionEnvs/Juggling"] is existing
 
 
-def test_criterion_is_the_episodes_criterion():
+def test_split_criterion_is_the_familys_episodes_criterion():
     env_id = "MotionEnvs/OrientationReach-v1"
     kwargs = {"val_fraction": 0.2}
     direct = episode_max_errors(None, env_id, kwargs, "val", 3).criterion
-    assert scorer_for(env_id).criterion(None, env_id, kwargs, "val", 3) == direct
+    assert split_criterion(None, env_id, kwargs, "val", 3) == direct
 
 
 def test_validation_split_checks_follow_the_family():
@@ -86,7 +87,7 @@ def test_a_registered_family_is_used(monkeypatch):
 
     scorer = Scorer("Test/Thing", episodes, lambda loaded, split, n: {})
     monkeypatch.setitem(SCORERS, "Test/Thing", scorer)
-    assert scorer_for("Test/Thing-v3").criterion(None, "Test/Thing-v3", {}, "val", 4) == 0.25
+    assert split_criterion(None, "Test/Thing-v3", {}, "val", 4) == 0.25
     assert calls == [("Test/Thing-v3", "val", 4)]
 
 

@@ -67,7 +67,8 @@ def split_criterion(
     on the split's seeds (:func:`~baselines.agents.juggling_score.juggling_episodes`)."""
     from baselines.agents.scorers import scorer_for
 
-    return scorer_for(env_id).criterion(policy, env_id, env_kwargs, split, episodes)
+    got = scorer_for(env_id).episodes(policy, env_id, env_kwargs, split, episodes)
+    return float(got.criterion)
 
 
 # -- motion-bench agent ------------------------------------------------------------------

@@ -59,17 +59,6 @@ class Scorer:
     agent_results: Callable[[Any, str, int | None], dict[str, Any]]
     first_val_seed: int | None = None
 
-    def criterion(
-        self,
-        policy: Policy | None,
-        env_id: str,
-        env_kwargs: Mapping[str, Any],
-        split: str,
-        episodes: int | None = None,
-    ) -> float:
-        """The criterion of ``policy`` on ``split`` (lower is better)."""
-        return float(self.episodes(policy, env_id, env_kwargs, split, episodes).criterion)
-
 
 #: Family -> scorer (:func:`register_scorer`).
 SCORERS: dict[str, Scorer] = {}
