@@ -92,8 +92,10 @@ def test_cli_errors(tmp_path, capsys):
 
 
 def test_cli_says_when_movement_primitives_is_missing(monkeypatch, capsys):
-    monkeypatch.setattr(pb, "peers_missing_reason", lambda: "No module named 'movement_primitives'")
-    monkeypatch.setattr(pb, "peers_available", lambda: False)
+    monkeypatch.setattr(
+        pb.cli, "peers_missing_reason", lambda: "No module named 'movement_primitives'"
+    )
+    monkeypatch.setattr(pb.scoring, "peers_available", lambda: False)
     args = ["position", "--shapes", "Line", "--n-points", "20", "--n-sines", "2", "--no-progress"]
     assert main(args) == 0
     captured = capsys.readouterr()
