@@ -302,7 +302,7 @@ def test_an_out_holding_a_sweep_is_refused_unless_resumed_with_the_same_file(
 def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     finished_sweep, local_ray, tmp_path, capsys
 ):
-    from baselines.agents.sweep import _train_and_score
+    from baselines.agents.sweep import train_and_score, trial_settings
 
     out = tmp_path / "sweep"
     runs = out / "runs"
@@ -365,7 +365,9 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     # a trial restarted after its run folder was finished only scores it again
     sweep = load_sweep(TINY, out=str(out))
     trial = next(t for t in doc["trials"] if Path(t["run_dir"]).name == kept.name)
-    again = _train_and_score(sweep.configurations[0], trial["seed"], kept, sweep, True)
+    again = train_and_score(
+        sweep.configurations[0], trial["seed"], kept, trial_settings(sweep), True
+    )
     assert {"config_index": trial["config_index"], **_numbers(again)} == {
         **_numbers(trial),
         "resumed": True,

@@ -212,21 +212,16 @@ def test_training_never_touches_the_test_split(tmp_path, monkeypatch, env_id):
     are "train" and "val" only (the juggling scorer's split picks its seed range)."""
     import gymnasium as gym
 
-    import baselines.agents.evaluate as evaluate_module
-    import baselines.agents.juggling_score as juggling_module
+    from baselines.agents.scorers import SCORERS
 
     seen: list[str] = []
-    for module, name in (
-        (evaluate_module, "episode_max_errors"),
-        (juggling_module, "juggling_episodes"),
-    ):
-        original = getattr(module, name)
+    for family, scorer in list(SCORERS.items()):
 
-        def spy(policy, env, kwargs, split, episodes=None, _original=original):
+        def spy(policy, env, kwargs, split, episodes=None, _original=scorer.episodes):
             seen.append(split)
             return _original(policy, env, kwargs, split, episodes)
 
-        monkeypatch.setattr(module, name, spy)
+        monkeypatch.setitem(SCORERS, family, dataclasses.replace(scorer, episodes=spy))
     for name in ("make", "make_vec"):
         original = getattr(gym, name)
 

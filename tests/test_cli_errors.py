@@ -11,17 +11,14 @@ from pathlib import Path
 
 import pytest
 
-from baselines import (
-    calibrate_cohort,
-    juggling_bench,
-    orientation_bench,
-    position_bench,
-    run_all,
-)
+from baselines import calibrate_cohort, run_all
 from baselines.agents import evaluate as agent_evaluate
-from baselines.agents import sweep as agent_sweep
 from baselines.agents import train as agent_train
+from baselines.agents.sweep import cli as agent_sweep
 from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
+from baselines.juggling_bench import runner as juggling_runner
+from baselines.orientation_bench import runner as orientation_runner
+from baselines.position_bench import runner as position_runner
 from motion_envs import __version__
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,10 +50,10 @@ def no_computation(monkeypatch):
     def started(*args, **kwargs):
         raise AssertionError("the computation started before the error was reported")
 
-    monkeypatch.setattr(orientation_bench, "table1", started)
-    monkeypatch.setattr(position_bench, "run_benchmark", started)
+    monkeypatch.setattr(orientation_runner, "table1", started)
+    monkeypatch.setattr(position_runner, "run_benchmark", started)
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
-    monkeypatch.setattr(juggling_bench, "load_demos", started)
+    monkeypatch.setattr(juggling_runner, "load_demos", started)
     monkeypatch.setattr(agent_train, "run", started)
     monkeypatch.setattr(agent_evaluate, "run", started)
     monkeypatch.setattr(agent_sweep, "load_sweep", started)

@@ -106,7 +106,7 @@ def test_run_rejects_a_bad_config_before_computing(field, value, monkeypatch):
     def started(*args, **kwargs):
         raise AssertionError("the computation started before the config was checked")
 
-    monkeypatch.setattr(jb, "load_demos", started)
+    monkeypatch.setattr(jb.runner, "load_demos", started)
     cfg = jb.JugglingConfig(progress=False, **{field: value})
     with pytest.raises(options.ConfigError) as info:
         jb.run(cfg)

@@ -234,7 +234,7 @@ def test_model_file_rejects_wrong_version_and_architecture(fitted, tmp_path):
 
 
 def test_orientation_rows_on_a_small_subset():
-    from baselines.learned_rows import LEARNED_ROWS, compare, learned_orientation_rows
+    from baselines.learned.rows import LEARNED_ROWS, compare, learned_orientation_rows
     from motion_envs.datasets import load_orientation_dataset
 
     ds = load_orientation_dataset("vr-kitchen")

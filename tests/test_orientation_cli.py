@@ -12,7 +12,7 @@ import pytest
 
 from baselines import orientation_bench, run_all
 from baselines.cli import main
-from baselines.learned_rows import LEARNED_ROWS
+from baselines.learned.rows import LEARNED_ROWS
 from baselines.options import ConfigError
 from motion_envs.datasets import load_vr_kitchen
 from motion_envs.models.criteria import criterion_names, table1

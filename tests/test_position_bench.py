@@ -50,7 +50,7 @@ def test_leave_one_out_matches_hand_computation():
     folds = position_folds(ds, "loo")
     assert [f[2].tolist() for f in folds] == [[i] for i in range(7)]
     preds, chosen = pb.predict_folds(
-        y, dur, folds, ["start", "end"], 3, ["line", "null"], pb._Timer()
+        y, dur, folds, ["start", "end"], 3, ["line", "null"], pb.scoring._Timer()
     )
     assert chosen == []
     tau = np.linspace(0, 1, 30)[:, None]
@@ -92,8 +92,10 @@ def test_cli_errors(tmp_path, capsys):
 
 
 def test_cli_says_when_movement_primitives_is_missing(monkeypatch, capsys):
-    monkeypatch.setattr(pb, "peers_missing_reason", lambda: "No module named 'movement_primitives'")
-    monkeypatch.setattr(pb, "peers_available", lambda: False)
+    monkeypatch.setattr(
+        pb.cli, "peers_missing_reason", lambda: "No module named 'movement_primitives'"
+    )
+    monkeypatch.setattr(pb.scoring, "peers_available", lambda: False)
     args = ["position", "--shapes", "Line", "--n-points", "20", "--n-sines", "2", "--no-progress"]
     assert main(args) == 0
     captured = capsys.readouterr()

@@ -41,6 +41,7 @@ __all__ = [
     "ALGO_KEYS",
     "COMMON_KEYS",
     "DEFAULT_CONFIG_DIR",
+    "SWEEP_CONFIG_DIR",
     "YamlLoader",
     "default_config_path",
     "load_hyperparams",
@@ -52,8 +53,12 @@ __all__ = [
 
 #: Algorithms ``motion-bench train`` knows.
 ALGOS: tuple[str, ...] = ("ppo", "sac", "td3")
-#: ``configs/agents`` of the repository.
-DEFAULT_CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "agents"
+#: The agent configs shipped in the package (``baselines/configs/agents``, package data): a
+#: byte-identical copy of the repository's canonical ``configs/agents``
+#: (``tests/test_packaged_configs.py``), so that a wheel install finds them.
+DEFAULT_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "agents"
+#: The sweep files shipped in the package (copy of ``configs/sweeps``, as above).
+SWEEP_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "sweeps"
 #: Activation names and their ``torch.nn`` classes.
 ACTIVATIONS: tuple[str, ...] = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
 
@@ -323,7 +328,7 @@ COMMAND_DEFAULTS: dict[str, Any] = {
 
 
 def default_config_path(algo: str) -> Path:
-    """``configs/agents/ALGO.yaml``."""
+    """``configs/agents/ALGO.yaml`` (the packaged copy, :data:`DEFAULT_CONFIG_DIR`)."""
     return DEFAULT_CONFIG_DIR / f"{algo}.yaml"
 
 

@@ -18,8 +18,9 @@ episode) and ``agent_vs_nominal.png``. Without scikit-learn (or for an environme
 without a regressor) the learned values are null and ``learned_skipped`` says why.
 
 ``Juggling-v0`` has no trajectories to replay: its splits are seed ranges and its
-criterion the drop rate per toss (:mod:`baselines.agents.juggling_score`, which
-:func:`split_criterion` dispatches to). ``motion-bench agent`` then reports the catch
+criterion the drop rate per toss (:mod:`baselines.agents.juggling_score`;
+:func:`split_criterion` and :func:`run` ask the env family's scorer,
+:mod:`baselines.agents.scorers`). ``motion-bench agent`` then reports the catch
 rates of the agent and of the zero action (the analytic juggler) on the same seeds and
 the hand's deviation from the demonstrations (held-out ones on ``--split test``):
 ``catch_rate``, ``nominal_catch_rate``, ``deviation``, ``nominal_deviation``,
@@ -30,7 +31,7 @@ from __future__ import annotations
 
 import argparse
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,6 +41,7 @@ from numpy.typing import NDArray
 
 from baselines import options
 from baselines.agents import checks
+from baselines.agents.reaching_score import EpisodeErrors, Policy, episode_max_errors
 from motion_envs._io import atomic_write_text, save_figure
 
 __all__ = [
@@ -51,76 +53,6 @@ __all__ = [
     "split_criterion",
 ]
 
-Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
-
-
-@dataclass(frozen=True)
-class EpisodeErrors:
-    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks."""
-
-    max_errors: NDArray[np.float64]
-    trajectory_ids: NDArray[np.str_]
-    tasks: NDArray[np.str_]
-
-    @property
-    def criterion(self) -> float:
-        """Median over episodes of the per-episode max error."""
-        return float(np.median(self.max_errors))
-
-    @property
-    def median_of_task_medians(self) -> float:
-        """Median over tasks of the median over the task's episodes (motion-bench position)."""
-        return float(
-            np.median([np.median(self.max_errors[self.tasks == t]) for t in np.unique(self.tasks)])
-        )
-
-
-def episode_max_errors(
-    policy: Policy | None,
-    env_id: str,
-    env_kwargs: Mapping[str, Any],
-    split: str,
-    episodes: int | None = None,
-) -> EpisodeErrors:
-    """``info["max_error"]`` of one deterministic episode per trajectory of ``split``.
-
-    ``policy`` maps a batch of raw observations ``(N, obs_dim)`` to actions; None is the
-    zero action (the nominal). ``episodes`` takes the first trajectories only.
-    """
-    import gymnasium as gym
-
-    import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
-
-    kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
-    probe: Any = gym.make(env_id, split=split, **kwargs).unwrapped
-    n_traj = probe.task.n_trajectories
-    n = n_traj if episodes is None else min(int(episodes), n_traj)
-    if n < 1:
-        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
-    venv = gym.make_vec(
-        env_id, num_envs=n, vectorization_mode="vector_entry_point", split=split, **kwargs
-    )
-    obs, _ = venv.reset(seed=0, options={"trajectory": np.arange(n)})
-    shape = (n, *(venv.single_action_space.shape or ()))
-    maxima = np.full(n, np.nan)
-    done = np.zeros(n, dtype=bool)
-    while not done.all():
-        actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
-        obs, _, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.float32))
-        ended = (np.asarray(terminated) | np.asarray(truncated)) & ~done
-        if "max_error" in info:
-            got = ended & info["_max_error"]
-            maxima[got] = info["max_error"][got]
-        done |= ended
-    venv.close()
-    if np.isnan(maxima).any():
-        raise RuntimeError(f"{env_id}: some episodes ended without info['max_error']")
-    return EpisodeErrors(
-        maxima,
-        np.asarray(probe.task.trajectory_ids[:n]).astype(str),
-        np.asarray(probe.task.tasks[:n]).astype(str),
-    )
-
 
 def split_criterion(
     policy: Policy | None,
@@ -129,15 +61,14 @@ def split_criterion(
     split: str,
     episodes: int | None = None,
 ) -> float:
-    """The criterion checkpoints are chosen by (lower is better): for the reaching
-    environments the papers' criterion (:func:`episode_max_errors`), for Juggling-v0 the
-    drop rate per toss on the split's seeds
-    (:func:`~baselines.agents.juggling_score.juggling_episodes`)."""
-    from baselines.agents.juggling_score import is_juggling, juggling_episodes
+    """The criterion checkpoints are chosen by (lower is better), the env family's
+    (:func:`baselines.agents.scorers.scorer_for`): for the reaching environments the
+    papers' criterion (:func:`episode_max_errors`), for Juggling-v0 the drop rate per toss
+    on the split's seeds (:func:`~baselines.agents.juggling_score.juggling_episodes`)."""
+    from baselines.agents.scorers import scorer_for
 
-    if is_juggling(env_id):
-        return juggling_episodes(policy, env_id, env_kwargs, split, episodes).criterion
-    return episode_max_errors(policy, env_id, env_kwargs, split, episodes).criterion
+    got = scorer_for(env_id).episodes(policy, env_id, env_kwargs, split, episodes)
+    return float(got.criterion)
 
 
 # -- motion-bench agent ------------------------------------------------------------------
@@ -158,37 +89,10 @@ def run(config: AgentConfig) -> dict[str, Any]:
     if config.split not in ("train", "val", "test"):
         raise ValueError(f"split must be 'train', 'val' or 'test'; got {config.split!r}")
     loaded = load_run(config.run_dir, config.which)
-    kwargs = loaded.env_kwargs
-    from baselines.agents.juggling_score import is_juggling
+    from baselines.agents.scorers import scorer_for
 
-    if is_juggling(loaded.env_id):
-        return _run_juggling(loaded, config)
-    agent = episode_max_errors(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
-    nominal = episode_max_errors(None, loaded.env_id, kwargs, config.split, config.episodes)
-    learned_entries, learned = _learned(loaded.env_id, kwargs, config.split, config.episodes)
-    results: dict[str, Any] = {
-        **_run_entries(loaded, config),
-        "n_episodes": int(agent.max_errors.size),
-        "criterion": agent.criterion,
-        "nominal_criterion": nominal.criterion,
-        "ratio": agent.criterion / nominal.criterion,
-        "median_of_task_medians": agent.median_of_task_medians,
-        "nominal_median_of_task_medians": nominal.median_of_task_medians,
-        "best_val_criterion": loaded.manifest.get("best_val_criterion"),
-        **learned_entries,
-        "episodes": {
-            "trajectory_id": agent.trajectory_ids.tolist(),
-            "task": agent.tasks.tolist(),
-            "agent_max_error": agent.max_errors.tolist(),
-            "nominal_max_error": nominal.max_errors.tolist(),
-        },
-    }
-    if learned is not None:
-        if not np.array_equal(learned.trajectory_ids, agent.trajectory_ids):
-            raise RuntimeError("the learned regressor was scored on other episodes")
-        results["learned_ratio"] = agent.criterion / learned.criterion
-        results["episodes"]["learned_max_error"] = learned.max_errors.tolist()
-    return results
+    scores = scorer_for(loaded.env_id).agent_results(loaded, config.split, config.episodes)
+    return {**_run_entries(loaded, config), **scores}
 
 
 def _run_entries(loaded: Any, config: AgentConfig) -> dict[str, Any]:
@@ -202,78 +106,6 @@ def _run_entries(loaded: Any, config: AgentConfig) -> dict[str, Any]:
         "split": config.split,
         "checkpoint": config.which,
     }
-
-
-def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
-    """``motion-bench agent`` on Juggling-v0: catch rate and the hand's deviation from the
-    demonstrations (held-out ones on ``test``), agent and zero action on the same seeds."""
-    from baselines.agents.juggling_score import juggling_episodes
-
-    kwargs = loaded.env_kwargs
-    agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
-    nominal = juggling_episodes(None, loaded.env_id, kwargs, config.split, config.episodes)
-    from motion_envs.datasets.juggling_task import PHASES
-
-    both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
-    phases = [p for p in PHASES if p in both]  # in the task's order
-    return {
-        **_run_entries(loaded, config),
-        "n_episodes": int(agent.seeds.size),
-        "criterion": agent.criterion,
-        "nominal_criterion": nominal.criterion,
-        "ratio": agent.criterion / nominal.criterion if nominal.criterion > 0 else None,
-        "catch_rate": agent.catch_rate,
-        "nominal_catch_rate": nominal.catch_rate,
-        "tosses": int(agent.tosses.sum()),
-        "nominal_tosses": int(nominal.tosses.sum()),
-        "deviation": agent.deviation,
-        "nominal_deviation": nominal.deviation,
-        "deviation_ratio": agent.deviation / nominal.deviation,
-        "phase_deviation": {p: agent.phase_deviation(p) for p in phases},
-        "nominal_phase_deviation": {p: nominal.phase_deviation(p) for p in phases},
-        "deviation_reference": (
-            "held-out demonstrations" if config.split == "test" else "training demonstrations"
-        ),
-        "best_val_criterion": loaded.manifest.get("best_val_criterion"),
-        "learned_criterion": None,
-        "learned_ratio": None,
-        "learned_skipped": f"{loaded.env_id} has no learned regressor",
-        "episodes": {
-            "seed": agent.seeds.tolist(),
-            "agent_tosses": agent.tosses.tolist(),
-            "agent_catches": agent.catches.tolist(),
-            "agent_dropped": agent.dropped.tolist(),
-            "agent_deviation": agent.episode_deviation().tolist(),
-            "nominal_tosses": nominal.tosses.tolist(),
-            "nominal_catches": nominal.catches.tolist(),
-            "nominal_dropped": nominal.dropped.tolist(),
-            "nominal_deviation": nominal.episode_deviation().tolist(),
-        },
-    }
-
-
-def _learned(
-    env_id: str, kwargs: Mapping[str, Any], split: str, episodes: int | None
-) -> tuple[dict[str, Any], EpisodeErrors | None]:
-    """``learned_*`` entries of results.json (null with ``learned_skipped`` when there is
-    no regressor) and the regressor's per-episode errors."""
-    from baselines.agents.learned_criterion import learned_episode_errors, learned_skip_reason
-
-    reason = learned_skip_reason(env_id)
-    if reason is not None:
-        entries: dict[str, Any] = {
-            "learned_criterion": None,
-            "learned_ratio": None,
-            "learned_skipped": reason,
-        }
-        return entries, None
-    got = learned_episode_errors(env_id, kwargs, split, episodes)
-    entries = {
-        "learned_criterion": got.errors.criterion,
-        "learned_model": got.model,
-        "learned_chosen": got.chosen,
-    }
-    return entries, got.errors
 
 
 def write_results(results: Mapping[str, Any], out: Path) -> None:

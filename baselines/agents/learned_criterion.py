@@ -12,7 +12,7 @@ same criterion: the median over episodes of ``info["max_error"]``.
   (:func:`~motion_envs.envs.orientation_reach.orientation_split_parts`), with residuals
   taken against the same base slerp as the environment: ``e = slerp(q_0, q_n,
   alpha_bar)`` with ``alpha_bar`` the mean speed profile of those trajectories (the
-  "predicted timing" residual of :mod:`baselines.learned_rows`). The ridge penalty is
+  "predicted timing" residual of :mod:`baselines.learned.rows`). The ridge penalty is
   chosen by inner folds over the training subjects
   (:func:`~baselines.learned.orientation.ridge_nested`).
 * **Position** (``PositionReach-v0``/``-v1``): the ``ridge`` column of
@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.agents.evaluate import EpisodeErrors
+from baselines.agents.reaching_score import EpisodeErrors
 from motion_envs.envs.orientation_reach import N_STEPS, orientation_max_errors
 from motion_envs.envs.position_reach import position_max_errors
 

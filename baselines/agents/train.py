@@ -24,8 +24,8 @@ train`` and every trial of ``motion-bench sweep`` call it):
 from __future__ import annotations
 
 import argparse
+import functools
 import json
-import math
 import shlex
 import sys
 import time
@@ -34,8 +34,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from baselines import options
 from baselines.agents import checks
@@ -95,37 +93,6 @@ def _check_config(config: TrainConfig) -> None:
         raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
 
 
-def _check_validation_split(
-    env_id: str, env_kwargs: Mapping[str, Any], seed: int, n_envs: int
-) -> None:
-    """A data-split environment needs ``val_fraction > 0`` (its validation split is carved
-    from the training data); the juggling environment's splits are seed ranges
-    (:mod:`baselines.agents.juggling_score`) that the training seeds ``seed .. seed +
-    n_envs - 1`` must stay below."""
-    from baselines.agents.juggling_score import SPLIT_SEEDS, is_juggling
-    from baselines.agents.vec import takes_keyword
-
-    if is_juggling(env_id):
-        if seed + n_envs > SPLIT_SEEDS["val"]:
-            raise options.ConfigError(
-                "seed",
-                f"{seed} with {n_envs} environments would reset on the validation seeds of "
-                f"{env_id} (from {SPLIT_SEEDS['val']}); use a seed below "
-                f"{SPLIT_SEEDS['val'] - n_envs + 1}",
-            )
-        return
-    if not takes_keyword(env_id, "val_fraction"):
-        return
-    val_fraction = env_kwargs.get("val_fraction", 0)
-    if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):
-        raise ValueError(f"env_kwargs.val_fraction must be a number; got {val_fraction!r}")
-    if not val_fraction > 0:
-        raise ValueError(
-            "env_kwargs.val_fraction must be > 0: checkpoints are chosen on a validation split "
-            "carved from the training data, never on the test split"
-        )
-
-
 def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor, VecNormalize
 
@@ -146,83 +113,20 @@ def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
     return env
 
 
-def _validation_callback(
-    env_id: str,
-    hp: Mapping[str, Any],
-    run_dir: Path,
-    on_evaluation: EvaluationHook | None,
-) -> Any:
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    from baselines.agents.evaluate import split_criterion
-    from baselines.agents.rundir import ObsNormalizer, save_model
-
-    class ValidationCallback(BaseCallback):
-        """Papers' criterion on the validation split; keeps the best policy as agent.zip."""
-
-        def __init__(self) -> None:
-            super().__init__()
-            self.eval_freq = int(hp["eval_freq"])
-            self.episodes = hp.get("eval_episodes")
-            self.best = math.inf
-            self.best_timesteps = 0
-            self.evaluations: list[dict[str, float]] = []
-            self._next = 0
-
-        def _evaluate(self) -> None:
-            vn = self.model.get_vec_normalize_env()
-            normalizer = ObsNormalizer.from_vec_normalize(vn)
-            model = self.model
-
-            def policy(obs: np.ndarray) -> np.ndarray:
-                return model.predict(normalizer(obs), deterministic=True)[0]
-
-            crit = split_criterion(policy, env_id, hp["env_kwargs"], "val", self.episodes)
-            is_best = crit < self.best
-            if is_best:
-                self.best, self.best_timesteps = crit, self.num_timesteps
-                save_model(self.model, run_dir / "agent.zip")
-                if vn is not None:
-                    ObsNormalizer.save_vec_normalize(vn, run_dir / "normalization.npz")
-            self.evaluations.append({"timesteps": self.num_timesteps, "val_criterion": crit})
-            self.logger.record("eval/val_criterion", crit)
-            self.logger.record("eval/best_val_criterion", self.best)
-            if on_evaluation is not None:
-                on_evaluation(
-                    {
-                        "timesteps": self.num_timesteps,
-                        "val_criterion": crit,
-                        "best_val_criterion": self.best,
-                        "is_best": is_best,
-                        "run_dir": str(run_dir),
-                    }
-                )
-
-        def _on_training_start(self) -> None:
-            self._evaluate()  # the nominal itself when the action head starts at zero
-            self._next = self.num_timesteps + self.eval_freq
-
-        def _on_step(self) -> bool:
-            if self.num_timesteps >= self._next:
-                self._evaluate()
-                self._next = self.num_timesteps + self.eval_freq
-            return True
-
-        def _on_training_end(self) -> None:
-            if self.evaluations[-1]["timesteps"] != self.num_timesteps:
-                self._evaluate()
-
-    return ValidationCallback()
-
-
 def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> TrainResult:
     """Train, validate, save the run folder; see the module docstring."""
     import torch
     from stable_baselines3.common.utils import set_random_seed
 
+    from baselines.agents.callbacks import (
+        EvaluationHookCallback,
+        SaveBestCallback,
+        ValidationCallback,
+    )
     from baselines.agents.evaluate import split_criterion
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
+    from baselines.agents.scorers import check_validation_split
     from baselines.sb3 import TqdmCallback
 
     _check_config(config)
@@ -234,7 +138,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     if config.env_kwargs:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    _check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
     run_dir = Path(config.out)
     if (run_dir / "run.json").exists():
         raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
@@ -258,7 +162,20 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     val_nominal = split_criterion(
         None, config.env_id, hp["env_kwargs"], "val", hp.get("eval_episodes")
     )
-    validation = _validation_callback(config.env_id, hp, run_dir, on_evaluation)
+    validation = ValidationCallback(
+        functools.partial(
+            split_criterion,
+            env_id=config.env_id,
+            env_kwargs=hp["env_kwargs"],
+            split="val",
+            episodes=hp.get("eval_episodes"),
+        ),
+        eval_freq=int(hp["eval_freq"]),
+        callback_on_new_best=SaveBestCallback(run_dir),
+        callback_after_eval=None
+        if on_evaluation is None
+        else EvaluationHookCallback(on_evaluation, run_dir),
+    )
     callbacks: list[Any] = [validation]
     total = int(hp["n_timesteps"])
     if config.progress:
@@ -342,12 +259,12 @@ def _cli(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise options.ConfigError("env_kwargs", str(exc).removeprefix("--env-kwargs: ")) from None
     checks.check_env_kwargs(args.env, env_kwargs)
-    from baselines.agents.juggling_score import is_juggling
+    from baselines.agents.scorers import check_validation_split, scorer_for
 
-    if is_juggling(args.env):  # its seed range, checked before anything is built
-        hp = resolve_hyperparams(args.algo, args.env, args.config)
+    if scorer_for(args.env).first_val_seed is not None:  # seed-range splits: checked
+        hp = resolve_hyperparams(args.algo, args.env, args.config)  # before anything is built
         n_envs = args.n_envs if args.n_envs is not None else int(hp["n_envs"])
-        _check_validation_split(args.env, {}, args.seed, n_envs)
+        check_validation_split(args.env, {}, args.seed, n_envs)
     default_out = f"runs/{args.algo}-{args.env.split('/')[-1]}-seed{args.seed}"
     config = TrainConfig(
         algo=args.algo,

@@ -12,6 +12,8 @@ from typing import Any
 
 import numpy as np
 
+from baselines.learned.reading import bootstrap_ratio, format_comparison
+
 __all__ = ["TARGETS", "format_position_reading", "position_comparisons"]
 
 #: (analytic column, target ratio of the better learned column).
@@ -21,8 +23,6 @@ _ANALYTIC = ("line", "null", "lippi")
 
 def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[str, Any]]:
     """Ratios of the learned columns to the analytic ones (see the module docstring)."""
-    from baselines.learned_rows import bootstrap_ratio
-
     methods = doc["methods"]
     learned = [m for m in ("ridge", "mlp") if m in methods]
     if not learned:
@@ -62,8 +62,6 @@ def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[s
 
 def format_position_reading(doc: dict[str, Any], comparisons: list[dict[str, Any]]) -> str:
     """A short honest reading of the learned columns (max error criterion)."""
-    from baselines.learned_rows import format_comparison
-
     lines = [
         "",
         "learned vs analytic (max error, median across shapes; ratio < 1: learned better):",

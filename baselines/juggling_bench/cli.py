@@ -1,0 +1,176 @@
+"""The ``motion-bench juggling`` sub-command: argparse checkers, :func:`register` and
+:func:`main` (build the config, run, print, write)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import time
+
+from baselines import options
+from baselines.juggling_bench.config import JugglingConfig
+from baselines.juggling_bench.media import write
+from baselines.juggling_bench.runner import run
+from baselines.juggling_bench.text import report
+from motion_envs.datasets.juggling_task import JugglingTask
+
+
+def main(args: argparse.Namespace) -> int:
+    """``motion-bench juggling`` with parsed arguments: run, print, write."""
+    config = JugglingConfig(
+        cycles=args.cycles,
+        noise=args.noise,
+        tracking=args.tracking,
+        seed=args.seed,
+        data=args.data,
+        progress=not args.no_progress,
+        use_dmp=not args.no_dmp,
+        world=args.world,
+        demo_cycles=args.demo_cycles,
+        demo_persons=args.demo_persons,
+        mujoco_cycles=args.mujoco_cycles,
+        mujoco_noise_cycles=args.mujoco_cycles // 4,
+        task=args.gravity,
+    )
+    t0 = time.perf_counter()
+    doc = run(config)
+    doc["timing"]["total_s"] = time.perf_counter() - t0
+    print(report(doc))
+    if args.out:
+        paths = write(doc, args.out, video=not args.no_video)
+        print("wrote " + ", ".join(str(p) for p in paths))
+    print(f"total {doc['timing']['total_s']:.1f} s")
+    return 0
+
+
+def noise_levels(text: str) -> tuple[float, ...]:
+    """``--noise``: a comma list of finite numbers in [0, 1) (relative std)."""
+    what = f"a comma list of numbers in [0, 1) (e.g. 0.05,0.1); got {text!r}"
+    try:
+        levels = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what}") from None
+    if not levels or not all(math.isfinite(v) and 0 <= v < 1 for v in levels):
+        raise argparse.ArgumentTypeError(f"expected {what}")
+    return levels
+
+
+def gravity_task(text: str) -> JugglingTask:
+    """``--gravity``: a finite number > 0 (m/s^2), as the task it defines."""
+    value = options.non_negative_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0; got {text!r}")
+    try:
+        return JugglingTask(gravity=value)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def juggling_data(text: str) -> str:
+    """``--data``: ``simulated`` or an existing, readable juggling CSV with ``t,x,z``.
+
+    Only the header line is read here (the rows are checked when the run loads them).
+    """
+    if text == "simulated":
+        return text
+    path = options.input_file(text)
+    try:
+        with path.open(encoding="utf-8", newline="") as fh:
+            header = next(csv.reader([fh.readline()]), [])
+    except UnicodeDecodeError:
+        raise argparse.ArgumentTypeError(f"{text} is not a UTF-8 text CSV") from None
+    missing = [c for c in ("t", "x", "z") if c not in [h.strip() for h in header]]
+    if missing:
+        raise argparse.ArgumentTypeError(
+            f"{text}: line 1: missing column(s) {missing}; expected header "
+            "t,x,z[,ball_x,ball_z][,phase][,recording]"
+        )
+    return str(path)
+
+
+DESCRIPTION = """\
+The analytic juggler of Lippi, Avizzano & Ruffaldi (section III-A). Demonstrations are
+SIMULATED by default (a seeded model of a person; the paper's recordings are not public)
+or read from a juggling CSV (--data). They are split by demonstration (cycle): the
+juggler is fitted on the training cycles only (N per phase by cross-validation inside
+them) and scored on the held-out ones.
+
+Reported: the catch rate of --cycles seeded cycles, unperturbed and with release noise
+(--noise) plus tracking noise (--tracking), each with and without the eq. 10
+correction; per phase, on the held-out demonstrations, the median over demonstrations of
+the max over time of the position error (and of the RMSE) for Lippi's regression,
+minimum jerk and a DMP, next to the within-person variability; the paper's validation of
+the linear hypothesis; a Figure-6-style plot and a GIF of the juggler (with --out)."""
+
+
+def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
+    """Add the ``juggling`` sub-command."""
+    p = options.add_subcommand(
+        subparsers,
+        "juggling",
+        help="the analytic juggler (Lippi et al. III-A): catch rates, per-phase errors vs "
+        "minimum jerk and DMP, validation statistics (SIMULATED demonstrations by default)",
+        description=DESCRIPTION,
+    )
+    p.add_argument(
+        "--cycles", type=options.positive_int, default=1000, help="seeded juggling cycles per run"
+    )
+    p.add_argument(
+        "--noise",
+        type=noise_levels,
+        default="0.05,0.10",
+        help="release-velocity noise levels (relative std), comma-separated",
+    )
+    p.add_argument(
+        "--tracking", type=options.non_negative_float, default=0.0005, help="tracking noise std (m)"
+    )
+    p.add_argument(
+        "--seed",
+        type=options.non_negative_int,
+        default=0,
+        help="seed of data, split and cycles (default: 0)",
+    )
+    p.add_argument(
+        "--data",
+        type=juggling_data,
+        default=None,
+        help="a juggling CSV, or 'simulated' (default: SIMULATED demonstrations)",
+    )
+    p.add_argument(
+        "--demo-cycles",
+        type=options.positive_int,
+        default=50,
+        help="SIMULATED cycles per person (examples)",
+    )
+    p.add_argument("--demo-persons", type=options.positive_int, default=1, help="SIMULATED persons")
+    p.add_argument(
+        "--gravity",
+        type=gravity_task,
+        default="1.0",
+        help="m/s^2 (9.81: real gravity)",
+    )
+    p.add_argument(
+        "--out",
+        type=options.output_folder,
+        default=None,
+        help="folder for results.json/.csv, plot, GIF (nothing written without it)",
+    )
+    p.add_argument(
+        "--world",
+        choices=("mujoco", "model"),
+        default="mujoco",
+        help="mujoco: the figure, the video and the first --mujoco-cycles cycles of each run "
+        "in the MuJoCo scene (checked equal to the pure model, which runs all cycles); "
+        "model: pure model only (fast)",
+    )
+    p.add_argument(
+        "--mujoco-cycles",
+        type=options.non_negative_int,
+        default=100,
+        help="unperturbed cycles stepped in MuJoCo (a quarter of it per perturbed run)",
+    )
+    p.add_argument("--no-dmp", action="store_true", help="skip the DMP competitor")
+    p.add_argument("--no-video", action="store_true", help="skip the GIF")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=main)

@@ -1,0 +1,117 @@
+"""The pure :func:`run` of ``motion-bench orientation``: Table 1, the nominal's criterion
+and the learned leave-one-subject-out rows.
+
+(Named ``runner`` so that the package attribute ``run`` stays the function.)"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from baselines import options
+from baselines.learned import LEARNED_MODES
+from baselines.learned.rows import LearnedRows
+from baselines.orientation_bench.config import OrientationConfig, OrientationResults
+from motion_envs.datasets import OrientationDataset, load_orientation_dataset
+from motion_envs.datasets.orientation import check_up
+from motion_envs.datasets.splits import split_by_subject
+from motion_envs.models.criteria import table1
+from motion_envs.models.orientation_nominal import orientation_criterion
+
+
+def _split(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> tuple[OrientationDataset, OrientationDataset]:
+    return split_by_subject(dataset, test_fraction=config.test_fraction, seed=config.split_seed)
+
+
+def _nominal_criterion(config: OrientationConfig, dataset: OrientationDataset) -> dict[str, Any]:
+    """Offline criterion of ``config.nominal`` fitted on the train split, scored on ``split``.
+
+    The same :mod:`motion_envs.models.orientation_nominal` code builds the environments'
+    nominal, so the zero-action policy of ``MotionEnvs/OrientationReach-v0`` reproduces
+    this value.
+    """
+    assert config.nominal is not None
+    train, test = _split(config, dataset)
+    scored = {"train": train, "test": test, "all": dataset}[config.split]
+    res = orientation_criterion(train, scored, nominal=config.nominal, degree=config.degree)
+    return {
+        "nominal": config.nominal,
+        "degree": config.degree,
+        "scored_on": config.split,
+        "criterion": res["criterion"],
+        "n_train": res["n_train"],
+        "n_scored": res["n_test"],
+        "n_unseen": res["n_unseen"],
+    }
+
+
+def _learned_rows(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> tuple[LearnedRows | None, str | None]:
+    """The rows of :mod:`baselines.learned.rows` at ``config.learned``'s budget, or None
+    and the reason they are skipped (too few subjects, scikit-learn missing)."""
+    if config.learned == "off":
+        return None, None
+    n_subjects = np.unique(dataset.subjects).size
+    if n_subjects < 3:
+        return None, f"{n_subjects} subjects, at least 3 needed"
+    from baselines.learned import mlp_config, sklearn_missing_reason, torch_missing_reason
+    from baselines.learned.rows import learned_orientation_rows
+
+    missing_sklearn = sklearn_missing_reason()
+    if missing_sklearn:
+        return None, missing_sklearn
+    use_torch = torch_missing_reason() is None
+    budget = mlp_config(config.learned) if use_torch else None
+    return learned_orientation_rows(dataset, mlp_config=budget, use_torch=use_torch), None
+
+
+def run(config: OrientationConfig) -> OrientationResults:
+    """Table 1, the learned rows (and the nominal's criterion) for ``config``; no
+    printing, no files.
+
+    Raises ``ValueError`` for unusable data and :class:`~baselines.options.ConfigError`
+    (naming the field) for a ``plot_task`` the data does not have or an ``up`` or
+    ``learned`` that is not valid, before computing.
+    """
+    if config.learned not in LEARNED_MODES:
+        raise options.ConfigError(
+            "learned", f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}"
+        )
+    if config.up is not None:
+        try:
+            check_up(config.up)
+        except ValueError as exc:
+            raise options.ConfigError("up", str(exc)) from None
+    t0 = time.perf_counter()
+    dataset = load_orientation_dataset(config.data, min_deg=config.min_deg, up=config.up)
+    if len(dataset) < 2:
+        raise options.ConfigError(
+            "min_deg",
+            f"only {len(dataset)} trajectories left after dropping those under "
+            f"{config.min_deg} degrees; lower --min-deg",
+        )
+    full = dataset
+    if config.split != "all":
+        dataset = _split(config, full)[config.split == "test"]
+    if config.plot_task is not None and config.plot_task not in set(dataset.tasks.tolist()):
+        raise options.ConfigError(
+            "plot_task",
+            f"task {config.plot_task!r} is not in the data; choose one of "
+            f"{sorted(set(dataset.tasks.tolist()))}",
+        )
+    table = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    learned, note = _learned_rows(config, dataset)
+    comparisons: list[dict[str, Any]] = []
+    if learned is not None:
+        from baselines.learned.rows import compare
+
+        table.criteria.update(learned.criteria)
+        comparisons = compare(learned, dataset.subjects)
+    elapsed = time.perf_counter() - t0
+    nominal = _nominal_criterion(config, full) if config.nominal is not None else None
+    return OrientationResults(config, dataset, table, nominal, elapsed, learned, comparisons, note)

@@ -1,0 +1,144 @@
+"""The text outputs of ``motion-bench orientation``: Table 1 beside the paper's values
+(:func:`report`), ``results.csv`` and the results document."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from typing import Any
+
+import numpy as np
+
+from baselines.learned.rows import ROW_LABELS
+from baselines.orientation_bench.config import OrientationConfig, OrientationResults
+from motion_envs.datasets import OrientationDataset
+from motion_envs.models.criteria import Table1Result
+from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
+
+_ROW_LABELS = {
+    "within_subject": "Within subject",
+    "between_subject": "Between subject",
+    "slerp_empirical": "Slerp, empirical",
+    "slerp_average": "Slerp, average",
+    "null_average": "Null average",
+}
+
+
+def _label(name: str) -> str:
+    if name in _ROW_LABELS:
+        return _ROW_LABELS[name]
+    if name in ROW_LABELS:
+        return ROW_LABELS[name]
+    base, _, rest = name.partition("_d")
+    degree, _, split = rest.partition("_")
+    pretty = base.replace("_", " ").capitalize()
+    suffix = {"loso": ", leave one subject out", "loro": ", leave one replicate out"}.get(split, "")
+    return f"{pretty} (d={degree}){suffix}"
+
+
+def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
+    """Table 1 as text: one row per criterion, ours beside the paper's value (radians)."""
+    lines = [
+        f"Faraway & Choe Table 1 on {dataset.name!r}: {len(dataset)} trajectories "
+        f"({'simulated' if dataset.simulated else 'real'} data), {dataset.n_dropped} dropped, "
+        f"{np.unique(dataset.subjects).size} subjects, {np.unique(dataset.tasks).size} tasks",
+        "median over trajectories of the max over time of the tangent-space error, radians",
+        "",
+        f"{'criterion':<50} {'name':<40} {'ours':>7} {'paper':>7}",
+        "-" * 108,
+    ]
+    for name, value in result.criteria.items():
+        paper = FARAWAY_CHOE_TABLE1.get(name)
+        paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
+        ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
+        note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
+        lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
+    lines.append("")
+    lines.append(
+        "paper: 1,088 reaches of 20 subjects (hand relative to forearm); rows ending in "
+        "_loso/_loro are ours only (out of sample)."
+    )
+    return "\n".join(lines)
+
+
+def results_document(result: Table1Result, dataset: OrientationDataset) -> dict[str, Any]:
+    """The ``results.json`` document."""
+    return {
+        "dataset": dataset.name,
+        "simulated": dataset.simulated,
+        "n_trajectories": len(dataset),
+        "n_dropped": dataset.n_dropped,
+        "n_subjects": int(np.unique(dataset.subjects).size),
+        "n_tasks": int(np.unique(dataset.tasks).size),
+        "criteria": {k: (v if math.isfinite(v) else None) for k, v in result.criteria.items()},
+        "paper": dict(FARAWAY_CHOE_TABLE1),
+        "fallbacks": dict(result.fallbacks),
+    }
+
+
+def results_csv(result: Table1Result) -> str:
+    """``results.csv``: one row per criterion, ``name,label,ours,paper`` (radians)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["name", "label", "ours", "paper"])
+    for name, value in result.criteria.items():
+        paper = FARAWAY_CHOE_TABLE1.get(name)
+        writer.writerow(
+            [name, _label(name), repr(value) if math.isfinite(value) else "", paper or ""]
+        )
+    return buf.getvalue()
+
+
+def nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
+    degree = f", d={config.degree}" if config.nominal != "slerp" else ""
+    unseen = (
+        f" ({nominal['n_unseen']} with an unseen label use the null model)"
+        if nominal["n_unseen"]
+        else ""
+    )
+    return (
+        f"\nnominal {config.nominal!r}{degree} fitted on the train split ({nominal['n_train']} "
+        f"trajectories; split by subject, seed {config.split_seed}, test fraction "
+        f"{config.test_fraction:g}); criterion on the {config.split} split "
+        f"({nominal['n_scored']} trajectories): {nominal['criterion']!r} rad{unseen}"
+    )
+
+
+def report(results: OrientationResults) -> str:
+    """The text ``motion-bench orientation`` prints."""
+    parts = [format_table1(results.table, results.dataset)]
+    if results.learned is not None:
+        from baselines.learned.rows import format_reading
+
+        parts.append(format_reading(results.learned, results.comparisons))
+    elif results.learned_note is not None:
+        parts.append(f"\nlearned rows skipped: {results.learned_note}")
+    if results.nominal is not None:
+        parts.append(nominal_text(results.config, results.nominal))
+    parts.append(f"\ncomputed in {results.seconds:.2f} s")
+    return "\n".join(parts)
+
+
+def document(results: OrientationResults) -> dict[str, Any]:
+    """The ``results.json`` document of a run."""
+    config = results.config
+    doc = results_document(results.table, results.dataset)
+    if config.split != "all" or results.nominal is not None:
+        doc["split"] = {
+            "split": config.split,
+            "split_seed": config.split_seed,
+            "test_fraction": config.test_fraction,
+        }
+    if results.nominal is not None:
+        doc["nominal"] = results.nominal
+    if results.learned is not None:
+        doc["learned"] = {
+            "mode": config.learned,
+            "up": list(results.dataset.up),
+            "comparisons": results.comparisons,
+            "chosen": results.learned.chosen,
+            "seconds": results.learned.seconds,
+            "skipped": results.learned.skipped,
+        }
+    return doc
