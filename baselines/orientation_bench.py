@@ -26,6 +26,8 @@ import numpy as np
 from baselines import options
 from baselines.learned import LEARNED_MODES
 from baselines.learned_rows import ROW_LABELS, LearnedRows
+from baselines.stats import Comparison
+from baselines.verdicts import FLOOR_ROW, calibration_label, calibration_option
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets import ORIENTATION_DATASETS, OrientationDataset, load_orientation_dataset
 from motion_envs.datasets.orientation import check_up
@@ -34,6 +36,7 @@ from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.criteria import Table1Result, table1
 from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS, orientation_criterion
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
+from motion_envs.models.person_calibration import PersonCalibration
 
 __all__ = [
     "OrientationConfig",
@@ -73,6 +76,9 @@ class OrientationConfig:
     up:
         The data's vertical axis for the path frame (None: the dataset's own, ``+y`` for
         vr-kitchen, ``+z`` for a CSV and the cohort).
+    calibration:
+        The K of the person-calibration rows
+        (:mod:`motion_envs.models.person_calibration`); empty: none.
     """
 
     data: str = "vr-kitchen"
@@ -85,6 +91,7 @@ class OrientationConfig:
     plot_task: str | None = None
     learned: str = "full"
     up: tuple[float, float, float] | None = None
+    calibration: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -94,7 +101,9 @@ class OrientationResults:
 
     ``learned`` is None when the rows were not computed, ``learned_note`` then says why
     (None for ``--learned off``); ``comparisons`` are
-    :func:`baselines.learned_rows.compare`'s readings.
+    :func:`baselines.learned_rows.compare`'s readings; ``calibration`` the person-
+    calibration rows (None when not asked for, ``calibration_note`` then says why when
+    asked); ``verdicts`` every printed ratio with its interval (:mod:`baselines.verdicts`).
     """
 
     config: OrientationConfig
@@ -105,6 +114,9 @@ class OrientationResults:
     learned: LearnedRows | None = None
     comparisons: list[dict[str, Any]] = field(default_factory=list)
     learned_note: str | None = None
+    calibration: PersonCalibration | None = None
+    calibration_note: str | None = None
+    verdicts: list[Comparison] = field(default_factory=list)
 
 
 _ROW_LABELS = {
@@ -121,6 +133,8 @@ def _label(name: str) -> str:
         return _ROW_LABELS[name]
     if name in ROW_LABELS:
         return ROW_LABELS[name]
+    if (label := calibration_label(name)) is not None:
+        return label
     base, _, rest = name.partition("_d")
     degree, _, split = rest.partition("_")
     pretty = base.replace("_", " ").capitalize()
@@ -144,6 +158,8 @@ def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
         paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
         ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
         note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
+        if name == FLOOR_ROW:
+            note = f"noise floor{'; ' + note if note else ''}"
         lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
     lines.append("")
     lines.append(
@@ -257,6 +273,8 @@ def run(config: OrientationConfig) -> OrientationResults:
         raise options.ConfigError(
             "learned", f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}"
         )
+    if any(k < 1 for k in config.calibration):
+        raise options.ConfigError("calibration", f"K must be >= 1; got {list(config.calibration)}")
     if config.up is not None:
         try:
             check_up(config.up)
@@ -287,9 +305,33 @@ def run(config: OrientationConfig) -> OrientationResults:
 
         table.criteria.update(learned.criteria)
         comparisons = compare(learned, dataset.subjects)
+    calibration, calibration_note = _calibration_rows(config, dataset)
+    if calibration is not None:
+        table.criteria.update(calibration.criteria)
+    from baselines.verdicts import orientation_verdicts
+
+    subjects = np.asarray(dataset.subjects).astype(str)
+    verdicts = orientation_verdicts(comparisons, calibration, config.calibration, subjects)
     elapsed = time.perf_counter() - t0
     nominal = _nominal_criterion(config, full) if config.nominal is not None else None
-    return OrientationResults(config, dataset, table, nominal, elapsed, learned, comparisons, note)
+    return OrientationResults(
+        config, dataset, table, nominal, elapsed, learned, comparisons, note,
+        calibration, calibration_note, verdicts,
+    )  # fmt: skip
+
+
+def _calibration_rows(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> tuple[PersonCalibration | None, str | None]:
+    """The person-calibration rows for ``config.calibration`` (None and why not)."""
+    if not config.calibration:
+        return None, None
+    n_subjects = np.unique(dataset.subjects).size
+    if n_subjects < 3:
+        return None, f"{n_subjects} subjects, at least 3 needed"
+    from motion_envs.models.person_calibration import person_calibration_rows
+
+    return person_calibration_rows(dataset.ragged, dataset.subjects, config.calibration), None
 
 
 def _nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
@@ -316,10 +358,48 @@ def report(results: OrientationResults) -> str:
         parts.append(format_reading(results.learned, results.comparisons))
     elif results.learned_note is not None:
         parts.append(f"\nlearned rows skipped: {results.learned_note}")
+    parts.append(_floor_and_verdicts(results))
     if results.nominal is not None:
         parts.append(_nominal_text(results.config, results.nominal))
     parts.append(f"\ncomputed in {results.seconds:.2f} s")
     return "\n".join(parts)
+
+
+def _floor_and_verdicts(results: OrientationResults) -> str:
+    """The noise-floor block, the calibration note and every ratio's verdict line."""
+    from baselines.verdicts import format_floor, format_verdicts, noise_floor
+
+    text = format_floor(noise_floor(results.table.criteria))
+    cal = results.calibration
+    if cal is not None:
+        text += (
+            f"\nperson calibration: K of the held-out person's other reaches, {cal.n_draws} "
+            f"draws (seed {cal.seed}) averaged per trajectory; k0 chosen on the training "
+            "people (docs/protocol.md)"
+        )
+    elif results.calibration_note is not None:
+        text += f"\nperson-calibration rows skipped: {results.calibration_note}"
+    return text + format_verdicts(results.verdicts, "verdicts, leave one person out")
+
+
+def _new_entries(results: OrientationResults) -> dict[str, Any]:
+    """The keys of ``results.json`` added with the intervals: ``noise_floor``,
+    ``calibration``, ``intervals``, ``verdicts``."""
+    from baselines.verdicts import noise_floor, verdicts_document
+
+    out: dict[str, Any] = {"noise_floor": noise_floor(results.table.criteria)}
+    cal = results.calibration
+    if cal is not None:
+        out["calibration"] = {
+            "k": list(results.config.calibration),
+            "n_draws": cal.n_draws,
+            "seed": cal.seed,
+            "chosen_k0": cal.chosen_k0,
+            "trajectories_with_fewer_than_k_others": {str(k): n for k, n in cal.short.items()},
+        }
+    elif results.calibration_note is not None:
+        out["calibration"] = {"skipped": results.calibration_note}
+    return {**out, **verdicts_document(results.verdicts)}
 
 
 def document(results: OrientationResults) -> dict[str, Any]:
@@ -343,6 +423,7 @@ def document(results: OrientationResults) -> dict[str, Any]:
             "seconds": results.learned.seconds,
             "skipped": results.learned.skipped,
         }
+    doc.update(_new_entries(results))
     return doc
 
 
@@ -385,6 +466,7 @@ def main(args: argparse.Namespace) -> int:
         plot_task=args.plot_task,
         learned=args.learned,
         up=args.up,
+        calibration=args.calibration,
     )
     results = run(config)
     print(report(results))
@@ -508,5 +590,14 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help="the data's vertical axis for the path frame (default: the dataset's; "
         "+z for a CSV and the cohort, +y for vr-kitchen); write --up=-1,0,0 when the first "
         "value is negative",
+    )
+    p.add_argument(
+        "--calibration",
+        type=calibration_option,
+        default=(),
+        metavar="K,K,...",
+        help="person-calibration rows for each K (a held-out person's reach predicted from K "
+        "of their other reaches; docs/protocol.md), e.g. 1,3,5,10; default: none ('motion-bench "
+        "all' uses 1,3,5,10)",
     )
     p.set_defaults(func=main)
