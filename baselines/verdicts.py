@@ -31,12 +31,16 @@ from motion_envs.models.person_calibration import PersonCalibration
 __all__ = [
     "FLOOR_ROW",
     "GAP_REFERENCE",
+    "agent_comparisons",
     "agent_verdicts",
     "calibration_label",
     "calibration_option",
     "format_agent_verdicts",
     "format_floor",
+    "format_verdict_entries",
     "format_verdicts",
+    "juggling_verdicts",
+    "kept_initial_policy",
     "noise_floor",
     "orientation_verdicts",
     "position_verdicts",
@@ -159,6 +163,19 @@ def format_verdicts(comparisons: Sequence[Comparison], title: str) -> str:
     return "\n".join([head, *(c.line(width) for c in comparisons)])
 
 
+def format_verdict_entries(entries: Sequence[Mapping[str, Any]], title: str) -> str:
+    """:func:`format_verdicts` of the ``verdicts`` entries of a ``results.json``."""
+    return format_verdicts([_entry_comparison(v) for v in entries], title)
+
+
+def _entry_comparison(v: Mapping[str, Any]) -> Comparison:
+    lo, hi = v["ci95"]
+    return Comparison(
+        v["a"], v["b"], v["ratio"], (lo, hi), v["wins"], v["n_groups"], v["group"],
+        v["criterion"], v["unit"],
+    )  # fmt: skip
+
+
 def verdicts_document(comparisons: Sequence[Comparison]) -> dict[str, Any]:
     """``{"intervals": {...}, "verdicts": [...]}`` for ``results.json``."""
     return {
@@ -198,7 +215,7 @@ def position_verdicts(doc: Mapping[str, Any]) -> list[Comparison]:
 
 
 # -- agent -------------------------------------------------------------------------------
-def agent_verdicts(
+def agent_comparisons(
     agent: NDArray[np.float64],
     nominal: NDArray[np.float64],
     groups: NDArray[Any],
@@ -230,19 +247,92 @@ def agent_verdicts(
     }
 
 
-def format_agent_verdicts(entries: Mapping[str, Any], kept_initial: bool) -> str:
-    """The printed lines of :func:`agent_verdicts` (and the initial-policy warning)."""
-    lo, hi = entries["criterion_ci"]
-    lines = [f"agent criterion 95% CI {lo:.6g}-{hi:.6g} (lower is better)"]
-    for v in entries["verdicts"]:
-        c = Comparison(
-            v["a"], v["b"], v["ratio"], (v["ci95"][0], v["ci95"][1]), v["wins"], v["n_groups"],
-            v["group"], v["criterion"], v["unit"],
-        )  # fmt: skip
-        lines.append(c.line().strip())
-    if kept_initial:
+def format_agent_verdicts(entries: Mapping[str, Any]) -> str:
+    """The printed lines of :func:`agent_verdicts` or :func:`juggling_verdicts` (and the
+    initial-policy warning)."""
+    lines = []
+    if "criterion_ci" in entries:
+        lo, hi = entries["criterion_ci"]
+        lines.append(f"agent criterion 95% CI {lo:.6g}-{hi:.6g} (lower is better)")
+    lines += [_entry_comparison(v).line().strip() for v in entries["verdicts"]]
+    if entries.get("kept_initial_policy"):
         lines.append(
             "the kept checkpoint is the INITIAL policy (step 0): validation never improved on "
             "it, so this agent is its untrained starting point"
         )
     return "\n".join(lines)
+
+
+def kept_initial_policy(manifest: Mapping[str, Any], which: str) -> bool:
+    """Whether the evaluated checkpoint is the initial policy: ``--checkpoint best`` and
+    validation never improved on the evaluation at step 0 (``best_timesteps == 0``)."""
+    return which == "best" and manifest.get("best_timesteps") == 0
+
+
+def agent_verdicts(
+    env_id: str, agent: Any, nominal: Any, learned: Any | None = None
+) -> dict[str, Any]:
+    """The new entries of a reaching agent's ``results.json``: :func:`agent_comparisons`
+    of the :class:`~baselines.agents.evaluate.EpisodeErrors` of the agent, the zero action
+    and the learned regressor (people resampled, or shapes without people)."""
+    people = "Orientation" in env_id
+    return agent_comparisons(
+        agent.max_errors,
+        nominal.max_errors,
+        agent.groups,
+        "people" if people else "shapes",
+        "rad" if people else "position units",
+        None if learned is None else learned.max_errors,
+    )
+
+
+def juggling_verdicts(agent: Any, nominal: Any) -> dict[str, Any]:
+    """Juggling-v0 (SIMULATED demonstrations): the drop rate per toss and the deviation of
+    the agent over the zero action's, episodes (seeds) resampled; ``intervals``,
+    ``verdicts``, ``ratio_ci`` (drop rate) and ``deviation_ratio_ci``."""
+    from baselines.stats import Comparison, group_bootstrap
+
+    n = int(agent.seeds.size)
+
+    def segments(eps: Any, rows: NDArray[np.int64]) -> NDArray[np.float64]:
+        per = [eps.segment_deviation[eps.segment_episode == i] for i in range(n)]
+        return np.concatenate([per[i] for i in rows] or [np.empty(0)])
+
+    def drop_ratio(rows: NDArray[np.int64]) -> float:
+        a = 1.0 - agent.catches[rows].sum() / max(int(agent.tosses[rows].sum()), 1)
+        b = 1.0 - nominal.catches[rows].sum() / max(int(nominal.tosses[rows].sum()), 1)
+        return float(a / b) if b > 0 else float("nan")
+
+    def deviation_ratio(rows: NDArray[np.int64]) -> float:
+        a, b = segments(agent, rows), segments(nominal, rows)
+        return float(np.median(a) / np.median(b)) if a.size and b.size else float("nan")
+
+    episodes = np.arange(n)
+    out: list[Comparison] = []
+    for name, stat, per, what, unit in (
+        ("drop rate", drop_ratio, (agent.dropped, nominal.dropped), "drops per toss", "1"),
+        (
+            "deviation", deviation_ratio,
+            (agent.episode_deviation(), nominal.episode_deviation()),
+            "median deviation from the demonstrations", "m",
+        ),
+    ):  # fmt: skip
+        point, lo, hi = group_bootstrap(stat, episodes)
+        if not np.isfinite(point):
+            continue
+        a, b = per
+        wins = int(np.sum(np.asarray(a) < np.asarray(b)))
+        out.append(
+            Comparison(
+                f"agent {name}", f"nominal {name}", point, (lo, hi), wins, n, "episodes",
+                what, unit,
+            )
+        )  # fmt: skip
+    doc = verdicts_document(out)
+    by = {c.a: c for c in out}
+    doc["ratio_ci"] = list(by["agent drop rate"].ci95) if "agent drop rate" in by else None
+    doc["deviation_ratio_ci"] = (
+        list(by["agent deviation"].ci95) if "agent deviation" in by else None
+    )
+    doc["verdict"] = "; ".join(c.sentence() for c in out) or None
+    return doc

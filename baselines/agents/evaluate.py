@@ -56,11 +56,13 @@ Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 @dataclass(frozen=True)
 class EpisodeErrors:
-    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks."""
+    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks
+    (and ``groups``: the person of each episode, or its task where there are no people)."""
 
     max_errors: NDArray[np.float64]
     trajectory_ids: NDArray[np.str_]
     tasks: NDArray[np.str_]
+    groups: NDArray[np.str_] | None = None
 
     @property
     def criterion(self) -> float:
@@ -115,10 +117,12 @@ def episode_max_errors(
     venv.close()
     if np.isnan(maxima).any():
         raise RuntimeError(f"{env_id}: some episodes ended without info['max_error']")
+    people = getattr(probe.task, "subjects", None)
     return EpisodeErrors(
         maxima,
         np.asarray(probe.task.trajectory_ids[:n]).astype(str),
         np.asarray(probe.task.tasks[:n]).astype(str),
+        np.asarray((probe.task.tasks if people is None else people)[:n]).astype(str),
     )
 
 
@@ -188,6 +192,10 @@ def run(config: AgentConfig) -> dict[str, Any]:
             raise RuntimeError("the learned regressor was scored on other episodes")
         results["learned_ratio"] = agent.criterion / learned.criterion
         results["episodes"]["learned_max_error"] = learned.max_errors.tolist()
+    from baselines.verdicts import agent_verdicts, kept_initial_policy
+
+    results.update(agent_verdicts(loaded.env_id, agent, nominal, learned))
+    results["kept_initial_policy"] = kept_initial_policy(loaded.manifest, config.which)
     return results
 
 
@@ -216,6 +224,12 @@ def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
 
     both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
     phases = [p for p in PHASES if p in both]  # in the task's order
+    from baselines.verdicts import juggling_verdicts, kept_initial_policy
+
+    new = {
+        **juggling_verdicts(agent, nominal),
+        "kept_initial_policy": kept_initial_policy(loaded.manifest, config.which),
+    }
     return {
         **_run_entries(loaded, config),
         "n_episodes": int(agent.seeds.size),
@@ -249,7 +263,7 @@ def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
             "nominal_dropped": nominal.dropped.tolist(),
             "nominal_deviation": nominal.episode_deviation().tolist(),
         },
-    }
+    } | new
 
 
 def _learned(
@@ -386,6 +400,9 @@ def _cli(args: argparse.Namespace) -> int:
             f"{results['n_episodes']} episodes): agent {results['criterion']:.6g}, nominal "
             f"{results['nominal_criterion']:.6g}, ratio {results['ratio']:.4f}"
         )
+    from baselines.verdicts import format_agent_verdicts
+
+    print(format_agent_verdicts(results))
     if results["learned_criterion"] is not None:
         print(
             f"learned regressor {results['learned_criterion']:.6g}, "
