@@ -126,6 +126,7 @@ def test_strata_rules():
 
 
 def test_rliable_iqm_and_probability_of_improvement():
+    pytest.importorskip("rliable")
     rng = np.random.default_rng(0)
     scores = rng.normal(1.0, 0.3, (6, 4))
     got = iqm_intervals({"m": scores}, reps=500)["m"]

@@ -45,12 +45,12 @@ def iqm_intervals(
         m = _matrix(value, name)
         flat = m.ravel()  # row-major: cell (run, task) -> run * n_tasks + task
         tasks = np.tile(np.arange(m.shape[1]), m.shape[0])
+
+        def iqm(rows: NDArray[np.int64], f: NDArray[np.float64] = flat) -> float:
+            return float(metrics.aggregate_iqm(f[rows]))
+
         point, lo, hi = group_bootstrap(
-            lambda rows, f=flat, s=m.shape: float(metrics.aggregate_iqm(f[rows].reshape(s))),
-            np.arange(flat.size),
-            strata=tasks,
-            n_resamples=reps,
-            seed=seed,
+            iqm, np.arange(flat.size), strata=tasks, n_resamples=reps, seed=seed
         )
         out[name] = {"iqm": point, "ci95": [lo, hi]}
     return out
