@@ -42,6 +42,7 @@ from baselines import juggling_bench, options, orientation_bench, position_bench
 from baselines.learned import LEARNED_MODES
 from baselines.report import write_report
 from motion_envs._io import atomic_write_text
+from motion_envs.models.person_calibration import DEFAULT_CALIBRATION
 
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
 
@@ -87,7 +88,7 @@ JOBS: tuple[Job, ...] = (
     Job(
         "orientation-vr-kitchen",
         "Orientation trajectories on vr-kitchen (real data)",
-        orientation_bench.OrientationConfig(data="vr-kitchen"),
+        orientation_bench.OrientationConfig(data="vr-kitchen", calibration=DEFAULT_CALIBRATION),
     ),
     Job(
         "orientation-cohort",

@@ -92,7 +92,10 @@ def run(config: AgentConfig) -> dict[str, Any]:
     from baselines.agents.scorers import scorer_for
 
     scores = scorer_for(loaded.env_id).agent_results(loaded, config.split, config.episodes)
-    return {**_run_entries(loaded, config), **scores}
+    from baselines.verdicts import kept_initial_policy
+
+    initial = kept_initial_policy(loaded.manifest, config.which)
+    return {**_run_entries(loaded, config), **scores, "kept_initial_policy": initial}
 
 
 def _run_entries(loaded: Any, config: AgentConfig) -> dict[str, Any]:
@@ -218,6 +221,9 @@ def _cli(args: argparse.Namespace) -> int:
             f"{results['n_episodes']} episodes): agent {results['criterion']:.6g}, nominal "
             f"{results['nominal_criterion']:.6g}, ratio {results['ratio']:.4f}"
         )
+    from baselines.verdicts import format_agent_verdicts
+
+    print(format_agent_verdicts(results))
     if results["learned_criterion"] is not None:
         print(
             f"learned regressor {results['learned_criterion']:.6g}, "

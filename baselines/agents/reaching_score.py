@@ -19,11 +19,13 @@ Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 @dataclass(frozen=True)
 class EpisodeErrors:
-    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks."""
+    """Per-episode ``max_error`` of a policy with the episodes' trajectory ids and tasks
+    (and ``groups``: the person of each episode, or its task where there are no people)."""
 
     max_errors: NDArray[np.float64]
     trajectory_ids: NDArray[np.str_]
     tasks: NDArray[np.str_]
+    groups: NDArray[np.str_] | None = None
 
     @property
     def criterion(self) -> float:
@@ -78,8 +80,10 @@ def episode_max_errors(
     venv.close()
     if np.isnan(maxima).any():
         raise RuntimeError(f"{env_id}: some episodes ended without info['max_error']")
+    people = getattr(probe.task, "subjects", None)
     return EpisodeErrors(
         maxima,
         np.asarray(probe.task.trajectory_ids[:n]).astype(str),
         np.asarray(probe.task.tasks[:n]).astype(str),
+        np.asarray((probe.task.tasks if people is None else people)[:n]).astype(str),
     )

@@ -144,6 +144,9 @@ def reaching_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
             raise RuntimeError("the learned regressor was scored on other episodes")
         results["learned_ratio"] = agent.criterion / learned.criterion
         results["episodes"]["learned_max_error"] = learned.max_errors.tolist()
+    from baselines.verdicts import agent_verdicts
+
+    results.update(agent_verdicts(loaded.env_id, agent, nominal, learned))
     return results
 
 
@@ -182,7 +185,9 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
 
     both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
     phases = [p for p in PHASES if p in both]  # in the task's order
-    return {
+    from baselines.verdicts import juggling_verdicts
+
+    results = {
         "n_episodes": int(agent.seeds.size),
         "criterion": agent.criterion,
         "nominal_criterion": nominal.criterion,
@@ -215,6 +220,7 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
             "nominal_deviation": nominal.episode_deviation().tolist(),
         },
     }
+    return results | juggling_verdicts(agent, nominal)
 
 
 for _family in ("MotionEnvs/OrientationReach", "MotionEnvs/PositionReach"):

@@ -13,6 +13,7 @@ from baselines.orientation_bench.config import SPLITS, OrientationConfig
 from baselines.orientation_bench.media import write
 from baselines.orientation_bench.runner import run
 from baselines.orientation_bench.text import report
+from baselines.verdicts import calibration_option
 from motion_envs.datasets import ORIENTATION_DATASETS
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
@@ -31,6 +32,7 @@ def main(args: argparse.Namespace) -> int:
         plot_task=args.plot_task,
         learned=args.learned,
         up=args.up,
+        calibration=args.calibration,
     )
     results = run(config)
     print(report(results))
@@ -154,5 +156,14 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help="the data's vertical axis for the path frame (default: the dataset's; "
         "+z for a CSV and the cohort, +y for vr-kitchen); write --up=-1,0,0 when the first "
         "value is negative",
+    )
+    p.add_argument(
+        "--calibration",
+        type=calibration_option,
+        default=(),
+        metavar="K,K,...",
+        help="person-calibration rows for each K (a held-out person's reach predicted from K "
+        "of their other reaches; docs/protocol.md), e.g. 1,3,5,10; default: none ('motion-bench "
+        "all' uses 1,3,5,10)",
     )
     p.set_defaults(func=main)

@@ -7,9 +7,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from baselines.learned.rows import LearnedRows
+from baselines.stats import Comparison
 from motion_envs.datasets import OrientationDataset
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.criteria import Table1Result
+from motion_envs.models.person_calibration import PersonCalibration
 
 SPLITS: tuple[str, ...] = ("all", "train", "test")
 
@@ -36,6 +38,9 @@ class OrientationConfig:
     up:
         The data's vertical axis for the path frame (None: the dataset's own, ``+y`` for
         vr-kitchen, ``+z`` for a CSV and the cohort).
+    calibration:
+        The K of the person-calibration rows
+        (:mod:`motion_envs.models.person_calibration`); empty: none.
     """
 
     data: str = "vr-kitchen"
@@ -48,6 +53,7 @@ class OrientationConfig:
     plot_task: str | None = None
     learned: str = "full"
     up: tuple[float, float, float] | None = None
+    calibration: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -57,7 +63,9 @@ class OrientationResults:
 
     ``learned`` is None when the rows were not computed, ``learned_note`` then says why
     (None for ``--learned off``); ``comparisons`` are
-    :func:`baselines.learned.rows.compare`'s readings.
+    :func:`baselines.learned.rows.compare`'s readings; ``calibration`` the person-
+    calibration rows (None when not asked for, ``calibration_note`` then says why when
+    asked); ``verdicts`` every printed ratio with its interval (:mod:`baselines.verdicts`).
     """
 
     config: OrientationConfig
@@ -68,3 +76,6 @@ class OrientationResults:
     learned: LearnedRows | None = None
     comparisons: list[dict[str, Any]] = field(default_factory=list)
     learned_note: str | None = None
+    calibration: PersonCalibration | None = None
+    calibration_note: str | None = None
+    verdicts: list[Comparison] = field(default_factory=list)

@@ -19,6 +19,7 @@ from motion_envs.datasets.orientation import check_up
 from motion_envs.datasets.splits import split_by_subject
 from motion_envs.models.criteria import table1
 from motion_envs.models.orientation_nominal import orientation_criterion
+from motion_envs.models.person_calibration import PersonCalibration
 
 
 def _split(
@@ -82,6 +83,8 @@ def run(config: OrientationConfig) -> OrientationResults:
         raise options.ConfigError(
             "learned", f"expected one of {list(LEARNED_MODES)}; got {config.learned!r}"
         )
+    if any(k < 1 for k in config.calibration):
+        raise options.ConfigError("calibration", f"K must be >= 1; got {list(config.calibration)}")
     if config.up is not None:
         try:
             check_up(config.up)
@@ -112,6 +115,30 @@ def run(config: OrientationConfig) -> OrientationResults:
 
         table.criteria.update(learned.criteria)
         comparisons = compare(learned, dataset.subjects)
+    calibration, calibration_note = _calibration_rows(config, dataset)
+    if calibration is not None:
+        table.criteria.update(calibration.criteria)
+    from baselines.verdicts import orientation_verdicts
+
+    subjects = np.asarray(dataset.subjects).astype(str)
+    verdicts = orientation_verdicts(comparisons, calibration, config.calibration, subjects)
     elapsed = time.perf_counter() - t0
     nominal = _nominal_criterion(config, full) if config.nominal is not None else None
-    return OrientationResults(config, dataset, table, nominal, elapsed, learned, comparisons, note)
+    return OrientationResults(
+        config, dataset, table, nominal, elapsed, learned, comparisons, note,
+        calibration, calibration_note, verdicts,
+    )  # fmt: skip
+
+
+def _calibration_rows(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> tuple[PersonCalibration | None, str | None]:
+    """The person-calibration rows for ``config.calibration`` (None and why not)."""
+    if not config.calibration:
+        return None, None
+    n_subjects = np.unique(dataset.subjects).size
+    if n_subjects < 3:
+        return None, f"{n_subjects} subjects, at least 3 needed"
+    from motion_envs.models.person_calibration import person_calibration_rows
+
+    return person_calibration_rows(dataset.ragged, dataset.subjects, config.calibration), None

@@ -12,6 +12,7 @@ import numpy as np
 
 from baselines.learned.rows import ROW_LABELS
 from baselines.orientation_bench.config import OrientationConfig, OrientationResults
+from baselines.verdicts import FLOOR_ROW, calibration_label
 from motion_envs.datasets import OrientationDataset
 from motion_envs.models.criteria import Table1Result
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
@@ -30,6 +31,8 @@ def _label(name: str) -> str:
         return _ROW_LABELS[name]
     if name in ROW_LABELS:
         return ROW_LABELS[name]
+    if (label := calibration_label(name)) is not None:
+        return label
     base, _, rest = name.partition("_d")
     degree, _, split = rest.partition("_")
     pretty = base.replace("_", " ").capitalize()
@@ -53,6 +56,8 @@ def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
         paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
         ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
         note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
+        if name == FLOOR_ROW:
+            note = f"noise floor{'; ' + note if note else ''}"
         lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
     lines.append("")
     lines.append(
@@ -114,10 +119,48 @@ def report(results: OrientationResults) -> str:
         parts.append(format_reading(results.learned, results.comparisons))
     elif results.learned_note is not None:
         parts.append(f"\nlearned rows skipped: {results.learned_note}")
+    parts.append(_floor_and_verdicts(results))
     if results.nominal is not None:
         parts.append(nominal_text(results.config, results.nominal))
     parts.append(f"\ncomputed in {results.seconds:.2f} s")
     return "\n".join(parts)
+
+
+def _floor_and_verdicts(results: OrientationResults) -> str:
+    """The noise-floor block, the calibration note and every ratio's verdict line."""
+    from baselines.verdicts import format_floor, format_verdicts, noise_floor
+
+    text = format_floor(noise_floor(results.table.criteria))
+    cal = results.calibration
+    if cal is not None:
+        text += (
+            f"\nperson calibration: K of the held-out person's other reaches, {cal.n_draws} "
+            f"draws (seed {cal.seed}) averaged per trajectory; k0 chosen on the training "
+            "people (docs/protocol.md)"
+        )
+    elif results.calibration_note is not None:
+        text += f"\nperson-calibration rows skipped: {results.calibration_note}"
+    return text + format_verdicts(results.verdicts, "verdicts, leave one person out")
+
+
+def _new_entries(results: OrientationResults) -> dict[str, Any]:
+    """The keys of ``results.json`` added with the intervals: ``noise_floor``,
+    ``calibration``, ``intervals``, ``verdicts``."""
+    from baselines.verdicts import noise_floor, verdicts_document
+
+    out: dict[str, Any] = {"noise_floor": noise_floor(results.table.criteria)}
+    cal = results.calibration
+    if cal is not None:
+        out["calibration"] = {
+            "k": list(results.config.calibration),
+            "n_draws": cal.n_draws,
+            "seed": cal.seed,
+            "chosen_k0": cal.chosen_k0,
+            "trajectories_with_fewer_than_k_others": {str(k): n for k, n in cal.short.items()},
+        }
+    elif results.calibration_note is not None:
+        out["calibration"] = {"skipped": results.calibration_note}
+    return {**out, **verdicts_document(results.verdicts)}
 
 
 def document(results: OrientationResults) -> dict[str, Any]:
@@ -141,4 +184,5 @@ def document(results: OrientationResults) -> dict[str, Any]:
             "seconds": results.learned.seconds,
             "skipped": results.learned.skipped,
         }
+    doc.update(_new_entries(results))
     return doc

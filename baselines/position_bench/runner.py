@@ -40,4 +40,7 @@ def run(config: PositionConfig) -> dict[str, Any]:
         learned=config.learned,
     )
     doc["learned"]["comparisons"] = position_comparisons(doc)
+    from baselines.verdicts import position_verdicts, verdicts_document
+
+    doc.update(verdicts_document(position_verdicts(doc)))
     return doc

@@ -89,6 +89,10 @@ def report(doc: dict[str, Any]) -> str:
     parts = [format_table(doc)]
     if doc["learned"]["comparisons"] or doc["learned"]["skipped"]:
         parts.append(format_position_reading(doc, doc["learned"]["comparisons"]))
+    if doc.get("verdicts"):
+        from baselines.verdicts import format_verdict_entries
+
+        parts.append(format_verdict_entries(doc["verdicts"], "verdicts, shapes resampled"))
     parts += ["", format_validation(doc)]
     if doc["timing"]:
         parts += [

@@ -44,6 +44,7 @@ __all__ = [
     "interpolate_on_grid",
     "normalised_grid",
     "resample_orientations",
+    "residuals_against_profiles",
     "slerp_residuals",
     "speed_fractions",
 ]
@@ -115,4 +116,24 @@ def slerp_residuals(
     out[:, 0] = 0.0
     if average_alpha is None or np.isclose(np.asarray(average_alpha)[-1], 1.0):
         out[:, -1] = 0.0
+    return out
+
+
+def residuals_against_profiles(
+    q_grid: ArrayLike, starts: ArrayLike, ends: ArrayLike, alpha: ArrayLike
+) -> FloatArray:
+    """Residuals ``logmap(conj(slerp(q_s, q_e, alpha_l(tau))) q_l(tau))`` on the grid.
+
+    ``q_grid`` ``(L, n, 4)`` are the orientations resampled to the grid
+    (:func:`resample_orientations`), ``starts``/``ends`` ``(L, 4)``, ``alpha`` a speed
+    profile ``(n,)`` for all or ``(L, n)`` one per trajectory (a *predicted* timing);
+    returns ``(L, n, 3)`` with both end rows exactly 0.
+    """
+    q = np.asarray(q_grid, dtype=np.float64)
+    a = np.broadcast_to(np.asarray(alpha, dtype=np.float64), q.shape[:2])
+    s = np.asarray(starts, dtype=np.float64)[:, None, :]
+    e = quat.slerp(s, np.asarray(ends, dtype=np.float64)[:, None, :], a, validate=False)
+    out = quat.logmap(quat.multiply(quat.conjugate(e), q), validate=False)
+    out[:, 0] = 0.0
+    out[:, -1] = 0.0
     return out
