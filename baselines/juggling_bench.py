@@ -1,10 +1,11 @@
 """``motion-bench juggling``: the analytic juggler of Lippi et al. (section III-A).
 
-Demonstrations are SIMULATED by default (:mod:`motion_envs.datasets.juggling_demos`: a
+Demonstrations are SIMULATED by default (:mod:`motion_envs.datasets.juggling`: a
 seeded model of a person; the paper's recordings are not public) or read from the users'
-CSV (``--data PATH.csv``, :mod:`motion_envs.datasets.juggling_csv`). They are split by
-demonstration (cycle): the juggler is fitted on the training cycles only (``N`` per
-phase by cross-validation inside the training cycles) and scored on the held-out ones.
+CSV (``--data PATH.csv``, :func:`motion_envs.datasets.juggling.read_juggling_csv`). They
+are split by demonstration (cycle): the juggler is fitted on the training cycles only
+(``N`` per phase by cross-validation inside the training cycles) and scored on the
+held-out ones, as :func:`motion_envs.models.juggling.fit_juggler` does for every user.
 
 Reported:
 
@@ -46,22 +47,30 @@ from numpy.typing import NDArray
 
 from baselines import options
 from motion_envs._io import atomic_write, atomic_write_text, save_figure
-from motion_envs.datasets.juggling_demos import (
+from motion_envs.datasets.juggling import (
+    MIN_SPLIT_CYCLES,
+    PHASES,
     SIMULATED_LABEL,
     JugglingDemos,
+    JugglingNoise,
+    JugglingTask,
     departure_from_line,
-    generate_demonstrations,
 )
-from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingTask
-from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
-from motion_envs.models.juggling_run import (
+from motion_envs.geometry.jerk import minimum_jerk
+from motion_envs.models.juggling import (
+    DEMO_CYCLES,
+    FIT_SEED,
+    FIT_TEST_FRACTION,
+    TRACKING_NOISE,
+    AnalyticJuggler,
+    BallisticWorld,
     cycle_rngs,
     fit_juggler,
+    load_demonstrations,
     run_cycle,
     run_cycles,
     run_cycles_fast,
 )
-from motion_envs.models.juggling_world import BallisticWorld
 
 __all__ = ["JugglingConfig", "main", "register", "report", "run", "write"]
 
@@ -75,8 +84,8 @@ TARGET_VARIABILITY_RATIO = 1.5
 VIDEO_CAPTION = "analytic juggler in the MuJoCo scene (SIMULATED)"
 
 
-#: Complete cycles a run needs (:func:`~motion_envs.datasets.juggling_demos.split_cycles`).
-MIN_CYCLES = 8
+#: Complete cycles a run needs (:func:`~motion_envs.datasets.juggling.split_cycles`).
+MIN_CYCLES = MIN_SPLIT_CYCLES
 
 
 @dataclass(frozen=True)
@@ -91,12 +100,12 @@ class JugglingConfig:
 
     cycles: int = 1000
     noise: tuple[float, ...] = (0.05, 0.10)
-    tracking: float = 0.0005
-    seed: int = 0
+    tracking: float = TRACKING_NOISE
+    seed: int = FIT_SEED
     data: str | None = None
-    demo_cycles: int = 50
+    demo_cycles: int = DEMO_CYCLES
     demo_persons: int = 1
-    test_fraction: float = 0.25
+    test_fraction: float = FIT_TEST_FRACTION
     n_sines: int | str = "auto"
     n_points: int = 150
     dmp_weights: int = 10
@@ -111,16 +120,10 @@ class JugglingConfig:
 
 def load_demos(config: JugglingConfig) -> JugglingDemos:
     """The SIMULATED demonstrations, or the users' CSV when ``config.data`` is a path."""
-    if config.data is None or config.data == "simulated":
-        return generate_demonstrations(
-            n_cycles=config.demo_cycles,
-            n_persons=config.demo_persons,
-            seed=config.seed,
-            task=config.task,
-        )
-    from motion_envs.models.juggling_segmentation import load_juggling_csv
-
-    return load_juggling_csv(config.data, task=config.task)
+    data = None if config.data == "simulated" else config.data
+    return load_demonstrations(
+        data, config.task, config.seed, config.demo_cycles, config.demo_persons
+    )
 
 
 def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -230,10 +233,10 @@ def catch_rates(
     for level, tracking, corr in tqdm(
         runs, desc="catch-rate runs", file=sys.stderr, disable=not config.progress
     ):
-        juggler.correction = corr
+        variant = juggler.variant(correction=corr)  # the fitted model is shared, not changed
         noise = JugglingNoise(level, tracking)
         t0 = time.perf_counter()
-        res = run_cycles_fast(juggler, config.cycles, noise, config.seed)
+        res = run_cycles_fast(variant, config.cycles, noise, config.seed)
         row = {
             "noise": level,
             "tracking": tracking,
@@ -249,7 +252,7 @@ def catch_rates(
                 config.cycles, config.mujoco_cycles if level == 0 else config.mujoco_noise_cycles
             )
             t0 = time.perf_counter()
-            mj = run_cycles(juggler, m, noise, config.seed, world=_scene(juggler.task))
+            mj = run_cycles(variant, m, noise, config.seed, world=_scene(juggler.task))
             row["mujoco"] = {
                 "cycles": m,
                 "catch_rate": float(np.mean([r.caught for r in mj])) if m else None,
@@ -261,12 +264,11 @@ def catch_rates(
                 "seconds": time.perf_counter() - t0,
             }
         rows.append(row)
-    juggler.correction = True
     return rows[0], rows[1:]
 
 
 def _scene(task: JugglingTask) -> Any:
-    from motion_envs.envs.juggling_scene import JugglingScene
+    from motion_envs.envs.juggling import JugglingScene
 
     return JugglingScene(task)
 

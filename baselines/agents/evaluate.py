@@ -212,7 +212,7 @@ def _run_juggling(loaded: Any, config: AgentConfig) -> dict[str, Any]:
     kwargs = loaded.env_kwargs
     agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, config.split, config.episodes)
     nominal = juggling_episodes(None, loaded.env_id, kwargs, config.split, config.episodes)
-    from motion_envs.datasets.juggling_task import PHASES
+    from motion_envs.datasets.juggling import PHASES
 
     both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
     phases = [p for p in PHASES if p in both]  # in the task's order
