@@ -155,11 +155,12 @@ def test_correction_plan_meets_the_observed_intercept(juggler):
             continue
         t_fix, _ = juggler.corrections[0]
         k = round(t_fix / juggler.task.dt)
-        s = juggler.t_start + juggler.duration - res.times[k]
+        plan = juggler.episode  # the cycle's controller: its current (corrected) plan
+        s = plan.t_start + plan.duration - res.times[k]
         target = ballistic_position(res.ball[k], _vel(res, k), s, juggler.task.gravity)
-        np.testing.assert_allclose(juggler.end, target, atol=1e-9)
-        p = juggler.coefficients
-        np.testing.assert_allclose(p[0] + p[1], juggler.end, atol=1e-9)
+        np.testing.assert_allclose(plan.end, target, atol=1e-9)
+        p = plan.coefficients
+        np.testing.assert_allclose(p[0] + p[1], plan.end, atol=1e-9)
         return
     pytest.fail("no correction happened in 10 noisy cycles")
 

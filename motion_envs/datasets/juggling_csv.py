@@ -1,27 +1,9 @@
-"""Deprecated: ``motion_envs.datasets.juggling_csv`` moved to
-:mod:`motion_envs.datasets.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.datasets.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.datasets.juggling import (
-    JUGGLING_COLUMNS,
-    MIN_SAMPLES,
-    read_juggling_csv,
-    write_juggling_csv,
-)
-
-__all__ = [
-    "JUGGLING_COLUMNS",
-    "MIN_SAMPLES",
-    "read_juggling_csv",
-    "write_juggling_csv",
-]
+from motion_envs.datasets.juggling import *  # noqa: F403
 
 warnings.warn(
-    "motion_envs.datasets.juggling_csv is deprecated; import from motion_envs.datasets.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.datasets.juggling", DeprecationWarning, 2
 )

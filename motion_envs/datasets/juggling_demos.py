@@ -1,43 +1,10 @@
-"""Deprecated: ``motion_envs.datasets.juggling_demos`` moved to
-:mod:`motion_envs.datasets.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.datasets.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.datasets.juggling import (
-    SIMULATED_LABEL,
-    JugglingDemos,
-    JugglingRecording,
-    PersonStyle,
-    PhaseSegment,
-    departure_from_line,
-    draw_person,
-    generate_demonstrations,
-    resample_path,
-    split_cycles,
-)
-from motion_envs.geometry.jerk import (
-    quintic,
-)
-
-__all__ = [
-    "SIMULATED_LABEL",
-    "JugglingDemos",
-    "JugglingRecording",
-    "PersonStyle",
-    "PhaseSegment",
-    "departure_from_line",
-    "draw_person",
-    "generate_demonstrations",
-    "quintic",
-    "resample_path",
-    "split_cycles",
-]
+from motion_envs.datasets.juggling import *  # noqa: F403
+from motion_envs.geometry.jerk import quintic  # noqa: F401
 
 warnings.warn(
-    "motion_envs.datasets.juggling_demos is deprecated; import from motion_envs.datasets.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.datasets.juggling", DeprecationWarning, 2
 )

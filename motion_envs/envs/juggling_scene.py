@@ -1,27 +1,9 @@
-"""Deprecated: ``motion_envs.envs.juggling_scene`` moved to
-:mod:`motion_envs.envs.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.envs.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.envs.juggling import (
-    SCENE_XML,
-    JugglingScene,
-    check_task,
-    load_juggling_model,
-)
-
-__all__ = [
-    "SCENE_XML",
-    "JugglingScene",
-    "check_task",
-    "load_juggling_model",
-]
+from motion_envs.envs.juggling import *  # noqa: F403
 
 warnings.warn(
-    "motion_envs.envs.juggling_scene is deprecated; import from motion_envs.envs.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.envs.juggling", DeprecationWarning, 2
 )

@@ -1,31 +1,10 @@
-"""Deprecated: ``motion_envs.models.juggling_juggler`` moved to
-:mod:`motion_envs.models.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.models.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.geometry.jerk import (
-    minimum_jerk,
-)
-from motion_envs.models.juggling import (
-    AnalyticJuggler,
-    PhaseFit,
-    phase_conditions,
-    plan_catch,
-)
-
-__all__ = [
-    "AnalyticJuggler",
-    "PhaseFit",
-    "minimum_jerk",
-    "phase_conditions",
-    "plan_catch",
-]
+from motion_envs.geometry.jerk import minimum_jerk  # noqa: F401
+from motion_envs.models.juggling import *  # noqa: F403
 
 warnings.warn(
-    "motion_envs.models.juggling_juggler is deprecated; import from motion_envs.models.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.models.juggling", DeprecationWarning, 2
 )

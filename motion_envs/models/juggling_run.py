@@ -1,31 +1,9 @@
-"""Deprecated: ``motion_envs.models.juggling_run`` moved to
-:mod:`motion_envs.models.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.models.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.models.juggling import (
-    CycleResult,
-    cycle_rngs,
-    fit_juggler,
-    run_cycle,
-    run_cycles,
-    run_cycles_fast,
-)
-
-__all__ = [
-    "CycleResult",
-    "cycle_rngs",
-    "fit_juggler",
-    "run_cycle",
-    "run_cycles",
-    "run_cycles_fast",
-]
+from motion_envs.models.juggling import *  # noqa: F403
 
 warnings.warn(
-    "motion_envs.models.juggling_run is deprecated; import from motion_envs.models.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.models.juggling", DeprecationWarning, 2
 )

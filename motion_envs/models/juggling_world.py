@@ -1,25 +1,9 @@
-"""Deprecated: ``motion_envs.models.juggling_world`` moved to
-:mod:`motion_envs.models.juggling`; import from there.
-
-This module only re-exports the names it had, and warns (``DeprecationWarning``).
-"""
+"""Deprecated alias of :mod:`motion_envs.models.juggling` (warns); import from there."""
 
 import warnings
 
-from motion_envs.models.juggling import (
-    TRACKING_ROWS,
-    BallisticWorld,
-    draw_episode_noise,
-)
-
-__all__ = [
-    "TRACKING_ROWS",
-    "BallisticWorld",
-    "draw_episode_noise",
-]
+from motion_envs.models.juggling import *  # noqa: F403
 
 warnings.warn(
-    "motion_envs.models.juggling_world is deprecated; import from motion_envs.models.juggling",
-    DeprecationWarning,
-    stacklevel=2,
+    f"{__name__} is deprecated; import from motion_envs.models.juggling", DeprecationWarning, 2
 )

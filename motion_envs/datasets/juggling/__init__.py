@@ -5,15 +5,17 @@ The public names of small private modules, one concern each:
 * ``_task``: every constant (:class:`JugglingTask`), the world's state
   (:class:`JugglingState`), a run's perturbations (:class:`JugglingNoise`), the phases
   (:data:`PHASES`) and the ballistic closed form;
-* ``_rules``: the world's rules (release, catch, drop, flight), written once for one ball
-  and for a batch, used by the pure-model world, the MuJoCo scene, the vectorised runner,
-  the demonstration generator and the segmentation;
+* :mod:`~motion_envs.datasets.juggling.rules` (public, used as a namespace:
+  ``rules.catch_fires(...)``): the world's rules (release, catch, drop, flight), written
+  once for one ball and for a batch, used by the pure-model world, the MuJoCo scene, the
+  vectorised runner, the demonstration generator and the segmentation;
 * ``_records``: recordings, phase examples, demonstration sets and their split;
 * ``_paths``: paths on normalised time (resampling, departure from the line);
 * ``_person``: the SIMULATED demonstrations (a seeded model of a person);
 * ``_csv``: the users' juggling CSV, read as raw recordings.
 """
 
+from motion_envs.datasets.juggling import rules
 from motion_envs.datasets.juggling._csv import (
     JUGGLING_COLUMNS,
     MIN_SAMPLES,
@@ -33,16 +35,6 @@ from motion_envs.datasets.juggling._records import (
     JugglingRecording,
     PhaseSegment,
     split_cycles,
-)
-from motion_envs.datasets.juggling._rules import (
-    catch_fires,
-    drop_fires,
-    flight,
-    hand_acceleration,
-    hand_velocity,
-    has_left,
-    release_fires,
-    release_velocity,
 )
 from motion_envs.datasets.juggling._task import (
     PHASES,
@@ -68,19 +60,12 @@ __all__ = [
     "PhaseSegment",
     "ballistic_position",
     "ballistic_velocity",
-    "catch_fires",
     "departure_from_line",
     "draw_person",
-    "drop_fires",
-    "flight",
     "generate_demonstrations",
-    "hand_acceleration",
-    "hand_velocity",
-    "has_left",
     "read_juggling_csv",
-    "release_fires",
-    "release_velocity",
     "resample_path",
+    "rules",
     "split_cycles",
     "write_juggling_csv",
 ]

@@ -36,13 +36,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling import rules
 from motion_envs.datasets.juggling._records import JugglingDemos, JugglingRecording
-from motion_envs.datasets.juggling._rules import (
-    catch_fires,
-    hand_acceleration,
-    hand_velocity,
-    release_fires,
-)
 from motion_envs.datasets.juggling._task import JugglingTask, ballistic_position
 from motion_envs.geometry.jerk import quintic, quintic_evaluate
 
@@ -147,8 +142,8 @@ class _Session:
         y = quintic_evaluate(c_toss, tk - t0) + self._tremor(tk)
         prev = np.asarray(self.hand[-2:]) if k0 >= 2 else np.repeat(y[:1], 2, axis=0)
         full = np.concatenate([prev, y])
-        az = hand_acceleration(full[2:, 1], full[1:-1, 1], full[:-2, 1], dt)
-        fired = np.flatnonzero(release_fires(np.arange(len(k)) > 0, az, task.toss_threshold))
+        az = rules.hand_acceleration(full[2:, 1], full[1:-1, 1], full[:-2, 1], dt)
+        fired = np.flatnonzero(rules.release_fires(np.arange(len(k)) > 0, az, task.toss_threshold))
         if fired.size == 0:
             return False
         j = int(fired[0])
@@ -157,7 +152,7 @@ class _Session:
         self._append(c_toss, t0, k0, k_rel, "toss")
         self.ball.extend(self.hand[k0:k_rel])
         p_rel = y[j]
-        v_ball = hand_velocity(y[j], full[j + 1], dt)  # as the virtual world
+        v_ball = rules.hand_velocity(y[j], full[j + 1], dt)  # as the virtual world
         # 2. the flight, the catch point and the go-down timing
         g = task.gravity
         apex = p_rel[1] + max(v_ball[1], 0.0) ** 2 / (2 * g)
@@ -192,7 +187,9 @@ class _Session:
         ball = ballistic_position(p_rel, v_ball, kk * dt - t_rel, g)
         dist = np.linalg.norm(hand - ball, axis=1)
         left = np.maximum.accumulate(dist > task.catch_radius)
-        touch = np.flatnonzero(catch_fires(dist, left, False, task.catch_radius) & (kk >= k_bottom))
+        touch = np.flatnonzero(
+            rules.catch_fires(dist, left, False, task.catch_radius) & (kk >= k_bottom)
+        )
         if touch.size == 0:  # cannot happen: the hand reaches the ball centre at t_c
             raise RuntimeError("simulated catch missed the ball")
         k_touch = k_rel + int(touch[0])

@@ -4,7 +4,7 @@ One ball, one (right) hand, the vertical plane ``(x, z)`` (``x`` horizontal, ``z
 SI units. Every physical constant lives in :class:`JugglingTask`; the pure-model world
 (:class:`motion_envs.models.juggling.BallisticWorld`) and the MuJoCo scene
 (:class:`motion_envs.envs.juggling.JugglingScene`) share the states defined here, and
-their rules (:mod:`motion_envs.datasets.juggling` ``release_fires``, ``catch_fires``, ...).
+their rules (:mod:`motion_envs.datasets.juggling.rules`).
 
 Gravity. The paper's ball is virtual and its phases (150-200 samples at 200 Hz, i.e.
 0.75-1.0 s each) need a flight of about 1.6-1.9 s through go-down and catch. A one-hand

@@ -39,7 +39,7 @@ Choices, and why:
   hand does.
 
 Step order: exactly ``BallisticWorld``'s, with the same rule functions
-(:mod:`motion_envs.datasets.juggling`: ``hand_velocity``, ``hand_acceleration``,
+(:mod:`motion_envs.datasets.juggling.rules`: ``hand_velocity``, ``hand_acceleration``,
 ``release_fires``, ``release_velocity``, ``catch_fires``, ``has_left``, ``drop_fires``;
 the flight is MuJoCo's) and the same noise draws
 (:func:`~motion_envs.models.juggling.draw_episode_noise`, at reset), so that for the same
@@ -69,20 +69,10 @@ from typing import Any
 
 import mujoco
 import numpy as np
+from numpy.random import Generator
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.datasets.juggling import (
-    JugglingNoise,
-    JugglingState,
-    JugglingTask,
-    catch_fires,
-    drop_fires,
-    hand_acceleration,
-    hand_velocity,
-    has_left,
-    release_fires,
-    release_velocity,
-)
+from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask, rules
 from motion_envs.models.juggling import draw_episode_noise, tracked_hand
 
 __all__ = ["SCENE_XML", "JugglingScene", "check_task", "load_juggling_model"]
@@ -162,7 +152,7 @@ class JugglingScene:
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: np.random.Generator | None = None,
+        rng: Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
         p = _vec2(hand_pos, "hand_pos")
@@ -195,8 +185,8 @@ class JugglingScene:
         prev = self._prev = self._hand
         self._hand = (x, z)
         self._k += 1
-        vx, vz = hand_velocity(x, prev[0], dt), hand_velocity(z, prev[1], dt)
-        az = hand_acceleration(z, prev[1], prev2[1], dt)
+        vx, vz = rules.hand_velocity(x, prev[0], dt), rules.hand_velocity(z, prev[1], dt)
+        az = rules.hand_acceleration(z, prev[1], prev2[1], dt)
         self._mocap[0], self._mocap[2] = x, z
         if not self._held:  # a held ball is a copy of the hand: nothing to integrate
             mujoco.mj_step(self.model, self.data)
@@ -204,24 +194,24 @@ class JugglingScene:
         qpos, qvel = self._qpos, self._qvel
         released = caught = False
         if self._held:
-            if release_fires(release_armed, az, task.toss_threshold):
+            if rules.release_fires(release_armed, az, task.toss_threshold):
                 self._held = self._left = False
                 released = True
                 f = self.release_factor
-                qvel[0], qvel[1] = release_velocity(vx, vz, f[0], f[1])
+                qvel[0], qvel[1] = rules.release_velocity(vx, vz, f[0], f[1])
             else:
                 qvel[0], qvel[1] = vx, vz
             qpos[0], qpos[1] = x, z
         else:
             dist = math.hypot(x - float(qpos[0]), z - float(qpos[1]))
-            caught = bool(catch_fires(dist, self._left, self._dropped, task.catch_radius))
-            self._left = bool(has_left(dist, self._left, caught, task.catch_radius))
+            caught = bool(rules.catch_fires(dist, self._left, self._dropped, task.catch_radius))
+            self._left = bool(rules.has_left(dist, self._left, caught, task.catch_radius))
             if caught:
                 self._held = True
                 qpos[0], qpos[1] = x, z
                 qvel[0], qvel[1] = vx, vz
             self._dropped = self._dropped or bool(
-                drop_fires(float(qpos[1]), self._held, task.floor_z)
+                rules.drop_fires(float(qpos[1]), self._held, task.floor_z)
             )
         self.state = self._make_state(released, caught)
         return self.state
@@ -253,7 +243,7 @@ class JugglingScene:
         px, pz = self._prev
         obs = tracked_hand(np.array(self._hand), self.tracking_noise, self._k)
         ball_pos, ball_vel = self._qpos[:2].copy(), self._qvel[:2].copy()
-        hand_vel = (hand_velocity(hx, px, dt), hand_velocity(hz, pz, dt))
+        hand_vel = (rules.hand_velocity(hx, px, dt), rules.hand_velocity(hz, pz, dt))
         self.values = (*obs.tolist(), *hand_vel, *ball_pos.tolist(), *ball_vel.tolist())
         return JugglingState(
             time=float(self.data.time),

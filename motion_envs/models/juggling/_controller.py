@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_position, flight
+from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_position, rules
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.juggling._model import JugglerModel, plan_catch
 
@@ -83,6 +83,8 @@ class JugglingController:
         self.model = model
         self.options = ControlOptions() if options is None else options
         self.task = model.task
+        #: the ball's believed release ``(time, position, velocity)``
+        self.release_belief: tuple[float, FloatArray, FloatArray] = (0.0, np.zeros(2), np.zeros(2))
 
     # -- planning -------------------------------------------------------------------
     def _draw_end(self, phase: str) -> FloatArray:
@@ -167,11 +169,7 @@ class JugglingController:
         self.plans: list[tuple[str, float, float, FloatArray]] = []
         self.corrections: list[tuple[float, float]] = []
         self._last = [np.asarray(state.hand_pos, dtype=np.float64)] * 2
-        self.release_belief: tuple[float, FloatArray, FloatArray] = (
-            0.0,
-            self._last[0],
-            np.zeros(2),
-        )
+        self.release_belief = (0.0, self._last[0], np.zeros(2))
         self.start_phase("toss", state.time, self._last[0].copy())
 
     @property
@@ -211,7 +209,7 @@ class JugglingController:
             return False
         bx, bz = float(ball_pos[0]), float(ball_pos[1])
         vx, vz = float(ball_vel[0]), float(ball_vel[1])
-        px, pz, _, _ = flight((0.0, bx, bz, vx, vz), s, self.task.gravity)
+        px, pz, _, _ = rules.flight((0.0, bx, bz, vx, vz), s, self.task.gravity)
         if math.hypot(px - self.end[0], pz - self.end[1]) <= self.options.correction_tolerance:
             return False
         predicted = np.array([px, pz])

@@ -35,11 +35,12 @@ class AnalyticJuggler:
     correction, correction_tolerance, release_after, reach_tolerance:
         The controller's (:class:`ControlOptions`).
 
-    Attributes ``model`` (the :class:`JugglerModel`) and ``options`` (the
-    :class:`ControlOptions`); ``phases_`` and ``home_`` are the model's. ``reset``,
-    ``command``, ``nominal_next``, ``phase``, ``phase_time``, ``plans``, ``corrections``
-    (and the current plan's ``t_start``, ``duration``, ``coefficients``, ``end``) are the
-    current episode's controller's.
+    Attributes ``model`` (the :class:`JugglerModel`), ``options`` (the
+    :class:`ControlOptions`) and ``episode`` (the current :class:`JugglingController`,
+    None before the first ``reset``; its current plan: ``episode.t_start``,
+    ``episode.duration``, ``episode.coefficients``, ``episode.end``); ``phases_`` and
+    ``home_`` are the model's; ``reset``, ``command``, ``nominal_next``, ``phase``,
+    ``phase_time``, ``plans`` and ``corrections`` the current episode's.
     """
 
     def __init__(
@@ -156,26 +157,6 @@ class AnalyticJuggler:
     def corrections(self) -> list[tuple[float, float]]:
         """The episode's eq. 10 corrections ``(time, tau_1)``."""
         return self._current().corrections
-
-    @property
-    def t_start(self) -> float:
-        """Start time of the current plan, s."""
-        return self._current().t_start
-
-    @property
-    def duration(self) -> float:
-        """Duration of the current plan, s."""
-        return self._current().duration
-
-    @property
-    def coefficients(self) -> FloatArray:
-        """Sine-series coefficients of the current plan."""
-        return self._current().coefficients
-
-    @property
-    def end(self) -> FloatArray:
-        """End point of the current plan."""
-        return self._current().end
 
     def _current(self) -> JugglingController:
         if self.episode is None:

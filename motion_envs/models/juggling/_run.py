@@ -16,17 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES as PHASES_ORDER
-from motion_envs.datasets.juggling import (
-    JugglingNoise,
-    catch_fires,
-    drop_fires,
-    flight,
-    hand_acceleration,
-    hand_velocity,
-    has_left,
-    release_fires,
-    release_velocity,
-)
+from motion_envs.datasets.juggling import JugglingNoise, rules
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._world import BallisticWorld, JugglingWorld, tracked_hand
 
@@ -158,7 +148,7 @@ def run_cycles_fast(
     The same cycles as ``run_cycles(juggler, n_cycles, noise, seed)`` (same draws, same
     rules, same events; tested), tens of times faster: the world and the per-step part
     of the juggler are vectorised over cycles (the world's rules are the functions of
-    :mod:`motion_envs.datasets.juggling` on arrays); phase starts and eq. 10 corrections,
+    :mod:`motion_envs.datasets.juggling.rules` on arrays); phase starts and eq. 10 corrections,
     which are rare, run one cycle at a time through each cycle's
     :class:`~motion_envs.models.juggling.JugglingController` (its public methods).
     """
@@ -242,7 +232,7 @@ def run_cycles_fast(
             cand = active & ~switch & (phase == 2) & ~held
             if cand.any():
                 s = t_end - time_prev
-                px, pz, _, _ = flight(
+                px, pz, _, _ = rules.flight(
                     (0.0, ball[:, 0], ball[:, 1], ball_v[:, 0], ball_v[:, 1]), s, g
                 )
                 far = np.hypot(px - ends[:, 0], pz - ends[:, 1]) > options.correction_tolerance * (
@@ -260,15 +250,17 @@ def run_cycles_fast(
         # -- the world's step (BallisticWorld.step, the same rules on the batch) --------
         t_now = kw * dt
         prev2, prev, hand = prev, hand, target
-        vel = hand_velocity(hand, prev, dt)
-        az = hand_acceleration(hand[:, 1], prev[:, 1], prev2[:, 1], dt)
-        released_ev = release_fires(held & armed, az, thr)
+        vel = rules.hand_velocity(hand, prev, dt)
+        az = rules.hand_acceleration(hand[:, 1], prev[:, 1], prev2[:, 1], dt)
+        released_ev = rules.release_fires(held & armed, az, thr)
         caught_ev = np.zeros(n, dtype=bool)
         stay = held & ~released_ev
         ball = np.where(stay[:, None], hand, ball)
         ball_v = np.where(stay[:, None], vel, ball_v)
         if released_ev.any():
-            bv = np.column_stack(release_velocity(vel[:, 0], vel[:, 1], factor[:, 0], factor[:, 1]))
+            bv = np.column_stack(
+                rules.release_velocity(vel[:, 0], vel[:, 1], factor[:, 0], factor[:, 1])
+            )
             rel[released_ev] = np.column_stack([np.full(n, t_now), hand, bv])[released_ev]
             ball[released_ev] = hand[released_ev]
             ball_v[released_ev] = bv[released_ev]
@@ -278,19 +270,19 @@ def run_cycles_fast(
             ever_released |= released_ev & active
         fly = ~held & ~released_ev
         if fly.any():
-            bx, bz, bvx, bvz = flight(
+            bx, bz, bvx, bvz = rules.flight(
                 (rel[:, 0], rel[:, 1], rel[:, 2], rel[:, 3], rel[:, 4]), t_now, g
             )
             ball[fly] = np.column_stack([bx, bz])[fly]
             ball_v[fly] = np.column_stack([bvx, bvz])[fly]
             dist = np.hypot(hand[:, 0] - ball[:, 0], hand[:, 1] - ball[:, 1])
-            catch = fly & catch_fires(dist, left, dropped, rc)
-            left |= fly & has_left(dist, left, catch, rc)
+            catch = fly & rules.catch_fires(dist, left, dropped, rc)
+            left |= fly & rules.has_left(dist, left, catch, rc)
             caught_ev = catch
             held |= catch
             ball[catch] = hand[catch]
             ball_v[catch] = vel[catch]
-            dropped |= fly & drop_fires(ball[:, 1], held, task.floor_z)
+            dropped |= fly & rules.drop_fires(ball[:, 1], held, task.floor_z)
         obs = tracked_hand(hand, tracks, kw)
         steps[active] = kw
         fin = active & (caught_ev | dropped)

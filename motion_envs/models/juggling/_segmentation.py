@@ -6,7 +6,7 @@
 end a phase. :func:`segment_demos` labels every unlabelled recording of a
 :class:`~motion_envs.datasets.juggling.JugglingDemos`; :func:`load_juggling_csv`
 reads the users' juggling CSV (:func:`motion_envs.datasets.juggling.read_juggling_csv`)
-and segments it. The events are the world's rules (:mod:`motion_envs.datasets.juggling`
+and segments it. The events are the world's rules (:mod:`motion_envs.datasets.juggling.rules`
 ``hand_acceleration``, ``release_fires``, ``catch_fires``) on the recorded tracks.
 """
 
@@ -19,14 +19,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import (
-    JugglingDemos,
-    JugglingTask,
-    catch_fires,
-    hand_acceleration,
-    read_juggling_csv,
-    release_fires,
-)
+from motion_envs.datasets.juggling import JugglingDemos, JugglingTask, read_juggling_csv, rules
 from motion_envs.models.segmentation import EventOccurred, SpeedBelow, segment
 
 __all__ = ["load_juggling_csv", "segment_demos", "segment_juggling"]
@@ -68,13 +61,13 @@ def segment_juggling(
     ball = np.asarray(ball, dtype=np.float64)
     dt = np.diff(t)
     az = np.full(len(t), np.inf)
-    az[2:] = hand_acceleration(ball[2:, 1], ball[1:-1, 1], ball[:-2, 1], dt[1:], dt[:-1])
+    az[2:] = rules.hand_acceleration(ball[2:, 1], ball[1:-1, 1], ball[:-2, 1], dt[1:], dt[:-1])
     dist = np.linalg.norm(hand - ball, axis=1)
     enter = np.zeros(len(t), dtype=bool)
     # the catch rule with "has left" = outside the radius at the previous sample
-    enter[1:] = catch_fires(dist[1:], dist[:-1] > task.catch_radius, False, task.catch_radius)
+    enter[1:] = rules.catch_fires(dist[1:], dist[:-1] > task.catch_radius, False, task.catch_radius)
     events: dict[int, set[str]] = {}
-    for k in np.flatnonzero(release_fires(True, az, task.toss_threshold)):
+    for k in np.flatnonzero(rules.release_fires(True, az, task.toss_threshold)):
         events.setdefault(int(k), set()).add("release")
     for k in np.flatnonzero(enter):
         events.setdefault(int(k), set()).add("catch")

@@ -1,7 +1,7 @@
 """The pure-model juggling world: a kinematic hand and a ballistic ball, no physics engine.
 
 One :meth:`BallisticWorld.step` (period ``dt``) applies the world's rules in the order
-documented in :mod:`motion_envs.datasets.juggling` (``hand_velocity``,
+documented in :mod:`motion_envs.datasets.juggling.rules` (``hand_velocity``,
 ``hand_acceleration``, ``release_fires``, ``release_velocity``, ``flight``,
 ``catch_fires``, ``has_left``, ``drop_fires``), the same functions the MuJoCo scene
 (:class:`motion_envs.envs.juggling.JugglingScene`), the vectorised runner, the
@@ -18,24 +18,13 @@ same however the world is stepped.
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.random import Generator
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.datasets.juggling import (
-    JugglingNoise,
-    JugglingState,
-    JugglingTask,
-    catch_fires,
-    drop_fires,
-    flight,
-    hand_acceleration,
-    hand_velocity,
-    has_left,
-    release_fires,
-    release_velocity,
-)
+from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask, rules
 
 __all__ = [
     "TRACKING_ROWS",
@@ -51,6 +40,7 @@ FloatArray = NDArray[np.float64]
 TRACKING_ROWS = 2000
 
 
+@runtime_checkable
 class JugglingWorld(Protocol):
     """What a juggling world offers a controller or a runner (``BallisticWorld``, the
     MuJoCo ``JugglingScene``): the task, ``reset`` and ``step`` returning the state."""
@@ -62,7 +52,7 @@ class JugglingWorld(Protocol):
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: np.random.Generator | None = None,
+        rng: Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
         ...
@@ -131,7 +121,7 @@ class BallisticWorld:
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: np.random.Generator | None = None,
+        rng: Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it; draws the episode's noise."""
         self.noise = noise or JugglingNoise()
@@ -162,7 +152,10 @@ class BallisticWorld:
             time=self.time,
             hand_pos=tracked_hand(np.array([hx, hz]), self.tracking_noise, self._k),
             hand_vel=np.array(
-                [hand_velocity(hx, self._prev[0], dt), hand_velocity(hz, self._prev[1], dt)]
+                [
+                    rules.hand_velocity(hx, self._prev[0], dt),
+                    rules.hand_velocity(hz, self._prev[1], dt),
+                ]
             ),
             ball_pos=np.array(self._ball),
             ball_vel=np.array(self._ball_v),
@@ -182,28 +175,31 @@ class BallisticWorld:
         self._prev2 = self._prev
         self._prev = self._hand
         self._hand = [x, z]
-        vx, vz = hand_velocity(x, self._prev[0], dt), hand_velocity(z, self._prev[1], dt)
-        az = hand_acceleration(z, self._prev[1], self._prev2[1], dt)
+        vx, vz = (
+            rules.hand_velocity(x, self._prev[0], dt),
+            rules.hand_velocity(z, self._prev[1], dt),
+        )
+        az = rules.hand_acceleration(z, self._prev[1], self._prev2[1], dt)
         released = caught = False
         if self._held:
-            if release_fires(release_armed, az, task.toss_threshold):
+            if rules.release_fires(release_armed, az, task.toss_threshold):
                 self._held = False
                 self._left = False
                 released = True
                 factor = self.release_factor
-                bvx, bvz = release_velocity(vx, vz, factor[0], factor[1])
+                bvx, bvz = rules.release_velocity(vx, vz, factor[0], factor[1])
                 self._release = (self.time, x, z, bvx, bvz)
                 self._ball, self._ball_v = [x, z], [bvx, bvz]
             else:
                 self._ball, self._ball_v = [x, z], [vx, vz]
         else:
-            bx, bz, bvx, bvz = flight(self._release, self.time, task.gravity)
+            bx, bz, bvx, bvz = rules.flight(self._release, self.time, task.gravity)
             self._ball, self._ball_v = [bx, bz], [bvx, bvz]
             dist = math.hypot(x - bx, z - bz)
-            caught = bool(catch_fires(dist, self._left, self._dropped, task.catch_radius))
-            self._left = bool(has_left(dist, self._left, caught, task.catch_radius))
+            caught = bool(rules.catch_fires(dist, self._left, self._dropped, task.catch_radius))
+            self._left = bool(rules.has_left(dist, self._left, caught, task.catch_radius))
             if caught:
                 self._held = True
                 self._ball, self._ball_v = [x, z], [vx, vz]
-            self._dropped = self._dropped or bool(drop_fires(bz, self._held, task.floor_z))
+            self._dropped = self._dropped or bool(rules.drop_fires(bz, self._held, task.floor_z))
         return self._state(released, caught)
