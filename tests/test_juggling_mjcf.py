@@ -41,3 +41,16 @@ def test_compiled_scene_draws_the_task(task):
     assert data.geom("floor").xpos[2] == task.floor_z
     assert model.geom("ball").size[0] == task.ball_radius
     assert model.geom("hand").size[0] == task.catch_radius
+
+
+def test_first_frame_uses_the_side_camera():
+    """``sync`` places the camera before any ``mj_step`` (the ball held since the reset)."""
+    import numpy as np
+
+    from motion_envs.envs.juggling import JugglingScene
+
+    scene = JugglingScene()
+    scene.reset([0.2, 1.0])
+    scene.step([0.2, 1.001], False)
+    scene.sync()
+    np.testing.assert_allclose(scene.data.cam("side").xpos, scene.model.cam("side").pos)

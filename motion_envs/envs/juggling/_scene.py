@@ -234,8 +234,11 @@ class JugglingScene:
         return np.array(self._hand)
 
     def sync(self) -> None:
-        """Recompute the bodies' poses (``data.xpos``) after the state copies, for drawing."""
+        """Recompute the bodies' poses (``data.xpos``) after the state copies, and place the
+        cameras and lights, for drawing (a held ball is never integrated, so no ``mj_step``
+        places them before the first release)."""
         mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)
 
     def _make_state(self, released: bool, caught: bool) -> JugglingState:
         dt = self.task.dt
