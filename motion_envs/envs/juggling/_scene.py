@@ -69,7 +69,6 @@ from typing import Any
 
 import mujoco
 import numpy as np
-from numpy.random import Generator
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask, rules
@@ -152,7 +151,7 @@ class JugglingScene:
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: Generator | None = None,
+        rng: np.random.Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
         p = _vec2(hand_pos, "hand_pos")

@@ -21,7 +21,6 @@ import math
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.random import Generator
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask, rules
@@ -52,7 +51,7 @@ class JugglingWorld(Protocol):
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: Generator | None = None,
+        rng: np.random.Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it, time 0; draws the episode's noise."""
         ...
@@ -121,7 +120,7 @@ class BallisticWorld:
         hand_pos: ArrayLike,
         *,
         noise: JugglingNoise | None = None,
-        rng: Generator | None = None,
+        rng: np.random.Generator | None = None,
     ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it; draws the episode's noise."""
         self.noise = noise or JugglingNoise()
