@@ -5,7 +5,7 @@ Single environments (``gym.make``, with the registration's wrappers) step the sa
 pre-sampled uniform actions in ``[-1, 1]^2`` and reset at episode ends; Juggling-v0 is also
 timed under the zero action (the analytic juggler's own run, episodes of ``max_cycles``
 catches). Pure-model mode: the fitted analytic juggler drives
-``motion_envs.models.juggling_world.BallisticWorld`` (no MuJoCo, no Gymnasium) step by step
+``motion_envs.models.juggling.BallisticWorld`` (no MuJoCo, no Gymnasium) step by step
 for ``--cycles`` cycles (a cycle ends with a catch or a drop; a drop restarts at home), the
 same loop in the MuJoCo scene (``JugglingScene``), and ``run_cycles_fast`` (the vectorised
 pure-model runner of ``motion-bench juggling``: its own seeded cycles, each from home).
@@ -95,11 +95,9 @@ def main(argv: list[str] | None = None) -> int:
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1")
 
-    from motion_envs.datasets.juggling_task import JugglingTask
-    from motion_envs.envs.juggling import load_juggler
-    from motion_envs.envs.juggling_scene import JugglingScene
-    from motion_envs.models.juggling_run import run_cycles_fast
-    from motion_envs.models.juggling_world import BallisticWorld
+    from motion_envs.datasets.juggling import JugglingTask
+    from motion_envs.envs.juggling import JugglingScene
+    from motion_envs.models.juggling import BallisticWorld, load_juggler, run_cycles_fast
 
     rng = np.random.default_rng(args.seed)
     actions = rng.uniform(-1, 1, size=(args.steps, 2)).astype(np.float32)

@@ -75,8 +75,8 @@ def test_segments_cut_like_the_demonstrations():
 
 # -- splits ------------------------------------------------------------------------------
 def test_val_and_test_compare_with_disjoint_demonstrations():
-    from motion_envs.datasets.juggling_task import JugglingTask
-    from motion_envs.envs.juggling import juggler_demonstrations
+    from motion_envs.datasets.juggling import JugglingTask
+    from motion_envs.models.juggling import juggler_demonstrations
 
     demos, train, test = juggler_demonstrations(None, JugglingTask())
     assert train and test and not train & test

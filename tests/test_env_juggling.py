@@ -15,10 +15,9 @@ import pytest
 from test_env_orientation import _documented_defaults, _fail_on_warnings
 
 import motion_envs
-from motion_envs.datasets.juggling_task import JugglingNoise, JugglingTask
+from motion_envs.datasets.juggling import JugglingNoise, JugglingTask
 from motion_envs.envs import juggling as juggling_module
-from motion_envs.envs.juggling import OBS_DIM, JugglingEnv, cycle_rngs
-from motion_envs.envs.juggling_scene import JugglingScene
+from motion_envs.envs.juggling import OBS_DIM, JugglingEnv, JugglingScene, cycle_rngs
 
 ENV_ID = "MotionEnvs/Juggling-v0"
 
@@ -255,7 +254,7 @@ def _controller_run(task, noise, seed, cycle, n_steps, world, continuous):
 @pytest.mark.parametrize("frame_skip", [1, 3])
 @pytest.mark.parametrize("cycle", [0, 5])
 def test_zero_action_reproduces_the_analytic_juggler(noise, frame_skip, cycle):
-    from motion_envs.models.juggling_world import BallisticWorld
+    from motion_envs.models.juggling import BallisticWorld
 
     env = JugglingEnv(noise=noise, frame_skip=frame_skip, max_cycles=3)
     env.reset(seed=21, options={"cycle": cycle})
@@ -378,7 +377,7 @@ def test_zero_action_cycles_are_motion_bench_juggling_cycles():
     """Cycle i of ``motion-bench juggling --seed 3 --noise 0.05`` (its runner, with its
     tracking noise) = Juggling-v0 after ``reset(seed=3, options={"cycle": i})``, zero action:
     same catch or drop at the same control step, same hand path as recorded."""
-    from motion_envs.models.juggling_run import run_cycle, run_cycles_fast
+    from motion_envs.models.juggling import run_cycle, run_cycles_fast
 
     noise = {"release": 0.05, "tracking": 0.0005}
     env = JugglingEnv(noise=noise, max_cycles=1)
@@ -415,8 +414,7 @@ def test_zero_action_cycles_are_motion_bench_juggling_cycles():
 
 def test_users_csv_as_data(tmp_path):
     """``data=PATH`` fits the juggler on the users' recordings; bad paths fail clearly."""
-    from motion_envs.datasets.juggling_csv import write_juggling_csv
-    from motion_envs.datasets.juggling_demos import generate_demonstrations
+    from motion_envs.datasets.juggling import generate_demonstrations, write_juggling_csv
 
     path = write_juggling_csv(generate_demonstrations(n_cycles=16, seed=8), tmp_path / "me.csv")
     env = gym.make(ENV_ID, data=str(path), max_cycles=1)
@@ -446,7 +444,7 @@ def test_catch_rates_equal_motion_bench_juggling():
     env = JugglingEnv(noise=0.1, max_cycles=1)
     assert doc["catch_rate"] == 1.0
     for row in doc["catch_rates"]:
-        env.juggler.correction = row["correction"]
+        env.juggler = env.juggler.variant(correction=row["correction"])
         caught = 0
         for i in range(n):
             env.reset(seed=0, options={"cycle": i})

@@ -10,8 +10,7 @@ import pytest
 from baselines import juggling_bench as jb
 from baselines import options
 from baselines.cli import main
-from motion_envs.datasets.juggling_csv import write_juggling_csv
-from motion_envs.datasets.juggling_demos import generate_demonstrations
+from motion_envs.datasets.juggling import generate_demonstrations, write_juggling_csv
 
 
 def test_small_run_writes_the_documented_results(tmp_path, capsys):

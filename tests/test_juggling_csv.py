@@ -5,9 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motion_envs.datasets.juggling_csv import read_juggling_csv, write_juggling_csv
-from motion_envs.datasets.juggling_demos import generate_demonstrations
-from motion_envs.models.juggling_segmentation import load_juggling_csv
+from motion_envs.datasets.juggling import (
+    generate_demonstrations,
+    read_juggling_csv,
+    write_juggling_csv,
+)
+from motion_envs.models.juggling import load_juggling_csv
 
 
 @pytest.fixture(scope="module")

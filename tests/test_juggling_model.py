@@ -6,12 +6,23 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from motion_envs.datasets.juggling_demos import generate_demonstrations
-from motion_envs.datasets.juggling_task import JugglingNoise, JugglingTask, ballistic_position
+from motion_envs.datasets.juggling import (
+    JugglingNoise,
+    JugglingTask,
+    ballistic_position,
+    generate_demonstrations,
+)
 from motion_envs.geometry import sine_series as ss
-from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk, plan_catch
-from motion_envs.models.juggling_run import cycle_rngs, run_cycle, run_cycles, run_cycles_fast
-from motion_envs.models.juggling_world import BallisticWorld
+from motion_envs.geometry.jerk import minimum_jerk
+from motion_envs.models.juggling import (
+    AnalyticJuggler,
+    BallisticWorld,
+    cycle_rngs,
+    plan_catch,
+    run_cycle,
+    run_cycles,
+    run_cycles_fast,
+)
 
 
 @pytest.fixture(scope="module")
@@ -126,12 +137,11 @@ def test_eq10_correction_retargets_the_catch(juggler):
     noise = JugglingNoise(release=0.1)
     rngs = cycle_rngs(11, 30)
     world = BallisticWorld(juggler.task)
-    juggler.correction = True
     with_c = [run_cycle(juggler, world, noise, r) for r in cycle_rngs(11, 30)]
     assert sum(r.corrections for r in with_c) > 0
-    juggler.correction = False
-    without = [run_cycle(juggler, world, noise, r) for r in rngs]
-    juggler.correction = True
+    off = juggler.variant(correction=False)
+    without = [run_cycle(off, world, noise, r) for r in rngs]
+    assert juggler.correction and off.model is juggler.model  # shared, unchanged
     assert np.mean([r.caught for r in with_c]) >= np.mean([r.caught for r in without])
     assert np.mean([r.caught for r in with_c]) >= 0.95
 
@@ -145,11 +155,12 @@ def test_correction_plan_meets_the_observed_intercept(juggler):
             continue
         t_fix, _ = juggler.corrections[0]
         k = round(t_fix / juggler.task.dt)
-        s = juggler.t_start + juggler.duration - res.times[k]
+        plan = juggler.episode  # the cycle's controller: its current (corrected) plan
+        s = plan.t_start + plan.duration - res.times[k]
         target = ballistic_position(res.ball[k], _vel(res, k), s, juggler.task.gravity)
-        np.testing.assert_allclose(juggler.end, target, atol=1e-9)
-        p = juggler.coefficients
-        np.testing.assert_allclose(p[0] + p[1], juggler.end, atol=1e-9)
+        np.testing.assert_allclose(plan.end, target, atol=1e-9)
+        p = plan.coefficients
+        np.testing.assert_allclose(p[0] + p[1], plan.end, atol=1e-9)
         return
     pytest.fail("no correction happened in 10 noisy cycles")
 
@@ -162,9 +173,9 @@ def _vel(res, k):
 def test_fast_runner_equals_the_step_by_step_runner(juggler):
     for noise in (JugglingNoise(), JugglingNoise(release=0.1, tracking=5e-4)):
         for corr in (True, False):
-            juggler.correction = corr
-            a = run_cycles(juggler, 25, noise, seed=4)
-            b = run_cycles_fast(juggler, 25, noise, seed=4)
+            variant = juggler.variant(correction=corr)
+            a = run_cycles(variant, 25, noise, seed=4)
+            b = run_cycles_fast(variant, 25, noise, seed=4)
             for x, y in zip(a, b, strict=True):
                 assert (x.caught, x.dropped, x.released, x.steps, x.corrections) == (
                     y.caught,
@@ -174,7 +185,6 @@ def test_fast_runner_equals_the_step_by_step_runner(juggler):
                     y.corrections,
                 )
                 np.testing.assert_allclose(x.release_velocity, y.release_velocity, atol=1e-12)
-    juggler.correction = True
 
 
 def test_runs_are_deterministic_under_a_seed(juggler):
@@ -192,7 +202,7 @@ def test_minimum_jerk_closed_form():
     np.testing.assert_allclose(y[[0, -1]], [[0, 1], [1, 3]])
     np.testing.assert_allclose(y[5], [0.5, 2.0])  # symmetric profile
     # oracle: the quintic with rest end states (solved as a linear system)
-    from motion_envs.datasets.juggling_demos import quintic
+    from motion_envs.geometry.jerk import quintic
 
     z = np.zeros(2)
     c = quintic(np.array([0.0, 1.0]), z, z, np.array([1.0, 3.0]), z, z, 1.0)
@@ -206,7 +216,7 @@ def test_unfitted_juggler_raises():
 
 def test_real_gravity_is_the_same_gesture_faster():
     """Under 9.81 m/s^2 the person's movements are time-scaled; the juggler still catches."""
-    from motion_envs.models.juggling_run import fit_juggler
+    from motion_envs.models.juggling import fit_juggler
 
     task = JugglingTask(gravity=9.81)
     assert task.toss_threshold == pytest.approx(3.0 * 9.81)

@@ -10,8 +10,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from motion_envs.datasets.juggling_task import JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs.juggling_scene import JugglingScene, load_juggling_model
+from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask
+from motion_envs.envs.juggling import JugglingScene, load_juggling_model
 
 TASK = JugglingTask()
 
@@ -187,7 +187,7 @@ def _juggling_targets(task: JugglingTask, cycles: int, seed: int):
 )
 def test_scene_equals_ballistic_world_for_the_same_hand_targets(gravity, noise):
     """The contract: JugglingScene and the pure-model BallisticWorld agree to 1e-9."""
-    from motion_envs.models.juggling_world import BallisticWorld
+    from motion_envs.models.juggling import BallisticWorld
 
     task = replace(TASK, gravity=gravity)
     targets, armed = _juggling_targets(task, 6, 3)

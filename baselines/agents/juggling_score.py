@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling_demos import departure_from_line, resample_path
+from motion_envs.datasets.juggling import departure_from_line, resample_path
 
 __all__ = [
     "DEFAULT_EPISODES",
@@ -92,8 +92,8 @@ def is_juggling(env_id: str) -> bool:
 def _demonstration_paths(
     data: str | None, gravity: float | None, split: str
 ) -> dict[str, FloatArray]:
-    from motion_envs.datasets.juggling_task import PHASES, JugglingTask
-    from motion_envs.envs.juggling import juggler_demonstrations
+    from motion_envs.datasets.juggling import PHASES, JugglingTask
+    from motion_envs.models.juggling import juggler_demonstrations
 
     task = JugglingTask() if gravity is None else JugglingTask(gravity=float(gravity))
     demos, train, test = juggler_demonstrations(data, task)

@@ -181,7 +181,7 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
     kwargs = loaded.env_kwargs
     agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, split, episodes)
     nominal = juggling_episodes(None, loaded.env_id, kwargs, split, episodes)
-    from motion_envs.datasets.juggling_task import PHASES
+    from motion_envs.datasets.juggling import PHASES
 
     both = set(agent.segment_phase.tolist()) & set(nominal.segment_phase.tolist())
     phases = [p for p in PHASES if p in both]  # in the task's order

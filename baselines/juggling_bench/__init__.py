@@ -1,10 +1,11 @@
 """``motion-bench juggling``: the analytic juggler of Lippi et al. (section III-A).
 
-Demonstrations are SIMULATED by default (:mod:`motion_envs.datasets.juggling_demos`: a
+Demonstrations are SIMULATED by default (:mod:`motion_envs.datasets.juggling`: a
 seeded model of a person; the paper's recordings are not public) or read from the users'
-CSV (``--data PATH.csv``, :mod:`motion_envs.datasets.juggling_csv`). They are split by
-demonstration (cycle): the juggler is fitted on the training cycles only (``N`` per
-phase by cross-validation inside the training cycles) and scored on the held-out ones.
+CSV (``--data PATH.csv``, :func:`motion_envs.datasets.juggling.read_juggling_csv`). They
+are split by demonstration (cycle): the juggler is fitted on the training cycles only
+(``N`` per phase by cross-validation inside the training cycles) and scored on the
+held-out ones, as :func:`motion_envs.models.juggling.fit_juggler` does for every user.
 
 Reported:
 
@@ -63,7 +64,7 @@ from baselines.juggling_bench.media import (
 from baselines.juggling_bench.runner import load_demos, run
 from baselines.juggling_bench.scoring import catch_rates, phase_errors, validation
 from baselines.juggling_bench.text import report, results_csv
-from motion_envs.models.juggling_juggler import AnalyticJuggler
+from motion_envs.models.juggling import AnalyticJuggler
 
 __all__ = [
     "MIN_CYCLES",

@@ -13,7 +13,7 @@ from baselines.juggling_bench.config import JugglingConfig
 from baselines.juggling_bench.media import write
 from baselines.juggling_bench.runner import run
 from baselines.juggling_bench.text import report
-from motion_envs.datasets.juggling_task import JugglingTask
+from motion_envs.datasets.juggling import JugglingTask
 
 
 def main(args: argparse.Namespace) -> int:

@@ -7,7 +7,8 @@ import math
 from dataclasses import dataclass, field
 
 from baselines import options
-from motion_envs.datasets.juggling_task import JugglingTask
+from motion_envs.datasets.juggling import MIN_SPLIT_CYCLES, JugglingTask
+from motion_envs.models.juggling import DEMO_CYCLES, FIT_SEED, FIT_TEST_FRACTION, TRACKING_NOISE
 
 #: Targets of issue 9, checked in ``results["targets"]``.
 TARGET_UNPERTURBED = 0.99
@@ -17,8 +18,8 @@ TARGET_VARIABILITY_RATIO = 1.5
 VIDEO_CAPTION = "analytic juggler in the MuJoCo scene (SIMULATED)"
 
 
-#: Complete cycles a run needs (:func:`~motion_envs.datasets.juggling_demos.split_cycles`).
-MIN_CYCLES = 8
+#: Complete cycles a run needs (:func:`~motion_envs.datasets.juggling.split_cycles`).
+MIN_CYCLES = MIN_SPLIT_CYCLES
 
 
 @dataclass(frozen=True)
@@ -33,12 +34,12 @@ class JugglingConfig:
 
     cycles: int = 1000
     noise: tuple[float, ...] = (0.05, 0.10)
-    tracking: float = 0.0005
-    seed: int = 0
+    tracking: float = TRACKING_NOISE
+    seed: int = FIT_SEED
     data: str | None = None
-    demo_cycles: int = 50
+    demo_cycles: int = DEMO_CYCLES
     demo_persons: int = 1
-    test_fraction: float = 0.25
+    test_fraction: float = FIT_TEST_FRACTION
     n_sines: int | str = "auto"
     n_points: int = 150
     dmp_weights: int = 10

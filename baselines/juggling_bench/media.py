@@ -15,10 +15,8 @@ from numpy.typing import NDArray
 from baselines.juggling_bench.scoring import juggling_scene
 from baselines.juggling_bench.text import clean_json, results_csv
 from motion_envs._io import atomic_write, atomic_write_text, save_figure
-from motion_envs.datasets.juggling_demos import JugglingDemos
-from motion_envs.datasets.juggling_task import PHASES, JugglingNoise
-from motion_envs.models.juggling_juggler import AnalyticJuggler
-from motion_envs.models.juggling_run import cycle_rngs, run_cycle
+from motion_envs.datasets.juggling import PHASES, JugglingDemos, JugglingNoise
+from motion_envs.models.juggling import AnalyticJuggler, cycle_rngs, run_cycle
 
 VIDEO_CAPTION = "analytic juggler in the MuJoCo scene (SIMULATED)"
 

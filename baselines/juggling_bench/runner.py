@@ -18,24 +18,22 @@ from baselines.juggling_bench.config import (
     check_config,
 )
 from baselines.juggling_bench.scoring import catch_rates, juggling_scene, phase_errors, validation
-from motion_envs.datasets.juggling_demos import JugglingDemos, generate_demonstrations
-from motion_envs.datasets.juggling_task import JugglingNoise
-from motion_envs.models.juggling_run import cycle_rngs, fit_juggler, run_cycle
-from motion_envs.models.juggling_world import BallisticWorld
+from motion_envs.datasets.juggling import JugglingDemos, JugglingNoise
+from motion_envs.models.juggling import (
+    BallisticWorld,
+    cycle_rngs,
+    fit_juggler,
+    load_demonstrations,
+    run_cycle,
+)
 
 
 def load_demos(config: JugglingConfig) -> JugglingDemos:
     """The SIMULATED demonstrations, or the users' CSV when ``config.data`` is a path."""
-    if config.data is None or config.data == "simulated":
-        return generate_demonstrations(
-            n_cycles=config.demo_cycles,
-            n_persons=config.demo_persons,
-            seed=config.seed,
-            task=config.task,
-        )
-    from motion_envs.models.juggling_segmentation import load_juggling_csv
-
-    return load_juggling_csv(config.data, task=config.task)
+    data = None if config.data == "simulated" else config.data
+    return load_demonstrations(
+        data, config.task, config.seed, config.demo_cycles, config.demo_persons
+    )
 
 
 def run(config: JugglingConfig) -> dict[str, Any]:

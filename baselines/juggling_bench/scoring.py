@@ -12,10 +12,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.juggling_bench.config import JugglingConfig
-from motion_envs.datasets.juggling_demos import JugglingDemos, departure_from_line
-from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingTask
-from motion_envs.models.juggling_juggler import AnalyticJuggler, minimum_jerk
-from motion_envs.models.juggling_run import run_cycles, run_cycles_fast
+from motion_envs.datasets.juggling import (
+    PHASES,
+    JugglingDemos,
+    JugglingNoise,
+    JugglingTask,
+    departure_from_line,
+)
+from motion_envs.geometry.jerk import minimum_jerk
+from motion_envs.models.juggling import AnalyticJuggler, run_cycles, run_cycles_fast
 
 FloatArray = NDArray[np.float64]
 
@@ -127,10 +132,10 @@ def catch_rates(
     for level, tracking, corr in tqdm(
         runs, desc="catch-rate runs", file=sys.stderr, disable=not config.progress
     ):
-        juggler.correction = corr
+        variant = juggler.variant(correction=corr)  # the fitted model is shared, not changed
         noise = JugglingNoise(level, tracking)
         t0 = time.perf_counter()
-        res = run_cycles_fast(juggler, config.cycles, noise, config.seed)
+        res = run_cycles_fast(variant, config.cycles, noise, config.seed)
         row = {
             "noise": level,
             "tracking": tracking,
@@ -146,7 +151,7 @@ def catch_rates(
                 config.cycles, config.mujoco_cycles if level == 0 else config.mujoco_noise_cycles
             )
             t0 = time.perf_counter()
-            mj = run_cycles(juggler, m, noise, config.seed, world=juggling_scene(juggler.task))
+            mj = run_cycles(variant, m, noise, config.seed, world=juggling_scene(juggler.task))
             row["mujoco"] = {
                 "cycles": m,
                 "catch_rate": float(np.mean([r.caught for r in mj])) if m else None,
@@ -158,11 +163,10 @@ def catch_rates(
                 "seconds": time.perf_counter() - t0,
             }
         rows.append(row)
-    juggler.correction = True
     return rows[0], rows[1:]
 
 
 def juggling_scene(task: JugglingTask) -> Any:
-    from motion_envs.envs.juggling_scene import JugglingScene
+    from motion_envs.envs.juggling import JugglingScene
 
     return JugglingScene(task)

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from motion_envs.datasets.juggling_demos import SIMULATED_LABEL
+from motion_envs.datasets.juggling import SIMULATED_LABEL
 
 
 def clean_json(value: Any) -> Any:

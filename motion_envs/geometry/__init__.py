@@ -1,8 +1,9 @@
-"""Pure-numpy geometry: unit quaternions, Bézier curves, sine series, Beta speed profiles.
+"""Pure-numpy geometry: unit quaternions, Bézier curves, sine series, Beta speed profiles,
+minimum-jerk movements.
 
 Every function works on batches (leading axes) and states its formula in the docstring.
 """
 
-from motion_envs.geometry import beta_profile, bezier, quaternion, sine_series
+from motion_envs.geometry import beta_profile, bezier, jerk, quaternion, sine_series
 
-__all__ = ["beta_profile", "bezier", "quaternion", "sine_series"]
+__all__ = ["beta_profile", "bezier", "jerk", "quaternion", "sine_series"]

@@ -4,8 +4,6 @@
 
 from __future__ import annotations
 
-import copy
-import functools
 import math
 import os
 from collections.abc import Mapping
@@ -15,10 +13,14 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling_task import PHASES, JugglingNoise, JugglingState, JugglingTask
+from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
 from motion_envs.envs._common import LazyRendererMixin, check_reward_weights, check_scale
-from motion_envs.envs.juggling_scene import JugglingScene
-from motion_envs.models.juggling_run import cycle_rngs
+from motion_envs.envs.juggling._scene import JugglingScene
+from motion_envs.models.juggling import (
+    TRACKING_NOISE,
+    cycle_rngs,
+    load_juggler,
+)
 
 __all__ = [
     "CYCLE_TIME_LIMIT",
@@ -26,11 +28,7 @@ __all__ = [
     "HAND_SPEED_MARGIN",
     "OBS_DIM",
     "POSITION_MARGIN",
-    "TRACKING_NOISE",
     "JugglingEnv",
-    "cycle_rngs",
-    "juggler_demonstrations",
-    "load_juggler",
 ]
 
 #: Default reward weights (see the class docstring, section Rewards).
@@ -56,49 +54,6 @@ HAND_SPEED_MARGIN = 10.0
 #: the nominal's next hand position (2).
 OBS_DIM = 16
 _ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
-
-
-#: Tracking noise (m) that comes with a release-noise level, as in ``motion-bench juggling
-#: --noise LEVEL`` (its ``--tracking`` default).
-TRACKING_NOISE = 0.0005
-
-#: Seed (of the demonstrations and the split) and held-out share with which ``motion-bench juggling``
-#: (default ``--seed 0``) generates, splits and fits; Juggling-v0 fits the same juggler.
-FIT_SEED = 0
-FIT_TEST_FRACTION = 0.25
-
-
-@functools.lru_cache(maxsize=8)
-def _demos_and_juggler(data: str | None, task: JugglingTask) -> tuple[Any, Any, Any, Any]:
-    from motion_envs.datasets.juggling_demos import generate_demonstrations
-    from motion_envs.models.juggling_run import fit_juggler
-
-    if data is None:
-        demos = generate_demonstrations(seed=FIT_SEED, task=task)  # SIMULATED
-    else:
-        from motion_envs.models.juggling_segmentation import load_juggling_csv
-
-        demos = load_juggling_csv(data, task=task)
-    juggler, train, test = fit_juggler(demos, seed=FIT_SEED, test_fraction=FIT_TEST_FRACTION)
-    return demos, frozenset(train), frozenset(test), juggler
-
-
-def juggler_demonstrations(
-    data: str | os.PathLike[str] | None, task: JugglingTask
-) -> tuple[Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]]]:
-    """The demonstrations Juggling-v0's juggler is fitted on and their split: ``(demos,
-    train, test)`` with ``train``/``test`` sets of ``(recording, cycle)``; the juggler saw
-    the ``train`` cycles only (``motion-bench juggling``'s split, seed ``FIT_SEED``)."""
-    demos, train, test, _ = _demos_and_juggler(None if data is None else os.fspath(data), task)
-    return demos, train, test
-
-
-def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Any:
-    """A fresh copy of the analytic juggler fitted as ``motion-bench juggling`` fits it:
-    on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
-    the users' juggling CSV; fitted once per process and data (a few seconds)."""
-    key = None if data is None else os.fspath(data)
-    return copy.deepcopy(_demos_and_juggler(key, task)[3])
 
 
 def _check_noise(noise: Any) -> JugglingNoise:
@@ -148,14 +103,14 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     chained by the paper's phase criteria, the toss planned with zero final vertical speed,
     the catch planned from the ball's predicted flight and corrected online) commands the
     hand every 5 ms; the agent adds a bounded offset to each command. The world is the
-    MuJoCo scene :class:`~motion_envs.envs.juggling_scene.JugglingScene` (a mocap hand, a
+    MuJoCo scene :class:`~motion_envs.envs.juggling.JugglingScene` (a mocap hand, a
     ball under gravity; see its docstring). The built-in demonstrations are **simulated**
     (a seeded generator of a person doing the paper's task): the paper's recordings are not
     public.
 
     The zero action reproduces the analytic juggler exactly: the first cycle of the episode
     after ``reset(seed=S, options={"cycle": i})`` is cycle ``i`` of the analytic juggler's
-    seeded runner (``motion_envs.models.juggling_run``) with seed ``S``, the runner
+    seeded runner (``motion_envs.models.juggling.run_cycle``) with seed ``S``, the runner
     ``motion-bench juggling`` uses: same release, same catch or drop at the same control
     step, same hand path to 1e-9 (tested against the pure-model runner and the same runner
     in the MuJoCo scene; and ``motion-bench juggling --seed 0 --noise LEVEL``'s catch rates
@@ -217,7 +172,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     S`` draws its cycle ``i``: two generators ``SeedSequence(S).spawn(i + 1)[i].spawn(2)``,
     one for the world (the release-velocity factor ``1 + release * N(0, 1)`` per component
     and the tracking noise of every control period,
-    ``motion_envs.models.juggling_world.draw_episode_noise``), one for the juggler (its
+    ``motion_envs.models.juggling.draw_episode_noise``), one for the juggler (its
     random phase end points and durations); so the zero-action episode's first cycle *is*
     that cycle. Without a seed, ``S`` is drawn from the environment's generator. Each
     later toss of the episode redraws the world's noise from the world generator.

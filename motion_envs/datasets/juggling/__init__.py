@@ -1,0 +1,71 @@
+"""The juggling task of Lippi, Avizzano & Ruffaldi (section III-A): data layer.
+
+The public names of small private modules, one concern each:
+
+* ``_task``: every constant (:class:`JugglingTask`), the world's state
+  (:class:`JugglingState`), a run's perturbations (:class:`JugglingNoise`), the phases
+  (:data:`PHASES`) and the ballistic closed form;
+* :mod:`~motion_envs.datasets.juggling.rules` (public, used as a namespace:
+  ``rules.catch_fires(...)``): the world's rules (release, catch, drop, flight), written
+  once for one ball and for a batch, used by the pure-model world, the MuJoCo scene, the
+  vectorised runner, the demonstration generator and the segmentation;
+* ``_records``: recordings, phase examples, demonstration sets and their split;
+* ``_paths``: paths on normalised time (resampling, departure from the line);
+* ``_person``: the SIMULATED demonstrations (a seeded model of a person);
+* ``_csv``: the users' juggling CSV, read as raw recordings.
+"""
+
+from motion_envs.datasets.juggling import rules
+from motion_envs.datasets.juggling._csv import (
+    JUGGLING_COLUMNS,
+    MIN_SAMPLES,
+    read_juggling_csv,
+    write_juggling_csv,
+)
+from motion_envs.datasets.juggling._paths import departure_from_line, resample_path
+from motion_envs.datasets.juggling._person import (
+    PersonStyle,
+    draw_person,
+    generate_demonstrations,
+)
+from motion_envs.datasets.juggling._records import (
+    MIN_SPLIT_CYCLES,
+    SIMULATED_LABEL,
+    JugglingDemos,
+    JugglingRecording,
+    PhaseSegment,
+    split_cycles,
+)
+from motion_envs.datasets.juggling._task import (
+    PHASES,
+    JugglingNoise,
+    JugglingState,
+    JugglingTask,
+    ballistic_position,
+    ballistic_velocity,
+)
+
+__all__ = [
+    "JUGGLING_COLUMNS",
+    "MIN_SAMPLES",
+    "MIN_SPLIT_CYCLES",
+    "PHASES",
+    "SIMULATED_LABEL",
+    "JugglingDemos",
+    "JugglingNoise",
+    "JugglingRecording",
+    "JugglingState",
+    "JugglingTask",
+    "PersonStyle",
+    "PhaseSegment",
+    "ballistic_position",
+    "ballistic_velocity",
+    "departure_from_line",
+    "draw_person",
+    "generate_demonstrations",
+    "read_juggling_csv",
+    "resample_path",
+    "rules",
+    "split_cycles",
+    "write_juggling_csv",
+]

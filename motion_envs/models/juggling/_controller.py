@@ -1,0 +1,231 @@
+"""The analytic juggler's per-episode controller: Lippi et al.'s phase models chained by
+the task's online criteria (section III-A).
+
+A :class:`JugglingController` reads a fitted :class:`~motion_envs.models.juggling.JugglerModel`
+(never changes it) and holds one episode's state: its generator, the current phase plan,
+the ball's believed flight. Generation:
+
+* end points of toss, go-down and return are drawn from a Gaussian fitted to the
+  training end points, durations uniformly over the training range;
+* **toss**: the plan is constrained to zero vertical velocity at its end (eq. 9, on the
+  regression hyperplane) and driven until the world releases the ball (vertical hand
+  acceleration below ``-toss_threshold``);
+* **go down**: reaches its end point (``PositionReached`` on the commanded position);
+* **catch**: :func:`~motion_envs.models.juggling.plan_catch` chooses the duration ``T`` in
+  the training range whose intercept on the predicted flight is closest to the training
+  catch end points, and sets the end point to the ball's predicted centre at ``t0 + T``.
+  The flight is predicted from what the juggler commanded at the release (its own hand
+  velocity, an efference copy); when the observed ball's flight predicts a different
+  intercept (release noise), the eq. 10 correction
+  (:meth:`SineSeriesRegression.correct`, position and velocity kept at ``tau_1``, new end
+  point) re-plans the rest of the reach (``ControlOptions.correction``);
+* **return**: back to a home point; then the next toss.
+
+Each phase plan is evaluated once on the control grid ``t_start + k dt`` (the closed
+form ``Y(t) = Phi(t / T) . P``), so one :meth:`JugglingController.command` costs an index.
+The controller sees only the state (observed hand, ball); it never imports Gymnasium.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_position, rules
+from motion_envs.geometry import sine_series as ss
+from motion_envs.models.juggling._model import JugglerModel, plan_catch
+
+__all__ = ["ControlOptions", "JugglingController"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ControlOptions:
+    """How the controller runs a fitted model (a variant is ``dataclasses.replace``).
+
+    Attributes
+    ----------
+    correction:
+        Apply the eq. 10 correction in the catch phase.
+    correction_tolerance:
+        m; re-plan when the predicted intercept moves farther than this from the plan.
+    release_after:
+        s; the release is armed only after this time in the toss (the toss accelerates
+        first, so the threshold belongs to its decelerating part; a step of the observed
+        start position under tracking noise must not release the ball).
+    reach_tolerance:
+        m; go-down and return end when the commanded position is this close to their
+        end point (the paper's "position reached").
+    """
+
+    correction: bool = True
+    correction_tolerance: float = 1e-3
+    release_after: float = 0.25
+    reach_tolerance: float = 1e-3
+
+
+class JugglingController:
+    """One episode of the analytic juggler (see the module docstring).
+
+    Public state (read by the vectorised runner): ``phase``, ``t_start``, ``duration``,
+    ``coefficients``, ``end`` (the current plan), ``grid`` (the plan on the control grid),
+    ``end_k`` (the grid step that ends go-down and return; -1 for toss and catch, which end
+    on the world's events), ``k`` (steps into the phase), ``plans`` and ``corrections``
+    (the episode's history).
+    """
+
+    def __init__(self, model: JugglerModel, options: ControlOptions | None = None) -> None:
+        model.check_fitted()
+        self.model = model
+        self.options = ControlOptions() if options is None else options
+        self.task = model.task
+        #: the ball's believed release ``(time, position, velocity)``
+        self.release_belief: tuple[float, FloatArray, FloatArray] = (0.0, np.zeros(2), np.zeros(2))
+
+    # -- planning -------------------------------------------------------------------
+    def _draw_end(self, phase: str) -> FloatArray:
+        fit = self.model.phases_[phase]
+        out: FloatArray = fit.end_mean + fit.end_chol @ self._rng.standard_normal(2)
+        return out
+
+    def _draw_duration(self, phase: str) -> float:
+        lo, hi = self.model.phases_[phase].duration_range
+        return float(self._rng.uniform(lo, hi))
+
+    def start_phase(self, phase: str, t: float, start: FloatArray) -> None:
+        """Plan ``phase`` from the hand position ``start`` at time ``t``; ``k = 0``."""
+        fit = self.model.phases_[phase]
+        model = fit.model
+        if phase == "catch":
+            duration, end = plan_catch(
+                start,
+                *self.belief_at(t),
+                self.task.gravity,
+                fit.duration_range,
+                fit.end_mean,
+            )
+        else:
+            duration, end = self._draw_duration(phase), self._draw_end(phase)
+        q = np.concatenate([start, end])
+        if phase == "toss":  # eq. 9: zero vertical velocity at the end, on the hyperplane
+            p = model.plan(q, duration, start, end, final_velocity=np.zeros(2), axes=[1])
+        else:
+            p = model.plan(q, duration, start, end)
+        self.phase = phase
+        self.t_start = t
+        self.duration = duration
+        self.coefficients = p
+        self.end = p[0] + p[1]
+        self._grid_from(0)
+        if phase in ("go_down", "return"):  # PositionReached(end, 1 mm) on the command
+            near = np.linalg.norm(self.grid - self.end, axis=1) <= self.options.reach_tolerance
+            self.end_k = int(np.argmax(near)) if near.any() else len(self.grid) - 1
+        else:  # toss and catch end on the world's release and catch events
+            self.end_k = -1
+        self.plans.append((phase, t, duration, p.copy()))
+        self.k = 0
+
+    def _grid_from(self, k0: int) -> None:
+        """Evaluate the current plan on steps ``k0 .. ceil(T / dt)`` of the phase."""
+        dt = self.task.dt
+        n = math.ceil(self.duration / dt - 1e-9)
+        k = np.arange(k0, n + 1)
+        tau = np.minimum(k * dt / self.duration, 1.0)
+        grid = ss.evaluate(self.coefficients, tau)
+        if k0 == 0:
+            self.grid = grid
+        else:
+            self.grid = np.concatenate([self.grid[:k0], grid])
+
+    def belief_at(self, t: float) -> tuple[FloatArray, FloatArray]:
+        """The ball's believed position and velocity at ``t`` (flight from the release)."""
+        t_r, p_r, v_r = self.release_belief
+        s = t - t_r
+        pos = ballistic_position(p_r, v_r, s, self.task.gravity)
+        return pos, v_r - np.array([0.0, self.task.gravity * s])
+
+    def next_phase(
+        self, time: float, hand: FloatArray, last_commands: tuple[FloatArray, FloatArray]
+    ) -> None:
+        """End the current phase at ``time`` (observed hand ``hand``) and start the next.
+
+        Ending the toss sets the release belief: the last command and the velocity of the
+        last two commands ``last_commands`` (what the juggler commanded, an efference copy).
+        """
+        if self.phase == "toss":
+            v = (last_commands[1] - last_commands[0]) / self.task.dt
+            self.release_belief = (time, last_commands[1].copy(), v)
+        nxt = PHASES[(PHASES.index(self.phase) + 1) % len(PHASES)]
+        self.start_phase(nxt, time, hand)
+
+    # -- the controller interface ---------------------------------------------------
+    def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
+        """Start a toss from the observed state (ball in hand)."""
+        self._rng = rng if rng is not None else np.random.default_rng(0)
+        self.plans: list[tuple[str, float, float, FloatArray]] = []
+        self.corrections: list[tuple[float, float]] = []
+        self._last = [np.asarray(state.hand_pos, dtype=np.float64)] * 2
+        self.release_belief = (0.0, self._last[0], np.zeros(2))
+        self.start_phase("toss", state.time, self._last[0].copy())
+
+    @property
+    def phase_time(self) -> float:
+        """Time within the current phase, s."""
+        return self.k * self.task.dt
+
+    def nominal_next(self) -> FloatArray:
+        """The nominal's next hand position (what :meth:`command` returns without events)."""
+        out: FloatArray = self.grid[min(self.k + 1, len(self.grid) - 1)].copy()
+        return out
+
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        """Next hand target ``(2,)`` and whether the release is armed, given the state."""
+        phase = self.phase
+        if (
+            (phase == "toss" and state.released)
+            or (phase == "catch" and state.caught)
+            or (self.end_k >= 0 and self.k >= self.end_k)
+        ):
+            hand = np.asarray(state.hand_pos, dtype=np.float64)
+            self.next_phase(state.time, hand, (self._last[0], self._last[1]))
+        elif phase == "catch" and self.options.correction and not state.held:
+            self.correct(state.time, state.ball_pos, state.ball_vel)
+        self.k += 1
+        target: FloatArray = self.grid[min(self.k, len(self.grid) - 1)]
+        self._last = [self._last[1], target]
+        armed = self.phase == "toss" and self.k * self.task.dt >= self.options.release_after
+        return target, armed
+
+    def correct(self, time: float, ball_pos: FloatArray, ball_vel: FloatArray) -> bool:
+        """Eq. 10 at step ``k`` of the catch when the ball observed at ``time`` flies to
+        another intercept than the plan's (farther than ``correction_tolerance``); returns
+        whether the plan changed."""
+        s = self.t_start + self.duration - time
+        if s <= self.task.dt:
+            return False
+        bx, bz = float(ball_pos[0]), float(ball_pos[1])
+        vx, vz = float(ball_vel[0]), float(ball_vel[1])
+        px, pz, _, _ = rules.flight((0.0, bx, bz, vx, vz), s, self.task.gravity)
+        if math.hypot(px - self.end[0], pz - self.end[1]) <= self.options.correction_tolerance:
+            return False
+        predicted = np.array([px, pz])
+        tau1 = self.k * self.task.dt / self.duration
+        velocity = ss.velocity(self.coefficients, np.array([tau1]), self.duration)[0]
+        model = self.model.phases_["catch"].model
+        self.coefficients = model.correct(
+            self.coefficients,
+            tau1,
+            self.grid[self.k],
+            predicted,
+            self.duration,
+            velocity=velocity,
+            mode="free",
+        )
+        self.end = predicted
+        self._grid_from(self.k + 1)
+        self.corrections.append((time, tau1))
+        return True

@@ -1,0 +1,124 @@
+"""THE default fit: the juggler as ``motion-bench juggling`` fits it, which
+``MotionEnvs/Juggling-v0`` acts on top of, with its constants in one place.
+
+:func:`load_demonstrations` gives the SIMULATED demonstrations (or the users' juggling
+CSV, segmented by the online criteria), :func:`fit_juggler` splits them by demonstration
+and fits the juggler on the training cycles only; :func:`default_fit` is both with the
+defaults, once per process, data and task.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import os
+from dataclasses import dataclass
+
+from motion_envs.datasets.juggling import (
+    JugglingDemos,
+    JugglingTask,
+    generate_demonstrations,
+    split_cycles,
+)
+from motion_envs.models.juggling._juggler import AnalyticJuggler
+from motion_envs.models.juggling._segmentation import load_juggling_csv
+
+__all__ = [
+    "DEMO_CYCLES",
+    "FIT_SEED",
+    "FIT_TEST_FRACTION",
+    "TRACKING_NOISE",
+    "DefaultFit",
+    "default_fit",
+    "fit_juggler",
+    "juggler_demonstrations",
+    "load_demonstrations",
+    "load_juggler",
+]
+
+#: Tracking noise (m) that comes with a release-noise level, as in ``motion-bench juggling
+#: --noise LEVEL`` (its ``--tracking`` default) and ``Juggling-v0``'s ``noise=LEVEL``.
+TRACKING_NOISE = 0.0005
+
+#: Seed (of the demonstrations and the split) and held-out share with which
+#: ``motion-bench juggling`` (default ``--seed 0``) generates, splits and fits;
+#: Juggling-v0 fits the same juggler.
+FIT_SEED = 0
+FIT_TEST_FRACTION = 0.25
+
+#: Cycles per simulated person of the default demonstrations (the paper's 50 per phase).
+DEMO_CYCLES = 50
+
+
+def load_demonstrations(
+    data: str | os.PathLike[str] | None = None,
+    task: JugglingTask | None = None,
+    seed: int = FIT_SEED,
+    n_cycles: int = DEMO_CYCLES,
+    n_persons: int = 1,
+) -> JugglingDemos:
+    """The SIMULATED demonstrations (``data`` None; seeded by ``seed``) or the users'
+    juggling CSV at ``data`` (:func:`~motion_envs.models.juggling.load_juggling_csv`)."""
+    if data is None:
+        return generate_demonstrations(n_cycles=n_cycles, n_persons=n_persons, seed=seed, task=task)
+    return load_juggling_csv(data, task=task)
+
+
+def fit_juggler(
+    demos: JugglingDemos,
+    seed: int = FIT_SEED,
+    test_fraction: float = FIT_TEST_FRACTION,
+    **kwargs: object,
+) -> tuple[AnalyticJuggler, set[tuple[int, int]], set[tuple[int, int]]]:
+    """The juggler as ``motion-bench juggling --seed seed`` fits it, and the split.
+
+    ``demos`` (a :class:`~motion_envs.datasets.juggling.JugglingDemos`) is split by
+    demonstration (:func:`~motion_envs.datasets.juggling.split_cycles`); the juggler
+    (``AnalyticJuggler(task=demos.task, **kwargs)``) is fitted on the training cycles only.
+    Returns ``(juggler, train, test)``.
+    """
+    train, test = split_cycles(demos, test_fraction, seed)
+    juggler = AnalyticJuggler(task=demos.task, **kwargs).fit(demos, train)  # type: ignore[arg-type]
+    return juggler, train, test
+
+
+@dataclass(frozen=True)
+class DefaultFit:
+    """The default fit: the demonstrations, their split and the fitted juggler."""
+
+    demos: JugglingDemos
+    train: frozenset[tuple[int, int]]
+    test: frozenset[tuple[int, int]]
+    juggler: AnalyticJuggler
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_fit(data: str | None, task: JugglingTask) -> DefaultFit:
+    demos = load_demonstrations(data, task)  # SIMULATED when data is None
+    juggler, train, test = fit_juggler(demos)
+    return DefaultFit(demos, frozenset(train), frozenset(test), juggler)
+
+
+def default_fit(data: str | os.PathLike[str] | None, task: JugglingTask) -> DefaultFit:
+    """The default fit of ``data`` (None: the built-in SIMULATED demonstrations) under
+    ``task``: seed ``FIT_SEED``, held-out share ``FIT_TEST_FRACTION``; computed once per
+    process, data and task (a few seconds). Do not change the returned juggler: take
+    :func:`load_juggler`'s copy."""
+    return _cached_fit(None if data is None else os.fspath(data), task)
+
+
+def juggler_demonstrations(
+    data: str | os.PathLike[str] | None, task: JugglingTask
+) -> tuple[JugglingDemos, frozenset[tuple[int, int]], frozenset[tuple[int, int]]]:
+    """The demonstrations the default juggler is fitted on and their split: ``(demos,
+    train, test)`` with ``train``/``test`` sets of ``(recording, cycle)``; the juggler saw
+    the ``train`` cycles only (``motion-bench juggling``'s split, seed ``FIT_SEED``)."""
+    fit = default_fit(data, task)
+    return fit.demos, fit.train, fit.test
+
+
+def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> AnalyticJuggler:
+    """A fresh copy of the analytic juggler fitted as ``motion-bench juggling`` fits it:
+    on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
+    the users' juggling CSV (:func:`default_fit`)."""
+    return copy.deepcopy(default_fit(data, task).juggler)
