@@ -117,18 +117,25 @@ class Case:
     ``kwargs``: a configuration that draws from the seed (tests of determinism and
     pickling need the seed to matter); ``action_scale``: the seeded random actions'
     bound (small enough that episodes last); ``nominal``: a zero-action run returning
-    ``(what the environment did, what its nominal does)``.
+    ``(what the environment did, what its nominal does)``; ``checked``: further
+    configurations the checkers also run on.
     """
 
     nominal: Callable[[gym.Env], tuple[np.ndarray, np.ndarray]]
     kwargs: dict[str, Any] = field(default_factory=dict)
     action_scale: float = 1.0
+    checked: tuple[dict[str, Any], ...] = ()
 
 
 CASES: dict[str, Case] = {
     "MotionEnvs/OrientationReach": Case(_orientation_nominal, {"nominal": "bezier-task"}),
     "MotionEnvs/PositionReach": Case(_position_nominal, {"shapes": ["Angle", "CShape", "GShape"]}),
-    "MotionEnvs/Juggling": Case(_juggling_nominal, {"noise": 0.05}, action_scale=0.2),
+    "MotionEnvs/Juggling": Case(
+        _juggling_nominal,
+        {"noise": 0.05},
+        action_scale=0.2,
+        checked=({"noise": 0.1, "frame_skip": 3}, {"noise": {"release": 0.05, "tracking": 0.002}}),
+    ),
 }
 
 
@@ -175,7 +182,7 @@ def _assert_checker_clean(check: Callable[[], None]) -> None:
 
 
 def _checker_kwargs(env_id: str) -> list[dict[str, Any]]:
-    return [{}, case(env_id).kwargs]
+    return [{}, case(env_id).kwargs, *case(env_id).checked]
 
 
 def _documented_defaults(cls: type) -> dict[str, object]:
