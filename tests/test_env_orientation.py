@@ -1,23 +1,17 @@
-"""MotionEnvs/OrientationReach-v0 and -v1: contract, reliability, the zero-action invariant.
+"""MotionEnvs/OrientationReach-v0 and -v1: what is special to them (the contract every id
+keeps, checkers, determinism, pickling, spaces, is in ``test_env_contract.py``).
 
 Every test runs on both versions (the autouse fixture ``env_version`` sets ``ENV_ID``).
 """
 
 from __future__ import annotations
 
-import ast
-import inspect
 import json
-import pickle
-import random
-import re
-import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
-import motion_envs
 from motion_envs.envs.orientation_reach import N_STEPS, OrientationReachEnv
 
 ENV_ID = "MotionEnvs/OrientationReach-v0"
@@ -31,71 +25,11 @@ def env_version(request, monkeypatch):
     return request.param
 
 
-# Warnings the checkers may raise that say nothing about the environment's correctness:
-# SB3 recommends a symmetric, normalised observation space; ours has [0, 1] entries
-# (tau, one-hot) by design.
-# gym.make of a -v0 id notes that a newer version (-v1) is registered (Gymnasium's own
-# deprecation notice, as for every outdated version of its environments).
-ALLOWED_WARNINGS = (
-    r".*(symmetric|normaliz|normalis).*observation.*",
-    r".*is out of date\. You should consider upgrading to version.*",
-)
-
-
-def _fail_on_warnings(record: list[warnings.WarningMessage]) -> None:
-    bad = [
-        str(w.message)
-        for w in record
-        if not any(re.match(pattern, str(w.message)) for pattern in ALLOWED_WARNINGS)
-    ]
-    assert not bad, f"unexpected warnings: {bad}"
-
-
-def rollout(env: gym.Env, seed: int, actions: np.ndarray):
-    obs, _ = env.reset(seed=seed)
-    out = [obs]
-    rewards = []
-    for a in actions:
-        obs, reward, terminated, truncated, _ = env.step(a)
-        out.append(obs)
-        rewards.append(reward)
-        if terminated or truncated:
-            obs, _ = env.reset()
-            out.append(obs)
-    return np.stack(out), np.array(rewards)
-
-
-@pytest.fixture(scope="module")
-def actions() -> np.ndarray:
-    return np.random.default_rng(123).uniform(-1, 1, size=(120, 3)).astype(np.float32)
-
-
-def test_registered_ids_and_module_form():
-    assert ENV_ID in motion_envs.ENV_IDS
-    assert set(motion_envs.ENV_IDS) <= set(gym.registry)
-    env = gym.make("motion_envs:" + ENV_ID)
+def test_registered_class_and_episode_length():
+    env = gym.make(ENV_ID)
     assert isinstance(env.unwrapped, OrientationReachEnv)
     assert env.spec.max_episode_steps == N_STEPS
     env.close()
-
-
-def test_gymnasium_check_env_without_warnings():
-    from gymnasium.utils.env_checker import check_env
-
-    env = gym.make(ENV_ID).unwrapped
-    with warnings.catch_warnings(record=True) as record:
-        warnings.simplefilter("always")
-        check_env(env, skip_render_check=True)
-    _fail_on_warnings(record)
-
-
-def test_sb3_check_env_without_warnings():
-    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
-    env = OrientationReachEnv()
-    with warnings.catch_warnings(record=True) as record:
-        warnings.simplefilter("always")
-        sb3_checker.check_env(env, warn=True)
-    _fail_on_warnings(record)
 
 
 def test_episode_is_50_steps_on_the_grid():
@@ -180,49 +114,6 @@ def test_train_and_test_splits_hold_different_subjects():
     assert set(other.subjects) != set(test.subjects)
 
 
-def test_seeded_rollouts_are_bit_identical(actions):
-    a = rollout(gym.make(ENV_ID), 7, actions)
-    b = rollout(gym.make(ENV_ID), 7, actions)
-    np.testing.assert_array_equal(a[0], b[0])
-    np.testing.assert_array_equal(a[1], b[1])
-    c = rollout(gym.make(ENV_ID), 8, actions)
-    assert not np.array_equal(a[0][0], c[0][0]) or not np.array_equal(a[1], c[1])
-
-
-def test_global_seeds_change_nothing(actions):
-    np.random.seed(0)  # noqa: NPY002 (the legacy global seed is what users set)
-    random.seed(0)
-    a = rollout(gym.make(ENV_ID), 11, actions)
-    np.random.seed(999)  # noqa: NPY002
-    random.seed(999)
-    b = rollout(gym.make(ENV_ID), 11, actions)
-    np.testing.assert_array_equal(a[0], b[0])
-    np.testing.assert_array_equal(a[1], b[1])
-
-
-def test_pickled_env_reproduces_its_original(actions):
-    env = gym.make(ENV_ID, nominal="bezier-task")
-    env.reset(seed=5)
-    for a in actions[:20]:
-        env.step(a)
-    clone = pickle.loads(pickle.dumps(env))
-    for a in actions[20:]:
-        r1 = env.step(a)
-        r2 = clone.step(a)
-        np.testing.assert_array_equal(r1[0], r2[0])
-        assert r1[1:4] == r2[1:4]
-        if r1[2] or r1[3]:
-            np.testing.assert_array_equal(env.reset()[0], clone.reset()[0])
-
-
-@pytest.mark.parametrize("shape", [(2,), (4,), (1, 3), (3, 1), ()])
-def test_wrong_action_shape_raises(shape):
-    env = gym.make(ENV_ID)
-    env.reset(seed=0)
-    with pytest.raises(ValueError, match="shape"):
-        env.step(np.zeros(shape, np.float32))
-
-
 def test_out_of_bound_actions_are_clipped_to_the_bound():
     a = gym.make(ENV_ID)
     b = gym.make(ENV_ID)
@@ -264,14 +155,6 @@ def test_observations_stay_in_space_over_10000_random_steps():
         if terminated or truncated:
             obs, _ = env.reset()
             assert space.contains(obs)
-
-
-def test_close_twice_and_step_before_reset():
-    env = OrientationReachEnv()
-    with pytest.raises(RuntimeError, match="reset"):
-        env.step(np.zeros(3))
-    env.close()
-    env.close()
 
 
 def test_reward_weights_and_info_terms():
@@ -338,37 +221,3 @@ def test_users_csv_data(tmp_path):
     env = OrientationReachEnv(data=str(path), split="test")
     ref = OrientationReachEnv(split="test")
     np.testing.assert_allclose(env.task.steps, ref.task.steps, atol=1e-12)
-
-
-def _documented_defaults(cls) -> dict[str, object]:
-    doc = inspect.getdoc(cls)
-    section = doc.split("## Arguments", 1)[1].split("## Version History", 1)[0]
-    out = {}
-    for line in section.splitlines():
-        m = re.match(r"\|\s*`(\w+)`\s*\|[^|]*\|\s*`([^`]*)`\s*\|", line)
-        if m:
-            out[m.group(1)] = ast.literal_eval(m.group(2))
-    return out
-
-
-@pytest.mark.parametrize("cls", [OrientationReachEnv])
-def test_documented_argument_defaults_equal_the_signature(cls):
-    documented = _documented_defaults(cls)
-    params = {
-        name: p.default
-        for name, p in inspect.signature(cls.__init__).parameters.items()
-        if name != "self"
-    }
-    assert documented == params
-    doc = inspect.getdoc(cls)
-    for heading in (
-        "## Description",
-        "## Action Space",
-        "## Observation Space",
-        "## Rewards",
-        "## Starting State",
-        "## Episode End",
-        "## Arguments",
-        "## Version History",
-    ):
-        assert heading in doc

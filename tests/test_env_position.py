@@ -1,4 +1,5 @@
-"""MotionEnvs/PositionReach-v0 and -v1: contract, reliability, the zero-action invariant.
+"""MotionEnvs/PositionReach-v0 and -v1: what is special to them (the contract every id keeps,
+checkers, determinism, pickling, spaces, is in ``test_env_contract.py``).
 
 Every test runs on both versions (the autouse fixture ``env_version`` sets ``ENV_ID``).
 """
@@ -6,16 +7,11 @@ Every test runs on both versions (the autouse fixture ``env_version`` sets ``ENV
 from __future__ import annotations
 
 import json
-import pickle
-import random
-import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from test_env_orientation import _documented_defaults, _fail_on_warnings, rollout
 
-import motion_envs
 from motion_envs.envs.orientation_reach import N_STEPS
 from motion_envs.envs.position_reach import PositionReachEnv
 
@@ -36,30 +32,13 @@ def make(**kwargs):
     return gym.make(ENV_ID, **kwargs)
 
 
-@pytest.fixture(scope="module")
-def actions() -> np.ndarray:
-    return np.random.default_rng(5).uniform(-1, 1, size=(120, 2)).astype(np.float32)
-
-
-def test_registered_and_module_form(env_version):
-    assert ENV_ID in motion_envs.ENV_IDS
-    env = gym.make("motion_envs:" + ENV_ID, shapes=SHAPES)
+def test_registered_class_and_spaces(env_version):
+    env = make()
     assert isinstance(env.unwrapped, PositionReachEnv)
     assert env.spec.max_episode_steps == N_STEPS
     assert env.action_space.shape == (2,)
     timing = 2 if env_version == "v1" else 0  # v1: duration and elapsed time
     assert env.observation_space.shape == (4 * 2 + 1 + 3 + timing,)
-
-
-def test_gymnasium_and_sb3_check_env_without_warnings():
-    from gymnasium.utils.env_checker import check_env
-
-    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
-    with warnings.catch_warnings(record=True) as record:
-        warnings.simplefilter("always")
-        check_env(gym.make(ENV_ID).unwrapped, skip_render_check=True)
-        sb3_checker.check_env(PositionReachEnv(shapes=SHAPES), warn=True)
-    _fail_on_warnings(record)
 
 
 def run_bench(out, split: str) -> dict:
@@ -149,39 +128,6 @@ def test_residual_scale_is_the_offset_of_a_unit_action():
     np.testing.assert_allclose(obs[4:6] - nominal, [2.0, -1.0], atol=1e-4)
 
 
-def test_seeded_rollouts_bit_identical_and_global_seeds_irrelevant(actions):
-    np.random.seed(0)  # noqa: NPY002
-    random.seed(0)
-    a = rollout(make(), 3, actions)
-    np.random.seed(1)  # noqa: NPY002
-    random.seed(1)
-    b = rollout(make(), 3, actions)
-    np.testing.assert_array_equal(a[0], b[0])
-    np.testing.assert_array_equal(a[1], b[1])
-
-
-def test_pickled_env_reproduces_its_original(actions):
-    env = make()
-    env.reset(seed=5)
-    for a in actions[:20]:
-        env.step(a)
-    clone = pickle.loads(pickle.dumps(env))
-    for a in actions[20:]:
-        r1, r2 = env.step(a), clone.step(a)
-        np.testing.assert_array_equal(r1[0], r2[0])
-        assert r1[1:4] == r2[1:4]
-        if r1[2] or r1[3]:
-            np.testing.assert_array_equal(env.reset()[0], clone.reset()[0])
-
-
-@pytest.mark.parametrize("shape", [(3,), (1,), (1, 2), ()])
-def test_wrong_action_shape_raises(shape):
-    env = make()
-    env.reset(seed=0)
-    with pytest.raises(ValueError, match="shape"):
-        env.step(np.zeros(shape, np.float32))
-
-
 def test_clipping_and_non_finite_actions():
     a, b = make(), make()
     a.reset(seed=1)
@@ -196,26 +142,6 @@ def test_clipping_and_non_finite_actions():
     for _ in range(5):
         ra, rb = a.step(np.full(2, 0.3, np.float32)), b.step(np.full(2, 0.3, np.float32))
         np.testing.assert_array_equal(ra[0], rb[0])
-
-
-def test_observations_stay_in_space_over_10000_random_steps():
-    env = make()
-    env.action_space.seed(0)
-    obs, _ = env.reset(seed=0)
-    for _ in range(10_000):
-        obs, _, terminated, truncated, _ = env.step(env.action_space.sample())
-        assert env.observation_space.contains(obs)
-        if terminated or truncated:
-            obs, _ = env.reset()
-            assert env.observation_space.contains(obs)
-
-
-def test_close_twice_and_step_before_reset():
-    env = PositionReachEnv(shapes=SHAPES)
-    with pytest.raises(RuntimeError, match="reset"):
-        env.step(np.zeros(2))
-    env.close()
-    env.close()
 
 
 @pytest.mark.parametrize(
@@ -256,15 +182,3 @@ def test_users_csv_in_3d(tmp_path):
     env.reset(seed=0)
     obs, *_ = env.step(np.zeros(3, np.float32))
     assert env.observation_space.contains(obs)
-
-
-def test_documented_argument_defaults_equal_the_signature():
-    import inspect
-
-    documented = _documented_defaults(PositionReachEnv)
-    params = {
-        name: p.default
-        for name, p in inspect.signature(PositionReachEnv.__init__).parameters.items()
-        if name != "self"
-    }
-    assert documented == params

@@ -1,4 +1,6 @@
-"""Rendering of both environments: rgb_array frames, the MuJoCo hand frame, RecordVideo."""
+"""Rendering of the reaching environments: rgb_array frames over an episode, the MuJoCo hand
+frame, RecordVideo (the first frame and render() without a mode of every id:
+``test_env_contract.py``)."""
 
 from __future__ import annotations
 
@@ -34,13 +36,10 @@ def test_rgb_array_frames(env_id, kwargs):
     env.close()
 
 
-def test_orientation_uses_the_mujoco_hand_frame():
+def test_orientation_uses_the_mujoco_hand_frame(mujoco_gl):
     from motion_envs.envs.rendering import HandFrameRenderer
 
-    try:
-        renderer = HandFrameRenderer(96, 96, backend="mujoco")
-    except RuntimeError as exc:
-        pytest.skip(f"no MuJoCo OpenGL backend here: {exc}")
+    renderer = HandFrameRenderer(96, 96, backend="mujoco")
     q = np.tile([1.0, 0.0, 0.0, 0.0], (50, 1))
     frame = renderer.render(q, q, q[:1], 0)
     assert frame.shape == (96, 96, 3) and frame.dtype == np.uint8
@@ -61,13 +60,6 @@ def test_matplotlib_fallback_of_the_hand_frame():
     assert frame.shape == (80, 100, 3) and frame.dtype == np.uint8
     with pytest.raises(ValueError, match="backend"):
         HandFrameRenderer(backend="opengl")
-
-
-def test_render_without_mode_returns_none():
-    env = gym.make(ORIENTATION).unwrapped
-    env.reset(seed=0)
-    with pytest.warns(UserWarning, match="render_mode"):
-        assert env.render() is None
 
 
 def test_vector_env_renders_every_sub_env():

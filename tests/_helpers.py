@@ -1,0 +1,43 @@
+"""Plain helper functions shared by test modules (not a test module: pytest collects nothing here).
+
+Why a module and not conftest fixtures: these take arguments and return values, so an explicit
+``from _helpers import ...`` shows the reader where they come from; fixtures (``conftest.py``)
+are kept for set-up that a test requests by name (e.g. skipping without an OpenGL backend).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+def run_juggler_alone(
+    task: Any, noise: Any, seed: int, cycle: int, n_steps: int, world: Any, continuous: bool
+) -> tuple[np.ndarray, list[tuple[bool, bool, bool]]]:
+    """The analytic juggler alone in ``world``: its hand path and per-step events.
+
+    As ``motion-bench juggling`` runs cycle ``cycle`` of ``seed`` (to the first catch), or,
+    with ``continuous``, juggling on and redrawing the noise at each toss as Juggling-v0
+    does, for at most ``n_steps`` control periods (stopping at a drop). ``events`` holds
+    ``(released, caught, dropped)`` per period.
+    """
+    from motion_envs.models.juggling import cycle_rngs, load_juggler
+
+    juggler = load_juggler(None, task)
+    world_rng, juggler_rng = cycle_rngs(seed, cycle + 1)[cycle]
+    home = getattr(juggler, "home_", task.home)
+    state = world.reset(home, noise=noise, rng=world_rng)
+    juggler.reset(state, juggler_rng)
+    hands, events, phase = [], [], juggler.phase
+    for _ in range(n_steps):
+        target, armed = juggler.command(state)
+        if continuous and juggler.phase != phase and juggler.phase == "toss":
+            world.redraw_noise(world_rng)
+        phase = juggler.phase
+        state = world.step(target, armed)
+        hands.append(state.hand_pos)
+        events.append((state.released, state.caught, state.dropped))
+        if state.dropped or (state.caught and not continuous):
+            break
+    return np.array(hands), events
