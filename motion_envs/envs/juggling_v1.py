@@ -40,6 +40,7 @@ __all__ = [
     "V1_CYCLE_TIME",
     "V1_OBS_DIM",
     "JugglingV1Env",
+    "held_out_likeness",
     "v1_juggler",
 ]
 
@@ -67,7 +68,9 @@ _SPEED_BOUND = 30.0
 
 
 @functools.lru_cache(maxsize=4)
-def _fitted(gravity: float) -> tuple[Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]], Any]:
+def _fitted(
+    gravity: float,
+) -> tuple[Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]], Any]:
     from motion_envs.datasets.juggling_demos import generate_demonstrations
     from motion_envs.models.juggling_run import fit_juggler
 
@@ -83,7 +86,9 @@ def _fitted(gravity: float) -> tuple[Any, frozenset[tuple[int, int]], frozenset[
     return demos, frozenset(train), frozenset(test), juggler
 
 
-def v1_juggler(gravity: float) -> tuple[Any, Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]]]:
+def v1_juggler(
+    gravity: float,
+) -> tuple[Any, Any, frozenset[tuple[int, int]], frozenset[tuple[int, int]]]:
     """``(juggler, demos, train, test)``: a fresh copy of Juggling-v1's analytic juggler and
     the SIMULATED demonstrations (seed 0) at ``gravity`` it was fitted on (training cycles
     only; ``motion-bench juggling``'s split). Differences from Juggling-v0's juggler: the
@@ -98,6 +103,12 @@ def v1_juggler(gravity: float) -> tuple[Any, Any, frozenset[tuple[int, int]], fr
 def _likeness(gravity: float, split: str) -> HumanLikeness:
     demos, train, test, _ = _fitted(gravity)
     return HumanLikeness(demos, train if split == "train" else test)
+
+
+def held_out_likeness(gravity: float) -> HumanLikeness:
+    """Human-likeness against the HELD-OUT demonstrations (the benchmark's; the reward
+    uses the training ones)."""
+    return _likeness(float(gravity), "test")
 
 
 class JugglingV1Env(LazyRendererMixin, gym.Env):
@@ -125,9 +136,9 @@ class JugglingV1Env(LazyRendererMixin, gym.Env):
 
     | level    | `latency` (s) | `position_std` (m) | `velocity_std` (m/s) | `release_speed_std` | `release_angle_std` (deg) |
     |----------|---------------|--------------------|----------------------|---------------------|---------------------------|
-    | `easy`   | 0.0           | 0.0                | 0.0                  | 0.03                | 1.0                       |
-    | `medium` | 0.1           | 0.002              | 0.02                 | 0.05                | 2.0                       |
-    | `hard`   | 0.2           | 0.004              | 0.05                 | 0.08                | 3.0                       |
+    | `easy`   | 0.0           | 0.0                | 0.0                  | 0.05                | 4.0                       |
+    | `medium` | 0.10          | 0.002              | 0.02                 | 0.08                | 6.0                       |
+    | `hard`   | 0.11          | 0.004              | 0.05                 | 0.12                | 12.0                      |
 
     The zero action reproduces the reference controller exactly (the same world, sensor and
     seeds; tested against an independent loop).

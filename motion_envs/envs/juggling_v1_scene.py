@@ -191,7 +191,9 @@ class JugglingV1World:
         self._k = 0
         self.state: JugglingState | None = None
 
-    def reset(self, hand_pos: ArrayLike, *, rng: np.random.Generator | None = None) -> JugglingState:
+    def reset(
+        self, hand_pos: ArrayLike, *, rng: np.random.Generator | None = None
+    ) -> JugglingState:
         """Hand at rest at ``hand_pos``, ball held in it, time 0; the scene placed (camera
         and lights included) before any physics step."""
         x, z = _vec2(hand_pos, "hand_pos")

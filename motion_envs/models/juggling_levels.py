@@ -80,9 +80,9 @@ class JugglingLevel:
 
 #: The levels (see the env docstring's table).
 LEVELS: dict[str, JugglingLevel] = {
-    "easy": JugglingLevel(0.0, 0.0, 0.0, 0.03, 1.0),
-    "medium": JugglingLevel(0.1, 0.002, 0.02, 0.05, 2.0),
-    "hard": JugglingLevel(0.2, 0.004, 0.05, 0.08, 3.0),
+    "easy": JugglingLevel(0.0, 0.0, 0.0, 0.05, 4.0),
+    "medium": JugglingLevel(0.10, 0.002, 0.02, 0.08, 6.0),
+    "hard": JugglingLevel(0.11, 0.004, 0.05, 0.12, 12.0),
 }
 
 #: The reference controllers' names.
@@ -145,7 +145,9 @@ class _LatencyAware(JugglerController):
     def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
         if state.held or self.latency <= 0:
             return self.juggler.command(state)
-        p, v = predict_forward(state.ball_pos, state.ball_vel, self.latency, self.juggler.task.gravity)
+        p, v = predict_forward(
+            state.ball_pos, state.ball_vel, self.latency, self.juggler.task.gravity
+        )
         return self.juggler.command(replace(state, ball_pos=p, ball_vel=v))
 
 
@@ -223,7 +225,9 @@ class HumanLikeness:
     velocity is the backward difference of the recorded positions.
     """
 
-    def __init__(self, demos: JugglingDemos, cycles: set[tuple[int, int]] | frozenset[tuple[int, int]]) -> None:
+    def __init__(
+        self, demos: JugglingDemos, cycles: set[tuple[int, int]] | frozenset[tuple[int, int]]
+    ) -> None:
         points: dict[str, list[FloatArray]] = {p: [] for p in PHASES}
         for s in demos.segments():
             if (s.recording, s.cycle) not in cycles:
