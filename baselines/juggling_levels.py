@@ -203,9 +203,12 @@ def _targets(levels: list[dict[str, Any]]) -> dict[str, Any]:
 
 def report(doc: dict[str, Any]) -> str:
     """A plain-text table of ``doc``."""
+    seeds = doc["seeds"]
     lines = [
-        f"Juggling-v1 levels ({doc['demonstrations']}); {doc['seeds']['count']} {doc['seeds']['split']} episodes each",
-        f"{'level':8s} {'method':24s} {'catch rate [95% CI]':26s} {'consec.':>7s} {'likeness m':>10s}",
+        f"Juggling-v1 levels ({doc['demonstrations']}); "
+        f"{seeds['count']} {seeds['split']} episodes each",
+        f"{'level':8s} {'method':24s} {'catch rate [95% CI]':26s} "
+        f"{'consec.':>7s} {'likeness m':>10s}",
     ]
     for lv in doc["levels"]:
         for name, m in lv["methods"].items():

@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import math
 from importlib import resources
+
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -224,7 +225,7 @@ class JugglingV1World:
         start = self._ref
         vref = np.array([dx / dt, dz / dt])
         aref = (vref - self._vref) / dt
-        self._ref = start + (dx, dz)
+        self._ref = start + np.array([dx, dz])
         self._vref = vref
         v_before = self.data.qvel[0:2].copy()
         m, d, phys = self.model, self.data, self.physics
