@@ -217,7 +217,8 @@ class JugglingV1Env(LazyRendererMixin, gym.Env):
     | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
     | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
     | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
-    | `width`, `height`   | **int**   | `480`       | frame size in pixels |
+    | `width`             | **int**   | `480`       | frame width in pixels |
+    | `height`            | **int**   | `480`       | frame height in pixels |
 
     ## Version History
     * v1: MuJoCo contacts and an actuated hand with human limits, real gravity, a delayed
