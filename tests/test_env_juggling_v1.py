@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from test_env_orientation import _documented_defaults
 
-import motion_envs  # noqa: F401
+import motion_envs
 from motion_envs.datasets.juggling_task import JugglingTask
 from motion_envs.envs.juggling_v1 import V1_OBS_DIM, JugglingV1Env, held_out_likeness, v1_juggler
 from motion_envs.envs.juggling_v1_scene import (
@@ -181,14 +181,10 @@ def test_hand_respects_its_speed_and_acceleration_limits():
     assert abs(first.hand_pos[0] - 0.2) < 1.5  # never a jump to the target
 
 
-def _flying_ball(world, hand, ball, ball_vel):
+def _flying_ball(world, hand, ball, ball_vel, hand_vel=(0.0, 0.0)):
     """A world whose ball flies at ``ball`` with ``ball_vel``, the hand at ``hand``."""
-    world.reset(hand)
-    d = world.data
-    d.qpos[2:4] = ball
-    d.qvel[2:4] = ball_vel
-    world._held, world._left = False, True  # noqa: SLF001 (test set-up)
-    world.physics.set_ball_contacts(True)
+    world.reset(hand, hand_vel=hand_vel)
+    world.launch(ball, ball_vel)
 
 
 def test_capture_rule_and_no_tunnelling_at_the_fastest_closing_speed():
@@ -207,9 +203,7 @@ def test_capture_rule_and_no_tunnelling_at_the_fastest_closing_speed():
     # its speed limit: it bounces off (relative speed > CAPTURE_SPEED), never through
     v_fall = math.sqrt(2 * 9.81 * 2.0)
     assert v_fall + HAND_SPEED_LIMIT > CAPTURE_SPEED
-    _flying_ball(world, (0.2, 0.8), (0.2, 1.3), (0.0, -v_fall))
-    world._vref = np.array([0.0, HAND_SPEED_LIMIT])  # noqa: SLF001
-    world.data.qvel[1] = HAND_SPEED_LIMIT
+    _flying_ball(world, (0.2, 0.8), (0.2, 1.3), (0.0, -v_fall), (0.0, HAND_SPEED_LIMIT))
     z = 0.8
     above = []
     for _ in range(60):

@@ -193,16 +193,22 @@ class JugglingV1World:
         self.state: JugglingState | None = None
 
     def reset(
-        self, hand_pos: ArrayLike, *, rng: np.random.Generator | None = None
+        self,
+        hand_pos: ArrayLike,
+        *,
+        rng: np.random.Generator | None = None,
+        hand_vel: ArrayLike = (0.0, 0.0),
     ) -> JugglingState:
-        """Hand at rest at ``hand_pos``, ball held in it, time 0; the scene placed (camera
-        and lights included) before any physics step."""
+        """Hand at ``hand_pos`` moving at ``hand_vel`` (default at rest), ball held in it,
+        time 0; the scene placed (camera and lights included) before any physics step."""
         x, z = _vec2(hand_pos, "hand_pos")
+        vx, vz = _vec2(hand_vel, "hand_vel")
         self._rng = rng
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = (x, z, x, z)
+        self.data.qvel[:] = (vx, vz, vx, vz)
         self._ref = np.array([x, z])
-        self._vref = np.zeros(2)
+        self._vref = np.array([vx, vz])
         self._held, self._left, self._dropped = True, False, False
         self._k = 0
         self.physics.set_ball_contacts(False)
@@ -288,6 +294,17 @@ class JugglingV1World:
                 released = True
                 phys.set_ball_contacts(True)
         self.state = self._make_state(released, caught)
+        return self.state
+
+    def launch(self, ball_pos: ArrayLike, ball_vel: ArrayLike) -> JugglingState:
+        """Put the ball in flight at ``ball_pos`` with ``ball_vel`` (as if tossed long ago:
+        it may be captured at once), the hand unchanged; for tests and demonstrations."""
+        self.data.qpos[2:4] = _vec2(ball_pos, "ball_pos")
+        self.data.qvel[2:4] = _vec2(ball_vel, "ball_vel")
+        self._held, self._left = False, True
+        self.physics.set_ball_contacts(True)
+        mujoco.mj_forward(self.model, self.data)
+        self.state = self._make_state(False, False)
         return self.state
 
     @property
