@@ -179,7 +179,8 @@ class JugglingV1Env(LazyRendererMixin, gym.Env):
     same phase in the TRAINING demonstrations (``motion_envs.models.juggling_levels.HumanLikeness``;
     never the controller's own plan, so the zero action is not its optimum). `info` holds
     each weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
-    ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far, ``phase``,
+    ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``:
+    the same, Juggling-v0's name), ``phase``,
     ``held``, ``time``, the true ``hand`` and ``ball`` positions ``(x, z)`` (m) and
     ``action_invalid``.
 
@@ -402,6 +403,7 @@ class JugglingV1Env(LazyRendererMixin, gym.Env):
             "caught": bool(caught),
             "catches": self._catches,
             "tosses": self._tosses,
+            "cycles": self._tosses,
             "phase": phase,
             "held": true.held,
             "time": true.time,

@@ -121,19 +121,19 @@ class JugglingPhysics:
     # qpos/qvel layout: hand_x, hand_z, ball_x, ball_z
     def hand_position(self) -> NDArray[np.float64]:
         """The hand origin (where a held ball's centre sits), ``(x, z)`` m."""
-        return self.data.qpos[0:2].copy()
+        return np.array(self.data.qpos[0:2], dtype=np.float64)
 
     def hand_velocity(self) -> NDArray[np.float64]:
         """``(vx, vz)`` m/s."""
-        return self.data.qvel[0:2].copy()
+        return np.array(self.data.qvel[0:2], dtype=np.float64)
 
     def ball_position(self) -> NDArray[np.float64]:
         """The ball's centre ``(x, z)`` m."""
-        return self.data.qpos[2:4].copy()
+        return np.array(self.data.qpos[2:4], dtype=np.float64)
 
     def ball_velocity(self) -> NDArray[np.float64]:
         """``(vx, vz)`` m/s."""
-        return self.data.qvel[2:4].copy()
+        return np.array(self.data.qvel[2:4], dtype=np.float64)
 
     def ball_touches(self, geom: int) -> bool:
         """Whether a contact between the ball and ``geom`` is active."""
