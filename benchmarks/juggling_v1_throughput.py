@@ -31,15 +31,17 @@ JUGGLING = "MotionEnvs/Juggling-v1"
 ANCHOR = "Reacher-v5"
 
 
-def _env_rate(env: gym.Env, actions: np.ndarray) -> float:
-    """Steps per second of ``env`` over ``actions`` (resetting at episode ends)."""
+def _env_rate(env: gym.Env, actions: np.ndarray, cpu: dict[str, list[float]], key: str) -> float:
+    """Steps per second (wall clock) of ``env`` over ``actions`` (resetting at episode
+    ends); the steps per CPU second of the process are appended to ``cpu[key]``."""
     env.reset(seed=0)
     step, reset = env.step, env.reset
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for a in actions:
         _, _, terminated, truncated, _ = step(a)
         if terminated or truncated:
             reset()
+    cpu.setdefault(key, []).append(actions.shape[0] / (time.process_time() - c0))
     return actions.shape[0] / (time.perf_counter() - t0)
 
 
@@ -70,19 +72,25 @@ def main(argv: list[str] | None = None) -> int:
     jobs.append((ANCHOR, ANCHOR, {}, actions))
     best: dict[str, float] = {}
     steps: dict[str, float] = {}
+    cpu_runs: dict[str, list[float]] = {}
     for key, env_id, kwargs, acts in tqdm(jobs, desc="environments", file=sys.stderr):
         env = gym.make(env_id, **kwargs)
         steps[key] = _median(
-            lambda env=env, acts=acts: _env_rate(env, acts), args.repeats, best, key
+            lambda env=env, acts=acts, key=key: _env_rate(env, acts, cpu_runs, key),
+            args.repeats,
+            best,
+            key,
         )
         env.close()
+    # per CPU second (the warm-up run left out): robust to other processes on the machine
+    cpu = {k: statistics.median(v[1:]) for k, v in cpu_runs.items()}
     info = machine()
     print_machine(info)
     print(f"median of {args.repeats} timed runs after a warm-up")
     reacher = steps[ANCHOR]
     print_table(
-        ["environment", "steps/s", f"/ {ANCHOR}"],
-        [[k, v, v / reacher] for k, v in steps.items()],
+        ["environment", "steps/s", f"/ {ANCHOR}", "steps/CPU s", f"/ {ANCHOR} (CPU)"],
+        [[k, v, v / reacher, cpu[k], cpu[k] / cpu[ANCHOR]] for k, v in steps.items()],
     )
     ratio = steps[f"{JUGGLING} medium (uniform actions)"] / reacher
     print_json(
@@ -94,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
             "steps": args.steps,
             "steps_per_s": steps,
             "over_reacher": {k: v / reacher for k, v in steps.items()},
+            "steps_per_cpu_s": cpu,
+            "over_reacher_cpu": {k: v / cpu[ANCHOR] for k, v in cpu.items()},
             "best_run": best,
             "targets": {"juggling_v1_at_least_reacher": ratio >= 1.0},
         }

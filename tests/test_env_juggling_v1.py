@@ -368,3 +368,20 @@ def test_closed_loop_toss_like_the_training_demonstrations():
     d_speed, j_speed = np.linalg.norm(np.median(rel, axis=0)), np.linalg.norm(np.median(jr, axis=0))
     assert abs(j_speed / d_speed - 1) <= 0.10
     assert abs(np.median(jc) / np.median(catch) - 1) <= 0.10
+
+
+def test_motion_bench_train_and_agent_smoke(tmp_path):
+    """``motion-bench train --env MotionEnvs/Juggling-v1`` with the shipped PPO config, then
+    ``motion-bench agent``: the juggler's catch rate on the same test seeds is reported."""
+    import json
+
+    pytest.importorskip("stable_baselines3")
+    from baselines.cli import main
+
+    out = tmp_path / "run"
+    argv = ["train", "--algo", "ppo", "--env", ENV_ID, "--timesteps", "2048", "--seed", "0"]
+    assert main([*argv, "--out", str(out), "--no-progress"]) == 0
+    assert main(["agent", str(out), "--episodes", "4"]) == 0
+    doc = json.loads((out / "eval-test" / "results.json").read_text())
+    assert doc["env_id"] == ENV_ID
+    assert 0 <= doc["nominal_catch_rate"] <= 1 and 0 <= doc["catch_rate"] <= 1
