@@ -184,8 +184,8 @@ class JugglingV1World:
         self.physics = JugglingPhysics(task)
         self.model, self.data = self.physics.model, self.physics.data
         self._rng: np.random.Generator | None = None
-        self._ref = np.zeros(2)
-        self._vref = np.zeros(2)
+        self._ref = (0.0, 0.0)
+        self._vref = (0.0, 0.0)
         self._held = True
         self._left = False
         self._dropped = False
@@ -207,8 +207,8 @@ class JugglingV1World:
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[:] = (x, z, x, z)
         self.data.qvel[:] = (vx, vz, vx, vz)
-        self._ref = np.array([x, z])
-        self._vref = np.array([vx, vz])
+        self._ref = (x, z)
+        self._vref = (vx, vz)
         self._held, self._left, self._dropped = True, False, False
         self._k = 0
         self.physics.set_ball_contacts(False)
@@ -224,28 +224,29 @@ class JugglingV1World:
         tx, tz = _vec2(hand_target, "hand_target")
         task, dt = self.task, self.task.dt
         step_max = HAND_SPEED_LIMIT * dt
-        dx, dz = tx - self._ref[0], tz - self._ref[1]
+        sx, sz = self._ref
+        dx, dz = tx - sx, tz - sz
         dist = math.hypot(dx, dz)
         if dist > step_max:  # the command moves at most at the speed limit
             dx, dz = dx * step_max / dist, dz * step_max / dist
-        start = self._ref
-        vref = np.array([dx / dt, dz / dt])
-        aref = (vref - self._vref) / dt
-        self._ref = start + np.array([dx, dz])
-        self._vref = vref
-        v_before = self.data.qvel[0:2].copy()
+        vrx, vrz = dx / dt, dz / dt
+        arx, arz = (vrx - self._vref[0]) / dt, (vrz - self._vref[1]) / dt
+        self._ref = (sx + dx, sz + dz)
+        self._vref = (vrx, vrz)
         m, d, phys = self.model, self.data, self.physics
+        qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
+        vz_before = float(qvel[1])
         h = m.opt.timestep
         kp, kd = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
         amax2, vmax = HAND_ACCEL_LIMIT**2, HAND_SPEED_LIMIT
-        qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
+        radius, floor_z = task.ball_radius, task.floor_z
         caught = False
         for j in range(1, SUBSTEPS + 1):
             f = j / SUBSTEPS
-            px, pz = start[0] + f * dx, start[1] + f * dz
-            vx, vz = float(qvel[0]), float(qvel[1])
-            ax = aref[0] + kp * (px - qpos[0]) + kd * (vref[0] - vx)
-            az = aref[1] + kp * (pz - qpos[1]) + kd * (vref[1] - vz)
+            hx, hz = qpos[0:2].tolist()
+            vx, vz = qvel[0:2].tolist()
+            ax = arx + kp * (sx + f * dx - hx) + kd * (vrx - vx)
+            az = arz + kp * (sz + f * dz - hz) + kd * (vrz - vz)
             n2 = ax * ax + az * az
             if n2 > amax2:
                 s = math.sqrt(amax2 / n2)
@@ -258,33 +259,30 @@ class JugglingV1World:
             ctrl[0], ctrl[1] = HAND_MASS * ax, HAND_MASS * az
             mujoco.mj_step(m, d)
             if self._held:
-                qpos[2], qpos[3] = qpos[0], qpos[1]
-                qvel[2], qvel[3] = qvel[0], qvel[1]
+                qpos[2:4] = qpos[0:2]
+                qvel[2:4] = qvel[0:2]
                 continue
-            bx, bz = float(qpos[2]), float(qpos[3])
-            if not self._left and math.hypot(bx - qpos[0], bz - qpos[1]) > 2 * task.ball_radius:
+            hx, hz, bx, bz = qpos.tolist()
+            if not self._left and math.hypot(bx - hx, bz - hz) > 2 * radius:
                 self._left = True
-            if not self._dropped and (
-                bz - task.ball_radius <= task.floor_z or phys.ball_touches(phys.floor_geom)
-            ):
+            if not self._dropped and (bz - radius <= floor_z or phys.ball_touches(phys.floor_geom)):
                 self._dropped = True
-            if (
-                not self._dropped
-                and self._left
-                and float(qvel[3]) < 0.0
-                and bz >= qpos[1] + phys.palm_top
-                and math.hypot(qvel[2] - qvel[0], qvel[3] - qvel[1]) < CAPTURE_SPEED
-                and phys.ball_touches(phys.palm_geom)
-            ):
-                self._held = caught = True
-                phys.set_ball_contacts(False)
-                qpos[2], qpos[3] = qpos[0], qpos[1]
-                qvel[2], qvel[3] = qvel[0], qvel[1]
+            if not self._dropped and self._left and bz >= hz + phys.palm_top:
+                wx, wz, ux, uz = qvel.tolist()
+                if (
+                    uz < 0.0
+                    and math.hypot(ux - wx, uz - wz) < CAPTURE_SPEED
+                    and phys.ball_touches(phys.palm_geom)
+                ):
+                    self._held = caught = True
+                    phys.set_ball_contacts(False)
+                    qpos[2:4] = qpos[0:2]
+                    qvel[2:4] = qvel[0:2]
         self._k += 1
         d.time = self._k * dt
         released = False
         if self._held and not caught and release_armed:
-            a_z = (float(qvel[1]) - float(v_before[1])) / dt
+            a_z = (float(qvel[1]) - vz_before) / dt
             if a_z < -task.toss_threshold:
                 v = perturb_release(
                     qvel[0:2].copy(), self.release_speed_std, self.release_angle_std, self._rng
