@@ -92,7 +92,7 @@ class BallSensor:
         self.delay_steps = int(delay_steps)
         self.position_std = float(position_std)
         self.velocity_std = float(velocity_std)
-        self._buffer: deque[tuple[FloatArray, FloatArray, bool]] = deque(
+        self._buffer: deque[tuple[float, float, float, float, bool]] = deque(
             maxlen=self.delay_steps + 1
         )
         self._rng: np.random.Generator | None = None
@@ -103,9 +103,11 @@ class BallSensor:
         """Start with the ball held at ``position``; the buffer is filled with that state."""
         self._rng = rng
         self._buffer.clear()
+        px, pz = (float(v) for v in position)
+        vx, vz = (float(v) for v in velocity)
         for _ in range(self.delay_steps + 1):
-            self._buffer.append((np.array(position, float), np.array(velocity, float), True))
-        return BallMeasurement(np.array(position, float), np.array(velocity, float))
+            self._buffer.append((px, pz, vx, vz, True))
+        return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
 
     def measure(self, position: FloatArray, velocity: FloatArray, held: bool) -> BallMeasurement:
         """Record the true state of this step; return the measurement it makes available.
@@ -113,15 +115,18 @@ class BallSensor:
         A held ball is measured exactly (the hand feels it). A flying ball is reported as it
         was ``delay_steps`` steps ago (held then: exactly; flying: plus the noise).
         """
-        self._buffer.append((np.array(position, float), np.array(velocity, float), held))
+        px, pz = float(position[0]), float(position[1])
+        vx, vz = float(velocity[0]), float(velocity[1])
+        self._buffer.append((px, pz, vx, vz, held))
         if held:
-            return BallMeasurement(self._buffer[-1][0].copy(), self._buffer[-1][1].copy())
-        p, v, was_held = self._buffer[0]
-        p, v = p.copy(), v.copy()
+            return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
+        px, pz, vx, vz, was_held = self._buffer[0]
         if not was_held and (self.position_std > 0 or self.velocity_std > 0):
             if self._rng is None:
                 raise ValueError("rng is required when the measurement noise is non-zero")
-            e = self._rng.standard_normal(4)
-            p += self.position_std * e[:2]
-            v += self.velocity_std * e[2:]
-        return BallMeasurement(p, v)
+            e = self._rng.standard_normal(4).tolist()
+            px += self.position_std * e[0]
+            pz += self.position_std * e[1]
+            vx += self.velocity_std * e[2]
+            vz += self.velocity_std * e[3]
+        return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
