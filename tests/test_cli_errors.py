@@ -394,12 +394,13 @@ def test_every_subcommand_is_registered():
         "orientation",
         "position",
         "juggling",
+        "juggling-levels",
         "calibrate-cohort",
         "train",
         "agent",
         "sweep",
     }
-    assert len(SUBCOMMAND_MODULES) == 8
+    assert len(SUBCOMMAND_MODULES) == 9
 
 
 @pytest.mark.parametrize(
@@ -409,6 +410,7 @@ def test_every_subcommand_is_registered():
         "all",
         "orientation",
         "position",
+        "juggling-levels",
         "calibrate-cohort",
         "train",
         "agent",

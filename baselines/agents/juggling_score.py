@@ -70,7 +70,7 @@ FloatArray = NDArray[np.float64]
 Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 #: Environment ids scored by this module.
-JUGGLING_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Juggling-v0",)
+JUGGLING_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Juggling-v0", "MotionEnvs/Juggling-v1")
 #: First reset seed of each split's episodes.
 SPLIT_SEEDS: Mapping[str, int] = {
     "train": 0,
@@ -211,6 +211,8 @@ def juggling_episodes(
     if n < 1:
         raise ValueError(f"episodes must be >= 1; got {episodes!r}")
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
+    if env_id == "MotionEnvs/Juggling-v1":  # its default gravity, that of its demonstrations
+        kwargs.setdefault("gravity", 9.81)
     demos = demonstration_paths(kwargs, split)
     seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
     venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)

@@ -13,6 +13,7 @@ id                              environment
 ``MotionEnvs/OrientationReach-v1``  the same, observing duration and elapsed time
 ``MotionEnvs/PositionReach-v1``     the same, observing duration and elapsed time
 ``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
+``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling_v1.JugglingV1Env` (contacts)
 ==============================  ===================================================
 
 The two reaching environments come with a native vector environment
@@ -56,6 +57,9 @@ _SPECS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Juggling-v0": {
         "entry_point": "motion_envs.envs.juggling:JugglingEnv",
+    },
+    "MotionEnvs/Juggling-v1": {
+        "entry_point": "motion_envs.envs.juggling_v1:JugglingV1Env",
     },
 }
 
