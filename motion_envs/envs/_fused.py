@@ -14,9 +14,8 @@ The loop is written once (:func:`_batch_step`, plain Python); each kind gets its
 compiled copy, with the kind's physics and info layout bound as compile-time globals
 (numba inlines them; a function passed as an argument would be neither inlined nor
 cached). Each copy is cached on disk under a name holding the kind's name and a digest
-of its physics' code, so editing a kind's physics compiles it again (numba does not see
-edits of the kernels it calls in :mod:`motion_envs.envs._kernels`: clear the cache,
-``__pycache__/*.nbi``, after such an edit, as before).
+of the code of its physics and of the kernels it calls, so editing them compiles it
+again (numba itself checks only the timestamp of this file).
 
 State layout (shared with the numpy path of :mod:`motion_envs.envs._reach_vector`):
 
@@ -135,7 +134,6 @@ def _batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature a
                 return 1, i, 0, 0
     a = np.empty(d)
     q = np.empty(dim)
-    vals = np.empty(_N_INFO)
     tau_row = _N_INFO + 1
     n_term = 0
     n_reset = 0
@@ -159,7 +157,7 @@ def _batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature a
         idx = si[i, IDX]
         kk = si[i, K_]
         row = steps[idx, kk]
-        reward = _physics(row, a, scale, w, q, vals)
+        reward, vals = _physics(row, a, scale, w, q)
         for j in range(dim):
             sf[i, j] = q[j]
         out_f[0, i] = reward
@@ -202,20 +200,40 @@ def _batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature a
 _COMPILED: dict[str, Any] = {}
 
 
-def _jit_calling(fn: types.FunctionType, name: str, bound: dict[str, Any]) -> Any:
+def _jit_calling(
+    fn: types.FunctionType, name: str, bound: dict[str, Any], inline: bool = False
+) -> Any:
     """``fn`` compiled with ``bound`` (and the compiled copy of every Python function it
-    calls by global name) as its globals, under the cache name ``name``."""
+    calls by global name) as its globals, under the cache name ``name``; with
+    ``inline``, ``fn`` and every function it calls are inlined into their callers by
+    numba (LLVM's heuristics leave a kind's physics a call, whose array arguments then
+    cost reference counts: twice the time of a position step, measured)."""
     env = dict(fn.__globals__)
     env.update(bound)
     for global_name in fn.__code__.co_names:
         value = env.get(global_name)
         if global_name not in bound and isinstance(value, types.FunctionType):
-            env[global_name] = _jit_calling(value, value.__qualname__, {})
+            suffix = "_inline" if inline else ""
+            env[global_name] = _jit_calling(value, value.__qualname__ + suffix, {}, inline)
     copy = types.FunctionType(fn.__code__, env, name, fn.__defaults__)
     copy.__qualname__ = name  # numba's cache file name
     copy.__module__ = fn.__module__
     copy.__doc__ = fn.__doc__
+    if inline:
+        return njit(cache=True, error_model="numpy", inline="always")(copy)
     return _jit(copy)
+
+
+def _code_digest(fn: types.FunctionType, h: Any) -> Any:
+    """``h`` updated with the code of ``fn`` and of every Python function it calls by
+    global name (what :func:`_jit_calling` compiles into the loop)."""
+    code = fn.__code__
+    h.update(code.co_code + repr(code.co_consts).encode())
+    for global_name in code.co_names:
+        value = fn.__globals__.get(global_name)
+        if isinstance(value, types.FunctionType) and value is not fn:
+            _code_digest(value, h)
+    return h
 
 
 def batch_step_of(kind: Any) -> Any:
@@ -223,12 +241,11 @@ def batch_step_of(kind: Any) -> Any:
     the kind's ``fused_physics`` and info layout bound; compiled once per process, cached
     on disk (see the module docstring)."""
     physics = kind.fused_physics
-    code = physics.__code__
-    digest = hashlib.sha256(code.co_code + repr(code.co_consts).encode()).hexdigest()[:12]
+    digest = _code_digest(physics, hashlib.sha256()).hexdigest()[:12]
     name = f"batch_step_{kind.name}_{digest}"
     if name not in _COMPILED:
         bound = {
-            "_physics": _jit_calling(physics, f"{kind.name}_physics_{digest}", {}),
+            "_physics": _jit_calling(physics, f"{kind.name}_physics_{digest}", {}, inline=True),
             "_N_INFO": len(kind.step_keys),
             "_MAX_SRC": tuple(kind.step_keys.index(src) for _, src in kind.end_keys),
         }

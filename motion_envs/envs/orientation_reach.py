@@ -327,7 +327,9 @@ class OrientationKind(ReachKind):
         return np.stack(q, axis=1), reward, [err, geo, r_res, r_geo, r_act]
 
     @staticmethod
-    def fused_physics(row: Any, a: Any, scale: float, w: Any, q: Any, vals: Any) -> float:
+    def fused_physics(
+        row: Any, a: Any, scale: float, w: Any, q: Any
+    ) -> tuple[float, tuple[float, ...]]:
         qo, err, geo = orientation_step_scalar(row, a[0], a[1], a[2], scale)
         r_res, r_geo, r_act, reward = orientation_reward(
             err, geo, a[0], a[1], a[2], w[0], w[1], w[2]
@@ -336,12 +338,7 @@ class OrientationKind(ReachKind):
         q[1] = qo[1]
         q[2] = qo[2]
         q[3] = qo[3]
-        vals[0] = err
-        vals[1] = geo
-        vals[2] = r_res
-        vals[3] = r_geo
-        vals[4] = r_act
-        return reward  # type: ignore[no-any-return]
+        return reward, (err, geo, r_res, r_geo, r_act)
 
     def load_task(self, *args: Any, **kwargs: Any) -> OrientationTask:
         return load_orientation_task(*args, **kwargs)

@@ -321,16 +321,15 @@ class PositionKind(ReachKind):
         return np.stack(q, axis=1), reward, [err, r_dist, r_act]
 
     @staticmethod
-    def fused_physics(row: Any, a: Any, scale: float, w: Any, q: Any, vals: Any) -> float:
+    def fused_physics(
+        row: Any, a: Any, scale: float, w: Any, q: Any
+    ) -> tuple[float, tuple[float, ...]]:
         err = position_step_scalar(row, a, scale, q)
         sq = 0.0
         for j in range(a.shape[0]):
             sq = sq + a[j] * a[j]
         r_dist, r_act, reward = position_reward(err, sq, w[0], w[1])
-        vals[0] = err
-        vals[1] = r_dist
-        vals[2] = r_act
-        return reward  # type: ignore[no-any-return]
+        return reward, (err, r_dist, r_act)
 
     def load_task(self, *args: Any, **kwargs: Any) -> PositionTask:
         return load_position_task(*args, **kwargs)
