@@ -238,6 +238,14 @@ class ReachKind:
     instance_name: ClassVar[str]
 
 
+def _finite_clipped(acts: list[float]) -> list[float]:
+    """``acts`` clipped to ``[-1, 1]``; ``ValueError`` if any is NaN or infinite."""
+    for v in acts:
+        if not math.isfinite(v):
+            raise ValueError(f"action must be finite; got {acts}")
+    return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
+
+
 class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     """A single reaching environment over a :class:`ReachKind`.
 
@@ -302,6 +310,7 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._cur = ObsLayout.for_dim(dim).current
         self._cur_bounds = cur_bounds
         self._weights = tuple(self.reward_weights[key] for key in kind.weight_keys)
+        self._kind_step = kind.scalar_step  # bound once (hot path)
         self._labels = reset_labels(self.task)
         # the running maxima: (position in _running, step key), (end key, position)
         self._max_of = tuple((j, src) for j, (_, src) in enumerate(kind.end_keys))
@@ -343,12 +352,10 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         acts = as_action(action, self._action_shape).tolist()
         for v in acts:
-            if not math.isfinite(v):
-                raise ValueError(f"action must be finite; got {acts}")
-        acts = [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
-        q, reward, info = self.kind.scalar_step(
-            self._steps[k], acts, self.residual_scale, self._weights
-        )
+            if not -1.0 <= v <= 1.0:  # out of range, NaN or infinite (else: as it is)
+                acts = _finite_clipped(acts)
+                break
+        q, reward, info = self._kind_step(self._steps[k], acts, self.residual_scale, self._weights)
         self._k = k + 1
         self._history.append(q)
         running = self._running
