@@ -18,8 +18,8 @@ kind's own module (:mod:`~motion_envs.envs.orientation_reach`,
   sub-environments) and :attr:`ReachKind.fused_physics` (compiled by numba into the
   vector environments' loop, :mod:`motion_envs.envs._fused`); all three evaluate the
   kernels of :mod:`motion_envs.envs._kernels`, so they agree bit for bit;
-* task building and the criterion (:meth:`ReachKind.load_task`,
-  :meth:`ReachKind.max_errors`).
+* task building and the criterion (:attr:`ReachKind.load_task`,
+  :attr:`ReachKind.max_errors`).
 
 :class:`ReachEnv` (single environment) and
 :class:`~motion_envs.envs._reach_vector.ReachVectorEnv` (native vector environment) are
@@ -186,6 +186,13 @@ class ReachKind:
     default_weights: ClassVar[Mapping[str, float]]
     #: Largest accepted ``residual_scale``.
     max_residual_scale: ClassVar[float]
+    #: ``load_task(...)``: build (or reuse) the precomputed episodes of a split (the
+    #: kind's ``load_*_task``).
+    load_task: ClassVar[Callable[..., Any]]
+    #: ``max_errors(task, predicted)``: ``(L,)`` per-episode max error of a predicted
+    #: trajectory per episode of ``task``, scored by the step kernel with a zero action
+    #: (the kind's criterion, ``*_max_errors``).
+    max_errors: ClassVar[Callable[[Any, NDArray[np.float64]], NDArray[np.float64]]]
 
     #: ``fused_physics(row, a, scale, w, q, vals) -> reward``: one step of one
     #: sub-environment on float64 arrays (``row`` a ``task.steps`` row, ``a`` the clipped
@@ -222,15 +229,6 @@ class ReachKind:
         rewards and the :attr:`step_keys` values (``(N,)`` arrays)."""
         raise NotImplementedError
 
-    def load_task(self, *args: Any, **kwargs: Any) -> Any:
-        """Build (or reuse) the precomputed episodes of a split."""
-        raise NotImplementedError
-
-    def max_errors(self, task: Any, predicted: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``(L,)`` per-episode max error of a predicted trajectory per episode of
-        ``task``, scored by the step kernel with a zero action."""
-        raise NotImplementedError
-
     def __reduce__(self) -> str:
         return self.instance_name  # pickled by reference: the module's instance
 
@@ -254,6 +252,7 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     :meth:`_setup` in ``__init__``, and implements :meth:`_render_frame`.
     """
 
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
     kind: ClassVar[ReachKind]
     task: Any
     _starts: NDArray[np.float64]

@@ -273,6 +273,8 @@ class OrientationKind(ReachKind):
     weight_keys = ("residual", "geodesic", "action")
     default_weights = DEFAULT_REWARD_WEIGHTS
     max_residual_scale = MAX_RESIDUAL_SCALE
+    load_task = staticmethod(load_orientation_task)
+    max_errors = staticmethod(orientation_max_errors)
 
     def state_dim(self, task: Any) -> int:
         return 4
@@ -339,12 +341,6 @@ class OrientationKind(ReachKind):
         q[2] = qo[2]
         q[3] = qo[3]
         return reward, (err, geo, r_res, r_geo, r_act)
-
-    def load_task(self, *args: Any, **kwargs: Any) -> OrientationTask:
-        return load_orientation_task(*args, **kwargs)
-
-    def max_errors(self, task: Any, predicted: NDArray[np.float64]) -> NDArray[np.float64]:
-        return orientation_max_errors(task, predicted)
 
 
 #: The orientation kind (one instance serves every orientation environment).
@@ -471,7 +467,6 @@ class OrientationReachEnv(ReachEnv):
     * v0: Initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
     kind = ORIENTATION
 
     def __init__(

@@ -284,6 +284,8 @@ class PositionKind(ReachKind):
     weight_keys = ("distance", "action")
     default_weights = DEFAULT_POSITION_REWARD_WEIGHTS
     max_residual_scale = MAX_POSITION_RESIDUAL_SCALE
+    load_task = staticmethod(load_position_task)
+    max_errors = staticmethod(position_max_errors)
 
     def state_dim(self, task: Any) -> int:
         return int(task.n_dims)
@@ -330,12 +332,6 @@ class PositionKind(ReachKind):
             sq = sq + a[j] * a[j]
         r_dist, r_act, reward = position_reward(err, sq, w[0], w[1])
         return reward, (err, r_dist, r_act)
-
-    def load_task(self, *args: Any, **kwargs: Any) -> PositionTask:
-        return load_position_task(*args, **kwargs)
-
-    def max_errors(self, task: Any, predicted: NDArray[np.float64]) -> NDArray[np.float64]:
-        return position_max_errors(task, predicted)
 
 
 #: The position kind (one instance serves every position environment).
@@ -456,7 +452,6 @@ class PositionReachEnv(ReachEnv):
     * v0: Initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
     kind = POSITION
 
     def __init__(
