@@ -200,9 +200,7 @@ def _batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature a
 _COMPILED: dict[str, Any] = {}
 
 
-def _jit_calling(
-    fn: types.FunctionType, name: str, bound: dict[str, Any], inline: bool = False
-) -> Any:
+def _jit_calling(fn: Any, name: str, bound: dict[str, Any], inline: bool = False) -> Any:
     """``fn`` compiled with ``bound`` (and the compiled copy of every Python function it
     calls by global name) as its globals, under the cache name ``name``; with
     ``inline``, ``fn`` and every function it calls are inlined into their callers by
@@ -224,7 +222,7 @@ def _jit_calling(
     return _jit(copy)
 
 
-def _code_digest(fn: types.FunctionType, h: Any) -> Any:
+def _code_digest(fn: Any, h: Any) -> Any:
     """``h`` updated with the code of ``fn`` and of every Python function it calls by
     global name (what :func:`_jit_calling` compiles into the loop)."""
     code = fn.__code__

@@ -192,15 +192,15 @@ class ReachKind:
     #: ``max_errors(task, predicted)``: ``(L,)`` per-episode max error of a predicted
     #: trajectory per episode of ``task``, scored by the step kernel with a zero action
     #: (the kind's criterion, ``*_max_errors``).
-    max_errors: ClassVar[Callable[[Any, NDArray[np.float64]], NDArray[np.float64]]]
+    max_errors: ClassVar[Callable[..., NDArray[np.float64]]]
 
-    #: ``fused_physics(row, a, scale, w, q, vals) -> reward``: one step of one
+    #: ``fused_physics(row, a, scale, w, q) -> (reward, values)``: one step of one
     #: sub-environment on float64 arrays (``row`` a ``task.steps`` row, ``a`` the clipped
-    #: action, ``w`` the weights), writing the new state into ``q`` and the
-    #: :attr:`step_keys` values into ``vals``; plain Python that numba compiles
-    #: unchanged, with the functions it calls by global name
-    #: (:func:`motion_envs.envs._fused.batch_step_of`).
-    fused_physics: ClassVar[Callable[..., float]]
+    #: action, ``w`` the weights), writing the new state into ``q`` and returning the
+    #: reward and the :attr:`step_keys` values (a tuple); plain Python that numba
+    #: compiles unchanged and inlines into the vector loop, with the functions it calls
+    #: by global name (:func:`motion_envs.envs._fused.batch_step_of`).
+    fused_physics: ClassVar[Callable[..., tuple[float, tuple[float, ...]]]]
 
     def state_dim(self, task: Any) -> int:
         """Number of values of the state the agent sets (4 for a quaternion)."""

@@ -9,7 +9,7 @@ backends, infos). A kind module subclasses it with its single environment class
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -439,7 +439,7 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         return np.asarray(frame, dtype=np.uint8)
 
 
-def step_info_builder(keys: tuple[str, ...]) -> Any:
+def step_info_builder(keys: tuple[str, ...]) -> Callable[[Any, Any], dict[str, Any]]:
     """``build(out_f, mask)``: the per-step vector infos, ``{keys[j]: out_f[1 + j],
     "_" + keys[j]: mask, ...}``, as a function holding one dict display (generated
     once, as :mod:`dataclasses` generates ``__init__``): twice as fast as a loop, and
@@ -450,4 +450,5 @@ def step_info_builder(keys: tuple[str, ...]) -> Any:
     items = ", ".join(f"{key!r}: out_f[{r}], {'_' + key!r}: mask" for r, key in enumerate(keys, 1))
     namespace: dict[str, Any] = {}
     exec(f"def build(out_f, mask):\n    return {{{items}}}\n", namespace)
-    return namespace["build"]
+    build: Callable[[Any, Any], dict[str, Any]] = namespace["build"]
+    return build

@@ -224,6 +224,11 @@ def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.space
     return gym.spaces.Box(low, high, dtype=np.float32)
 
 
+def _quaternion(c: NDArray[np.float64]) -> tuple[Any, Any, Any, Any]:
+    """The components ``(w, x, y, z)`` of ``(4, ...)`` quaternion values (the kernels')."""
+    return c[0], c[1], c[2], c[3]
+
+
 def orientation_max_errors(
     task: Any, predicted_residuals: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -247,13 +252,15 @@ def orientation_max_errors(
     zero = np.zeros(steps.shape[0])
     errors = np.empty(steps.shape[:2])
     for k in range(steps.shape[1]):
-        h, r = steps[:, k, ROW["human"]].T, steps[:, k, ROW["residual"]].T
+        r = steps[:, k, ROW["residual"]].T
         _, errors[:, k], _ = K.orientation_step(
             K.BATCH,
-            tuple(chart[:, k].T),
-            tuple(nominal[:, k].T),
-            tuple(h),
-            *r,
+            _quaternion(chart[:, k].T),
+            _quaternion(nominal[:, k].T),
+            _quaternion(steps[:, k, ROW["human"]].T),
+            r[0],
+            r[1],
+            r[2],
             zero,
             zero,
             zero,
@@ -314,12 +321,15 @@ class OrientationKind(ReachKind):
             err = np.array([o[1] for o in outs])
             geo = np.array([o[2] for o in outs])
         else:
+            r = rows[ROW["residual"]]
             q, err, geo = K.orientation_step(
                 K.BATCH,
-                tuple(rows[ROW["chart"]]),
-                tuple(rows[ROW["nominal"]]),
-                tuple(rows[ROW["human"]]),
-                *rows[ROW["residual"]],
+                _quaternion(rows[ROW["chart"]]),
+                _quaternion(rows[ROW["nominal"]]),
+                _quaternion(rows[ROW["human"]]),
+                r[0],
+                r[1],
+                r[2],
                 ax,
                 ay,
                 az,
