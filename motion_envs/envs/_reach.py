@@ -58,10 +58,12 @@ __all__ = [
     "ReachEnv",
     "ReachKind",
     "ReachTask",
+    "checked_prediction",
     "observation_table",
     "reset_labels",
     "step_table",
     "with_timing",
+    "zero_action_errors",
 ]
 
 
@@ -402,3 +404,30 @@ def step_table(layout: Mapping[str, slice], parts: Mapping[str, NDArray[np.float
     if list(parts) != list(layout) or any(a.stop != b.start for a, b in itertools.pairwise(slices)):
         raise ValueError(f"step parts {list(parts)} do not follow the layout {layout}")
     return np.concatenate([parts[name] for name in layout], axis=2)
+
+
+def zero_action_errors(
+    kind: ReachKind, task: Any, steps: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(L,)`` per-episode ``max_k`` of the step error of ``kind``'s kernel
+    (:meth:`ReachKind.batch_step`) with a zero action, on a step table ``steps`` laid out
+    as ``task.steps`` (the kinds' ``max_errors``: a predicted nominal in its rows)."""
+    L, n, _ = steps.shape
+    zero = np.zeros((L, kind.action_dim(task)))
+    weights = (0.0,) * len(kind.weight_keys)
+    errors = np.empty((L, n))
+    for k in range(n):
+        _, _, values = kind.batch_step(steps[:, k].T, zero, 1.0, weights)
+        errors[:, k] = values[0]
+    out: NDArray[np.float64] = errors.max(axis=1)
+    return out
+
+
+def checked_prediction(values: Any, task: Any, width: int, name: str) -> NDArray[np.float64]:
+    """``values`` as a float64 ``(L, n, width)`` array of one prediction per episode of
+    ``task``; ``ValueError`` naming ``name`` for another shape."""
+    out = np.asarray(values, dtype=np.float64)
+    shape = (*task.steps.shape[:2], width)
+    if out.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}; got {out.shape}")
+    return out

@@ -41,6 +41,9 @@ _NEXT, _SAME, _DISABLED = 0, 1, 2
 _IDX, _K, _ELAPSED, _AUTORESET, _PTR = 0, 1, 2, 3, 4  # columns of the integer state
 _POOL_AT = 5  # first column of the trajectory pool in the integer state
 _POOL = 64  # trajectory draws per sub-environment taken from its generator at once
+# Below this many sub-environments the numpy backend runs the kind's scalar step per
+# environment (numpy's per-call overhead dominates small batches).
+_SCALAR_BELOW = 8
 
 
 def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
@@ -387,7 +390,10 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         active = ~resetting
         k = si[:, _K].copy()
         rows = self._table[:, si[:, _IDX] * n + np.minimum(k, n - 1)]
-        q, reward, values = self.kind.batch_step(rows, a, self.residual_scale, self._weights)
+        if self.num_envs < _SCALAR_BELOW:
+            q, reward, values = self._scalar_steps(rows, a)
+        else:
+            q, reward, values = self.kind.batch_step(rows, a, self.residual_scale, self._weights)
         out_f[0] = np.where(active, reward, 0.0)
         for r, value in enumerate(values, start=1):
             out_f[r] = value
@@ -419,6 +425,16 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
             self._reset_envs(envs)
         obs[:] = self._observe()
         return 0, int(np.count_nonzero(terminated)), int(envs.size)
+
+    def _scalar_steps(
+        self, rows: NDArray[np.float64], a: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], Any, list[Any]]:
+        """:meth:`ReachKind.batch_step` as the single environment's scalar step per
+        sub-environment (the same arithmetic, so the same bits; faster for few)."""
+        step, scale, w = self.kind.scalar_step, self.residual_scale, self._weights
+        outs = [step(r, act, scale, w) for r, act in zip(rows.T.tolist(), a.tolist(), strict=True)]
+        values = [np.array([o[2][key] for o in outs]) for key in self.kind.step_keys]
+        return np.array([o[0] for o in outs]), np.array([o[1] for o in outs]), values
 
     def close_extras(self, **kwargs: Any) -> None:
         self.single.close()

@@ -30,9 +30,11 @@ from motion_envs.envs._reach import (
     ReachEnv,
     ReachKind,
     ReachTask,
+    checked_prediction,
     observation_table,
     step_table,
     with_timing,
+    zero_action_errors,
 )
 from motion_envs.envs._reach_vector import ReachVectorEnv
 
@@ -70,9 +72,6 @@ ROW: dict[str, slice] = {
     "human": slice(8, 12),
     "residual": slice(12, 15),
 }
-# Below this many sub-environments the numpy backend runs the step as the scalar kernel
-# per environment (numpy's per-call overhead dominates small batches).
-_SCALAR_BELOW = 8
 
 
 @dataclass(frozen=True)
@@ -224,11 +223,6 @@ def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.space
     return gym.spaces.Box(low, high, dtype=np.float32)
 
 
-def _quaternion(c: NDArray[np.float64]) -> tuple[Any, Any, Any, Any]:
-    """The components ``(w, x, y, z)`` of ``(4, ...)`` quaternion values (the kernels')."""
-    return c[0], c[1], c[2], c[3]
-
-
 def orientation_max_errors(
     task: Any, predicted_residuals: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -241,33 +235,12 @@ def orientation_max_errors(
     """
     from motion_envs.geometry import quaternion as quat
 
-    rhat = np.asarray(predicted_residuals, dtype=np.float64)
-    steps = task.steps
-    if rhat.shape != (*steps.shape[:2], 3):
-        raise ValueError(
-            f"predicted_residuals must have shape {(*steps.shape[:2], 3)}; got {rhat.shape}"
-        )
-    chart = quat.expmap(rhat)  # as the environment's steps[..., 0:4]
-    nominal = quat.multiply(task.grids.base, chart)
-    zero = np.zeros(steps.shape[0])
-    errors = np.empty(steps.shape[:2])
-    for k in range(steps.shape[1]):
-        r = steps[:, k, ROW["residual"]].T
-        _, errors[:, k], _ = K.orientation_step(
-            K.BATCH,
-            _quaternion(chart[:, k].T),
-            _quaternion(nominal[:, k].T),
-            _quaternion(steps[:, k, ROW["human"]].T),
-            r[0],
-            r[1],
-            r[2],
-            zero,
-            zero,
-            zero,
-            1.0,
-        )
-    out: NDArray[np.float64] = errors.max(axis=1)
-    return out
+    rhat = checked_prediction(predicted_residuals, task, 3, "predicted_residuals")
+    chart = quat.expmap(rhat)
+    predicted = np.array(task.steps)
+    predicted[..., ROW["chart"]] = chart
+    predicted[..., ROW["nominal"]] = quat.multiply(task.grids.base, chart)
+    return zero_action_errors(ORIENTATION, task, predicted)
 
 
 class OrientationKind(ReachKind):
@@ -311,30 +284,20 @@ class OrientationKind(ReachKind):
         self, rows: NDArray[np.float64], a: NDArray[np.float64], scale: float, w: tuple[float, ...]
     ) -> tuple[NDArray[np.float64], Any, list[Any]]:
         ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
-        if a.shape[0] < _SCALAR_BELOW:
-            # few environments: the scalar kernel (same arithmetic, bit-identical) is faster
-            outs = [
-                orientation_step_scalar(row, act[0], act[1], act[2], scale)
-                for row, act in zip(rows.T.tolist(), a.tolist(), strict=True)
-            ]
-            q: Any = tuple(np.array([o[0][c] for o in outs]) for c in range(4))
-            err = np.array([o[1] for o in outs])
-            geo = np.array([o[2] for o in outs])
-        else:
-            r = rows[ROW["residual"]]
-            q, err, geo = K.orientation_step(
-                K.BATCH,
-                _quaternion(rows[ROW["chart"]]),
-                _quaternion(rows[ROW["nominal"]]),
-                _quaternion(rows[ROW["human"]]),
-                r[0],
-                r[1],
-                r[2],
-                ax,
-                ay,
-                az,
-                scale,
-            )
+        e, n, h, r = (rows[ROW[name]] for name in ("chart", "nominal", "human", "residual"))
+        q, err, geo = K.orientation_step(
+            K.BATCH,
+            (e[0], e[1], e[2], e[3]),
+            (n[0], n[1], n[2], n[3]),
+            (h[0], h[1], h[2], h[3]),
+            r[0],
+            r[1],
+            r[2],
+            ax,
+            ay,
+            az,
+            scale,
+        )
         r_res, r_geo, r_act, reward = orientation_reward(err, geo, ax, ay, az, *w)
         return np.stack(q, axis=1), reward, [err, geo, r_res, r_geo, r_act]
 
@@ -524,16 +487,8 @@ class OrientationReachEnv(ReachEnv):
 
 
 class OrientationReachVectorEnv(ReachVectorEnv):
-    """``num_envs`` copies of :class:`OrientationReachEnv` (``gym.make_vec``).
-
-    Takes the single environment's keyword arguments (checked by it) plus ``num_envs``,
-    ``max_episode_steps`` (default: the registration's 50), ``autoreset_mode`` (default
-    ``NEXT_STEP``) and ``backend`` (``"auto"``, ``"numba"``, ``"numpy"``); see
-    :class:`~motion_envs.envs._reach_vector.ReachVectorEnv` and
-    :mod:`motion_envs.envs.vector`. Observations, rewards, terminations and truncations
-    are bit-identical to ``SyncVectorEnv`` of single environments with the same seeds and
-    autoreset mode; ``infos`` carry the same per-step terms and, at an episode's end,
-    ``max_error`` and ``max_geodesic_error``.
-    """
+    """``num_envs`` copies of :class:`OrientationReachEnv`, bit-identical to
+    ``SyncVectorEnv`` (arguments: :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`,
+    contract: :mod:`motion_envs.envs.vector`)."""
 
     single_class = OrientationReachEnv

@@ -27,9 +27,11 @@ from motion_envs.envs._reach import (
     ReachEnv,
     ReachKind,
     ReachTask,
+    checked_prediction,
     observation_table,
     step_table,
     with_timing,
+    zero_action_errors,
 )
 from motion_envs.envs._reach_vector import ReachVectorEnv
 
@@ -170,8 +172,7 @@ def _build_task(
     steps = step_table(row_layout(D), {"nominal": g.nominal, "human": g.human})
     task_names = tuple(sorted(set(np.asarray(full.tasks).astype(str).tolist())))
     starts, goals = g.human[:, 0], g.human[:, -1]
-    # plot extents of this split (rendering only): every position an agent can reach is a
-    # nominal + residual
+    # plot extents of this split (rendering): an agent's position is a nominal + residual
     lo = min(g.nominal.min(), g.human.min()) - residual_scale
     hi = max(g.nominal.max(), g.human.max()) + residual_scale
     pad = 1e-3 * max(1.0, abs(lo), abs(hi))
@@ -257,21 +258,11 @@ def position_max_errors(task: Any, predicted_positions: NDArray[np.float64]) -> 
     ``predicted_positions`` ``(L, n, D)``; scored by the environment's step kernel with a
     zero action (the demonstration ``y`` from ``task.steps``).
     """
-    yhat = np.asarray(predicted_positions, dtype=np.float64)
-    steps = task.steps
     D = task.n_dims
-    if yhat.shape != (*steps.shape[:2], D):
-        raise ValueError(
-            f"predicted_positions must have shape {(*steps.shape[:2], D)}; got {yhat.shape}"
-        )
-    zero = [np.zeros(steps.shape[0])] * D
-    errors = np.empty(steps.shape[:2])
-    human = row_layout(D)["human"]
-    for k in range(steps.shape[1]):
-        h = steps[:, k, human].T
-        _, errors[:, k] = K.position_step(K.BATCH, list(yhat[:, k].T), list(h), zero, 1.0)
-    out: NDArray[np.float64] = errors.max(axis=1)
-    return out
+    yhat = checked_prediction(predicted_positions, task, D, "predicted_positions")
+    predicted = np.array(task.steps)
+    predicted[..., row_layout(D)["nominal"]] = yhat
+    return zero_action_errors(POSITION, task, predicted)
 
 
 class PositionKind(ReachKind):
@@ -481,8 +472,8 @@ class PositionReachEnv(ReachEnv):
         self.observation_space = gym.spaces.Box(
             self.task.obs_low, self.task.obs_high, dtype=np.float32
         )
-        # the current position is clipped to the observation bounds, as float64 (float32
-        # rounding is monotonic, so the float32 observation stays inside the bounds)
+        # the current position clipped to the observation bounds as float64 (float32
+        # rounding is monotonic: the float32 observation stays inside the bounds)
         bounds = (tuple(self.task.cur_low.tolist()), tuple(self.task.cur_high.tolist()))
         self._setup(self.task.starts, bounds)
 
@@ -502,13 +493,8 @@ class PositionReachEnv(ReachEnv):
 
 
 class PositionReachVectorEnv(ReachVectorEnv):
-    """``num_envs`` copies of :class:`PositionReachEnv` (``gym.make_vec``).
-
-    Takes the single environment's keyword arguments (checked by it) plus ``num_envs``,
-    ``max_episode_steps`` (default: the registration's 50), ``autoreset_mode`` and
-    ``backend`` (see :class:`~motion_envs.envs._reach_vector.ReachVectorEnv` and
-    :mod:`motion_envs.envs.vector`); bit-identical to ``SyncVectorEnv`` of single
-    environments with the same seeds and autoreset mode.
-    """
+    """``num_envs`` copies of :class:`PositionReachEnv`, bit-identical to
+    ``SyncVectorEnv`` (arguments: :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`,
+    contract: :mod:`motion_envs.envs.vector`)."""
 
     single_class = PositionReachEnv
