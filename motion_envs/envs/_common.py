@@ -1,10 +1,6 @@
-"""Argument checks and episode mechanics shared by the single replay environments.
+"""Argument checks and mixins shared by the environments (reaching and juggling).
 
-Both environments replay one precomputed trajectory of a task per episode on the
-:data:`N_STEPS`-point grid (``task.steps`` and ``task.obs``, see the task dataclasses);
-:class:`ReplayEnv` holds what does not depend on the kind of motion: argument checks,
-drawing the trajectory at reset, the per-step bookkeeping, the render guard, ``close``
-and pickling. The step arithmetic and the reward stay in the environment modules.
+The reaching environments' episode mechanics are in :mod:`motion_envs.envs._reach`.
 """
 
 from __future__ import annotations
@@ -15,7 +11,6 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
@@ -26,8 +21,6 @@ __all__ = [
     "N_STEPS",
     "JsonSpecMixin",
     "LazyRendererMixin",
-    "ReplayEnv",
-    "ReplayTask",
     "as_action",
     "check_choice",
     "check_fraction",
@@ -39,7 +32,6 @@ __all__ = [
     "check_scale",
     "check_seed",
     "check_val_fraction",
-    "reset_labels",
     "timing_bounds",
 ]
 
@@ -161,21 +153,6 @@ def check_scale(residual_scale: Any, maximum: float = math.inf) -> float:
     return check_number(residual_scale, "residual_scale", 0.0, maximum, low_open=True)
 
 
-def reset_labels(task: Any) -> dict[str, NDArray[np.object_]]:
-    """The text entries of a single environment's reset ``info``, for every trajectory.
-
-    ``trajectory_id`` and ``task`` (and ``subject`` when the task has subjects) ->
-    ``(L,)`` object array of ``str``; the native vector environments batch these exactly
-    as ``SyncVectorEnv`` batches the single environments' reset infos.
-    """
-    fields = {"trajectory_id": "trajectory_ids", "task": "tasks", "subject": "subjects"}
-    return {
-        key: np.asarray(getattr(task, attr)).astype(str).astype(object)
-        for key, attr in fields.items()
-        if hasattr(task, attr)
-    }
-
-
 def check_val_fraction(val_fraction: float, split: str) -> float:
     """``val_fraction`` as a ``float`` in ``[0, 1)``; ``split="val"`` needs it ``> 0``.
 
@@ -196,21 +173,6 @@ def timing_bounds(max_duration: float) -> tuple[float, float]:
     """Bounds ``(0, high)`` of the v1 timing observations (duration, elapsed; seconds):
     the dataset's longest movement, padded, so they hold on every split."""
     return 0.0, float(np.float32(max_duration * 1.001 + 1e-6))
-
-
-class ReplayTask:
-    """Properties of the precomputed episodes of a split (the task dataclasses)."""
-
-    steps: NDArray[np.float64]  # (L, n, row width)
-    obs: NDArray[np.float32]  # (L, n + 1, obs_dim)
-
-    @property
-    def n_trajectories(self) -> int:
-        return int(self.steps.shape[0])
-
-    @property
-    def obs_dim(self) -> int:
-        return int(self.obs.shape[2])
 
 
 def json_safe_spec(spec: Any) -> Any:
@@ -252,124 +214,3 @@ class LazyRendererMixin:
         state = self.__dict__.copy()
         state["_renderer"] = None
         return state
-
-
-class ReplayEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
-    """Episode mechanics of a single replay environment.
-
-    A subclass sets ``task`` (``n_trajectories``, ``steps``, ``obs``, ``trajectory_ids``,
-    ``tasks``), ``_starts`` (the ``(L, D)`` start of each trajectory), ``_cur`` (the
-    slice of the observation that holds the current state) and, if the observation clips
-    the current state, ``_cur_bounds`` (its ``(low, high)`` per component) in ``__init__``, after
-    :meth:`_check_arguments`; and implements ``step`` (ending with :meth:`_end_step`) and
-    :meth:`_render_frame`.
-    """
-
-    task: Any
-    _starts: NDArray[np.float64]
-    _cur: slice
-    _cur_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None
-
-    def _check_arguments(
-        self,
-        render_mode: str | None,
-        width: int,
-        height: int,
-        residual_scale: float,
-        reward_weights: Mapping[str, float] | None,
-        default_weights: Mapping[str, float],
-        max_scale: float = math.inf,
-        test_fraction: float = 0.25,
-        split_seed: int = 0,
-    ) -> None:
-        """Check and store the arguments every replay environment takes; no episode yet.
-
-        ``residual_scale`` must lie in ``(0, max_scale]``, ``test_fraction`` in ``(0, 1)``,
-        ``split_seed`` be an integer ``>= 0``, ``width`` and ``height`` integers in
-        ``[16, MAX_FRAME_SIZE]``, reward weights in ``[0, MAX_REWARD_WEIGHT]``.
-        """
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        for name, value in (("width", width), ("height", height)):
-            check_integer(value, name, 16, MAX_FRAME_SIZE)
-        self.residual_scale = check_scale(residual_scale, max_scale)
-        check_fraction(test_fraction)
-        check_seed(split_seed)
-        self.reward_weights = check_reward_weights(reward_weights, default_weights)
-        self.render_mode = render_mode
-        self.width, self.height = int(width), int(height)
-        self._renderer: Any = None
-        self._index = -1
-        self._k = N_STEPS
-        self._history: list[tuple[float, ...]] = []
-
-    # -- episode --------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        super().reset(seed=seed)
-        L = self.task.n_trajectories
-        if options is not None and options.get("trajectory") is not None:
-            index = options["trajectory"]
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
-                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
-            if not 0 <= index < L:
-                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
-            index = int(index)
-        else:
-            index = int(self.np_random.integers(L))
-        self._index = index
-        self._k = 0
-        self._steps = self.task.steps[index].tolist()
-        self._obs = self.task.obs[index]
-        start = tuple(self._starts[index].tolist())
-        self._history = [start]
-        self._max_error = 0.0
-        obs = self._obs[0].copy()
-        obs[self._cur] = start
-        info = {
-            "trajectory_index": index,
-            "trajectory_id": str(self.task.trajectory_ids[index]),
-            "task": str(self.task.tasks[index]),
-        }
-        return obs, info
-
-    def _end_step(
-        self, k: int, q: tuple[float, ...], err: float, info: dict[str, Any]
-    ) -> tuple[NDArray[np.float32], bool]:
-        """Record state ``q`` with error ``err`` at grid point ``k``; add ``tau`` (and, at
-        the episode's end, ``max_error``) to ``info``; the next observation and whether
-        the episode terminated."""
-        self._k = k + 1
-        self._history.append(q)
-        if err > self._max_error:
-            self._max_error = err
-        obs = self._obs[k + 1].copy()
-        if self._cur_bounds is None:
-            obs[self._cur] = q
-        else:
-            lo, hi = self._cur_bounds
-            obs[self._cur] = [min(max(v, a), b) for v, a, b in zip(q, lo, hi, strict=True)]
-        info["tau"] = k / (N_STEPS - 1)
-        terminated = k + 1 == N_STEPS
-        if terminated:
-            info["max_error"] = self._max_error
-        return obs, terminated
-
-    # -- rendering ------------------------------------------------------------------
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
-            return None
-        if self._index < 0:
-            raise RuntimeError("call reset() before render()")
-        return self._render_frame()
-
-    def _render_frame(self) -> NDArray[np.uint8]:
-        raise NotImplementedError

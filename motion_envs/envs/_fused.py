@@ -1,17 +1,23 @@
 """The native vector environments' step as one compiled loop (numba backend).
 
-:func:`batch_step` advances every sub-environment by one step in a single call: action
-check and clipping, the step kernel (:func:`~motion_envs.envs._kernels.orientation_step_scalar`
-or :func:`~motion_envs.envs._kernels.position_step_scalar`, compiled unchanged), the
-reward (:func:`~motion_envs.envs._kernels.orientation_reward` /
-:func:`~motion_envs.envs._kernels.position_reward`, compiled unchanged), the episode
-counters, the next observation, and the autoreset of Gymnasium's three
+:func:`batch_step_of` compiles, for a :class:`~motion_envs.envs._reach.ReachKind`, the
+one loop that advances every sub-environment by one step in a single call: action check
+and clipping, the kind's :attr:`~motion_envs.envs._reach.ReachKind.fused_physics` (the
+kind's kernel and reward, compiled unchanged), the running maxima of its end keys, the
+episode counters, the next observation, and the autoreset of Gymnasium's three
 :class:`~gymnasium.vector.AutoresetMode` s. Same expressions in the same order as the
-single environments and the numpy path of :mod:`motion_envs.envs.vector`, correctly
-rounded ``+ - * / sqrt`` and libm's ``sin``/``cos`` (as ``math``), no fast-math, so the
-results are bit-identical (tested).
+single environments and the numpy path of :mod:`motion_envs.envs._reach_vector`,
+correctly rounded ``+ - * / sqrt`` and libm's ``sin``/``cos`` (as ``math``), no
+fast-math, so the results are bit-identical (tested).
 
-State layout (shared with the numpy path of :mod:`motion_envs.envs.vector`):
+The loop is written once (:func:`_batch_step`, plain Python); each kind gets its own
+compiled copy, with the kind's physics and info layout bound as compile-time globals
+(numba inlines them; a function passed as an argument would be neither inlined nor
+cached). Each copy is cached on disk under a name holding the kind's name and a digest
+of the code of its physics and of the kernels it calls, so editing them compiles it
+again (numba itself checks only the timestamp of this file).
+
+State layout (shared with the numpy path of :mod:`motion_envs.envs._reach_vector`):
 
 * ``steps[l, k]`` (float64): the step row of trajectory ``l`` at grid point ``k`` (the
   task's ``steps``), and one extra row ``k = n`` holding the trajectory's start state
@@ -19,43 +25,42 @@ State layout (shared with the numpy path of :mod:`motion_envs.envs.vector`):
   (``dim`` each; infinite when not clipped), ``residual_scale`` and the reward weights;
 * ``si[i]`` (int64): trajectory index, grid point ``k``, elapsed steps, autoreset flag,
   position in the trajectory pool, then the pool (the next trajectory indices);
-* ``sf[i]`` (float64): current state (``dim`` values), running max error, running max
-  geodesic error (orientation);
-* ``out_f`` rows: reward, then the info terms (orientation: error, geodesic error,
-  reward_residual, reward_geodesic, reward_action, tau, max_error, max_geodesic_error;
-  position: error, reward_distance, reward_action, tau, max_error, unused);
+* ``sf[i]`` (float64): current state (``dim`` values), then the running maximum of each
+  of the kind's end keys;
+* ``out_f`` rows: reward, the kind's step keys, tau, the kind's end keys;
 * ``out_b`` rows: terminated, truncated, mask of the step infos, mask of the
   sub-environments reset in this step.
 
-Importing this module imports numba (the ``fast`` extra); the first call compiles
-(38 s measured on a shared 2-core machine under load average 15), then it is cached on
-disk (3 s to load there).
+Importing this module imports numba (the ``fast`` extra); the first call of a kind's
+loop compiles it (38 s measured on a shared 2-core machine under load average 15), then
+it is cached on disk (3 s to load there).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
+import types
+from typing import Any
 
 import numpy as np
 from numba import njit
 
-from motion_envs.envs import _kernels as K
+__all__ = ["DISABLED", "NEXT_STEP", "SAME_STEP", "batch_step_of"]
 
-__all__ = ["DISABLED", "NEXT_STEP", "ORIENTATION", "POSITION", "SAME_STEP", "batch_step"]
-
-# autoreset modes and environment kinds (integers for the compiled code)
+# autoreset modes (integers for the compiled code)
 NEXT_STEP, SAME_STEP, DISABLED = 0, 1, 2
-ORIENTATION, POSITION = 0, 1
 # si columns
 IDX, K_, ELAPSED, AUTORESET, PTR, POOL = 0, 1, 2, 3, 4, 5
 
 # error_model="numpy": no zero-division checks (no divisor can be 0; the kernels guard
 # their small-angle cases); never fastmath, which would reorder the arithmetic
 _jit = njit(cache=True, error_model="numpy")
-_orientation_step = _jit(K.orientation_step_scalar)
-_position_step = _jit(K.position_step_scalar)
-_orientation_reward = _jit(K.orientation_reward)
-_position_reward = _jit(K.position_reward)
+
+# bound per kind in its compiled copy of _batch_step (see batch_step_of)
+_physics: Any = None
+_N_INFO = 0  # number of the kind's step keys
+_MAX_SRC: tuple[int, ...] = ()  # per end key: the index of its step key
 
 
 @_jit
@@ -70,8 +75,8 @@ def _reset_env(i, si, sf, steps, obs_table, dim, cur_lo, out_obs):  # type: igno
     si[i, AUTORESET] = 0
     for j in range(dim):
         sf[i, j] = start[j]
-    sf[i, dim] = 0.0
-    sf[i, dim + 1] = 0.0
+    for j in range(dim, sf.shape[1]):
+        sf[i, j] = 0.0  # the running maxima
     _copy_row(obs_table[idx, 0], out_obs[i])
     _write_current(i, sf, start, dim, cur_lo, out_obs)
 
@@ -93,9 +98,7 @@ def _write_current(i, sf, extra, dim, cur_lo, out_obs):  # type: ignore[no-untyp
         out_obs[i, cur_lo + j] = hi if v > hi else v
 
 
-@_jit
-def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at compile time
-    kind,
+def _batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at compile time
     mode,
     max_steps,
     cur_lo,
@@ -118,7 +121,8 @@ def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at
     """
     N, d = actions.shape
     n_steps = steps.shape[1] - 1
-    dim = sf.shape[1] - 2
+    n_end = len(_MAX_SRC)
+    dim = sf.shape[1] - n_end
     extra = steps[0, n_steps]
     scale = extra[3 * dim]
     w = extra[3 * dim + 1 :]
@@ -129,7 +133,8 @@ def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at
             if not math.isfinite(actions[i, j]):
                 return 1, i, 0, 0
     a = np.empty(d)
-    q = np.empty(d)
+    q = np.empty(dim)
+    tau_row = _N_INFO + 1
     n_term = 0
     n_reset = 0
     n_exhausted = 0
@@ -152,39 +157,17 @@ def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at
         idx = si[i, IDX]
         kk = si[i, K_]
         row = steps[idx, kk]
-        if kind == ORIENTATION:
-            qo, err, geo = _orientation_step(row, a[0], a[1], a[2], scale)
-            r_res, r_geo, r_act, reward = _orientation_reward(
-                err, geo, a[0], a[1], a[2], w[0], w[1], w[2]
-            )
-            sf[i, 0] = qo[0]
-            sf[i, 1] = qo[1]
-            sf[i, 2] = qo[2]
-            sf[i, 3] = qo[3]
-            if geo > sf[i, dim + 1]:
-                sf[i, dim + 1] = geo
-            out_f[1, i] = err
-            out_f[2, i] = geo
-            out_f[3, i] = r_res
-            out_f[4, i] = r_geo
-            out_f[5, i] = r_act
-            tau_row = 6
-        else:
-            err = _position_step(row, a, scale, q)
-            sq = 0.0
-            for j in range(d):
-                sq = sq + a[j] * a[j]
-            r_dist, r_act, reward = _position_reward(err, sq, w[0], w[1])
-            for j in range(d):
-                sf[i, j] = q[j]
-            out_f[1, i] = err
-            out_f[2, i] = r_dist
-            out_f[3, i] = r_act
-            tau_row = 4
+        reward, vals = _physics(row, a, scale, w, q)
+        for j in range(dim):
+            sf[i, j] = q[j]
         out_f[0, i] = reward
+        for j in range(_N_INFO):
+            out_f[1 + j, i] = vals[j]
         out_f[tau_row, i] = kk / (n_steps - 1)
-        if err > sf[i, dim]:
-            sf[i, dim] = err
+        for j in range(n_end):
+            v = vals[_MAX_SRC[j]]
+            if v > sf[i, dim + j]:
+                sf[i, dim + j] = v
         kk += 1
         si[i, K_] = kk
         si[i, ELAPSED] += 1
@@ -194,8 +177,8 @@ def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at
         out_b[1, i] = truncated
         if terminated:
             n_term += 1
-            out_f[tau_row + 1, i] = sf[i, dim]
-            out_f[tau_row + 2, i] = sf[i, dim + 1]
+            for j in range(n_end):
+                out_f[tau_row + 1 + j, i] = sf[i, dim + j]
         _copy_row(obs_table[idx, kk], out_obs[i])
         _write_current(i, sf, extra, dim, cur_lo, out_obs)
         ended = terminated or truncated
@@ -212,3 +195,57 @@ def batch_step(  # type: ignore[no-untyped-def]  # numba infers the signature at
             out_b[3, i] = False
             si[i, AUTORESET] = 1 if ended else 0
     return 0, n_term, n_reset, n_exhausted
+
+
+_COMPILED: dict[str, Any] = {}
+
+
+def _jit_calling(fn: Any, name: str, bound: dict[str, Any], inline: bool = False) -> Any:
+    """``fn`` compiled with ``bound`` (and the compiled copy of every Python function it
+    calls by global name) as its globals, under the cache name ``name``; with
+    ``inline``, ``fn`` and every function it calls are inlined into their callers by
+    numba (LLVM's heuristics leave a kind's physics a call, whose array arguments then
+    cost reference counts: twice the time of a position step, measured)."""
+    env = dict(fn.__globals__)
+    env.update(bound)
+    for global_name in fn.__code__.co_names:
+        value = env.get(global_name)
+        if global_name not in bound and isinstance(value, types.FunctionType):
+            suffix = "_inline" if inline else ""
+            env[global_name] = _jit_calling(value, value.__qualname__ + suffix, {}, inline)
+    copy = types.FunctionType(fn.__code__, env, name, fn.__defaults__)
+    copy.__qualname__ = name  # numba's cache file name
+    copy.__module__ = fn.__module__
+    copy.__doc__ = fn.__doc__
+    if inline:
+        return njit(cache=True, error_model="numpy", inline="always")(copy)
+    return _jit(copy)
+
+
+def _code_digest(fn: Any, h: Any) -> Any:
+    """``h`` updated with the code of ``fn`` and of every Python function it calls by
+    global name (what :func:`_jit_calling` compiles into the loop)."""
+    code = fn.__code__
+    h.update(code.co_code + repr(code.co_consts).encode())
+    for global_name in code.co_names:
+        value = fn.__globals__.get(global_name)
+        if isinstance(value, types.FunctionType) and value is not fn:
+            _code_digest(value, h)
+    return h
+
+
+def batch_step_of(kind: Any) -> Any:
+    """The compiled one-step loop of ``kind`` (a ``ReachKind``): :func:`_batch_step` with
+    the kind's ``fused_physics`` and info layout bound; compiled once per process, cached
+    on disk (see the module docstring)."""
+    physics = kind.fused_physics
+    digest = _code_digest(physics, hashlib.sha256()).hexdigest()[:12]
+    name = f"batch_step_{kind.name}_{digest}"
+    if name not in _COMPILED:
+        bound = {
+            "_physics": _jit_calling(physics, f"{kind.name}_physics_{digest}", {}, inline=True),
+            "_N_INFO": len(kind.step_keys),
+            "_MAX_SRC": tuple(kind.step_keys.index(src) for _, src in kind.end_keys),
+        }
+        _COMPILED[name] = _jit_calling(_batch_step, name, bound)
+    return _COMPILED[name]

@@ -18,20 +18,33 @@ from numpy.typing import NDArray
 from motion_envs.envs import _kernels as K
 from motion_envs.envs._common import (
     N_STEPS,
-    ReplayEnv,
-    ReplayTask,
-    as_action,
     check_choice,
     check_integer,
     check_number,
     check_val_fraction,
     timing_bounds,
 )
+from motion_envs.envs._kernels import orientation_reward, orientation_step_scalar
+from motion_envs.envs._reach import (
+    ObsLayout,
+    ReachEnv,
+    ReachKind,
+    ReachTask,
+    checked_prediction,
+    observation_table,
+    step_table,
+    with_timing,
+    zero_action_errors,
+)
+from motion_envs.envs._reach_vector import ReachVectorEnv
 
 __all__ = [
     "DEFAULT_REWARD_WEIGHTS",
     "N_STEPS",
+    "ORIENTATION",
+    "OrientationKind",
     "OrientationReachEnv",
+    "OrientationReachVectorEnv",
     "OrientationTask",
     "load_orientation_task",
     "orientation_max_errors",
@@ -47,12 +60,22 @@ MAX_RESIDUAL_SCALE = math.pi
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
 _SPLITS = ("train", "val", "test")
 
-# Observation layout
-_START, _GOAL, _CURRENT, _TAU, _NOMINAL, _TASK = 0, 4, 8, 12, 13, 17
+#: The observation's parts (a quaternion state): start 0-3, goal 4-7, current 8-11,
+#: tau 12, nominal 13-16, one-hot task from 17.
+LAYOUT = ObsLayout.for_dim(4)
+#: A ``task.steps`` row: ``expmap(rhat_k)`` (the nominal in the residual chart), the
+#: nominal ``n_k``, the human ``h_k`` and the human residual ``r_k`` (the layout that
+#: :func:`~motion_envs.envs._kernels.orientation_step_scalar` reads).
+ROW: dict[str, slice] = {
+    "chart": slice(0, 4),
+    "nominal": slice(4, 8),
+    "human": slice(8, 12),
+    "residual": slice(12, 15),
+}
 
 
 @dataclass(frozen=True)
-class OrientationTask(ReplayTask):
+class OrientationTask(ReachTask):
     """Precomputed episodes of one split (read-only arrays shared between environments).
 
     ``steps[l, k]`` holds, for trajectory ``l`` and grid point ``k``, the 15 values the
@@ -126,27 +149,21 @@ def _build_task(
     )
     model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
     g = model.grids(part)
-    L, n = g.n_trajectories, N_STEPS
-    steps = np.concatenate(
-        [quat.expmap(g.predicted_residuals), g.nominal, g.human, g.residuals], axis=2
-    )
+    parts = {
+        "chart": quat.expmap(g.predicted_residuals),
+        "nominal": g.nominal,
+        "human": g.human,
+        "residual": g.residuals,
+    }
+    steps = step_table(ROW, parts)
     task_names = tuple(np.unique(dataset.tasks).tolist())
-    obs = np.zeros((L, n + 1, _TASK + len(task_names)), dtype=np.float32)
-    obs[:, :, _START:_GOAL] = g.starts[:, None, :]
-    obs[:, :, _GOAL:_CURRENT] = g.goals[:, None, :]
-    obs[:, :n, _TAU] = g.tau
-    obs[:, n, _TAU] = 1.0
-    obs[:, :n, _NOMINAL:_TASK] = g.nominal
-    obs[:, n, _NOMINAL:_TASK] = g.nominal[:, -1]
     task_index = np.searchsorted(np.asarray(task_names), part.tasks)
-    obs[np.arange(L), :, _TASK + task_index] = 1.0
-    np.clip(obs, -1.0, 1.0, out=obs)
+    obs = observation_table(
+        LAYOUT, g.starts, g.goals, g.tau, g.nominal, task_index, len(task_names), -1.0, 1.0
+    )
     max_duration = float(max(t[-1] - t[0] for t in dataset.times))
     if observe_timing:  # v1: the movement's duration T and the elapsed time tau T (s)
-        durations = np.array([t[-1] - t[0] for t in part.times])
-        elapsed = durations[:, None] * obs[:, :, _TAU].astype(np.float64)
-        timing = np.stack([np.broadcast_to(durations[:, None], elapsed.shape), elapsed], axis=2)
-        obs = np.concatenate([obs, timing.astype(np.float32)], axis=2)
+        obs = with_timing(obs, LAYOUT, np.array([t[-1] - t[0] for t in part.times]))
     for arr in (steps, obs, *vars(g).values()):
         arr.flags.writeable = False  # shared by every environment built from the cache
     return OrientationTask(
@@ -199,8 +216,8 @@ def load_orientation_task(
 def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.spaces.Box:
     low = np.full(task.obs_dim, -1.0, dtype=np.float32)
     high = np.ones(task.obs_dim, dtype=np.float32)
-    low[_TAU] = 0.0
-    low[_TASK:] = 0.0
+    low[LAYOUT.tau] = 0.0
+    low[LAYOUT.task] = 0.0
     if observe_timing:
         low[-2:], high[-2:] = timing_bounds(task.max_duration)
     return gym.spaces.Box(low, high, dtype=np.float32)
@@ -218,36 +235,92 @@ def orientation_max_errors(
     """
     from motion_envs.geometry import quaternion as quat
 
-    rhat = np.asarray(predicted_residuals, dtype=np.float64)
-    steps = task.steps
-    if rhat.shape != (*steps.shape[:2], 3):
-        raise ValueError(
-            f"predicted_residuals must have shape {(*steps.shape[:2], 3)}; got {rhat.shape}"
-        )
-    chart = quat.expmap(rhat)  # as the environment's steps[..., 0:4]
-    nominal = quat.multiply(task.grids.base, chart)
-    zero = np.zeros(steps.shape[0])
-    errors = np.empty(steps.shape[:2])
-    for k in range(steps.shape[1]):
-        s, e, n = steps[:, k], chart[:, k], nominal[:, k]
-        _, errors[:, k], _ = K.orientation_step(
+    rhat = checked_prediction(predicted_residuals, task, 3, "predicted_residuals")
+    chart = quat.expmap(rhat)
+    predicted = np.array(task.steps)
+    predicted[..., ROW["chart"]] = chart
+    predicted[..., ROW["nominal"]] = quat.multiply(task.grids.base, chart)
+    return zero_action_errors(ORIENTATION, task, predicted)
+
+
+class OrientationKind(ReachKind):
+    """The orientation kind: a unit quaternion state set by a rotation-vector action."""
+
+    name = "orientation"
+    instance_name = "ORIENTATION"
+    step_keys = ("error", "geodesic_error", "reward_residual", "reward_geodesic", "reward_action")
+    end_keys = (("max_error", "error"), ("max_geodesic_error", "geodesic_error"))
+    weight_keys = ("residual", "geodesic", "action")
+    default_weights = DEFAULT_REWARD_WEIGHTS
+    max_residual_scale = MAX_RESIDUAL_SCALE
+    load_task = staticmethod(load_orientation_task)
+    max_errors = staticmethod(orientation_max_errors)
+
+    def state_dim(self, task: Any) -> int:
+        return 4
+
+    def action_dim(self, task: Any) -> int:
+        return 3
+
+    def row_layout(self, dim: int) -> dict[str, slice]:
+        return ROW
+
+    def scalar_step(
+        self, row: list[float], a: list[float], scale: float, w: tuple[float, ...]
+    ) -> tuple[tuple[float, ...], float, dict[str, float]]:
+        ax, ay, az = a
+        q, err, geo = orientation_step_scalar(row, ax, ay, az, scale)
+        r_res, r_geo, r_act, reward = orientation_reward(err, geo, ax, ay, az, w[0], w[1], w[2])
+        info = {
+            "error": err,
+            "geodesic_error": geo,
+            "reward_residual": r_res,
+            "reward_geodesic": r_geo,
+            "reward_action": r_act,
+        }
+        return q, reward, info
+
+    def batch_step(
+        self, rows: NDArray[np.float64], a: NDArray[np.float64], scale: float, w: tuple[float, ...]
+    ) -> tuple[NDArray[np.float64], Any, list[Any]]:
+        ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
+        e, n, h, r = (rows[ROW[name]] for name in ("chart", "nominal", "human", "residual"))
+        q, err, geo = K.orientation_step(
             K.BATCH,
-            (e[:, 0], e[:, 1], e[:, 2], e[:, 3]),
-            (n[:, 0], n[:, 1], n[:, 2], n[:, 3]),
-            (s[:, 8], s[:, 9], s[:, 10], s[:, 11]),
-            s[:, 12],
-            s[:, 13],
-            s[:, 14],
-            zero,
-            zero,
-            zero,
-            1.0,
+            (e[0], e[1], e[2], e[3]),
+            (n[0], n[1], n[2], n[3]),
+            (h[0], h[1], h[2], h[3]),
+            r[0],
+            r[1],
+            r[2],
+            ax,
+            ay,
+            az,
+            scale,
         )
-    out: NDArray[np.float64] = errors.max(axis=1)
-    return out
+        r_res, r_geo, r_act, reward = orientation_reward(err, geo, ax, ay, az, *w)
+        return np.stack(q, axis=1), reward, [err, geo, r_res, r_geo, r_act]
+
+    @staticmethod
+    def fused_physics(
+        row: Any, a: Any, scale: float, w: Any, q: Any
+    ) -> tuple[float, tuple[float, ...]]:
+        qo, err, geo = orientation_step_scalar(row, a[0], a[1], a[2], scale)
+        r_res, r_geo, r_act, reward = orientation_reward(
+            err, geo, a[0], a[1], a[2], w[0], w[1], w[2]
+        )
+        q[0] = qo[0]
+        q[1] = qo[1]
+        q[2] = qo[2]
+        q[3] = qo[3]
+        return reward, (err, geo, r_res, r_geo, r_act)
 
 
-class OrientationReachEnv(ReplayEnv):
+#: The orientation kind (one instance serves every orientation environment).
+ORIENTATION = OrientationKind()
+
+
+class OrientationReachEnv(ReachEnv):
     r"""Replay a human hand-orientation trajectory; the agent corrects an analytic nominal.
 
     ## Description
@@ -367,7 +440,7 @@ class OrientationReachEnv(ReplayEnv):
     * v0: Initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
+    kind = ORIENTATION
 
     def __init__(
         self,
@@ -387,67 +460,14 @@ class OrientationReachEnv(ReplayEnv):
         observe_timing: bool = False,
     ) -> None:
         self._check_arguments(
-            render_mode,
-            width,
-            height,
-            residual_scale,
-            reward_weights,
-            DEFAULT_REWARD_WEIGHTS,
-            MAX_RESIDUAL_SCALE,
-            test_fraction,
-            split_seed,
+            render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg,
             val_fraction, observe_timing,
         )  # fmt: skip
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         self.observation_space = _observation_space(self.task, bool(observe_timing))
-        self._starts = self.task.grids.starts
-        self._cur = slice(_CURRENT, _TAU)
-        self._current: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)
-
-    # -- episode --------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        obs, info = super().reset(seed=seed, options=options)
-        self._current = self._history[0]
-        self._max_geodesic = 0.0
-        info["subject"] = str(self.task.subjects[self._index])
-        return obs, info
-
-    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        k = self._k
-        if k >= N_STEPS:
-            raise RuntimeError("the episode has ended (or never started); call reset() first")
-        # the action checks, unrolled for three components (hot path)
-        a = as_action(action, (3,))
-        ax, ay, az = a.tolist()
-        if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
-            raise ValueError(f"action must be finite; got {a.tolist()}")
-        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
-        ay = -1.0 if ay < -1.0 else (1.0 if ay > 1.0 else ay)
-        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
-        q, err, geo = K.orientation_step_scalar(self._steps[k], ax, ay, az, self.residual_scale)
-        w = self.reward_weights
-        r_res, r_geo, r_act, reward = K.orientation_reward(
-            err, geo, ax, ay, az, w["residual"], w["geodesic"], w["action"]
-        )
-        self._current = q
-        if geo > self._max_geodesic:
-            self._max_geodesic = geo
-        info = {
-            "error": err,
-            "geodesic_error": geo,
-            "reward_residual": r_res,
-            "reward_geodesic": r_geo,
-            "reward_action": r_act,
-        }
-        obs, terminated = self._end_step(k, q, err, info)
-        if terminated:
-            info["max_geodesic_error"] = self._max_geodesic
-        return obs, reward, terminated, False, info
+        self._setup(self.task.grids.starts)
 
     # -- rendering ------------------------------------------------------------------
     def _render_frame(self) -> NDArray[np.uint8]:
@@ -464,3 +484,11 @@ class OrientationReachEnv(ReplayEnv):
             step=k,
         )
         return frame
+
+
+class OrientationReachVectorEnv(ReachVectorEnv):
+    """``num_envs`` copies of :class:`OrientationReachEnv`, bit-identical to
+    ``SyncVectorEnv`` (arguments: :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`,
+    contract: :mod:`motion_envs.envs.vector`)."""
+
+    single_class = OrientationReachEnv

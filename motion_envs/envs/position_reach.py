@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import functools
-import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -18,17 +17,30 @@ from numpy.typing import NDArray
 from motion_envs.envs import _kernels as K
 from motion_envs.envs._common import (
     N_STEPS,
-    ReplayEnv,
-    ReplayTask,
-    as_action,
     check_integer,
     check_val_fraction,
     timing_bounds,
 )
+from motion_envs.envs._kernels import position_reward, position_step_scalar
+from motion_envs.envs._reach import (
+    ObsLayout,
+    ReachEnv,
+    ReachKind,
+    ReachTask,
+    checked_prediction,
+    observation_table,
+    step_table,
+    with_timing,
+    zero_action_errors,
+)
+from motion_envs.envs._reach_vector import ReachVectorEnv
 
 __all__ = [
     "DEFAULT_POSITION_REWARD_WEIGHTS",
+    "POSITION",
+    "PositionKind",
     "PositionReachEnv",
+    "PositionReachVectorEnv",
     "PositionTask",
     "load_position_task",
     "position_max_errors",
@@ -45,8 +57,15 @@ MAX_N_SINES = N_STEPS - 2
 DEFAULT_POSITION_REWARD_WEIGHTS: Mapping[str, float] = {"distance": 1.0, "action": 0.0}
 
 
+def row_layout(D: int) -> dict[str, slice]:
+    """A ``task.steps`` row of ``D``-dimensional data: the nominal ``n_k``, then the human
+    ``y_k`` (the layout that :func:`~motion_envs.envs._kernels.position_step_scalar`
+    reads)."""
+    return {"nominal": slice(0, D), "human": slice(D, 2 * D)}
+
+
 @dataclass(frozen=True)
-class PositionTask(ReplayTask):
+class PositionTask(ReachTask):
     """Precomputed episodes of one split (read-only arrays shared between environments).
 
     ``steps[l, k]`` holds the nominal ``n_k`` (D values) then the human ``y_k`` (D) of
@@ -91,13 +110,13 @@ def _observation_bounds(
     y, _ = resample_positions(dataset, N_STEPS)
     lo, hi = y.min(axis=(0, 1)), y.max(axis=(0, 1))
     margin = (hi - lo) + residual_scale
-    dim = 4 * D + 1 + n_tasks
-    low = np.zeros(dim)
-    high = np.ones(dim)
-    low[0:D] = low[D : 2 * D] = lo
-    high[0:D] = high[D : 2 * D] = hi
-    low[2 * D : 3 * D] = low[3 * D + 1 : 4 * D + 1] = lo - margin
-    high[2 * D : 3 * D] = high[3 * D + 1 : 4 * D + 1] = hi + margin
+    layout = ObsLayout.for_dim(D)
+    low = np.zeros(layout.size(n_tasks))
+    high = np.ones(layout.size(n_tasks))
+    low[layout.start] = low[layout.goal] = lo
+    high[layout.start] = high[layout.goal] = hi
+    low[layout.current] = low[layout.nominal] = lo - margin
+    high[layout.current] = high[layout.nominal] = hi + margin
     return low, high
 
 
@@ -148,12 +167,12 @@ def _build_task(
     )
     all_durations = np.array([t[-1] - t[0] for t in full.times])
     g = position_grids(dataset, inner, nominal, n_sines, fraction, split_seed, N_STEPS)
-    L, n, D = g.human.shape
-    steps = np.concatenate([g.nominal, g.human], axis=2)
+    D = g.human.shape[2]
+    layout = ObsLayout.for_dim(D)
+    steps = step_table(row_layout(D), {"nominal": g.nominal, "human": g.human})
     task_names = tuple(sorted(set(np.asarray(full.tasks).astype(str).tolist())))
     starts, goals = g.human[:, 0], g.human[:, -1]
-    # plot extents of this split (rendering only): every position an agent can reach is a
-    # nominal + residual
+    # plot extents of this split (rendering): an agent's position is a nominal + residual
     lo = min(g.nominal.min(), g.human.min()) - residual_scale
     hi = max(g.nominal.max(), g.human.max()) + residual_scale
     pad = 1e-3 * max(1.0, abs(lo), abs(hi))
@@ -161,21 +180,13 @@ def _build_task(
     high = np.full(D, hi + pad, dtype=np.float32)
     low64, high64 = _observation_bounds(full, D, len(task_names), residual_scale)
     obs_low, obs_high = low64.astype(np.float32), high64.astype(np.float32)
-    obs = np.zeros((L, n + 1, obs_low.size), dtype=np.float32)
-    obs[:, :, 0:D] = starts[:, None]
-    obs[:, :, D : 2 * D] = goals[:, None]
-    obs[:, :n, 3 * D] = g.tau
-    obs[:, n, 3 * D] = 1.0
-    obs[:, :n, 3 * D + 1 : 4 * D + 1] = g.nominal
-    obs[:, n, 3 * D + 1 : 4 * D + 1] = g.nominal[:, -1]
     task_index = np.searchsorted(np.asarray(task_names), g.tasks)
-    obs[np.arange(L), :, 4 * D + 1 + task_index] = 1.0
-    np.clip(obs, obs_low, obs_high, out=obs)  # a diverged nominal (see the class docstring)
+    # clipped: a diverged nominal (see the class docstring)
+    obs = observation_table(
+        layout, starts, goals, g.tau, g.nominal, task_index, len(task_names), obs_low, obs_high
+    )
     if observe_timing:  # v1: the movement's duration T and the elapsed time tau T (s)
-        durations = np.array([t[-1] - t[0] for t in dataset.times])[g.index]
-        elapsed = durations[:, None] * obs[:, :, 3 * D].astype(np.float64)
-        timing = np.stack([np.broadcast_to(durations[:, None], elapsed.shape), elapsed], axis=2)
-        obs = np.concatenate([obs, timing.astype(np.float32)], axis=2)
+        obs = with_timing(obs, layout, np.array([t[-1] - t[0] for t in dataset.times])[g.index])
         t_low, t_high = timing_bounds(float(all_durations.max()))
         obs_low = np.concatenate([obs_low, np.full(2, t_low, dtype=np.float32)])
         obs_high = np.concatenate([obs_high, np.full(2, t_high, dtype=np.float32)])
@@ -194,8 +205,8 @@ def _build_task(
         high=high,
         obs_low=obs_low,
         obs_high=obs_high,
-        cur_low=low64[2 * D : 3 * D],
-        cur_high=high64[2 * D : 3 * D],
+        cur_low=low64[layout.current],
+        cur_high=high64[layout.current],
         trajectory_ids=np.asarray(dataset.trajectory_ids)[g.index],
         tasks=g.tasks,
         task_names=task_names,
@@ -247,23 +258,78 @@ def position_max_errors(task: Any, predicted_positions: NDArray[np.float64]) -> 
     ``predicted_positions`` ``(L, n, D)``; scored by the environment's step kernel with a
     zero action (the demonstration ``y`` from ``task.steps``).
     """
-    yhat = np.asarray(predicted_positions, dtype=np.float64)
-    steps = task.steps
     D = task.n_dims
-    if yhat.shape != (*steps.shape[:2], D):
-        raise ValueError(
-            f"predicted_positions must have shape {(*steps.shape[:2], D)}; got {yhat.shape}"
+    yhat = checked_prediction(predicted_positions, task, D, "predicted_positions")
+    predicted = np.array(task.steps)
+    predicted[..., row_layout(D)["nominal"]] = yhat
+    return zero_action_errors(POSITION, task, predicted)
+
+
+class PositionKind(ReachKind):
+    """The position kind: a ``D``-dimensional position set by an offset action."""
+
+    name = "position"
+    instance_name = "POSITION"
+    step_keys = ("error", "reward_distance", "reward_action")
+    end_keys = (("max_error", "error"),)
+    weight_keys = ("distance", "action")
+    default_weights = DEFAULT_POSITION_REWARD_WEIGHTS
+    max_residual_scale = MAX_POSITION_RESIDUAL_SCALE
+    load_task = staticmethod(load_position_task)
+    max_errors = staticmethod(position_max_errors)
+
+    def state_dim(self, task: Any) -> int:
+        return int(task.n_dims)
+
+    def action_dim(self, task: Any) -> int:
+        return int(task.n_dims)
+
+    def row_layout(self, dim: int) -> dict[str, slice]:
+        return row_layout(dim)
+
+    def scalar_step(
+        self, row: list[float], a: list[float], scale: float, w: tuple[float, ...]
+    ) -> tuple[tuple[float, ...], float, dict[str, float]]:
+        q = [0.0] * len(a)
+        err = position_step_scalar(row, a, scale, q)
+        sq = 0.0
+        for v in a:
+            sq = sq + v * v
+        r_dist, r_act, reward = position_reward(err, sq, w[0], w[1])
+        return tuple(q), reward, {"error": err, "reward_distance": r_dist, "reward_action": r_act}
+
+    def batch_step(
+        self, rows: NDArray[np.float64], a: NDArray[np.float64], scale: float, w: tuple[float, ...]
+    ) -> tuple[NDArray[np.float64], Any, list[Any]]:
+        D = a.shape[1]
+        layout = row_layout(D)
+        cols = [a[:, i] for i in range(D)]
+        q, err = K.position_step(
+            K.BATCH, rows[layout["nominal"]], rows[layout["human"]], cols, scale
         )
-    zero = [np.zeros(steps.shape[0])] * D
-    errors = np.empty(steps.shape[:2])
-    for k in range(steps.shape[1]):
-        h = steps[:, k, D:].T
-        _, errors[:, k] = K.position_step(K.BATCH, list(yhat[:, k].T), list(h), zero, 1.0)
-    out: NDArray[np.float64] = errors.max(axis=1)
-    return out
+        sq: Any = 0.0
+        for c in cols:
+            sq = sq + c * c
+        r_dist, r_act, reward = position_reward(err, sq, *w)
+        return np.stack(q, axis=1), reward, [err, r_dist, r_act]
+
+    @staticmethod
+    def fused_physics(
+        row: Any, a: Any, scale: float, w: Any, q: Any
+    ) -> tuple[float, tuple[float, ...]]:
+        err = position_step_scalar(row, a, scale, q)
+        sq = 0.0
+        for j in range(a.shape[0]):
+            sq = sq + a[j] * a[j]
+        r_dist, r_act, reward = position_reward(err, sq, w[0], w[1])
+        return reward, (err, r_dist, r_act)
 
 
-class PositionReachEnv(ReplayEnv):
+#: The position kind (one instance serves every position environment).
+POSITION = PositionKind()
+
+
+class PositionReachEnv(ReachEnv):
     r"""Replay a human demonstration's positions; the agent corrects an analytic nominal.
 
     ## Description
@@ -377,7 +443,7 @@ class PositionReachEnv(ReplayEnv):
     * v0: Initial version.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
+    kind = POSITION
 
     def __init__(
         self,
@@ -397,52 +463,19 @@ class PositionReachEnv(ReplayEnv):
         observe_timing: bool = False,
     ) -> None:
         self._check_arguments(
-            render_mode,
-            width,
-            height,
-            residual_scale,
-            reward_weights,
-            DEFAULT_POSITION_REWARD_WEIGHTS,
-            MAX_POSITION_RESIDUAL_SCALE,
-            test_fraction,
-            split_seed,
+            render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
         self.task = load_position_task(
             data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale,
             val_fraction, observe_timing,
         )  # fmt: skip
-        D = self.task.n_dims
-        self._D = D
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (D,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(
             self.task.obs_low, self.task.obs_high, dtype=np.float32
         )
-        self._starts = self.task.starts
-        self._cur = slice(2 * D, 3 * D)
-        # the current position is clipped to the observation bounds, as float64 (float32
-        # rounding is monotonic, so the float32 observation stays inside the bounds)
-        self._cur_bounds = (tuple(self.task.cur_low.tolist()), tuple(self.task.cur_high.tolist()))
-
-    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        k = self._k
-        if k >= N_STEPS:
-            raise RuntimeError("the episode has ended (or never started); call reset() first")
-        D = self._D
-        acts = as_action(action, (D,)).tolist()
-        for v in acts:
-            if not math.isfinite(v):
-                raise ValueError(f"action must be finite; got {acts}")
-        acts = [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
-        q = [0.0] * D
-        err = K.position_step_scalar(self._steps[k], acts, self.residual_scale, q)
-        w = self.reward_weights
-        sq = 0.0
-        for v in acts:
-            sq = sq + v * v
-        r_dist, r_act, reward = K.position_reward(err, sq, w["distance"], w["action"])
-        info = {"error": err, "reward_distance": r_dist, "reward_action": r_act}
-        obs, terminated = self._end_step(k, tuple(q), err, info)
-        return obs, reward, terminated, False, info
+        # the current position clipped to the observation bounds as float64 (float32
+        # rounding is monotonic: the float32 observation stays inside the bounds)
+        bounds = (tuple(self.task.cur_low.tolist()), tuple(self.task.cur_high.tolist()))
+        self._setup(self.task.starts, bounds)
 
     def _render_frame(self) -> NDArray[np.uint8]:
         if self._renderer is None:
@@ -457,3 +490,11 @@ class PositionReachEnv(ReplayEnv):
             title=f"{self.task.tasks[self._index]}  step {len(self._history) - 1}/{N_STEPS}",
         )
         return frame
+
+
+class PositionReachVectorEnv(ReachVectorEnv):
+    """``num_envs`` copies of :class:`PositionReachEnv`, bit-identical to
+    ``SyncVectorEnv`` (arguments: :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`,
+    contract: :mod:`motion_envs.envs.vector`)."""
+
+    single_class = PositionReachEnv
