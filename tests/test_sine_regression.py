@@ -103,7 +103,10 @@ def test_final_velocity_constraint_holds(fitted, v, duration, mode):
     model, _, _, _ = fitted
     start, end = np.array([0.1, 0.2]), np.array([2.0, 2.4])
     p0 = model.predict_coefficients(np.r_[start, end], start, end)
-    p = model.plan(np.r_[start, end], duration, start, end, final_velocity=v, mode=mode)
+    p = model.plan(
+        np.r_[start, end], duration, start, end, final_velocity=v, mode=mode,
+        fix_end=False, max_end_shift=None,
+    )  # fmt: skip
     np.testing.assert_allclose(_end_velocity(p, duration), v, atol=1e-9)
     np.testing.assert_allclose(ss.evaluate(p, [0.0])[0], start, atol=1e-12)
     dp = (p - p0).reshape(-1)
@@ -123,7 +126,9 @@ def test_final_velocity_single_axis_and_fixed_end(fitted):
     model, _, _, _ = fitted
     start, end = np.array([0.0, 0.0]), np.array([1.0, 3.0])
     p0 = model.predict_coefficients(np.r_[start, end], start, end)
-    p = sr.constrain_final_velocity(p0, [0.0, 0.0], 1.5, model.F_Q_, "hyperplane", axes=[1])
+    p = sr.constrain_final_velocity(
+        p0, [0.0, 0.0], 1.5, model.F_Q_, "hyperplane", axes=[1], fix_end=False
+    )
     assert abs(_end_velocity(p, 1.5)[1]) < 1e-9
     p = sr.constrain_final_velocity(p0, [0.7, -0.2], 1.5, mode="free", fix_end=True)
     np.testing.assert_allclose(_end_velocity(p, 1.5), [0.7, -0.2], atol=1e-9)

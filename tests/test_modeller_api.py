@@ -1,0 +1,90 @@
+"""The models as a modeller calls them on their own arrays (issue 23).
+
+Every test is a friction a human-motion modeller met, written as the modeller's call, on
+SIMULATED reaches: 3 people to 4 targets, 120 Hz, 0.5 mm Gaussian noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motion_envs.geometry import sine_series as ss
+from motion_envs.models.sine_regression import SineSeriesRegression
+
+RATE = 120.0
+NOISE = 0.5e-3
+TARGETS = np.array([[0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [-0.2, 0.2, 0.1], [0.2, -0.2, -0.1]])
+
+
+def _min_jerk(s):
+    return 10 * s**3 - 15 * s**4 + 6 * s**5
+
+
+def simulated_reaches(seed=0, n_reps=3, noise=NOISE):
+    """SIMULATED reaches: positions (n_i, 3) in metres, times (n_i,) in s, conditions."""
+    rng = np.random.default_rng(seed)
+    ys, ts, qs, subjects = [], [], [], []
+    for subject in range(3):
+        bow = 0.02 * (subject + 1)
+        for target in TARGETS:
+            for _ in range(n_reps):
+                start = rng.normal(scale=0.01, size=3)
+                end = target + rng.normal(scale=0.005, size=3)
+                duration = 0.8 + 0.1 * subject + rng.uniform(0, 0.1)
+                t = np.arange(int(duration * RATE) + 1) / RATE
+                s = t / t[-1]
+                side = np.cross(end - start, [0.0, 0.0, 1.0])
+                side = side / max(np.linalg.norm(side), 1e-9)
+                y = start + np.outer(_min_jerk(s), end - start)
+                y = y + bow * np.outer(np.sin(np.pi * s) ** 2, side)
+                ys.append(y + rng.normal(scale=noise, size=y.shape))
+                ts.append(t)
+                qs.append(np.r_[start, end])
+                subjects.append(f"s{subject}")
+    return ys, ts, np.array(qs), np.array(subjects)
+
+
+@pytest.fixture(scope="module")
+def reaches():
+    return simulated_reaches()
+
+
+@pytest.fixture(scope="module")
+def sine_model(reaches):
+    ys, ts, q, _ = reaches
+    return SineSeriesRegression(n_sines=6).fit(ys, q, times=ts)
+
+
+# -- 1. eq. 9: safe by default ---------------------------------------------------------
+def test_plan_final_velocity_holds_start_and_end_by_default(sine_model):
+    y0, y1 = np.zeros(3), np.array([0.3, 0.0, 0.0])
+    q, duration = np.r_[y0, y1], 1.0
+    p = sine_model.plan(q, duration, start=y0, end=y1, final_velocity=[0, 0, -0.1])
+    np.testing.assert_allclose(ss.evaluate(p, 0.0), y0, atol=1e-12)
+    np.testing.assert_allclose(ss.evaluate(p, 1.0), y1, atol=1e-12)
+    np.testing.assert_allclose(ss.velocity(p, [1.0], duration)[0], [0, 0, -0.1], atol=1e-12)
+    _t, y = sine_model.generate(q, duration, start=y0, end=y1, final_velocity=[0, 0, -0.1])
+    np.testing.assert_allclose(y[-1], y1, atol=1e-12)
+
+
+def test_plan_hyperplane_reports_and_limits_the_end_shift(sine_model):
+    y0, y1 = np.zeros(3), np.array([0.3, 0.0, 0.0])
+    q = np.r_[y0, y1]
+    kw = dict(start=y0, end=y1, final_velocity=[0, 0, -0.1], mode="hyperplane")
+    with pytest.raises(ValueError, match="fix_end=False"):
+        sine_model.plan(q, 1.0, **kw)
+    with pytest.raises(ValueError, match=r"moves the end point by .*max_end_shift"):
+        sine_model.plan(q, 1.0, fix_end=False, **kw)
+    p, shift = sine_model.plan(q, 1.0, fix_end=False, max_end_shift=None,
+                               return_end_shift=True, **kw)  # fmt: skip
+    np.testing.assert_allclose(ss.evaluate(p, 1.0), y1 + shift, atol=1e-12)
+    assert np.linalg.norm(shift) > 1e-3
+    np.testing.assert_allclose(ss.velocity(p, [1.0], 1.0)[0], [0, 0, -0.1], atol=1e-9)
+
+
+def test_generate_fix_end_false_free_mode_shift_is_checked(sine_model):
+    y0, y1 = np.zeros(3), np.array([0.3, 0.0, 0.0])
+    with pytest.raises(ValueError, match="max_end_shift"):
+        sine_model.generate(np.r_[y0, y1], 1.0, start=y0, end=y1,
+                            final_velocity=[0, 0, -5.0], fix_end=False)  # fmt: skip
