@@ -88,3 +88,24 @@ def test_generate_fix_end_false_free_mode_shift_is_checked(sine_model):
     with pytest.raises(ValueError, match="max_end_shift"):
         sine_model.generate(np.r_[y0, y1], 1.0, start=y0, end=y1,
                             final_velocity=[0, 0, -5.0], fix_end=False)  # fmt: skip
+
+
+# -- 2. segmentation criteria: keyword-only, never-firing refused -----------------------
+def test_criteria_are_keyword_only_and_refuse_never_firing():
+    from motion_envs.models import segmentation as sg
+
+    with pytest.raises(TypeError):
+        sg.SpeedAbove(0.05)  # type: ignore[misc]
+    assert sg.SpeedAbove(threshold=0.05).threshold == 0.05
+    for bad in (
+        lambda: sg.SpeedBelow(threshold=0.0),
+        lambda: sg.SpeedBelow(threshold=float("nan")),
+        lambda: sg.SpeedAbove(threshold=-1.0),
+        lambda: sg.SpeedAbove(threshold=float("inf")),
+        lambda: sg.AccelerationBelow(axis=2, threshold=float("-inf")),
+        lambda: sg.PositionReached(target=(0.3, 0.0, 0.0), tolerance=-1e-3),
+        lambda: sg.EventOccurred(name=""),
+        lambda: sg.SpeedAbove(threshold=0.05, min_elapsed=-0.1),
+    ):
+        with pytest.raises(ValueError, match=r"never|must"):
+            bad()

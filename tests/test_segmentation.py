@@ -49,7 +49,7 @@ def test_acceleration_speed_and_event_criteria():
     # |v_k| = |(1, -(t_k + t_{k-1}))| exceeds sqrt(1 + 1.5^2) once t_k + t_{k-1} > 1.5
     k = int(np.argmax(t[1:] + t[:-1] > 1.5)) + 1
     assert segs == [sg.Segment("fast", 0, k)]
-    crit = sg.AnyOf((sg.EventOccurred(name="catch"), sg.SpeedBelow(threshold=0.0)))
+    crit = sg.AnyOf((sg.EventOccurred(name="catch"), sg.SpeedBelow(threshold=0.5)))
     segs = sg.segment(t, y, [("catch", crit)], events={7: ["catch"]}, cycle=False)
     assert segs == [sg.Segment("catch", 0, 7)]
     early = sg.EventOccurred(name="catch", min_elapsed=0.5)

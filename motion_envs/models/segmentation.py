@@ -13,7 +13,11 @@ so the same criteria cut the training recordings and drive generation:
 * :class:`AnyOf` / :class:`AllOf` combine criteria.
 
 Every criterion may require ``min_elapsed`` seconds since the phase began (a reach
-starts at rest, so "speed below" would fire at once without it).
+starts at rest, so "speed below" would fire at once without it). Their parameters are
+keyword-only (``SpeedAbove(threshold=0.05)``; ``SpeedAbove(0.05)`` is a ``TypeError``)
+and a criterion that could never fire (``SpeedBelow(threshold=0)``, a non-finite
+threshold, a negative tolerance or ``min_elapsed``, an empty event name) is refused
+with a ``ValueError`` when it is built.
 
 Online derivatives are causal backward differences (:func:`causal_derivatives`):
 ``v_k = (y_k - y_{k-1}) / (t_k - t_{k-1})``, ``a_k = (v_k - v_{k-1}) / (t_k - t_{k-1})``,
@@ -76,21 +80,48 @@ class Criterion(Protocol):
     def __call__(self, state: MotionState) -> bool: ...
 
 
-@dataclass(frozen=True)
+def _finite(value: float, name: str, owner: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{owner}: {name} must be a number; got {value!r}")
+    if not np.isfinite(value):
+        raise ValueError(f"{owner}: {name} must be finite (it could never fire); got {value}")
+    return float(value)
+
+
+@dataclass(frozen=True, kw_only=True)
 class _Timed:
     min_elapsed: float = 0.0
+
+    def __post_init__(self) -> None:
+        if _finite(self.min_elapsed, "min_elapsed", type(self).__name__) < 0:
+            raise ValueError(f"{type(self).__name__}: min_elapsed must be >= 0 s")
 
     def _early(self, state: MotionState) -> bool:
         return state.elapsed < self.min_elapsed
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PositionReached(_Timed):
-    """``|position[axes] - target[axes]| <= tolerance`` (Euclidean; default all axes)."""
+    """``|position[axes] - target[axes]| <= tolerance`` (Euclidean; default all axes).
 
-    target: tuple[float, ...] = ()
+    Keyword-only: ``PositionReached(target=(x, y, z), tolerance=1e-3, axes=None,
+    min_elapsed=0.0)``.
+    """
+
+    target: tuple[float, ...]
     tolerance: float = 1e-3
     axes: tuple[int, ...] | None = None
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        target = np.asarray(self.target, dtype=np.float64)
+        if target.ndim != 1 or target.size == 0 or not np.all(np.isfinite(target)):
+            raise ValueError(f"{name}: target must be a non-empty finite vector; got {self.target}")
+        if _finite(self.tolerance, "tolerance", name) < 0:
+            raise ValueError(f"{name}: tolerance must be >= 0 (it could never fire)")
+        if self.axes is not None and len(self.axes) != target.size:
+            raise ValueError(f"{name}: axes {self.axes} must name one axis per target value")
 
     def __call__(self, state: MotionState) -> bool:
         if self._early(state):
@@ -100,53 +131,79 @@ class PositionReached(_Timed):
         return bool(np.linalg.norm(state.position[axes] - target) <= self.tolerance)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SpeedBelow(_Timed):
-    """``|velocity| < threshold``."""
+    """``|velocity| < threshold`` (keyword-only; ``threshold > 0``, else it never fires)."""
 
-    threshold: float = 0.0
+    threshold: float
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if _finite(self.threshold, "threshold", "SpeedBelow") <= 0:
+            raise ValueError(
+                f"SpeedBelow: threshold must be > 0 (|v| < {self.threshold} never holds)"
+            )
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(np.linalg.norm(state.velocity) < self.threshold)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SpeedAbove(_Timed):
-    """``|velocity| > threshold``."""
+    """``|velocity| > threshold`` (keyword-only; ``threshold >= 0``)."""
 
-    threshold: float = 0.0
+    threshold: float
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if _finite(self.threshold, "threshold", "SpeedAbove") < 0:
+            raise ValueError(
+                f"SpeedAbove: threshold must be >= 0 (|v| > {self.threshold} always holds)"
+            )
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(np.linalg.norm(state.velocity) > self.threshold)
 
 
-@dataclass(frozen=True)
-class AccelerationBelow(_Timed):
-    """``acceleration[axis] < threshold``."""
+@dataclass(frozen=True, kw_only=True)
+class _AxisThreshold(_Timed):
+    axis: int
+    threshold: float
 
-    axis: int = 0
-    threshold: float = 0.0
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        _finite(self.threshold, "threshold", name)
+        if isinstance(self.axis, bool) or not isinstance(self.axis, (int, np.integer)):
+            raise TypeError(f"{name}: axis must be an integer; got {self.axis!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class AccelerationBelow(_AxisThreshold):
+    """``acceleration[axis] < threshold`` (keyword-only: ``axis=``, ``threshold=``)."""
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(state.acceleration[self.axis] < self.threshold)
 
 
-@dataclass(frozen=True)
-class AccelerationAbove(_Timed):
-    """``acceleration[axis] > threshold``."""
-
-    axis: int = 0
-    threshold: float = 0.0
+@dataclass(frozen=True, kw_only=True)
+class AccelerationAbove(_AxisThreshold):
+    """``acceleration[axis] > threshold`` (keyword-only: ``axis=``, ``threshold=``)."""
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(state.acceleration[self.axis] > self.threshold)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EventOccurred(_Timed):
-    """The external event ``name`` is among the state's events."""
+    """The external event ``name`` (non-empty, keyword-only) is among the state's events."""
 
-    name: str = ""
+    name: str
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"EventOccurred: name must be a non-empty string; got {self.name!r}")
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and self.name in state.events
