@@ -109,3 +109,40 @@ def test_criteria_are_keyword_only_and_refuse_never_firing():
     ):
         with pytest.raises(ValueError, match=r"never|must"):
             bad()
+
+
+# -- 3. one shape rule for scalar and array tau ------------------------------------------
+def test_scalar_and_array_tau_share_one_shape_rule(sine_model):
+    y0, y1 = np.zeros(3), np.array([0.3, 0.0, 0.0])
+    duration = 0.9
+    p = sine_model.plan(np.r_[y0, y1], duration, start=y0, end=y1)
+    for f in (
+        lambda tau: ss.evaluate(p, tau),
+        lambda tau: ss.velocity(p, tau, duration),
+        lambda tau: ss.acceleration(p, tau, duration),
+    ):
+        assert f(0.5).shape == (3,)
+        assert f([0.5]).shape == (1, 3)
+        assert f(np.linspace(0, 1, 7)).shape == (7, 3)
+        np.testing.assert_array_equal(f(0.5), f([0.5])[0])
+    # batched coefficients with one duration each
+    pb = np.stack([p, 2 * p])
+    assert ss.velocity(pb, 0.5, [duration, 2 * duration]).shape == (2, 3)
+    assert ss.acceleration(pb, [0.2, 0.5], [duration, 2 * duration]).shape == (2, 2, 3)
+    np.testing.assert_allclose(ss.velocity(pb, 0.5, [duration, 2 * duration])[1],
+                               ss.velocity(p, 0.5, duration), rtol=1e-12)  # fmt: skip
+    # oracle: central differences of the position in seconds
+    h = 1e-4
+    t = 0.4 * duration
+    pos = [ss.evaluate(p, (t + k * h) / duration) for k in (-1, 0, 1)]
+    np.testing.assert_allclose(ss.velocity(p, t / duration, duration),
+                               (pos[2] - pos[0]) / (2 * h), atol=1e-6)  # fmt: skip
+    np.testing.assert_allclose(ss.acceleration(p, t / duration, duration),
+                               (pos[2] - 2 * pos[1] + pos[0]) / h**2, atol=1e-3)  # fmt: skip
+    # eq. 10 takes the executed velocity straight from velocity(P, tau1, T)
+    tau1 = 0.5
+    v1 = ss.velocity(p, tau1, duration)
+    p2 = sine_model.correct(p, tau1, ss.evaluate(p, tau1), [0.25, 0.05, 0.0], duration,
+                            velocity=v1)  # fmt: skip
+    np.testing.assert_allclose(ss.velocity(p2, tau1, duration), v1, atol=1e-12)
+    np.testing.assert_allclose(ss.evaluate(p2, 1.0), [0.25, 0.05, 0.0], atol=1e-12)
