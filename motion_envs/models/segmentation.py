@@ -19,7 +19,12 @@ and a criterion that could never fire (``SpeedBelow(threshold=0)``, a non-finite
 threshold, a negative tolerance or ``min_elapsed``, an empty event name) is refused
 with a ``ValueError`` when it is built.
 
-Online derivatives are causal backward differences (:func:`causal_derivatives`):
+Derivatives of a recording (:func:`segment`) are Savitzky-Golay smoothed by default
+(:func:`motion_envs.geometry.kinematics.smoothed_velocity`, window
+``DEFAULT_WINDOW = 0.1`` s, cubic): raw differences of noisy samples fire speed
+criteria on noise. The smoothing window is centred (it looks ``window / 2`` ahead), so
+offline segments may start up to that much earlier than an online criterion would fire.
+``window=None`` uses the causal backward differences of :func:`causal_derivatives`:
 ``v_k = (y_k - y_{k-1}) / (t_k - t_{k-1})``, ``a_k = (v_k - v_{k-1}) / (t_k - t_{k-1})``,
 ``v_0 = a_0 = a_1 = 0``.
 
@@ -40,6 +45,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import sine_series as ss
+from motion_envs.geometry.kinematics import (
+    DEFAULT_POLYORDER,
+    DEFAULT_WINDOW,
+    smoothed_acceleration,
+    smoothed_velocity,
+)
 
 __all__ = [
     "AccelerationAbove",
@@ -262,19 +273,31 @@ def segment(
     phases: Sequence[tuple[str, Criterion]],
     events: Mapping[int, Iterable[str]] | None = None,
     cycle: bool = True,
+    *,
+    window: float | None = DEFAULT_WINDOW,
+    polyorder: int = DEFAULT_POLYORDER,
 ) -> list[Segment]:
     """Cut a recording into phases ``(name, end criterion)`` taken in order.
 
     The criterion of the current phase is evaluated at every sample after the phase's
-    first (with causal derivatives and ``events[k]``, the events at sample ``k``); the
-    sample where it first holds ends the phase and starts the next. With ``cycle`` the
-    phase list repeats. A last phase whose criterion never holds is not returned.
+    first (with the velocity, acceleration and ``events[k]``, the events at sample
+    ``k``); the sample where it first holds ends the phase and starts the next. With
+    ``cycle`` the phase list repeats. A last phase whose criterion never holds is not
+    returned.
+
+    Velocities and accelerations are Savitzky-Golay derivatives over ``window`` seconds
+    with polynomials of degree ``polyorder`` (default 0.1 s, cubic; ``times`` must then
+    be uniform, see :func:`motion_envs.geometry.kinematics.smoothed_derivative`);
+    ``window=None`` uses raw causal backward differences (:func:`causal_derivatives`).
     """
     if not phases:
         raise ValueError("phases must contain at least one (name, criterion) pair")
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(positions, dtype=np.float64)
     v, a = causal_derivatives(t, y)
+    if window is not None:
+        v = smoothed_velocity(y, times=t, window=window, polyorder=polyorder)
+        a = smoothed_acceleration(y, times=t, window=window, polyorder=polyorder)
     events = events or {}
     out: list[Segment] = []
     p, start = 0, 0
