@@ -52,7 +52,7 @@ def fitted_models() -> list[SerializableModel]:
         TaskBezierModel(3).fit(R, tasks=labels),
         SubjectBezierModel(2, unseen="global").fit(R, subjects=labels),
         LinearBezierModel(2).fit(R, predictors={"age": rng.normal(size=12)}),
-        SineSeriesRegression(n_sines=3).fit(y, q),
+        SineSeriesRegression(n_sines=3).fit(y, q, times="normalised"),
     ]
 
 

@@ -183,3 +183,19 @@ def test_segmentation_smooths_noise_before_differentiating():
     v = kinematics.smoothed_velocity(y, rate=RATE, window=0.2)
     assert v.shape == y.shape
     assert np.max(kinematics.speed(y[:60], rate=RATE)[8:-8]) < 0.03  # at rest: noise only
+
+
+# -- 5. the time base is required, sample indices are not seconds -----------------------
+def test_fit_requires_times_or_rate(reaches):
+    ys, ts, q, _ = reaches
+    with pytest.raises(ValueError, match=r"times=.*rate="):
+        SineSeriesRegression(n_sines=6).fit(ys, q)
+    with pytest.raises(ValueError, match="sample indices are not seconds"):
+        SineSeriesRegression(n_sines=6).fit(ys, q, times=[np.arange(len(y)) for y in ys])
+    by_rate = SineSeriesRegression(n_sines=6).fit(ys, q, rate=RATE)
+    by_times = SineSeriesRegression(n_sines=6).fit(ys, q, times=ts)
+    np.testing.assert_allclose(by_rate.durations_, [t[-1] for t in ts], rtol=1e-12)
+    np.testing.assert_allclose(by_rate.F_, by_times.F_, atol=1e-12)
+    assert 0.8 <= by_rate.durations_.min() and by_rate.durations_.max() < 1.15  # seconds
+    unit = SineSeriesRegression(n_sines=6).fit(ys, q, times="normalised")
+    np.testing.assert_array_equal(unit.durations_, 1.0)

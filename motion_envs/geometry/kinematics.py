@@ -22,6 +22,8 @@ import numpy as np
 import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.geometry.resampling import check_rate, times_in_seconds
+
 __all__ = [
     "DEFAULT_POLYORDER",
     "DEFAULT_WINDOW",
@@ -54,22 +56,10 @@ def sample_rate(
     if (times is None) == (rate is None):
         raise ValueError("give exactly one of times= (seconds) or rate= (Hz)")
     if rate is not None:
-        r = float(rate)
-        if not np.isfinite(r) or r <= 0:
-            raise ValueError(f"rate must be a finite sampling rate > 0 in Hz; got {rate!r}")
-        return r
-    t = np.asarray(times)
-    if t.dtype.kind in "iub":
-        raise ValueError(
-            "times are integers: sample indices are not seconds; pass times in seconds "
-            "(float) or rate= in Hz"
-        )
-    t = t.astype(np.float64)
-    if t.ndim != 1 or t.size < 2 or not np.all(np.isfinite(t)):
-        raise ValueError(f"times must be a finite (K,) array with K >= 2; got shape {t.shape}")
+        return check_rate(rate)
+    assert times is not None
+    t = times_in_seconds(times)
     dt = np.diff(t)
-    if np.any(dt <= 0):
-        raise ValueError("times must be strictly increasing")
     if np.ptp(dt) > rtol * np.mean(dt):
         raise ValueError(
             "times are not uniform; resample to a rate first (motion_envs.geometry.resample)"

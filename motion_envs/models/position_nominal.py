@@ -140,7 +140,9 @@ class PositionNominal:
                     n_use, _ = select_n_sines(list(y), q_train, candidates=cands)
                     self.selection_seconds_ = time.perf_counter() - t0
                 self.n_sines_ = int(n_use)
-                self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(list(y), q_train)
+                self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(
+                    list(y), q_train, times="normalised"
+                )
         return self
 
     def predict(self, y: FloatArray, durations: FloatArray) -> FloatArray:

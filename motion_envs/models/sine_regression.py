@@ -64,6 +64,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
+from motion_envs.geometry.resampling import recording_times
 from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = [
@@ -362,10 +363,33 @@ class SineSeriesRegression(SerializableModel):
         self,
         positions: Sequence[ArrayLike],
         conditions: ArrayLike,
-        times: Sequence[ArrayLike] | None = None,
+        times: Sequence[ArrayLike] | Literal["normalised"] | None = None,
+        *,
+        rate: float | None = None,
     ) -> SineSeriesRegression:
-        """Fit from trajectories ``(n_i, D)`` (times ``(n_i,)`` optional), conditions ``(n, q)``."""
-        coefs, durations = trajectory_coefficients(positions, self.n_sines, times)
+        """Fit eq. 6 to trajectories ``positions[i]`` ``(n_i, D)`` and conditions ``(n, q)``.
+
+        The time base is required: ``times`` (seconds, one ``(n_i,)`` float array per
+        trajectory) or ``rate`` (Hz, ``t_k = k / rate``); ``durations_`` are then in
+        seconds and :meth:`plan` velocities per second. ``times="normalised"`` fits on
+        normalised time ``tau_k = k / (n_i - 1)`` with unit durations (for data already
+        time-normalised). Integer ``times`` (sample indices) are refused. Returns ``self``.
+        """
+        if isinstance(times, str):
+            if times != "normalised" or rate is not None:
+                raise ValueError(
+                    f"times must be arrays in seconds or 'normalised' (without rate); got {times!r}"
+                )
+            coefs, durations = trajectory_coefficients(positions, self.n_sines, None)
+        else:
+            if times is None and rate is None:
+                raise ValueError(
+                    "fit needs the time base: times= (seconds, one array per trajectory) "
+                    "or rate= (Hz); times='normalised' fits on normalised time with unit "
+                    "durations"
+                )
+            ts = recording_times(positions, times, rate)
+            coefs, durations = trajectory_coefficients(positions, self.n_sines, ts)
         return self.fit_coefficients(coefs, conditions, durations)
 
     def fit_coefficients(
