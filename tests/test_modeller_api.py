@@ -199,3 +199,76 @@ def test_fit_requires_times_or_rate(reaches):
     assert 0.8 <= by_rate.durations_.min() and by_rate.durations_.max() < 1.15  # seconds
     unit = SineSeriesRegression(n_sines=6).fit(ys, q, times="normalised")
     np.testing.assert_array_equal(unit.durations_, 1.0)
+
+
+# -- 6. scikit-learn estimator conventions ------------------------------------------------
+def _all_models():
+    from motion_envs.models.bezier_models import (
+        GroupBezierModel,
+        LinearBezierModel,
+        NullBezierModel,
+        SubjectBezierModel,
+        TaskBezierModel,
+    )
+    from motion_envs.models.timing_model import SpeedProfileModel
+
+    return [
+        SineSeriesRegression(n_sines=5),
+        NullBezierModel(degree=3),
+        GroupBezierModel(degree=2, by="subject", unseen="global"),
+        SubjectBezierModel(degree=2),
+        TaskBezierModel(degree=3, frame="path", up=(0, 1, 0)),
+        LinearBezierModel(degree=2),
+        SpeedProfileModel(lam=0.1),
+    ]
+
+
+def _predict_unfitted(model):
+    if isinstance(model, SineSeriesRegression):
+        model.predict([0.0] * 6, 1.0)
+    elif type(model).__name__ == "SpeedProfileModel":
+        model.predict(np.zeros((2, 2)))
+    else:
+        model.predict(n=2, subjects=["a", "b"], tasks=["a", "b"], predictors=np.zeros((2, 1)))
+
+
+@pytest.mark.parametrize("model", _all_models(), ids=lambda m: type(m).__name__)
+def test_every_model_follows_sklearn_conventions(model):
+    from motion_envs.models.estimator import NotFittedError
+
+    params = model.get_params()
+    assert params and all(getattr(model, k) is v for k, v in params.items())
+    assert repr(model).startswith(type(model).__name__ + "(")
+    assert model.set_params(**params) is model
+    with pytest.raises(ValueError, match="invalid parameter"):
+        model.set_params(not_a_parameter=1)
+    assert hasattr(model, "predict") and hasattr(model, "fit")
+    assert not [k for k in vars(model) if k.endswith("_") and not k.startswith("_")]
+    with pytest.raises(NotFittedError, match="not fitted") as info:
+        _predict_unfitted(model)
+    assert isinstance(info.value, ValueError) and isinstance(info.value, AttributeError)
+
+
+@pytest.mark.parametrize("model", _all_models(), ids=lambda m: type(m).__name__)
+def test_sklearn_clone_and_not_fitted_error(model):
+    sklearn_base = pytest.importorskip("sklearn.base")
+    from sklearn.exceptions import NotFittedError as SkNotFitted
+
+    twin = sklearn_base.clone(model)
+    assert type(twin) is type(model) and twin is not model
+    assert repr(twin) == repr(model)
+    with pytest.raises(SkNotFitted):
+        _predict_unfitted(model)
+
+
+def test_sine_model_fit_returns_self_and_predicts_at_times(reaches, sine_model):
+    ys, ts, q, _ = reaches
+    model = SineSeriesRegression(n_sines=6)
+    assert model.fit(ys, q, times=ts) is model
+    i = 5
+    y_hat = sine_model.predict(q[i], ts[i][-1], ts[i], start=ys[i][0], end=ys[i][-1])
+    assert y_hat.shape == ys[i].shape
+    # within 2 cm: the subjects bow by 2, 4, 6 cm and Q (start, end) does not say whose reach
+    assert np.sqrt(np.mean(np.sum((y_hat - ys[i]) ** 2, axis=1))) < 0.02
+    batch = sine_model.predict(q[:3], [t[-1] for t in ts[:3]], np.linspace(0, 0.8, 5))
+    assert batch.shape == (3, 5, 3)

@@ -65,6 +65,7 @@ from numpy.typing import ArrayLike, NDArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.resampling import recording_times
+from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = [
@@ -414,8 +415,7 @@ class SineSeriesRegression(SerializableModel):
 
     # -- fitted shape helpers -------------------------------------------------------
     def _fitted(self) -> None:
-        if not hasattr(self, "F_"):
-            raise ValueError("this SineSeriesRegression is not fitted; call fit() first")
+        check_is_fitted(self, "F_")
 
     @property
     def n_dims_(self) -> int:
@@ -465,6 +465,53 @@ class SineSeriesRegression(SerializableModel):
                 raise ValueError("end contains NaN or infinite values")
             p[:, 1] = e - p[:, 0]
         return p[0] if single else p
+
+    def predict(
+        self,
+        conditions: ArrayLike,
+        duration: ArrayLike,
+        times: ArrayLike | None = None,
+        *,
+        start: ArrayLike | None = None,
+        end: ArrayLike | None = None,
+        final_velocity: ArrayLike | None = None,
+        mode: Mode = "free",
+        axes: Sequence[int] | None = None,
+        fix_end: bool = True,
+        max_end_shift: float | None = DEFAULT_MAX_END_SHIFT,
+    ) -> FloatArray:
+        """Positions predicted from conditions at ``times`` (s since the phase start).
+
+        ``conditions`` ``(q,)`` gives ``(K, D)``; ``(m, q)`` gives ``(m, K, D)`` (then
+        ``duration`` is a scalar or ``(m,)``, ``start``/``end`` ``(m, D)``). ``times``
+        ``(K,)`` lie in ``[0, T]``; default 100 uniform samples. Each phase is planned by
+        :meth:`plan` (eqs. 7-9, same keywords) and evaluated at ``tau = t / T`` (eq. 8).
+        """
+        q = np.asarray(conditions, dtype=np.float64)
+        single = q.ndim == 1
+        q2 = q[None] if single else q
+        m = q2.shape[0]
+        durations = np.broadcast_to(np.asarray(duration, dtype=np.float64), (m,))
+        starts = None if start is None else np.broadcast_to(start, (m, self.n_dims_))
+        ends = None if end is None else np.broadcast_to(end, (m, self.n_dims_))
+        out = []
+        for i in range(m):
+            p = self.plan(
+                q2[i], float(durations[i]),
+                None if starts is None else starts[i], None if ends is None else ends[i],
+                final_velocity, mode, axes, fix_end=fix_end, max_end_shift=max_end_shift,
+            )  # fmt: skip
+            if times is None:
+                tau = np.linspace(0.0, 1.0, 100)
+            else:
+                t = np.asarray(times, dtype=np.float64)
+                if t.ndim != 1 or np.any(t < 0) or np.any(t > durations[i] * (1 + 1e-12)):
+                    raise ValueError(
+                        f"times must be (K,) seconds within [0, duration = {durations[i]:g}]"
+                    )
+                tau = np.minimum(t / durations[i], 1.0)
+            out.append(ss.evaluate(p, tau))
+        return out[0] if single else np.stack(out)
 
     def generate(
         self,
