@@ -210,9 +210,11 @@ def _all_models():
         SubjectBezierModel,
         TaskBezierModel,
     )
+    from motion_envs.models.orientation_model import OrientationModel
     from motion_envs.models.timing_model import SpeedProfileModel
 
     return [
+        OrientationModel(degree=3, by="subject"),
         SineSeriesRegression(n_sines=5),
         NullBezierModel(degree=3),
         GroupBezierModel(degree=2, by="subject", unseen="global"),
@@ -224,7 +226,9 @@ def _all_models():
 
 
 def _predict_unfitted(model):
-    if isinstance(model, SineSeriesRegression):
+    if type(model).__name__ == "OrientationModel":
+        model.predict([1.0, 0, 0, 0], [0.0, 1, 0, 0], [0.0, 0.5])
+    elif isinstance(model, SineSeriesRegression):
         model.predict([0.0] * 6, 1.0)
     elif type(model).__name__ == "SpeedProfileModel":
         model.predict(np.zeros((2, 2)))
@@ -272,3 +276,110 @@ def test_sine_model_fit_returns_self_and_predicts_at_times(reaches, sine_model):
     assert np.sqrt(np.mean(np.sum((y_hat - ys[i]) ** 2, axis=1))) < 0.02
     batch = sine_model.predict(q[:3], [t[-1] for t in ts[:3]], np.linspace(0, 0.8, 5))
     assert batch.shape == (3, 5, 3)
+
+
+# -- 7. one orientation model object; selecting ragged trajectories ----------------------
+def simulated_turns(seed=2, n_reps=3):
+    """SIMULATED wrist turns (w, x, y, z) at 120 Hz with sign flips, 3 subjects x 4 goals."""
+    from motion_envs.geometry import quaternion as quat
+
+    rng = np.random.default_rng(seed)
+    qs, ts, subjects = [], [], []
+    goals = quat.expmap(np.array([[0.6, 0, 0], [0, 0.8, 0], [0, 0, -0.7], [0.4, 0.4, 0]]))
+    for subject in range(3):
+        tilt = np.array([0.0, 0.0, 0.05 * (subject + 1)])
+        for goal in goals:
+            for _ in range(n_reps):
+                start = quat.expmap(rng.normal(scale=0.05, size=3))
+                duration = 0.7 + 0.1 * subject + rng.uniform(0, 0.1)
+                t = np.arange(int(duration * RATE) + 1) / RATE
+                s = t / t[-1]
+                base = quat.slerp(start, goal, _min_jerk(s))
+                q = quat.multiply(base, quat.expmap(np.outer(np.sin(np.pi * s), tilt)))
+                flips = rng.random(len(q)) < 0.2
+                q[flips] *= -1.0
+                qs.append(q)
+                ts.append(t)
+                subjects.append(f"s{subject}")
+    return qs, ts, np.array(subjects)
+
+
+def test_orientation_model_predicts_quaternions_at_given_times():
+    from motion_envs.geometry import quaternion as quat
+    from motion_envs.models.orientation_model import OrientationModel
+
+    qs, ts, subjects = simulated_turns()
+    model = OrientationModel(degree=3, by="subject")
+    assert model.fit(qs, rate=RATE, subjects=subjects) is model
+    i = 7
+    q_hat = model.predict(qs[i][0], qs[i][-1], ts[i], subjects=[subjects[i]])
+    assert q_hat.shape == (len(ts[i]), 4)
+    np.testing.assert_allclose(quat.angle(q_hat[[0, -1]], qs[i][[0, -1]]), 0.0, atol=1e-9)
+    assert np.max(quat.angle(q_hat, qs[i])) < np.deg2rad(3.0)  # 0.15 rad tilt, 4 rad turns
+    # the same as the three-module pipeline it wraps, on the paper's grid
+    from motion_envs.datasets.ragged import RaggedTrajectories
+    from motion_envs.models.bezier_models import SubjectBezierModel
+    from motion_envs.models.orientation_prediction import predict_orientations
+    from motion_envs.models.slerp_residual import slerp_residuals
+    from motion_envs.models.speed_profile import average_speed_profile
+
+    traj = RaggedTrajectories.from_sequences(qs, ts)
+    alpha = average_speed_profile(traj)
+    bez = SubjectBezierModel(3).fit(slerp_residuals(traj, average_alpha=alpha), subjects=subjects)
+    points = bez.predict_control_points(subjects=[subjects[i]])[0]
+    oracle = predict_orientations(traj.starts[i], traj.ends[i], points, alpha=alpha)
+    on_grid = model.predict(traj.starts[i], traj.ends[i], subjects=[subjects[i]])
+    np.testing.assert_allclose(on_grid, oracle, atol=1e-12)
+    # any times, batches of movements, one duration each
+    starts = np.stack([q[0] for q in qs[:2]])
+    ends = np.stack([q[-1] for q in qs[:2]])
+    q2 = model.predict(starts, ends, [0.0, 0.2, 0.4], duration=[0.8, 0.9], subjects=subjects[:2])
+    assert q2.shape == (2, 3, 4)
+    with pytest.raises(ValueError, match="times"):
+        model.predict(starts, ends, [0.0, 2.0], duration=[0.8, 0.9], subjects=subjects[:2])
+
+
+def test_ragged_trajectories_select_by_mask_and_index():
+    from motion_envs.datasets.ragged import RaggedTrajectories
+
+    qs, ts, subjects = simulated_turns(n_reps=1)
+    traj = RaggedTrajectories.from_sequences(qs, ts)
+    mask = subjects == "s1"
+    picked = traj[mask]
+    expected = RaggedTrajectories.from_sequences(
+        [q for q, m in zip(qs, mask, strict=True) if m],
+        [t for t, m in zip(ts, mask, strict=True) if m],
+    )
+    assert len(picked) == mask.sum()
+    for name in ("quaternions", "tau", "offsets", "durations"):
+        np.testing.assert_array_equal(getattr(picked, name), getattr(expected, name))
+    for key in ([3, 0, -1], np.array([2]), 5, slice(1, None, 4)):
+        sub = traj[key]
+        idx = np.arange(len(traj))[key] if not isinstance(key, list) else np.array(key) % len(traj)
+        idx = np.atleast_1d(idx)
+        np.testing.assert_array_equal(sub.durations, traj.durations[idx])
+        np.testing.assert_array_equal(sub.starts, traj.starts[idx])
+        np.testing.assert_array_equal(sub.ends, traj.ends[idx])
+    with pytest.raises(IndexError):
+        traj[np.ones(3, dtype=bool)]
+
+
+# -- 8. one unit tolerance, explicit normalize=, shapes kept ------------------------------
+def test_quaternion_tolerance_normalize_and_shapes():
+    from motion_envs.geometry import quaternion as quat
+
+    q = np.array([0.99999, 0.0, 0.0, 0.0])
+    with pytest.raises(ValueError, match="normalize=True"):
+        quat.as_unit(q)
+    np.testing.assert_array_equal(quat.as_unit(q, normalize=True), [1.0, 0, 0, 0])
+    assert quat.UNIT_TOLERANCE == 1e-6
+    single = quat.expmap([0.1, 0.2, 0.3])
+    np.testing.assert_array_equal(quat.make_continuous(single), single)
+    rng = np.random.default_rng(0)
+    batch = quat.normalize(rng.normal(size=(5, 7, 4)))
+    rot = quat.to_rotation(batch)
+    assert rot.shape == (5, 7)
+    back = quat.from_rotation(rot)
+    assert back.shape == (5, 7, 4)
+    np.testing.assert_allclose(np.abs(np.sum(back * batch, axis=-1)), 1.0, atol=1e-12)
+    assert quat.from_rotation(quat.to_rotation(single)).shape == (4,)
