@@ -383,3 +383,111 @@ def test_quaternion_tolerance_normalize_and_shapes():
     assert back.shape == (5, 7, 4)
     np.testing.assert_allclose(np.abs(np.sum(back * batch, axis=-1)), 1.0, atol=1e-12)
     assert quat.from_rotation(quat.to_rotation(single)).shape == (4,)
+
+
+# -- 9. resampling, smoothness, minimum jerk, pandas ------------------------------------
+def test_resample_to_a_rate_and_time_normalise(reaches):
+    from motion_envs.geometry import resampling
+
+    ys, ts, _, _ = reaches
+    t100, _ = resampling.resample(ys[0], ts[0], rate=100.0)
+    np.testing.assert_allclose(np.diff(t100), 0.01, atol=1e-12)
+    assert t100[-1] <= ts[0][-1] + 1e-12 and ts[0][-1] - t100[-1] < 0.01
+    # a cubic polynomial is reproduced exactly by the cubic spline (not-a-knot)
+    t = np.sort(np.random.default_rng(3).uniform(0, 2, 40))
+    poly = np.column_stack([t**3 - t, 2 * t**2])
+    tn, yn = resampling.resample(poly, t, rate=50.0)
+    np.testing.assert_allclose(yn, np.column_stack([tn**3 - tn, 2 * tn**2]), atol=1e-10)
+    tau, y_tau = resampling.time_normalise(poly, t, n_points=11)
+    np.testing.assert_array_equal(tau, np.linspace(0, 1, 11))
+    t_of_tau = t[0] + tau * (t[-1] - t[0])
+    np.testing.assert_allclose(y_tau[:, 1], 2 * t_of_tau**2, atol=1e-10)
+    with pytest.raises(ValueError, match="sample indices"):
+        resampling.resample(poly, np.arange(40), rate=50.0)
+
+
+def test_smoothed_derivatives_are_exact_on_polynomials():
+    from motion_envs.geometry import kinematics
+
+    t = np.arange(200) / RATE
+    y = np.column_stack([t**3, 1 - t**2, t])
+    v = kinematics.smoothed_velocity(y, rate=RATE)
+    np.testing.assert_allclose(v, np.column_stack([3 * t**2, -2 * t, np.ones_like(t)]), atol=1e-9)
+    a = kinematics.smoothed_acceleration(y, times=t)
+    np.testing.assert_allclose(a, np.column_stack([6 * t, -2 + 0 * t, 0 * t]), atol=1e-7)
+    j = kinematics.smoothed_jerk(y, rate=RATE, window=0.2)
+    np.testing.assert_allclose(j[:, 0], 6.0, atol=1e-5)
+    assert kinematics.window_samples(0.1, RATE) == 13
+    with pytest.raises(ValueError, match="not uniform"):
+        kinematics.smoothed_velocity(y, times=t**1.1)
+
+
+def test_smoothness_measures_against_closed_forms():
+    from scipy import integrate
+
+    from motion_envs.geometry import kinematics, smoothness
+    from motion_envs.geometry.minimum_jerk import minimum_jerk
+
+    t = np.arange(int(0.8 * RATE) + 1) / RATE
+    y = minimum_jerk([0.0, 0, 0], [0.3, 0.1, 0], t / t[-1])
+    ldlj = smoothness.log_dimensionless_jerk(y, rate=RATE)
+    assert ldlj == pytest.approx(-np.log(720 / 1.875**2), abs=2e-3)  # -5.322
+    wobbly = y + 0.002 * np.sin(2 * np.pi * 6 * t)[:, None]
+    assert smoothness.log_dimensionless_jerk(wobbly, rate=RATE) < ldlj - 1
+    # SPARC of a Gaussian speed profile: |V(f)| / V(0) = exp(-2 pi^2 s^2 f^2)
+    s, rate = 0.1, 1000.0
+    tt = np.arange(-1.0, 1.0, 1 / rate)
+    sparc = smoothness.spectral_arc_length(np.exp(-(tt**2) / (2 * s**2)), rate)
+    fc = np.sqrt(np.log(1 / 0.05) / (2 * np.pi**2 * s**2))  # where V falls to 0.05 (< 10 Hz)
+
+    def arc(f):
+        dv = -4 * np.pi**2 * s**2 * f * np.exp(-2 * np.pi**2 * s**2 * f**2)
+        return np.sqrt((1 / fc) ** 2 + dv**2)
+
+    assert sparc == pytest.approx(-integrate.quad(arc, 0, fc)[0], abs=5e-3)
+    two = np.exp(-(tt**2) / (2 * s**2)) + np.exp(-((tt - 0.35) ** 2) / (2 * s**2))
+    assert smoothness.spectral_arc_length(two, rate) < sparc  # two submovements: less smooth
+    assert smoothness.spectral_arc_length(kinematics.speed(y, rate=RATE), RATE) < 0
+
+
+def test_minimum_jerk_model_fitted_and_predicted_like_the_others(reaches):
+    from motion_envs.geometry.minimum_jerk import minimum_jerk
+    from motion_envs.models.minimum_jerk import MinimumJerk
+
+    ys, ts, _, _ = reaches
+    model = MinimumJerk()
+    assert model.fit(ys, times=ts) is model
+    assert model.rmse_.shape == (len(ys),) and np.all(model.rmse_ < 0.05)
+    y = model.predict(ys[0][0], ys[0][-1], ts[0], duration=ts[0][-1])
+    np.testing.assert_allclose(y, minimum_jerk(ys[0][0], ys[0][-1], ts[0] / ts[0][-1]))
+    durations = np.array([t[-1] for t in ts])
+    distances = np.array([np.linalg.norm(y[-1] - y[0]) for y in ys])
+    a, b = np.polyfit(distances, durations, 1)[::-1]
+    np.testing.assert_allclose(model.duration_coef_, [a, b], rtol=1e-9)
+    assert model.predict([0.0, 0, 0], [0.3, 0, 0]).shape == (100, 3)
+    sklearn_base = pytest.importorskip("sklearn.base")
+    assert repr(sklearn_base.clone(MinimumJerk("mean"))) == "MinimumJerk(duration_model='mean')"
+
+
+def test_to_frame_exports(reaches, sine_model):
+    from motion_envs.datasets.ragged import RaggedTrajectories
+    from motion_envs.models import segmentation as sg
+    from motion_envs.models.frames import segments_frame, trajectories_frame
+
+    ys, ts, _, subjects = reaches
+    frame = trajectories_frame(ys, ts, labels={"subject": subjects})
+    assert list(frame.columns) == ["trajectory", "sample", "t", "tau", "subject", "x", "y", "z"]
+    assert len(frame) == sum(len(y) for y in ys)
+    per_subject = frame.groupby("subject")["trajectory"].nunique()
+    assert per_subject.to_dict() == {"s0": 12, "s1": 12, "s2": 12}
+    np.testing.assert_array_equal(frame.loc[frame.trajectory == 4, ["x", "y", "z"]], ys[4])
+    qs, qts, _ = simulated_turns(n_reps=1)
+    rag = RaggedTrajectories.from_sequences(qs, qts).to_frame()
+    assert rag.groupby("trajectory")["t"].max().to_numpy() == pytest.approx([t[-1] for t in qts])
+    report = sine_model.validate().to_frame()
+    assert len(report) == sine_model.F_.shape[0] and "F_intercept" in report
+    t, y = simulated_session()
+    phases = [("rest", sg.SpeedAbove(threshold=0.05)),
+              ("reach", sg.SpeedBelow(threshold=0.05, min_elapsed=0.2))]  # fmt: skip
+    segs = segments_frame(sg.segment(t, y, phases), t)
+    assert (segs.loc[segs.name == "reach", "duration"] > 0.7).all()

@@ -10,11 +10,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import quaternion as quat
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["DEFAULT_N_POINTS", "MIN_SAMPLES", "RaggedTrajectories", "normalised_grid"]
 
@@ -113,6 +117,26 @@ class RaggedTrajectories:
     def ends(self) -> FloatArray:
         """``(L, 4)`` last orientation of each trajectory (sign-continuous with the start)."""
         return self.quaternions[self.offsets[1:] - 1]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sample: ``trajectory``, ``tau``, ``t`` (``tau * duration``),
+        ``duration``, ``qw``, ``qx``, ``qy``, ``qz`` (a :class:`pandas.DataFrame`)."""
+        import pandas as pd
+
+        idx = self.trajectory_index()
+        q = self.quaternions
+        return pd.DataFrame(
+            {
+                "trajectory": idx,
+                "tau": self.tau,
+                "t": self.tau * self.durations[idx],
+                "duration": self.durations[idx],
+                "qw": q[:, 0],
+                "qx": q[:, 1],
+                "qy": q[:, 2],
+                "qz": q[:, 3],
+            }
+        )
 
     def trajectory_index(self) -> NDArray[np.int64]:
         """``(N_total,)`` index ``l`` of the trajectory each sample belongs to."""

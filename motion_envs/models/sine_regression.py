@@ -57,7 +57,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, overload
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -82,6 +82,9 @@ __all__ = [
     "trajectory_coefficients",
     "validate_linear_hypothesis",
 ]
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 FloatArray = NDArray[np.float64]
 Mode = Literal["hyperplane", "free"]
@@ -755,6 +758,33 @@ class LinearHypothesisReport:
     f_stat: FloatArray
     f_p: FloatArray
     exact: NDArray[np.bool_]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per coefficient ``k``: ``basis_index``, ``coordinate``, ``exact``, the
+        tests, and per column ``j`` of ``F`` (``q`` conditions, then ``intercept``)
+        ``F_j``, ``ci_low_j``, ``ci_high_j``, ``jackknife_var_j``."""
+        import pandas as pd
+
+        cols: dict[str, Any] = {
+            "basis_index": self.basis_index,
+            "coordinate": self.coordinate,
+            "exact": self.exact,
+            "lilliefors_stat": self.lilliefors_stat,
+            "lilliefors_p": self.lilliefors_p,
+            "f_stat": self.f_stat,
+            "f_p": self.f_p,
+        }
+        n_cond = self.F.shape[1] - 1
+        for j in range(n_cond + 1):
+            name = "intercept" if j == n_cond else f"q{j}"
+            for what, values in (
+                ("F", self.F),
+                ("ci_low", self.ci_low),
+                ("ci_high", self.ci_high),
+                ("jackknife_var", self.jackknife_var),
+            ):
+                cols[f"{what}_{name}"] = values[:, j]
+        return pd.DataFrame(cols)
 
     def summary(self, alpha: float = 0.05) -> list[dict[str, float | int]]:
         """One row per coordinate over its non-exact sine coefficients.
