@@ -491,3 +491,40 @@ def test_to_frame_exports(reaches, sine_model):
               ("reach", sg.SpeedBelow(threshold=0.05, min_elapsed=0.2))]  # fmt: skip
     segs = segments_frame(sg.segment(t, y, phases), t)
     assert (segs.loc[segs.name == "reach", "duration"] > 0.7).all()
+
+
+# -- 10. every public name from motion_envs.models / motion_envs.geometry ----------------
+@pytest.mark.parametrize("package", ["motion_envs.geometry", "motion_envs.models"])
+def test_public_names_are_reexported(package):
+    import importlib
+    import pkgutil
+
+    pkg = importlib.import_module(package)
+    assert len(set(pkg.__all__)) == len(pkg.__all__)
+    for name in pkg.__all__:
+        assert getattr(pkg, name) is not None
+    missing = []
+    for info in pkgutil.iter_modules(pkg.__path__):
+        if info.name.startswith(("_", "juggling")) or info.ispkg:
+            continue
+        module = importlib.import_module(f"{package}.{info.name}")
+        for name in module.__all__:
+            obj = getattr(module, name)
+            flat = name in pkg.__all__ and getattr(pkg, name) is obj
+            via_module = info.name in pkg.__all__ and getattr(getattr(pkg, info.name), name) is obj
+            if not (flat or via_module):
+                missing.append(f"{info.name}.{name}")
+    assert not missing, f"not re-exported by {package}: {missing}"
+
+
+def test_importing_the_packages_stays_cheap():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, motion_envs.models, motion_envs.geometry; "
+        "print(sorted(m for m in ('scipy.signal', 'statsmodels', 'sklearn', 'pandas') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -19,7 +19,6 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 import numpy as np
-import scipy.signal
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry.resampling import check_rate, times_in_seconds
@@ -105,6 +104,8 @@ def smoothed_derivative(
             f"window = {window} s is {n} samples at {r:g} Hz, more than the {y.shape[-2]} "
             "samples of positions; lower window"
         )
+    import scipy.signal  # here: importing it costs ~1 s, and most callers never smooth
+
     return np.asarray(
         scipy.signal.savgol_filter(
             y, n, int(polyorder), deriv=int(order), delta=1.0 / r, axis=-2, mode="interp"
