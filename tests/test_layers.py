@@ -5,9 +5,9 @@ itself) < baselines``: a module may import only from its own layer or those belo
 module level, inside functions or under ``TYPE_CHECKING`` alike. No module imports a
 private name (``_x``) of another module, or reaches into another package's private
 module; the exceptions are ``motion_envs._io``, the project's atomic writer, and
-``motion_envs._lazy``, the packages' lazy re-exports, which every layer may use. ``geometry``, ``datasets`` and ``models`` import no Gymnasium,
-MuJoCo or torch. The checker works on the source (``ast``), so it sees imports that a
-run would not reach.
+``motion_envs._lazy``, the packages' lazy re-exports, which every layer may use.
+``geometry``, ``datasets`` and ``models`` import no Gymnasium, MuJoCo or torch. The
+checker works on the source (``ast``), so it sees imports that a run would not reach.
 """
 
 from __future__ import annotations
