@@ -528,3 +528,31 @@ def test_importing_the_packages_stays_cheap():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+# -- 11. the quickstart script and the docs' session run ------------------------------
+def test_modeller_quickstart_runs_in_30_lines(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "modeller_quickstart.py"
+    assert len(script.read_text().splitlines()) <= 30
+    out = subprocess.run(
+        [sys.executable, "-W", "error", str(script), str(tmp_path)],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "reach_model.json").exists()
+    assert "eq. 9 end velocity" in out.stdout and "-1.0" in out.stdout
+
+
+def test_docs_models_session_runs():
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks
+    for block in blocks:
+        exec(compile(block, "docs/models.md", "exec"), {})
