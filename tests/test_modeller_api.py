@@ -556,3 +556,20 @@ def test_docs_models_session_runs():
     assert blocks
     for block in blocks:
         exec(compile(block, "docs/models.md", "exec"), {})
+
+
+@pytest.mark.parametrize("by", ["null", "subject", "task", "linear"])
+def test_orientation_model_save_load_round_trip(tmp_path, by):
+    from motion_envs.models import OrientationModel, load_model
+
+    qs, ts, subjects = simulated_turns(n_reps=1)
+    labels = {"subjects": subjects, "tasks": np.arange(len(qs)) % 4,
+              "predictors": {"speed": 1 / np.array([t[-1] for t in ts])}}  # fmt: skip
+    model = OrientationModel(degree=3, by=by).fit(qs, ts, **labels)
+    again = load_model(model.save(tmp_path / "orientation.json"))
+    ask = {"subjects": subjects[:2], "tasks": [0, 3], "predictors": {"speed": [1.2, 1.4]}}
+    starts, ends = np.stack([q[0] for q in qs[:2]]), np.stack([q[-1] for q in qs[:2]])
+    np.testing.assert_array_equal(
+        again.predict(starts, ends, [0.0, 0.3, 0.6], **ask),
+        model.predict(starts, ends, [0.0, 0.3, 0.6], **ask),
+    )

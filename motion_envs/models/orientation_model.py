@@ -24,6 +24,7 @@ subject, task or numeric predictors) and
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,7 +39,8 @@ from motion_envs.models.bezier_models import (
     LinearBezierModel,
     NullBezierModel,
 )
-from motion_envs.models.estimator import Estimator, check_is_fitted
+from motion_envs.models.estimator import check_is_fitted
+from motion_envs.models.serialization import SerializableModel, StateSchema
 from motion_envs.models.slerp_residual import slerp_residuals
 from motion_envs.models.speed_profile import average_speed_profile
 
@@ -50,7 +52,7 @@ FloatArray = NDArray[np.float64]
 ORIENTATION_PREDICTORS = ("null", "subject", "task", "linear")
 
 
-class OrientationModel(Estimator):
+class OrientationModel(SerializableModel):
     """Fit quaternion trajectories; predict quaternions at the times asked for.
 
     Parameters
@@ -71,6 +73,8 @@ class OrientationModel(Estimator):
 
     Fitted attributes: ``average_alpha_`` ``(n_points,)``, ``residual_model_`` (the
     fitted Bézier model), ``durations_`` ``(L,)`` seconds, ``n_trajectories_``.
+    ``save``/``load`` use the JSON model format (the residual model's fitted points are
+    stored as groups of control points: one group for ``"null"`` and ``"linear"``).
     """
 
     def __init__(
@@ -188,3 +192,95 @@ class OrientationModel(Estimator):
             curve = bezier.evaluate(points[i], taus[i], int(self.degree))
             out[i] = quat.multiply(path, quat.expmap(curve))
         return out[0] if single else out
+
+    # -- serialization --------------------------------------------------------------
+    state_schema = StateSchema(
+        params={"degree": "int", "by": "str", "unseen": "str", "n_points": "int",
+                "normalize": "bool"},
+        arrays={
+            "average_alpha_": ("float64", 1),
+            "durations_": ("float64", 1),
+            "control_points": ("float64", 3),
+            "global_control_points": ("float64", 2),
+            "group_sizes": ("int64", 1),
+            "coef": ("float64", 3),
+        },
+        attributes={"groups": "str_list", "predictor_names": "str_list", "n_points_": "int"},
+    )  # fmt: skip
+
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+        check_is_fitted(self, "residual_model_")
+        m = self.residual_model_
+        k = int(self.degree) - 1
+        groups: list[str] = []
+        names: list[str] = []
+        coef = np.zeros((0, k, 3))
+        sizes = np.array([self.n_trajectories_], dtype=np.int64)
+        if isinstance(m, GroupBezierModel):
+            points, mean = m.control_points_, m.global_control_points_
+            groups, sizes = m.groups_.tolist(), m.group_sizes_
+        elif isinstance(m, LinearBezierModel):
+            points, mean = m.intercept_[None], m.intercept_
+            coef, names = m.coef_, list(m.predictor_names_)
+        elif isinstance(m, NullBezierModel):
+            points, mean = m.control_points_[None], m.control_points_
+        else:
+            raise TypeError(f"cannot save a residual model of type {type(m).__name__}")
+        params = {
+            "degree": int(self.degree),
+            "by": self.by,
+            "unseen": self.unseen,
+            "n_points": int(self.n_points),
+            "normalize": bool(self.normalize),
+        }
+        arrays = {
+            "average_alpha_": self.average_alpha_,
+            "durations_": self.durations_,
+            "control_points": points,
+            "global_control_points": mean,
+            "group_sizes": sizes,
+            "coef": coef,
+        }
+        attributes = {"groups": groups, "predictor_names": names, "n_points_": m.n_points_}
+        return params, arrays, attributes
+
+    @classmethod
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> OrientationModel:
+        model = cls(**params)
+        k = int(model.degree) - 1
+        points, mean = arrays["control_points"], arrays["global_control_points"]
+        coef, sizes = arrays["coef"], arrays["group_sizes"]
+        groups, names = list(attributes["groups"]), list(attributes["predictor_names"])
+        n_groups = len(groups) if model.by in ("subject", "task") else 1
+        checks = {
+            "arrays.control_points": points.shape == (n_groups, k, 3),
+            "arrays.global_control_points": mean.shape == (k, 3),
+            "arrays.group_sizes": sizes.shape == (n_groups,) and bool(np.all(sizes >= 1)),
+            "arrays.coef": coef.shape == (len(names) if model.by == "linear" else 0, k, 3),
+            "arrays.average_alpha_": arrays["average_alpha_"].shape == (int(model.n_points),),
+            "attributes.groups": groups == sorted(set(groups)),
+        }
+        for field_name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"field {field_name}: does not match by={model.by!r}, degree")
+        residual = model._residual_model()
+        if isinstance(residual, GroupBezierModel):
+            residual.groups_ = np.asarray(groups, dtype=str)
+            residual.group_sizes_ = sizes.astype(np.int64)
+            residual.control_points_ = points
+            residual.global_control_points_ = mean
+        elif isinstance(residual, LinearBezierModel):
+            residual.intercept_, residual.coef_, residual.predictor_names_ = mean, coef, names
+        elif isinstance(residual, NullBezierModel):
+            residual.control_points_ = mean
+        residual.n_points_ = int(attributes["n_points_"])
+        model.residual_model_ = residual
+        model.average_alpha_ = arrays["average_alpha_"]
+        model.durations_ = arrays["durations_"]
+        model.n_trajectories_ = int(model.durations_.shape[0])
+        return model
