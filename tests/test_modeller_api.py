@@ -450,7 +450,7 @@ def test_smoothness_measures_against_closed_forms():
     assert smoothness.spectral_arc_length(kinematics.speed(y, rate=RATE), RATE) < 0
 
 
-def test_minimum_jerk_model_fitted_and_predicted_like_the_others(reaches):
+def test_minimum_jerk_model_fitted_and_predicted_like_the_others(reaches, tmp_path):
     from motion_envs.geometry.minimum_jerk import minimum_jerk
     from motion_envs.models.minimum_jerk import MinimumJerk
 
@@ -465,6 +465,9 @@ def test_minimum_jerk_model_fitted_and_predicted_like_the_others(reaches):
     a, b = np.polyfit(distances, durations, 1)[::-1]
     np.testing.assert_allclose(model.duration_coef_, [a, b], rtol=1e-9)
     assert model.predict([0.0, 0, 0], [0.3, 0, 0]).shape == (100, 3)
+    again = MinimumJerk.load(model.save(tmp_path / "mj.json"))
+    np.testing.assert_array_equal(again.predict([0.0, 0, 0], [0.3, 0, 0]),
+                                  model.predict([0.0, 0, 0], [0.3, 0, 0]))  # fmt: skip
     sklearn_base = pytest.importorskip("sklearn.base")
     assert repr(sklearn_base.clone(MinimumJerk("mean"))) == "MinimumJerk(duration_model='mean')"
 

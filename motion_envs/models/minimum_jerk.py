@@ -12,20 +12,22 @@ duration ``T`` as a linear function of the distance ``|e - s|``
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.geometry.resampling import recording_times
-from motion_envs.models.estimator import Estimator, check_is_fitted
+from motion_envs.models.estimator import check_is_fitted
+from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = ["MinimumJerk"]
 
 FloatArray = NDArray[np.float64]
 
 
-class MinimumJerk(Estimator):
+class MinimumJerk(SerializableModel):
     """Minimum-jerk movements between a start and an end at rest.
 
     Parameters
@@ -104,3 +106,30 @@ class MinimumJerk(Estimator):
         if t.ndim != 1 or np.any(t < 0) or not np.all(np.isfinite(t)):
             raise ValueError(f"times must be (K,) finite seconds >= 0; got shape {t.shape}")
         return minimum_jerk(s, e, np.minimum(t / T, 1.0))
+
+    state_schema = StateSchema(
+        params={"duration_model": "str"},
+        arrays={"durations_": ("float64", 1), "duration_coef_": ("float64", 1),
+                "rmse_": ("float64", 1)},
+    )  # fmt: skip
+
+    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+        check_is_fitted(self, "duration_coef_")
+        arrays = {name: getattr(self, name) for name in ("durations_", "duration_coef_", "rmse_")}
+        return {"duration_model": self.duration_model}, arrays, {}
+
+    @classmethod
+    def _from_state(
+        cls,
+        params: dict[str, Any],
+        arrays: dict[str, NDArray[Any]],
+        attributes: dict[str, Any],
+    ) -> MinimumJerk:
+        model = cls(**params)
+        n = arrays["durations_"].shape[0]
+        if n < 1 or arrays["rmse_"].shape != (n,) or arrays["duration_coef_"].shape != (2,):
+            raise ValueError("field arrays: durations_ (n >= 1), rmse_ (n,), duration_coef_ (2,)")
+        model.durations_ = arrays["durations_"]
+        model.duration_coef_ = arrays["duration_coef_"]
+        model.rmse_ = arrays["rmse_"]
+        return model
