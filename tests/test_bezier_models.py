@@ -16,6 +16,7 @@ from motion_envs.models.bezier_models import (
     SubjectBezierModel,
     TaskBezierModel,
 )
+from motion_envs.models.estimator import NotFittedError
 from motion_envs.models.serialization import ModelFileError, load_model
 
 GRID = np.linspace(0, 1, 50)
@@ -93,7 +94,7 @@ def test_errors_name_the_argument(curves):
         SubjectBezierModel(2).fit(R, subjects=subjects[:-1])
     with pytest.raises(ValueError, match="degree"):
         NullBezierModel(0)
-    with pytest.raises(RuntimeError, match="not fitted"):
+    with pytest.raises(NotFittedError, match="not fitted"):
         NullBezierModel(2).predict(n=2)
 
 

@@ -15,7 +15,7 @@ from motion_envs.datasets.juggling import (
     JugglingTask,
     generate_demonstrations,
 )
-from motion_envs.geometry.jerk import quintic
+from motion_envs.geometry.minimum_jerk import quintic
 
 ROOT = Path(motion_envs.__file__).parent
 

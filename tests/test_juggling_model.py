@@ -13,7 +13,7 @@ from motion_envs.datasets.juggling import (
     generate_demonstrations,
 )
 from motion_envs.geometry import sine_series as ss
-from motion_envs.geometry.jerk import minimum_jerk
+from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.models.juggling import (
     AnalyticJuggler,
     BallisticWorld,
@@ -202,7 +202,7 @@ def test_minimum_jerk_closed_form():
     np.testing.assert_allclose(y[[0, -1]], [[0, 1], [1, 3]])
     np.testing.assert_allclose(y[5], [0.5, 2.0])  # symmetric profile
     # oracle: the quintic with rest end states (solved as a linear system)
-    from motion_envs.geometry.jerk import quintic
+    from motion_envs.geometry.minimum_jerk import quintic
 
     z = np.zeros(2)
     c = quintic(np.array([0.0, 1.0]), z, z, np.array([1.0, 3.0]), z, z, 1.0)

@@ -238,7 +238,7 @@ def test_old_module_warns_and_reexports_the_same_objects(old):
     with pytest.warns(DeprecationWarning, match=f"{old} is deprecated; import from {new}$"):
         shim = importlib.import_module(old)
     target = importlib.import_module(new)
-    geometry = importlib.import_module("motion_envs.geometry.jerk")
+    geometry = importlib.import_module("motion_envs.geometry.minimum_jerk")
     for name in names.split():
         source = geometry if name in FROM_GEOMETRY else target
         assert getattr(shim, name) is getattr(source, name), name

@@ -4,10 +4,10 @@
 itself) < baselines``: a module may import only from its own layer or those below, at
 module level, inside functions or under ``TYPE_CHECKING`` alike. No module imports a
 private name (``_x``) of another module, or reaches into another package's private
-module; the one exception is ``motion_envs._io``, the project's atomic writer, which
-every layer may use. ``geometry``, ``datasets`` and ``models`` import no Gymnasium,
-MuJoCo or torch. The checker works on the source (``ast``), so it sees imports that a
-run would not reach.
+module; the exceptions are ``motion_envs._io``, the project's atomic writer, and
+``motion_envs._lazy``, the packages' lazy re-exports, which every layer may use.
+``geometry``, ``datasets`` and ``models`` import no Gymnasium, MuJoCo or torch. The
+checker works on the source (``ast``), so it sees imports that a run would not reach.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ PACKAGES = ("motion_envs", "baselines")
 #: Layer of each module prefix; the longest matching prefix wins.
 LAYERS: dict[str, int] = {
     "motion_envs._io": 0,
+    "motion_envs._lazy": 0,
     "motion_envs.geometry": 1,
     "motion_envs.datasets": 2,
     "motion_envs.models": 3,
@@ -34,7 +35,7 @@ LAYERS: dict[str, int] = {
 }
 LAYER_NAMES = {0: "_io", 1: "geometry", 2: "datasets", 3: "models", 4: "envs", 5: "baselines"}
 #: Private modules every layer may import.
-SHARED_PRIVATE = ("motion_envs._io",)
+SHARED_PRIVATE = ("motion_envs._io", "motion_envs._lazy")
 #: Third-party packages the lower layers must not import (heavy, or another layer's job).
 FORBIDDEN_BELOW_ENVS = ("gymnasium", "mujoco", "torch", "stable_baselines3")
 

@@ -15,12 +15,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import (
     LinearBezierModel,
     NullBezierModel,
     SubjectBezierModel,
     TaskBezierModel,
 )
+from motion_envs.models.orientation_model import OrientationModel
 from motion_envs.models.serialization import (
     ModelFileError,
     SerializableModel,
@@ -52,8 +54,15 @@ def fitted_models() -> list[SerializableModel]:
         TaskBezierModel(3).fit(R, tasks=labels),
         SubjectBezierModel(2, unseen="global").fit(R, subjects=labels),
         LinearBezierModel(2).fit(R, predictors={"age": rng.normal(size=12)}),
-        SineSeriesRegression(n_sines=3).fit(y, q),
+        SineSeriesRegression(n_sines=3).fit(y, q, times="normalised"),
+        OrientationModel(degree=3, by="task").fit(_turns(), rate=50.0, tasks=labels),
     ]
+
+
+def _turns() -> list[np.ndarray]:
+    """12 short SIMULATED rotations about z with a bump about x, 11 samples each."""
+    s = np.linspace(0.0, 1.0, 11)[:, None]
+    return [quat.expmap(np.hstack([0.1 * i * np.sin(np.pi * s), 0 * s, s])) for i in range(12)]
 
 
 @pytest.fixture(scope="module")

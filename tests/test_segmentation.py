@@ -43,17 +43,20 @@ def test_segment_back_and_forth_cycles():
 def test_acceleration_speed_and_event_criteria():
     t = np.linspace(0, 1, 21)
     y = np.column_stack([t, -(t**2)])  # vertical acceleration -2
-    segs = sg.segment(t, y, [("toss", sg.AccelerationBelow(axis=1, threshold=-1.0))], cycle=False)
+    toss = [("toss", sg.AccelerationBelow(axis=1, threshold=-1.0))]
+    segs = sg.segment(t, y, toss, cycle=False, window=None)
     assert segs == [sg.Segment("toss", 0, 2)]  # the first sample with a causal acceleration
-    segs = sg.segment(t, y, [("fast", sg.SpeedAbove(threshold=np.hypot(1, 1.5)))], cycle=False)
+    fast = [("fast", sg.SpeedAbove(threshold=np.hypot(1, 1.5)))]
+    segs = sg.segment(t, y, fast, cycle=False, window=None)
     # |v_k| = |(1, -(t_k + t_{k-1}))| exceeds sqrt(1 + 1.5^2) once t_k + t_{k-1} > 1.5
     k = int(np.argmax(t[1:] + t[:-1] > 1.5)) + 1
     assert segs == [sg.Segment("fast", 0, k)]
-    crit = sg.AnyOf((sg.EventOccurred(name="catch"), sg.SpeedBelow(threshold=0.0)))
-    segs = sg.segment(t, y, [("catch", crit)], events={7: ["catch"]}, cycle=False)
+    crit = sg.AnyOf((sg.EventOccurred(name="catch"), sg.SpeedBelow(threshold=0.5)))
+    segs = sg.segment(t, y, [("catch", crit)], events={7: ["catch"]}, cycle=False, window=None)
     assert segs == [sg.Segment("catch", 0, 7)]
     early = sg.EventOccurred(name="catch", min_elapsed=0.5)
-    assert sg.segment(t, y, [("c", early)], events={7: ["catch"]}, cycle=False) == []
+    segs = sg.segment(t, y, [("c", early)], events={7: ["catch"]}, cycle=False, window=None)
+    assert segs == []
 
 
 def _line_planner(target, duration):

@@ -35,7 +35,7 @@ def _synthetic(n=30, noise=0.0, seed=0, n_samples=60, n_sines=N_SINES):
 @pytest.fixture(scope="module")
 def fitted():
     ys, q, p, w = _synthetic()
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q)
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
     return model, q, p, w
 
 
@@ -52,7 +52,7 @@ def test_fit_recovers_affine_map(fitted):
 
 def test_fit_matches_lstsq_oracle_with_noise():
     ys, q, _, _ = _synthetic(n=25, noise=0.1, seed=3)
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q)
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
     design = np.column_stack([q, np.ones(len(q))])
     oracle = np.linalg.lstsq(design, model.coefficients_.reshape(len(q), -1), rcond=None)[0].T
     np.testing.assert_allclose(model.F_, oracle, atol=1e-10)
@@ -62,7 +62,7 @@ def test_rank_deficient_design_warns():
     ys, q, _, _ = _synthetic(n=10)
     q = np.column_stack([q, np.full(len(q), 3.0)])
     with pytest.warns(sr.RankDeficientDesignWarning, match=r"constant"):
-        sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q)
+        sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
 
 
 def test_generation_hits_requested_ends(fitted):
@@ -103,7 +103,10 @@ def test_final_velocity_constraint_holds(fitted, v, duration, mode):
     model, _, _, _ = fitted
     start, end = np.array([0.1, 0.2]), np.array([2.0, 2.4])
     p0 = model.predict_coefficients(np.r_[start, end], start, end)
-    p = model.plan(np.r_[start, end], duration, start, end, final_velocity=v, mode=mode)
+    p = model.plan(
+        np.r_[start, end], duration, start, end, final_velocity=v, mode=mode,
+        fix_end=False, max_end_shift=None,
+    )  # fmt: skip
     np.testing.assert_allclose(_end_velocity(p, duration), v, atol=1e-9)
     np.testing.assert_allclose(ss.evaluate(p, [0.0])[0], start, atol=1e-12)
     dp = (p - p0).reshape(-1)
@@ -123,7 +126,9 @@ def test_final_velocity_single_axis_and_fixed_end(fitted):
     model, _, _, _ = fitted
     start, end = np.array([0.0, 0.0]), np.array([1.0, 3.0])
     p0 = model.predict_coefficients(np.r_[start, end], start, end)
-    p = sr.constrain_final_velocity(p0, [0.0, 0.0], 1.5, model.F_Q_, "hyperplane", axes=[1])
+    p = sr.constrain_final_velocity(
+        p0, [0.0, 0.0], 1.5, model.F_Q_, "hyperplane", axes=[1], fix_end=False
+    )
     assert abs(_end_velocity(p, 1.5)[1]) < 1e-9
     p = sr.constrain_final_velocity(p0, [0.7, -0.2], 1.5, mode="free", fix_end=True)
     np.testing.assert_allclose(_end_velocity(p, 1.5), [0.7, -0.2], atol=1e-9)
@@ -215,7 +220,7 @@ def test_select_n_sines_by_cross_validation():
 
 def test_validation_statistics_against_oracles():
     ys, q, _, _ = _synthetic(n=40, noise=0.05, seed=7)
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q)
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
     rep = model.validate()
     n, k = len(q), model.F_.shape[0]
     assert rep.F.shape == (k, 2 * DIMS + 1)
@@ -253,11 +258,13 @@ def test_validation_statistics_against_oracles():
 def test_bad_input():
     ys, q, _, _ = _synthetic(n=6)
     with pytest.raises(ValueError, match="NaN"):
-        sr.SineSeriesRegression(2).fit(ys, np.where(np.eye(6, 4, dtype=bool), np.nan, q))
+        sr.SineSeriesRegression(2).fit(
+            ys, np.where(np.eye(6, 4, dtype=bool), np.nan, q), times="normalised"
+        )
     with pytest.raises(ValueError, match="positions\\[1\\] has 3 samples"):
-        sr.SineSeriesRegression(2).fit([ys[0], ys[1][:3]], q[:2])
+        sr.SineSeriesRegression(2).fit([ys[0], ys[1][:3]], q[:2], times="normalised")
     with pytest.raises(ValueError, match="one row per example"):
-        sr.SineSeriesRegression(2).fit(ys, q[:4])
+        sr.SineSeriesRegression(2).fit(ys, q[:4], times="normalised")
     with pytest.raises(ValueError, match="not fitted"):
         sr.SineSeriesRegression(2).predict_coefficients([0.0])
     with pytest.raises(ValueError, match="tau1"):

@@ -19,7 +19,7 @@ from motion_envs.datasets.juggling import (
     JugglingTask,
     departure_from_line,
 )
-from motion_envs.geometry.jerk import minimum_jerk
+from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.models.juggling import AnalyticJuggler, run_cycles, run_cycles_fast
 
 FloatArray = NDArray[np.float64]

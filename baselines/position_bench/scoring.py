@@ -105,7 +105,7 @@ def _validation_rows(
     q = q[:, varying_columns(q)]
     if y.shape[0] <= q.shape[1] + 2:
         return []
-    model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q)
+    model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q, times="normalised")
     return model.validate().summary()
 
 

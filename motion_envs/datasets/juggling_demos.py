@@ -3,7 +3,7 @@
 import warnings
 
 from motion_envs.datasets.juggling import *  # noqa: F403
-from motion_envs.geometry.jerk import quintic  # noqa: F401
+from motion_envs.geometry.minimum_jerk import quintic  # noqa: F401
 
 warnings.warn(
     f"{__name__} is deprecated; import from motion_envs.datasets.juggling", DeprecationWarning, 2

@@ -10,11 +10,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import quaternion as quat
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["DEFAULT_N_POINTS", "MIN_SAMPLES", "RaggedTrajectories", "normalised_grid"]
 
@@ -60,6 +64,46 @@ class RaggedTrajectories:
     def n_trajectories(self) -> int:
         return int(self.offsets.size - 1)
 
+    def __len__(self) -> int:
+        return self.n_trajectories
+
+    def __getitem__(self, key: int | slice | ArrayLike) -> RaggedTrajectories:
+        """The trajectories selected by ``key``: an index, a slice, integer indices (any
+        order, repeats allowed, negative from the end) or a boolean mask ``(L,)``.
+
+        Always returns a :class:`RaggedTrajectories` (an integer gives one trajectory).
+        """
+        n = self.n_trajectories
+        if isinstance(key, slice):
+            idx = np.arange(n)[key]
+        else:
+            k = np.asarray(key)
+            if k.dtype == np.bool_:
+                if k.shape != (n,):
+                    raise IndexError(f"a boolean mask must have shape ({n},); got {k.shape}")
+                idx = np.flatnonzero(k)
+            elif k.dtype.kind in "iu" and k.ndim <= 1:
+                idx = np.atleast_1d(k).astype(np.int64)
+                if np.any(idx >= n) or np.any(idx < -n):
+                    raise IndexError(f"trajectory index out of range for {n} trajectories")
+                idx = np.where(idx < 0, idx + n, idx)
+            else:
+                raise IndexError(
+                    f"select trajectories with an int, a slice, integer indices or a boolean "
+                    f"mask; got {key!r}"
+                )
+        lengths = self.lengths[idx]
+        offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+        # sample j of the selection is sample (j - offsets[l]) of trajectory idx[l]
+        owner = np.repeat(np.arange(idx.size), lengths)
+        samples = np.arange(int(offsets[-1])) - offsets[owner] + self.offsets[idx][owner]
+        return RaggedTrajectories(
+            quaternions=self.quaternions[samples],
+            tau=self.tau[samples],
+            offsets=offsets,
+            durations=self.durations[idx],
+        )
+
     @property
     def lengths(self) -> NDArray[np.int64]:
         return np.diff(self.offsets)
@@ -73,6 +117,26 @@ class RaggedTrajectories:
     def ends(self) -> FloatArray:
         """``(L, 4)`` last orientation of each trajectory (sign-continuous with the start)."""
         return self.quaternions[self.offsets[1:] - 1]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per sample: ``trajectory``, ``tau``, ``t`` (``tau * duration``),
+        ``duration``, ``qw``, ``qx``, ``qy``, ``qz`` (a :class:`pandas.DataFrame`)."""
+        import pandas as pd
+
+        idx = self.trajectory_index()
+        q = self.quaternions
+        return pd.DataFrame(
+            {
+                "trajectory": idx,
+                "tau": self.tau,
+                "t": self.tau * self.durations[idx],
+                "duration": self.durations[idx],
+                "qw": q[:, 0],
+                "qx": q[:, 1],
+                "qy": q[:, 2],
+                "qz": q[:, 3],
+            }
+        )
 
     def trajectory_index(self) -> NDArray[np.int64]:
         """``(N_total,)`` index ``l`` of the trajectory each sample belongs to."""

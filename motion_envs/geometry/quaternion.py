@@ -11,6 +11,14 @@ Functions that *require* unit quaternions validate their input and raise
 ``ValueError`` naming the argument; pass ``validate=False`` on hot paths where the
 input is known to be valid.
 
+Unit-norm tolerance: one number, :data:`UNIT_TOLERANCE` (``| |q| - 1 | <= 1e-6``), is
+what every entry point accepts as a unit quaternion. Data that is only approximately
+unit is renormalised only when asked: ``normalize=True`` on :func:`as_unit` and
+:func:`to_rotation` (and on the models that take quaternions, e.g.
+``OrientationModel(normalize=True)``); the CSV readers of :mod:`motion_envs.datasets`
+renormalise by design and refuse norms off by more than their documented data
+tolerance (``1e-3``), which flags corrupt rows, not rounding.
+
 References: Faraway & Choe (2008), section 3.2; Shoemake (1985); Grassia (1998).
 """
 
@@ -159,12 +167,19 @@ def _all_unit_fast(flat: FloatArray, tol: float) -> bool:
     return True
 
 
-def as_unit(q: ArrayLike, name: str = "q", tol: float = UNIT_TOLERANCE) -> FloatArray:
+def as_unit(
+    q: ArrayLike, name: str = "q", tol: float = UNIT_TOLERANCE, normalize: bool = False
+) -> FloatArray:
     """Validate that ``q`` holds unit quaternions ``(w, x, y, z)`` and return it as float64.
 
     Raises ``ValueError`` naming ``name`` if the last axis is not 4, a value is NaN or
-    infinite, or a norm differs from 1 by more than ``tol``.
+    infinite, or a norm differs from 1 by more than ``tol`` (default
+    :data:`UNIT_TOLERANCE`). With ``normalize=True`` every finite non-zero quaternion is
+    divided by its norm instead (:func:`normalize`): say so explicitly when your data
+    (a CSV rounded to a few digits, a tracker's output) is only approximately unit.
     """
+    if normalize:
+        return _normalized(q, name)
     arr = np.asarray(q, dtype=np.float64)
     if arr.ndim > 0 and arr.shape[-1] == 4 and _all_unit_fast(arr.reshape(-1, 4), tol):
         return arr
@@ -176,7 +191,8 @@ def as_unit(q: ArrayLike, name: str = "q", tol: float = UNIT_TOLERANCE) -> Float
         worst = float(norms.flat[np.argmax(np.abs(norms - 1.0).ravel())])
         raise ValueError(
             f"{name} must contain unit quaternions (|q| = 1 within {tol:g}); "
-            f"{int(np.count_nonzero(bad))} are not (worst norm {worst:.6g})"
+            f"{int(np.count_nonzero(bad))} are not (worst norm {worst:.6g}); pass "
+            "normalize=True to renormalise them"
         )
     return arr
 
@@ -187,6 +203,10 @@ def normalize(q: ArrayLike, name: str = "q") -> FloatArray:
     Raises ``ValueError`` naming ``name`` for NaN/inf entries, a wrong last axis or a
     (near) zero norm, which has no direction to normalise to.
     """
+    return _normalized(q, name)
+
+
+def _normalized(q: ArrayLike, name: str) -> FloatArray:
     arr = _as_quaternion_array(q, name)
     norms = np.sqrt(np.einsum("...i,...i->...", arr, arr))
     if np.any(norms < 1e-12):
@@ -480,9 +500,11 @@ def make_continuous(q: ArrayLike, name: str = "q", axis: int = -2) -> FloatArray
     Flips ``q_i`` to ``-q_i`` whenever ``q_i . q_{i-1} < 0`` (after the previous flips),
     so that consecutive samples lie on the same hemisphere. ``axis`` is the time axis
     (default: the one before the quaternion axis); leading axes are batches. The first
-    sample keeps its sign.
+    sample keeps its sign; a single quaternion ``(4,)`` is returned unchanged (a copy).
     """
     arr = _as_quaternion_array(q, name)
+    if arr.ndim == 1:
+        return arr.copy()
     arr = np.moveaxis(arr, axis, 0)
     if arr.shape[0] < 2:
         return np.moveaxis(arr.copy(), 0, axis)
@@ -493,14 +515,22 @@ def make_continuous(q: ArrayLike, name: str = "q", axis: int = -2) -> FloatArray
     return np.moveaxis(out, 0, axis)
 
 
-def to_rotation(q: ArrayLike, name: str = "q") -> Rotation:
-    """Convert unit quaternions ``(w, x, y, z)`` to a scipy ``Rotation`` (flattened batch)."""
-    q = as_unit(q, name)
-    return Rotation.from_quat(q.reshape(-1, 4)[:, [1, 2, 3, 0]])
+def to_rotation(q: ArrayLike, name: str = "q", normalize: bool = False) -> Rotation:
+    """Convert unit quaternions ``(w, x, y, z)`` to a scipy ``Rotation`` of the same batch shape.
+
+    ``(4,)`` gives a single rotation, ``(n, 4)`` ``n`` rotations and ``(..., 4)`` a
+    rotation array of shape ``...`` (scipy >= 1.17 for more than one batch axis).
+    ``normalize`` as in :func:`as_unit`.
+    """
+    arr = as_unit(q, name, normalize=normalize)
+    return Rotation.from_quat(arr[..., [1, 2, 3, 0]])
 
 
 def from_rotation(rotation: Rotation) -> FloatArray:
-    """Convert a scipy ``Rotation`` to quaternions ``(w, x, y, z)`` with ``w >= 0``."""
-    xyzw = np.atleast_2d(rotation.as_quat())
-    q = xyzw[:, [3, 0, 1, 2]]
-    return q * np.where(q[:, :1] < 0.0, -1.0, 1.0)
+    """Quaternions ``(..., 4)`` ``(w, x, y, z)`` with ``w >= 0`` of a scipy ``Rotation``.
+
+    The batch shape is kept (a single rotation gives ``(4,)``).
+    """
+    xyzw = np.asarray(rotation.as_quat(), dtype=np.float64)
+    q = xyzw[..., [3, 0, 1, 2]]
+    return np.asarray(q * np.where(q[..., :1] < 0.0, -1.0, 1.0), dtype=np.float64)

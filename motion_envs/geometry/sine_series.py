@@ -37,6 +37,7 @@ import scipy.fft
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "acceleration",
     "basis",
     "basis_derivative",
     "basis_second_derivative",
@@ -102,27 +103,56 @@ def basis_second_derivative(tau: ArrayLike, n_sines: int) -> FloatArray:
     )
 
 
-def evaluate(coefficients: ArrayLike, tau: ArrayLike) -> FloatArray:
-    """Positions ``Y(tau) = Phi(tau) . P``.
-
-    ``coefficients`` is ``(..., N + 2, D)``, ``tau`` is ``(K,)`` or ``(..., K)``
-    (broadcast against the batch axes); returns ``(..., K, D)``.
-    """
+def _check_coefficients(coefficients: ArrayLike) -> FloatArray:
     p = np.asarray(coefficients, dtype=np.float64)
     if p.ndim < 2 or p.shape[-2] < 2:
         raise ValueError(f"coefficients must be (..., N + 2, D) with N >= 0; got {p.shape}")
+    return p
+
+
+def _check_positive(duration: ArrayLike) -> FloatArray:
+    d = np.asarray(duration, dtype=np.float64)
+    if np.any(~np.isfinite(d)) or np.any(d <= 0):
+        raise ValueError(f"duration must be finite and > 0; got {d}")
+    return d
+
+
+def _per_time(values: FloatArray, tau: FloatArray, duration: FloatArray, power: int) -> FloatArray:
+    """``values / T**power`` with ``T`` broadcast against the batch axes of ``values``."""
+    scale = duration**power
+    return values / (scale[..., None] if tau.ndim == 0 else scale[..., None, None])
+
+
+def evaluate(coefficients: ArrayLike, tau: ArrayLike) -> FloatArray:
+    """Positions ``Y(tau) = Phi(tau) . P``.
+
+    Shape rule (shared by :func:`evaluate`, :func:`velocity` and :func:`acceleration`):
+    ``coefficients`` is ``(..., N + 2, D)``; a scalar ``tau`` gives ``(..., D)``, an array
+    ``tau`` of shape ``(K,)`` (or ``(..., K)``, broadcast against the batch axes) gives
+    ``(..., K, D)``.
+    """
+    p = _check_coefficients(coefficients)
     return basis(tau, p.shape[-2] - 2) @ p
 
 
 def velocity(coefficients: ArrayLike, tau: ArrayLike, duration: ArrayLike = 1.0) -> FloatArray:
-    """Velocities ``dY/dt = dPhi/dtau(tau) . P / T`` (``T`` = ``duration``), ``(..., K, D)``."""
-    p = np.asarray(coefficients, dtype=np.float64)
-    if p.ndim < 2 or p.shape[-2] < 2:
-        raise ValueError(f"coefficients must be (..., N + 2, D) with N >= 0; got {p.shape}")
-    duration = np.asarray(duration, dtype=np.float64)
-    if np.any(~np.isfinite(duration)) or np.any(duration <= 0):
-        raise ValueError(f"duration must be finite and > 0; got {duration}")
-    return (basis_derivative(tau, p.shape[-2] - 2) @ p) / duration[..., None, None]
+    """Velocities ``dY/dt = dPhi/dtau(tau) . P / T`` (``T`` = ``duration``).
+
+    Same shape rule as :func:`evaluate`: scalar ``tau`` -> ``(..., D)``, ``(K,)`` ->
+    ``(..., K, D)``; ``duration`` is a scalar or one per batch entry.
+    """
+    p = _check_coefficients(coefficients)
+    d = _check_positive(duration)
+    t = _as_tau(tau)
+    return _per_time(basis_derivative(t, p.shape[-2] - 2) @ p, t, d, 1)
+
+
+def acceleration(coefficients: ArrayLike, tau: ArrayLike, duration: ArrayLike = 1.0) -> FloatArray:
+    """Accelerations ``d2Y/dt2 = d2Phi/dtau2(tau) . P / T**2``, shapes as :func:`evaluate`."""
+    p = _check_coefficients(coefficients)
+    d = _check_positive(duration)
+    t = _as_tau(tau)
+    return _per_time(basis_second_derivative(t, p.shape[-2] - 2) @ p, t, d, 2)
 
 
 def normalised_time(times: ArrayLike) -> FloatArray:

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import normalised_grid
 from motion_envs.geometry import bezier
+from motion_envs.models.estimator import not_fitted_error
 from motion_envs.models.path_frame import (
     DEFAULT_UP,
     FRAMES,
@@ -137,12 +138,17 @@ class BezierResidualModel(SerializableModel):
             raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {FRAMES}; got {frame!r}")
-        self.degree = int(degree)
+        check_up(up)
+        self.degree = degree
         self.frame = frame
-        self.up = tuple(float(x) for x in check_up(up))
+        self.up = up
+
+    def _up(self) -> tuple[float, ...]:
+        """``up`` as a unit float vector (the parameter is stored as given)."""
+        return tuple(float(x) for x in check_up(self.up))
 
     def _frame_params(self) -> dict[str, Any]:
-        return {"degree": self.degree, "frame": self.frame, "up": list(self.up)}
+        return {"degree": int(self.degree), "frame": self.frame, "up": list(self._up())}
 
     def _ends(
         self, starts: ArrayLike | None, ends: ArrayLike | None, L: int
@@ -180,7 +186,7 @@ class BezierResidualModel(SerializableModel):
         if self.frame == "body":
             return C
         S, E = self._ends(starts, ends, C.shape[0])
-        return transform(C, S, E, self.up)
+        return transform(C, S, E, self._up())
 
     # -- to implement -------------------------------------------------------------
     def _fit_points(
@@ -235,7 +241,7 @@ class BezierResidualModel(SerializableModel):
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "control_points_") and not hasattr(self, "intercept_"):
-            raise RuntimeError(f"{type(self).__name__} is not fitted; call fit() first")
+            raise not_fitted_error(self)
 
     def predict(
         self,

@@ -2,7 +2,7 @@
 
 import warnings
 
-from motion_envs.geometry.jerk import minimum_jerk  # noqa: F401
+from motion_envs.geometry.minimum_jerk import minimum_jerk  # noqa: F401
 from motion_envs.models.juggling import *  # noqa: F403
 
 warnings.warn(

@@ -55,6 +55,7 @@ from motion_envs.models.bezier_models import (
     TaskBezierModel,
 )
 from motion_envs.models.criteria import max_errors
+from motion_envs.models.estimator import not_fitted_error
 from motion_envs.models.slerp_residual import slerp_residuals
 from motion_envs.models.speed_profile import average_speed_profile
 
@@ -176,7 +177,7 @@ class OrientationNominal:
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "average_alpha_"):
-            raise RuntimeError("OrientationNominal is not fitted; call fit(train) first")
+            raise not_fitted_error(self, "call fit() first")
 
     def predict_residuals(self, dataset: OrientationDataset) -> FloatArray:
         """``(L, n_points, 3)`` predicted residual ``rhat`` of every trajectory of ``dataset``."""

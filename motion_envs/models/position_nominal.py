@@ -27,6 +27,7 @@ from motion_envs.datasets.ragged import DEFAULT_N_POINTS
 from motion_envs.datasets.resampling import resample_positions
 from motion_envs.datasets.splits import POSITION_SPLITS, position_folds
 from motion_envs.geometry import sine_series as ss
+from motion_envs.models.estimator import not_fitted_error
 from motion_envs.models.sine_regression import (
     RankDeficientDesignWarning,
     SineSeriesRegression,
@@ -140,13 +141,15 @@ class PositionNominal:
                     n_use, _ = select_n_sines(list(y), q_train, candidates=cands)
                     self.selection_seconds_ = time.perf_counter() - t0
                 self.n_sines_ = int(n_use)
-                self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(list(y), q_train)
+                self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(
+                    list(y), q_train, times="normalised"
+                )
         return self
 
     def predict(self, y: FloatArray, durations: FloatArray) -> FloatArray:
         """Nominal of each trajectory of ``y`` ``(m, K, D)`` from its own conditions."""
         if not hasattr(self, "tau_"):
-            raise RuntimeError("PositionNominal is not fitted; call fit() first")
+            raise not_fitted_error(self, "call fit() first")
         y = np.asarray(y, dtype=np.float64)
         tau = self.tau_
         out = np.empty_like(y)

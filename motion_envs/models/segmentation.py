@@ -13,9 +13,18 @@ so the same criteria cut the training recordings and drive generation:
 * :class:`AnyOf` / :class:`AllOf` combine criteria.
 
 Every criterion may require ``min_elapsed`` seconds since the phase began (a reach
-starts at rest, so "speed below" would fire at once without it).
+starts at rest, so "speed below" would fire at once without it). Their parameters are
+keyword-only (``SpeedAbove(threshold=0.05)``; ``SpeedAbove(0.05)`` is a ``TypeError``)
+and a criterion that could never fire (``SpeedBelow(threshold=0)``, a non-finite
+threshold, a negative tolerance or ``min_elapsed``, an empty event name) is refused
+with a ``ValueError`` when it is built.
 
-Online derivatives are causal backward differences (:func:`causal_derivatives`):
+Derivatives of a recording (:func:`segment`) are Savitzky-Golay smoothed by default
+(:func:`motion_envs.geometry.kinematics.smoothed_velocity`, window
+``DEFAULT_WINDOW = 0.1`` s, cubic): raw differences of noisy samples fire speed
+criteria on noise. The smoothing window is centred (it looks ``window / 2`` ahead), so
+offline segments may start up to that much earlier than an online criterion would fire.
+``window=None`` uses the causal backward differences of :func:`causal_derivatives`:
 ``v_k = (y_k - y_{k-1}) / (t_k - t_{k-1})``, ``a_k = (v_k - v_{k-1}) / (t_k - t_{k-1})``,
 ``v_0 = a_0 = a_1 = 0``.
 
@@ -36,6 +45,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import sine_series as ss
+from motion_envs.geometry.kinematics import (
+    DEFAULT_POLYORDER,
+    DEFAULT_WINDOW,
+    smoothed_acceleration,
+    smoothed_velocity,
+)
 
 __all__ = [
     "AccelerationAbove",
@@ -76,21 +91,48 @@ class Criterion(Protocol):
     def __call__(self, state: MotionState) -> bool: ...
 
 
-@dataclass(frozen=True)
+def _finite(value: float, name: str, owner: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{owner}: {name} must be a number; got {value!r}")
+    if not np.isfinite(value):
+        raise ValueError(f"{owner}: {name} must be finite (it could never fire); got {value}")
+    return float(value)
+
+
+@dataclass(frozen=True, kw_only=True)
 class _Timed:
     min_elapsed: float = 0.0
+
+    def __post_init__(self) -> None:
+        if _finite(self.min_elapsed, "min_elapsed", type(self).__name__) < 0:
+            raise ValueError(f"{type(self).__name__}: min_elapsed must be >= 0 s")
 
     def _early(self, state: MotionState) -> bool:
         return state.elapsed < self.min_elapsed
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class PositionReached(_Timed):
-    """``|position[axes] - target[axes]| <= tolerance`` (Euclidean; default all axes)."""
+    """``|position[axes] - target[axes]| <= tolerance`` (Euclidean; default all axes).
 
-    target: tuple[float, ...] = ()
+    Keyword-only: ``PositionReached(target=(x, y, z), tolerance=1e-3, axes=None,
+    min_elapsed=0.0)``.
+    """
+
+    target: tuple[float, ...]
     tolerance: float = 1e-3
     axes: tuple[int, ...] | None = None
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        target = np.asarray(self.target, dtype=np.float64)
+        if target.ndim != 1 or target.size == 0 or not np.all(np.isfinite(target)):
+            raise ValueError(f"{name}: target must be a non-empty finite vector; got {self.target}")
+        if _finite(self.tolerance, "tolerance", name) < 0:
+            raise ValueError(f"{name}: tolerance must be >= 0 (it could never fire)")
+        if self.axes is not None and len(self.axes) != target.size:
+            raise ValueError(f"{name}: axes {self.axes} must name one axis per target value")
 
     def __call__(self, state: MotionState) -> bool:
         if self._early(state):
@@ -100,53 +142,79 @@ class PositionReached(_Timed):
         return bool(np.linalg.norm(state.position[axes] - target) <= self.tolerance)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SpeedBelow(_Timed):
-    """``|velocity| < threshold``."""
+    """``|velocity| < threshold`` (keyword-only; ``threshold > 0``, else it never fires)."""
 
-    threshold: float = 0.0
+    threshold: float
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if _finite(self.threshold, "threshold", "SpeedBelow") <= 0:
+            raise ValueError(
+                f"SpeedBelow: threshold must be > 0 (|v| < {self.threshold} never holds)"
+            )
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(np.linalg.norm(state.velocity) < self.threshold)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SpeedAbove(_Timed):
-    """``|velocity| > threshold``."""
+    """``|velocity| > threshold`` (keyword-only; ``threshold >= 0``)."""
 
-    threshold: float = 0.0
+    threshold: float
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if _finite(self.threshold, "threshold", "SpeedAbove") < 0:
+            raise ValueError(
+                f"SpeedAbove: threshold must be >= 0 (|v| > {self.threshold} always holds)"
+            )
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(np.linalg.norm(state.velocity) > self.threshold)
 
 
-@dataclass(frozen=True)
-class AccelerationBelow(_Timed):
-    """``acceleration[axis] < threshold``."""
+@dataclass(frozen=True, kw_only=True)
+class _AxisThreshold(_Timed):
+    axis: int
+    threshold: float
 
-    axis: int = 0
-    threshold: float = 0.0
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        _finite(self.threshold, "threshold", name)
+        if isinstance(self.axis, bool) or not isinstance(self.axis, (int, np.integer)):
+            raise TypeError(f"{name}: axis must be an integer; got {self.axis!r}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class AccelerationBelow(_AxisThreshold):
+    """``acceleration[axis] < threshold`` (keyword-only: ``axis=``, ``threshold=``)."""
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(state.acceleration[self.axis] < self.threshold)
 
 
-@dataclass(frozen=True)
-class AccelerationAbove(_Timed):
-    """``acceleration[axis] > threshold``."""
-
-    axis: int = 0
-    threshold: float = 0.0
+@dataclass(frozen=True, kw_only=True)
+class AccelerationAbove(_AxisThreshold):
+    """``acceleration[axis] > threshold`` (keyword-only: ``axis=``, ``threshold=``)."""
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and bool(state.acceleration[self.axis] > self.threshold)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class EventOccurred(_Timed):
-    """The external event ``name`` is among the state's events."""
+    """The external event ``name`` (non-empty, keyword-only) is among the state's events."""
 
-    name: str = ""
+    name: str
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"EventOccurred: name must be a non-empty string; got {self.name!r}")
 
     def __call__(self, state: MotionState) -> bool:
         return not self._early(state) and self.name in state.events
@@ -205,19 +273,31 @@ def segment(
     phases: Sequence[tuple[str, Criterion]],
     events: Mapping[int, Iterable[str]] | None = None,
     cycle: bool = True,
+    *,
+    window: float | None = DEFAULT_WINDOW,
+    polyorder: int = DEFAULT_POLYORDER,
 ) -> list[Segment]:
     """Cut a recording into phases ``(name, end criterion)`` taken in order.
 
     The criterion of the current phase is evaluated at every sample after the phase's
-    first (with causal derivatives and ``events[k]``, the events at sample ``k``); the
-    sample where it first holds ends the phase and starts the next. With ``cycle`` the
-    phase list repeats. A last phase whose criterion never holds is not returned.
+    first (with the velocity, acceleration and ``events[k]``, the events at sample
+    ``k``); the sample where it first holds ends the phase and starts the next. With
+    ``cycle`` the phase list repeats. A last phase whose criterion never holds is not
+    returned.
+
+    Velocities and accelerations are Savitzky-Golay derivatives over ``window`` seconds
+    with polynomials of degree ``polyorder`` (default 0.1 s, cubic; ``times`` must then
+    be uniform, see :func:`motion_envs.geometry.kinematics.smoothed_derivative`);
+    ``window=None`` uses raw causal backward differences (:func:`causal_derivatives`).
     """
     if not phases:
         raise ValueError("phases must contain at least one (name, criterion) pair")
     t = np.asarray(times, dtype=np.float64)
     y = np.asarray(positions, dtype=np.float64)
     v, a = causal_derivatives(t, y)
+    if window is not None:
+        v = smoothed_velocity(y, times=t, window=window, polyorder=polyorder)
+        a = smoothed_acceleration(y, times=t, window=window, polyorder=polyorder)
     events = events or {}
     out: list[Segment] = []
     p, start = 0, 0

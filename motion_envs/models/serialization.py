@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs._io import UserFileError, atomic_write_text, read_regular_file, strict_json_loads
+from motion_envs.models.estimator import Estimator
 
 __all__ = [
     "FORMAT_NAME",
@@ -105,7 +106,7 @@ class StateSchema:
     optional_params: frozenset[str] = frozenset()
 
 
-class SerializableModel:
+class SerializableModel(Estimator):
     """Mixin for models that save to and load from the JSON model format.
 
     Subclasses implement :meth:`_get_state` returning ``(params, arrays, attributes)``

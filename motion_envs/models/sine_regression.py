@@ -26,9 +26,15 @@ conditions and ``r`` what they lack:
   bottom), which for the velocity alone is ``pinv(g) (v_req - v_free)``.
 
 The constraint is applied to the *generated* coefficients (after the start/end
-overwrite), so the generated trajectory has exactly the requested end velocity; the end
-position moves (row 1 of ``dP``), as the paper says, unless ``fix_end=True`` (free form
-only in general: on the hyperplane of ``Q = [start, end]`` fixing both ends fixes ``Q``).
+overwrite), so the generated trajectory has exactly the requested end velocity. The safe
+default of :meth:`SineSeriesRegression.plan`/``generate`` and of
+:func:`constrain_final_velocity` is ``mode="free", fix_end=True``: start and end are held
+and only the sine rows change (exact whenever ``N >= 1``). With ``fix_end=False`` the end
+position moves (row 1 of ``dP``), as the paper says; ``plan`` reports that shift
+(``return_end_shift=True``) and refuses one longer than ``max_end_shift`` (default
+:data:`DEFAULT_MAX_END_SHIFT`, in the data's units) unless ``max_end_shift=None``. On the
+hyperplane of ``Q = [start, end]`` fixing both ends fixes ``Q``, so
+``mode="hyperplane"`` needs ``fix_end=False``.
 
 Online correction (eq. 10), :func:`correct_online`: at ``tau_1`` the executed state is
 ``y_1`` (and optionally velocity ``v_1``), the target is now ``y_f``. The new ``P' = P +
@@ -51,16 +57,19 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
+from motion_envs.geometry.resampling import recording_times
+from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, StateSchema
 
 __all__ = [
+    "DEFAULT_MAX_END_SHIFT",
     "MIN_SAMPLES",
     "LinearHypothesisReport",
     "RankDeficientDesignWarning",
@@ -74,8 +83,16 @@ __all__ = [
     "validate_linear_hypothesis",
 ]
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 FloatArray = NDArray[np.float64]
 Mode = Literal["hyperplane", "free"]
+
+#: Largest end-point shift (Euclidean, in the data's units: 1 mm for positions in metres)
+#: that :meth:`SineSeriesRegression.plan` accepts from an eq. 9 correction with
+#: ``fix_end=False`` unless the caller passes ``max_end_shift=None``.
+DEFAULT_MAX_END_SHIFT = 1e-3
 
 
 class RankDeficientDesignWarning(UserWarning):
@@ -242,17 +259,19 @@ def constrain_final_velocity(
     velocity: ArrayLike,
     duration: float,
     f_q: ArrayLike | None = None,
-    mode: Mode = "hyperplane",
+    mode: Mode = "free",
     axes: Sequence[int] | None = None,
-    fix_end: bool = False,
+    fix_end: bool = True,
 ) -> FloatArray:
     """Eq. 9: change ``P`` so that ``dPhi/dtau(1) . P / T = v_req`` on ``axes``.
 
     ``coefficients`` ``(N + 2, D)`` are the generated ones (start/end already set);
-    ``velocity`` is ``(D,)`` (only ``axes`` are used; default all). The start never moves.
-    ``mode="hyperplane"``: ``dP = F_Q pinv(A F_Q) r`` (needs ``f_q``, ``(K, q)``);
-    ``mode="free"``: ``dP = pinv(A) r``. ``fix_end=True`` also keeps the end position.
-    Returns the new coefficients; raises ``ValueError`` if the conditions cannot be met.
+    ``velocity`` is ``(D,)`` (only ``axes`` are used; default all). The start never moves;
+    ``fix_end=True`` (default) also keeps the end position, ``fix_end=False`` lets it
+    move (the paper's form). ``mode="free"`` (default): ``dP = pinv(A) r``, the
+    minimum-norm change; ``mode="hyperplane"``: ``dP = F_Q pinv(A F_Q) r`` (needs
+    ``f_q``, ``(K, q)``, and in general ``fix_end=False``). Returns the new coefficients;
+    raises ``ValueError`` if the conditions cannot be met.
     """
     p = _check_p(coefficients)
     n_basis, dims = p.shape
@@ -348,10 +367,33 @@ class SineSeriesRegression(SerializableModel):
         self,
         positions: Sequence[ArrayLike],
         conditions: ArrayLike,
-        times: Sequence[ArrayLike] | None = None,
+        times: Sequence[ArrayLike] | Literal["normalised"] | None = None,
+        *,
+        rate: float | None = None,
     ) -> SineSeriesRegression:
-        """Fit from trajectories ``(n_i, D)`` (times ``(n_i,)`` optional), conditions ``(n, q)``."""
-        coefs, durations = trajectory_coefficients(positions, self.n_sines, times)
+        """Fit eq. 6 to trajectories ``positions[i]`` ``(n_i, D)`` and conditions ``(n, q)``.
+
+        The time base is required: ``times`` (seconds, one ``(n_i,)`` float array per
+        trajectory) or ``rate`` (Hz, ``t_k = k / rate``); ``durations_`` are then in
+        seconds and :meth:`plan` velocities per second. ``times="normalised"`` fits on
+        normalised time ``tau_k = k / (n_i - 1)`` with unit durations (for data already
+        time-normalised). Integer ``times`` (sample indices) are refused. Returns ``self``.
+        """
+        if isinstance(times, str):
+            if times != "normalised" or rate is not None:
+                raise ValueError(
+                    f"times must be arrays in seconds or 'normalised' (without rate); got {times!r}"
+                )
+            coefs, durations = trajectory_coefficients(positions, self.n_sines, None)
+        else:
+            if times is None and rate is None:
+                raise ValueError(
+                    "fit needs the time base: times= (seconds, one array per trajectory) "
+                    "or rate= (Hz); times='normalised' fits on normalised time with unit "
+                    "durations"
+                )
+            ts = recording_times(positions, times, rate)
+            coefs, durations = trajectory_coefficients(positions, self.n_sines, ts)
         return self.fit_coefficients(coefs, conditions, durations)
 
     def fit_coefficients(
@@ -376,8 +418,7 @@ class SineSeriesRegression(SerializableModel):
 
     # -- fitted shape helpers -------------------------------------------------------
     def _fitted(self) -> None:
-        if not hasattr(self, "F_"):
-            raise ValueError("this SineSeriesRegression is not fitted; call fit() first")
+        check_is_fitted(self, "F_")
 
     @property
     def n_dims_(self) -> int:
@@ -428,6 +469,53 @@ class SineSeriesRegression(SerializableModel):
             p[:, 1] = e - p[:, 0]
         return p[0] if single else p
 
+    def predict(
+        self,
+        conditions: ArrayLike,
+        duration: ArrayLike,
+        times: ArrayLike | None = None,
+        *,
+        start: ArrayLike | None = None,
+        end: ArrayLike | None = None,
+        final_velocity: ArrayLike | None = None,
+        mode: Mode = "free",
+        axes: Sequence[int] | None = None,
+        fix_end: bool = True,
+        max_end_shift: float | None = DEFAULT_MAX_END_SHIFT,
+    ) -> FloatArray:
+        """Positions predicted from conditions at ``times`` (s since the phase start).
+
+        ``conditions`` ``(q,)`` gives ``(K, D)``; ``(m, q)`` gives ``(m, K, D)`` (then
+        ``duration`` is a scalar or ``(m,)``, ``start``/``end`` ``(m, D)``). ``times``
+        ``(K,)`` lie in ``[0, T]``; default 100 uniform samples. Each phase is planned by
+        :meth:`plan` (eqs. 7-9, same keywords) and evaluated at ``tau = t / T`` (eq. 8).
+        """
+        q = np.asarray(conditions, dtype=np.float64)
+        single = q.ndim == 1
+        q2 = q[None] if single else q
+        m = q2.shape[0]
+        durations = np.broadcast_to(np.asarray(duration, dtype=np.float64), (m,))
+        starts = None if start is None else np.broadcast_to(start, (m, self.n_dims_))
+        ends = None if end is None else np.broadcast_to(end, (m, self.n_dims_))
+        out = []
+        for i in range(m):
+            p = self.plan(
+                q2[i], float(durations[i]),
+                None if starts is None else starts[i], None if ends is None else ends[i],
+                final_velocity, mode, axes, fix_end=fix_end, max_end_shift=max_end_shift,
+            )  # fmt: skip
+            if times is None:
+                tau = np.linspace(0.0, 1.0, 100)
+            else:
+                t = np.asarray(times, dtype=np.float64)
+                if t.ndim != 1 or np.any(t < 0) or np.any(t > durations[i] * (1 + 1e-12)):
+                    raise ValueError(
+                        f"times must be (K,) seconds within [0, duration = {durations[i]:g}]"
+                    )
+                tau = np.minimum(t / durations[i], 1.0)
+            out.append(ss.evaluate(p, tau))
+        return out[0] if single else np.stack(out)
+
     def generate(
         self,
         conditions: ArrayLike,
@@ -436,18 +524,62 @@ class SineSeriesRegression(SerializableModel):
         start: ArrayLike | None = None,
         end: ArrayLike | None = None,
         final_velocity: ArrayLike | None = None,
-        mode: Mode = "hyperplane",
+        mode: Mode = "free",
         axes: Sequence[int] | None = None,
+        *,
+        fix_end: bool = True,
+        max_end_shift: float | None = DEFAULT_MAX_END_SHIFT,
     ) -> tuple[FloatArray, FloatArray]:
         """Times ``(n_points,)`` and positions ``(n_points, D)`` of one generated phase.
 
-        ``Y(t) = Phi(t / T) . P`` (eq. 8) with ``P`` from :meth:`predict_coefficients`,
-        optionally constrained to ``final_velocity`` on ``axes`` (eq. 9, see
-        :func:`constrain_final_velocity`).
+        ``Y(t) = Phi(t / T) . P`` (eq. 8) with ``P`` from :meth:`plan` (same
+        ``final_velocity``/``mode``/``axes``/``fix_end``/``max_end_shift``, eq. 9).
         """
-        p = self.plan(conditions, duration, start, end, final_velocity, mode, axes)
+        p = self.plan(
+            conditions,
+            duration,
+            start,
+            end,
+            final_velocity,
+            mode,
+            axes,
+            fix_end=fix_end,
+            max_end_shift=max_end_shift,
+        )
         tau = np.linspace(0.0, 1.0, int(n_points))
         return tau * duration, ss.evaluate(p, tau)
+
+    @overload
+    def plan(
+        self,
+        conditions: ArrayLike,
+        duration: float,
+        start: ArrayLike | None = ...,
+        end: ArrayLike | None = ...,
+        final_velocity: ArrayLike | None = ...,
+        mode: Mode = ...,
+        axes: Sequence[int] | None = ...,
+        *,
+        fix_end: bool = ...,
+        max_end_shift: float | None = ...,
+        return_end_shift: Literal[False] = ...,
+    ) -> FloatArray: ...
+
+    @overload
+    def plan(
+        self,
+        conditions: ArrayLike,
+        duration: float,
+        start: ArrayLike | None = ...,
+        end: ArrayLike | None = ...,
+        final_velocity: ArrayLike | None = ...,
+        mode: Mode = ...,
+        axes: Sequence[int] | None = ...,
+        *,
+        fix_end: bool = ...,
+        max_end_shift: float | None = ...,
+        return_end_shift: Literal[True],
+    ) -> tuple[FloatArray, FloatArray]: ...
 
     def plan(
         self,
@@ -456,20 +588,71 @@ class SineSeriesRegression(SerializableModel):
         start: ArrayLike | None = None,
         end: ArrayLike | None = None,
         final_velocity: ArrayLike | None = None,
-        mode: Mode = "hyperplane",
+        mode: Mode = "free",
         axes: Sequence[int] | None = None,
-    ) -> FloatArray:
-        """Coefficients ``(N + 2, D)`` of one phase, with the optional eq. 9 constraint."""
+        *,
+        fix_end: bool = True,
+        max_end_shift: float | None = DEFAULT_MAX_END_SHIFT,
+        return_end_shift: bool = False,
+    ) -> FloatArray | tuple[FloatArray, FloatArray]:
+        """Coefficients ``(N + 2, D)`` of one phase (eq. 7), with the optional eq. 9 constraint.
+
+        Parameters
+        ----------
+        conditions:
+            ``Q`` of this phase, ``(q,)``.
+        duration:
+            ``T`` in seconds.
+        start, end:
+            ``(D,)`` positions that overwrite rows 0/1 of ``P`` (else predicted from ``Q``).
+        final_velocity:
+            ``(D,)`` end velocity to impose (eq. 9; only ``axes`` are used, default all).
+        mode:
+            ``"free"`` (default, minimum-norm change of ``P``) or ``"hyperplane"``
+            (change along ``F_Q``, the paper's text; needs ``fix_end=False`` and the start
+            among the conditions).
+        fix_end:
+            Hold the end point (default). ``False`` lets eq. 9 move it.
+        max_end_shift:
+            Refuse (``ValueError``) a plan whose end point moved farther than this
+            (Euclidean, data units; default :data:`DEFAULT_MAX_END_SHIFT`); ``None``
+            accepts any shift.
+        return_end_shift:
+            Also return the end-point shift ``(D,)`` caused by eq. 9.
+        """
         _check_duration(duration)
         q = np.asarray(conditions, dtype=np.float64)
         if q.ndim != 1:
             raise ValueError(f"conditions must be (q,) for one phase; got shape {q.shape}")
-        p = self.predict_coefficients(q, start, end)
+        if max_end_shift is not None and not (
+            np.isfinite(max_end_shift) and float(max_end_shift) >= 0
+        ):
+            raise ValueError(f"max_end_shift must be >= 0 or None; got {max_end_shift!r}")
+        p0 = self.predict_coefficients(q, start, end)
+        p = p0
         if final_velocity is not None:
-            p = constrain_final_velocity(
-                p, final_velocity, duration, f_q=self.F_Q_, mode=mode, axes=axes
+            try:
+                p = constrain_final_velocity(
+                    p0, final_velocity, duration, f_q=self.F_Q_, mode=mode, axes=axes,
+                    fix_end=fix_end,
+                )  # fmt: skip
+            except ValueError as exc:
+                if mode == "hyperplane" and fix_end and "cannot meet" in str(exc):
+                    raise ValueError(
+                        f"{exc}; on the hyperplane pass fix_end=False to let the end move "
+                        "(the shift is checked against max_end_shift)"
+                    ) from None
+                raise
+        shift = (p[0] + p[1]) - (p0[0] + p0[1])
+        size = float(np.linalg.norm(shift))
+        if max_end_shift is not None and size > float(max_end_shift):
+            raise ValueError(
+                f"final_velocity: the {mode} eq. 9 correction moves the end point by "
+                f"{np.array2string(shift, precision=4)} (|shift| = {size:.4g} > "
+                f"max_end_shift = {float(max_end_shift):g}); pass fix_end=True to hold the "
+                "end, or max_end_shift=None to accept the shift"
             )
-        return p
+        return (p, shift) if return_end_shift else p
 
     def correct(
         self,
@@ -575,6 +758,33 @@ class LinearHypothesisReport:
     f_stat: FloatArray
     f_p: FloatArray
     exact: NDArray[np.bool_]
+
+    def to_frame(self) -> pd.DataFrame:
+        """One row per coefficient ``k``: ``basis_index``, ``coordinate``, ``exact``, the
+        tests, and per column ``j`` of ``F`` (``q`` conditions, then ``intercept``)
+        ``F_j``, ``ci_low_j``, ``ci_high_j``, ``jackknife_var_j``."""
+        import pandas as pd
+
+        cols: dict[str, Any] = {
+            "basis_index": self.basis_index,
+            "coordinate": self.coordinate,
+            "exact": self.exact,
+            "lilliefors_stat": self.lilliefors_stat,
+            "lilliefors_p": self.lilliefors_p,
+            "f_stat": self.f_stat,
+            "f_p": self.f_p,
+        }
+        n_cond = self.F.shape[1] - 1
+        for j in range(n_cond + 1):
+            name = "intercept" if j == n_cond else f"q{j}"
+            for what, values in (
+                ("F", self.F),
+                ("ci_low", self.ci_low),
+                ("ci_high", self.ci_high),
+                ("jackknife_var", self.jackknife_var),
+            ):
+                cols[f"{what}_{name}"] = values[:, j]
+        return pd.DataFrame(cols)
 
     def summary(self, alpha: float = 0.05) -> list[dict[str, float | int]]:
         """One row per coordinate over its non-exact sine coefficients.

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel
 
 __all__ = ["DEFAULT_LAMBDAS", "SpeedProfileModel", "timing_features"]
@@ -86,7 +87,7 @@ class SpeedProfileModel(SerializableModel):
         if len(lambdas) == 0 or any(not (np.isfinite(v) and v >= 0) for v in lambdas):
             raise ValueError(f"lambdas must be finite numbers >= 0; got {lambdas!r}")
         self.lam = lam
-        self.lambdas = tuple(float(v) for v in lambdas)
+        self.lambdas = lambdas
 
     @staticmethod
     def _check(features: ArrayLike, alpha: ArrayLike | None = None) -> tuple[FloatArray, Any]:
@@ -141,8 +142,7 @@ class SpeedProfileModel(SerializableModel):
 
     def predict(self, features: ArrayLike) -> FloatArray:
         """Predicted ``alpha`` curves ``(L, n_points)``: strictly increasing, 0 to 1."""
-        if not hasattr(self, "coef_"):
-            raise RuntimeError("SpeedProfileModel is not fitted; call fit() first")
+        check_is_fitted(self, "coef_")
         X, _ = self._check(features)
         if X.shape[1] != self.mean_.size:
             raise ValueError(f"features must have {self.mean_.size} columns; got {X.shape[1]}")
@@ -151,7 +151,7 @@ class SpeedProfileModel(SerializableModel):
 
     def _get_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any]]:
         return (
-            {"lam": self.lam, "lambdas": list(self.lambdas)},
+            {"lam": self.lam, "lambdas": [float(v) for v in self.lambdas]},
             {
                 "intercept_": self.intercept_,
                 "coef_": self.coef_,

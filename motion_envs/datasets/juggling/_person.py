@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import rules
 from motion_envs.datasets.juggling._records import JugglingDemos, JugglingRecording
 from motion_envs.datasets.juggling._task import JugglingTask, ballistic_position
-from motion_envs.geometry.jerk import quintic, quintic_evaluate
+from motion_envs.geometry.minimum_jerk import quintic, quintic_evaluate
 
 __all__ = ["PersonStyle", "draw_person", "generate_demonstrations"]
 

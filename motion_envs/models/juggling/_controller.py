@@ -112,7 +112,10 @@ class JugglingController:
             duration, end = self._draw_duration(phase), self._draw_end(phase)
         q = np.concatenate([start, end])
         if phase == "toss":  # eq. 9: zero vertical velocity at the end, on the hyperplane
-            p = model.plan(q, duration, start, end, final_velocity=np.zeros(2), axes=[1])
+            p = model.plan(
+                q, duration, start, end, final_velocity=np.zeros(2), axes=[1],
+                mode="hyperplane", fix_end=False, max_end_shift=None,
+            )  # fmt: skip
         else:
             p = model.plan(q, duration, start, end)
         self.phase = phase

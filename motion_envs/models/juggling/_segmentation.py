@@ -82,6 +82,7 @@ def segment_juggling(
             ("return", rest),
         ],
         events=events,
+        window=None,
     )
     labels = np.full(len(t), "none", dtype="<U7")
     for s in segs:

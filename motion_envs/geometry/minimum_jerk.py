@@ -1,15 +1,16 @@
-"""Minimum-jerk movements (Flash & Hogan 1985): quintic polynomials in time.
+"""The minimum-jerk movement between two rest states (Flash & Hogan 1985).
 
-Two forms, both batched over leading axes:
+Among all movements from ``s`` to ``e`` in time ``T`` that start and end at rest (zero
+velocity and acceleration), the one minimising ``int_0^T |d3y/dt3|^2 dt`` is, on
+normalised time ``u = t / T``::
 
-* :func:`minimum_jerk`: between rest states, in normalised time ``u = t / T``::
+    y(u) = s + (e - s) (10 u^3 - 15 u^4 + 6 u^5)
 
-      y(u) = s + (e - s) (10 u^3 - 15 u^4 + 6 u^5)
-
-* :func:`quintic` / :func:`quintic_evaluate`: between any two states (position, velocity,
-  acceleration at ``0`` and at ``T``), ``y(t) = sum_j c_j t^j``, ``j = 0 .. 5``, the
-  coefficients solving the 6 x 6 boundary-value system. With zero end velocities and
-  accelerations it is :func:`minimum_jerk` (to round-off).
+with peak speed ``1.875 |e - s| / T`` at ``u = 1/2``. Between any two states (position,
+velocity and acceleration at ``0`` and at ``T``) the minimiser is the quintic
+``y(t) = sum_j c_j t^j``, ``j = 0 .. 5``, whose coefficients solve the 6 x 6
+boundary-value system (:func:`quintic`, :func:`quintic_evaluate`); with zero end
+velocities and accelerations it is :func:`minimum_jerk` (to round-off).
 """
 
 from __future__ import annotations
@@ -17,9 +18,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["minimum_jerk", "quintic", "quintic_evaluate"]
+__all__ = ["minimum_jerk", "minimum_jerk_profile", "quintic", "quintic_evaluate"]
 
 FloatArray = NDArray[np.float64]
+
+
+def minimum_jerk_profile(tau: ArrayLike) -> FloatArray:
+    """The normalised path ``10 u^3 - 15 u^4 + 6 u^5`` (0 to 1), same shape as ``tau``."""
+    u = np.asarray(tau, dtype=np.float64)
+    return np.asarray(10 * u**3 - 15 * u**4 + 6 * u**5, dtype=np.float64)
 
 
 def minimum_jerk(start: ArrayLike, end: ArrayLike, tau: ArrayLike) -> FloatArray:
@@ -30,9 +37,8 @@ def minimum_jerk(start: ArrayLike, end: ArrayLike, tau: ArrayLike) -> FloatArray
     """
     s = np.asarray(start, dtype=np.float64)
     e = np.asarray(end, dtype=np.float64)
-    u = np.asarray(tau, dtype=np.float64)
-    shape = 10 * u**3 - 15 * u**4 + 6 * u**5
-    return s[..., None, :] + (e - s)[..., None, :] * shape[:, None]
+    shape = minimum_jerk_profile(tau)
+    return np.asarray(s[..., None, :] + (e - s)[..., None, :] * shape[:, None], dtype=np.float64)
 
 
 def quintic(
