@@ -149,9 +149,12 @@ def snapshot(out: Path, skip_bench: bool, reuse: bool = False) -> dict[str, str]
                     manifest[f"bench/{path.relative_to(results).as_posix()}"] = digest
     for env_id in motion_envs.ENV_IDS:
         for policy in ("zero", "random"):
-            manifest[f"rollout/{env_id}/single/{policy}"] = rollout_digest(env_id, False, policy)
-            if has_native_vector(env_id):
-                manifest[f"rollout/{env_id}/vector/{policy}"] = rollout_digest(env_id, True, policy)
+            for vector in (False, True) if has_native_vector(env_id) else (False,):
+                key = f"rollout/{env_id}/{'vector' if vector else 'single'}/{policy}"
+                try:
+                    manifest[key] = rollout_digest(env_id, vector, policy)
+                except Exception as exc:  # recorded, so that compare names it
+                    manifest[key] = f"error: {type(exc).__name__}: {exc}"
     return manifest
 
 
@@ -165,6 +168,8 @@ def compare(before: dict[str, str], after: dict[str, str]) -> list[str]:
             lines.append(f"new after:     {key}")
         elif before[key] != after[key]:
             lines.append(f"differs:       {key}")
+        if after.get(key, "").startswith("error:"):
+            lines.append(f"  {after[key]}")
     return lines
 
 
