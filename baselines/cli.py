@@ -22,6 +22,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.orientation_bench",
     "baselines.position_bench",
     "baselines.juggling_bench",
+    "baselines.mocap_import",
     "baselines.calibrate_cohort",
     "baselines.agents.train",
     "baselines.agents.evaluate",

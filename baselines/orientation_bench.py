@@ -398,6 +398,8 @@ def orientation_data(text: str) -> str:
     """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
     if text in ORIENTATION_DATASETS or text.startswith("cohort:"):
         return text
+    if (recording := options.mocap_data(text, "orientation")) is not None:  # FILE.c3d?opt=...
+        return recording
     if not Path(text).exists():
         raise argparse.ArgumentTypeError(
             f"expected one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a CSV file; "

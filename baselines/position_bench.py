@@ -531,6 +531,8 @@ def position_data(text: str) -> str:
     """``--data``: ``lasa`` or an existing position CSV file."""
     if text in POSITION_DATASETS:
         return text
+    if (recording := options.mocap_data(text, "position")) is not None:  # FILE.c3d?opt=...
+        return recording
     if not Path(text).exists():
         raise argparse.ArgumentTypeError(
             f"expected one of {list(POSITION_DATASETS)} or a CSV file; {text} does not exist"
