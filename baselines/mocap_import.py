@@ -127,6 +127,8 @@ _HELP = {
     "marker": "C3D/TSV marker imported as a position (the hand for juggling)",
     "markers": "ORIGIN,X,PLANE: three rigid C3D/TSV markers whose frame is the orientation",
     "joint": "BVH joint: global position and orientation by forward kinematics",
+    "relative_to": "orientation relative to this frame: ORIGIN,X,PLANE markers (e.g. "
+    "wrist,elbow,shoulder as in Faraway & Choe) or a BVH joint (e.g. the forearm)",
     "ball": "C3D/TSV marker of the ball (juggling)",
     "balls": "'unlabelled': assemble the ball from a Qualisys TSV's unlabelled fragments",
     "unit": "length unit of the file (default: C3D POINT:UNITS, TSV mm; a BVH needs it)",

@@ -305,6 +305,26 @@ def test_bvh_round_trip_mixed_rotation_orders(tmp_path, movement):
     np.testing.assert_allclose(pos_ds.times[0], t, rtol=0, atol=1e-12)
 
 
+def test_relative_orientation_like_the_paper(tmp_path, movement):
+    """Faraway & Choe's hand orientation relative to the arm's marker triad (TSV), and a
+    BVH joint relative to its parent (= its local rotation, scipy from the Euler angles)."""
+    t, rot, pos = movement
+    arm = Rotation.from_rotvec(np.column_stack([0.3 * np.sin(t), 0.2 * t / t[-1], 0 * t]))
+    arm_pos = pos - [0.0, 0.25, 0.0]
+    points = np.concatenate([marker_points(rot, pos), marker_points(arm, arm_pos)], axis=1)
+    write_tsv(tmp_path / "two.tsv", points * 1000.0, ["O", "X", "P", "W", "E", "S"])
+    options = ImportOptions(markers=("O", "X", "P"), relative_to=("W", "E", "S"))
+    ds, _ = import_orientation(tmp_path / "two.tsv", options)
+    assert angle_to(ds.quaternions[0], arm.inv() * rot).max() < 1e-9
+    t = t[:300]
+    angles = bvh_angles(t)
+    write_bvh(tmp_path / "rec.bvh", t, np.zeros((t.size, 3)), angles)
+    options = ImportOptions(joint="Hand", relative_to=("Chest",), up="y")
+    ds, _ = import_orientation(tmp_path / "rec.bvh", options)
+    local = Rotation.from_euler(BVH_ORDERS[2], angles[:, 2], degrees=True)
+    assert angle_to(ds.quaternions[0], local).max() < 1e-9  # the up turn cancels
+
+
 def test_sign_continuity_before_gap_filling(tmp_path, movement):
     """A BVH joint turning through 180 degrees: pybvh's per-frame canonical signs flip,
     the imported quaternions do not."""

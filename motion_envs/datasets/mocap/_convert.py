@@ -143,34 +143,58 @@ def _position(
     return _to_zup(rec.points[:, j], opts.up), present
 
 
-def _orientation(rec: MocapRecording, opts: ImportOptions) -> tuple[FloatArray, NDArray[np.bool_]]:
+def _frame(
+    rec: MocapRecording, opts: ImportOptions, names: tuple[str, ...]
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """World orientation (Z-up) of a BVH joint (one name) or a marker triad (three names)."""
     if rec.fmt == "bvh":
-        if opts.joint is None:
-            raise ValueError(
-                f"{rec.path}: give the joint whose orientation is imported (--joint NAME)"
-            )
         assert rec.quaternions is not None
-        q = rec.quaternions[:, rec.index(opts.joint, "joint")]
+        q = rec.quaternions[:, rec.index(names[0], "joint")]
         if opts.up == "y":
             turn = quat.from_rotation(Rotation.from_matrix(YUP_TO_ZUP))
             q = quat.multiply(np.broadcast_to(turn, q.shape), q)
-        return quat.make_continuous(q), np.ones(q.shape[0], dtype=bool)
-    if opts.markers is None:
-        raise ValueError(
-            f"{rec.path}: give the three rigid markers of the orientation "
-            "(--markers ORIGIN,X,PLANE)"
-        )
-    idx = [rec.index(m) for m in opts.markers]
+        return q, np.ones(q.shape[0], dtype=bool)
+    idx = [rec.index(m) for m in names]
     miss = rec.missing()
-    for m, j in zip(opts.markers, idx, strict=True):
+    for m, j in zip(names, idx, strict=True):
         if miss[:, j].all():
             raise ValueError(f"{rec.path}: marker {m!r} has no sample (all missing)")
     pts = _to_zup(rec.points[:, idx], opts.up)
     q, valid = triad_quaternions(pts[:, 0], pts[:, 1], pts[:, 2])
-    valid &= ~miss[:, idx].any(axis=1)
+    return q, valid & ~miss[:, idx].any(axis=1)
+
+
+def _orientation(rec: MocapRecording, opts: ImportOptions) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The imported orientation, relative to ``opts.relative_to`` when given.
+
+    Relative: ``q_ref* q`` (the body's orientation in the reference frame), present
+    where both are; sign-continuous over the present samples.
+    """
+    names: tuple[str, ...]
+    if rec.fmt == "bvh":
+        if opts.joint is None:
+            raise ValueError(f"{rec.path}: give the joint whose orientation is imported (--joint)")
+        names = (opts.joint,)
+    else:
+        if opts.markers is None:
+            raise ValueError(
+                f"{rec.path}: give the three rigid markers of the orientation "
+                "(--markers ORIGIN,X,PLANE)"
+            )
+        names = opts.markers
+    q, valid = _frame(rec, opts, names)
+    if opts.relative_to is not None:
+        want = 1 if rec.fmt == "bvh" else 3
+        if len(opts.relative_to) != want:
+            raise ValueError(
+                f"{rec.path}: --relative-to needs {'one joint' if want == 1 else 'three markers'}"
+            )
+        q_ref, valid_ref = _frame(rec, opts, opts.relative_to)
+        q = quat.multiply(quat.conjugate(q_ref), q)
+        valid &= valid_ref
     if not valid.any():
         raise ValueError(
-            f"{rec.path}: markers {','.join(opts.markers)} are never all present together"
+            f"{rec.path}: the markers of the orientation are never all present together"
         )
     q[valid] = quat.make_continuous(q[valid])
     return q, valid

@@ -47,6 +47,10 @@ class ImportOptions:
     joint:
         BVH joint: its global position and orientation by forward kinematics (the hand
         for ``juggling``).
+    relative_to:
+        The orientation is taken relative to this frame: three markers
+        ``ORIGIN,X,PLANE`` (C3D/TSV; e.g. wrist, elbow, shoulder as in Faraway & Choe) or
+        one BVH joint (e.g. the forearm).
     ball:
         C3D/TSV marker of the ball (``juggling``).
     balls:
@@ -79,6 +83,7 @@ class ImportOptions:
     marker: str | None = None
     markers: tuple[str, str, str] | None = None
     joint: str | None = None
+    relative_to: tuple[str, ...] | None = None
     ball: str | None = None
     balls: str = "labelled"
     unit: str | None = None
@@ -119,6 +124,13 @@ def _triad(text: str) -> tuple[str, str, str]:
     if len(parts) != 3 or not all(parts) or len(set(parts)) != 3:
         raise ValueError(f"expected three different marker names ORIGIN,X,PLANE; got {text!r}")
     return (parts[0], parts[1], parts[2])
+
+
+def _one_or_three(text: str) -> tuple[str, ...]:
+    parts = tuple(p.strip() for p in text.split(","))
+    if len(parts) == 1 and parts[0]:
+        return parts
+    return _triad(text)
 
 
 def _choice(*allowed: str) -> Callable[[str], str]:
@@ -169,6 +181,7 @@ _CHECKS: dict[str, Callable[[str], Any]] = {
     "marker": _name,
     "markers": _triad,
     "joint": _name,
+    "relative_to": _one_or_three,
     "ball": _name,
     "balls": _choice("labelled", "unlabelled"),
     "unit": _choice(*UNITS),
