@@ -93,6 +93,12 @@ class Movement:
     values: FloatArray
 
 
+def _markers_used(opts: ImportOptions) -> tuple[str, ...]:
+    """The C3D markers an import reads (the others are not kept in memory)."""
+    names = [opts.marker, *(opts.markers or ()), opts.ball, *(opts.relative_to or ())]
+    return tuple(n for n in names if n is not None)
+
+
 def _to_zup(points: FloatArray, up: str) -> FloatArray:
     if up == "z":
         return points
@@ -282,7 +288,7 @@ def import_orientation(
 ) -> tuple[OrientationDataset, ImportReport]:
     """An orientation dataset from a C3D/TSV marker triad or a BVH joint (see the module)."""
     opts = options or ImportOptions()
-    rec = read_recording(path, opts.unit)
+    rec = read_recording(path, opts.unit, _markers_used(opts))
     q, present = _orientation(rec, opts)
     moves, (ids, subjects, tasks), rep = _trajectories(rec, q, present, opts, rotation=True)
     ds = OrientationDataset(
@@ -302,7 +308,7 @@ def import_position(
 ) -> tuple[PositionDataset, ImportReport]:
     """A 3-D position dataset (metres, Z-up) from a C3D/TSV marker or a BVH joint."""
     opts = options or ImportOptions()
-    rec = read_recording(path, opts.unit)
+    rec = read_recording(path, opts.unit, _markers_used(opts))
     name = opts.joint if rec.fmt == "bvh" else opts.marker
     y, present = _position(rec, opts, name, "position")
     moves, (ids, subjects, tasks), rep = _trajectories(rec, y, present, opts, rotation=False)
@@ -334,7 +340,7 @@ def import_juggling(
     :func:`motion_envs.models.juggling_segmentation.segment_demos`.
     """
     opts = options or ImportOptions()
-    rec = read_recording(path, opts.unit)
+    rec = read_recording(path, opts.unit, _markers_used(opts))
     hand_name = opts.joint if rec.fmt == "bvh" else opts.marker
     hand, hand_ok = _position(rec, opts, hand_name, "hand")
     ball_counts: dict[str, int] = {}

@@ -9,7 +9,9 @@ names the file, in one line.
 from __future__ import annotations
 
 import math
+import multiprocessing
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -44,50 +46,120 @@ def _unit_scale(path: Path, unit: str) -> float:
     return UNITS[key]
 
 
-def read_c3d(path: str | Path, unit: str | None = None) -> MocapRecording:
-    """Read the 3D points of a C3D file with ezc3d (``unit`` overrides ``POINT:UNITS``).
+def _c3d_fields(path: str, markers: Sequence[str] | None = None) -> dict[str, Any]:
+    """What the import needs of a C3D file, read by ezc3d (in the guarded child): every
+    label, and the points and residuals of ``markers`` (None: all) that the file has."""
+    import ezc3d
 
-    Missing markers are NaN (ezc3d sets them for negative residuals; residuals are
-    kept). Raises ``ValueError`` naming the file when it is not a C3D file, is
-    truncated (fewer frames than its header announces), has no points, or a frame rate
-    that is not > 0.
-    """
-    p = Path(path)
-    try:
-        import ezc3d
-    except ImportError:  # pragma: no cover - the extra is installed in the tests
-        raise ValueError(f"{p}: reading C3D needs ezc3d; {_EXTRA}") from None
-    try:
-        c3d = ezc3d.c3d(str(p))
-    except (OSError, RuntimeError, ValueError, IndexError) as exc:
-        raise ValueError(f"{p}: not a readable C3D file ({' '.join(str(exc).split())})") from None
-    header = c3d["header"]["points"]
+    c3d = ezc3d.c3d(path)
     params = c3d["parameters"]["POINT"]
-    rate = _check_rate(p, float(header["frame_rate"]), "C3D header")
-    raw = c3d["data"]["points"]
-    expected = _announced_frames(p)
-    if expected is not None and raw.shape[2] < expected:
-        raise ValueError(
-            f"{p}: truncated C3D file: {raw.shape[2]} of the {expected} frames its header announces"
-        )
-    if raw.shape[1] == 0 or raw.shape[2] == 0:
-        raise ValueError(f"{p}: the C3D file holds no 3D points")
     labels: list[str] = []
     for key in ("LABELS", *(f"LABELS{i}" for i in range(2, 100))):
         if key not in params:
             break
         labels.extend(str(x).strip() for x in params[key]["value"])
+    units = params["UNITS"]["value"] if "UNITS" in params else []
+    raw = c3d["data"]["points"]
     labels = labels[: raw.shape[1]] + [f"point{i}" for i in range(len(labels), raw.shape[1])]
-    if unit is None:
-        units = params["UNITS"]["value"] if "UNITS" in params else ["mm"]
-        unit = str(units[0]) if len(units) else "mm"
-    scale = _unit_scale(p, unit)
-    points = np.ascontiguousarray(raw[:3].transpose(2, 1, 0), dtype=np.float64)
-    points *= scale
-    residuals = None
+    keep = list(range(raw.shape[1]))
+    if markers is not None:
+        keep = [labels.index(m) for m in dict.fromkeys(markers) if m in labels]
     meta = c3d["data"].get("meta_points", {})
-    if "residuals" in meta and np.shape(meta["residuals"])[1:] == raw.shape[1:]:
-        residuals = np.ascontiguousarray(meta["residuals"][0].T, dtype=np.float64)
+    residuals = meta.get("residuals")
+    return {
+        "rate": float(c3d["header"]["points"]["frame_rate"]),
+        "labels": labels,
+        "kept": [labels[j] for j in keep],
+        "n_frames": int(raw.shape[2]),
+        "unit": str(units[0]) if len(units) else "mm",
+        # (F, M, 3) as the import uses it; the transpose is done here, once
+        "points": np.ascontiguousarray(raw[:3, keep].transpose(2, 1, 0), dtype=np.float64),
+        "residuals": None
+        if residuals is None or np.shape(residuals)[1:] != raw.shape[1:]
+        else np.ascontiguousarray(residuals[0, keep].T, dtype=np.float64),
+    }
+
+
+def _c3d_child(path: str, markers: Sequence[str] | None, conn: Any) -> None:
+    try:
+        conn.send(_c3d_fields(path, markers))
+    except Exception as exc:  # reported to the parent as one line
+        conn.send(f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+    finally:
+        conn.close()
+
+
+def _read_c3d_guarded(path: Path, markers: Sequence[str] | None) -> dict[str, Any]:
+    """:func:`_c3d_fields` in a forked child process, so that a corrupt file that crashes
+    ezc3d (it can end the process with a segmentation fault) becomes a ``ValueError``.
+
+    Without ``fork`` (Windows) ezc3d runs in this process.
+    """
+    if not hasattr(os, "fork"):  # pragma: no cover - Linux and macOS fork
+        try:
+            return _c3d_fields(str(path), markers)
+        except (OSError, RuntimeError, ValueError, IndexError) as exc:
+            raise ValueError(
+                f"{path}: not a readable C3D file ({' '.join(str(exc).split())})"
+            ) from None
+    ctx = multiprocessing.get_context("fork")
+    receive, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_c3d_child, args=(str(path), markers, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        result: dict[str, Any] | str | None = receive.recv()
+    except EOFError:
+        result = None
+    finally:
+        receive.close()
+        child.join()
+    if result is None:
+        raise ValueError(
+            f"{path}: not a readable C3D file (ezc3d stopped with exit code {child.exitcode})"
+        )
+    if isinstance(result, str):
+        raise ValueError(f"{path}: not a readable C3D file ({result})")
+    return result
+
+
+def read_c3d(
+    path: str | Path, unit: str | None = None, markers: Sequence[str] | None = None
+) -> MocapRecording:
+    """Read the 3D points of a C3D file with ezc3d (``unit`` overrides ``POINT:UNITS``).
+
+    ``markers``: keep only these (None: all); a name the file lacks raises
+    ``ValueError`` listing the file's labels. Missing samples are NaN (ezc3d sets them
+    for negative residuals; residuals are kept). ezc3d runs in a forked child process: a
+    corrupt file can crash it. Raises ``ValueError`` naming the file when it is not a
+    C3D file, is truncated (fewer frames than its header announces), has no points, or
+    a frame rate that is not > 0.
+    """
+    p = Path(path)
+    try:
+        import ezc3d  # noqa: F401  (imported here so that the child does not import it)
+    except ImportError:  # pragma: no cover - the extra is installed in the tests
+        raise ValueError(f"{p}: reading C3D needs ezc3d; {_EXTRA}") from None
+    fields = _read_c3d_guarded(p, markers)
+    rate = _check_rate(p, fields["rate"], "C3D header")
+    points = fields["points"]
+    expected = _announced_frames(p)
+    if expected is not None and fields["n_frames"] < expected:
+        raise ValueError(
+            f"{p}: truncated C3D file: {fields['n_frames']} of the {expected} frames its "
+            "header announces"
+        )
+    if fields["n_frames"] == 0 or not fields["labels"]:
+        raise ValueError(f"{p}: the C3D file holds no 3D points")
+    if markers is not None:
+        every = MocapRecording(p, "c3d", rate, tuple(fields["labels"]), np.empty((0, 0, 3)))
+        for name in markers:
+            every.index(name)  # ValueError listing the file's markers
+    labels = list(fields["kept"])
+    scale = _unit_scale(p, unit if unit is not None else fields["unit"])
+    points *= scale
+    residuals = fields["residuals"]
+    if residuals is not None:
         points[residuals < 0] = np.nan
     return MocapRecording(p, "c3d", rate, tuple(labels), points, residuals, None, scale)
 
@@ -310,13 +382,18 @@ def _tsv_markers(
     return [_label(n) for n in meta["MARKER_NAMES"]], False
 
 
-def read_recording(path: str | os.PathLike[str], unit: str | None = None) -> MocapRecording:
-    """Read a ``.c3d``, ``.bvh`` or ``.tsv`` file by its suffix."""
+def read_recording(
+    path: str | os.PathLike[str], unit: str | None = None, markers: Sequence[str] | None = None
+) -> MocapRecording:
+    """Read a ``.c3d``, ``.bvh`` or ``.tsv`` file by its suffix (``markers``: of a C3D,
+    only these are read into memory; None: all)."""
     p = Path(path)
     suffix = p.suffix.lower()
     if not p.is_file():
         raise FileNotFoundError(f"motion capture file {p} does not exist")
-    readers = {".c3d": read_c3d, ".bvh": read_bvh, ".tsv": read_qualisys_tsv}
+    if suffix == ".c3d":
+        return read_c3d(p, unit, markers)
+    readers = {".bvh": read_bvh, ".tsv": read_qualisys_tsv}
     if suffix not in readers:
         raise ValueError(f"{p}: unknown motion capture format; expected .c3d, .bvh or .tsv")
     return readers[suffix](p, unit)
