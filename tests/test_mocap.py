@@ -7,11 +7,14 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import os
 from pathlib import Path
 
 import ezc3d
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from baselines import orientation_bench, position_bench
@@ -541,3 +544,52 @@ def test_options_dataclass_checks_its_values():
     with pytest.raises(ValueError, match="markers: expected three different"):
         ImportOptions(markers=("A", "A", "B"))
     assert dataclasses.replace(ImportOptions(), up="y").up == "y"
+
+
+# --------------------------------------------------------------------------------------
+# fuzz: corrupted files load or raise ValueError naming the file, nothing else (no crash)
+# --------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def valid_files(tmp_path_factory, movement):
+    folder = tmp_path_factory.mktemp("valid")
+    t, rot, pos = movement
+    pts = marker_points(rot, pos)[:60]
+    write_c3d(folder / "ok.c3d", pts, ["O", "X", "P"])
+    write_tsv(folder / "ok.tsv", pts * 1000.0, ["O", "X", "P"])
+    write_bvh(folder / "ok.bvh", t[:60], np.zeros((60, 3)), bvh_angles(t[:60]))
+    return {
+        ".c3d": (folder / "ok.c3d", "markers=O,X,P"),
+        ".tsv": (folder / "ok.tsv", "markers=O,X,P"),
+        ".bvh": (folder / "ok.bvh", "joint=Hand"),
+    }
+
+
+@settings(
+    max_examples=int(os.environ.get("FUZZ_EXAMPLES", "60")),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
+@given(data=st.data())
+def test_fuzzed_recordings_raise_only_value_error(valid_files, tmp_path, data):
+    """Bytes overwritten, cut or spliced in a valid C3D, TSV or BVH file: the import
+    succeeds or raises one ValueError naming the file (ezc3d runs in a child process, so
+    a file that crashes it is reported too)."""
+    suffix = data.draw(st.sampled_from(sorted(valid_files)))
+    valid, query = valid_files[suffix]
+    raw = bytearray(valid.read_bytes())
+    for _ in range(data.draw(st.integers(1, 6))):
+        at = data.draw(st.integers(0, len(raw) - 1))
+        raw[at] = data.draw(st.integers(0, 255))
+    if data.draw(st.booleans()):
+        a = data.draw(st.integers(0, len(raw)))
+        b = data.draw(st.integers(a, min(len(raw), a + 40)))
+        raw[a:b] = data.draw(st.binary(max_size=8))
+    path = tmp_path / f"fuzz{suffix}"
+    path.write_bytes(bytes(raw))
+    try:
+        load_orientation_dataset(f"{path}?{query}", min_deg=0.0)
+    except ValueError as exc:
+        assert str(path) in str(exc)
+        assert "\n" not in str(exc)
