@@ -96,10 +96,15 @@ def report(results: ImportResults) -> str:
 
 
 def write(results: ImportResults, out: Path) -> list[Path]:
-    """Write the project's CSV of the imported kind to ``out``."""
+    """Write the project's CSV of the imported kind to ``out``.
+
+    A juggling CSV holds the recordings without the ``phase`` column (samples after the
+    last complete cycle have no phase): whoever reads it cuts it by the same online
+    criteria, so it gives the cycles reported here.
+    """
     data = results.data
     if isinstance(data, JugglingDemos):
-        return [write_juggling_csv(data, out)]
+        return [write_juggling_csv(data, out, phase=False)]
     return [data.to_csv(out)]
 
 

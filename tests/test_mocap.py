@@ -593,3 +593,49 @@ def test_fuzzed_recordings_raise_only_value_error(valid_files, tmp_path, data):
     except ValueError as exc:
         assert str(path) in str(exc)
         assert "\n" not in str(exc)
+
+
+# --------------------------------------------------------------------------------------
+# the environments' data= and motion-bench juggling take a recording too
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("env_id", "query", "to_csv"),
+    [
+        ("MotionEnvs/OrientationReach-v0", "markers=O,X,P", load_orientation_dataset),
+        ("MotionEnvs/PositionReach-v0", "marker=O", load_position_dataset),
+    ],
+)
+def test_env_data_takes_a_recording(tmp_path, movement, env_id, query, to_csv):
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids)
+
+    t, rot, pos = movement
+    write_tsv(tmp_path / "rec.tsv", marker_points(rot, pos) * 1000.0, ["O", "X", "P"])
+    seg = segments_table(tmp_path / "seg.csv", t)
+    source = f"{tmp_path / 'rec.tsv'}?{query}&segments={seg}"
+    to_csv(source).to_csv(tmp_path / "same.csv")
+    observations = []
+    for data in (source, str(tmp_path / "same.csv")):
+        env = gym.make(env_id, data=data)
+        obs, _ = env.reset(seed=3)
+        obs2, reward, *_ = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+        observations.append((obs, obs2, reward))
+        env.close()
+    for a, b in zip(observations[0], observations[1], strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def test_juggling_bench_on_a_tsv(tmp_path, capsys):
+    juggling_tsv(tmp_path / "jug.tsv")
+    source = f"{tmp_path / 'jug.tsv'}?marker=HAND&balls=unlabelled&max-gap=5"
+    out = tmp_path / "jug.csv"
+    argv = ["import", str(tmp_path / "jug.tsv"), "--kind", "juggling", "--out", str(out)]
+    assert main([*argv, "--marker", "HAND", "--balls", "unlabelled", "--max-gap", "5"]) == 0
+    text = capsys.readouterr().out
+    assert "spurious dropped 1" in text and "complete juggling cycle(s)" in text
+    direct = load_juggling_csv(source)
+    from_csv = load_juggling_csv(out)
+    assert len(direct.cycles()) == len(from_csv.cycles()) >= 2
