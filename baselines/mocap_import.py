@@ -105,7 +105,7 @@ def write(results: ImportResults, out: Path) -> list[Path]:
     data = results.data
     if isinstance(data, JugglingDemos):
         return [write_juggling_csv(data, out, phase=False)]
-    return [data.to_csv(out)]
+    return [data.to_csv(path=out)]  # atomic: sample_table.write_csv
 
 
 def _source(text: str) -> Path:
