@@ -639,3 +639,29 @@ def test_juggling_bench_on_a_tsv(tmp_path, capsys):
     direct = load_juggling_csv(source)
     from_csv = load_juggling_csv(out)
     assert len(direct.cycles()) == len(from_csv.cycles()) >= 2
+
+
+def test_ball_assembly_decisions():
+    """A flight cut by a 6-frame occlusion is joined by its ballistic prediction; a
+    fragment far from every prediction starts another track; short ones are spurious."""
+    from motion_envs.datasets.mocap import assemble_balls
+
+    rate = 200.0
+    t = np.arange(200) / rate
+    flight = np.column_stack([0.3 * t, np.zeros_like(t), 1.0 + 3.0 * t - 4.905 * t**2])
+    points = np.full((t.size, 4, 3), np.nan)
+    points[:80, 0] = flight[:80]  # before the occlusion
+    points[86:, 1] = flight[86:]  # after it, in another column
+    points[100:140, 2] = [2.0, 2.0, 0.5]  # a marker elsewhere: another track
+    points[50:53, 3] = [0.0, 1.0, 1.0]  # 3 frames: spurious
+    ball, present, counts = assemble_balls(t, points, "rec.tsv")
+    assert counts == {
+        "fragments": 4,
+        "spurious dropped": 1,
+        "joined by ballistic prediction": 1,
+        "tracks": 2,
+        "other tracks ignored": 1,
+        "fragments in the ball": 2,
+    }
+    assert np.array_equal(present, ~np.isin(np.arange(t.size), np.arange(80, 86)))
+    np.testing.assert_array_equal(ball[present], flight[present])

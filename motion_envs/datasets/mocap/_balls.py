@@ -66,14 +66,13 @@ class _Track:
 
 
 def assemble_balls(
-    t: FloatArray, points: FloatArray, hand: FloatArray, source: str
+    t: FloatArray, points: FloatArray, source: str
 ) -> tuple[FloatArray, NDArray[np.bool_], dict[str, int]]:
     """The ball ``(F, 3)`` (NaN where missing), its present mask and the decision counts.
 
     ``points`` ``(F, U, 3)`` are the unlabelled columns (NaN where absent, metres, Z-up);
-    ``hand`` is not used for the association but for the error message.
+    ``source`` names the file in the error raised when no fragment is long enough.
     """
-    del hand
     fragments: list[tuple[NDArray[np.int64], FloatArray]] = []
     spurious = 0
     for u in range(points.shape[1]):

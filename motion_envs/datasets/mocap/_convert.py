@@ -351,7 +351,7 @@ def import_juggling(
                 f"{rec.path}: --balls unlabelled needs unlabelled trajectories; the file has none"
             )
         ball, ball_ok, ball_counts = assemble_balls(
-            rec.t, _to_zup(rec.points[:, cols], opts.up), hand, str(rec.path)
+            rec.t, _to_zup(rec.points[:, cols], opts.up), str(rec.path)
         )
     else:
         ball, ball_ok = _position(rec, opts, opts.ball, "ball")
