@@ -441,8 +441,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help=(
             f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}; 'cohort' is the simulated "
             "cohort calibrated to the paper, 'cohort:CONFIG' another one, CONFIG a name under "
-            "configs/cohorts/ or a YAML path) or a path to a CSV with "
-            "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors]"
+            "configs/cohorts/ or a YAML path), a path to a CSV with "
+            "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors], or a "
+            "recording 'FILE.c3d|.bvh|.tsv?option=value&...' with motion-bench import's "
+            "options (docs/recordings.md)"
         ),
     )
     p.add_argument(

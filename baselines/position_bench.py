@@ -582,7 +582,11 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         ),
     )
     p.add_argument(
-        "--data", default="lasa", type=position_data, help="'lasa' or a position CSV path"
+        "--data",
+        default="lasa",
+        type=position_data,
+        help="'lasa', a position CSV path, or a recording 'FILE.c3d|.bvh|.tsv?option=value&...' "
+        "with motion-bench import's options (docs/recordings.md)",
     )
     p.add_argument(
         "--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV); default: all"
