@@ -32,12 +32,10 @@ from typing import Any
 
 import numpy as np
 
-#: Keys of ``results.json`` whose values are wall-clock measurements or the output folder's
-#: path (``command`` names ``--out``), not results.
-TIMING_KEYS = {"seconds", "elapsed", "timing", "timings", "command"}
+#: Keys of ``results.json`` whose values are wall-clock measurements, not results.
+TIMING_KEYS = {"seconds", "elapsed", "elapsed_s", "wall_seconds", "cpu_seconds", "timings", "time"}
 
 ROLLOUT_STEPS = 120
-NO_BARS = ("--no-progress",)
 
 
 def _strip_timings(value: Any) -> Any:
@@ -45,9 +43,7 @@ def _strip_timings(value: Any) -> Any:
         return {
             k: _strip_timings(v)
             for k, v in value.items()
-            if k not in TIMING_KEYS
-            and not k.endswith(("_seconds", "_s"))
-            and not k.startswith("seconds_")
+            if k not in TIMING_KEYS and not k.endswith("_seconds")
         }
     if isinstance(value, list):
         return [_strip_timings(v) for v in value]
@@ -131,17 +127,16 @@ def has_native_vector(env_id: str) -> bool:
     return gym.spec(env_id).vector_entry_point is not None
 
 
-def snapshot(out: Path, skip_bench: bool, reuse: bool = False) -> dict[str, str]:
+def snapshot(out: Path, skip_bench: bool) -> dict[str, str]:
     import motion_envs
 
     manifest: dict[str, str] = {}
     if not skip_bench:
         results = out / "results"
-        if not reuse:
-            subprocess.run(
-                [sys.executable, "-m", "baselines.cli", "all", "--out", str(results), *NO_BARS],
-                check=True,
-            )
+        subprocess.run(
+            [sys.executable, "-m", "baselines.cli", "all", "--out", str(results), "--no-progress"],
+            check=True,
+        )
         for path in sorted(results.rglob("*")):
             if path.is_file():
                 digest = file_digest(path)
@@ -174,16 +169,13 @@ def main(argv: list[str] | None = None) -> int:
     snap = sub.add_parser("snapshot", help="record a manifest of the outputs")
     snap.add_argument("--out", type=Path, required=True, help="folder for results + manifest")
     snap.add_argument("--skip-bench", action="store_true", help="rollouts only")
-    snap.add_argument(
-        "--reuse", action="store_true", help="hash the results already in --out (no new run)"
-    )
     cmp_ = sub.add_parser("compare", help="compare two snapshot folders")
     cmp_.add_argument("before", type=Path)
     cmp_.add_argument("after", type=Path)
     args = parser.parse_args(argv)
     if args.cmd == "snapshot":
         args.out.mkdir(parents=True, exist_ok=True)
-        manifest = snapshot(args.out, args.skip_bench, args.reuse)
+        manifest = snapshot(args.out, args.skip_bench)
         (args.out / "manifest.json").write_text(json.dumps(manifest, indent=1, sort_keys=True))
         print(f"{len(manifest)} entries -> {args.out / 'manifest.json'}")
         return 0
