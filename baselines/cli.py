@@ -23,6 +23,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.position_bench",
     "baselines.juggling_bench",
     "baselines.juggling_levels",
+    "baselines.mocap_import",
     "baselines.calibrate_cohort",
     "baselines.agents.train",
     "baselines.agents.evaluate",

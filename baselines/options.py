@@ -36,6 +36,7 @@ __all__ = [
     "fraction",
     "input_file",
     "int_at_least",
+    "mocap_data",
     "non_negative_float",
     "non_negative_int",
     "option_name",
@@ -223,6 +224,30 @@ def output_file(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
     _probe_folder(path.parent, text)
     return path
+
+
+def mocap_data(text: str, kind: str) -> str | None:
+    """``--data FILE.c3d|.bvh|.tsv[?option=value&...]``: a recording and its import options.
+
+    None when ``text`` names no motion capture file (the caller checks it as a CSV).
+    The options are those of ``motion-bench import`` without the dashes
+    (``rec.c3d?markers=O,X,P&up=y``); the file must exist and the options must name
+    what a ``kind`` import needs (checked here, before the file is read).
+    """
+    from motion_envs.datasets.mocap import is_mocap_source, missing_option, parse_source
+
+    if not is_mocap_source(text):
+        return None
+    try:
+        path, opts = parse_source(text)
+    except (ValueError, FileNotFoundError) as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    input_file(str(path))
+    missing = missing_option(path, kind, opts)
+    if missing is not None:
+        field, message = missing
+        raise argparse.ArgumentTypeError(f"{message} (add {field.replace('_', '-')}=... after ?)")
+    return text
 
 
 def fail(prog: str, message: str, status: int = 2) -> int:

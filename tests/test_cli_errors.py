@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from baselines import calibrate_cohort, run_all
+from baselines import calibrate_cohort, mocap_import, run_all
 from baselines.agents import evaluate as agent_evaluate
 from baselines.agents import train as agent_train
 from baselines.agents.sweep import cli as agent_sweep
@@ -39,6 +39,8 @@ def paths(tmp_path):
     (tmp_path / "run").mkdir()
     (tmp_path / "run" / "run.json").write_text("{}\n")
     (tmp_path / "binary.csv").write_bytes(b"\xff\xfe\x00t,x,z\n")
+    (tmp_path / "rec.c3d").write_bytes(b"options are checked before the file is read")
+    (tmp_path / "rec.bvh").write_text("options are checked before the file is read\n")
     yield tmp_path
     ro.chmod(0o755)
 
@@ -54,6 +56,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(position_runner, "run_benchmark", started)
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
     monkeypatch.setattr(juggling_runner, "load_demos", started)
+    monkeypatch.setattr(mocap_import, "run", started)
     monkeypatch.setattr(agent_train, "run", started)
     monkeypatch.setattr(agent_evaluate, "run", started)
     monkeypatch.setattr(agent_sweep, "load_sweep", started)
@@ -306,6 +309,53 @@ CASES = [
     ),
     (["sweep", "--config", "{tmp}/ok.yaml", "--out", "{tmp}/file.txt"], "argument --out:"),
     (["sweep", "--config", "{tmp}/ok.yaml", "--num-cpu", "2"], "unrecognized arguments: --num"),
+    (["import"], "the following arguments are required: file, --kind, --out"),
+    (["import", "{tmp}/no.c3d", "--kind", "position", "--out", "o.csv"], "argument file: {tmp}/no"),
+    (["import", "{tmp}/file.txt", "--kind", "position", "--out", "o.csv"], "expected a .c3d, "),
+    (["import", "{tmp}/rec.c3d", "--kind", "speed", "--out", "o.csv"], "argument --kind: invalid"),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--out", "{tmp}/folder"], "argument --out"),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--out", "o.csv"], "argument --marker: "),
+    (["import", "{tmp}/rec.c3d", "--kind", "orientation", "--out", "o.csv"], "argument --markers"),
+    (
+        ["import", "{tmp}/rec.c3d", "--kind", "juggling", "--out", "o.csv", "--marker", "H"],
+        "--ball",
+    ),
+    (["import", "{tmp}/rec.bvh", "--kind", "position", "--out", "o.csv"], "argument --joint: "),
+    (
+        ["import", "{tmp}/rec.bvh", "--kind", "position", "--out", "o.csv", "--joint", "Hand"],
+        "argument --unit: {tmp}/rec.bvh: BVH lengths carry no unit",
+    ),
+    (
+        [
+            "import",
+            "{tmp}/rec.c3d",
+            "--kind",
+            "juggling",
+            "--out",
+            "o.csv",
+            "--balls",
+            "unlabelled",
+        ],
+        "argument --balls: unlabelled fragments are read from a Qualisys .tsv file only",
+    ),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--max-gap", "-1"], "argument --max-gap: "),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--markers", "A,B"], "argument --markers: "),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--up", "x"], "argument --up: expected one"),
+    (
+        ["import", "{tmp}/rec.c3d", "--kind", "position", "--unit", "ft"],
+        "argument --unit: expected",
+    ),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--speed-threshold", "0"], "argument --spe"),
+    (["import", "{tmp}/rec.c3d", "--kind", "position", "--segments", "{tmp}/no"], "argument --seg"),
+    (
+        ["import", "{tmp}/rec.c3d", "--kind", "position", "--out", "o.csv", "--marke", "O"],
+        "unrecognized arguments: --marke",
+    ),
+    (["orientation", "--data", "{tmp}/rec.c3d"], "argument --data: {tmp}/rec.c3d: give the three"),
+    (["orientation", "--data", "{tmp}/rec.c3d?colour=red"], "unknown import option 'colour'"),
+    (["position", "--data", "{tmp}/rec.c3d?max-gap=x"], "option max-gap: expected an integer"),
+    (["position", "--data", "{tmp}/no.tsv?marker=O"], "argument --data: motion capture file"),
+    (["juggling", "--data", "{tmp}/rec.bvh?joint=Hand"], "BVH lengths carry no unit"),
     (["nonsense"], "argument COMMAND: invalid choice"),
     (["--vers", "all"], "unrecognized arguments: --vers"),
 ]
@@ -395,12 +445,13 @@ def test_every_subcommand_is_registered():
         "position",
         "juggling",
         "juggling-levels",
+        "import",
         "calibrate-cohort",
         "train",
         "agent",
         "sweep",
     }
-    assert len(SUBCOMMAND_MODULES) == 9
+    assert len(SUBCOMMAND_MODULES) == 10
 
 
 @pytest.mark.parametrize(
@@ -411,6 +462,7 @@ def test_every_subcommand_is_registered():
         "orientation",
         "position",
         "juggling-levels",
+        "import",
         "calibrate-cohort",
         "train",
         "agent",

@@ -74,6 +74,8 @@ def juggling_data(text: str) -> str:
     """
     if text == "simulated":
         return text
+    if (recording := options.mocap_data(text, "juggling")) is not None:  # FILE.c3d?opt=...
+        return recording
     path = options.input_file(text)
     try:
         with path.open(encoding="utf-8", newline="") as fh:

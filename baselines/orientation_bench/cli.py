@@ -46,6 +46,8 @@ def orientation_data(text: str) -> str:
     """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
     if text in ORIENTATION_DATASETS or text.startswith("cohort:"):
         return text
+    if (recording := options.mocap_data(text, "orientation")) is not None:  # FILE.c3d?opt=...
+        return recording
     if not Path(text).exists():
         raise argparse.ArgumentTypeError(
             f"expected one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a CSV file; "
@@ -87,8 +89,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help=(
             f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}; 'cohort' is the simulated "
             "cohort calibrated to the paper, 'cohort:CONFIG' another one, CONFIG a name under "
-            "configs/cohorts/ or a YAML path) or a path to a CSV with "
-            "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors]"
+            "configs/cohorts/ or a YAML path), a path to a CSV with "
+            "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors], or a "
+            "recording 'FILE.c3d|.bvh|.tsv?option=value&...' with motion-bench import's "
+            "options (docs/recordings.md)"
         ),
     )
     p.add_argument(

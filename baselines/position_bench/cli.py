@@ -61,6 +61,8 @@ def position_data(text: str) -> str:
     """``--data``: ``lasa`` or an existing position CSV file."""
     if text in POSITION_DATASETS:
         return text
+    if (recording := options.mocap_data(text, "position")) is not None:  # FILE.c3d?opt=...
+        return recording
     if not Path(text).exists():
         raise argparse.ArgumentTypeError(
             f"expected one of {list(POSITION_DATASETS)} or a CSV file; {text} does not exist"
@@ -110,7 +112,11 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         ),
     )
     p.add_argument(
-        "--data", default="lasa", type=position_data, help="'lasa' or a position CSV path"
+        "--data",
+        default="lasa",
+        type=position_data,
+        help="'lasa', a position CSV path, or a recording 'FILE.c3d|.bvh|.tsv?option=value&...' "
+        "with motion-bench import's options (docs/recordings.md)",
     )
     p.add_argument(
         "--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV); default: all"

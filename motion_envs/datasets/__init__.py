@@ -9,6 +9,12 @@ from pathlib import Path
 import numpy as np
 
 from motion_envs.datasets.lasa import load_lasa
+from motion_envs.datasets.mocap import (
+    import_orientation,
+    import_position,
+    is_mocap_source,
+    parse_source,
+)
 from motion_envs.datasets.orientation import OrientationDataset, read_orientation_csv
 from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG, load_vr_kitchen
@@ -37,7 +43,11 @@ def load_orientation_dataset(
     min_deg: float = DEFAULT_MIN_DEG,
     up: tuple[float, float, float] | None = None,
 ) -> OrientationDataset:
-    """Load a built-in orientation dataset by name, or the users' CSV at a path.
+    """Load a built-in orientation dataset by name, the users' CSV at a path, or a recording.
+
+    A motion capture file (``.c3d``, ``.bvh``, ``.tsv``) is imported with the options
+    after its name: ``"rec.c3d?markers=O,X,P&up=y"`` (:mod:`motion_envs.datasets.mocap`,
+    ``docs/recordings.md``).
 
     ``"cohort"`` is the simulated cohort ``faraway2008``; ``"cohort:CONFIG"`` another
     cohort, CONFIG being a name under ``configs/cohorts/`` or a path to a YAML file
@@ -62,6 +72,9 @@ def load_orientation_dataset(
         return load_cohort(config or DEFAULT_COHORT, min_deg=min_deg)
     if isinstance(data, str) and data == "vr-kitchen":
         return load_vr_kitchen(min_deg=min_deg)
+    if is_mocap_source(data):
+        path, options = parse_source(data)
+        return import_orientation(path, options)[0].drop_small_rotations(min_deg)
     path = Path(data)
     if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
         raise ValueError(
@@ -75,20 +88,27 @@ def load_orientation_dataset(
 def load_position_dataset(
     data: str | os.PathLike[str], shapes: Sequence[str] | None = None
 ) -> PositionDataset:
-    """Load the built-in ``"lasa"`` set or the users' position CSV at a path.
+    """Load the built-in ``"lasa"`` set, the users' position CSV at a path, or a recording.
+
+    A motion capture file is imported with the options after its name:
+    ``"rec.c3d?marker=RFIN&speed-threshold=0.05"`` (:mod:`motion_envs.datasets.mocap`).
 
     ``shapes`` keeps only those tasks (LASA shape names, or the CSV's task labels);
     an unknown name raises ``ValueError`` naming it.
     """
     if isinstance(data, str) and data in POSITION_DATASETS:
         return load_lasa(list(shapes) if shapes else None)
-    path = Path(data)
-    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-        raise ValueError(
-            f"data must be one of {list(POSITION_DATASETS)} or a path to a position CSV; "
-            f"got {data!r}"
-        )
-    ds = read_position_csv(path)
+    if is_mocap_source(data):
+        path, options = parse_source(data)
+        ds = import_position(path, options)[0]
+    else:
+        path = Path(data)
+        if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+            raise ValueError(
+                f"data must be one of {list(POSITION_DATASETS)} or a path to a position CSV; "
+                f"got {data!r}"
+            )
+        ds = read_position_csv(path)
     if shapes:
         unknown = sorted(set(shapes) - set(ds.tasks.tolist()))
         if unknown:

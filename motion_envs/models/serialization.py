@@ -43,6 +43,7 @@ import json
 import math
 import os
 import pkgutil
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -161,10 +162,12 @@ def model_classes() -> dict[str, type[SerializableModel]]:
     Imports the modules of the ``motion_envs.models`` package, so the registry is
     complete in a fresh process.
     """
-    import motion_envs.models as package
-
-    for info in pkgutil.iter_modules(package.__path__, prefix=package.__name__ + "."):
-        importlib.import_module(info.name)
+    # the package's folder, read without importing its __init__ (an import back up)
+    package = __name__.rpartition(".")[0]
+    with warnings.catch_warnings():  # the deprecated juggling_* modules warn on import
+        warnings.simplefilter("ignore", DeprecationWarning)
+        for info in pkgutil.iter_modules([str(Path(__file__).parent)], prefix=package + "."):
+            importlib.import_module(info.name)
     return dict(_REGISTRY)
 
 

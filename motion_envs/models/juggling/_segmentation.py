@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import JugglingDemos, JugglingTask, read_juggling_csv, rules
+from motion_envs.datasets.mocap import import_juggling, is_mocap_source, parse_source
 from motion_envs.models.segmentation import EventOccurred, SpeedBelow, segment
 
 __all__ = ["load_juggling_csv", "segment_demos", "segment_juggling"]
@@ -123,6 +124,12 @@ def load_juggling_csv(
 
     The format and the errors are those of
     :func:`motion_envs.datasets.juggling.read_juggling_csv`; recordings without
-    labels are cut by :func:`segment_juggling` (errors name the file).
+    labels are cut by :func:`segment_juggling` (errors name the file). A motion capture
+    file (``.c3d``, ``.bvh``, ``.tsv``) with its options after the name,
+    ``"rec.tsv?marker=HAND&balls=unlabelled"``, is imported by
+    :func:`motion_envs.datasets.mocap.import_juggling` and cut the same way.
     """
+    if is_mocap_source(path):
+        source, options = parse_source(path)
+        return segment_demos(import_juggling(source, options, task=task)[0], source)
     return segment_demos(read_juggling_csv(path, task=task), Path(path))

@@ -1,0 +1,75 @@
+"""Motion capture recordings (C3D, BVH, Qualisys TSV) into the project's data kinds.
+
+Readers: :func:`read_c3d` (ezc3d), :func:`read_bvh` (pybvh), :func:`read_qualisys_tsv`
+(plain text), :func:`read_recording` (by suffix), all returning a
+:class:`MocapRecording` in metres. Conversions: :func:`import_orientation`,
+:func:`import_position`, :func:`import_juggling` with :class:`ImportOptions`, each
+returning the dataset and an :class:`ImportReport`. :func:`parse_source` reads the
+``FILE?option=value&...`` data string that ``--data`` and the environments' ``data=``
+accept. Guide: ``docs/recordings.md``.
+"""
+
+from __future__ import annotations
+
+from motion_envs.datasets.mocap._balls import assemble_balls
+from motion_envs.datasets.mocap._convert import (
+    YUP_TO_ZUP,
+    ImportReport,
+    Movement,
+    import_juggling,
+    import_orientation,
+    import_position,
+    triad_quaternions,
+)
+from motion_envs.datasets.mocap._gaps import GapCounts, Piece, fill_gaps
+from motion_envs.datasets.mocap._options import (
+    IMPORT_OPTIONS,
+    KINDS,
+    MOCAP_SUFFIXES,
+    UNITS,
+    ImportOptions,
+    is_mocap_source,
+    missing_option,
+    parse_option,
+    parse_source,
+)
+from motion_envs.datasets.mocap._readers import (
+    read_bvh,
+    read_c3d,
+    read_qualisys_tsv,
+    read_recording,
+)
+from motion_envs.datasets.mocap._recording import MocapRecording
+from motion_envs.datasets.mocap._segments import SegmentRow, read_segments, speed, speed_segments
+
+__all__ = [
+    "IMPORT_OPTIONS",
+    "KINDS",
+    "MOCAP_SUFFIXES",
+    "UNITS",
+    "YUP_TO_ZUP",
+    "GapCounts",
+    "ImportOptions",
+    "ImportReport",
+    "MocapRecording",
+    "Movement",
+    "Piece",
+    "SegmentRow",
+    "assemble_balls",
+    "fill_gaps",
+    "import_juggling",
+    "import_orientation",
+    "import_position",
+    "is_mocap_source",
+    "missing_option",
+    "parse_option",
+    "parse_source",
+    "read_bvh",
+    "read_c3d",
+    "read_qualisys_tsv",
+    "read_recording",
+    "read_segments",
+    "speed",
+    "speed_segments",
+    "triad_quaternions",
+]

@@ -1,0 +1,75 @@
+"""What every reader returns: a :class:`MocapRecording` (points in metres, file axes)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["MocapRecording"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MocapRecording:
+    """One motion capture file as read, before any conversion but the unit.
+
+    Attributes
+    ----------
+    path:
+        The file read.
+    fmt:
+        ``"c3d"``, ``"bvh"`` or ``"tsv"``.
+    rate:
+        Frame rate in Hz (from the file; > 0).
+    labels:
+        ``(M,)`` marker (C3D, TSV) or joint (BVH) names; ``""`` for an unlabelled
+        Qualisys trajectory fragment.
+    points:
+        ``(F, M, 3)`` positions in metres in the file's axes; NaN where missing. For a
+        BVH without a unit (``scale`` None) in the file's length unit.
+    residuals:
+        ``(F, M)`` C3D residuals (negative: missing), else None.
+    quaternions:
+        ``(F, M, 4)`` global orientation ``(w, x, y, z)`` of each BVH joint (forward
+        kinematics, file axes), else None.
+    scale:
+        Metres per file unit used (None: unknown, a BVH read without ``unit``).
+    """
+
+    path: Path
+    fmt: str
+    rate: float
+    labels: tuple[str, ...]
+    points: FloatArray
+    residuals: FloatArray | None = None
+    quaternions: FloatArray | None = None
+    scale: float | None = 1.0
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.points.shape[0])
+
+    @property
+    def t(self) -> FloatArray:
+        """``(F,)`` time of each frame from the start of the file, in seconds."""
+        return np.arange(self.n_frames, dtype=np.float64) / self.rate
+
+    def index(self, name: str, what: str = "marker") -> int:
+        """Column of the marker or joint ``name``; ``ValueError`` naming the file if absent."""
+        try:
+            return self.labels.index(name)
+        except ValueError:
+            known = sorted({x for x in self.labels if x})
+            shown = ", ".join(known[:20]) + (" ..." if len(known) > 20 else "")
+            raise ValueError(f"{self.path}: no {what} {name!r}; the file has: {shown}") from None
+
+    def missing(self) -> NDArray[np.bool_]:
+        """``(F, M)`` True where a sample is missing (NaN, or a negative residual)."""
+        miss: NDArray[np.bool_] = np.logical_not(np.isfinite(self.points).all(axis=2))
+        if self.residuals is not None:
+            miss = miss | (self.residuals < 0)
+        return miss
