@@ -6,8 +6,8 @@ marker-triad or joint orientation; quaternions made sign-continuous first) -> ga
 (short ones filled, long ones split) -> movements (speed threshold or a segments table)
 -> :class:`~motion_envs.datasets.OrientationDataset`,
 :class:`~motion_envs.datasets.PositionDataset` or unlabelled
-:class:`~motion_envs.datasets.juggling_demos.JugglingDemos` (cut into cycles by
-:func:`motion_envs.models.juggling_segmentation.segment_demos`). Every sample keeps its
+:class:`~motion_envs.datasets.juggling.JugglingDemos` (cut into cycles by
+:func:`motion_envs.models.juggling.segment_demos`). Every sample keeps its
 time from the start of the file.
 """
 
@@ -20,8 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from motion_envs.datasets.juggling_demos import JugglingDemos, JugglingRecording
-from motion_envs.datasets.juggling_task import JugglingTask
+from motion_envs.datasets.juggling import JugglingDemos, JugglingRecording, JugglingTask
 from motion_envs.datasets.mocap._balls import assemble_balls
 from motion_envs.datasets.mocap._gaps import GapCounts, Piece, fill_gaps
 from motion_envs.datasets.mocap._options import ImportOptions
@@ -337,7 +336,7 @@ def import_juggling(
     fragments. The plane's ``x`` is the ``--lateral`` axis, its ``z`` the vertical. Frames
     where hand or ball is missing are gaps (filled up to ``--max-gap``, else split). The
     recordings have no phase labels: cut them into cycles with
-    :func:`motion_envs.models.juggling_segmentation.segment_demos`.
+    :func:`motion_envs.models.juggling.segment_demos`.
     """
     opts = options or ImportOptions()
     rec = read_recording(path, opts.unit, _markers_used(opts))
