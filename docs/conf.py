@@ -24,6 +24,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "sphinx_gallery.gen_gallery",
     "env_pages",
+    "docstring_sections",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -45,6 +46,8 @@ autodoc_mock_imports: list[str] = []
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_rtype = False
+# Attributes sections as fields of the class, not second descriptions of its members
+napoleon_use_ivar = True
 
 html_theme = "furo"
 html_title = "motion-envs"

@@ -1,4 +1,10 @@
-"""The models on your own arrays: SIMULATED reaches and turns at 120 Hz (docs/models.md)."""
+"""
+Fit the models on your own arrays
+=================================
+
+Five tasks in 30 lines of the public API: fit, predict from conditions, eq. 9, eq. 10,
+orientation at given times, save and load (SIMULATED reaches at 120 Hz; docs/models.md).
+"""
 
 import sys
 import tempfile

@@ -59,13 +59,15 @@ def test_deterministic_under_a_seed():
 def test_test_split_is_not_used_for_fitting(monkeypatch):
     """The juggler is fitted on the training cycles only (N by CV inside them)."""
     seen = {}
-    original = jb.AnalyticJuggler.fit
+    from motion_envs.models.juggling import AnalyticJuggler
+
+    original = AnalyticJuggler.fit
 
     def spy(self, demos, cycles=None):
         seen["cycles"] = cycles
         return original(self, demos, cycles)
 
-    monkeypatch.setattr(jb.AnalyticJuggler, "fit", spy)
+    monkeypatch.setattr(AnalyticJuggler, "fit", spy)
     cfg = jb.JugglingConfig(
         cycles=5, seed=1, progress=False, use_dmp=False, figure_cycles=1, world="model"
     )

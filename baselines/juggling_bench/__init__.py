@@ -64,7 +64,6 @@ from baselines.juggling_bench.media import (
 from baselines.juggling_bench.runner import load_demos, run
 from baselines.juggling_bench.scoring import catch_rates, phase_errors, validation
 from baselines.juggling_bench.text import report, results_csv
-from motion_envs.models.juggling import AnalyticJuggler
 
 __all__ = [
     "MIN_CYCLES",
@@ -73,7 +72,6 @@ __all__ = [
     "TARGET_UNPERTURBED",
     "TARGET_VARIABILITY_RATIO",
     "VIDEO_CAPTION",
-    "AnalyticJuggler",
     "JugglingConfig",
     "catch_rates",
     "check_config",

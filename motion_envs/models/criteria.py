@@ -9,22 +9,22 @@ with ``r_l`` the slerp residual of trajectory ``l`` on the 50-point normalised g
 (:mod:`motion_envs.models.slerp_residual`) and ``|.|`` the Euclidean norm in R^3.
 Subject ``i``, task ``j``, replicate ``k``; a bullet is a mean over that index.
 
-=========================  ==================================================================
-name                       prediction ``rhat``
-=========================  ==================================================================
-``within_subject``         ``mean_k r_ijk`` over the replicates of (i, j); groups with >= 2
-``between_subject``        ``mean_{i,k} r_ijk``; median over (i, k) within a task, then over j
-``slerp_empirical``        0 (slerp with the trajectory's own speed profile)
-``slerp_average``          0, residuals recomputed against the average speed profile
-``null_average``           ``mean_l r_l``
-``approximation_d{d}``     each curve's own Bézier fit of degree ``d``
-``null_d{d}``              :class:`NullBezierModel` (``P`` = mean of all ``P_l``)
-``subject_predictor_d{d}`` :class:`SubjectBezierModel` (in sample)
-``task_predictor_d{d}``    :class:`TaskBezierModel` (in sample)
-``null_d{d}_loso``         null model fitted without the trajectory's subject
-``task_predictor_d{d}_loso`` task means over the *other* subjects
-``subject_predictor_d{d}_loro`` subject means without the trajectory itself
-=========================  ==================================================================
+================================  ==================================================================
+name                              prediction ``rhat``
+================================  ==================================================================
+``within_subject``                ``mean_k r_ijk`` over the replicates of (i, j); groups with >= 2
+``between_subject``               ``mean_{i,k} r_ijk``; median over (i, k) in a task, then over j
+``slerp_empirical``               0 (slerp with the trajectory's own speed profile)
+``slerp_average``                 0, residuals recomputed against the average speed profile
+``null_average``                  ``mean_l r_l``
+``approximation_d{d}``            each curve's own Bézier fit of degree ``d``
+``null_d{d}``                     :class:`NullBezierModel` (``P`` = mean of all ``P_l``)
+``subject_predictor_d{d}``        :class:`SubjectBezierModel` (in sample)
+``task_predictor_d{d}``           :class:`TaskBezierModel` (in sample)
+``null_d{d}_loso``                null model fitted without the trajectory's subject
+``task_predictor_d{d}_loso``      task means over the *other* subjects
+``subject_predictor_d{d}_loro``   subject means without the trajectory itself
+================================  ==================================================================
 
 The paper's predictor rows are in-sample averages; the ``_loso`` (leave one subject
 out) and ``_loro`` (leave one replicate out) rows judge the same models on data they

@@ -356,8 +356,9 @@ class SineSeriesRegression(SerializableModel):
 
     Fitted attributes
     -----------------
-    coefficients_ ``(n, N + 2, D)``, conditions_ ``(n, q)``, durations_ ``(n,)``,
-    F_ ``((N + 2) D, q + 1)`` (intercept last), rank_ (rank of ``[Q; 1]``).
+    ``coefficients_`` ``(n, N + 2, D)``, ``conditions_`` ``(n, q)``, ``durations_``
+    ``(n,)``, ``F_`` ``((N + 2) D, q + 1)`` (intercept last), ``rank_`` (rank of
+    ``[Q; 1]``).
     """
 
     def __init__(self, n_sines: int = 8) -> None:
