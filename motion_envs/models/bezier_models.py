@@ -63,6 +63,12 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+#: Curve labels (subjects or tasks) as passed, ``(L,)``, or None.
+Labels = ArrayLike | None
+#: Numeric predictors: a mapping name -> ``(L,)`` values, an ``(L, p)`` array, or None.
+Predictors = Mapping[str, ArrayLike] | ArrayLike | None
+#: Curve labels as checked by ``fit`` (strings), or None.
+_Fitted = NDArray[np.str_] | None
 
 
 def _check_curves(residuals: ArrayLike, name: str = "residuals") -> FloatArray:
@@ -190,31 +196,23 @@ class BezierResidualModel(SerializableModel):
 
     # -- to implement -------------------------------------------------------------
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         raise NotImplementedError
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        """Predicted interior control points, ``(L, d - 1, 3)``."""
+        """The fitted model's control points for these curves (:meth:`predict_control_points`)."""
         raise NotImplementedError
 
     # -- shared -------------------------------------------------------------------
     def fit(
         self: B,
         residuals: ArrayLike,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
         starts: ArrayLike | None = None,
         ends: ArrayLike | None = None,
     ) -> B:
@@ -247,6 +245,17 @@ class BezierResidualModel(SerializableModel):
         """Set the fitted control-point attributes from a model file's state."""
         raise NotImplementedError
 
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
+    ) -> FloatArray:
+        """Predicted interior control points, ``(L, d - 1, 3)``."""
+        self._check_fitted()
+        return self._predict_points(n, subjects, tasks, predictors)
+
     def _check_fitted(self) -> None:
         if not hasattr(self, "control_points_") and not hasattr(self, "intercept_"):
             raise not_fitted_error(self)
@@ -254,9 +263,9 @@ class BezierResidualModel(SerializableModel):
     def predict(
         self,
         n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
         n_points: int | None = None,
         starts: ArrayLike | None = None,
         ends: ArrayLike | None = None,
@@ -280,22 +289,13 @@ class NullBezierModel(BezierResidualModel):
     """
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         self.control_points_ = points.mean(axis=0)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         if n is None:
             for labels in (subjects, tasks):
                 if labels is not None:
@@ -357,11 +357,7 @@ class GroupBezierModel(BezierResidualModel):
         self.unseen = unseen
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         labels = subjects if self.by == "subject" else tasks
         if labels is None:
@@ -374,14 +370,9 @@ class GroupBezierModel(BezierResidualModel):
         self.control_points_ = sums / counts[:, None, None]
         self.global_control_points_ = points.mean(axis=0)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         labels = subjects if self.by == "subject" else tasks
         name = f"{self.by}s"
         if labels is None:
@@ -529,11 +520,7 @@ class LinearBezierModel(BezierResidualModel):
         return X
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         if predictors is None:
             raise ValueError("predictors is required to fit a LinearBezierModel")
@@ -551,14 +538,9 @@ class LinearBezierModel(BezierResidualModel):
         self.intercept_ = np.asarray(beta[0], dtype=np.float64).reshape(k, 3)
         self.coef_ = np.asarray(beta[1:], dtype=np.float64).reshape(p, k, 3)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         if predictors is None:
             raise ValueError("predictors is required to predict with a LinearBezierModel")
         if isinstance(predictors, Mapping):
