@@ -62,7 +62,6 @@ __all__ = [
     "MAX_DEPTH",
     "ModelFileError",
     "SerializableModel",
-    "State",
     "StateSchema",
     "atomic_write_text",
     "check_document",
