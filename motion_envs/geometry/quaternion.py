@@ -25,7 +25,7 @@ References: Faraway & Choe (2008), section 3.2; Shoemake (1985); Grassia (1998).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -72,6 +72,29 @@ def _blocks(n: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` of consecutive blocks covering ``range(n)``."""
     for start in range(0, n, _BLOCK):
         yield start, min(start + _BLOCK, n)
+
+
+#: ``kernel(columns, work, small, rows)`` of :func:`_row_blocks`.
+_BlockKernel = Callable[[FloatArray, FloatArray, NDArray[np.bool_], FloatArray], None]
+
+
+def _row_blocks(flat: FloatArray, width: int, n_work: int, kernel: _BlockKernel) -> FloatArray:
+    """The ``(n, width)`` rows ``kernel`` writes for the ``(n, w)`` rows of ``flat``, by block.
+
+    For each block of at most :data:`_BLOCK` rows, ``kernel`` gets the block transposed
+    (``(w, k)`` columns), ``(n_work, k)`` and ``(k,)`` boolean scratch buffers (reused
+    across blocks) and the ``(k, width)`` rows of the result to fill.
+    """
+    n = flat.shape[0]
+    out = np.empty((n, width))
+    m = min(n, _BLOCK)
+    columns, work = np.empty((flat.shape[1], m)), np.empty((n_work, m))
+    small = np.empty(m, dtype=bool)
+    for start, stop in _blocks(n):
+        k = stop - start
+        np.copyto(columns[:, :k], flat[start:stop].T)
+        kernel(columns[:, :k], work[:, :k], small[:k], out[start:stop])
+    return out
 
 
 def _flatten(arr: FloatArray, batch: tuple[int, ...], trailing: tuple[int, ...]) -> FloatArray:
@@ -282,43 +305,37 @@ def expmap(v: ArrayLike, name: str = "v") -> FloatArray:
     infinite input raises ``ValueError`` naming ``name``.
     """
     v = _checked(v, name, 3)
-    batch = v.shape[:-1]
-    vf = v.reshape(-1, 3)
-    n = vf.shape[0]
-    out = np.empty((n, 4))
-    m = min(n, _BLOCK)
-    V, work, small = np.empty((3, m)), np.empty((4, m)), np.empty(m, dtype=bool)
+    return _row_blocks(v.reshape(-1, 3), 4, 4, _expmap_block).reshape((*v.shape[:-1], 4))
+
+
+def _expmap_block(
+    V: FloatArray, work: FloatArray, small: NDArray[np.bool_], block: FloatArray
+) -> None:
     # sin(theta/2) and cos(theta/2) from one tangent: with t = tan(theta/4),
     # sin(theta/2) = 2t / (1 + t^2) and cos(theta/2) = (1 - t^2) / (1 + t^2).
-    for start, stop in _blocks(n):
-        k = stop - start
-        Vk, smallk = V[:, :k], small[:k]
-        theta2, theta, t, den = work[:, :k]
-        np.copyto(Vk, vf[start:stop].T)
-        np.multiply(Vk[0], Vk[0], out=theta2)
-        for c in (1, 2):
-            np.multiply(Vk[c], Vk[c], out=t)
-            theta2 += t
-        np.sqrt(theta2, out=theta)
-        np.multiply(theta, 0.25, out=t)
-        np.tan(t, out=t)
-        np.multiply(t, t, out=den)
-        block = out[start:stop]
-        np.subtract(1.0, den, out=block[:, 0])
-        den += 1.0
-        np.divide(block[:, 0], den, out=block[:, 0])  # cos(theta/2)
-        # half_sinc = sin(theta/2) / theta = 2t / ((1 + t^2) theta)
-        np.multiply(den, theta, out=den)
-        np.add(t, t, out=t)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            np.divide(t, den, out=t)
-        np.less(theta, _SMALL_ANGLE, out=smallk)
-        if smallk.any():
-            th2 = theta2[smallk]
-            t[smallk] = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
-        for c in range(3):
-            np.multiply(t, Vk[c], out=block[:, c + 1])
-    return out.reshape((*batch, 4))
+    theta2, theta, t, den = work
+    np.multiply(V[0], V[0], out=theta2)
+    for c in (1, 2):
+        np.multiply(V[c], V[c], out=t)
+        theta2 += t
+    np.sqrt(theta2, out=theta)
+    np.multiply(theta, 0.25, out=t)
+    np.tan(t, out=t)
+    np.multiply(t, t, out=den)
+    np.subtract(1.0, den, out=block[:, 0])
+    den += 1.0
+    np.divide(block[:, 0], den, out=block[:, 0])  # cos(theta/2)
+    # half_sinc = sin(theta/2) / theta = 2t / ((1 + t^2) theta)
+    np.multiply(den, theta, out=den)
+    np.add(t, t, out=t)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        np.divide(t, den, out=t)
+    np.less(theta, _SMALL_ANGLE, out=small)
+    if small.any():
+        th2 = theta2[small]
+        t[small] = 0.5 - th2 / 48.0 + th2 * th2 / 3840.0
+    for c in range(3):
+        np.multiply(t, V[c], out=block[:, c + 1])
 
 
 def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
@@ -338,37 +355,31 @@ def logmap(q: ArrayLike, name: str = "q", validate: bool = True) -> FloatArray:
     q = _checked(q, name, 4, finite=not validate)
     if validate:
         q = as_unit(q, name)  # NaN/inf fail its unit check
-    batch = q.shape[:-1]
-    qf = q.reshape(-1, 4)
-    n = qf.shape[0]
-    out = np.empty((n, 3))
-    m = min(n, _BLOCK)
-    Q, work, small = np.empty((4, m)), np.empty((4, m)), np.empty(m, dtype=bool)
-    for start, stop in _blocks(n):
-        k = stop - start
-        Qk, smallk = Q[:, :k], small[:k]
-        s, w, scale, sign = work[:, :k]
-        np.copyto(Qk, qf[start:stop].T)
-        _sign_of(Qk[0], sign)
-        np.abs(Qk[0], out=w)
-        np.multiply(Qk[1], Qk[1], out=s)
-        for c in (2, 3):
-            np.multiply(Qk[c], Qk[c], out=scale)
-            s += scale
-        np.sqrt(s, out=s)
-        np.arctan2(s, w, out=scale)
-        scale *= 2.0  # theta
-        with np.errstate(invalid="ignore", divide="ignore"):
-            np.divide(scale, s, out=scale)
-        np.less(s, _SMALL_ANGLE, out=smallk)
-        if smallk.any():
-            ss, ws = s[smallk], w[smallk]
-            scale[smallk] = 2.0 / np.maximum(ws, 1e-300) * (1.0 - ss * ss / 3.0)
-        scale *= sign  # u = sign * (x, y, z)
-        block = out[start:stop]
-        for c in range(3):
-            np.multiply(scale, Qk[c + 1], out=block[:, c])
-    return out.reshape((*batch, 3))
+    return _row_blocks(q.reshape(-1, 4), 3, 4, _logmap_block).reshape((*q.shape[:-1], 3))
+
+
+def _logmap_block(
+    Q: FloatArray, work: FloatArray, small: NDArray[np.bool_], block: FloatArray
+) -> None:
+    s, w, scale, sign = work
+    _sign_of(Q[0], sign)
+    np.abs(Q[0], out=w)
+    np.multiply(Q[1], Q[1], out=s)
+    for c in (2, 3):
+        np.multiply(Q[c], Q[c], out=scale)
+        s += scale
+    np.sqrt(s, out=s)
+    np.arctan2(s, w, out=scale)
+    scale *= 2.0  # theta
+    with np.errstate(invalid="ignore", divide="ignore"):
+        np.divide(scale, s, out=scale)
+    np.less(s, _SMALL_ANGLE, out=small)
+    if small.any():
+        ss, ws = s[small], w[small]
+        scale[small] = 2.0 / np.maximum(ws, 1e-300) * (1.0 - ss * ss / 3.0)
+    scale *= sign  # u = sign * (x, y, z)
+    for c in range(3):
+        np.multiply(scale, Q[c + 1], out=block[:, c])
 
 
 def angle(p: ArrayLike, q: ArrayLike, name_p: str = "p", name_q: str = "q") -> FloatArray:

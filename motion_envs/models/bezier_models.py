@@ -32,7 +32,7 @@ attributes end in ``_``; ``save``/``load`` use the JSON model format of
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -47,7 +47,7 @@ from motion_envs.models.path_frame import (
     from_path_frame,
     to_path_frame,
 )
-from motion_envs.models.serialization import SerializableModel, StateSchema
+from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
 #: Parameters that model files written before the path frame existed lack (body frame).
 _FRAME_PARAMS = frozenset({"frame", "up"})
@@ -63,6 +63,12 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+#: Curve labels (subjects or tasks) as passed, ``(L,)``, or None.
+Labels = ArrayLike | None
+#: Numeric predictors: a mapping name -> ``(L,)`` values, an ``(L, p)`` array, or None.
+Predictors = Mapping[str, ArrayLike] | ArrayLike | None
+#: Curve labels as checked by ``fit`` (strings), or None.
+_Fitted = NDArray[np.str_] | None
 
 
 def _check_curves(residuals: ArrayLike, name: str = "residuals") -> FloatArray:
@@ -190,31 +196,23 @@ class BezierResidualModel(SerializableModel):
 
     # -- to implement -------------------------------------------------------------
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         raise NotImplementedError
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        """Predicted interior control points, ``(L, d - 1, 3)``."""
+        """The fitted model's control points for these curves (:meth:`predict_control_points`)."""
         raise NotImplementedError
 
     # -- shared -------------------------------------------------------------------
     def fit(
         self: B,
         residuals: ArrayLike,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
         starts: ArrayLike | None = None,
         ends: ArrayLike | None = None,
     ) -> B:
@@ -239,6 +237,25 @@ class BezierResidualModel(SerializableModel):
     ) -> FloatArray:
         return np.zeros((n, 0))
 
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
+        self._set_points(arrays, attributes)
+        self.n_points_ = _state_n_points(attributes)
+
+    def _set_points(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
+        """Set the fitted control-point attributes from a model file's state."""
+        raise NotImplementedError
+
+    def predict_control_points(
+        self,
+        n: int | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
+    ) -> FloatArray:
+        """Predicted interior control points, ``(L, d - 1, 3)``."""
+        self._check_fitted()
+        return self._predict_points(n, subjects, tasks, predictors)
+
     def _check_fitted(self) -> None:
         if not hasattr(self, "control_points_") and not hasattr(self, "intercept_"):
             raise not_fitted_error(self)
@@ -246,9 +263,9 @@ class BezierResidualModel(SerializableModel):
     def predict(
         self,
         n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+        subjects: Labels = None,
+        tasks: Labels = None,
+        predictors: Predictors = None,
         n_points: int | None = None,
         starts: ArrayLike | None = None,
         ends: ArrayLike | None = None,
@@ -272,22 +289,13 @@ class NullBezierModel(BezierResidualModel):
     """
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         self.control_points_ = points.mean(axis=0)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         if n is None:
             for labels in (subjects, tasks):
                 if labels is not None:
@@ -296,7 +304,7 @@ class NullBezierModel(BezierResidualModel):
             raise ValueError("n (the number of curves to predict) is required")
         return np.broadcast_to(self.control_points_, (n, *self.control_points_.shape)).copy()
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         return (
             self._frame_params(),
             {"control_points_": self.control_points_},
@@ -310,17 +318,8 @@ class NullBezierModel(BezierResidualModel):
         attributes={"n_points_": "int"},
     )
 
-    @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> NullBezierModel:
-        model = cls(**params)
-        model.control_points_ = _state_array(arrays, "control_points_", (model.degree - 1, 3))
-        model.n_points_ = _state_n_points(attributes)
-        return model
+    def _set_points(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
+        self.control_points_ = _state_array(arrays, "control_points_", (self.degree - 1, 3))
 
 
 class GroupBezierModel(BezierResidualModel):
@@ -358,11 +357,7 @@ class GroupBezierModel(BezierResidualModel):
         self.unseen = unseen
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         labels = subjects if self.by == "subject" else tasks
         if labels is None:
@@ -375,14 +370,9 @@ class GroupBezierModel(BezierResidualModel):
         self.control_points_ = sums / counts[:, None, None]
         self.global_control_points_ = points.mean(axis=0)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         labels = subjects if self.by == "subject" else tasks
         name = f"{self.by}s"
         if labels is None:
@@ -401,7 +391,7 @@ class GroupBezierModel(BezierResidualModel):
         out[~known] = self.global_control_points_
         return out
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         return (
             {**self._frame_params(), "by": self.by, "unseen": self.unseen},
             {
@@ -430,59 +420,57 @@ class GroupBezierModel(BezierResidualModel):
     )
 
     @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> GroupBezierModel:
+    def _from_params(cls, params: dict[str, Any]) -> GroupBezierModel:
         model = cls.__new__(cls)
         GroupBezierModel.__init__(model, **params)
-        fixed_by = {"SubjectBezierModel": "subject", "TaskBezierModel": "task"}.get(cls.__name__)
+        fixed_by = getattr(cls, "grouped_by", None)
         if fixed_by is not None and model.by != fixed_by:
             raise ValueError(f"field params.by: a {cls.__name__} groups by {fixed_by!r}")
+        return model
+
+    def _set_points(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         groups = attributes["groups_"]
         if not groups or sorted(set(groups)) != groups:
             raise ValueError("field attributes.groups_: must be sorted, unique and not empty")
-        k = model.degree - 1
-        model.control_points_ = _state_array(arrays, "control_points_", (len(groups), k, 3))
-        model.global_control_points_ = _state_array(arrays, "global_control_points_", (k, 3))
+        k = self.degree - 1
+        self.control_points_ = _state_array(arrays, "control_points_", (len(groups), k, 3))
+        self.global_control_points_ = _state_array(arrays, "global_control_points_", (k, 3))
         sizes = arrays["group_sizes_"]
         if sizes.shape != (len(groups),) or np.any(sizes < 1):
             raise ValueError(
                 f"field arrays.group_sizes_: must be {len(groups)} integers >= 1; "
                 f"got shape {list(sizes.shape)}"
             )
-        model.group_sizes_ = sizes.astype(np.int64)
-        model.groups_ = np.asarray(groups, dtype=str)
-        model.n_points_ = _state_n_points(attributes)
-        return model
+        self.group_sizes_ = sizes.astype(np.int64)
+        self.groups_ = np.asarray(groups, dtype=str)
 
 
-class SubjectBezierModel(GroupBezierModel):
+class _OneLabelBezierModel(GroupBezierModel):
+    """A :class:`GroupBezierModel` whose ``by`` is fixed by the subclass (``grouped_by``)."""
+
+    #: The label this class always groups by.
+    grouped_by: ClassVar[str]
+
+    def __init__(
+        self,
+        degree: int = 2,
+        unseen: str = "error",
+        frame: str = "body",
+        up: ArrayLike = DEFAULT_UP,
+    ) -> None:
+        super().__init__(degree, by=self.grouped_by, unseen=unseen, frame=frame, up=up)
+
+
+class SubjectBezierModel(_OneLabelBezierModel):
     """The subject predictor: ``P`` = mean of the ``P_l`` of the same subject."""
 
-    def __init__(
-        self,
-        degree: int = 2,
-        unseen: str = "error",
-        frame: str = "body",
-        up: ArrayLike = DEFAULT_UP,
-    ) -> None:
-        super().__init__(degree, by="subject", unseen=unseen, frame=frame, up=up)
+    grouped_by = "subject"
 
 
-class TaskBezierModel(GroupBezierModel):
+class TaskBezierModel(_OneLabelBezierModel):
     """The task predictor: ``P`` = mean of the ``P_l`` of the same task."""
 
-    def __init__(
-        self,
-        degree: int = 2,
-        unseen: str = "error",
-        frame: str = "body",
-        up: ArrayLike = DEFAULT_UP,
-    ) -> None:
-        super().__init__(degree, by="task", unseen=unseen, frame=frame, up=up)
+    grouped_by = "task"
 
 
 class LinearBezierModel(BezierResidualModel):
@@ -532,11 +520,7 @@ class LinearBezierModel(BezierResidualModel):
         return X
 
     def _fit_points(
-        self,
-        points: FloatArray,
-        subjects: NDArray[np.str_] | None,
-        tasks: NDArray[np.str_] | None,
-        predictors: FloatArray | None,
+        self, points: FloatArray, subjects: _Fitted, tasks: _Fitted, predictors: FloatArray | None
     ) -> None:
         if predictors is None:
             raise ValueError("predictors is required to fit a LinearBezierModel")
@@ -554,14 +538,9 @@ class LinearBezierModel(BezierResidualModel):
         self.intercept_ = np.asarray(beta[0], dtype=np.float64).reshape(k, 3)
         self.coef_ = np.asarray(beta[1:], dtype=np.float64).reshape(p, k, 3)
 
-    def predict_control_points(
-        self,
-        n: int | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
+    def _predict_points(
+        self, n: int | None, subjects: Labels, tasks: Labels, predictors: Predictors
     ) -> FloatArray:
-        self._check_fitted()
         if predictors is None:
             raise ValueError("predictors is required to predict with a LinearBezierModel")
         if isinstance(predictors, Mapping):
@@ -571,7 +550,7 @@ class LinearBezierModel(BezierResidualModel):
         X = self._predictor_matrix(predictors, n, fitting=False)
         return self.intercept_ + np.einsum("lp,pkc->lkc", X, self.coef_)
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         return (
             self._frame_params(),
             {"intercept_": self.intercept_, "coef_": self.coef_},
@@ -585,18 +564,9 @@ class LinearBezierModel(BezierResidualModel):
         attributes={"predictor_names_": "str_list", "n_points_": "int"},
     )
 
-    @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> LinearBezierModel:
-        model = cls(**params)
+    def _set_points(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         names = list(attributes["predictor_names_"])
-        k = model.degree - 1
-        model.intercept_ = _state_array(arrays, "intercept_", (k, 3))
-        model.coef_ = _state_array(arrays, "coef_", (len(names), k, 3))
-        model.predictor_names_ = names
-        model.n_points_ = _state_n_points(attributes)
-        return model
+        k = self.degree - 1
+        self.intercept_ = _state_array(arrays, "intercept_", (k, 3))
+        self.coef_ = _state_array(arrays, "coef_", (len(names), k, 3))
+        self.predictor_names_ = names

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.geometry.resampling import recording_times
 from motion_envs.models.estimator import check_is_fitted
-from motion_envs.models.serialization import SerializableModel, StateSchema
+from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
 __all__ = ["MinimumJerk"]
 
@@ -113,23 +113,15 @@ class MinimumJerk(SerializableModel):
                 "rmse_": ("float64", 1)},
     )  # fmt: skip
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         check_is_fitted(self, "duration_coef_")
         arrays = {name: getattr(self, name) for name in ("durations_", "duration_coef_", "rmse_")}
         return {"duration_model": self.duration_model}, arrays, {}
 
-    @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> MinimumJerk:
-        model = cls(**params)
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         n = arrays["durations_"].shape[0]
         if n < 1 or arrays["rmse_"].shape != (n,) or arrays["duration_coef_"].shape != (2,):
             raise ValueError("field arrays: durations_ (n >= 1), rmse_ (n,), duration_coef_ (2,)")
-        model.durations_ = arrays["durations_"]
-        model.duration_coef_ = arrays["duration_coef_"]
-        model.rmse_ = arrays["rmse_"]
-        return model
+        self.durations_ = arrays["durations_"]
+        self.duration_coef_ = arrays["duration_coef_"]
+        self.rmse_ = arrays["rmse_"]

@@ -40,7 +40,7 @@ from motion_envs.models.bezier_models import (
     NullBezierModel,
 )
 from motion_envs.models.estimator import check_is_fitted
-from motion_envs.models.serialization import SerializableModel, StateSchema
+from motion_envs.models.serialization import SerializableModel, State, StateSchema
 from motion_envs.models.slerp_residual import slerp_residuals
 from motion_envs.models.speed_profile import average_speed_profile
 
@@ -208,7 +208,7 @@ class OrientationModel(SerializableModel):
         attributes={"groups": "str_list", "predictor_names": "str_list", "n_points_": "int"},
     )  # fmt: skip
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         check_is_fitted(self, "residual_model_")
         m = self.residual_model_
         k = int(self.degree) - 1
@@ -244,31 +244,24 @@ class OrientationModel(SerializableModel):
         attributes = {"groups": groups, "predictor_names": names, "n_points_": m.n_points_}
         return params, arrays, attributes
 
-    @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> OrientationModel:
-        model = cls(**params)
-        k = int(model.degree) - 1
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
+        k = int(self.degree) - 1
         points, mean = arrays["control_points"], arrays["global_control_points"]
         coef, sizes = arrays["coef"], arrays["group_sizes"]
         groups, names = list(attributes["groups"]), list(attributes["predictor_names"])
-        n_groups = len(groups) if model.by in ("subject", "task") else 1
+        n_groups = len(groups) if self.by in ("subject", "task") else 1
         checks = {
             "arrays.control_points": points.shape == (n_groups, k, 3),
             "arrays.global_control_points": mean.shape == (k, 3),
             "arrays.group_sizes": sizes.shape == (n_groups,) and bool(np.all(sizes >= 1)),
-            "arrays.coef": coef.shape == (len(names) if model.by == "linear" else 0, k, 3),
-            "arrays.average_alpha_": arrays["average_alpha_"].shape == (int(model.n_points),),
+            "arrays.coef": coef.shape == (len(names) if self.by == "linear" else 0, k, 3),
+            "arrays.average_alpha_": arrays["average_alpha_"].shape == (int(self.n_points),),
             "attributes.groups": groups == sorted(set(groups)),
         }
         for field_name, ok in checks.items():
             if not ok:
-                raise ValueError(f"field {field_name}: does not match by={model.by!r}, degree")
-        residual = model._residual_model()
+                raise ValueError(f"field {field_name}: does not match by={self.by!r}, degree")
+        residual = self._residual_model()
         if isinstance(residual, GroupBezierModel):
             residual.groups_ = np.asarray(groups, dtype=str)
             residual.group_sizes_ = sizes.astype(np.int64)
@@ -279,8 +272,7 @@ class OrientationModel(SerializableModel):
         elif isinstance(residual, NullBezierModel):
             residual.control_points_ = mean
         residual.n_points_ = int(attributes["n_points_"])
-        model.residual_model_ = residual
-        model.average_alpha_ = arrays["average_alpha_"]
-        model.durations_ = arrays["durations_"]
-        model.n_trajectories_ = int(model.durations_.shape[0])
-        return model
+        self.residual_model_ = residual
+        self.average_alpha_ = arrays["average_alpha_"]
+        self.durations_ = arrays["durations_"]
+        self.n_trajectories_ = int(self.durations_.shape[0])

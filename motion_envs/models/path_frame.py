@@ -110,10 +110,7 @@ def to_path_frame(
     min_scale: float = MIN_SCALE,
 ) -> FloatArray:
     """Body-frame residual curves ``(L, n, 3)`` -> path frame: ``p = F^T r / s``."""
-    R = np.asarray(residuals, dtype=np.float64)
-    F, s = path_frames(starts, ends, up, min_scale)
-    if R.ndim != 3 or R.shape[2] != 3 or R.shape[0] != F.shape[0]:
-        raise ValueError(f"residuals must have shape ({F.shape[0]}, n, 3); got {R.shape}")
+    R, F, s = _curves_and_frames(residuals, "residuals", starts, ends, up, min_scale)
     return np.einsum("lij,lti->ltj", F, R) / s[:, None, None]
 
 
@@ -125,8 +122,21 @@ def from_path_frame(
     min_scale: float = MIN_SCALE,
 ) -> FloatArray:
     """Path-frame curves ``(L, n, 3)`` -> body frame: ``r = s F p`` (inverse of the above)."""
-    P = np.asarray(path_residuals, dtype=np.float64)
-    F, s = path_frames(starts, ends, up, min_scale)
-    if P.ndim != 3 or P.shape[2] != 3 or P.shape[0] != F.shape[0]:
-        raise ValueError(f"path_residuals must have shape ({F.shape[0]}, n, 3); got {P.shape}")
+    P, F, s = _curves_and_frames(path_residuals, "path_residuals", starts, ends, up, min_scale)
     return np.einsum("lij,ltj->lti", F, P) * s[:, None, None]
+
+
+def _curves_and_frames(
+    curves: ArrayLike,
+    name: str,
+    starts: ArrayLike,
+    ends: ArrayLike,
+    up: ArrayLike,
+    min_scale: float,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``curves`` as float ``(L, n, 3)`` (``ValueError`` naming ``name``), ``F`` and ``s``."""
+    C = np.asarray(curves, dtype=np.float64)
+    F, s = path_frames(starts, ends, up, min_scale)
+    if C.ndim != 3 or C.shape[2] != 3 or C.shape[0] != F.shape[0]:
+        raise ValueError(f"{name} must have shape ({F.shape[0]}, n, 3); got {C.shape}")
+    return C, F, s

@@ -15,11 +15,12 @@ Floats are written with Python's shortest round-trip ``repr``, so a float64 arra
 back is bit-identical to the one written. No pickle: a model file cannot run code.
 
 A model class takes part by subclassing :class:`SerializableModel`, implementing
-``_get_state()`` / ``_from_state()`` and declaring its :class:`StateSchema`; it is
-registered under its class name. A class that does not implement ``_from_state`` is
-abstract and cannot be loaded. :func:`load_model` finds every class of
-``motion_envs.models`` in a fresh process (it imports the package's modules when a name
-is not registered yet).
+``_get_state()`` / ``_set_state()`` (or the whole ``_from_state()``) and declaring its
+:class:`StateSchema`; it is registered under its class name. A class that implements
+neither ``_set_state`` nor ``_from_state`` is abstract and cannot be loaded; a class whose
+name starts with ``_`` (a private base class) is not registered. :func:`load_model`
+finds every class of ``motion_envs.models`` in a fresh process (it imports the
+package's modules when a name is not registered yet).
 
 **What is valid** (checked by :func:`check_document`, the same function on save and on
 load, so a file :func:`save_model` writes always loads and a file it could not have
@@ -92,6 +93,10 @@ class ModelFileError(ValueError):
     shape or value. The message names the file and the field."""
 
 
+#: A model's saved state: ``(params, arrays, attributes)``.
+State = tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]
+
+
 @dataclass(frozen=True)
 class StateSchema:
     """The state a model class saves: the kind of each parameter and attribute
@@ -111,8 +116,10 @@ class SerializableModel(Estimator):
     """Mixin for models that save to and load from the JSON model format.
 
     Subclasses implement :meth:`_get_state` returning ``(params, arrays, attributes)``
-    and the classmethod :meth:`_from_state` rebuilding a fitted model from them (raising
-    ``ValueError`` naming the field for inconsistent values), and set ``state_schema``.
+    and :meth:`_set_state` setting the fitted attributes from ``arrays`` and
+    ``attributes`` on the model :meth:`_from_params` built (raising ``ValueError``
+    naming the field for inconsistent values), and set ``state_schema``. A class whose
+    rebuilding does not split that way overrides the classmethod :meth:`_from_state`.
     """
 
     _model_name: ClassVar[str]
@@ -122,9 +129,10 @@ class SerializableModel(Estimator):
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         cls._model_name = cls.__name__
-        _REGISTRY[cls.__name__] = cls
+        if not cls.__name__.startswith("_"):  # a private base class is no file's model
+            _REGISTRY[cls.__name__] = cls
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, NDArray[Any]], dict[str, Any]]:
+    def _get_state(self) -> State:
         raise NotImplementedError
 
     @classmethod
@@ -134,6 +142,17 @@ class SerializableModel(Estimator):
         arrays: dict[str, NDArray[Any]],
         attributes: dict[str, Any],
     ) -> M:
+        """The fitted model: :meth:`_from_params`, then :meth:`_set_state`."""
+        model = cls._from_params(params)
+        model._set_state(arrays, attributes)
+        return model
+
+    @classmethod
+    def _from_params(cls: type[M], params: dict[str, Any]) -> M:
+        """The unfitted model the saved ``params`` describe (``cls(**params)``)."""
+        return cls(**params)
+
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         raise NotImplementedError
 
     @classmethod
@@ -141,7 +160,8 @@ class SerializableModel(Estimator):
         """True for a concrete class: it rebuilds itself and declares its schema."""
         own = cls._from_state.__func__  # type: ignore[attr-defined]
         base = SerializableModel._from_state.__func__  # type: ignore[attr-defined]
-        return own is not base and cls.state_schema is not None
+        sets = cls._set_state is not SerializableModel._set_state
+        return (own is not base or sets) and cls.state_schema is not None
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Save the fitted model to ``path`` (JSON, atomic write). Returns the path."""

@@ -66,7 +66,7 @@ from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.resampling import recording_times
 from motion_envs.models.estimator import check_is_fitted
-from motion_envs.models.serialization import SerializableModel, StateSchema
+from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
 __all__ = [
     "DEFAULT_MAX_END_SHIFT",
@@ -677,7 +677,7 @@ class SineSeriesRegression(SerializableModel):
         return validate_linear_hypothesis(self.coefficients_, self.conditions_)
 
     # -- serialization --------------------------------------------------------------
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any]]:
+    def _get_state(self) -> State:
         self._fitted()
         arrays = {
             "coefficients": self.coefficients_,
@@ -699,22 +699,19 @@ class SineSeriesRegression(SerializableModel):
     )
 
     @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> SineSeriesRegression:
+    def _from_params(cls, params: dict[str, Any]) -> SineSeriesRegression:
         n_sines = params["n_sines"]
         if n_sines < 0:
             raise ValueError(f"field params.n_sines: must be >= 0; got {n_sines}")
-        model = cls(n_sines=int(n_sines))
+        return cls(n_sines=int(n_sines))
+
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         p, q, f = arrays["coefficients"], arrays["conditions"], arrays["F"]
         d = arrays["durations"]
-        if p.shape[0] < 1 or p.shape[1] != model.n_sines + 2 or p.shape[2] < 1:
+        if p.shape[0] < 1 or p.shape[1] != self.n_sines + 2 or p.shape[2] < 1:
             raise ValueError(
                 f"field arrays.coefficients: shape {list(p.shape)} does not match "
-                f"(n >= 1, n_sines + 2 = {model.n_sines + 2}, D >= 1)"
+                f"(n >= 1, n_sines + 2 = {self.n_sines + 2}, D >= 1)"
             )
         if q.shape[0] != p.shape[0]:
             raise ValueError(
@@ -732,10 +729,9 @@ class SineSeriesRegression(SerializableModel):
         rank = attributes["rank"]
         if not 0 <= rank <= q.shape[1] + 1:
             raise ValueError(f"field attributes.rank: must be in [0, {q.shape[1] + 1}]; got {rank}")
-        model.coefficients_, model.conditions_ = p, q
-        model.durations_, model.F_ = d, f
-        model.rank_ = int(rank)
-        return model
+        self.coefficients_, self.conditions_ = p, q
+        self.durations_, self.F_ = d, f
+        self.rank_ = int(rank)
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.models.estimator import check_is_fitted
-from motion_envs.models.serialization import SerializableModel
+from motion_envs.models.serialization import SerializableModel, State
 
 __all__ = ["DEFAULT_LAMBDAS", "SpeedProfileModel", "timing_features"]
 
@@ -149,7 +149,7 @@ class SpeedProfileModel(SerializableModel):
         Xs = (X - self.mean_) / self.scale_
         return _softmax_cumsum(self.intercept_ + Xs @ self.coef_)
 
-    def _get_state(self) -> tuple[dict[str, Any], dict[str, np.ndarray], dict[str, Any]]:
+    def _get_state(self) -> State:
         return (
             {"lam": self.lam, "lambdas": [float(v) for v in self.lambdas]},
             {
@@ -161,16 +161,8 @@ class SpeedProfileModel(SerializableModel):
             {"lam_": self.lam_, "n_points_": self.n_points_},
         )
 
-    @classmethod
-    def _from_state(
-        cls,
-        params: dict[str, Any],
-        arrays: dict[str, NDArray[Any]],
-        attributes: dict[str, Any],
-    ) -> SpeedProfileModel:
-        model = cls(**params)
+    def _set_state(self, arrays: dict[str, NDArray[Any]], attributes: dict[str, Any]) -> None:
         for key in ("intercept_", "coef_", "mean_", "scale_"):
-            setattr(model, key, arrays[key])
-        model.lam_ = float(attributes["lam_"])
-        model.n_points_ = int(attributes["n_points_"])
-        return model
+            setattr(self, key, arrays[key])
+        self.lam_ = float(attributes["lam_"])
+        self.n_points_ = int(attributes["n_points_"])
