@@ -37,10 +37,22 @@ from typing import Any
 
 from baselines import options
 from baselines.agents import checks
-from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
+from baselines.agents.config import (
+    ALGOS,
+    parse_env_kwargs,
+    resolve_hyperparams,
+    unknown_env_id,
+)
 from motion_envs._io import atomic_write_text
 
-__all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
+__all__ = [
+    "TrainConfig",
+    "TrainResult",
+    "equivalent_command",
+    "preflight",
+    "register",
+    "run",
+]
 
 #: Called after every validation: ``{"timesteps", "val_criterion", "best_val_criterion",
 #: "is_best", "run_dir"}``.
@@ -88,9 +100,30 @@ def _check_config(config: TrainConfig) -> None:
     import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
 
     if config.env_id not in gym.registry:
-        raise ValueError(f"--env {config.env_id!r} is not a registered environment id")
+        raise ValueError(f"--env {unknown_env_id(config.env_id)}")
     if isinstance(config.seed, bool) or not isinstance(config.seed, int) or config.seed < 0:
         raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
+
+
+def preflight(config: TrainConfig) -> dict[str, Any]:
+    """Every check of a run that needs no training: algorithm, registered id, seed, the
+    resolved hyper-parameters, the constructor's keywords and the validation split (with
+    ``n_envs``); the resolved hyper-parameters. ``run`` calls it first, ``motion-bench
+    sweep`` for every configuration and seed before Ray starts."""
+    from baselines.agents.scorers import check_validation_split
+
+    _check_config(config)
+    overrides: dict[str, Any] = dict(config.overrides)
+    if config.timesteps is not None:
+        overrides["n_timesteps"] = config.timesteps
+    if config.n_envs is not None:
+        overrides["n_envs"] = config.n_envs
+    if config.env_kwargs:
+        overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
+    hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
+    checks.check_env_kwargs(config.env_id, hp["env_kwargs"])
+    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    return hp
 
 
 def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
@@ -126,19 +159,9 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     from baselines.agents.evaluate import split_criterion
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
-    from baselines.agents.scorers import check_validation_split
     from baselines.sb3 import TqdmCallback
 
-    _check_config(config)
-    overrides: dict[str, Any] = dict(config.overrides)
-    if config.timesteps is not None:
-        overrides["n_timesteps"] = config.timesteps
-    if config.n_envs is not None:
-        overrides["n_envs"] = config.n_envs
-    if config.env_kwargs:
-        overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
-    hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    hp = preflight(config)
     run_dir = Path(config.out)
     if (run_dir / "run.json").exists():
         raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
