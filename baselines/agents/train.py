@@ -24,6 +24,7 @@ train`` and every trial of ``motion-bench sweep`` call it):
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import json
 import shlex
@@ -147,7 +148,31 @@ def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
 
 
 def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> TrainResult:
-    """Train, validate, save the run folder; see the module docstring."""
+    """Train, validate, save the run folder; see the module docstring.
+
+    ``--out`` must not exist or be an empty folder. The run is written into a fresh
+    staging folder beside it (``.NAME.partial-*``, removed if training fails or is
+    interrupted) and renamed to ``--out`` once complete, so a run folder holds exactly one
+    run's files; of two runs into one folder the second to finish is refused.
+    """
+    from baselines.agents.rundir import staged_run_folder
+
+    hp = preflight(config)
+    out = Path(config.out)
+    # a fresh staging folder beside --out, renamed into place once complete: nothing of an
+    # interrupted or concurrent run (a stale normalization.npz) can end up in the run
+    with staged_run_folder(out) as staging:
+        result = _train(config, hp, staging, on_evaluation)
+    return dataclasses.replace(result, run_dir=str(out))
+
+
+def _train(
+    config: TrainConfig,
+    hp: dict[str, Any],
+    run_dir: Path,
+    on_evaluation: EvaluationHook | None,
+) -> TrainResult:
+    """Train into the (empty, staging) ``run_dir``; see :func:`run`."""
     import torch
     from stable_baselines3.common.utils import set_random_seed
 
@@ -160,12 +185,6 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
     from baselines.sb3 import TqdmCallback
-
-    hp = preflight(config)
-    run_dir = Path(config.out)
-    if (run_dir / "run.json").exists():
-        raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
-    run_dir.mkdir(parents=True, exist_ok=True)
 
     torch.set_num_threads(int(hp["torch_threads"]))
     set_random_seed(config.seed)
