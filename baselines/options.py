@@ -33,6 +33,7 @@ __all__ = [
     "Parser",
     "add_subcommand",
     "fail",
+    "float_in",
     "fraction",
     "input_file",
     "int_at_least",
@@ -166,6 +167,22 @@ def non_negative_float(text: str) -> float:
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected a finite number >= 0; got {text!r}")
     return value
+
+
+def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """A ``type=`` checker accepting finite numbers in ``[low, high]`` (the documented
+    plausible range of the option: ``1e-300`` or ``1e400`` are refused naming the option,
+    before any computation could overflow)."""
+    what = f"a finite number in [{low:g}, {high:g}]" + (f" {unit}" if unit else "")
+
+    def check(text: str) -> float:
+        value: float = _number(text, float, what)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}")
+        return value
+
+    check.__name__ = what
+    return check
 
 
 def fraction(text: str) -> float:

@@ -56,11 +56,17 @@ def noise_levels(text: str) -> tuple[float, ...]:
     return levels
 
 
+#: ``--gravity``'s range (m/s^2): the default 1.0 (the paper's phase sizes) to beyond
+#: Jupiter's 24.8; outside it the phase timings under- or overflow.
+GRAVITY_RANGE = (0.1, 100.0)
+#: ``--tracking``'s range (m): tracking noise std up to 10 cm.
+TRACKING_RANGE = (0.0, 0.1)
+
+
 def gravity_task(text: str) -> JugglingTask:
-    """``--gravity``: a finite number > 0 (m/s^2), as the task it defines."""
-    value = options.non_negative_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0; got {text!r}")
+    """``--gravity``: a finite number in :data:`GRAVITY_RANGE` (m/s^2), as the task it
+    defines."""
+    value = options.float_in(*GRAVITY_RANGE, "(m/s^2)")(text)
     try:
         return JugglingTask(gravity=value)
     except ValueError as exc:
@@ -123,7 +129,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help="release-velocity noise levels (relative std), comma-separated",
     )
     p.add_argument(
-        "--tracking", type=options.non_negative_float, default=0.0005, help="tracking noise std (m)"
+        "--tracking",
+        type=options.float_in(*TRACKING_RANGE, "(m)"),
+        default=0.0005,
+        help="tracking noise std (m), in [0, 0.1]",
     )
     p.add_argument(
         "--seed",
@@ -148,7 +157,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--gravity",
         type=gravity_task,
         default="1.0",
-        help="m/s^2 (9.81: real gravity)",
+        help="m/s^2, in [0.1, 100] (1.0: the paper's phase sizes; 9.81: real gravity)",
     )
     p.add_argument(
         "--out",

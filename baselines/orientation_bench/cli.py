@@ -91,7 +91,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     )
     p.add_argument(
         "--min-deg",
-        type=options.non_negative_float,
+        type=options.float_in(0.0, 180.0, "(degrees)"),
         default=DEFAULT_MIN_DEG,
         help="drop trajectories rotating less than this many degrees from start to end",
     )
