@@ -43,6 +43,7 @@ __all__ = [
     "output_file",
     "output_folder",
     "positive_int",
+    "results_folder",
 ]
 
 
@@ -231,6 +232,23 @@ def output_folder(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
     _probe_folder(path, text)
     return path
+
+
+#: The folder the sub-commands write into without ``--out`` (as ``motion-bench all``).
+RESULTS_ROOT = Path("results")
+
+
+def results_folder(out: Path | None, job: str) -> Path:
+    """``--out``, or ``results/JOB`` (``motion-bench all``'s folder of that job) when it is
+    not given; the default is checked like ``--out`` (``ConfigError`` naming ``--out``),
+    before anything is computed."""
+    if out is not None:
+        return out
+    default = RESULTS_ROOT / job
+    try:
+        return output_folder(str(default))
+    except argparse.ArgumentTypeError as exc:
+        raise ConfigError("out", f"the default {exc}") from None
 
 
 def output_file(text: str) -> Path:

@@ -18,6 +18,7 @@ from motion_envs.datasets.juggling_task import JugglingTask
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench juggling`` with parsed arguments: run, print, write."""
+    out = options.results_folder(args.out, "juggling")
     config = JugglingConfig(
         cycles=args.cycles,
         noise=args.noise,
@@ -37,9 +38,8 @@ def main(args: argparse.Namespace) -> int:
     doc = run(config)
     doc["timing"]["total_s"] = time.perf_counter() - t0
     print(report(doc))
-    if args.out:
-        paths = write(doc, args.out, video=not args.no_video)
-        print("wrote " + ", ".join(str(p) for p in paths))
+    paths = write(doc, out, video=not args.no_video)
+    print("wrote " + ", ".join(str(p) for p in paths))
     print(f"total {doc['timing']['total_s']:.1f} s")
     return 0
 
@@ -163,7 +163,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--out",
         type=options.output_folder,
         default=None,
-        help="folder for results.json/.csv, plot, GIF (nothing written without it)",
+        help="folder for results.json/.csv, plot, GIF (default: results/juggling, the folder "
+        "of motion-bench all)",
     )
     p.add_argument(
         "--world",

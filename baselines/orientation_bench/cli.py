@@ -20,6 +20,7 @@ from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench orientation`` with parsed arguments: run, print, write."""
+    out = options.results_folder(args.out, f"orientation-{Path(args.data).stem}")
     config = OrientationConfig(
         data=args.data,
         min_deg=args.min_deg,
@@ -34,9 +35,8 @@ def main(args: argparse.Namespace) -> int:
     )
     results = run(config)
     print(report(results))
-    if args.out is not None:
-        written = write(results, args.out)
-        print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+    written = write(results, out)
+    print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
     return 0
 
 
@@ -99,7 +99,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--out",
         default=None,
         type=options.output_folder,
-        help="folder for results.json, results.csv and residuals.png (nothing written without it)",
+        help="folder for results.json, results.csv and residuals.png (default: "
+        "results/orientation-DATA, the folder of motion-bench all)",
     )
     p.add_argument(
         "--plot-task",
