@@ -95,3 +95,18 @@ def test_run_json_paths_stay_inside_the_run_folder(tmp_path, name):
     (out / "run.json").write_text(json.dumps(manifest))
     with pytest.raises(ValueError, match="not a file name inside the run folder"):
         load_run(out)
+
+
+def test_agent_final_checkpoint_does_not_overwrite_the_best_evaluation(tmp_path):
+    """Once, ``motion-bench agent DIR --checkpoint final`` overwrote ``DIR/eval-test/``."""
+    from baselines.cli import main
+
+    out = tmp_path / "run"
+    train_run(_config(out, normalize=False))
+    assert main(["agent", str(out), "--episodes", "2"]) == 0
+    best = (out / "eval-test" / "results.json").read_bytes()
+    assert main(["agent", str(out), "--episodes", "2", "--checkpoint", "final"]) == 0
+    assert (out / "eval-test" / "results.json").read_bytes() == best
+    final = json.loads((out / "eval-test-final" / "results.json").read_text())
+    assert final["checkpoint"] == "final"
+    assert json.loads(best)["checkpoint"] == "best"
