@@ -31,6 +31,7 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
 def build_parser() -> options.Parser:
     """Return the ``motion-bench`` argument parser with every sub-command registered."""
     from motion_envs import __version__  # here, so that Ctrl-C while importing is handled
+
     parser = options.Parser(
         prog="motion-bench",
         description=(

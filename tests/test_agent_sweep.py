@@ -8,6 +8,7 @@ the same numbers as an uninterrupted sweep.
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import os
@@ -57,6 +58,11 @@ def test_two_trial_sweep_equals_the_single_run_command(local_ray, tmp_path):
         assert (out / name).is_file()
     row = doc["configurations"][0]
     assert row["best_on_validation"] and row["seeds"] == [0, 1]
+    # trials.csv: run folders relative to --out (once absolute paths)
+    with open(out / "trials.csv", newline="") as fh:
+        dirs = [r["run_dir"] for r in csv.DictReader(fh)]
+    assert len(dirs) == 2 and all(not Path(d).is_absolute() for d in dirs)
+    assert all((out / d / "run.json").is_file() for d in dirs)
 
     sweep = load_sweep(TINY, out=str(out))
     cfg = sweep.configurations[0]
