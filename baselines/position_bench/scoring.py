@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 import time
 from collections import Counter, defaultdict
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -118,7 +119,7 @@ MIN_TRAIN_FOR_AUTO = 3
 
 
 def _check_enough_demonstrations(
-    dataset: Any, folds: Any, split: str, n_sines: int | None, learned: list[str]
+    dataset: Any, folds: Any, split: str, n_sines: int | None, learned: Sequence[str]
 ) -> None:
     """Refuse, before any fitting, a shape whose folds leave too few demonstrations to
     choose ``N`` (``--n-sines auto``) or the learned rows' hyper-parameters by
