@@ -17,6 +17,12 @@ from motion_envs.models.nominal import position_folds, resample_positions
 from motion_envs.models.position_criteria import max_error
 
 
+@pytest.fixture(autouse=True)
+def _in_tmp_path(tmp_path, monkeypatch):
+    """A run without --out writes into results/ of the working folder: keep it in tmp."""
+    monkeypatch.chdir(tmp_path)
+
+
 def test_cli_lasa_writes_results(tmp_path, capsys):
     out = tmp_path / "res"
     args = ["position", "--shapes", "Line", "Angle", "--n-points", "40", "--n-sines", "4"]
