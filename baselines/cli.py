@@ -14,7 +14,6 @@ import sys
 from collections.abc import Sequence
 
 from baselines import options
-from motion_envs import __version__
 
 # Modules providing sub-commands, in the order they are listed by --help.
 SUBCOMMAND_MODULES: tuple[str, ...] = (
@@ -33,6 +32,8 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
 
 def build_parser() -> options.Parser:
     """Return the ``motion-bench`` argument parser with every sub-command registered."""
+    from motion_envs import __version__  # here, so that Ctrl-C while importing is handled
+
     parser = options.Parser(
         prog="motion-bench",
         description=(
@@ -49,11 +50,13 @@ def build_parser() -> options.Parser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``motion-bench`` console script; returns the exit code."""
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)
+    try:  # the imports of every sub-command and the checks of the options
+        args = build_parser().parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors (already printed)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
+    except KeyboardInterrupt:
+        print("motion-bench: interrupted while starting; nothing was written", file=sys.stderr)
+        return 130
     prog = f"motion-bench {args.command}"
     try:
         return int(args.func(args) or 0)

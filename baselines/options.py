@@ -33,6 +33,7 @@ __all__ = [
     "Parser",
     "add_subcommand",
     "fail",
+    "float_in",
     "fraction",
     "input_file",
     "int_at_least",
@@ -43,6 +44,7 @@ __all__ = [
     "output_file",
     "output_folder",
     "positive_int",
+    "results_folder",
 ]
 
 
@@ -169,6 +171,22 @@ def non_negative_float(text: str) -> float:
     return value
 
 
+def float_in(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """A ``type=`` checker accepting finite numbers in ``[low, high]`` (the documented
+    plausible range of the option: ``1e-300`` or ``1e400`` are refused naming the option,
+    before any computation could overflow)."""
+    what = f"a finite number in [{low:g}, {high:g}]" + (f" {unit}" if unit else "")
+
+    def check(text: str) -> float:
+        value: float = _number(text, float, what)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {what}; got {text!r}")
+        return value
+
+    check.__name__ = what
+    return check
+
+
 def fraction(text: str) -> float:
     """A number strictly between 0 and 1."""
     value: float = _number(text, float, "a number in (0, 1)")
@@ -215,6 +233,23 @@ def output_folder(text: str) -> Path:
         raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
     _probe_folder(path, text)
     return path
+
+
+#: The folder the sub-commands write into without ``--out`` (as ``motion-bench all``).
+RESULTS_ROOT = Path("results")
+
+
+def results_folder(out: Path | None, job: str) -> Path:
+    """``--out``, or ``results/JOB`` (``motion-bench all``'s folder of that job) when it is
+    not given; the default is checked like ``--out`` (``ConfigError`` naming ``--out``),
+    before anything is computed."""
+    if out is not None:
+        return out
+    default = RESULTS_ROOT / job
+    try:
+        return output_folder(str(default))
+    except argparse.ArgumentTypeError as exc:
+        raise ConfigError("out", f"the default {exc}") from None
 
 
 def output_file(text: str) -> Path:

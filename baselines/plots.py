@@ -62,6 +62,33 @@ def _robust_limit(points: NDArray[np.float64], quantile: float = 0.98) -> float:
     return lim if lim > 0 else 1.0
 
 
+def _model_inset(
+    ax: Any,
+    task_curve: NDArray[np.float64],
+    null_curve: NDArray[np.float64],
+    dims: tuple[int, int],
+    model_lim: float,
+    lim: float,
+) -> Any:
+    """An inset of ``ax`` (upper right) with the two model curves magnified to
+    ``model_lim``, so that curves much smaller than the data's spread stay visible; the
+    zoomed square is marked in the main axes."""
+    i, j = dims
+    ins = ax.inset_axes([0.6, 0.55, 0.38, 0.38])
+    ins.plot(task_curve[:, i], task_curve[:, j], color="C3", lw=2.0)
+    ins.plot(null_curve[:, i], null_curve[:, j], color="C0", lw=1.8, ls="--")
+    ins.plot(0, 0, "k+", ms=8, mew=1.2)
+    ins.set_xlim(-model_lim, model_lim)
+    ins.set_ylim(-model_lim, model_lim)
+    ins.set_aspect("equal")
+    ins.tick_params(labelsize=7, length=2)
+    ins.set_title(f"models, {lim / model_lim:.0f}x zoom", fontsize=8, pad=2)
+    ins.set_facecolor("white")
+    ins.grid(alpha=0.3)
+    ax.indicate_inset_zoom(ins, edgecolor="0.3")
+    return ins
+
+
 def residual_figure(
     residuals: NDArray[np.float64],
     tasks: Sequence[str] | NDArray[np.str_],
@@ -78,7 +105,9 @@ def residual_figure(
     the null model (mean control points of all curves), both fitted by
     :mod:`motion_envs.models.bezier_models` on every curve shown. The axes hold 98 % of
     the task's samples (a few extreme curves may leave the frame; the caption says how
-    far the farthest goes).
+    far the farthest goes). When the model curves are under a quarter of that range (as
+    on vr-kitchen, where they would hide at the origin) each view gets an inset with the
+    models magnified.
     """
     from motion_envs.models.bezier_models import NullBezierModel, TaskBezierModel
 
@@ -93,6 +122,7 @@ def residual_figure(
     null_curve = NullBezierModel(degree).fit(R).predict(n=1)[0]
     lim = max(_robust_limit(mine), 1.1 * float(np.abs(task_curve).max()))
     farthest = float(np.linalg.norm(mine, axis=2).max())
+    model_lim = 1.3 * float(max(np.abs(task_curve).max(), np.abs(null_curve).max(), 1e-12))
 
     fig = new_figure(12.5, 4.6)
     axes = fig.subplots(1, 3)
@@ -122,6 +152,8 @@ def residual_figure(
             label=f"null model, d = {degree}",
         )
         ax.plot(0, 0, "k+", ms=11, mew=1.5, label="origin (start and end)")
+        if model_lim < 0.25 * lim:  # the models would hide at the origin: magnify them
+            _model_inset(ax, task_curve, null_curve, (i, j), model_lim, lim)
         ax.set_xlim(-lim, lim)
         ax.set_ylim(-lim, lim)
         ax.set_aspect("equal")

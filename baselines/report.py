@@ -74,6 +74,58 @@ def _images(folder: Path, names: Sequence[tuple[str, str]]) -> list[tuple[str, b
     return [(caption, (folder / n).read_bytes()) for n, caption in names if (folder / n).exists()]
 
 
+def _learned_table(doc: dict[str, Any], groups: str) -> list[str]:
+    """The learned rows against the best analytic one: ratio, its 95 % bootstrap interval,
+    the target and how many ``groups`` (subjects, shapes) the learned row is better on."""
+    comparisons = (doc.get("learned") or {}).get("comparisons") or []
+    if not comparisons:
+        return []
+    rows = []
+    for c in comparisons:
+        lo, hi = (c.get("ratio_ci95") or [None, None])[:2]
+        rows.append(
+            [
+                f"<code>{html.escape(str(c.get('learned')))}</code>",
+                f"<code>{html.escape(str(c.get('best_analytic')))}</code>",
+                _fmt(c.get("ratio")),
+                f"[{_fmt(lo)}, {_fmt(hi)}]",
+                _fmt(c.get("target_ratio")),
+                "yes" if c.get("met") else "no",
+                f"{c.get('subjects_better')} of {c.get('n_subjects')}",
+            ]
+        )
+    return [
+        _table(
+            ["learned", "best analytic", "ratio", "95 % interval", "target", "met",
+             f"{groups} better"],
+            rows,
+            "Learned vs analytic, out of sample: ratio of the criteria (below 1: the learned "
+            "row is better), bootstrap interval over " + groups,
+        )
+    ]  # fmt: skip
+
+
+def _validation_table(by_group: dict[str, Any], group: str, caption: str) -> list[str]:
+    """The validation of the linear hypothesis (per group and coordinate): share of
+    normal residuals, share of significant F-tests, relative CI and jackknife widths."""
+    rows = [
+        [html.escape(str(name)), "xyz"[int(r["coordinate"])] if int(r["coordinate"]) < 3 else "?"]
+        + [_fmt(r.get(k), 2) if k != "n_coefficients" else _fmt(r.get(k)) for k in _VAL_KEYS]
+        for name, rs in by_group.items()
+        for r in rs or []
+    ]
+    if not rows:
+        return []
+    header = [group, "coordinate", "coefficients", "normal residuals", "F-test significant",
+              "CI width (rel.)", "jackknife width (rel.)"]  # fmt: skip
+    return [_table(header, rows, caption)]
+
+
+_VAL_KEYS = ("n_coefficients", "normal_frac", "ftest_frac", "ci_rel", "jack_rel")
+
+LEARNED_RATIO_CAPTION = "Learned vs analytic criterion per group, out of sample"
+
+
 # -- orientation (Faraway & Choe, Table 1) ----------------------------------------------
 
 
@@ -141,9 +193,13 @@ def _orientation_section(folder: Path, job: dict[str, Any]) -> Section:
         title=job.get("title", folder.name),
         command=job.get("command", ""),
         reading=html.escape(reading),
-        tables=[table],
+        tables=[table, *_learned_table(doc, "subjects")],
         images=_images(
-            folder, [("residuals.png", "Slerp residual curves of one task with the fitted models")]
+            folder,
+            [
+                ("residuals.png", "Slerp residual curves of one task with the fitted models"),
+                ("learned_ratio.png", LEARNED_RATIO_CAPTION),
+            ],
         ),
     )
 
@@ -235,9 +291,21 @@ def _position_section(folder: Path, job: dict[str, Any]) -> Section:
         title=job.get("title", folder.name),
         command=job.get("command", ""),
         reading=html.escape(reading),
-        tables=tables,
+        tables=[
+            *tables,
+            *_learned_table(doc, "shapes"),
+            *_validation_table(
+                {k: v.get("validation") for k, v in doc.get("per_shape", {}).items()},
+                "shape",
+                "Validation of the linear hypothesis per shape (all its demonstrations)",
+            ),
+        ],
         images=_images(
-            folder, [("shapes.png", "Held-out demonstrations and each method's prediction")]
+            folder,
+            [
+                ("shapes.png", "Held-out demonstrations and each method's prediction"),
+                ("learned_ratio.png", LEARNED_RATIO_CAPTION),
+            ],
         ),
     )
 
@@ -352,14 +420,23 @@ def _juggling_section(folder: Path, job: dict[str, Any]) -> Section:
         title=job.get("title", folder.name),
         command=job.get("command", ""),
         reading=html.escape(reading),
-        tables=[catch_table, phase_table],
+        tables=[
+            catch_table,
+            phase_table,
+            *_validation_table(
+                doc.get("validation") or {},
+                "phase",
+                f"Validation of the linear hypothesis per phase ({label}, training cycles)",
+            ),
+        ],
         images=_images(
             folder,
             [
                 (
                     "juggling_fig6.png",
                     f"Held-out {label} and generated cycles, phases coloured (Fig. 6 style)",
-                )
+                ),
+                ("juggling.gif", "The analytic juggler in the MuJoCo scene (SIMULATED)"),
             ],
         ),
     )
@@ -379,11 +456,45 @@ th:first-child, td:first-child, td:nth-child(2) { text-align: left; }
 img { max-width: 100%; border: 1px solid #eee; }
 code { background: #f4f4f4; padding: 0 0.2em; }
 .command { color: #555; font-family: monospace; }
+.provenance { color: #555; }
 """
 
 
+def _provenance() -> str:
+    """motion-envs version, the git commit of the source (when it is a checkout) and the
+    date the page was built (UTC)."""
+    import datetime
+    import subprocess
+
+    import motion_envs
+
+    commit = "not a git checkout"
+    try:
+        proc = subprocess.run(
+            ["git", "rev-parse", "--short=12", "HEAD"],
+            cwd=Path(__file__).resolve().parent,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
+        if proc.returncode == 0 and proc.stdout.strip():
+            commit = proc.stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    return (
+        f'<p class="provenance">motion-envs {html.escape(motion_envs.__version__)}, commit '
+        f"<code>{html.escape(commit)}</code>, built {date}</p>"
+    )
+
+
+def _mime(data: bytes) -> str:
+    return "image/gif" if data[:6] in (b"GIF87a", b"GIF89a") else "image/png"
+
+
 def build_report(out: str | os.PathLike[str]) -> str:
-    """The HTML page of the results folder ``out`` (its ``index.json`` lists the jobs)."""
+    """The HTML page of the results folder ``out`` (its ``index.json`` lists the jobs):
+    version, commit and date, a table of contents, then one section per job."""
     root = Path(out)
     index = json.loads((root / "index.json").read_text())
     parts = [
@@ -392,36 +503,44 @@ def build_report(out: str | os.PathLike[str]) -> str:
         "<title>motion-bench report</title>",
         f"<style>{_STYLE}</style></head><body>",
         "<h1>motion-bench report</h1>",
+        _provenance(),
         "<p>Every benchmark of <code>motion-bench all</code> on the built-in data. The "
         "models, criteria and the differences from the papers are described in "
         f"<code>{MODELS_DOC}</code>. Simulated data is labelled SIMULATED.</p>",
     ]
+    toc: list[str] = []
+    body: list[str] = []
     for job in index.get("jobs", []):
         folder = root / job["folder"]
+        anchor = html.escape(job["folder"], quote=True)
         kind = job["folder"].split("-", 1)[0]
         builder = _BUILDERS.get(kind)
         title = html.escape(job.get("title", job["folder"]))
         if builder is None or not (folder / "results.json").exists():
             why = "no results" if builder else f"no report section for {kind!r}"
-            parts.append(
-                f"<section><h2>{title}</h2><p>{html.escape(why)} "
+            toc.append(f'<li><a href="#{anchor}">{title}</a></li>')
+            body.append(
+                f'<section id="{anchor}"><h2>{title}</h2><p>{html.escape(why)} '
                 f"(exit code {job.get('exit_code')}).</p></section>"
             )
             continue
         sec = builder(folder, job)
-        parts.append(f"<section><h2>{html.escape(sec.title)}</h2>")
-        parts.append(
+        toc.append(f'<li><a href="#{anchor}">{html.escape(sec.title)}</a></li>')
+        body.append(f'<section id="{anchor}"><h2>{html.escape(sec.title)}</h2>')
+        body.append(
             f'<p class="command">{html.escape(sec.command)} ({job.get("seconds", "?")} s)</p>'
         )
-        parts.append(f"<p>{sec.reading}</p>")
-        parts.extend(sec.tables)
+        body.append(f"<p>{sec.reading}</p>")
+        body.extend(sec.tables)
         for caption, data in sec.images:
             b64 = base64.b64encode(data).decode("ascii")
-            parts.append(
-                f'<figure><img alt="{html.escape(caption)}" src="data:image/png;base64,{b64}">'
-                f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+            body.append(
+                f'<figure><img alt="{html.escape(caption)}" src="data:{_mime(data)};base64,'
+                f'{b64}"><figcaption>{html.escape(caption)}</figcaption></figure>'
             )
-        parts.append("</section>")
+        body.append("</section>")
+    parts.append('<nav><h2>Contents</h2><ol class="toc">' + "".join(toc) + "</ol></nav>")
+    parts.extend(body)
     parts.append("</body></html>")
     return "\n".join(parts) + "\n"
 

@@ -8,6 +8,7 @@ the same numbers as an uninterrupted sweep.
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import os
@@ -57,6 +58,11 @@ def test_two_trial_sweep_equals_the_single_run_command(local_ray, tmp_path):
         assert (out / name).is_file()
     row = doc["configurations"][0]
     assert row["best_on_validation"] and row["seeds"] == [0, 1]
+    # trials.csv: run folders relative to --out (once absolute paths)
+    with open(out / "trials.csv", newline="") as fh:
+        dirs = [r["run_dir"] for r in csv.DictReader(fh)]
+    assert len(dirs) == 2 and all(not Path(d).is_absolute() for d in dirs)
+    assert all((out / d / "run.json").is_file() for d in dirs)
 
     sweep = load_sweep(TINY, out=str(out))
     cfg = sweep.configurations[0]
@@ -339,13 +345,17 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     finished = [d for d in sorted(runs.iterdir()) if (d / "run.json").is_file()]
     assert len(finished) == 1, "the second trial must be cut short"
     (kept,) = finished
-    (cut,) = set(runs.iterdir()) - {kept}
-    assert any(cut.iterdir())  # a partial run folder: the second trial had started training
+    (staging,) = set(runs.iterdir()) - {kept}
+    # the second trial had started: its staging folder, nothing at its run folder yet
+    assert staging.name.startswith(".config") and ".partial-" in staging.name
+    cut = runs / staging.name[1:].split(".partial-")[0]
+    assert not cut.exists()
     kept_files = _files(kept)
 
     assert _sweep(out, "--resume") == 0
     assert _files(kept) == kept_files  # not trained (nor written) again
     assert (cut / "run.json").is_file()
+    assert sorted(p.name for p in runs.iterdir()) == sorted([kept.name, cut.name])  # no leftover
     ref = json.loads((finished_sweep / "results.json").read_text())
     doc = json.loads((out / "results.json").read_text())
     # the finished trial's result is Ray Tune's stored one (a rerun would say resumed);

@@ -197,7 +197,7 @@ def test_other_version_and_mismatched_config_are_rejected(ppo_run, tmp_path):
 
 def test_train_refuses_to_overwrite_and_needs_a_validation_split(ppo_run, tmp_path):
     out, _ = ppo_run
-    with pytest.raises(ValueError, match="already holds a run"):
+    with pytest.raises(ValueError, match="not an empty folder"):
         train_run(tiny_config("ppo", "MotionEnvs/OrientationReach-v1", out))
     cfg = tiny_config("ppo", "MotionEnvs/OrientationReach-v1", tmp_path / "x")
     cfg = TrainConfig(**{**cfg.__dict__, "env_kwargs": {"val_fraction": 0.0}})

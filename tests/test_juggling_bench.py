@@ -77,12 +77,14 @@ def test_test_split_is_not_used_for_fitting(monkeypatch):
     assert len(seen["cycles"]) + len(doc["_test"]) == len(demos.cycles())
 
 
-def test_users_csv(tmp_path, capsys):
+def test_users_csv(tmp_path, capsys, monkeypatch):
     path = write_juggling_csv(generate_demonstrations(n_cycles=16, seed=4), tmp_path / "mine.csv")
     argv = ["juggling", "--data", str(path), "--cycles", "10", "--world", "model", "--no-dmp"]
-    rc = main([*argv, "--no-progress"])
+    monkeypatch.chdir(tmp_path)  # without --out: results/juggling, as motion-bench all
+    rc = main([*argv, "--no-progress", "--no-video"])
     assert rc == 0
     assert "mine.csv" in capsys.readouterr().out
+    assert (tmp_path / "results" / "juggling" / "results.json").is_file()
 
 
 @pytest.mark.parametrize(

@@ -67,3 +67,51 @@ def test_shapes_figure_one_demonstration_and_every_method_per_panel():
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert labels[0] == "held-out demonstration"
     assert [METHOD_STYLE[m]["label"] for m in methods] == labels[1 : 1 + len(methods)]
+
+
+def test_learned_ratio_figure_is_readable():
+    """Once: 5 pt labels rotated 90 degrees, subjects sorted as text (10 before 9), no
+    colour legend, row ids as titles."""
+    from baselines.learned.reading import natural_key, ratio_figure, row_words
+
+    per_group = {"10": 0.8, "9": 1.2, "12": 0.9, "Leaf_10": 1.1, "Leaf_2": 0.7}
+    comparison = {
+        "learned": "mlp_loso",
+        "best_analytic": "task_predictor_d2_loso",
+        "ratio": 0.9,
+        "ratio_ci95": [0.8, 1.0],
+        "target_ratio": 0.95,
+        "per_group_ratio": per_group,
+    }
+    fig = ratio_figure([comparison], "vr-kitchen", "subject")
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    assert labels == ["9", "10", "12", "Leaf_2", "Leaf_10"]
+    assert labels == sorted(per_group, key=natural_key)
+    for t in [*ax.get_yticklabels(), *ax.get_xticklabels()]:
+        assert t.get_fontsize() >= 8 and t.get_rotation() == 0
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert legend == ["learned better (< 1)", "analytic better (>= 1)", "target"]
+    title = ax.get_title()
+    assert "_" not in title and "MLP (leave one subject out)" in title
+    assert "task predictor, d = 2" in title and "95 % CI 0.800 to 1.000" in title
+    assert row_words("null_d2_path_loso") == (
+        "null model, d = 2, in the path frame (leave one subject out)"
+    )
+
+
+def test_residual_figure_magnifies_models_hidden_at_the_origin():
+    """Once, on vr-kitchen the model curves (about 0.02 rad) hid at the origin of axes
+    spanning 0.2 rad; now each view has an inset with the models magnified."""
+    rng = np.random.default_rng(1)
+    tau = np.linspace(0.0, 1.0, 50)[None, :, None]
+    bump = np.sin(np.pi * tau)
+    R = 0.01 * bump + 0.2 * rng.standard_normal((40, 1, 3)) * bump  # small mean, wide spread
+    fig = residual_figure(R, np.array(["a"] * 40), degree=2, dataset="synthetic")
+    for ax in fig.axes:
+        (inset,) = ax.child_axes
+        lines = [ln for ln in inset.get_lines() if len(ln.get_xdata()) > 1]
+        extent = max(np.abs(np.concatenate([ln.get_xydata().ravel() for ln in lines])).max(), 0)
+        assert inset.get_xlim()[1] < 0.25 * ax.get_xlim()[1]
+        assert 0.5 * inset.get_xlim()[1] < extent <= inset.get_xlim()[1]  # fills the inset
+        assert "zoom" in inset.get_title()

@@ -17,6 +17,12 @@ from motion_envs.models.nominal import position_folds, resample_positions
 from motion_envs.models.position_criteria import max_error
 
 
+@pytest.fixture(autouse=True)
+def _in_tmp_path(tmp_path, monkeypatch):
+    """A run without --out writes into results/ of the working folder: keep it in tmp."""
+    monkeypatch.chdir(tmp_path)
+
+
 def test_cli_lasa_writes_results(tmp_path, capsys):
     out = tmp_path / "res"
     args = ["position", "--shapes", "Line", "Angle", "--n-points", "40", "--n-sines", "4"]
@@ -74,14 +80,16 @@ def test_test_split_scores_only_held_out_demos(tmp_path, capsys):
         assert train.size == 5 and not set(train) & set(scored)
 
 
-def test_cli_on_csv_without_peers(tmp_path, capsys):
+def test_cli_on_csv_without_peers(tmp_path, capsys, monkeypatch):
     ds = load_lasa(["Sine"])
     path = ds.to_csv(tmp_path / "pos.csv")
+    monkeypatch.chdir(tmp_path)  # without --out: results/position-pos, as motion-bench all
     rc = main(["position", "--data", str(path), "--n-points", "30", "--n-sines", "3",
                "--no-peers", "--no-progress", "--conditions", "start"])  # fmt: skip
     assert rc == 0
     text = capsys.readouterr().out
     assert "dmp, promp: skipped" in text and "'pos.csv'" in text
+    assert (tmp_path / "results" / "position-pos" / "results.json").is_file()
 
 
 def test_cli_errors(tmp_path, capsys):
@@ -102,3 +110,51 @@ def test_cli_says_when_movement_primitives_is_missing(monkeypatch, capsys):
     assert "movement_primitives cannot be used" in captured.err
     assert "DMP and ProMP columns are skipped" in captured.err
     assert "dmp, promp: skipped" in captured.out
+
+
+@pytest.mark.parametrize(
+    ("n_demos", "extra", "expected"),
+    [
+        # once: "cross-validation needs at least 3 trajectories; got 2" (no shape named)
+        (3, [], "shape 'Sine' has 3 demonstrations; leave-one-out with --n-sines auto and "
+            "--learned needs at least 4"),
+        (3, ["--n-sines", "3"], "shape 'Sine' has 3 demonstrations; leave-one-out with "
+            "--learned needs at least 4"),
+        (2, ["--n-sines", "3", "--learned", "off"], "each needs at least 3 demonstrations "
+            "(demonstrations per shape: 'Sine': 2)"),
+    ],
+)  # fmt: skip
+def test_too_few_demonstrations_one_line_naming_the_shape(
+    tmp_path, capsys, n_demos, extra, expected
+):
+    import pandas as pd
+
+    path = load_lasa(["Sine"]).to_csv(tmp_path / "all.csv")
+    df = pd.read_csv(path)
+    keep = df.trajectory.isin(df.trajectory.unique()[:n_demos])
+    df[keep].to_csv(tmp_path / "few.csv", index=False)
+    argv = ["position", "--data", str(tmp_path / "few.csv"), "--n-points", "30", "--no-peers"]
+    assert main([*argv, "--no-progress", "--out", str(tmp_path / "o"), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and expected in err[0], err
+
+
+def test_three_demonstrations_run_with_fixed_n_and_no_learned_rows(tmp_path):
+    import pandas as pd
+
+    path = load_lasa(["Sine"]).to_csv(tmp_path / "all.csv")
+    df = pd.read_csv(path)
+    df[df.trajectory.isin(df.trajectory.unique()[:3])].to_csv(tmp_path / "few.csv", index=False)
+    argv = ["position", "--data", str(tmp_path / "few.csv"), "--n-points", "30", "--no-peers"]
+    argv += ["--n-sines", "3", "--learned", "off", "--no-progress", "--out", str(tmp_path / "o")]
+    assert main(argv) == 0
+    assert (
+        json.loads((tmp_path / "o" / "results.json").read_text())["per_shape"]["Sine"]["n_demos"]
+        == 3
+    )
+
+
+def test_help_documents_the_csv_format(capsys):
+    assert main(["position", "--help"]) == 0
+    text = capsys.readouterr().out
+    assert "trajectory,subject,task,t,x,y[,z]" in text and "at least 4" in text

@@ -78,7 +78,7 @@ def test_report_holds_every_table_image_and_paper_value(results):
     assert path.name == "report.html"
     page = _Collector()
     page.feed(path.read_text())
-    assert page.h2 == ["Orientation on vr-kitchen", "Position on LASA"]
+    assert page.h2 == ["Contents", "Orientation on vr-kitchen", "Position on LASA"]
 
     # orientation: one table, one row per criterion of results.json, the paper beside ours
     criteria = json.loads((results / "orientation-vr-kitchen" / "results.json").read_text())
@@ -94,7 +94,7 @@ def test_report_holds_every_table_image_and_paper_value(results):
 
     # position: the summary, the per-shape wins and the timing tables
     doc = json.loads((results / "position-lasa" / "results.json").read_text())
-    summary = page.tables[1]
+    summary = next(t for t in page.tables if t["caption"].startswith("lasa: median"))
     assert summary["header"] == ["criterion", *doc["methods"], "paper"]
     rows = [r for r in summary["rows"] if r]
     assert len(rows) == len(doc["criteria"])
@@ -104,8 +104,10 @@ def test_report_holds_every_table_image_and_paper_value(results):
     assert any("lower max error" in " ".join(t["header"]) for t in page.tables[2:])
     assert all(t["caption"] for t in page.tables)
 
-    # every image embedded as a PNG, one per plot written
-    assert len(page.images) == 2
+    # every image embedded as a PNG, one per plot written (learned_ratio.png included)
+    written = [p for f in ("orientation-vr-kitchen", "position-lasa")
+               for p in sorted((results / f).glob("*.png"))]  # fmt: skip
+    assert len(page.images) == len(written) == 4
     for img in page.images:
         assert img["src"].startswith("data:image/png;base64,")
         assert base64.b64decode(img["src"].split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
@@ -136,8 +138,9 @@ def test_motion_bench_all_writes_the_report(tmp_path):
     assert main(["all", "--out", str(out), "--only", "orientation-vr-kitchen"]) == 0
     page = _Collector()
     page.feed((out / "report.html").read_text())
-    assert len(page.h2) == 1 and "vr-kitchen" in page.h2[0]
-    assert len(page.tables) == 1 and len(page.images) == 1
+    assert len(page.h2) == 2 and page.h2[0] == "Contents" and "vr-kitchen" in page.h2[1]
+    # Table 1 and the learned comparisons; residuals.png and learned_ratio.png
+    assert len(page.tables) == 2 and len(page.images) == 2
 
 
 def test_juggling_section_has_catch_rates_per_phase_errors_and_the_figure(tmp_path):
@@ -149,8 +152,10 @@ def test_juggling_section_has_catch_rates_per_phase_errors_and_the_figure(tmp_pa
     page = _Collector()
     page.feed(write_report(tmp_path).read_text())
     doc = json.loads((folder / "results.json").read_text())
-    assert page.h2 == ["Juggling (SIMULATED)"]
-    catch, phases = page.tables
+    assert page.h2 == ["Contents", "Juggling (SIMULATED)"]
+    catch, phases, validation = page.tables
+    assert validation["header"][:2] == ["phase", "coordinate"]
+    assert len([r for r in validation["rows"] if r]) == sum(map(len, doc["validation"].values()))
     # one row per catch-rate run: the unperturbed one, then each noise level off/on
     rates = [r for r in catch["rows"] if r]
     assert len(rates) == 1 + len(doc["catch_rates"])
@@ -172,3 +177,42 @@ def test_juggling_section_has_catch_rates_per_phase_errors_and_the_figure(tmp_pa
     assert all("SIMULATED" in t["caption"] for t in page.tables)
     assert len(page.images) == 1 and "SIMULATED" in page.images[0]["alt"]
     assert base64.b64decode(page.images[0]["src"].split(",", 1)[1])[:4] == b"\x89PNG"
+
+
+def test_report_has_provenance_contents_learned_intervals_and_validation(results):
+    """Once, report.html left out the learned-ratio figures, their intervals, the
+    validation tables, and had no version, commit, date or table of contents."""
+    import motion_envs
+
+    text = build_report(results)
+    page = _Collector()
+    page.feed(text)
+    assert f"motion-envs {motion_envs.__version__}, commit" in text and " UTC</p>" in text
+    assert '<nav><h2>Contents</h2><ol class="toc"><li><a href="#orientation-vr-kitchen">' in text
+    assert 'id="position-lasa"' in text
+    learned = [t for t in page.tables if t["caption"].startswith("Learned vs analytic")]
+    assert len(learned) == 2
+    doc = json.loads((results / "position-lasa" / "results.json").read_text())
+    first = doc["learned"]["comparisons"][0]
+    row = next(r for r in learned[1]["rows"] if r)
+    lo, hi = first["ratio_ci95"]
+    assert row[2] == f"{first['ratio']:.3f}" and row[3] == f"[{lo:.3f}, {hi:.3f}]"
+    validation = [t for t in page.tables if t["caption"].startswith("Validation")]
+    assert len(validation) == 1
+    shapes = {r[0] for r in validation[0]["rows"] if r}
+    assert shapes == set(doc["per_shape"])
+    assert sum("per group" in img["alt"] for img in page.images) == 2
+
+
+def test_juggling_animation_embedded_as_gif(tmp_path):
+    folder = tmp_path / "juggling"
+    folder.mkdir()
+    argv = ["juggling", "--cycles", "12", "--world", "model", "--no-progress"]
+    assert main([*argv, "--out", str(folder)]) == 0
+    assert (folder / "juggling.gif").is_file()
+    (tmp_path / "index.json").write_text(json.dumps({"jobs": [{"folder": "juggling"}]}))
+    page = _Collector()
+    page.feed(build_report(tmp_path))
+    gifs = [i for i in page.images if i["src"].startswith("data:image/gif;base64,")]
+    assert len(gifs) == 1 and "SIMULATED" in gifs[0]["alt"]
+    assert base64.b64decode(gifs[0]["src"].split(",", 1)[1])[:6] in (b"GIF87a", b"GIF89a")

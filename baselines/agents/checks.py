@@ -13,7 +13,7 @@ from pathlib import Path
 import yaml
 
 from baselines import options
-from baselines.agents.config import YamlLoader
+from baselines.agents.yaml_files import YamlLoader, read_yaml
 
 __all__ = ["check_env_kwargs", "env_id", "env_kwarg", "run_folder", "yaml_file"]
 
@@ -43,16 +43,13 @@ def env_kwarg(text: str) -> str:
 
 
 def yaml_file(text: str) -> Path:
-    """An existing, readable YAML file whose top level is a mapping."""
+    """An existing, readable YAML file whose top level is a mapping (read within the
+    bounds of :func:`baselines.agents.yaml_files.read_yaml`: size, nesting, aliases)."""
     path = options.input_file(text)
     try:
-        doc = yaml.load(path.read_bytes(), Loader=YamlLoader)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f": line {mark.line + 1}" if mark is not None else ""
-        raise argparse.ArgumentTypeError(f"{text}{where}: not valid YAML") from None
-    except UnicodeDecodeError:
-        raise argparse.ArgumentTypeError(f"{text}: not a text (UTF-8) file") from None
+        doc, _ = read_yaml(path)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     if not isinstance(doc, dict):
         raise argparse.ArgumentTypeError(f"{text}: expected a YAML mapping at the top level")
     return path

@@ -35,6 +35,8 @@ from typing import Any
 
 import yaml
 
+from baselines.agents.yaml_files import YamlLoader, key_lines, read_yaml
+
 __all__ = [
     "ACTIVATIONS",
     "ALGOS",
@@ -68,24 +70,6 @@ Checker = Callable[[Any, str], Any]
 _PYTHON = re.compile(r"(\(|\)|lambda|\bnn\.|\bth\.|torch\.|__|import|dict\(|\blin_)")
 
 
-class YamlLoader(yaml.SafeLoader):  # type: ignore[misc]  # PyYAML ships no type stubs
-    """SafeLoader that also reads ``1e-4`` (YAML 1.2 floats) as a float."""
-
-
-YamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+][0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.X,
-    ),
-    list("-+0123456789."),
-)
-
-
 def _fail(where: str, message: str) -> ValueError:
     return ValueError(f"{where}: {message}")
 
@@ -99,24 +83,46 @@ def _no_python(value: Any, where: str) -> None:
         )
 
 
-def _int(lo: int = 0) -> Checker:
+#: Largest integer any count of a config may take (steps, buffer and batch sizes, seeds).
+MAX_INT = 2**31 - 1
+#: Most environment copies of a run (``n_envs``).
+MAX_N_ENVS = 256
+#: Most environment steps of a run (``n_timesteps``).
+MAX_TIMESTEPS = 10**10
+
+
+def _int(lo: int = 0, hi: int = MAX_INT) -> Checker:
     def check(v: Any, where: str) -> int:
         _no_python(v, where)
-        if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-            raise _fail(where, f"must be an integer >= {lo}; got {v!r}")
+        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
+            shown = (
+                v if not isinstance(v, int) or abs(v) < 10**30 else f"a {len(str(v))}-digit integer"
+            )
+            raise _fail(where, f"must be an integer in [{lo}, {hi}]; got {shown!r}")
         return int(v)
 
     return check
 
 
-def _float(lo: float = -math.inf, hi: float = math.inf) -> Checker:
+def _float(lo: float = -math.inf, hi: float = math.inf, *, open_lo: bool = False) -> Checker:
+    """A finite number in ``[lo, hi]`` (``(lo, hi]`` with ``open_lo``); an integer too
+    large for a float is refused like ``inf``, not with an ``OverflowError``."""
+    interval = f"{'(' if open_lo else '['}{lo}, {hi}]"
+
     def check(v: Any, where: str) -> float:
         _no_python(v, where)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
             raise _fail(where, f"must be a finite number; got {v!r}")
-        if not lo <= v <= hi:
-            raise _fail(where, f"must be in [{lo}, {hi}]; got {v!r}")
-        return float(v)
+        if isinstance(v, int) and abs(v) >= 10**300:
+            raise _fail(
+                where, f"must be a finite number in {interval}; got a {len(str(v))}-digit integer"
+            )
+        x = float(v)
+        if not math.isfinite(x):
+            raise _fail(where, f"must be a finite number; got {v!r}")
+        if not (lo < x <= hi if open_lo else lo <= x <= hi):
+            raise _fail(where, f"must be in {interval}; got {v!r}")
+        return x
 
     return check
 
@@ -142,8 +148,10 @@ def _choice(*choices: str) -> Checker:
     return check
 
 
-def _schedule_or(check_value: Checker) -> Checker:
-    """A number, or ``{kind: linear|constant, start: x, end: y}``."""
+def _schedule_or(check_value: Checker, check_end: Checker | None = None) -> Checker:
+    """A number, or ``{kind: linear|constant, start: x, end: y}`` (``end`` checked by
+    ``check_end``, default ``check_value``)."""
+    check_end = check_value if check_end is None else check_end
 
     def check(v: Any, where: str) -> Any:
         if not isinstance(v, Mapping):
@@ -156,7 +164,7 @@ def _schedule_or(check_value: Checker) -> Checker:
             raise _fail(where, "a schedule needs 'start'")
         out: dict[str, Any] = {"kind": kind, "start": check_value(v["start"], f"{where}.start")}
         if kind == "linear":
-            out["end"] = check_value(v.get("end", 0.0), f"{where}.end")
+            out["end"] = check_end(v.get("end", 0.0), f"{where}.end")
         elif "end" in v:
             raise _fail(where, "a constant schedule has no 'end'")
         return out
@@ -225,24 +233,30 @@ def _sub(schema: Mapping[str, Checker]) -> Checker:
     return check
 
 
-_LR = _schedule_or(_float(0.0, 1.0))
+#: A learning rate: in (0, 1]; a linear schedule may end at 0.
+_LR = _schedule_or(_float(0.0, 1.0, open_lo=True), _float(0.0, 1.0))
 
 #: Keys every algorithm takes.
 COMMON_KEYS: dict[str, Checker] = {
-    "n_timesteps": _int(1),
-    "n_envs": _int(1),
+    "n_timesteps": _int(1, MAX_TIMESTEPS),
+    "n_envs": _int(1, MAX_N_ENVS),
     "policy": _choice("MlpPolicy"),
     "env_kwargs": _env_kwargs,
     "normalize": _sub(
-        {"obs": _bool, "reward": _bool, "clip_obs": _float(0.0), "gamma": _float(0, 1)}
+        {
+            "obs": _bool,
+            "reward": _bool,
+            "clip_obs": _float(0.0, open_lo=True),
+            "gamma": _float(0.0, 1.0, open_lo=True),
+        }
     ),
     "action_head_scale": _float(0.0, 1.0),
     "eval_freq": _int(1),
     "eval_episodes": _optional(_int(1)),
-    "torch_threads": _int(1),
+    "torch_threads": _int(1, 1024),
     "vec_env": _choice("dummy", "subproc"),
     "learning_rate": _LR,
-    "gamma": _float(0.0, 1.0),
+    "gamma": _float(0.0, 1.0, open_lo=True),
     "batch_size": _int(1),
 }
 
@@ -332,15 +346,24 @@ def default_config_path(algo: str) -> Path:
     return DEFAULT_CONFIG_DIR / f"{algo}.yaml"
 
 
-def _key_lines(node: yaml.Node, prefix: tuple[str, ...] = ()) -> dict[tuple[str, ...], int]:
-    """1-based line of every mapping key of a composed YAML document, by key path."""
-    lines: dict[tuple[str, ...], int] = {}
-    if isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            path = (*prefix, str(key.value))
-            lines[path] = key.start_mark.line + 1
-            lines.update(_key_lines(value, path))
-    return lines
+def registered_env_ids() -> list[str]:
+    """Every environment id Gymnasium knows once ``motion_envs`` registered its own."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the environments)
+
+    return sorted(gym.envs.registry)
+
+
+def unknown_env_id(name: str) -> str:
+    """The message for an unregistered id ``name``, with the closest registered ids."""
+    import difflib
+
+    ids = registered_env_ids()
+    close = difflib.get_close_matches(name, ids, n=3, cutoff=0.6)
+    hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+    ours = [i for i in ids if i.startswith("MotionEnvs/")]
+    return f"{name!r} is not a registered environment id{hint} (motion-envs ids: {ours})"
 
 
 def validate_hyperparams(algo: str, block: Any, where: str = "config") -> dict[str, Any]:
@@ -382,19 +405,15 @@ def load_hyperparams(path: str | Path, algo: str, env_id: str) -> dict[str, Any]
     Errors name the file and the line of the offending key.
     """
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise FileNotFoundError(f"config file {path} does not exist")
-    text = path.read_text(encoding="utf-8")
-    try:
-        node = yaml.compose(text, Loader=YamlLoader)
-        doc = yaml.load(text, Loader=YamlLoader)
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {exc}".replace("\n", " ")) from None
+    doc, node = read_yaml(path)
     if doc is None:
         doc = {}
     if not isinstance(doc, Mapping):
         raise ValueError(f"{path}: must map environment ids (and 'default') to hyper-parameters")
-    lines = _key_lines(node) if node is not None else {}
+    lines = key_lines(node)
+    ids = None
     blocks: dict[str, dict[str, Any]] = {}
     for name, block in doc.items():
         name = str(name)
@@ -403,6 +422,12 @@ def load_hyperparams(path: str | Path, algo: str, env_id: str) -> dict[str, Any]
                 f"{path}, line {lines.get((name,), '?')}: top-level key {name!r} is neither "
                 "'default' nor an environment id (NAMESPACE/Name-vN)"
             )
+        if name != "default":
+            ids = registered_env_ids() if ids is None else ids
+            if name not in ids:  # a misspelt id's block would be silently ignored
+                raise ValueError(
+                    f"{path}, line {lines.get((name,), '?')}: top-level key {unknown_env_id(name)}"
+                )
         try:
             blocks[name] = validate_hyperparams(algo, block, name)
         except ValueError as exc:

@@ -199,12 +199,19 @@ def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> No
     save_figure(fig, path, dpi=120)
 
 
+def eval_folder_name(args: argparse.Namespace) -> str:
+    """The default output folder of ``motion-bench agent``: ``eval-SPLIT`` for the best
+    checkpoint, ``eval-SPLIT-final`` for the final one (never overwriting the other)."""
+    suffix = "" if args.checkpoint == "best" else f"-{args.checkpoint}"
+    return f"eval-{args.split}{suffix}"
+
+
 def _cli(args: argparse.Namespace) -> int:
     # the user chose the id; Gymnasium's "vN is out of date" notice would repeat per env
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
     config = AgentConfig(str(args.run_dir), args.split, args.episodes, args.checkpoint)
     results = run(config)
-    out = Path(args.out) if args.out else Path(args.run_dir) / f"eval-{args.split}"
+    out = Path(args.out) if args.out else Path(args.run_dir) / eval_folder_name(args)
     write_results(results, out)
     if "catch_rate" in results:
         print(
@@ -256,6 +263,7 @@ def register(subparsers: Any) -> None:
                    help="best on validation (agent.zip) or the final policy")  # fmt: skip
     p.add_argument(
         "--out", default=None, type=options.output_folder, metavar="DIR",
-        help="output folder (default: DIR/eval-SPLIT)",
+        help="output folder (default: DIR/eval-SPLIT, DIR/eval-SPLIT-final with --checkpoint "
+        "final)",
     )  # fmt: skip
     p.set_defaults(func=_cli)

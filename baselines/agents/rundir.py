@@ -21,10 +21,13 @@ folder and the file.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
-from collections.abc import Mapping
+import shutil
+import tempfile
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs._io import atomic_write, atomic_write_text
+from motion_envs._io import atomic_write, atomic_write_text, current_umask
 
 __all__ = [
     "FORMAT",
@@ -41,12 +44,45 @@ __all__ = [
     "file_sha256",
     "load_run",
     "save_model",
+    "staged_run_folder",
     "write_json",
     "write_manifest",
 ]
 
 #: ``run.json["format"]`` of the folders this module writes.
 FORMAT = "motion-envs-agent/1"
+
+
+@contextlib.contextmanager
+def staged_run_folder(out: Path) -> Iterator[Path]:
+    """A fresh empty folder beside ``out``, renamed to ``out`` when the block ends normally
+    and removed when it raises (an interrupted run leaves nothing behind).
+
+    ``out`` must not exist or be an empty folder (``ValueError`` naming it otherwise). The
+    rename is atomic and refuses a non-empty ``out``, so of two runs started into one
+    folder the second to finish gets a ``ValueError``, its files are removed, and the
+    first's folder is untouched.
+    """
+    out = Path(out)
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise ValueError(
+            f"--out {out} is not an empty folder (it may hold a run); choose another folder"
+        )
+    out.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        os.chmod(staging, 0o777 & ~current_umask())  # mkdtemp's 0o700 is for temporaries
+        yield staging
+        try:
+            os.replace(staging, out)  # POSIX rename(2): fails unless out is absent or empty
+        except OSError:
+            raise ValueError(
+                f"--out {out} was filled by another run while this one trained; this run "
+                "is discarded (choose another folder)"
+            ) from None
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
 
 
 def write_json(path: Path, obj: Any) -> None:
@@ -195,6 +231,15 @@ def _read_json(path: Path, run_dir: Path) -> dict[str, Any]:
     return doc
 
 
+def _inside(name: Any) -> bool:
+    """Whether a ``run.json`` file entry names a file inside the run folder (a relative
+    path without ``..``, not absolute, no drive)."""
+    if not isinstance(name, str) or not name or "\x00" in name or "\\" in name:
+        return False
+    parts = Path(name).parts
+    return not Path(name).is_absolute() and ".." not in parts and ":" not in name
+
+
 def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     """Load a run folder (``which="best"``: ``agent.zip``, ``"final"``: ``final_agent.zip``).
 
@@ -229,6 +274,11 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
         if name not in files:
             raise ValueError(f"run folder {run_dir}: run.json does not list {name}")
     for name, digest in files.items():
+        if not _inside(name):
+            raise ValueError(
+                f"run folder {run_dir}: run.json lists {name!r}, which is not a file name "
+                "inside the run folder"
+            )
         path = run_dir / name
         if not path.is_file():
             raise ValueError(f"run folder {run_dir}: {name} is missing")

@@ -24,6 +24,7 @@ train`` and every trial of ``motion-bench sweep`` call it):
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import json
 import shlex
@@ -37,10 +38,22 @@ from typing import Any
 
 from baselines import options
 from baselines.agents import checks
-from baselines.agents.config import ALGOS, parse_env_kwargs, resolve_hyperparams
+from baselines.agents.config import (
+    ALGOS,
+    parse_env_kwargs,
+    resolve_hyperparams,
+    unknown_env_id,
+)
 from motion_envs._io import atomic_write_text
 
-__all__ = ["TrainConfig", "TrainResult", "equivalent_command", "register", "run"]
+__all__ = [
+    "TrainConfig",
+    "TrainResult",
+    "equivalent_command",
+    "preflight",
+    "register",
+    "run",
+]
 
 #: Called after every validation: ``{"timesteps", "val_criterion", "best_val_criterion",
 #: "is_best", "run_dir"}``.
@@ -88,9 +101,30 @@ def _check_config(config: TrainConfig) -> None:
     import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
 
     if config.env_id not in gym.registry:
-        raise ValueError(f"--env {config.env_id!r} is not a registered environment id")
+        raise ValueError(f"--env {unknown_env_id(config.env_id)}")
     if isinstance(config.seed, bool) or not isinstance(config.seed, int) or config.seed < 0:
         raise ValueError(f"--seed must be an integer >= 0; got {config.seed!r}")
+
+
+def preflight(config: TrainConfig) -> dict[str, Any]:
+    """Every check of a run that needs no training: algorithm, registered id, seed, the
+    resolved hyper-parameters, the constructor's keywords and the validation split (with
+    ``n_envs``); the resolved hyper-parameters. ``run`` calls it first, ``motion-bench
+    sweep`` for every configuration and seed before Ray starts."""
+    from baselines.agents.scorers import check_validation_split
+
+    _check_config(config)
+    overrides: dict[str, Any] = dict(config.overrides)
+    if config.timesteps is not None:
+        overrides["n_timesteps"] = config.timesteps
+    if config.n_envs is not None:
+        overrides["n_envs"] = config.n_envs
+    if config.env_kwargs:
+        overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
+    hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
+    checks.check_env_kwargs(config.env_id, hp["env_kwargs"])
+    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    return hp
 
 
 def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
@@ -114,7 +148,31 @@ def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
 
 
 def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> TrainResult:
-    """Train, validate, save the run folder; see the module docstring."""
+    """Train, validate, save the run folder; see the module docstring.
+
+    ``--out`` must not exist or be an empty folder. The run is written into a fresh
+    staging folder beside it (``.NAME.partial-*``, removed if training fails or is
+    interrupted) and renamed to ``--out`` once complete, so a run folder holds exactly one
+    run's files; of two runs into one folder the second to finish is refused.
+    """
+    from baselines.agents.rundir import staged_run_folder
+
+    hp = preflight(config)
+    out = Path(config.out)
+    # a fresh staging folder beside --out, renamed into place once complete: nothing of an
+    # interrupted or concurrent run (a stale normalization.npz) can end up in the run
+    with staged_run_folder(out) as staging:
+        result = _train(config, hp, staging, on_evaluation)
+    return dataclasses.replace(result, run_dir=str(out))
+
+
+def _train(
+    config: TrainConfig,
+    hp: dict[str, Any],
+    run_dir: Path,
+    on_evaluation: EvaluationHook | None,
+) -> TrainResult:
+    """Train into the (empty, staging) ``run_dir``; see :func:`run`."""
     import torch
     from stable_baselines3.common.utils import set_random_seed
 
@@ -126,23 +184,7 @@ def run(config: TrainConfig, on_evaluation: EvaluationHook | None = None) -> Tra
     from baselines.agents.evaluate import split_criterion
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
-    from baselines.agents.scorers import check_validation_split
     from baselines.sb3 import TqdmCallback
-
-    _check_config(config)
-    overrides: dict[str, Any] = dict(config.overrides)
-    if config.timesteps is not None:
-        overrides["n_timesteps"] = config.timesteps
-    if config.n_envs is not None:
-        overrides["n_envs"] = config.n_envs
-    if config.env_kwargs:
-        overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
-    hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
-    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
-    run_dir = Path(config.out)
-    if (run_dir / "run.json").exists():
-        raise ValueError(f"--out {run_dir} already holds a run (run.json); choose another folder")
-    run_dir.mkdir(parents=True, exist_ok=True)
 
     torch.set_num_threads(int(hp["torch_threads"]))
     set_random_seed(config.seed)

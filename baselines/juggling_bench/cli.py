@@ -18,6 +18,7 @@ from motion_envs.datasets.juggling import JugglingTask
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench juggling`` with parsed arguments: run, print, write."""
+    out = options.results_folder(args.out, "juggling")
     config = JugglingConfig(
         cycles=args.cycles,
         noise=args.noise,
@@ -37,9 +38,8 @@ def main(args: argparse.Namespace) -> int:
     doc = run(config)
     doc["timing"]["total_s"] = time.perf_counter() - t0
     print(report(doc))
-    if args.out:
-        paths = write(doc, args.out, video=not args.no_video)
-        print("wrote " + ", ".join(str(p) for p in paths))
+    paths = write(doc, out, video=not args.no_video)
+    print("wrote " + ", ".join(str(p) for p in paths))
     print(f"total {doc['timing']['total_s']:.1f} s")
     return 0
 
@@ -56,11 +56,17 @@ def noise_levels(text: str) -> tuple[float, ...]:
     return levels
 
 
+#: ``--gravity``'s range (m/s^2): the default 1.0 (the paper's phase sizes) to beyond
+#: Jupiter's 24.8; outside it the phase timings under- or overflow.
+GRAVITY_RANGE = (0.1, 100.0)
+#: ``--tracking``'s range (m): tracking noise std up to 10 cm.
+TRACKING_RANGE = (0.0, 0.1)
+
+
 def gravity_task(text: str) -> JugglingTask:
-    """``--gravity``: a finite number > 0 (m/s^2), as the task it defines."""
-    value = options.non_negative_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0; got {text!r}")
+    """``--gravity``: a finite number in :data:`GRAVITY_RANGE` (m/s^2), as the task it
+    defines."""
+    value = options.float_in(*GRAVITY_RANGE, "(m/s^2)")(text)
     try:
         return JugglingTask(gravity=value)
     except ValueError as exc:
@@ -125,7 +131,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help="release-velocity noise levels (relative std), comma-separated",
     )
     p.add_argument(
-        "--tracking", type=options.non_negative_float, default=0.0005, help="tracking noise std (m)"
+        "--tracking",
+        type=options.float_in(*TRACKING_RANGE, "(m)"),
+        default=0.0005,
+        help="tracking noise std (m), in [0, 0.1]",
     )
     p.add_argument(
         "--seed",
@@ -150,13 +159,14 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--gravity",
         type=gravity_task,
         default="1.0",
-        help="m/s^2 (9.81: real gravity)",
+        help="m/s^2, in [0.1, 100] (1.0: the paper's phase sizes; 9.81: real gravity)",
     )
     p.add_argument(
         "--out",
         type=options.output_folder,
         default=None,
-        help="folder for results.json/.csv, plot, GIF (nothing written without it)",
+        help="folder for results.json/.csv, plot, GIF (default: results/juggling, the folder "
+        "of motion-bench all)",
     )
     p.add_argument(
         "--world",

@@ -1,5 +1,5 @@
 """The configuration of ``motion-bench juggling``: :class:`JugglingConfig`, its range
-checks (:func:`check_config`) and the targets of issue 9."""
+checks (:func:`check_config`) and the benchmark's acceptance targets."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from baselines import options
 from motion_envs.datasets.juggling import MIN_SPLIT_CYCLES, JugglingTask
 from motion_envs.models.juggling import DEMO_CYCLES, FIT_SEED, FIT_TEST_FRACTION, TRACKING_NOISE
 
-#: Targets of issue 9, checked in ``results["targets"]``.
+#: The benchmark's acceptance targets, checked in ``results["targets"]``.
 TARGET_UNPERTURBED = 0.99
 TARGET_NOISE5_CORRECTED = 0.90
 TARGET_VARIABILITY_RATIO = 1.5

@@ -82,7 +82,7 @@ def report(doc: dict[str, Any]) -> str:
                 f"{row['ci_rel']:9.2f}{row['jack_rel']:10.2f}"
             )
     t = doc["targets"]
-    lines += ["", "targets (issue 9):"]
+    lines += ["", "acceptance targets:"]
     lines.append(f"  unperturbed catch rate >= 0.99: {_met(t['unperturbed_catch_rate>=0.99'])}")
     lines.append(f"  5 % noise with eq. 10 >= 0.90: {_met(t['noise5_corrected_catch_rate>=0.90'])}")
     for key, text in (

@@ -4,6 +4,7 @@ interval over groups (subjects, shapes), its printed line, and the per-group bar
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +13,14 @@ from numpy.typing import NDArray
 
 from motion_envs._io import save_figure
 
-__all__ = ["bootstrap_ratio", "format_comparison", "plot_ratios"]
+__all__ = [
+    "bootstrap_ratio",
+    "format_comparison",
+    "natural_key",
+    "plot_ratios",
+    "ratio_figure",
+    "row_words",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -58,34 +66,85 @@ def format_comparison(c: dict[str, Any], group: str, widths: tuple[int, int]) ->
     )
 
 
-def plot_ratios(
-    comparisons: list[dict[str, Any]], path: str | Path, title: str, group: str = "subject"
-) -> Path:
-    """Bar plot of the per-group ratio learned / best analytic (one panel per comparison).
+def natural_key(name: str) -> tuple[Any, ...]:
+    """Sort key ordering ``"9" < "10"`` and ``"Leaf_2" < "Leaf_10"`` (digits as numbers)."""
+    return tuple(
+        (0, int(t), "") if t.isdigit() else (1, 0, t.lower()) for t in re.split(r"(\d+)", name) if t
+    )
 
-    Written atomically to ``path`` (:func:`motion_envs._io.save_figure`); returns it.
-    """
+
+_TOKENS = {"mlp": "MLP", "null": "null model", "path": "in the path frame"}
+
+
+def row_words(row: str) -> str:
+    """A row id in words: ``mlp_loso`` -> ``MLP (leave one subject out)``,
+    ``null_d2_path_loso`` -> ``null model, d = 2, in the path frame (leave one subject
+    out)``."""
+    text = row.replace("task_predictor", "task predictor")
+    text = text.replace("predicted_timing", "with predicted timing")
+    loso = False
+    words: list[str] = []
+    for token in text.split("_"):
+        if token == "loso":
+            loso = True
+        elif re.fullmatch(r"d\d+", token):
+            words.append(f"d = {token[1:]}")
+        else:
+            words.append(_TOKENS.get(token, token))
+    return ", ".join(words) + (" (leave one subject out)" if loso else "")
+
+
+def ratio_figure(comparisons: list[dict[str, Any]], title: str, group: str = "subject") -> Any:
+    """The figure of :func:`plot_ratios`: one panel per comparison, a horizontal bar per
+    group (sorted naturally, labels upright at 8 pt or more), coloured by which side is
+    better (legend), the parity line and the target; titles in words."""
     from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
 
     n = len(comparisons)
     cols = min(2, n)
     rows = -(-n // cols)
-    fig = Figure(figsize=(5.5 * cols, 3.4 * rows), constrained_layout=True)
+    n_groups = max((len(c["per_group_ratio"]) for c in comparisons), default=1)
+    height = max(3.0, 0.24 * n_groups + 1.6)
+    fig = Figure(figsize=(6.0 * cols, height * rows), constrained_layout=True)
     axes = fig.subplots(rows, cols, squeeze=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     for ax, c in zip(axes.ravel(), comparisons, strict=False):
-        names = list(c["per_group_ratio"])
+        names = sorted(c["per_group_ratio"], key=natural_key)
         vals = np.array([c["per_group_ratio"][k] for k in names])
-        ax.bar(range(len(names)), vals, color=np.where(vals < 1, "C2", "C3"))
-        ax.axhline(1.0, color="k", lw=0.8)
+        ax.barh(range(len(names)), vals, color=np.where(vals < 1, "C2", "C3"))
+        ax.axvline(1.0, color="k", lw=0.8)
+        handles = [
+            Patch(color="C2", label="learned better (< 1)"),
+            Patch(color="C3", label="analytic better (>= 1)"),
+        ]
         if c.get("target_ratio"):
-            ax.axhline(c["target_ratio"], color="C0", lw=0.8, ls="--", label="target")
-            ax.legend(fontsize=7)
-        ax.set_xticks(range(len(names)))
-        ax.set_xticklabels(names, rotation=90, fontsize=6)
-        ax.set_xlabel(group)
-        ax.set_ylabel("median max error ratio")
-        ax.set_title(f"{c['learned']} /\n{c['best_analytic']}: {c['ratio']:.3f}", fontsize=8)
-    fig.suptitle(title, fontsize=9)
-    return save_figure(fig, path, dpi=100)
+            handles.append(
+                ax.axvline(c["target_ratio"], color="C0", lw=1.0, ls="--", label="target")
+            )
+        ax.legend(handles=handles, fontsize=8, loc="lower right")
+        ax.set_yticks(range(len(names)))
+        ax.set_yticklabels(names, fontsize=8)
+        ax.invert_yaxis()  # first group at the top
+        ax.tick_params(axis="x", labelsize=8)
+        ax.set_ylabel(group, fontsize=9)
+        ax.set_xlabel("ratio of median max errors, learned / analytic", fontsize=9)
+        lo, hi = (c.get("ratio_ci95") or [float("nan")] * 2)[:2]
+        ax.set_title(
+            f"{row_words(c['learned'])}\nvs {row_words(c['best_analytic'])}: "
+            f"ratio {c['ratio']:.3f} (95 % CI {lo:.3f} to {hi:.3f})",
+            fontsize=9,
+        )
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def plot_ratios(
+    comparisons: list[dict[str, Any]], path: str | Path, title: str, group: str = "subject"
+) -> Path:
+    """Bar plot of the per-group ratio learned / best analytic (one panel per comparison,
+    :func:`ratio_figure`). Written atomically to ``path``
+    (:func:`motion_envs._io.save_figure`); returns it.
+    """
+    return save_figure(ratio_figure(comparisons, title, group), path, dpi=100)

@@ -21,6 +21,7 @@ from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench orientation`` with parsed arguments: run, print, write."""
+    out = options.results_folder(args.out, f"orientation-{Path(args.data).stem}")
     config = OrientationConfig(
         data=args.data,
         min_deg=args.min_deg,
@@ -36,9 +37,8 @@ def main(args: argparse.Namespace) -> int:
     )
     results = run(config)
     print(report(results))
-    if args.out is not None:
-        written = write(results, args.out)
-        print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+    written = write(results, out)
+    print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
     return 0
 
 
@@ -97,7 +97,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     )
     p.add_argument(
         "--min-deg",
-        type=options.non_negative_float,
+        type=options.float_in(0.0, 180.0, "(degrees)"),
         default=DEFAULT_MIN_DEG,
         help="drop trajectories rotating less than this many degrees from start to end",
     )
@@ -105,7 +105,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--out",
         default=None,
         type=options.output_folder,
-        help="folder for results.json, results.csv and residuals.png (nothing written without it)",
+        help="folder for results.json, results.csv and residuals.png (default: "
+        "results/orientation-DATA, the folder of motion-bench all)",
     )
     p.add_argument(
         "--plot-task",

@@ -34,6 +34,7 @@ def warn_missing_peers(use_peers: bool) -> None:
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench position`` with parsed arguments: run, print, write."""
+    out = options.results_folder(args.out, f"position-{Path(args.data).stem}")
     warn_missing_peers(not args.no_peers)
     config = PositionConfig(
         data=args.data,
@@ -51,9 +52,8 @@ def main(args: argparse.Namespace) -> int:
     )
     doc = run(config)
     print(report(doc))
-    if args.out:
-        written = write(doc, args.out)
-        print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+    written = write(doc, out)
+    print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
     return 0
 
 
@@ -108,15 +108,28 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
             "(movement_primitives, same start and goal). Criteria: max error (the papers'),\n"
             "RMSE, DTW, swept error area; median over a shape's demonstrations, then across\n"
             "shapes. ridge and mlp: learned residuals (ridge, torch MLP) of the conditions,\n"
-            "every hyper-parameter chosen on the training demonstrations only (--learned)."
+            "every hyper-parameter chosen on the training demonstrations only (--learned).\n"
+            "\n"
+            "Position CSV (--data PATH): one row per sample, header required, extra\n"
+            "columns ignored; columns trajectory,subject,task,t,x,y[,z]:\n"
+            "- trajectory: an identifier; the rows of one trajectory are contiguous\n"
+            "- subject, task: labels; a task is one shape, its trajectories the\n"
+            "  demonstrations\n"
+            "- t: seconds, strictly increasing within a trajectory\n"
+            "- x, y[, z]: positions (any unit, the same for every row)\n"
+            "\n"
+            "Each trajectory needs at least 5 samples. Leave-one-out scores a shape with at\n"
+            "least 3 demonstrations; with --n-sines auto or --learned (the default) it\n"
+            "needs at least 4 (3 left to cross-validate on in every fold)."
         ),
     )
     p.add_argument(
         "--data",
         default="lasa",
         type=position_data,
-        help="'lasa', a position CSV path, or a recording 'FILE.c3d|.bvh|.tsv?option=value&...' "
-        "with motion-bench import's options (docs/recordings.md)",
+        help="'lasa', a position CSV path (format above), or a recording "
+        "'FILE.c3d|.bvh|.tsv?option=value&...' with motion-bench import's options "
+        "(docs/recordings.md)",
     )
     p.add_argument(
         "--shapes", nargs="+", default=None, help="shapes (LASA) or tasks (CSV); default: all"
@@ -125,7 +138,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--out",
         default=None,
         type=options.output_folder,
-        help="folder for results.json/.csv and shapes.png (nothing written without it)",
+        help="folder for results.json/.csv and shapes.png (default: results/position-DATA, "
+        "the folder of motion-bench all)",
     )
     p.add_argument(
         "--n-points", type=options.int_at_least(5), default=200, help="normalised-time grid size"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 import time
 from collections import Counter, defaultdict
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -109,6 +110,38 @@ def _validation_rows(
     return model.validate().summary()
 
 
+#: Fewest demonstrations of a shape that leave-one-out scores (``position_folds``).
+MIN_DEMOS_LOO = 3
+#: Fewest training demonstrations from which ``--n-sines auto`` chooses N (leave-one-out
+#: cross-validation inside each fold, :mod:`motion_envs.models.sine_regression`) and the
+#: learned rows their hyper-parameters (nested cross-validation).
+MIN_TRAIN_FOR_AUTO = 3
+
+
+def _check_enough_demonstrations(
+    dataset: Any, folds: Any, split: str, n_sines: int | None, learned: Sequence[str]
+) -> None:
+    """Refuse, before any fitting, a shape whose folds leave too few demonstrations to
+    choose ``N`` (``--n-sines auto``) or the learned rows' hyper-parameters by
+    cross-validation on the training demonstrations; the message names the shape, its
+    demonstrations and the true rule."""
+    what = [w for w, on in (("--n-sines auto", n_sines is None), ("--learned", learned)) if on]
+    if not what:
+        return
+    for task in dataset.task_names():
+        train_sizes = [f[1].size for f in folds if f[0] == task]
+        if train_sizes and min(train_sizes) < MIN_TRAIN_FOR_AUTO:
+            n = int((dataset.tasks == task).sum())
+            needed = n + MIN_TRAIN_FOR_AUTO - min(train_sizes)
+            how = "leave-one-out" if split == "loo" else f"the {split!r} split"
+            raise ValueError(
+                f"shape {task!r} has {n} demonstrations; {how} with {' and '.join(what)} "
+                f"needs at least {needed} ({MIN_TRAIN_FOR_AUTO} left in every fold for the "
+                "cross-validation on training demonstrations); give --n-sines N and "
+                "--learned off, or drop the shape with --shapes"
+            )
+
+
 def run_benchmark(
     dataset: PositionDataset,
     n_points: int = 200,
@@ -160,6 +193,7 @@ def run_benchmark(
     predictions: dict[str, dict[str, FloatArray]] = {}
     truths: dict[str, FloatArray] = {}
     folds = position_folds(dataset, split, test_fraction, split_seed)
+    _check_enough_demonstrations(dataset, folds, split, n_sines, learned_methods)
     skipped = []
     for task in tqdm(dataset.task_names(), desc="shapes", file=sys.stderr, disable=not progress):
         task_folds = [f for f in folds if f[0] == task]
@@ -193,9 +227,10 @@ def run_benchmark(
         predictions[task] = preds
         truths[task] = y
     if not per_shape:
+        counts = ", ".join(f"{t!r}: {int((dataset.tasks == t).sum())}" for t in skipped)
         raise ValueError(
-            f"no shape/task can be scored on split {split!r} "
-            "(leave-one-out needs 3 or more trajectories per task)"
+            f"no shape/task can be scored on split {split!r}: each needs at least "
+            f"{MIN_DEMOS_LOO} demonstrations (demonstrations per shape: {counts})"
         )
     summary = {
         m: {

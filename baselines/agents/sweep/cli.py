@@ -37,7 +37,7 @@ def _cli(args: argparse.Namespace) -> int:
         address=args.address,
         num_cpus=args.num_cpus,
         resume=args.resume,
-        progress=not args.no_progress,
+        progress=args.verbose and not args.no_progress,
     )
     try:
         results = run(sweep)
@@ -79,5 +79,13 @@ def register(subparsers: Any) -> None:
         "--resume", action="store_true",
         help="continue the interrupted sweep in --out (or start it if --out holds none)",
     )  # fmt: skip
-    p.add_argument("--no-progress", action="store_true", help="no Ray Tune status table")
+    p.add_argument(
+        "--verbose", action="store_true",
+        help="Ray's log lines and Ray Tune's status table (default: quiet; the results table "
+        "is printed either way)",
+    )  # fmt: skip
+    p.add_argument(
+        "--no-progress", action="store_true",
+        help="no Ray Tune status table (the default; kept for scripts, overrides --verbose)",
+    )  # fmt: skip
     p.set_defaults(func=_cli)

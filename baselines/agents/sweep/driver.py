@@ -5,6 +5,7 @@ trials collected into the results (:func:`run`)."""
 from __future__ import annotations
 
 import json
+import logging
 import os
 import time
 from pathlib import Path
@@ -85,13 +86,16 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     _claim_out(sweep, out)
     started_here = False
     if not ray.is_initialized():
+        # quiet unless --verbose: Ray's start-up log lines go to its log files only
+        level = logging.INFO if sweep.progress else logging.ERROR
         if sweep.address is not None:
-            ray.init(address=sweep.address, log_to_driver=False)
+            ray.init(address=sweep.address, log_to_driver=False, logging_level=level)
         else:
             ray.init(
                 num_cpus=sweep.num_cpus or os.cpu_count(),
                 log_to_driver=False,
                 include_dashboard=False,
+                logging_level=level,
             )
         started_here = True
     t0 = time.perf_counter()
@@ -133,7 +137,19 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
                 tune_config=tune.TuneConfig(metric="best_val_criterion", mode="min"),
                 run_config=run_config,
             )
-        grid = tuner.fit()
+        # quiet unless --verbose: Ray Tune's newer console output prints its configuration
+        # box and result paths even at verbose=0; its classic reporter prints nothing then
+        quiet = {"RAY_AIR_NEW_OUTPUT": "0"} if not sweep.progress else {}
+        saved = {k: os.environ.get(k) for k in quiet}
+        os.environ.update(quiet)
+        try:
+            grid = tuner.fit()
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
     finally:
         wall = time.perf_counter() - t0
         if started_here:

@@ -104,14 +104,26 @@ def format_table(results: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def relative_to_out(path: str, out: Path) -> str:
+    """``path`` relative to ``out`` when it lies inside it (POSIX separators), else as is."""
+    try:
+        return Path(path).resolve().relative_to(Path(out).resolve()).as_posix()
+    except ValueError:
+        return str(path)
+
+
 def write_results(results: Mapping[str, Any], out: Path) -> None:
-    """results.json, trials.csv, table.csv, table.md and sweep.png in ``out``."""
+    """results.json, trials.csv (run folders relative to ``out``), table.csv, table.md and
+    sweep.png in ``out``."""
     import pandas as pd
 
     from baselines.agents.rundir import write_json
 
     write_json(out / "results.json", dict(results))
-    trials = pd.DataFrame(results["trials"]).to_csv(index=False, float_format="%.17g")
+    frame = pd.DataFrame(results["trials"])
+    if "run_dir" in frame:  # relative to --out, so that the folder can be moved or shared
+        frame["run_dir"] = [relative_to_out(p, out) for p in frame["run_dir"]]
+    trials = frame.to_csv(index=False, float_format="%.17g")
     atomic_write_text(out / "trials.csv", trials)
     table = pd.DataFrame(results["configurations"]).drop(
         columns=["overrides", "test_criteria", "seeds"]

@@ -74,10 +74,13 @@ def train_and_score(
     t0 = time.perf_counter()
     resumed = (run_dir / "run.json").exists()  # finished before an interruption: rescore it
     if not resumed:
-        if run_dir.exists():  # an interrupted trial: start it over
-            import shutil
+        import shutil
 
+        if run_dir.exists():  # an interrupted trial: start it over
             shutil.rmtree(run_dir)
+        # the staging folder of a trial whose worker was stopped before train could remove it
+        for leftover in run_dir.parent.glob(f".{run_dir.name}.partial-*"):
+            shutil.rmtree(leftover, ignore_errors=True)
 
         def report(ev: dict[str, Any]) -> None:
             keys = ("timesteps", "val_criterion", "best_val_criterion")
