@@ -14,7 +14,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs._common import LazyRendererMixin, check_reward_weights, check_scale
+from motion_envs.envs._common import (
+    MAX_FRAME_SIZE,
+    LazyRendererMixin,
+    as_action,
+    check_integer,
+    check_number,
+    check_reward_weights,
+    check_scale,
+)
 from motion_envs.envs.juggling._scene import JugglingScene
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
@@ -25,7 +33,11 @@ from motion_envs.models.juggling import (
 __all__ = [
     "CYCLE_TIME_LIMIT",
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
+    "GRAVITY_RANGE",
     "HAND_SPEED_MARGIN",
+    "MAX_RELEASE_NOISE",
+    "MAX_RESIDUAL_SCALE",
+    "MAX_TRACKING_NOISE",
     "OBS_DIM",
     "POSITION_MARGIN",
     "JugglingEnv",
@@ -50,6 +62,16 @@ POSITION_MARGIN = 10.0
 #: the velocity bound adds the largest jump of the offset, ``3 residual_scale / dt``.
 HAND_SPEED_MARGIN = 10.0
 
+#: Accepted ``gravity`` (m/s^2): from a hundredth of the default slow world to ten times
+#: Earth's; beyond, a toss takes hours or a millisecond (and the flight arithmetic overflows).
+GRAVITY_RANGE = (0.01, 100.0)
+#: Largest accepted ``residual_scale`` (m): an arm's reach.
+MAX_RESIDUAL_SCALE = 1.0
+#: Largest accepted release-velocity noise (relative std: 1 = 100 %).
+MAX_RELEASE_NOISE = 1.0
+#: Largest accepted tracking noise (std, m: a tracker off by 10 cm is no tracker).
+MAX_TRACKING_NOISE = 0.1
+
 #: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
 #: the nominal's next hand position (2).
 OBS_DIM = 16
@@ -66,26 +88,21 @@ def _check_noise(noise: Any) -> JugglingNoise:
                 f"noise has unknown key(s) {sorted(unknown)}; expected 'release', 'tracking'"
             )
         values = dict(noise)
-    elif isinstance(noise, (int, float, np.floating)) and not isinstance(noise, bool):
-        level = float(noise)
+    elif isinstance(noise, (int, float, np.integer, np.floating)) and not isinstance(noise, bool):
+        level = check_number(noise, "noise", 0.0, MAX_RELEASE_NOISE)
         values = {"release": level, "tracking": TRACKING_NOISE if level > 0 else 0.0}
     else:
         raise ValueError(
             "noise must be a number (release-velocity std, relative), a mapping with keys "
             f"'release'/'tracking', or a JugglingNoise; got {noise!r}"
         )
-    for key, value in values.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"noise[{key!r}] must be a number >= 0; got {value!r}")
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"noise[{key!r}] must be finite and >= 0; got {value!r}")
-    return JugglingNoise(**{k: float(v) for k, v in values.items()})
+    highs = {"release": MAX_RELEASE_NOISE, "tracking": MAX_TRACKING_NOISE}
+    checked = {k: check_number(v, f"noise[{k!r}]", 0.0, highs[k]) for k, v in values.items()}
+    return JugglingNoise(**checked)
 
 
-def _check_int(value: Any, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}; got {value!r}")
-    return int(value)
+def _check_int(value: Any, name: str, low: int, high: int = 10_000) -> int:
+    return check_integer(value, name, low, high)
 
 
 class JugglingEnv(LazyRendererMixin, gym.Env):
@@ -194,13 +211,13 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
 
     | Parameter        | Type          | Default | Description |
     |------------------|---------------|---------|-------------|
-    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m) |
-    | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated |
-    | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1 |
+    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m); release at most 1, tracking at most 0.1 m |
+    | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated (at most 10,000) |
+    | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1, in (0, 1] (an arm's reach) |
     | `reward_weights` | **dict**      | `None`  | weights of the reward terms, keys `catch`, `drop`, `deviation`, `action` (None: 10, 10, 1, 0.01) |
-    | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them |
+    | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them (at most 10,000) |
     | `data`           | **str**       | `None`  | None: the built-in simulated demonstrations; or a path to the users' juggling CSV (`t, x, z[, ball_x, ball_z][, phase]`) |
-    | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity |
+    | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity; in [0.01, 100] m/s^2 |
     | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`) |
     | `width`          | **int**       | `480`   | frame width in pixels |
     | `height`         | **int**       | `480`   | frame height in pixels |
@@ -231,10 +248,10 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
                 f"got {render_mode!r}"
             )
         for name, value in (("width", width), ("height", height)):
-            _check_int(value, name, 16)
+            _check_int(value, name, 16, MAX_FRAME_SIZE)
         self.noise = _check_noise(noise)
         self.max_cycles = _check_int(max_cycles, "max_cycles", 1)
-        self.residual_scale = check_scale(residual_scale)
+        self.residual_scale = check_scale(residual_scale, MAX_RESIDUAL_SCALE)
         self.reward_weights = check_reward_weights(reward_weights, DEFAULT_JUGGLING_REWARD_WEIGHTS)
         self.frame_skip = _check_int(frame_skip, "frame_skip", 1)
         if data is not None and not isinstance(data, (str, os.PathLike)):
@@ -242,11 +259,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         if gravity is None:
             task = JugglingTask()
         else:
-            if isinstance(gravity, bool) or not isinstance(gravity, (int, float, np.floating)):
-                raise ValueError(f"gravity must be None or a number > 0; got {gravity!r}")
-            if not math.isfinite(gravity) or gravity <= 0:
-                raise ValueError(f"gravity must be finite and > 0; got {gravity!r}")
-            task = JugglingTask(gravity=float(gravity))
+            task = JugglingTask(gravity=check_number(gravity, "gravity", *GRAVITY_RANGE))
         self.task = task
         self.data_path = data
         self.juggler = load_juggler(data, task)
@@ -318,9 +331,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,); got shape {a.shape}")
+        a = as_action(action, (2,))
         ax, az = float(a[0]), float(a[1])
         invalid = not (math.isfinite(ax) and math.isfinite(az))
         if invalid:
