@@ -13,6 +13,7 @@ import pytest
 from motion_envs.envs.juggling import JugglingEnv
 
 HUGE = 10**400  # an int beyond float64's range: float(HUGE) raises OverflowError
+REACHING = ["MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0"]
 
 
 # -- item 7: numeric arguments and actions ----------------------------------------------
@@ -47,7 +48,7 @@ def test_juggling_huge_numbers_raise_value_error_naming_the_argument(kwargs, nam
         {"split_seed": HUGE},
     ],
 )
-@pytest.mark.parametrize("env_id", ["MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0"])
+@pytest.mark.parametrize("env_id", REACHING)
 def test_reaching_huge_numbers_raise_value_error(env_id, kwargs):
     import gymnasium as gym
 
@@ -76,7 +77,7 @@ def test_juggling_step_rejects_non_real_actions_with_value_error(action):
     env.step(np.zeros(2))  # the episode is intact
 
 
-@pytest.mark.parametrize("env_id", ["MotionEnvs/OrientationReach-v0", "MotionEnvs/PositionReach-v0"])
+@pytest.mark.parametrize("env_id", REACHING)
 @pytest.mark.parametrize("action", BAD_ACTIONS[:5], ids=lambda a: type(a).__name__)
 def test_reaching_step_rejects_the_same_actions(env_id, action):
     import gymnasium as gym
