@@ -107,3 +107,69 @@ def test_nan_action_is_zero_and_flagged():
     env.reset(seed=0)
     _, reward, *_, info = env.step(np.array([math.nan, 0.0]))
     assert info["action_invalid"] and math.isfinite(reward)
+
+
+# -- item 11: autoreset_mode= as a keyword of make_vec for Juggling-v0 -----------------
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep", "Disabled"])
+def test_juggling_make_vec_takes_autoreset_mode_like_sync(mode):
+    import gymnasium as gym
+    from gymnasium.vector import AutoresetMode
+
+    kw = {"max_cycles": 1, "frame_skip": 40, "residual_scale": 0.3}
+    env = gym.make_vec("MotionEnvs/Juggling-v0", num_envs=2, autoreset_mode=mode, **kw)
+    ref = gym.make_vec(
+        "MotionEnvs/Juggling-v0",
+        num_envs=2,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": AutoresetMode(mode)},
+        **kw,
+    )
+    assert env.metadata["autoreset_mode"] == AutoresetMode(mode)
+    o1, _ = env.reset(seed=3)
+    o2, _ = ref.reset(seed=3)
+    np.testing.assert_array_equal(o1, o2)
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        a = rng.uniform(-1, 1, (2, 2))
+        r1, r2 = env.step(a), ref.step(a)
+        for x, y in zip(r1[:4], r2[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+        assert r1[4].keys() == r2[4].keys()
+        if mode == "Disabled" and (r1[2] | r1[3]).any():
+            mask = r1[2] | r1[3]
+            env.reset(options={"reset_mask": mask})
+            ref.reset(options={"reset_mask": mask})
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+def test_the_docs_cleanrl_recipe_runs_on_juggling():
+    """docs/using-envs.md's CleanRL recipe, with the juggling id."""
+    import gymnasium as gym
+    from gymnasium.vector import AutoresetMode
+    from gymnasium.wrappers import vector as vw
+
+    envs = gym.make_vec(
+        "MotionEnvs/Juggling-v0",
+        num_envs=2,
+        autoreset_mode=AutoresetMode.SAME_STEP,
+        max_cycles=1,
+        frame_skip=50,
+    )
+    envs = vw.RecordEpisodeStatistics(vw.ClipAction(envs))
+    envs.reset(seed=1)
+    envs.action_space.seed(0)
+    seen = False
+    for _ in range(60):
+        *_, infos = envs.step(envs.action_space.sample())
+        if "episode" in infos:
+            seen = True
+            assert np.isfinite(infos["episode"]["r"][infos["_episode"]]).all()
+    assert seen
+
+
+def test_bad_autoreset_mode_is_a_value_error():
+    import gymnasium as gym
+
+    with pytest.raises(ValueError, match="autoreset_mode must"):
+        gym.make_vec("MotionEnvs/Juggling-v0", num_envs=2, autoreset_mode="Sometimes")

@@ -22,6 +22,7 @@ __all__ = [
     "JsonSpecMixin",
     "LazyRendererMixin",
     "as_action",
+    "check_autoreset_mode",
     "check_choice",
     "check_fraction",
     "check_integer",
@@ -130,6 +131,21 @@ def as_action(action: Any, shape: tuple[int, ...], name: str = "action") -> NDAr
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got shape {a.shape}")
     return a.astype(np.float64, copy=False)
+
+
+def check_autoreset_mode(mode: Any) -> Any:
+    """``mode`` as a ``gymnasium.vector.AutoresetMode`` (the enum or its value, e.g.
+    ``"SameStep"``); ``ValueError`` else."""
+    from gymnasium.vector import AutoresetMode
+
+    try:
+        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
+    except (ValueError, TypeError):
+        values = [m.value for m in AutoresetMode]
+        raise ValueError(
+            f"autoreset_mode must be a gymnasium.vector.AutoresetMode or one of {values}; "
+            f"got {mode!r}"
+        ) from None
 
 
 def check_choice(value: Any, name: str, choices: tuple[str, ...]) -> str:

@@ -24,6 +24,7 @@ from motion_envs.envs._common import (
     N_STEPS,
     JsonSpecMixin,
     as_action,
+    check_autoreset_mode,
     check_max_episode_steps,
     check_num_envs,
 )
@@ -44,17 +45,6 @@ _POOL = 64  # trajectory draws per sub-environment taken from its generator at o
 # Below this many sub-environments the numpy backend runs the kind's scalar step per
 # environment (numpy's per-call overhead dominates small batches).
 _SCALAR_BELOW = 8
-
-
-def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
-    try:
-        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
-    except ValueError:
-        values = [m.value for m in AutoresetMode]
-        raise ValueError(
-            f"autoreset_mode must be a gymnasium.vector.AutoresetMode or one of {values}; "
-            f"got {mode!r}"
-        ) from None
 
 
 class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
@@ -116,7 +106,7 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._n_traj = task.n_trajectories
         self.num_envs = check_num_envs(num_envs)
         self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
-        self.autoreset_mode = _check_autoreset_mode(autoreset_mode)
+        self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self._mode = _MODES[self.autoreset_mode]
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.backend = K.resolve_vector_backend(backend)
