@@ -173,3 +173,28 @@ def test_bad_autoreset_mode_is_a_value_error():
 
     with pytest.raises(ValueError, match="autoreset_mode must"):
         gym.make_vec("MotionEnvs/Juggling-v0", num_envs=2, autoreset_mode="Sometimes")
+
+
+# -- item 6: reset(options={"cycle": N}) is O(1) and bit-identical to the spawned cycles --
+def test_cycle_rng_is_the_spawned_cycle():
+    from motion_envs.models.juggling import cycle_rng, cycle_rngs
+
+    for seed in (0, 3, 2**40 + 7):
+        ref = cycle_rngs(seed, 12)
+        for i in (0, 1, 5, 11):
+            got = cycle_rng(seed, i)
+            for g, r in zip(got, ref[i], strict=True):
+                np.testing.assert_array_equal(g.random(8), r.random(8))
+
+
+def test_reset_to_a_huge_cycle_is_fast_and_bounded():
+    import time
+
+    env = JugglingEnv(max_cycles=1)
+    start = time.perf_counter()
+    _, info = env.reset(seed=0, options={"cycle": 10**7})
+    env.reset(seed=0, options={"cycle": 2**63 - 1})
+    assert time.perf_counter() - start < 1.0 and info["cycle"] == 10**7
+    for bad in (2**63, -1, 1.5, "3", True):
+        with pytest.raises(ValueError, match=r"options\['cycle'\]"):
+            env.reset(seed=0, options={"cycle": bad})

@@ -26,7 +26,7 @@ from motion_envs.envs._common import (
 from motion_envs.envs.juggling._scene import JugglingScene
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
-    cycle_rngs,
+    cycle_rng,
     load_juggler,
 )
 
@@ -35,6 +35,7 @@ __all__ = [
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
     "GRAVITY_RANGE",
     "HAND_SPEED_MARGIN",
+    "MAX_CYCLE_INDEX",
     "MAX_RELEASE_NOISE",
     "MAX_RESIDUAL_SCALE",
     "MAX_TRACKING_NOISE",
@@ -71,6 +72,9 @@ MAX_RESIDUAL_SCALE = 1.0
 MAX_RELEASE_NOISE = 1.0
 #: Largest accepted tracking noise (std, m: a tracker off by 10 cm is no tracker).
 MAX_TRACKING_NOISE = 0.1
+
+#: Largest ``options["cycle"]`` of ``reset`` (any cycle is O(1); the bound is a seed's).
+MAX_CYCLE_INDEX = 2**63 - 1
 
 #: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
 #: the nominal's next hand position (2).
@@ -191,7 +195,8 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     and the tracking noise of every control period,
     ``motion_envs.models.juggling.draw_episode_noise``), one for the juggler (its
     random phase end points and durations); so the zero-action episode's first cycle *is*
-    that cycle. Without a seed, ``S`` is drawn from the environment's generator. Each
+    that cycle. Any ``i`` up to ``2**63 - 1`` costs the same (the cycle's generators come from
+    its spawn key, ``models.juggling.cycle_rng``). Without a seed, ``S`` is drawn from the environment's generator. Each
     later toss of the episode redraws the world's noise from the world generator.
 
     ## Episode End
@@ -305,12 +310,9 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         super().reset(seed=seed)
         cycle = 0
         if options is not None and options.get("cycle") is not None:
-            cycle = options["cycle"]
-            if isinstance(cycle, bool) or not isinstance(cycle, (int, np.integer)) or cycle < 0:
-                raise ValueError(f"options['cycle'] must be an integer >= 0; got {cycle!r}")
-            cycle = int(cycle)
+            cycle = check_integer(options["cycle"], "options['cycle']", 0, MAX_CYCLE_INDEX)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
-        self._world_rng, juggler_rng = cycle_rngs(base, cycle + 1)[cycle]
+        self._world_rng, juggler_rng = cycle_rng(base, cycle)
         home = np.asarray(getattr(self.juggler, "home_", self.task.home), dtype=np.float64)
         state = self.scene.reset(home, noise=self.noise, rng=self._world_rng)
         self.juggler.reset(state, juggler_rng)
