@@ -198,3 +198,52 @@ def test_reset_to_a_huge_cycle_is_fast_and_bounded():
     for bad in (2**63, -1, 1.5, "3", True):
         with pytest.raises(ValueError, match=r"options\['cycle'\]"):
             env.reset(seed=0, options={"cycle": bad})
+
+
+# -- item 8: native vector infos on the autoreset step equal SyncVectorEnv's ------------
+def _same_infos(a, b, where=""):
+    assert set(a) == set(b), (where, sorted(set(a) ^ set(b)))
+    for key in a:
+        if isinstance(a[key], dict):
+            _same_infos(a[key], b[key], f"{where}/{key}")
+        elif key.startswith("_") or key in ("final_obs",):
+            mask = np.asarray(a[key])
+            if key == "final_obs":
+                for x, y in zip(a[key], b[key], strict=True):
+                    assert (x is None) == (y is None)
+                    if x is not None:
+                        np.testing.assert_array_equal(x, y)
+            else:
+                np.testing.assert_array_equal(mask, b[key], err_msg=f"{where}/{key}")
+    for key in a:
+        if not key.startswith("_") and "_" + key in a and not isinstance(a[key], dict):
+            m = np.asarray(a["_" + key])
+            if key != "final_obs":
+                np.testing.assert_array_equal(np.asarray(a[key])[m], np.asarray(b[key])[m])
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+@pytest.mark.parametrize("mode", ["NextStep", "SameStep"])
+@pytest.mark.parametrize("env_id", REACHING)
+@pytest.mark.parametrize("num_envs", [1, 3, 9])
+def test_native_infos_equal_sync_on_the_autoreset_step(env_id, mode, num_envs):
+    """Every sub-environment ends on the same step (zero actions, 50 steps): the native
+    infos had ``error``, ``tau``, ``reward_*`` with all-False masks that Sync has not."""
+    import gymnasium as gym
+    from gymnasium.vector import AutoresetMode
+
+    nat = gym.make_vec(env_id, num_envs=num_envs, autoreset_mode=mode)
+    syn = gym.make_vec(
+        env_id,
+        num_envs=num_envs,
+        vectorization_mode="sync",
+        vector_kwargs={"autoreset_mode": AutoresetMode(mode)},
+    )
+    _, i1 = nat.reset(seed=0)
+    _, i2 = syn.reset(seed=0)
+    zeros = np.zeros(nat.action_space.shape)
+    for t in range(105):
+        r1, r2 = nat.step(zeros), syn.step(zeros)
+        for x, y in zip(r1[:4], r2[:4], strict=True):
+            np.testing.assert_array_equal(x, y, err_msg=f"step {t}")
+        _same_infos(r1[4], r2[4], f"step {t}")

@@ -332,10 +332,15 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
     def _infos(
         self, out_f: NDArray[np.float64], out_b: NDArray[np.bool_], n_term: int, n_reset: int
     ) -> dict[str, Any]:
-        """The vector infos of a step from the float and flag outputs (views, no copies)."""
-        info = self._step_infos(out_f, out_b[2])
+        """The vector infos of a step from the float and flag outputs (views, no copies).
+
+        As ``SyncVectorEnv``, a key is present only when some sub-environment reports it:
+        on a step where every sub-environment autoresets (NEXT_STEP) or ends (SAME_STEP)
+        the step keys are left out, not given all-False masks.
+        """
         if not (n_term or n_reset):
-            return info
+            return self._step_infos(out_f, out_b[2])
+        info = self._step_infos(out_f, out_b[2]) if out_b[2].any() else {}
         terminated, reset = out_b[0], out_b[3]
         t = self._n_info + 1  # the row of tau
         if self._mode == _SAME:
