@@ -241,6 +241,7 @@ def test_native_infos_equal_sync_on_the_autoreset_step(env_id, mode, num_envs):
     )
     _, i1 = nat.reset(seed=0)
     _, i2 = syn.reset(seed=0)
+    _same_infos(i1, i2, "reset")
     zeros = np.zeros(nat.action_space.shape)
     for t in range(105):
         r1, r2 = nat.step(zeros), syn.step(zeros)
