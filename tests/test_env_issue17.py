@@ -248,3 +248,28 @@ def test_native_infos_equal_sync_on_the_autoreset_step(env_id, mode, num_envs):
         for x, y in zip(r1[:4], r2[:4], strict=True):
             np.testing.assert_array_equal(x, y, err_msg=f"step {t}")
         _same_infos(r1[4], r2[4], f"step {t}")
+
+
+# -- item 10: without OpenGL, Juggling-v0 renders with matplotlib (one warning) ---------
+def test_juggling_render_falls_back_to_matplotlib(monkeypatch):
+    import warnings
+
+    from motion_envs.envs import rendering
+
+    monkeypatch.setattr(rendering, "_mujoco_failure", "no OpenGL here (test)")
+    monkeypatch.setattr(rendering, "_warned", set())
+    env = JugglingEnv(render_mode="rgb_array", width=64, height=48, max_cycles=1)
+    env.reset(seed=0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        first = env.render()
+        env.step(np.zeros(2))
+        second = env.render()
+    assert [str(w.message) for w in caught] == [
+        "juggling frames are drawn with matplotlib: MuJoCo offscreen rendering is "
+        "unavailable: no OpenGL here (test)"
+    ]
+    for frame in (first, second):
+        assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8
+        assert frame.std() > 0  # a drawing, not a blank
+    env.close()

@@ -24,6 +24,11 @@ from motion_envs.envs._common import (
     check_scale,
 )
 from motion_envs.envs.juggling._scene import JugglingScene
+from motion_envs.envs.rendering import (
+    JugglingSketch,
+    new_mujoco_renderer,
+    warn_matplotlib_fallback,
+)
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
     cycle_rng,
@@ -223,7 +228,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them (at most 10,000) |
     | `data`           | **str**       | `None`  | None: the built-in simulated demonstrations; or a path to the users' juggling CSV (`t, x, z[, ball_x, ball_z][, phase]`) |
     | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity; in [0.01, 100] m/s^2 |
-    | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`) |
+    | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`; without a usable OpenGL backend a matplotlib drawing of floor, hand and ball, with one warning) |
     | `width`          | **int**       | `480`   | frame width in pixels |
     | `height`         | **int**       | `480`   | frame height in pixels |
 
@@ -414,12 +419,27 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         if self._state is None:
             raise RuntimeError("call reset() before render()")
         if self._renderer is None:
-            from motion_envs.envs.rendering import new_mujoco_renderer
-
-            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
-            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
-            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
+            self._renderer = self._new_renderer()
+        if isinstance(self._renderer, JugglingSketch):
+            st = self._state
+            title = f"{self.juggler.phase}  t = {st.time:.2f} s  catches {self._catches}"
+            return self._renderer.render(self.scene.hand_true, st.ball_pos, title)
         self.scene.sync()
         self._renderer.update_scene(self.data, camera="side")
         frame: NDArray[np.uint8] = self._renderer.render()
         return frame
+
+    def _new_renderer(self) -> Any:
+        """MuJoCo's renderer, or without a usable OpenGL backend the matplotlib sketch
+        (one warning says why)."""
+        try:
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
+            return new_mujoco_renderer(self.model, self.height, self.width)
+        except RuntimeError as exc:
+            warn_matplotlib_fallback("juggling frames", str(exc))
+        (hx, hz), task = self.task.home, self.task
+        limits = (hx - 1.5, hx + 1.5, task.floor_z - 0.2, hz + 2.8)
+        return JugglingSketch(
+            self.width, self.height, limits, task.floor_z, task.catch_radius, task.ball_radius
+        )
