@@ -273,3 +273,105 @@ def test_juggling_render_falls_back_to_matplotlib(monkeypatch):
         assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8
         assert frame.std() > 0  # a drawing, not a blank
     env.close()
+
+
+# -- item 6: Juggling-v0's defects mended ------------------------------------------------
+def test_swept_distance_oracle():
+    """Closest approach of a segment to the origin, against a dense sampling."""
+    from motion_envs.datasets.juggling import rules
+
+    rng = np.random.default_rng(1)
+    d0, d1 = rng.normal(size=(200, 2)), rng.normal(size=(200, 2))
+    s = np.linspace(0.0, 1.0, 20001)[:, None, None]
+    dense = np.linalg.norm(d0 + s * (d1 - d0), axis=2).min(axis=0)
+    got = rules.swept_distance(d0[:, 0], d0[:, 1], d1[:, 0], d1[:, 1])
+    assert np.all(got <= dense + 1e-15)  # the exact minimum is below every sample
+    np.testing.assert_allclose(got, dense, atol=1e-6)  # the sampling grid's error
+    one = [float(rules.swept_distance(*a, *b)) for a, b in zip(d0, d1, strict=True)]
+    np.testing.assert_array_equal(one, got)  # one ball and a batch alike, bit for bit
+    assert rules.swept_distance(0.3, 0.4, 0.3, 0.4) == 0.5  # no motion: the distance
+
+
+def test_a_ball_cannot_pass_through_the_hand_between_samples():
+    """A ball tossed at 26 m/s falls back 13 cm per 5 ms; the hand waits halfway between
+    two samples of its path, 6.5 cm from both (catch radius 6 cm): the sampled test let
+    it pass through, the swept one catches it, in both worlds."""
+    from motion_envs.datasets.juggling import JugglingTask, rules
+    from motion_envs.envs.juggling import JugglingScene
+    from motion_envs.models.juggling import BallisticWorld
+
+    task = JugglingTask(gravity=9.81)
+    for world in (BallisticWorld(task), JugglingScene(task)):
+        world.reset((0.2, 1.0))
+        z = 1.0
+        for dz in (0.05, 0.14, 0.13):  # the last one decelerates: the release
+            z += dz
+            state = world.step((0.2, z), True)
+        assert state.released and state.ball_vel[1] > 20
+        release = (state.time, *state.ball_pos, *state.ball_vel)
+        k = np.arange(1, 3000)
+        bz = rules.flight(release, state.time + k * task.dt, task.gravity)[1]
+        down = np.flatnonzero((bz[:-1] >= z) & (bz[1:] < z))[0]
+        z_hand = 0.5 * (bz[down] + bz[down + 1])
+        assert min(abs(bz[down] - z_hand), abs(bz[down + 1] - z_hand)) > task.catch_radius
+        for _ in range(down + 5):
+            state = world.step((0.2, z_hand), False)
+            if state.caught or state.dropped:
+                break
+        assert state.caught, type(world).__name__
+
+
+def test_a_held_ball_below_the_floor_ends_the_episode_as_a_drop():
+    """Random actions (seed 1, residual_scale 0.3, frame_skip 10) had the juggler hold
+    the ball below the floor for 3972 steps, until the 200 s limit."""
+    env = JugglingEnv(residual_scale=0.3, max_cycles=10, frame_skip=10)
+    env.reset(seed=1)
+    rng = np.random.default_rng(1)
+    while True:
+        _, _, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2))
+        state = env._state
+        if not (terminated or truncated):
+            assert not (state.held and state.ball_pos[1] < env.task.floor_z)
+        else:
+            break
+    assert info["time"] < 200.0
+
+
+def test_a_hand_far_outside_the_workspace_ends_the_episode():
+    env = JugglingEnv(max_cycles=10, residual_scale=1.0)
+    env.reset(seed=0)
+    for _ in range(40000):
+        _, _, terminated, truncated, info = env.step(np.array([1.0, 1.0]))
+        assert np.all(np.abs(info["hand"] - np.array(env.task.home)) < 10.5)
+        if terminated or truncated:
+            break
+    assert terminated or truncated
+
+
+def test_a_constant_action_does_not_jump_the_hand_at_phase_starts():
+    """The offset is added once: with a constant action the hand moves as the zero-action
+    hand shifted by the offset (no 2x offset jump at a phase start)."""
+    scale = 0.05
+    env = JugglingEnv(max_cycles=2, residual_scale=scale)
+    env.reset(seed=0)
+    hands, phases = [env.scene.hand_true], []
+    for _ in range(3000):
+        *_, terminated, truncated, info = env.step(np.array([1.0, 0.0]))
+        hands.append(info["hand"])
+        phases.append(info["phase"])
+        if terminated or truncated:
+            break
+    steps = np.linalg.norm(np.diff(np.array(hands), axis=0), axis=1)
+    starts = [k for k in range(1, len(phases)) if phases[k] != phases[k - 1]]
+    assert starts
+    assert steps[1:].max() < 0.5 * scale  # no jump of the offset at any step
+
+
+def test_info_hand_is_the_true_hand():
+    env = JugglingEnv(noise={"tracking": 0.01}, max_cycles=1)
+    _, info = env.reset(seed=0)
+    np.testing.assert_array_equal(info["hand"], env.scene.hand_true)
+    for _ in range(20):
+        *_, info = env.step(np.zeros(2))
+    np.testing.assert_array_equal(info["hand"], env.scene.hand_true)
+    assert np.linalg.norm(info["hand"] - info["hand_observed"]) > 0  # the tracking noise

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Mapping
@@ -188,8 +189,8 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     term (``reward_catch``, ``reward_drop``, ``reward_deviation``, ``reward_action``;
     ``reward`` is their sum), ``deviation``, ``catches`` and ``cycles`` (so far),
     ``phase``, ``held``, ``time``, ``hand`` (the hand's true position ``(x, z)`` in m at
-    the end of the step, without the observation's tracking noise) and
-    ``action_invalid``.
+    the end of the step, without the observation's tracking noise), ``hand_observed``
+    (the tracked hand, as observed) and ``action_invalid``.
 
     ## Starting State
     The hand rests at the juggler's home (the mean start of the training tosses) with the
@@ -206,7 +207,10 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
 
     ## Episode End
     ### Termination
-    The episode terminates when the ball's centre falls below the floor (``floor_z``): a drop.
+    The episode terminates on a drop: the free ball's centre falls below the floor
+    (``floor_z``), or the ball is lost otherwise: held below the floor, or the (true) hand
+    outside the box of observed positions (10 m around the start and the floor, see the
+    observation space). Both count as a drop (``reward_drop``).
 
     ### Truncation
     The episode is truncated at the `max_cycles`-th catch, or after
@@ -235,6 +239,18 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     ## Version History
     * v0: Initial version (``info["hand"]`` added later; observations, rewards and
       dynamics unchanged).
+    * v0, issue 17 (rollouts change on purpose; the id stays v0, the paper's setting is
+      unchanged, its defects are mended): the catch is tested between samples (closest
+      approach over the control period, ``rules.swept_distance``: no pass-through; also
+      in ``BallisticWorld`` and the vectorised runner, so the zero action still equals
+      ``run_cycle``); a ball held below the floor or a hand outside the observation box
+      ends the episode as a drop (before, the juggler could carry it for the whole time
+      limit); the juggler sees its own hand (the tracked hand minus the agent's last
+      offset), so the offset is added once at a phase start (it was added twice: a
+      constant action jumped the hand by ``residual_scale``); ``info["hand"]`` is the
+      true hand (it carried the tracking noise; the tracked hand is
+      ``info["hand_observed"]``); ``reset(options={"cycle": N})`` costs O(1) (same
+      generators as before).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
@@ -288,6 +304,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         self._done = True
         self._catches = 0
         self._cycles = 0
+        self._applied = (0.0, 0.0)
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """The observation bounds of the docstring (task constants and arguments only)."""
@@ -326,10 +343,12 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         self._done = False
         self._catches = 0
         self._cycles = 0
+        self._applied = (0.0, 0.0)
         info = {
             "phase": self._phase,
             "time": state.time,
-            "hand": np.array(state.hand_pos, dtype=np.float64),
+            "hand": self.scene.hand_true,
+            "hand_observed": np.array(state.hand_pos, dtype=np.float64),
             "seed": base,
             "cycle": cycle,
         }
@@ -353,24 +372,32 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         catches = 0
         periods = 0
         for _ in range(self.frame_skip):
-            target, armed = juggler.command(state)
+            # the juggler sees its own hand: the tracked hand minus the offset the agent
+            # added in the last period (else a phase planned from the hand would start
+            # at the offset hand and the offset be added twice)
+            ox, oz = self._applied
+            seen = state
+            if ox != 0.0 or oz != 0.0:
+                seen = dataclasses.replace(state, hand_pos=state.hand_pos - (ox, oz))
+            target, armed = juggler.command(seen)
             phase = juggler.phase
             if phase != self._phase:
                 if phase == "toss":  # a new cycle: its own release and tracking noise
                     scene.redraw_noise(self._world_rng)
                 self._phase = phase
             state = scene.step((float(target[0]) + rx, float(target[1]) + rz), armed)
+            self._applied = (rx, rz)
             periods += 1
             if state.released:
                 self._cycles += 1
             if state.caught:
                 catches += 1
-            if state.dropped:
+            if state.dropped or self._lost(state):
                 break
         self._state = state
         self._catches += catches
         w = self.reward_weights
-        dropped = state.dropped
+        dropped = state.dropped or self._lost(state)
         r_catch = w["catch"] * catches
         r_drop = -w["drop"] * float(dropped)
         r_dev = -w["deviation"] * offset
@@ -392,10 +419,19 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
             "phase": juggler.phase,
             "held": state.held,
             "time": state.time,
-            "hand": np.array(state.hand_pos, dtype=np.float64),
+            "hand": scene.hand_true,
+            "hand_observed": np.array(state.hand_pos, dtype=np.float64),
             "action_invalid": invalid,
         }
         return self._observation(state), reward, terminated, truncated, info
+
+    def _lost(self, state: JugglingState) -> bool:
+        """The ball is lost (a drop): held below the floor, or the hand outside the box
+        of observed positions (``POSITION_MARGIN`` around the start and floor)."""
+        hx, hz = self.scene.hand_true.tolist()
+        low, high = self._low, self._high
+        outside = not (low[0] <= hx <= high[0] and low[1] <= hz <= high[1])
+        return outside or (state.held and float(state.ball_pos[1]) < self.task.floor_z)
 
     def _observation(self, state: JugglingState) -> NDArray[np.float32]:
         juggler = self.juggler
