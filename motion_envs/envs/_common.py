@@ -183,6 +183,8 @@ def check_val_fraction(val_fraction: float, split: str) -> float:
     or demonstrations (position), so hyper-parameters and checkpoints can be chosen
     without touching the test split.
     """
+    if isinstance(val_fraction, bool) or not isinstance(val_fraction, (int, float, np.floating)):
+        raise ValueError(f"val_fraction must be a number in [0, 1); got {val_fraction!r}")
     v = check_number(val_fraction, "val_fraction", 0.0, 1.0)
     if v >= 1.0:
         raise ValueError(f"val_fraction must be in [0, 1); got {val_fraction!r}")
