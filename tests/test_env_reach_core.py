@@ -161,7 +161,7 @@ def test_a_new_kind_runs_single_and_vector_alike(backend):
         a = rng.uniform(-1.5, 1.5, (n, 2)).astype(np.float32)
         obs, reward, term, _, info = venv.step(a)
         for i, env in enumerate(singles):
-            if not info["_error"][i]:  # the autoreset step of sub-environment i
+            if not info.get("_error", np.zeros(n, bool))[i]:  # sub-env i autoresets
                 o, _ = env.reset()
                 np.testing.assert_array_equal(obs[i], o)
                 continue

@@ -118,3 +118,78 @@ def test_unlabelled_csv_without_any_cycle_names_the_file(tmp_path):
     assert read_juggling_csv(path).recordings[0].phase is None
     with pytest.raises(ValueError, match=r"bad\.csv: no complete toss"):
         load_juggling_csv(path)
+
+
+# -- issue 17 item 1: the juggling CSV at the bar of the other two loaders -------------
+def test_absurd_positions_are_rejected_with_their_line(tmp_path):
+    rows = _rows()
+    rows[5] = "0.025,1e300,1,0,1,toss"
+    with pytest.raises(ValueError, match=r"plausible range .* line\(s\) 7 ") as info:
+        read_juggling_csv(_write(tmp_path, GOOD + "\n".join(rows) + "\n"))
+    assert "bad.csv" in str(info.value)
+
+
+def test_absurd_time_is_rejected(tmp_path):
+    rows = [f"{1e11 + k},0.1,1,0.1,1,toss" for k in range(25)]
+    with pytest.raises(ValueError, match=r"time 't' beyond the plausible range"):
+        read_juggling_csv(_write(tmp_path, GOOD + "\n".join(rows) + "\n"))
+
+
+@pytest.mark.parametrize("label", ["NA", "None", "null", "nan"])
+def test_na_like_recording_labels_are_labels(demos, tmp_path, label):
+    path = write_juggling_csv(demos, tmp_path / "j.csv")
+    text = path.read_text().splitlines()
+    col = text[0].split(",").index("recording")
+    rows = [",".join([*r.split(",")[:col], label]) for r in text[1:]]
+    back = read_juggling_csv(_write(tmp_path, "\n".join([text[0], *rows]) + "\n"))
+    assert [r.name for r in back.recordings] == [label]
+
+
+def test_line_numbers_are_physical_after_blank_lines(tmp_path):
+    rows = _rows()
+    rows[3] = "0.015,abc,1,0,1,toss"
+    text = GOOD + "\n\n\n" + "\n".join(rows) + "\n"  # three blank lines after the header
+    with pytest.raises(ValueError, match=r"line\(s\) 8 "):
+        read_juggling_csv(_write(tmp_path, text))
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda p: p.mkdir(), "is a folder"),
+        (lambda p: p.write_bytes(b""), "empty file"),
+        (lambda p: p.write_bytes(b"\n\n  \n"), "empty file"),
+        (lambda p: p.write_bytes(b"t,x,z\n0,\xff\xfe,1\n"), "not UTF-8"),
+        (lambda p: p.write_bytes(b"t,x,z\n0,0\x00,1\n"), "NUL bytes"),
+    ],
+)
+@pytest.mark.parametrize("reader", [read_juggling_csv, load_juggling_csv])
+def test_unreadable_files_are_one_value_error_naming_the_file(tmp_path, make, match, reader):
+    path = tmp_path / "odd.csv"
+    make(path)
+    with pytest.raises(ValueError, match=match) as info:
+        reader(path)
+    assert "odd.csv" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_fifo_is_refused_without_blocking(tmp_path):
+    import os
+
+    path = tmp_path / "pipe.csv"
+    os.mkfifo(path)
+    with pytest.raises(ValueError, match="not a regular file"):
+        read_juggling_csv(path)
+
+
+def test_bench_with_absurd_data_fails_with_one_line(tmp_path, capsys):
+    """``motion-bench juggling --data FILE`` with x = 1e300: one line, exit 2, no results
+    (it printed inf/nan rows and N = 0)."""
+    from baselines.cli import main
+
+    rows = [f"{k * 0.005},1e300,1.0,0.1,1.0" for k in range(40)]
+    path = _write(tmp_path, "t,x,z,ball_x,ball_z\n" + "\n".join(rows) + "\n")
+    code = main(["juggling", "--data", str(path), "--cycles", "2", "--out", str(tmp_path / "o")])
+    assert code == 2
+    out, err = capsys.readouterr()
+    assert "plausible range" in err and len(err.strip().splitlines()) == 1, err
+    assert "nan" not in out and "inf" not in out

@@ -45,9 +45,13 @@ __all__ = [
     "LABEL_COLUMNS",
     "MAX_ABS_TIME",
     "MAX_ABS_VALUE",
+    "MAX_CSV_BYTES",
     "NA_STRINGS",
     "SampleTable",
+    "fail_rows",
+    "numeric_columns",
     "read_csv_exact",
+    "read_csv_text",
     "read_sample_table",
     "replicate_numbers",
     "write_csv",
@@ -61,6 +65,9 @@ MAX_ABS_TIME = 1e10
 
 #: Default largest accepted ``|value|`` of a numeric column (any unit).
 MAX_ABS_VALUE = 1e12
+
+#: Largest users' CSV file read, in bytes (1 GiB: 10^7 samples are a few hundred MB).
+MAX_CSV_BYTES = 2**30
 
 #: Cells read as missing in numeric columns (pandas' defaults); labels only miss when empty.
 NA_STRINGS: tuple[str, ...] = (
@@ -145,11 +152,29 @@ def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
     raise ValueError(f"{path}: {what} on line(s) {shown} ({bad.size} row(s))")
 
 
-def _read_frame(path: Path, kind: str) -> pd.DataFrame:
-    """The raw table; ``ValueError`` naming the file for an empty, binary, non-UTF-8 or
-    malformed file. Labels are text; only an empty label is missing."""
+def read_csv_text(
+    path: str | os.PathLike[str], kind: str, label_columns: Sequence[str] = LABEL_COLUMNS
+) -> pd.DataFrame:
+    """THE front end of every users' CSV loader: the raw table, checked as text.
+
+    ``FileNotFoundError`` for a missing file; ``ValueError`` naming the file for a folder,
+    a FIFO or device, a file over :data:`MAX_CSV_BYTES`, an empty, binary (NUL bytes),
+    non-UTF-8 or malformed file. ``label_columns`` are read as text and only an empty
+    label is missing (``NA``, ``None`` are labels); in the other columns
+    :data:`NA_STRINGS` are missing.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{kind} CSV {path} does not exist")
     if path.is_dir():
         raise ValueError(f"{kind} CSV {path} is a folder, not a file")
+    if not path.is_file():  # a FIFO or a device would block or never end
+        raise ValueError(f"{kind} CSV {path} is not a regular file")
+    if path.stat().st_size > MAX_CSV_BYTES:
+        raise ValueError(
+            f"{path}: {path.stat().st_size} bytes, more than the {MAX_CSV_BYTES} bytes "
+            "a users' CSV may have"
+        )
     if path.suffix.lower() not in _COMPRESSED:
         with open(path, "rb") as fh:
             head = fh.read(65536)
@@ -164,10 +189,10 @@ def _read_frame(path: Path, kind: str) -> pd.DataFrame:
                 raise _encoding_error(path, exc) from None
     try:
         header = read_csv_exact(path, nrows=0).columns
-        na = {c: ([""] if c in LABEL_COLUMNS else list(NA_STRINGS)) for c in header}
+        na = {c: ([""] if c in label_columns else list(NA_STRINGS)) for c in header}
         return read_csv_exact(
             path,
-            dtype={c: str for c in LABEL_COLUMNS if c in header},
+            dtype={c: str for c in label_columns if c in header},
             keep_default_na=False,
             na_values=na,
         )
@@ -177,6 +202,48 @@ def _read_frame(path: Path, kind: str) -> pd.DataFrame:
         raise _encoding_error(path, exc) from None
     except pd.errors.ParserError as exc:
         raise ValueError(f"{path}: not a well-formed CSV file: {exc}") from None
+    except (OSError, EOFError) as exc:  # a corrupt compressed file, a read error
+        raise ValueError(f"{path}: cannot be read: {exc}") from None
+
+
+def fail_rows(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
+    """Raise ``ValueError`` naming ``path`` and the physical line numbers of the rows of
+    the table :func:`read_csv_text` read where ``mask`` is set."""
+    _fail(path, mask, what)
+
+
+def numeric_columns(
+    path: Path,
+    frame: pd.DataFrame,
+    columns: Sequence[str],
+    max_abs_value: float = MAX_ABS_VALUE,
+    value_unit: str = "",
+) -> NDArray[np.float64]:
+    """``frame[columns]`` as float64, the first column a time: ``ValueError`` with the
+    lines of NaN, infinite or non-numeric cells, a time beyond :data:`MAX_ABS_TIME` or a
+    value beyond ``max_abs_value`` (in ``value_unit``)."""
+    numeric = list(columns)
+    data = frame[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
+    nonfinite = ~np.isfinite(data).all(axis=1)
+    if nonfinite.any():
+        _fail(path, nonfinite, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
+    absurd_t = np.abs(data[:, 0]) > MAX_ABS_TIME
+    if absurd_t.any():
+        _fail(
+            path,
+            absurd_t,
+            f"time {numeric[0]!r} beyond the plausible range |t| <= {MAX_ABS_TIME:g} s",
+        )
+    huge = (np.abs(data[:, 1:]) > max_abs_value).any(axis=1)
+    if huge.any():
+        unit = f" {value_unit}" if value_unit else ""
+        _fail(
+            path,
+            huge,
+            f"value in {'/'.join(numeric[1:])} beyond the plausible range "
+            f"|value| <= {max_abs_value:g}{unit}",
+        )
+    return data
 
 
 def _encoding_error(path: Path, exc: UnicodeDecodeError) -> ValueError:
@@ -279,10 +346,8 @@ def read_sample_table(
     labels changing within a trajectory.
     """
     p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"{kind} CSV {p} does not exist")
     required = (*LABEL_COLUMNS, "t", *value_columns)
-    frame = _read_frame(p, kind)
+    frame = read_csv_text(p, kind)
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise ValueError(f"{p}: missing column(s) {missing}; expected header {','.join(required)}")
@@ -293,22 +358,7 @@ def read_sample_table(
         if empty.any():
             _fail(p, empty, f"empty {col!r}")
     numeric = ["t", *value_columns, *(c for c in optional_value_columns if c in frame.columns)]
-    data = frame[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-    nonfinite = ~np.isfinite(data).all(axis=1)
-    if nonfinite.any():
-        _fail(p, nonfinite, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
-    absurd_t = np.abs(data[:, 0]) > MAX_ABS_TIME
-    if absurd_t.any():
-        _fail(p, absurd_t, f"time 't' beyond the plausible range |t| <= {MAX_ABS_TIME:g} s")
-    huge = (np.abs(data[:, 1:]) > max_abs_value).any(axis=1)
-    if huge.any():
-        unit = f" {value_unit}" if value_unit else ""
-        _fail(
-            p,
-            huge,
-            f"value in {'/'.join(numeric[1:])} beyond the plausible range "
-            f"|value| <= {max_abs_value:g}{unit}",
-        )
+    data = numeric_columns(p, frame, numeric, max_abs_value, value_unit)
 
     traj = frame["trajectory"].to_numpy(dtype=str)
     starts = np.flatnonzero(np.concatenate([[True], traj[1:] != traj[:-1]]))

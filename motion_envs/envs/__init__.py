@@ -57,6 +57,7 @@ _SPECS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Juggling-v0": {
         "entry_point": "motion_envs.envs.juggling:JugglingEnv",
+        "vector_entry_point": "motion_envs.envs.vector:juggling_v0_vector_env",
     },
     "MotionEnvs/Juggling-v1": {
         "entry_point": "motion_envs.envs.juggling_v1:JugglingV1Env",

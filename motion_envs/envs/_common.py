@@ -22,6 +22,7 @@ __all__ = [
     "JsonSpecMixin",
     "LazyRendererMixin",
     "as_action",
+    "check_autoreset_mode",
     "check_choice",
     "check_fraction",
     "check_integer",
@@ -59,11 +60,16 @@ def check_number(value: Any, name: str, low: float, high: float, low_open: bool 
     """
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ValueError(f"{name} must be a real number; got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond float64's range (10**400)
+        v = math.inf
     below = v <= low if low_open else v < low
     if not math.isfinite(v) or below or v > high:
         bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must be finite and in {bracket}{low:g}, {high:g}]; got {value!r}")
+        raise ValueError(
+            f"{name} must be finite and in {bracket}{low:g}, {high:g}]; got {_short(value)}"
+        )
     return v
 
 
@@ -72,8 +78,14 @@ def check_integer(value: Any, name: str, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {value!r}")
     if not low <= value <= high:
-        raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {value!r}")
+        raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {_short(value)}")
     return int(value)
+
+
+def _short(value: Any) -> str:
+    """``repr(value)``, abbreviated when it is long (a 400-digit integer)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
 
 
 def check_fraction(test_fraction: Any) -> float:
@@ -102,12 +114,15 @@ def check_max_episode_steps(max_episode_steps: Any, default: int) -> int:
 
 
 def as_action(action: Any, shape: tuple[int, ...], name: str = "action") -> NDArray[np.float64]:
-    """``action`` as a float64 array of ``shape``.
+    """``action`` as a float64 array of ``shape``: THE action check of every environment.
 
-    ``ValueError`` for a non-numeric action (a dict, a string, complex numbers, objects)
-    or a wrong shape; finiteness and clipping are left to the caller's hot path.
+    ``ValueError`` for a non-numeric action (a dict, a string, complex numbers, objects,
+    bools) or a wrong shape; finiteness and clipping are left to the caller's hot path.
     """
-    a = np.asarray(action)
+    try:
+        a = np.asarray(action)
+    except (ValueError, TypeError, OverflowError) as exc:  # ragged nesting, huge ints
+        raise ValueError(f"{name} must be an array of real numbers; got {exc}") from None
     if a.dtype.kind not in "fiu":
         raise ValueError(
             f"{name} must be an array of real numbers; got {type(action).__name__} "
@@ -116,6 +131,21 @@ def as_action(action: Any, shape: tuple[int, ...], name: str = "action") -> NDAr
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got shape {a.shape}")
     return a.astype(np.float64, copy=False)
+
+
+def check_autoreset_mode(mode: Any) -> Any:
+    """``mode`` as a ``gymnasium.vector.AutoresetMode`` (the enum or its value, e.g.
+    ``"SameStep"``); ``ValueError`` else."""
+    from gymnasium.vector import AutoresetMode
+
+    try:
+        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
+    except (ValueError, TypeError):
+        values = [m.value for m in AutoresetMode]
+        raise ValueError(
+            f"autoreset_mode must be a gymnasium.vector.AutoresetMode or one of {values}; "
+            f"got {mode!r}"
+        ) from None
 
 
 def check_choice(value: Any, name: str, choices: tuple[str, ...]) -> str:
@@ -137,14 +167,7 @@ def check_reward_weights(
     for key, value in weights.items():
         if key not in out:
             raise ValueError(f"reward_weights has unknown key {key!r}; expected keys {list(out)}")
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"reward_weights[{key!r}] must be a number; got {value!r}")
-        if not math.isfinite(value) or not 0 <= value <= MAX_REWARD_WEIGHT:
-            raise ValueError(
-                f"reward_weights[{key!r}] must be finite and in [0, {MAX_REWARD_WEIGHT:g}]; "
-                f"got {value!r}"
-            )
-        out[key] = float(value)
+        out[key] = check_number(value, f"reward_weights[{key!r}]", 0.0, MAX_REWARD_WEIGHT)
     return out
 
 
@@ -162,11 +185,12 @@ def check_val_fraction(val_fraction: float, split: str) -> float:
     """
     if isinstance(val_fraction, bool) or not isinstance(val_fraction, (int, float, np.floating)):
         raise ValueError(f"val_fraction must be a number in [0, 1); got {val_fraction!r}")
-    if not 0.0 <= float(val_fraction) < 1.0:
+    v = check_number(val_fraction, "val_fraction", 0.0, 1.0)
+    if v >= 1.0:
         raise ValueError(f"val_fraction must be in [0, 1); got {val_fraction!r}")
-    if split == "val" and val_fraction == 0:
+    if split == "val" and v == 0:
         raise ValueError("split='val' needs val_fraction > 0 (the share of training data held out)")
-    return float(val_fraction)
+    return v
 
 
 def timing_bounds(max_duration: float) -> tuple[float, float]:

@@ -24,6 +24,7 @@ from motion_envs.envs._common import (
     N_STEPS,
     JsonSpecMixin,
     as_action,
+    check_autoreset_mode,
     check_max_episode_steps,
     check_num_envs,
 )
@@ -44,17 +45,6 @@ _POOL = 64  # trajectory draws per sub-environment taken from its generator at o
 # Below this many sub-environments the numpy backend runs the kind's scalar step per
 # environment (numpy's per-call overhead dominates small batches).
 _SCALAR_BELOW = 8
-
-
-def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
-    try:
-        return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
-    except ValueError:
-        values = [m.value for m in AutoresetMode]
-        raise ValueError(
-            f"autoreset_mode must be a gymnasium.vector.AutoresetMode or one of {values}; "
-            f"got {mode!r}"
-        ) from None
 
 
 class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
@@ -116,7 +106,7 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._n_traj = task.n_trajectories
         self.num_envs = check_num_envs(num_envs)
         self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
-        self.autoreset_mode = _check_autoreset_mode(autoreset_mode)
+        self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self._mode = _MODES[self.autoreset_mode]
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.backend = K.resolve_vector_backend(backend)
@@ -342,10 +332,15 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
     def _infos(
         self, out_f: NDArray[np.float64], out_b: NDArray[np.bool_], n_term: int, n_reset: int
     ) -> dict[str, Any]:
-        """The vector infos of a step from the float and flag outputs (views, no copies)."""
-        info = self._step_infos(out_f, out_b[2])
+        """The vector infos of a step from the float and flag outputs (views, no copies).
+
+        As ``SyncVectorEnv``, a key is present only when some sub-environment reports it:
+        on a step where every sub-environment autoresets (NEXT_STEP) or ends (SAME_STEP)
+        the step keys are left out, not given all-False masks.
+        """
         if not (n_term or n_reset):
-            return info
+            return self._step_infos(out_f, out_b[2])
+        info = self._step_infos(out_f, out_b[2]) if out_b[2].any() else {}
         terminated, reset = out_b[0], out_b[3]
         t = self._n_info + 1  # the row of tau
         if self._mode == _SAME:

@@ -12,6 +12,9 @@
   says which is used, and one warning says why). The outcome of the first attempt is
   remembered for the process: a failed OpenGL backend is never tried twice (a second
   GLFW initialisation without a display can abort the interpreter).
+* :class:`JugglingSketch` (juggling): the fallback of ``Juggling-v0``'s MuJoCo scene
+  without a working OpenGL backend (one warning says why): floor, hand (its catch
+  radius) and ball in the vertical plane, drawn with matplotlib's Agg canvas.
 * :class:`CurveRenderer` (position): the human demonstration, the nominal and the
   agent's positions so far as curves (matplotlib Agg; first two coordinates).
 """
@@ -30,8 +33,10 @@ from numpy.typing import NDArray
 __all__ = [
     "CurveRenderer",
     "HandFrameRenderer",
+    "JugglingSketch",
     "mujoco_rendering_failure",
     "new_mujoco_renderer",
+    "warn_matplotlib_fallback",
 ]
 
 # axis lengths of the hand frame (pointing, medium, short), as in the MJCF
@@ -251,13 +256,13 @@ def _remember_failure(reason: str) -> str:
     return _mujoco_failure
 
 
-_warned: set[str] = set()
+_warned: set[tuple[str, str]] = set()
 
 
-def _warn_once(reason: str) -> None:
-    if reason not in _warned:
-        _warned.add(reason)
-        warnings.warn(f"hand frames are drawn with matplotlib: {reason}", UserWarning, stacklevel=3)
+def _warn_once(reason: str, what: str = "hand frames") -> None:
+    if (what, reason) not in _warned:
+        _warned.add((what, reason))
+        warnings.warn(f"{what} are drawn with matplotlib: {reason}", UserWarning, stacklevel=3)
 
 
 class CurveRenderer:
@@ -300,3 +305,52 @@ class CurveRenderer:
 
     def close(self) -> None:
         pass
+
+
+class JugglingSketch:
+    """The juggling scene drawn with matplotlib (the fallback without OpenGL): the floor
+    (grey line), the hand (orange circle of the catch radius) and the ball (blue), within
+    ``limits = (x_low, x_high, z_low, z_high)`` (m)."""
+
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        limits: tuple[float, float, float, float],
+        floor_z: float,
+        catch_radius: float,
+        ball_radius: float,
+    ) -> None:
+        self.width, self.height = int(width), int(height)
+        self._fig = _new_figure(self.width, self.height)
+        self._limits = limits
+        self._floor, self._catch, self._ball = floor_z, catch_radius, ball_radius
+
+    def render(
+        self, hand: NDArray[np.float64], ball: NDArray[np.float64], title: str = ""
+    ) -> NDArray[np.uint8]:
+        from matplotlib.patches import Circle
+
+        fig = self._fig
+        fig.clear()
+        ax = fig.add_subplot()
+        x0, x1, z0, z1 = self._limits
+        ax.axhline(self._floor, color="0.5", lw=2)
+        ax.add_patch(Circle((float(hand[0]), float(hand[1])), self._catch, color=_COLORS["agent"]))
+        ax.add_patch(Circle((float(ball[0]), float(ball[1])), self._ball, color=(0.1, 0.3, 0.9)))
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(z0, z1)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (m)", fontsize=7)
+        ax.set_ylabel("z (m)", fontsize=7)
+        ax.set_title(title, fontsize=8)
+        return _figure_to_array(fig)
+
+    def close(self) -> None:
+        self._fig = None
+
+
+def warn_matplotlib_fallback(what: str, reason: str) -> None:
+    """One ``UserWarning`` per (``what``, ``reason``) in the process: ``what`` is drawn
+    with matplotlib because MuJoCo rendering is unavailable."""
+    _warn_once(reason, what)

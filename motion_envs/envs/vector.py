@@ -44,12 +44,48 @@ Observations, rewards, flags and infos are new arrays every step. Bad arguments 
 the same ``ValueError`` as the single environment's (the checks of
 :mod:`motion_envs.envs._common`); a non-numeric ``actions`` (dict, string, complex)
 raises ``ValueError``.
+
+The juggling ids have no native vector environment: their ``vector_entry_point``,
+:func:`juggling_vector_env`, builds a :class:`gymnasium.vector.SyncVectorEnv` of
+``gym.make(id, **kwargs)`` copies, so ``gym.make_vec(id, N, autoreset_mode=...)`` takes
+the same keyword as the reaching ids (it would otherwise reach the single
+environment's constructor and be refused).
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+import gymnasium as gym
+
+from motion_envs.envs._common import check_autoreset_mode, check_num_envs
 from motion_envs.envs._reach_vector import ReachVectorEnv
 from motion_envs.envs.orientation_reach import OrientationReachVectorEnv
 from motion_envs.envs.position_reach import PositionReachVectorEnv
 
-__all__ = ["OrientationReachVectorEnv", "PositionReachVectorEnv", "ReachVectorEnv"]
+__all__ = [
+    "OrientationReachVectorEnv",
+    "PositionReachVectorEnv",
+    "ReachVectorEnv",
+    "juggling_v0_vector_env",
+    "juggling_vector_env",
+]
+
+
+def juggling_vector_env(
+    env_id: str,
+    num_envs: int = 1,
+    autoreset_mode: Any = gym.vector.AutoresetMode.NEXT_STEP,
+    **kwargs: Any,
+) -> gym.vector.SyncVectorEnv:
+    """``SyncVectorEnv`` of ``num_envs`` copies of ``gym.make(env_id, **kwargs)`` with
+    ``autoreset_mode`` (an ``AutoresetMode`` or its value)."""
+    n = check_num_envs(num_envs)
+    mode = check_autoreset_mode(autoreset_mode)
+    env_fns = [lambda: gym.make(env_id, **kwargs) for _ in range(n)]
+    return gym.vector.SyncVectorEnv(env_fns, autoreset_mode=mode)
+
+
+def juggling_v0_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.SyncVectorEnv:
+    """The ``vector_entry_point`` of ``MotionEnvs/Juggling-v0`` (:func:`juggling_vector_env`)."""
+    return juggling_vector_env("MotionEnvs/Juggling-v0", num_envs, **kwargs)

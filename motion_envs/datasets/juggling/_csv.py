@@ -15,7 +15,14 @@ Format (one row per sample, header required, extra columns ignored)::
   the paper's online criteria, which need the ball columns.
 * ``recording`` (optional): an identifier; the rows of one recording are contiguous.
 
-Errors are one line naming the file and the line numbers (the header is line 1).
+Errors are one line naming the file and the physical line numbers (the header is line 1;
+blank lines and multi-line quoted fields counted), as the other users' CSV formats (the
+one front end :func:`motion_envs.datasets.sample_table.read_csv_text`): a missing file is
+``FileNotFoundError``; a folder, an empty, binary (NUL bytes), non-UTF-8 or malformed
+file, NaN/inf/non-numeric values, ``|t|`` beyond ``MAX_ABS_TIME`` (10^10 s) or a
+position beyond :data:`MAX_ABS_JUGGLING_POSITION` (10^3 m: a tracker in a room, a ball
+tossed 10 m up) are ``ValueError``. Labels (``phase``, ``recording``) are text: only an
+empty label is missing, ``NA`` or ``None`` are recording names.
 """
 
 from __future__ import annotations
@@ -29,23 +36,33 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling._records import JugglingDemos, JugglingRecording
 from motion_envs.datasets.juggling._task import PHASES, JugglingTask
-from motion_envs.datasets.sample_table import read_csv_exact, write_csv
+from motion_envs.datasets.sample_table import fail_rows, numeric_columns, read_csv_text, write_csv
 
-__all__ = ["JUGGLING_COLUMNS", "MIN_SAMPLES", "read_juggling_csv", "write_juggling_csv"]
+__all__ = [
+    "JUGGLING_COLUMNS",
+    "MAX_ABS_JUGGLING_POSITION",
+    "MIN_SAMPLES",
+    "read_juggling_csv",
+    "write_juggling_csv",
+]
 
 FloatArray = NDArray[np.float64]
 
 #: Required columns of the juggling CSV.
 JUGGLING_COLUMNS: tuple[str, ...] = ("t", "x", "z")
 
+#: Largest plausible ``|x|``, ``|z|``, ``|ball_x|``, ``|ball_z|`` in m.
+MAX_ABS_JUGGLING_POSITION = 1e3
+
+#: Label columns (text; only an empty label is missing).
+_LABELS = ("phase", "recording")
+
 #: Samples fewer than this in a recording are rejected.
 MIN_SAMPLES = 20
 
 
 def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> None:
-    bad = np.flatnonzero(mask) + 2
-    shown = ", ".join(str(b) for b in bad[:10]) + (" ..." if bad.size > 10 else "")
-    raise ValueError(f"{path}: {what} on line(s) {shown} ({bad.size} row(s))")
+    fail_rows(path, mask, what)
 
 
 def read_juggling_csv(
@@ -61,9 +78,7 @@ def read_juggling_csv(
     """
     task = task or JugglingTask()
     p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(f"juggling CSV {p} does not exist")
-    frame = read_csv_exact(p, dtype={"phase": str, "recording": str})
+    frame = read_csv_text(p, "juggling", _LABELS)
     missing = [c for c in JUGGLING_COLUMNS if c not in frame.columns]
     if missing:
         raise ValueError(
@@ -75,10 +90,7 @@ def read_juggling_csv(
     if any(has_ball) and not all(has_ball):
         raise ValueError(f"{p}: ball_x and ball_z must both be present or both absent")
     numeric = [*JUGGLING_COLUMNS, *(["ball_x", "ball_z"] if all(has_ball) else [])]
-    data = frame[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-    bad = ~np.isfinite(data).all(axis=1)
-    if bad.any():
-        _fail(p, bad, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
+    data = numeric_columns(p, frame, numeric, MAX_ABS_JUGGLING_POSITION, "m")
     if "phase" in frame.columns:
         lab = frame["phase"].to_numpy(dtype=object)
         wrong = ~np.isin(lab.astype(str), PHASES) | pd.isna(frame["phase"]).to_numpy()

@@ -18,8 +18,11 @@ One control period ``k`` of the world (period ``dt``), in this order:
    not released follows the hand (``h_k``, ``v_k``);
 3. a free ball flies (:func:`flight`, the closed-form parabola from the release);
    once it has been farther than ``catch_radius`` from the hand (:func:`has_left`), a
-   distance ``|h_k - ball| <= catch_radius`` is a catch (:func:`catch_fires`; the ball is
-   held again, its state copied from the hand); a free ball whose centre is below
+   distance ``<= catch_radius`` is a catch (:func:`catch_fires`; the ball is held again,
+   its state copied from the hand). The worlds test the catch between samples, not only
+   at them: the distance is :func:`swept_distance`, the closest approach of ball and
+   hand over the control period (both moving linearly from sample ``k-1`` to ``k``), so
+   a fast ball cannot pass through the hand between two samples; a free ball whose centre is below
    ``floor_z`` is dropped (:func:`drop_fires`, sticky until reset; a dropped ball is not
    caught).
 """
@@ -27,6 +30,8 @@ One control period ``k`` of the world (period ``dt``), in this order:
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
 
 __all__ = [
     "catch_fires",
@@ -37,6 +42,7 @@ __all__ = [
     "has_left",
     "release_fires",
     "release_velocity",
+    "swept_distance",
 ]
 
 
@@ -74,6 +80,16 @@ def flight(
     t_r, x_r, z_r, vx, vz = release
     s = time - t_r
     return x_r + vx * s, z_r + vz * s - 0.5 * gravity * s * s, vx, vz - gravity * s
+
+
+def swept_distance(dx0: Any, dz0: Any, dx1: Any, dz1: Any) -> Any:
+    """Closest approach over a control period of the ball's offset from the hand, moving
+    linearly from ``(dx0, dz0)`` (sample ``k-1``) to ``(dx1, dz1)`` (sample ``k``):
+    ``min over s in [0, 1] of |d0 + s (d1 - d0)|``."""
+    ex, ez = dx1 - dx0, dz1 - dz0
+    s = np.clip(-(dx0 * ex + dz0 * ez) / (ex * ex + ez * ez + 1e-300), 0.0, 1.0)
+    px, pz = dx0 + s * ex, dz0 + s * ez
+    return np.sqrt(px * px + pz * pz)
 
 
 def catch_fires(distance: Any, left: Any, dropped: Any, radius: float) -> Any:

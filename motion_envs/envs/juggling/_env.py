@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Mapping
@@ -14,18 +15,36 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs._common import LazyRendererMixin, check_reward_weights, check_scale
+from motion_envs.envs._common import (
+    MAX_FRAME_SIZE,
+    LazyRendererMixin,
+    as_action,
+    check_integer,
+    check_number,
+    check_reward_weights,
+    check_scale,
+)
 from motion_envs.envs.juggling._scene import JugglingScene
+from motion_envs.envs.rendering import (
+    JugglingSketch,
+    new_mujoco_renderer,
+    warn_matplotlib_fallback,
+)
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
-    cycle_rngs,
+    cycle_rng,
     load_juggler,
 )
 
 __all__ = [
     "CYCLE_TIME_LIMIT",
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
+    "GRAVITY_RANGE",
     "HAND_SPEED_MARGIN",
+    "MAX_CYCLE_INDEX",
+    "MAX_RELEASE_NOISE",
+    "MAX_RESIDUAL_SCALE",
+    "MAX_TRACKING_NOISE",
     "OBS_DIM",
     "POSITION_MARGIN",
     "JugglingEnv",
@@ -50,6 +69,19 @@ POSITION_MARGIN = 10.0
 #: the velocity bound adds the largest jump of the offset, ``3 residual_scale / dt``.
 HAND_SPEED_MARGIN = 10.0
 
+#: Accepted ``gravity`` (m/s^2): from a hundredth of the default slow world to ten times
+#: Earth's; beyond, a toss takes hours or a millisecond (and the flight arithmetic overflows).
+GRAVITY_RANGE = (0.01, 100.0)
+#: Largest accepted ``residual_scale`` (m): an arm's reach.
+MAX_RESIDUAL_SCALE = 1.0
+#: Largest accepted release-velocity noise (relative std: 1 = 100 %).
+MAX_RELEASE_NOISE = 1.0
+#: Largest accepted tracking noise (std, m: a tracker off by 10 cm is no tracker).
+MAX_TRACKING_NOISE = 0.1
+
+#: Largest ``options["cycle"]`` of ``reset`` (any cycle is O(1); the bound is a seed's).
+MAX_CYCLE_INDEX = 2**63 - 1
+
 #: Observation size: hand (4), ball (4), held (1), phase one-hot (4), phase time (1),
 #: the nominal's next hand position (2).
 OBS_DIM = 16
@@ -66,26 +98,21 @@ def _check_noise(noise: Any) -> JugglingNoise:
                 f"noise has unknown key(s) {sorted(unknown)}; expected 'release', 'tracking'"
             )
         values = dict(noise)
-    elif isinstance(noise, (int, float, np.floating)) and not isinstance(noise, bool):
-        level = float(noise)
+    elif isinstance(noise, (int, float, np.integer, np.floating)) and not isinstance(noise, bool):
+        level = check_number(noise, "noise", 0.0, MAX_RELEASE_NOISE)
         values = {"release": level, "tracking": TRACKING_NOISE if level > 0 else 0.0}
     else:
         raise ValueError(
             "noise must be a number (release-velocity std, relative), a mapping with keys "
             f"'release'/'tracking', or a JugglingNoise; got {noise!r}"
         )
-    for key, value in values.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-            raise ValueError(f"noise[{key!r}] must be a number >= 0; got {value!r}")
-        if not math.isfinite(value) or value < 0:
-            raise ValueError(f"noise[{key!r}] must be finite and >= 0; got {value!r}")
-    return JugglingNoise(**{k: float(v) for k, v in values.items()})
+    highs = {"release": MAX_RELEASE_NOISE, "tracking": MAX_TRACKING_NOISE}
+    checked = {k: check_number(v, f"noise[{k!r}]", 0.0, highs[k]) for k, v in values.items()}
+    return JugglingNoise(**checked)
 
 
-def _check_int(value: Any, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}; got {value!r}")
-    return int(value)
+def _check_int(value: Any, name: str, low: int, high: int = 10_000) -> int:
+    return check_integer(value, name, low, high)
 
 
 class JugglingEnv(LazyRendererMixin, gym.Env):
@@ -162,8 +189,8 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     term (``reward_catch``, ``reward_drop``, ``reward_deviation``, ``reward_action``;
     ``reward`` is their sum), ``deviation``, ``catches`` and ``cycles`` (so far),
     ``phase``, ``held``, ``time``, ``hand`` (the hand's true position ``(x, z)`` in m at
-    the end of the step, without the observation's tracking noise) and
-    ``action_invalid``.
+    the end of the step, without the observation's tracking noise), ``hand_observed``
+    (the tracked hand, as observed) and ``action_invalid``.
 
     ## Starting State
     The hand rests at the juggler's home (the mean start of the training tosses) with the
@@ -174,12 +201,16 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     and the tracking noise of every control period,
     ``motion_envs.models.juggling.draw_episode_noise``), one for the juggler (its
     random phase end points and durations); so the zero-action episode's first cycle *is*
-    that cycle. Without a seed, ``S`` is drawn from the environment's generator. Each
+    that cycle. Any ``i`` up to ``2**63 - 1`` costs the same (the cycle's generators come from
+    its spawn key, ``models.juggling.cycle_rng``). Without a seed, ``S`` is drawn from the environment's generator. Each
     later toss of the episode redraws the world's noise from the world generator.
 
     ## Episode End
     ### Termination
-    The episode terminates when the ball's centre falls below the floor (``floor_z``): a drop.
+    The episode terminates on a drop: the free ball's centre falls below the floor
+    (``floor_z``), or the ball is lost otherwise: held below the floor, or the (true) hand
+    outside the box of observed positions (10 m around the start and the floor, see the
+    observation space). Both count as a drop (``reward_drop``).
 
     ### Truncation
     The episode is truncated at the `max_cycles`-th catch, or after
@@ -194,20 +225,32 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
 
     | Parameter        | Type          | Default | Description |
     |------------------|---------------|---------|-------------|
-    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m) |
-    | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated |
-    | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1 |
+    | `noise`          | **float/dict** | `0.0`  | a level as `motion-bench juggling --noise LEVEL`: release-velocity std relative to the hand's velocity (0.05 = 5 %) plus 0.5 mm hand tracking noise (none at 0); or a dict with keys `release`, `tracking` (std of the tracked hand position, m); release at most 1, tracking at most 0.1 m |
+    | `max_cycles`     | **int**       | `10`    | catches after which the episode is truncated (at most 10,000) |
+    | `residual_scale` | **float**     | `0.05`  | offset (m) of the hand for an action of 1, in (0, 1] (an arm's reach) |
     | `reward_weights` | **dict**      | `None`  | weights of the reward terms, keys `catch`, `drop`, `deviation`, `action` (None: 10, 10, 1, 0.01) |
-    | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them |
+    | `frame_skip`     | **int**       | `1`     | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them (at most 10,000) |
     | `data`           | **str**       | `None`  | None: the built-in simulated demonstrations; or a path to the users' juggling CSV (`t, x, z[, ball_x, ball_z][, phase]`) |
-    | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity |
-    | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`) |
+    | `gravity`        | **float**     | `None`  | None: the task's default (the paper's slow virtual world, see `JugglingTask`); 9.81 for real gravity; in [0.01, 100] m/s^2 |
+    | `render_mode`    | **str**       | `None`  | `None` or `"rgb_array"` (MuJoCo, camera `side`; without a usable OpenGL backend a matplotlib drawing of floor, hand and ball, with one warning) |
     | `width`          | **int**       | `480`   | frame width in pixels |
     | `height`         | **int**       | `480`   | frame height in pixels |
 
     ## Version History
     * v0: Initial version (``info["hand"]`` added later; observations, rewards and
       dynamics unchanged).
+    * v0, issue 17 (rollouts change on purpose; the id stays v0, the paper's setting is
+      unchanged, its defects are mended): the catch is tested between samples (closest
+      approach over the control period, ``rules.swept_distance``: no pass-through; also
+      in ``BallisticWorld`` and the vectorised runner, so the zero action still equals
+      ``run_cycle``); a ball held below the floor or a hand outside the observation box
+      ends the episode as a drop (before, the juggler could carry it for the whole time
+      limit); the juggler sees its own hand (the tracked hand minus the agent's last
+      offset), so the offset is added once at a phase start (it was added twice: a
+      constant action jumped the hand by ``residual_scale``); ``info["hand"]`` is the
+      true hand (it carried the tracking noise; the tracked hand is
+      ``info["hand_observed"]``); ``reset(options={"cycle": N})`` costs O(1) (same
+      generators as before).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
@@ -231,10 +274,10 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
                 f"got {render_mode!r}"
             )
         for name, value in (("width", width), ("height", height)):
-            _check_int(value, name, 16)
+            _check_int(value, name, 16, MAX_FRAME_SIZE)
         self.noise = _check_noise(noise)
         self.max_cycles = _check_int(max_cycles, "max_cycles", 1)
-        self.residual_scale = check_scale(residual_scale)
+        self.residual_scale = check_scale(residual_scale, MAX_RESIDUAL_SCALE)
         self.reward_weights = check_reward_weights(reward_weights, DEFAULT_JUGGLING_REWARD_WEIGHTS)
         self.frame_skip = _check_int(frame_skip, "frame_skip", 1)
         if data is not None and not isinstance(data, (str, os.PathLike)):
@@ -242,11 +285,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         if gravity is None:
             task = JugglingTask()
         else:
-            if isinstance(gravity, bool) or not isinstance(gravity, (int, float, np.floating)):
-                raise ValueError(f"gravity must be None or a number > 0; got {gravity!r}")
-            if not math.isfinite(gravity) or gravity <= 0:
-                raise ValueError(f"gravity must be finite and > 0; got {gravity!r}")
-            task = JugglingTask(gravity=float(gravity))
+            task = JugglingTask(gravity=check_number(gravity, "gravity", *GRAVITY_RANGE))
         self.task = task
         self.data_path = data
         self.juggler = load_juggler(data, task)
@@ -265,6 +304,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         self._done = True
         self._catches = 0
         self._cycles = 0
+        self._applied = (0.0, 0.0)
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """The observation bounds of the docstring (task constants and arguments only)."""
@@ -292,12 +332,9 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         super().reset(seed=seed)
         cycle = 0
         if options is not None and options.get("cycle") is not None:
-            cycle = options["cycle"]
-            if isinstance(cycle, bool) or not isinstance(cycle, (int, np.integer)) or cycle < 0:
-                raise ValueError(f"options['cycle'] must be an integer >= 0; got {cycle!r}")
-            cycle = int(cycle)
+            cycle = check_integer(options["cycle"], "options['cycle']", 0, MAX_CYCLE_INDEX)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
-        self._world_rng, juggler_rng = cycle_rngs(base, cycle + 1)[cycle]
+        self._world_rng, juggler_rng = cycle_rng(base, cycle)
         home = np.asarray(getattr(self.juggler, "home_", self.task.home), dtype=np.float64)
         state = self.scene.reset(home, noise=self.noise, rng=self._world_rng)
         self.juggler.reset(state, juggler_rng)
@@ -306,10 +343,12 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         self._done = False
         self._catches = 0
         self._cycles = 0
+        self._applied = (0.0, 0.0)
         info = {
             "phase": self._phase,
             "time": state.time,
-            "hand": np.array(state.hand_pos, dtype=np.float64),
+            "hand": self.scene.hand_true,
+            "hand_observed": np.array(state.hand_pos, dtype=np.float64),
             "seed": base,
             "cycle": cycle,
         }
@@ -318,9 +357,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,); got shape {a.shape}")
+        a = as_action(action, (2,))
         ax, az = float(a[0]), float(a[1])
         invalid = not (math.isfinite(ax) and math.isfinite(az))
         if invalid:
@@ -335,24 +372,32 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         catches = 0
         periods = 0
         for _ in range(self.frame_skip):
-            target, armed = juggler.command(state)
+            # the juggler sees its own hand: the tracked hand minus the offset the agent
+            # added in the last period (else a phase planned from the hand would start
+            # at the offset hand and the offset be added twice)
+            ox, oz = self._applied
+            seen = state
+            if ox != 0.0 or oz != 0.0:
+                seen = dataclasses.replace(state, hand_pos=state.hand_pos - (ox, oz))
+            target, armed = juggler.command(seen)
             phase = juggler.phase
             if phase != self._phase:
                 if phase == "toss":  # a new cycle: its own release and tracking noise
                     scene.redraw_noise(self._world_rng)
                 self._phase = phase
             state = scene.step((float(target[0]) + rx, float(target[1]) + rz), armed)
+            self._applied = (rx, rz)
             periods += 1
             if state.released:
                 self._cycles += 1
             if state.caught:
                 catches += 1
-            if state.dropped:
+            if state.dropped or self._lost(state):
                 break
         self._state = state
         self._catches += catches
         w = self.reward_weights
-        dropped = state.dropped
+        dropped = state.dropped or self._lost(state)
         r_catch = w["catch"] * catches
         r_drop = -w["drop"] * float(dropped)
         r_dev = -w["deviation"] * offset
@@ -374,10 +419,19 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
             "phase": juggler.phase,
             "held": state.held,
             "time": state.time,
-            "hand": np.array(state.hand_pos, dtype=np.float64),
+            "hand": scene.hand_true,
+            "hand_observed": np.array(state.hand_pos, dtype=np.float64),
             "action_invalid": invalid,
         }
         return self._observation(state), reward, terminated, truncated, info
+
+    def _lost(self, state: JugglingState) -> bool:
+        """The ball is lost (a drop): held below the floor, or the hand outside the box
+        of observed positions (``POSITION_MARGIN`` around the start and floor)."""
+        hx, hz = self.scene.hand_true.tolist()
+        low, high = self._low, self._high
+        outside = not (low[0] <= hx <= high[0] and low[1] <= hz <= high[1])
+        return outside or (state.held and float(state.ball_pos[1]) < self.task.floor_z)
 
     def _observation(self, state: JugglingState) -> NDArray[np.float32]:
         juggler = self.juggler
@@ -401,12 +455,27 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         if self._state is None:
             raise RuntimeError("call reset() before render()")
         if self._renderer is None:
-            from motion_envs.envs.rendering import new_mujoco_renderer
-
-            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
-            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
-            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
+            self._renderer = self._new_renderer()
+        if isinstance(self._renderer, JugglingSketch):
+            st = self._state
+            title = f"{self.juggler.phase}  t = {st.time:.2f} s  catches {self._catches}"
+            return self._renderer.render(self.scene.hand_true, st.ball_pos, title)
         self.scene.sync()
         self._renderer.update_scene(self.data, camera="side")
         frame: NDArray[np.uint8] = self._renderer.render()
         return frame
+
+    def _new_renderer(self) -> Any:
+        """MuJoCo's renderer, or without a usable OpenGL backend the matplotlib sketch
+        (one warning says why)."""
+        try:
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
+            return new_mujoco_renderer(self.model, self.height, self.width)
+        except RuntimeError as exc:
+            warn_matplotlib_fallback("juggling frames", str(exc))
+        (hx, hz), task = self.task.home, self.task
+        limits = (hx - 1.5, hx + 1.5, task.floor_z - 0.2, hz + 2.8)
+        return JugglingSketch(
+            self.width, self.height, limits, task.floor_z, task.catch_radius, task.ball_radius
+        )

@@ -52,10 +52,10 @@ hand targets and generator both give the same states to round-off (tested to 1e-
 2. Held ball: released (``released``) at ``h_k`` with velocity ``v_k * f`` if
    ``release_armed`` and ``a_k[z] < -toss_threshold`` (``f = 1 + release * N(0, 1)`` per
    component, drawn at reset); else it stays at ``h_k`` with velocity ``v_k``.
-3. Flying ball: once it has been farther than ``catch_radius`` from the hand,
-   ``|h_k - ball| <= catch_radius`` is a catch (``caught``; held again, its state copied
-   from the hand); a flying ball whose centre is below ``floor_z`` is ``dropped`` (sticky
-   until reset; a dropped ball is not caught).
+3. Flying ball: once it has been farther than ``catch_radius`` from the hand, a closest
+   approach over the period (``rules.swept_distance``) ``<= catch_radius`` is a catch
+   (``caught``; held again, its state copied from the hand); a flying ball whose centre
+   is below ``floor_z`` is ``dropped`` (sticky until reset; a dropped ball is not caught).
 
 The state's ``hand_pos`` is what the controller observes: the hand plus the episode's
 tracking noise (``JugglingNoise.tracking``); ``hand_vel`` is the true hand's.
@@ -187,6 +187,7 @@ class JugglingScene:
         vx, vz = rules.hand_velocity(x, prev[0], dt), rules.hand_velocity(z, prev[1], dt)
         az = rules.hand_acceleration(z, prev[1], prev2[1], dt)
         self._mocap[0], self._mocap[2] = x, z
+        ball0 = (float(self._qpos[0]), float(self._qpos[1]))
         if not self._held:  # a held ball is a copy of the hand: nothing to integrate
             mujoco.mj_step(self.model, self.data)
         self.data.time = self._k * dt  # k dt exactly, as BallisticWorld (no summed round-off)
@@ -203,7 +204,12 @@ class JugglingScene:
             qpos[0], qpos[1] = x, z
         else:
             dist = math.hypot(x - float(qpos[0]), z - float(qpos[1]))
-            caught = bool(rules.catch_fires(dist, self._left, self._dropped, task.catch_radius))
+            swept = float(
+                rules.swept_distance(
+                    prev[0] - ball0[0], prev[1] - ball0[1], x - float(qpos[0]), z - float(qpos[1])
+                )
+            )
+            caught = bool(rules.catch_fires(swept, self._left, self._dropped, task.catch_radius))
             self._left = bool(rules.has_left(dist, self._left, caught, task.catch_radius))
             if caught:
                 self._held = True

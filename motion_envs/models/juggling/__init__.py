@@ -40,6 +40,7 @@ from motion_envs.models.juggling._model import (
 )
 from motion_envs.models.juggling._run import (
     CycleResult,
+    cycle_rng,
     cycle_rngs,
     run_cycle,
     run_cycles,
@@ -73,6 +74,7 @@ __all__ = [
     "JugglingController",
     "JugglingWorld",
     "PhaseFit",
+    "cycle_rng",
     "cycle_rngs",
     "default_fit",
     "draw_episode_noise",

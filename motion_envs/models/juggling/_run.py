@@ -22,6 +22,7 @@ from motion_envs.models.juggling._world import BallisticWorld, JugglingWorld, tr
 
 __all__ = [
     "CycleResult",
+    "cycle_rng",
     "cycle_rngs",
     "run_cycle",
     "run_cycles",
@@ -54,6 +55,14 @@ def cycle_rngs(seed: int, n: int) -> list[tuple[np.random.Generator, np.random.G
         a, b = ss.spawn(2)
         out.append((np.random.default_rng(a), np.random.default_rng(b)))
     return out
+
+
+def cycle_rng(seed: int, cycle: int) -> tuple[np.random.Generator, np.random.Generator]:
+    """``cycle_rngs(seed, cycle + 1)[cycle]`` in O(1): cycle ``cycle``'s (world, juggler)
+    generators, from the spawn key ``(cycle,)`` that ``SeedSequence.spawn`` gives its
+    ``cycle``-th child (bit-identical streams)."""
+    a, b = np.random.SeedSequence(seed, spawn_key=(cycle,)).spawn(2)
+    return np.random.default_rng(a), np.random.default_rng(b)
 
 
 def run_cycle(
@@ -269,6 +278,7 @@ def run_cycles_fast(
             rel_vel[released_ev & active] = bv[released_ev & active]
             ever_released |= released_ev & active
         fly = ~held & ~released_ev
+        ball0 = ball.copy()
         if fly.any():
             bx, bz, bvx, bvz = rules.flight(
                 (rel[:, 0], rel[:, 1], rel[:, 2], rel[:, 3], rel[:, 4]), t_now, g
@@ -276,7 +286,13 @@ def run_cycles_fast(
             ball[fly] = np.column_stack([bx, bz])[fly]
             ball_v[fly] = np.column_stack([bvx, bvz])[fly]
             dist = np.hypot(hand[:, 0] - ball[:, 0], hand[:, 1] - ball[:, 1])
-            catch = fly & rules.catch_fires(dist, left, dropped, rc)
+            swept = rules.swept_distance(
+                prev[:, 0] - ball0[:, 0],
+                prev[:, 1] - ball0[:, 1],
+                hand[:, 0] - ball[:, 0],
+                hand[:, 1] - ball[:, 1],
+            )
+            catch = fly & rules.catch_fires(swept, left, dropped, rc)
             left |= fly & rules.has_left(dist, left, catch, rc)
             caught_ev = catch
             held |= catch

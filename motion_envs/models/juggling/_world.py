@@ -192,10 +192,13 @@ class BallisticWorld:
             else:
                 self._ball, self._ball_v = [x, z], [vx, vz]
         else:
+            bx0, bz0 = self._ball
             bx, bz, bvx, bvz = rules.flight(self._release, self.time, task.gravity)
             self._ball, self._ball_v = [bx, bz], [bvx, bvz]
             dist = math.hypot(x - bx, z - bz)
-            caught = bool(rules.catch_fires(dist, self._left, self._dropped, task.catch_radius))
+            px, pz = self._prev
+            swept = float(rules.swept_distance(px - bx0, pz - bz0, x - bx, z - bz))
+            caught = bool(rules.catch_fires(swept, self._left, self._dropped, task.catch_radius))
             self._left = bool(rules.has_left(dist, self._left, caught, task.catch_radius))
             if caught:
                 self._held = True
