@@ -49,6 +49,21 @@ LOADERS: tuple[Loader, ...] = (
         "csv",
         not_fuzzed="pandas.read_csv with exact floats: a helper, not a user surface",
     ),
+    *(
+        Loader(
+            f"motion_envs.datasets.mocap.{target}",
+            "mocap",
+            not_fuzzed="motion capture formats: fuzzed with corrupted C3D, TSV and BVH files "
+            "by tests/test_mocap.py (hypothesis), where the files are written",
+        )
+        for target in (
+            "_readers:read_bvh",
+            "_readers:read_c3d",
+            "_readers:read_qualisys_tsv",
+            "_readers:read_recording",
+            "_segments:read_segments",
+        )
+    ),
     Loader("motion_envs.models.serialization:load_model", "json_model"),
     Loader("baselines.learned.mlp_model:ResidualMLP.load", "safetensors"),
     Loader("baselines.learned.model_file:read_model_file", "safetensors"),
@@ -149,6 +164,11 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("train", "--n-envs"),
     ("agent", "--episodes"),
     ("sweep", "--num-cpus"),
+    ("import", "--unit"),
+    ("import", "--max-gap"),
+    ("import", "--speed-threshold"),
+    ("import", "--min-duration"),
+    ("import", "--min-pause"),
 )
 
 #: Checkers (``type=`` names) of options that take paths, ids or names, not numbers.
@@ -168,5 +188,18 @@ CLI_NON_NUMERIC_TYPES = frozenset(
         "yaml_file",
         "env_kwarg",
         "sweep_file",
+        # motion-bench import: marker, joint and label names, axis letters, files
+        "_source",
+        "marker",
+        "markers",
+        "joint",
+        "relative_to",
+        "ball",
+        "balls",
+        "up",
+        "segments",
+        "subject",
+        "task",
+        "lateral",
     }
 )

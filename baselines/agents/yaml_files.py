@@ -154,8 +154,9 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, yaml.Node | None]:
         raise ValueError(f"{p}: not a text (UTF-8) file (byte {exc.start})") from None
     if "\x00" in text:
         raise ValueError(f"{p}: holds a NUL byte (not a YAML text file)")
-    loader = BoundedLoader(text)
+    loader: BoundedLoader | None = None
     try:
+        loader = BoundedLoader(text)  # its reader refuses control characters here
         node = loader.get_single_node()
         if node is not None:
             _check_expanded(node)
@@ -170,7 +171,8 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, yaml.Node | None]:
     except RecursionError:  # defensive: the depth bound should make this unreachable
         raise ValueError(f"{p}: nested too deeply") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     return doc, node
 
 
