@@ -29,7 +29,7 @@ from motion_envs.envs._common import (
 )
 from motion_envs.envs._reach import ReachEnv, ReachKind, reset_labels
 
-__all__ = ["ReachVectorEnv"]
+__all__ = ["ReachVectorEnv", "check_autoreset_mode"]
 
 # observations, rewards, terminations, truncations, infos
 _StepResult = tuple[
@@ -46,7 +46,7 @@ _POOL = 64  # trajectory draws per sub-environment taken from its generator at o
 _SCALAR_BELOW = 8
 
 
-def _check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
+def check_autoreset_mode(mode: AutoresetMode | str) -> AutoresetMode:
     try:
         return mode if isinstance(mode, AutoresetMode) else AutoresetMode(mode)
     except ValueError:
@@ -116,7 +116,7 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._n_traj = task.n_trajectories
         self.num_envs = check_num_envs(num_envs)
         self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
-        self.autoreset_mode = _check_autoreset_mode(autoreset_mode)
+        self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self._mode = _MODES[self.autoreset_mode]
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.backend = K.resolve_vector_backend(backend)

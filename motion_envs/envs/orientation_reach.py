@@ -98,6 +98,7 @@ class OrientationTask(ReachTask):
     criterion: float
     grids: Any  # motion_envs.models.nominal.OrientationGrids
     max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
+    up: tuple[float, ...] = (0.0, 0.0, 1.0)  # the dataset's vertical axis (path frames)
 
 
 def orientation_split_parts(
@@ -180,6 +181,7 @@ def _build_task(
         criterion=g.criterion(),
         grids=g,
         max_duration=max_duration,
+        up=tuple(float(v) for v in dataset.up),
     )
 
 
@@ -224,7 +226,7 @@ def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.space
 
 
 def orientation_max_errors(
-    task: Any, predicted_residuals: NDArray[np.float64]
+    task: Any, predicted_residuals: NDArray[np.float64], index: Any = None
 ) -> NDArray[np.float64]:
     """``(L,)`` ``max_k |logmap(expmap(rhat_lk)) - r_lk|`` of an orientation task's episodes.
 
@@ -232,14 +234,18 @@ def orientation_max_errors(
     ``task`` (:class:`~motion_envs.envs.orientation_reach.OrientationTask`); the
     trajectory ``e_k expmap(rhat_k)`` is scored by the environment's step kernel with a
     zero action (the human residual ``r`` and orientation ``h`` from ``task.steps``).
+    With ``index`` (integer array), only those episodes: ``predicted_residuals`` is then
+    ``(len(index), n, 3)``.
     """
     from motion_envs.geometry import quaternion as quat
 
-    rhat = checked_prediction(predicted_residuals, task, 3, "predicted_residuals")
+    steps = task.steps if index is None else task.steps[index]
+    base = task.grids.base if index is None else task.grids.base[index]
+    rhat = checked_prediction(predicted_residuals, steps, 3, "predicted_residuals")
     chart = quat.expmap(rhat)
-    predicted = np.array(task.steps)
+    predicted = np.array(steps)
     predicted[..., ROW["chart"]] = chart
-    predicted[..., ROW["nominal"]] = quat.multiply(task.grids.base, chart)
+    predicted[..., ROW["nominal"]] = quat.multiply(base, chart)
     return zero_action_errors(ORIENTATION, task, predicted)
 
 
