@@ -161,3 +161,50 @@ def test_nan_action_raises():
     a[2] = np.nan
     with pytest.raises(ValueError, match="finite"):
         env.step(a)
+
+
+def test_calibration_summary_never_holds_the_current_trajectory():
+    """Poisoned rows: the episode's own calibration features are NaN (and those of every
+    trajectory outside its person): the observation stays finite, the drawn reaches are
+    the person's others of the split, and the summary is their mean."""
+    env = gym.make("MotionEnvs/OrientationCoefficients-v0", calibration=5).unwrapped
+    clean = env._cal_features.copy()
+    subjects = np.asarray(env.task.subjects).astype(str)
+    env.reset(seed=0)
+    for _ in range(300):
+        l = int(env.np_random.integers(env.task.n_trajectories))
+        poisoned = clean.copy()
+        poisoned[l] = np.nan
+        poisoned[subjects != subjects[l]] = np.nan
+        env._cal_features = poisoned
+        obs, info = env.reset(options={"trajectory": l})
+        drawn = info["calibration_trajectories"]
+        assert np.all(np.isfinite(obs)) and env.observation_space.contains(obs)
+        assert l not in drawn and np.all(subjects[drawn] == subjects[l])
+        m = min(5, int(np.sum(subjects == subjects[l])) - 1)
+        assert drawn.size == m and len(set(drawn.tolist())) == m
+        np.testing.assert_allclose(obs[-10:-1], np.clip(clean[drawn].mean(0), -3, 3), rtol=1e-6)
+        assert obs[-1] == np.float32(m / 5)
+
+
+def test_calibration_draws_are_seeded_and_vary():
+    a = gym.make("MotionEnvs/OrientationCoefficients-v0", calibration=3)
+    b = gym.make("MotionEnvs/OrientationCoefficients-v0", calibration=3)
+    seq_a = [a.reset(seed=11 if i == 0 else None)[0] for i in range(20)]
+    seq_b = [b.reset(seed=11 if i == 0 else None)[0] for i in range(20)]
+    np.testing.assert_array_equal(seq_a, seq_b)
+    same = [a.reset(options={"trajectory": 0})[0] for _ in range(10)]
+    assert len({x[-10:].tobytes() for x in same}) > 1  # other draws of the same person
+
+
+def test_calibration_vector_env_equals_sync():
+    env_id = "MotionEnvs/OrientationCoefficients-v0"
+    native = gym.make_vec(env_id, num_envs=3, calibration=2)
+    sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync", calibration=2)
+    rng = np.random.default_rng(0)
+    a_out, b_out = [native.reset(seed=4)], [sync.reset(seed=4)]
+    for _ in range(6):
+        a = rng.uniform(-1, 1, native.action_space.shape).astype(np.float32)
+        a_out.append(native.step(a))
+        b_out.append(sync.step(a))
+    np.testing.assert_equal(_plain(a_out), _plain(b_out))

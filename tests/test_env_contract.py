@@ -150,7 +150,9 @@ CASES: dict[str, Case] = {
     "MotionEnvs/OrientationReach": Case(_orientation_nominal, {"nominal": "bezier-task"}),
     "MotionEnvs/PositionReach": Case(_position_nominal, {"shapes": ["Angle", "CShape", "GShape"]}),
     "MotionEnvs/OrientationCoefficients": Case(
-        _coefficient_nominal("MotionEnvs/OrientationReach-v1"), {"nominal": "bezier-task"}
+        _coefficient_nominal("MotionEnvs/OrientationReach-v1"),
+        {"nominal": "bezier-task"},
+        checked=({"calibration": 5, "split": "test"},),
     ),
     "MotionEnvs/PositionCoefficients": Case(
         _coefficient_nominal("MotionEnvs/PositionReach-v1"),

@@ -73,6 +73,12 @@ __all__ = [
 
 #: Largest ``n_sines`` (the interior points of the grid).
 MAX_COEFFICIENT_SINES = N_STEPS - 2
+#: Largest ``calibration`` (reaches of the person in the summary).
+MAX_CALIBRATION = 1000
+#: Sine terms per path axis of a calibration summary (9 values).
+CALIBRATION_SINES = 3
+#: The calibration summary is clipped to ``[-CALIBRATION_BOUND, CALIBRATION_BOUND]``.
+CALIBRATION_BOUND = 3.0
 
 FloatArray = NDArray[np.float64]
 
@@ -142,6 +148,42 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._done = True
         self._predicted: FloatArray | None = None
 
+    def _setup_calibration(self, calibration: int, subjects: Any, features: FloatArray) -> None:
+        """``calibration = K``: the observation gains the mean of ``features`` ``(L, f)``
+        over ``K`` other trajectories of the episode's subject (within the split), drawn
+        at reset with the environment's generator, and the share drawn ``m / K``."""
+        self.calibration = check_integer(calibration, "calibration", 0, MAX_CALIBRATION)
+        self._cal_features = features
+        labels = np.asarray(subjects).astype(str)
+        self._others = [
+            np.flatnonzero((labels == s) & (np.arange(labels.size) != l))
+            for l, s in enumerate(labels)
+        ]
+        self._drawn: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
+        if self.calibration:
+            box: Any = self.observation_space
+            f = features.shape[1]
+            low = np.concatenate([box.low, np.full(f, -CALIBRATION_BOUND), [0.0]])
+            high = np.concatenate([box.high, np.full(f, CALIBRATION_BOUND), [1.0]])
+            self.observation_space = gym.spaces.Box(
+                low.astype(np.float32), high.astype(np.float32), dtype=np.float32
+            )
+
+    def _observe(self, index: int) -> NDArray[np.float32]:
+        """The episode's observation: the context, then (``calibration = K``) the
+        calibration summary of ``K`` other reaches of the same person, drawn now."""
+        context = self._context[index]
+        if not getattr(self, "calibration", 0):
+            return context.copy()
+        others = self._others[index]
+        m = min(self.calibration, others.size)
+        drawn = np.sort(self.np_random.choice(others, size=m, replace=False)) if m else others[:0]
+        self._drawn = drawn
+        f = self._cal_features.shape[1]
+        mean = self._cal_features[drawn].mean(axis=0) if m else np.zeros(f)
+        summary = np.clip(mean, -CALIBRATION_BOUND, CALIBRATION_BOUND)
+        return np.concatenate([context, summary, [m / self.calibration]]).astype(np.float32)
+
     def _finish_setup(self) -> None:
         tau = np.linspace(0.0, 1.0, N_STEPS)
         from motion_envs.geometry.sine_series import basis
@@ -210,10 +252,13 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._index = index
         self._done = False
         self._predicted = None
+        self._obs = self._observe(index)
         info: dict[str, Any] = {"trajectory_index": index}
         for key, labels in self._labels.items():
             info[key] = str(labels[index])
-        return self._context[index].copy(), info
+        if getattr(self, "calibration", 0):
+            info["calibration_trajectories"] = self._drawn.copy()
+        return self._obs.copy(), info
 
     def _check_action(self, action: Any) -> NDArray[np.float64]:
         a = as_action(action, self._action_shape)
@@ -230,7 +275,7 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._predicted = curve
         i = self._index
         info = {"max_error": float(error), "nominal_max_error": float(self._nominal_errors[i])}
-        return self._context[i].copy(), -float(error), True, False, info
+        return self._obs.copy(), -float(error), True, False, info
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done:
@@ -284,7 +329,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
 
     ## Observation Space
     `Box(low, high, (9 + T,), float32)`, ``T`` the number of tasks (10 for
-    ``"vr-kitchen"``: 19 values):
+    ``"vr-kitchen"``: 19 values; 29 with ``calibration > 0``):
 
     | Num    | Observation                                           | Min | Max       | Type (Unit)     |
     |--------|-------------------------------------------------------|-----|-----------|-----------------|
@@ -293,7 +338,14 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     | 8      | the movement's duration ``T``                         | 0   | ``T_max`` | time (s)        |
     | 9-...  | one-hot task over the dataset's sorted task names     | 0   | 1         | unitless        |
 
-    The subject is not observed (a split by subject holds whole people out).
+    The subject is not observed (a split by subject holds whole people out). With
+    ``calibration=K > 0`` the observation gains 10 entries: the mean over ``K`` other
+    reaches of the episode's person (drawn at `reset` with the environment's generator
+    among the person's trajectories *of the same split*, without replacement, never the
+    episode's own; all of them if the person has fewer) of their own human residual's
+    first 3 sine coefficients per path axis (path frame, as the action; clipped to
+    ``[-3, 3]``), then the share drawn ``m / K`` in ``[0, 1]`` (0: no other reach,
+    summary 0). `info["calibration_trajectories"]` lists the drawn trajectories.
 
     ## Rewards
     ``-max_k |logmap(conj(e_k) q_k) - r_k|``: minus the paper's per-trajectory error of
@@ -333,6 +385,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     | `split_seed`     | **int**   | `0`            | seed of the subject permutation |
     | `min_deg`        | **float** | `10.0`         | drop trajectories rotating less than this (degrees) |
     | `val_fraction`   | **float** | `0.0`          | share of the training subjects held out as `split="val"` |
+    | `calibration`    | **int**   | `0`            | ``K``: observe the summary of ``K`` other reaches of the person (0: none) |
     | `render_mode`    | **str**   | `None`         | `None` or `"rgb_array"` |
     | `width`          | **int**   | `480`          | frame width in pixels |
     | `height`         | **int**   | `480`          | frame height in pixels |
@@ -357,6 +410,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         split_seed: int = 0,
         min_deg: float = 10.0,
         val_fraction: float = 0.0,
+        calibration: int = 0,
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
@@ -383,7 +437,22 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         g = self.task.grids
         self._frames, self._scales = path_frames(g.starts, g.goals, self.task.up)
         self._base = np.asarray(g.predicted_residuals)
+        self._setup_calibration(calibration, self.task.subjects, self._path_coefficients())
         self._finish_setup()
+
+    def _path_coefficients(self) -> FloatArray:
+        """``(L, 3 CALIBRATION_SINES)`` least-squares sine coefficients of each
+        trajectory's own human residual in its path frame (the calibration features:
+        each row from that trajectory alone)."""
+        from motion_envs.geometry.sine_series import basis
+
+        local = np.einsum("lij,lti->ltj", self._frames, self.task.grids.residuals)
+        local = local / self._scales[:, None, None]
+        B = basis(np.linspace(0.0, 1.0, N_STEPS), CALIBRATION_SINES)[:, 2:]
+        L, n, w = local.shape
+        coef = np.linalg.lstsq(B, local.transpose(1, 0, 2).reshape(n, -1), rcond=None)[0]
+        out: FloatArray = coef.reshape(CALIBRATION_SINES, L, w).transpose(1, 0, 2).reshape(L, -1)
+        return out
 
     def _human_curves(self) -> FloatArray:
         return np.asarray(self.task.grids.residuals)
