@@ -87,10 +87,14 @@ def test_line_frames_are_orthonormal_with_the_first_axis_to_the_goal():
     assert np.allclose(np.linalg.det(F2), 1.0)
 
 
-@pytest.mark.parametrize("env_id", list(CASES))
-@pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
-def test_vector_env_equals_sync_vector_env(env_id, mode):
-    kwargs = CASES[env_id]
+VECTOR_CASES = [
+    *[(i, m, CASES[i]) for i in CASES for m in (AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP)],
+    ("MotionEnvs/OrientationCoefficients-v0", AutoresetMode.NEXT_STEP, {"calibration": 2}),
+]
+
+
+@pytest.mark.parametrize(("env_id", "mode", "kwargs"), VECTOR_CASES)
+def test_vector_env_equals_sync_vector_env(env_id, mode, kwargs):
     native = gym.make_vec(env_id, num_envs=3, autoreset_mode=mode, **kwargs)
     sync = gym.make_vec(
         env_id,
@@ -195,16 +199,3 @@ def test_calibration_draws_are_seeded_and_vary():
     np.testing.assert_array_equal(seq_a, seq_b)
     same = [a.reset(options={"trajectory": 0})[0] for _ in range(10)]
     assert len({x[-10:].tobytes() for x in same}) > 1  # other draws of the same person
-
-
-def test_calibration_vector_env_equals_sync():
-    env_id = "MotionEnvs/OrientationCoefficients-v0"
-    native = gym.make_vec(env_id, num_envs=3, calibration=2)
-    sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync", calibration=2)
-    rng = np.random.default_rng(0)
-    a_out, b_out = [native.reset(seed=4)], [sync.reset(seed=4)]
-    for _ in range(6):
-        a = rng.uniform(-1, 1, native.action_space.shape).astype(np.float32)
-        a_out.append(native.step(a))
-        b_out.append(sync.step(a))
-    np.testing.assert_equal(_plain(a_out), _plain(b_out))

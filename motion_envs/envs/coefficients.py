@@ -172,9 +172,9 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     def _observe(self, index: int) -> NDArray[np.float32]:
         """The episode's observation: the context, then (``calibration = K``) the
         calibration summary of ``K`` other reaches of the same person, drawn now."""
-        context = self._context[index]
+        context: NDArray[np.float32] = self._context[index].copy()
         if not getattr(self, "calibration", 0):
-            return context.copy()
+            return context
         others = self._others[index]
         m = min(self.calibration, others.size)
         drawn = np.sort(self.np_random.choice(others, size=m, replace=False)) if m else others[:0]
