@@ -188,8 +188,9 @@ def learned_episode_errors(
     # the coefficient envs score the same episodes of the same task (one step each)
     if isinstance(env, (OrientationReachEnv, OrientationCoefficientsEnv)):
         _, fit, part = orientation_split_parts(
-            a["data"], split, a["test_fraction"], a["split_seed"], a["min_deg"], a["val_fraction"]
-        )
+            a["data"], split, a["test_fraction"], a["split_seed"], a["min_deg"], a["val_fraction"],
+            a.get("fold"),
+        )  # fmt: skip
         if not np.array_equal(np.asarray(part.trajectory_ids), task.trajectory_ids):
             raise RuntimeError(f"{env_id}: the learned split does not match the environment's")
         rhat, chosen = orientation_learned_residuals(fit, part)

@@ -385,6 +385,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     | `split_seed`     | **int**   | `0`            | seed of the subject permutation |
     | `min_deg`        | **float** | `10.0`         | drop trajectories rotating less than this (degrees) |
     | `val_fraction`   | **float** | `0.0`          | share of the training subjects held out as `split="val"` |
+    | `fold`           | **int**   | `None`         | leave one person out: the `fold`-th person (sorted labels) is `"test"` (as `OrientationReach`) |
     | `calibration`    | **int**   | `0`            | ``K``: observe the summary of ``K`` other reaches of the person (0: none) |
     | `render_mode`    | **str**   | `None`         | `None` or `"rgb_array"` |
     | `width`          | **int**   | `480`          | frame width in pixels |
@@ -410,6 +411,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         split_seed: int = 0,
         min_deg: float = 10.0,
         val_fraction: float = 0.0,
+        fold: int | None = None,
         calibration: int = 0,
         render_mode: str | None = None,
         width: int = 480,
@@ -419,8 +421,9 @@ class OrientationCoefficientsEnv(CoefficientEnv):
 
         self._check_common(n_sines, residual_scale, render_mode, width, height)
         self.task = load_orientation_task(
-            data, split, nominal, degree, test_fraction, split_seed, min_deg, val_fraction, True
-        )
+            data, split, nominal, degree, test_fraction, split_seed, min_deg, val_fraction, True,
+            fold,
+        )  # fmt: skip
         obs0 = self.task.obs[:, 0]
         task_part = slice(LAYOUT.task.start, obs0.shape[1] - 2)  # before the v1 timing
         self._context = np.ascontiguousarray(
