@@ -105,6 +105,30 @@ def _juggling_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     return np.array(hands), expected[juggling.frame_skip - 1 :: juggling.frame_skip]
 
 
+def _coefficient_nominal(step_id: str) -> Callable[[gym.Env], tuple[np.ndarray, np.ndarray]]:
+    """Coefficient envs: the zero action's ``-reward`` and ``info['max_error']`` on the first
+    and last trajectory against the ``info['max_error']`` of a zero-action episode of the
+    step environment ``step_id`` (``-v1``, the same split and nominal)."""
+
+    def nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+        task = env.unwrapped.task
+        step_env = gym.make(step_id, split=task.split, nominal=task.nominal)
+        got, expected = [], []
+        for l in sorted({0, task.n_trajectories - 1}):
+            env.reset(options={"trajectory": l})
+            _, reward, terminated, _, info = env.step(np.zeros(env.action_space.shape))
+            assert terminated
+            got.extend([-reward, info["max_error"]])
+            step_env.reset(options={"trajectory": l})
+            done = False
+            while not done:
+                _, _, done, _, step_info = step_env.step(np.zeros(step_env.action_space.shape))
+            expected.extend([step_info["max_error"]] * 2)
+        return np.array(got), np.array(expected)
+
+    return nominal
+
+
 @dataclass(frozen=True)
 class Case:
     """What the contract needs to know about one environment (all its versions).
@@ -125,6 +149,15 @@ class Case:
 CASES: dict[str, Case] = {
     "MotionEnvs/OrientationReach": Case(_orientation_nominal, {"nominal": "bezier-task"}),
     "MotionEnvs/PositionReach": Case(_position_nominal, {"shapes": ["Angle", "CShape", "GShape"]}),
+    "MotionEnvs/OrientationCoefficients": Case(
+        _coefficient_nominal("MotionEnvs/OrientationReach-v1"),
+        {"nominal": "bezier-task"},
+        checked=({"calibration": 5, "split": "test"},),
+    ),
+    "MotionEnvs/PositionCoefficients": Case(
+        _coefficient_nominal("MotionEnvs/PositionReach-v1"),
+        {"shapes": ["Angle", "CShape", "GShape"]},
+    ),
     "MotionEnvs/Juggling": Case(
         _juggling_nominal,
         {"noise": 0.05},

@@ -4,7 +4,8 @@
 *learned* residual regressor of :mod:`baselines.learned` on the same episodes with the
 same criterion: the median over episodes of ``info["max_error"]``.
 
-* **Orientation** (``OrientationReach-v0``/``-v1``): the ridge regressor of
+* **Orientation** (``OrientationReach-v0``/``-v1``, and ``OrientationCoefficients-v0``,
+  whose episodes and scoring are the same task's): the ridge regressor of
   :mod:`baselines.learned.orientation` (pre-movement conditions: start and goal
   orientation, their relative rotation and angle, log duration, one-hot task) predicts
   the residual's path-frame sine coefficients. It is fitted on the trajectories the
@@ -15,7 +16,7 @@ same criterion: the median over episodes of ``info["max_error"]``.
   "predicted timing" residual of :mod:`baselines.learned.rows`). The ridge penalty is
   chosen by inner folds over the training subjects
   (:func:`~baselines.learned.orientation.ridge_nested`).
-* **Position** (``PositionReach-v0``/``-v1``): the ``ridge`` column of
+* **Position** (``PositionReach-v0``/``-v1``, ``PositionCoefficients-v0``): the ``ridge`` column of
   :mod:`baselines.learned.position` (Lippi's residual ``y - line`` regressed on the
   conditions, start and end, constant columns dropped), fitted per shape on the
   environment's training demonstrations of that shape (the folds of
@@ -141,7 +142,13 @@ def learned_skip_reason(env_id: str) -> str | None:
     """Why ``env_id`` has no learned row (None: it has one)."""
     from baselines.learned import sklearn_missing_reason
 
-    if not any(name in env_id for name in ("OrientationReach", "PositionReach")):
+    families = (
+        "OrientationReach",
+        "PositionReach",
+        "OrientationCoefficients",
+        "PositionCoefficients",
+    )
+    if not any(name in env_id for name in families):
         return f"no learned regressor for {env_id}"
     return sklearn_missing_reason()
 
@@ -167,6 +174,7 @@ def learned_episode_errors(
     import gymnasium as gym
 
     import motion_envs  # noqa: F401  (registers the ids)
+    from motion_envs.envs.coefficients import OrientationCoefficientsEnv, PositionCoefficientsEnv
     from motion_envs.envs.orientation_reach import OrientationReachEnv, orientation_split_parts
     from motion_envs.envs.position_reach import PositionReachEnv, position_split_source
 
@@ -177,15 +185,17 @@ def learned_episode_errors(
     env: Any = gym.make(env_id, split=split, **kwargs).unwrapped
     task = env.task
     a = _arguments(env, env_id, kwargs, split)
-    if isinstance(env, OrientationReachEnv):
+    # the coefficient envs score the same episodes of the same task (one step each)
+    if isinstance(env, (OrientationReachEnv, OrientationCoefficientsEnv)):
         _, fit, part = orientation_split_parts(
-            a["data"], split, a["test_fraction"], a["split_seed"], a["min_deg"], a["val_fraction"]
-        )
+            a["data"], split, a["test_fraction"], a["split_seed"], a["min_deg"], a["val_fraction"],
+            a.get("fold"),
+        )  # fmt: skip
         if not np.array_equal(np.asarray(part.trajectory_ids), task.trajectory_ids):
             raise RuntimeError(f"{env_id}: the learned split does not match the environment's")
         rhat, chosen = orientation_learned_residuals(fit, part)
         errors, model = orientation_max_errors(task, rhat), "ridge (path frame, mean profile)"
-    elif isinstance(env, PositionReachEnv):
+    elif isinstance(env, (PositionReachEnv, PositionCoefficientsEnv)):
         _, dataset, inner, fraction = position_split_source(
             a["data"], a["shapes"], split, a["test_fraction"], a["split_seed"], a["val_fraction"]
         )

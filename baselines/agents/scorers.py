@@ -223,7 +223,12 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
     return results | juggling_verdicts(agent, nominal)
 
 
-for _family in ("MotionEnvs/OrientationReach", "MotionEnvs/PositionReach"):
+for _family in (
+    "MotionEnvs/OrientationReach",
+    "MotionEnvs/PositionReach",
+    "MotionEnvs/OrientationCoefficients",
+    "MotionEnvs/PositionCoefficients",
+):
     register_scorer(Scorer(_family, episode_max_errors, reaching_agent_results))
 for _family in sorted({env_family(i) for i in JUGGLING_ENV_IDS}):
     register_scorer(Scorer(_family, juggling_episodes, juggling_agent_results, SPLIT_SEEDS["val"]))

@@ -425,9 +425,11 @@ def zero_action_errors(
 
 def checked_prediction(values: Any, task: Any, width: int, name: str) -> NDArray[np.float64]:
     """``values`` as a float64 ``(L, n, width)`` array of one prediction per episode of
-    ``task``; ``ValueError`` naming ``name`` for another shape."""
+    ``task`` (or of a step table ``(L, n, ...)``); ``ValueError`` naming ``name`` for
+    another shape."""
     out = np.asarray(values, dtype=np.float64)
-    shape = (*task.steps.shape[:2], width)
+    steps = task if isinstance(task, np.ndarray) else task.steps
+    shape = (*steps.shape[:2], width)
     if out.shape != shape:
         raise ValueError(f"{name} must have shape {shape}; got {out.shape}")
     return out

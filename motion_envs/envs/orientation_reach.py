@@ -98,6 +98,7 @@ class OrientationTask(ReachTask):
     criterion: float
     grids: Any  # motion_envs.models.nominal.OrientationGrids
     max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
+    up: tuple[float, ...] = (0.0, 0.0, 1.0)  # the dataset's vertical axis (path frames)
 
 
 def orientation_split_parts(
@@ -107,6 +108,7 @@ def orientation_split_parts(
     split_seed: int,
     min_deg: float,
     val_fraction: float = 0.0,
+    fold: int | None = None,
 ) -> tuple[Any, Any, Any]:
     """``(dataset, fit, part)``: the whole dataset, the subjects the environment's nominal
     is fitted on, and the trajectories of ``split`` (in episode order).
@@ -115,6 +117,10 @@ def orientation_split_parts(
     ``"train"``/``"val"`` split, the training subjects minus the validation ones.
     Anything else fitted "on the environment's training data" (the learned regressor
     of ``motion-bench agent``) uses this same ``fit``.
+
+    ``fold = i`` (leave one person out): the test split is the ``i``-th person in sorted
+    order of the subject labels, the training split every other person
+    (``test_fraction`` and ``split_seed`` then only seed the validation carve).
     """
     from motion_envs.datasets import load_orientation_dataset
     from motion_envs.datasets.splits import split_by_subject
@@ -122,7 +128,13 @@ def orientation_split_parts(
     dataset = load_orientation_dataset(data, min_deg=min_deg)
     if len(dataset) < 2:
         raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
-    train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
+    if fold is None:
+        train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
+    else:
+        people = np.unique(np.asarray(dataset.subjects).astype(str))
+        check_integer(fold, "fold", 0, people.size - 1)
+        is_test = np.asarray(dataset.subjects).astype(str) == people[fold]
+        train, test = dataset.subset(~is_test), dataset.subset(is_test)
     fit, part = train, (train if split == "train" else test)
     if val_fraction > 0 and split != "test":  # validation subjects carved from training
         fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
@@ -140,12 +152,13 @@ def _build_task(
     min_deg: float,
     val_fraction: float = 0.0,
     observe_timing: bool = False,
+    fold: int | None = None,
 ) -> OrientationTask:
     from motion_envs.geometry import quaternion as quat
     from motion_envs.models.nominal import OrientationNominal
 
     dataset, fit, part = orientation_split_parts(
-        data, split, test_fraction, split_seed, min_deg, val_fraction
+        data, split, test_fraction, split_seed, min_deg, val_fraction, fold
     )
     model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
     g = model.grids(part)
@@ -180,6 +193,7 @@ def _build_task(
         criterion=g.criterion(),
         grids=g,
         max_duration=max_duration,
+        up=tuple(float(v) for v in dataset.up),
     )
 
 
@@ -196,8 +210,12 @@ def load_orientation_task(
     min_deg: float = 10.0,
     val_fraction: float = 0.0,
     observe_timing: bool = False,
+    fold: int | None = None,
 ) -> OrientationTask:
-    """Build (or reuse) the precomputed episodes of a split; built-in data is cached."""
+    """Build (or reuse) the precomputed episodes of a split; built-in data is cached.
+
+    ``fold`` (None or an integer >= 0): leave one person out, the ``fold``-th person
+    (sorted labels) is the test split (:func:`orientation_split_parts`)."""
     from motion_envs.datasets import ORIENTATION_DATASETS
     from motion_envs.models.nominal import ORIENTATION_NOMINALS
 
@@ -207,7 +225,9 @@ def load_orientation_task(
     check_number(min_deg, "min_deg", 0.0, 180.0)
     val_fraction = check_val_fraction(val_fraction, split)
     args: tuple[Any, ...] = (data, split, nominal, int(degree), float(test_fraction))
-    args += (int(split_seed), min_deg, val_fraction, bool(observe_timing))
+    if fold is not None:
+        fold = check_integer(fold, "fold", 0, 2**31)
+    args += (int(split_seed), min_deg, val_fraction, bool(observe_timing), fold)
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
     return _build_task(*args)
@@ -224,7 +244,7 @@ def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.space
 
 
 def orientation_max_errors(
-    task: Any, predicted_residuals: NDArray[np.float64]
+    task: Any, predicted_residuals: NDArray[np.float64], index: Any = None
 ) -> NDArray[np.float64]:
     """``(L,)`` ``max_k |logmap(expmap(rhat_lk)) - r_lk|`` of an orientation task's episodes.
 
@@ -232,14 +252,18 @@ def orientation_max_errors(
     ``task`` (:class:`~motion_envs.envs.orientation_reach.OrientationTask`); the
     trajectory ``e_k expmap(rhat_k)`` is scored by the environment's step kernel with a
     zero action (the human residual ``r`` and orientation ``h`` from ``task.steps``).
+    With ``index`` (integer array), only those episodes: ``predicted_residuals`` is then
+    ``(len(index), n, 3)``.
     """
     from motion_envs.geometry import quaternion as quat
 
-    rhat = checked_prediction(predicted_residuals, task, 3, "predicted_residuals")
+    steps = task.steps if index is None else task.steps[index]
+    base = task.grids.base if index is None else task.grids.base[index]
+    rhat = checked_prediction(predicted_residuals, steps, 3, "predicted_residuals")
     chart = quat.expmap(rhat)
-    predicted = np.array(task.steps)
+    predicted = np.array(steps)
     predicted[..., ROW["chart"]] = chart
-    predicted[..., ROW["nominal"]] = quat.multiply(task.grids.base, chart)
+    predicted[..., ROW["nominal"]] = quat.multiply(base, chart)
     return zero_action_errors(ORIENTATION, task, predicted)
 
 
@@ -429,6 +453,7 @@ class OrientationReachEnv(ReachEnv):
     | `height`         | **int**      | `480`          | frame height in pixels |
     | `val_fraction`   | **float**    | `0.0`          | share of the *training* subjects held out as `split="val"`; with it `"train"` holds the others and its nominal is fitted on them only (`"test"` is unchanged) |
     | `observe_timing` | **bool**     | `False`        | append the duration and the elapsed time to the observation (`True` in `-v1`) |
+    | `fold`           | **int**      | `None`         | leave one person out: the `fold`-th person (sorted labels) is `"test"`, the others `"train"` (and `"val"` with `val_fraction`); replaces `test_fraction` |
 
     A bad argument raises `ValueError` naming it (the same in the vector environment);
     reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
@@ -458,13 +483,14 @@ class OrientationReachEnv(ReachEnv):
         height: int = 480,
         val_fraction: float = 0.0,
         observe_timing: bool = False,
+        fold: int | None = None,
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg,
-            val_fraction, observe_timing,
+            val_fraction, observe_timing, fold,
         )  # fmt: skip
         self.observation_space = _observation_space(self.task, bool(observe_timing))
         self._setup(self.task.grids.starts)

@@ -252,15 +252,19 @@ def load_position_task(
     return _build_task(*args)
 
 
-def position_max_errors(task: Any, predicted_positions: NDArray[np.float64]) -> NDArray[np.float64]:
+def position_max_errors(
+    task: Any, predicted_positions: NDArray[np.float64], index: Any = None
+) -> NDArray[np.float64]:
     """``(L,)`` ``max_k |yhat_lk - y_lk|`` of a position task's episodes.
 
     ``predicted_positions`` ``(L, n, D)``; scored by the environment's step kernel with a
-    zero action (the demonstration ``y`` from ``task.steps``).
+    zero action (the demonstration ``y`` from ``task.steps``). With ``index`` (integer
+    array), only those episodes: ``predicted_positions`` is ``(len(index), n, D)``.
     """
     D = task.n_dims
-    yhat = checked_prediction(predicted_positions, task, D, "predicted_positions")
-    predicted = np.array(task.steps)
+    steps = task.steps if index is None else task.steps[index]
+    yhat = checked_prediction(predicted_positions, steps, D, "predicted_positions")
+    predicted = np.array(steps)
     predicted[..., row_layout(D)["nominal"]] = yhat
     return zero_action_errors(POSITION, task, predicted)
 

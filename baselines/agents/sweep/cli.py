@@ -46,6 +46,10 @@ def _cli(args: argparse.Namespace) -> int:
     out = Path(sweep.out)
     write_results(results, out)
     print(format_table(results))
+    if results.get("lopo"):
+        from baselines.agents.sweep.lopo import format_lopo
+
+        print(format_lopo(results["lopo"]))
     print(
         f"{results['n_trials']} trials in {results['wall_seconds']:.0f} s; wrote "
         f"{out / 'results.json'}, trials.csv, table.csv, table.md, sweep.png"

@@ -60,10 +60,16 @@ def summarize(trials: Sequence[Mapping[str, Any]], sweep: SweepConfig) -> dict[s
     best = min(rows, key=lambda r: r["val_criterion_median"]) if rows else None
     for r in rows:
         r["best_on_validation"] = best is not None and r["config_index"] == best["config_index"]
-    return {
+    from baselines.agents.sweep.lopo import lopo_summary
+
+    out: dict[str, Any] = {
         "configurations": rows,
         "best_config_index": None if best is None else best["config_index"],
     }
+    lopo = lopo_summary(trials, sweep.configurations)
+    if lopo is not None:  # agents judged by people (leave one person out)
+        out["lopo"] = lopo
+    return out
 
 
 def format_table(results: Mapping[str, Any]) -> str:
