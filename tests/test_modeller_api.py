@@ -526,7 +526,8 @@ def test_importing_the_packages_stays_cheap():
 
     code = (
         "import sys, motion_envs.models, motion_envs.geometry; "
-        "print(sorted(m for m in ('scipy.signal', 'statsmodels', 'sklearn', 'pandas') "
+        "print(sorted(m for m in ('scipy.signal', 'statsmodels', 'sklearn', 'pandas', "
+        "'matplotlib') "
         "if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
