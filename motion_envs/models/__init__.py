@@ -76,6 +76,7 @@ if TYPE_CHECKING:
         to_path_frame,
     )
     from motion_envs.models.plotting import plot_fit
+    from motion_envs.models.pose_model import PoseModel
     from motion_envs.models.position_criteria import (
         CRITERIA,
         dtw_distance,
@@ -198,6 +199,7 @@ _EXPORTS: dict[str, str] = {
     "POSITION_SPLITS": "nominal",
     "Phase": "segmentation",
     "PhaseStateMachine": "segmentation",
+    "PoseModel": "pose_model",
     "PositionGrids": "position_nominal",
     "PositionNominal": "position_nominal",
     "PositionReached": "segmentation",
@@ -319,6 +321,7 @@ __all__ = [
     "OrientationNominal",
     "Phase",
     "PhaseStateMachine",
+    "PoseModel",
     "PositionGrids",
     "PositionNominal",
     "PositionReached",
