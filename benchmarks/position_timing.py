@@ -76,7 +76,8 @@ def main(argv: list[str] | None = None) -> int:
             lambda m=model, s=start, g=goal: ss.evaluate(m.predict_coefficients(s, s, g), tau),
             args.repeats))  # fmt: skip
         record("lippi", "cv", _median_time(
-            lambda y=y, q=q: select_n_sines(list(y), q, candidates=range(16)), 1))  # fmt: skip
+            lambda y=y, q=q: select_n_sines(
+                list(y), q, candidates=range(16), times="normalised"), 1))  # fmt: skip
         if missing:
             continue
         for name, cls in (("dmp", DMPPeer), ("promp", ProMPPeer)):

@@ -526,7 +526,8 @@ def test_importing_the_packages_stays_cheap():
 
     code = (
         "import sys, motion_envs.models, motion_envs.geometry; "
-        "print(sorted(m for m in ('scipy.signal', 'statsmodels', 'sklearn', 'pandas') "
+        "print(sorted(m for m in ('scipy.signal', 'statsmodels', 'sklearn', 'pandas', "
+        "'matplotlib') "
         "if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -577,3 +578,40 @@ def test_orientation_model_save_load_round_trip(tmp_path, by):
         again.predict(starts, ends, [0.0, 0.3, 0.6], **ask),
         model.predict(starts, ends, [0.0, 0.3, 0.6], **ask),
     )
+
+
+# -- issue 23 (second pass): the time base of select_n_sines and trajectory_coefficients ---
+def _reaches(n=8, n_samples=61, seed=3):
+    rng = np.random.default_rng(seed)
+    tau = np.linspace(0.0, 1.0, n_samples)
+    s5 = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+    starts = rng.normal(0, 0.02, (n, 3))
+    ends = starts + np.array([0.3, 0.1, 0.0]) + rng.normal(0, 0.02, (n, 3))
+    ys = [
+        s + (e - s) * s5[:, None] + rng.normal(0, 5e-4, (n_samples, 3))
+        for s, e in zip(starts, ends, strict=True)
+    ]
+    return ys, np.hstack([starts, ends])
+
+
+def test_select_n_sines_and_trajectory_coefficients_require_the_time_base():
+    from motion_envs.models import select_n_sines, trajectory_coefficients
+
+    ys, q = _reaches()
+    with pytest.raises(ValueError, match=r"times= .*rate="):
+        trajectory_coefficients(ys, 3)
+    with pytest.raises(ValueError, match=r"times= .*rate="):
+        select_n_sines(ys, q, candidates=[1, 2])
+    with pytest.raises(ValueError, match="normalised"):
+        trajectory_coefficients(ys, 3, "seconds")
+    with pytest.raises(ValueError, match="sample"):
+        trajectory_coefficients(ys, 3, [np.arange(61)] * 8)  # sample indices, not seconds
+    coefs, durations = trajectory_coefficients(ys, 3, rate=60.0)
+    assert np.allclose(durations, 1.0)  # 61 samples at 60 Hz: 1 s
+    same, unit = trajectory_coefficients(ys, 3, "normalised")
+    assert np.allclose(coefs, same) and np.array_equal(unit, np.ones(8))
+    halves, d2 = trajectory_coefficients(ys, 3, rate=120.0)
+    assert np.allclose(d2, 0.5) and np.allclose(halves, coefs)  # the shape in tau is rate-free
+    best, scores = select_n_sines(ys, q, candidates=[1, 2, 3], rate=120.0, n_folds=4)
+    best_n, scores_n = select_n_sines(ys, q, candidates=[1, 2, 3], times="normalised", n_folds=4)
+    assert best == best_n and np.allclose(scores, scores_n)

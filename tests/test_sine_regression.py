@@ -212,7 +212,9 @@ def test_select_n_sines_by_cross_validation():
     rng = np.random.default_rng(2)
     ys, q, _, _ = _synthetic(n=20, noise=0.02, seed=4, n_sines=3, n_samples=40)
     ys = [y + 0.05 * rng.normal(size=y.shape) for y in ys]
-    best, scores = sr.select_n_sines(ys, q, candidates=[0, 1, 2, 3, 6, 12], n_folds=5)
+    best, scores = sr.select_n_sines(
+        ys, q, candidates=[0, 1, 2, 3, 6, 12], times="normalised", n_folds=5
+    )
     assert best == 3
     assert scores.shape == (6,)
     assert scores[3] < scores[2] and scores[3] < scores[5]

@@ -41,6 +41,12 @@ if TYPE_CHECKING:
         check_is_fitted,
         not_fitted_error,
     )
+    from motion_envs.models.fit_errors import (
+        FitErrors,
+        fit_summary,
+        orientation_fit_errors,
+        position_fit_errors,
+    )
     from motion_envs.models.frames import segments_frame, trajectories_frame
     from motion_envs.models.minimum_jerk import MinimumJerk
     from motion_envs.models.nominal import (
@@ -69,6 +75,8 @@ if TYPE_CHECKING:
         path_frames,
         to_path_frame,
     )
+    from motion_envs.models.plotting import plot_fit
+    from motion_envs.models.pose_model import PoseModel
     from motion_envs.models.position_criteria import (
         CRITERIA,
         dtw_distance,
@@ -169,6 +177,7 @@ _EXPORTS: dict[str, str] = {
     "FORMAT_NAME": "serialization",
     "FORMAT_VERSION": "serialization",
     "FRAMES": "path_frame",
+    "FitErrors": "fit_errors",
     "GroupBezierModel": "bezier_models",
     "LinearBezierModel": "bezier_models",
     "LinearHypothesisReport": "sine_regression",
@@ -190,6 +199,7 @@ _EXPORTS: dict[str, str] = {
     "POSITION_SPLITS": "nominal",
     "Phase": "segmentation",
     "PhaseStateMachine": "segmentation",
+    "PoseModel": "pose_model",
     "PositionGrids": "position_nominal",
     "PositionNominal": "position_nominal",
     "PositionReached": "segmentation",
@@ -221,6 +231,7 @@ _EXPORTS: dict[str, str] = {
     "evaluate_corrected": "sine_regression",
     "fit_beta_speed_profile": "speed_profile",
     "fit_control_points": "bezier_models",
+    "fit_summary": "fit_errors",
     "from_path_frame": "path_frame",
     "interpolate_on_grid": "slerp_residual",
     "load_model": "serialization",
@@ -232,8 +243,11 @@ _EXPORTS: dict[str, str] = {
     "normalised_grid": "slerp_residual",
     "not_fitted_error": "estimator",
     "orientation_criterion": "orientation_nominal",
+    "orientation_fit_errors": "fit_errors",
     "path_frames": "path_frame",
+    "plot_fit": "plotting",
     "position_conditions": "position_nominal",
+    "position_fit_errors": "fit_errors",
     "position_folds": "nominal",
     "position_grids": "position_nominal",
     "predict_orientations": "orientation_prediction",
@@ -293,6 +307,7 @@ __all__ = [
     "Criterion",
     "Estimator",
     "EventOccurred",
+    "FitErrors",
     "GroupBezierModel",
     "LinearBezierModel",
     "LinearHypothesisReport",
@@ -306,6 +321,7 @@ __all__ = [
     "OrientationNominal",
     "Phase",
     "PhaseStateMachine",
+    "PoseModel",
     "PositionGrids",
     "PositionNominal",
     "PositionReached",
@@ -337,6 +353,7 @@ __all__ = [
     "evaluate_corrected",
     "fit_beta_speed_profile",
     "fit_control_points",
+    "fit_summary",
     "from_path_frame",
     "interpolate_on_grid",
     "load_model",
@@ -348,9 +365,12 @@ __all__ = [
     "normalised_grid",
     "not_fitted_error",
     "orientation_criterion",
+    "orientation_fit_errors",
     "path_frames",
     "person_calibration",
+    "plot_fit",
     "position_conditions",
+    "position_fit_errors",
     "position_folds",
     "position_grids",
     "predict_orientations",

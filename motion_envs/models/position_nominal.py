@@ -138,7 +138,9 @@ class PositionNominal:
                 if n_use == "auto":
                     t0 = time.perf_counter()
                     cands = [c for c in range(16) if c <= k - 2]
-                    n_use, _ = select_n_sines(list(y), q_train, candidates=cands)
+                    n_use, _ = select_n_sines(
+                        list(y), q_train, candidates=cands, times="normalised"
+                    )
                     self.selection_seconds_ = time.perf_counter() - t0
                 self.n_sines_ = int(n_use)
                 self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(

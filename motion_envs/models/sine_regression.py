@@ -110,20 +110,46 @@ def _as_conditions(conditions: ArrayLike, name: str = "conditions") -> FloatArra
     return q
 
 
+def _time_base(
+    positions: Sequence[ArrayLike],
+    times: Sequence[ArrayLike] | Literal["normalised"] | None,
+    rate: float | None,
+    caller: str,
+) -> Sequence[ArrayLike] | None:
+    """``times`` in seconds (from ``times`` or ``rate``), or None for ``"normalised"``."""
+    if isinstance(times, str):
+        if times != "normalised" or rate is not None:
+            raise ValueError(
+                f"times must be arrays in seconds or 'normalised' (without rate); got {times!r}"
+            )
+        return None
+    if times is None and rate is None:
+        raise ValueError(
+            f"{caller} needs the time base: times= (seconds, one array per trajectory) "
+            "or rate= (Hz); times='normalised' fits on normalised time with unit "
+            "durations"
+        )
+    return recording_times(positions, times, rate)
+
+
 def trajectory_coefficients(
     positions: Sequence[ArrayLike],
     n_sines: int,
-    times: Sequence[ArrayLike] | None = None,
+    times: Sequence[ArrayLike] | Literal["normalised"] | None = None,
     min_samples: int = MIN_SAMPLES,
+    *,
+    rate: float | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Coefficients ``(n, N + 2, D)`` and durations ``(n,)`` of a list of trajectories.
 
-    ``positions[i]`` is ``(n_i, D)``; ``times[i]`` is ``(n_i,)`` strictly increasing
-    (``None``: uniform samples of unit duration). Uniform samples use the DST, others
-    least squares.
+    ``positions[i]`` is ``(n_i, D)``. The time base is required, as in
+    :meth:`SineSeriesRegression.fit`: ``times[i]`` ``(n_i,)`` strictly increasing
+    seconds, or ``rate`` (Hz), or ``times="normalised"`` (uniform samples of unit
+    duration). Uniform samples use the DST, others least squares.
     """
     if len(positions) == 0:
         raise ValueError("positions must contain at least one trajectory")
+    times = _time_base(positions, times, rate, "trajectory_coefficients")
     if times is not None and len(times) != len(positions):
         raise ValueError(
             f"times must have one array per trajectory; got {len(times)} for {len(positions)}"
@@ -380,21 +406,10 @@ class SineSeriesRegression(SerializableModel):
         normalised time ``tau_k = k / (n_i - 1)`` with unit durations (for data already
         time-normalised). Integer ``times`` (sample indices) are refused. Returns ``self``.
         """
-        if isinstance(times, str):
-            if times != "normalised" or rate is not None:
-                raise ValueError(
-                    f"times must be arrays in seconds or 'normalised' (without rate); got {times!r}"
-                )
-            coefs, durations = trajectory_coefficients(positions, self.n_sines, None)
-        else:
-            if times is None and rate is None:
-                raise ValueError(
-                    "fit needs the time base: times= (seconds, one array per trajectory) "
-                    "or rate= (Hz); times='normalised' fits on normalised time with unit "
-                    "durations"
-                )
-            ts = recording_times(positions, times, rate)
-            coefs, durations = trajectory_coefficients(positions, self.n_sines, ts)
+        ts = _time_base(positions, times, rate, "fit")
+        coefs, durations = trajectory_coefficients(
+            positions, self.n_sines, "normalised" if ts is None else ts
+        )
         return self.fit_coefficients(coefs, conditions, durations)
 
     def fit_coefficients(
@@ -882,16 +897,21 @@ def select_n_sines(
     positions: Sequence[ArrayLike],
     conditions: ArrayLike,
     candidates: Sequence[int] = tuple(range(0, 16)),
-    times: Sequence[ArrayLike] | None = None,
+    times: Sequence[ArrayLike] | Literal["normalised"] | None = None,
     n_folds: int | None = None,
+    *,
+    rate: float | None = None,
 ) -> tuple[int, FloatArray]:
     """Choose ``N`` by cross-validation; returns the best ``N`` and the CV score per candidate.
 
+    The time base is required, as in :meth:`SineSeriesRegression.fit`: ``times``
+    (seconds, one array per trajectory), ``rate`` (Hz) or ``times="normalised"``.
     For each fold (leave-one-out when ``n_folds`` is None) the regression is fitted on the
     other examples and the held-out trajectory is generated from its conditions, with its
     own start and end; the score is the mean over trajectories of the RMS position error
     at the held-out samples. Ties go to the smallest ``N``.
     """
+    ts = _time_base(positions, times, rate, "select_n_sines")
     q = _as_conditions(conditions)
     n = q.shape[0]
     if n < 3:
@@ -903,13 +923,15 @@ def select_n_sines(
         raise ValueError("candidates must not be empty")
     folds = np.arange(n) % k
     taus = [
-        np.linspace(0.0, 1.0, np.shape(y)[0]) if times is None else ss.normalised_time(times[i])
+        np.linspace(0.0, 1.0, np.shape(y)[0]) if ts is None else ss.normalised_time(ts[i])
         for i, y in enumerate(positions)
     ]
     ys = [np.asarray(y, dtype=np.float64) for y in positions]
     scores = np.empty(len(candidates))
     for c, n_sines in enumerate(candidates):
-        coefs, _ = trajectory_coefficients(positions, int(n_sines), times)
+        coefs, _ = trajectory_coefficients(
+            positions, int(n_sines), "normalised" if ts is None else ts
+        )
         errors = np.empty(n)
         for fold in range(k):
             test = folds == fold
