@@ -22,7 +22,6 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.orientation_bench",
     "baselines.position_bench",
     "baselines.juggling_bench",
-    "baselines.juggling_levels",
     "baselines.calibrate_cohort",
     "baselines.agents.train",
     "baselines.agents.evaluate",

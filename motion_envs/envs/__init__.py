@@ -13,7 +13,7 @@ id                              environment
 ``MotionEnvs/OrientationReach-v1``  the same, observing duration and elapsed time
 ``MotionEnvs/PositionReach-v1``     the same, observing duration and elapsed time
 ``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
-``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling_v1.JugglingV1Env` (contacts)
+``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling.JugglingV1Env` (contacts)
 ==============================  ===================================================
 
 The two reaching environments come with a native vector environment
@@ -59,7 +59,7 @@ _SPECS: dict[str, dict[str, object]] = {
         "entry_point": "motion_envs.envs.juggling:JugglingEnv",
     },
     "MotionEnvs/Juggling-v1": {
-        "entry_point": "motion_envs.envs.juggling_v1:JugglingV1Env",
+        "entry_point": "motion_envs.envs.juggling:JugglingV1Env",
     },
 }
 

@@ -254,6 +254,49 @@ class LazyRendererMixin:
         return state
 
 
+def has_render_mode(render_mode: str | None) -> bool:
+    """False (with Gymnasium's warning) when ``render()`` is called without a mode."""
+    if render_mode is None:
+        gym.logger.warn(
+            "render() called without a render_mode; pass render_mode='rgb_array' to gym.make(...)"
+        )
+        return False
+    return True
+
+
+class SideCameraMixin(LazyRendererMixin):
+    """``render()`` of a MuJoCo environment seen through its ``side`` camera: the
+    environment has ``render_mode``, ``width``, ``height``, ``model``, ``data``, an
+    episode state ``_state`` (None before ``reset``) and :meth:`_sync_scene` (poses,
+    camera and lights recomputed for drawing)."""
+
+    render_mode: str | None
+    width: int
+    height: int
+    model: Any
+    data: Any
+    _state: Any = None
+
+    def _sync_scene(self) -> None:
+        raise NotImplementedError
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if not has_render_mode(self.render_mode):
+            return None
+        if self._state is None:
+            raise RuntimeError("call reset() before render()")
+        if self._renderer is None:
+            from motion_envs.envs.rendering import new_mujoco_renderer
+
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
+            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
+        self._sync_scene()
+        self._renderer.update_scene(self.data, camera="side")
+        frame: NDArray[np.uint8] = self._renderer.render()
+        return frame
+
+
 class ReplayEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     """Episode mechanics of a single replay environment.
 
@@ -361,11 +404,7 @@ class ReplayEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
 
     # -- rendering ------------------------------------------------------------------
     def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
+        if not has_render_mode(self.render_mode):
             return None
         if self._index < 0:
             raise RuntimeError("call reset() before render()")

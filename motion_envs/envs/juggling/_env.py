@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs._common import LazyRendererMixin, check_reward_weights, check_scale
+from motion_envs.envs._common import SideCameraMixin, check_reward_weights, check_scale
 from motion_envs.envs.juggling._scene import JugglingScene
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
@@ -88,7 +88,7 @@ def _check_int(value: Any, name: str, low: int) -> int:
     return int(value)
 
 
-class JugglingEnv(LazyRendererMixin, gym.Env):
+class JugglingEnv(SideCameraMixin, gym.Env):
     r"""Toss and catch one ball; the agent corrects the analytic juggler's hand.
 
     ## Description
@@ -390,23 +390,6 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         np.minimum(obs, self._high, out=obs)
         return np.maximum(obs, self._low, out=obs)
 
-    # -- rendering ----------------------------------------------------------------------
-    def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
-            return None
-        if self._state is None:
-            raise RuntimeError("call reset() before render()")
-        if self._renderer is None:
-            from motion_envs.envs.rendering import new_mujoco_renderer
-
-            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
-            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
-            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
+    # -- rendering (SideCameraMixin.render) ----------------------------------------------
+    def _sync_scene(self) -> None:
         self.scene.sync()
-        self._renderer.update_scene(self.data, camera="side")
-        frame: NDArray[np.uint8] = self._renderer.render()
-        return frame
