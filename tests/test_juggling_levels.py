@@ -163,3 +163,21 @@ def test_levels_play_the_agent_on_the_same_seeds(v1_run, tmp_path):
     eps = level_episodes("medium", config, "juggler", loaded.predict, loaded.env_kwargs)
     assert agent["catch_rate"] == eps.catches.sum() / eps.tosses.sum()
     assert "agent_medium>=juggler+0.10" in doc["targets"]
+
+
+def test_all_has_a_levels_job_and_the_report_shows_it(tmp_path):
+    from baselines import run_all
+    from baselines.juggling_bench import write_levels
+    from baselines.report import build_report
+
+    (job,) = [j for j in run_all.JOBS if isinstance(j.config, LevelsConfig)]
+    assert job.config == LevelsConfig()  # every level, 200 episodes
+    assert job.command(tmp_path).startswith("motion-bench juggling --levels easy,medium,hard")
+    assert job.with_learned("off") is job
+    doc = run_levels(LevelsConfig(levels=("hard",), methods=("juggler",), episodes=2))
+    write_levels(doc, tmp_path / job.folder)
+    entry = {"folder": job.folder, "title": job.title, "command": "c", "exit_code": 0}
+    (tmp_path / "index.json").write_text(json.dumps({"jobs": [entry]}))
+    page = build_report(tmp_path)
+    assert "no report section" not in page
+    assert "catch rate [95 % CI]" in page and "SIMULATED" in page
