@@ -144,7 +144,7 @@ def test_reward_terms_and_info():
         parts = ("reward_catch", "reward_drop", "reward_likeness", "reward_action")
         assert r == pytest.approx(sum(info[k] for k in parts), abs=1e-12)
         assert info["reward_action"] == pytest.approx(-0.01 * float(a @ a))
-        assert info["reward_likeness"] == pytest.approx(-info["likeness"])
+        assert info["reward_likeness"] == pytest.approx(-0.01 * info["likeness"])
         assert info["hand"].shape == info["ball"].shape == (2,)
         saw_catch |= info["reward_catch"] == 10.0
         if term or trunc:
