@@ -15,12 +15,14 @@ phase and, in the catch phase, the least-squares slope of the residual on
 and their correlation.
 
     python benchmarks/juggling_v1_agent_corrections.py RUN_DIR [--episodes 50] [--out DIR]
+        [--env-kwargs '{"level": "medium", "max_catches": 3, "residual_scale": 0.15}']
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
@@ -33,21 +35,46 @@ from baselines.plots import new_figure
 from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets.juggling import PHASES
 
+ENV_ID = "MotionEnvs/Juggling-v1"
 #: Index of the newest ball measurement's velocity ``vx, vz`` in the observation.
 BALL_VELOCITY = slice(17, 19)
 
 
-def play(run_dir: str, split: str, episodes: int) -> dict[str, np.ndarray]:
-    """Per step of all episodes: residual (m), phase index, time in phase, ball velocity."""
-    loaded = load_run(run_dir)
-    env = gym.make(loaded.env_id, **loaded.env_kwargs)
+def checkpoint_policy(run_dir: str) -> Callable[[np.ndarray], np.ndarray]:
+    """The deterministic policy of ``RUN_DIR/agent.zip`` (the validation-chosen checkpoint
+    SB3's callback saves during training) with ``normalization.npz``: for a run stopped
+    before ``motion-bench train`` wrote its ``run.json``."""
+    from stable_baselines3 import PPO
+
+    from baselines.agents.rundir import ObsNormalizer
+
+    model = PPO.load(Path(run_dir) / "agent.zip", device="cpu")
+    normalizer = ObsNormalizer.load(Path(run_dir) / "normalization.npz")
+
+    def policy(obs: np.ndarray) -> np.ndarray:
+        action, _ = model.predict(normalizer(obs), deterministic=True)
+        return np.asarray(action, dtype=np.float32)
+
+    return policy
+
+
+def play(
+    run_dir: str, split: str, episodes: int, env_kwargs: dict[str, object] | None = None
+) -> dict[str, np.ndarray]:
+    """Per step of all episodes: residual (m), phase index, time in phase, ball velocity.
+    ``env_kwargs`` given: the run has no ``run.json`` (:func:`checkpoint_policy`)."""
+    if env_kwargs is None:
+        loaded = load_run(run_dir)
+        predict, env = loaded.predict, gym.make(loaded.env_id, **loaded.env_kwargs)
+    else:
+        predict, env = checkpoint_policy(run_dir), gym.make(ENV_ID, **env_kwargs)
     scale = env.unwrapped.residual_scale
     rows: dict[str, list[object]] = {k: [] for k in ("res", "phase", "t", "v", "ep")}
     for i in range(episodes):
         obs, _ = env.reset(seed=SPLIT_SEEDS[split] + i)
         done = False
         while not done:
-            action = np.clip(loaded.predict(obs[None])[0], -1.0, 1.0)
+            action = np.clip(predict(obs[None])[0], -1.0, 1.0)
             rows["res"].append(scale * action)
             rows["phase"].append(PHASES.index(env.unwrapped.controller.phase))
             rows["t"].append(env.unwrapped.controller.phase_time)
@@ -117,8 +144,14 @@ def main() -> None:
     p.add_argument("--split", default="val", choices=sorted(SPLIT_SEEDS))
     p.add_argument("--episodes", type=int, default=50)
     p.add_argument("--out", default=None, help="folder (default: RUN_DIR)")
+    p.add_argument(
+        "--env-kwargs",
+        default=None,
+        help="JSON env kwargs: play RUN_DIR/agent.zip of a run without run.json",
+    )
     args = p.parse_args()
-    d = play(args.run_dir, args.split, args.episodes)
+    kwargs = None if args.env_kwargs is None else json.loads(args.env_kwargs)
+    d = play(args.run_dir, args.split, args.episodes, kwargs)
     out = Path(args.out or args.run_dir)
     summary = summarise(d)
     title = (
