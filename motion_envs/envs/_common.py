@@ -28,6 +28,7 @@ __all__ = [
     "LazyRendererMixin",
     "ReplayEnv",
     "ReplayTask",
+    "SideCameraMixin",
     "as_action",
     "check_choice",
     "check_fraction",
@@ -39,6 +40,8 @@ __all__ = [
     "check_scale",
     "check_seed",
     "check_val_fraction",
+    "clipped_pair",
+    "has_render_mode",
     "reset_labels",
     "timing_bounds",
 ]
@@ -252,6 +255,23 @@ class LazyRendererMixin:
         state = self.__dict__.copy()
         state["_renderer"] = None
         return state
+
+
+def clipped_pair(action: Any) -> tuple[float, float, bool]:
+    """A 2-vector action as ``(ax, az, invalid)``: each entry clipped to ``[-1, 1]``, NaN
+    counted as 0 (``invalid`` True when an entry was not finite); ValueError for another
+    shape (the juggling environments' residual)."""
+    a = np.asarray(action, dtype=np.float64)
+    if a.shape != (2,):
+        raise ValueError(f"action must have shape (2,); got shape {a.shape}")
+    ax, az = float(a[0]), float(a[1])
+    invalid = not (math.isfinite(ax) and math.isfinite(az))
+    if invalid:
+        ax = 0.0 if math.isnan(ax) else ax
+        az = 0.0 if math.isnan(az) else az
+    ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
+    az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+    return ax, az, invalid
 
 
 def has_render_mode(render_mode: str | None) -> bool:

@@ -14,7 +14,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
-from motion_envs.envs._common import SideCameraMixin, check_reward_weights, check_scale
+from motion_envs.envs._common import (
+    SideCameraMixin,
+    check_reward_weights,
+    check_scale,
+    clipped_pair,
+)
 from motion_envs.envs.juggling._scene import JugglingScene
 from motion_envs.models.juggling import (
     TRACKING_NOISE,
@@ -318,16 +323,7 @@ class JugglingEnv(SideCameraMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,); got shape {a.shape}")
-        ax, az = float(a[0]), float(a[1])
-        invalid = not (math.isfinite(ax) and math.isfinite(az))
-        if invalid:
-            ax = 0.0 if math.isnan(ax) else ax
-            az = 0.0 if math.isnan(az) else az
-        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
-        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+        ax, az, invalid = clipped_pair(action)
         rx, rz = self.residual_scale * ax, self.residual_scale * az
         offset = math.hypot(rx, rz)
         state = self._state

@@ -20,6 +20,7 @@ from motion_envs.envs._common import (
     check_number,
     check_reward_weights,
     check_scale,
+    clipped_pair,
 )
 from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT, JugglingV1World
 from motion_envs.models.juggling import (
@@ -313,16 +314,7 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,); got shape {a.shape}")
-        ax, az = float(a[0]), float(a[1])
-        invalid = not (math.isfinite(ax) and math.isfinite(az))
-        if invalid:
-            ax = 0.0 if math.isnan(ax) else ax
-            az = 0.0 if math.isnan(az) else az
-        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
-        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+        ax, az, invalid = clipped_pair(action)
         target, armed = self.controller.command(self._state)
         s = self.residual_scale
         true = self.world.step((float(target[0]) + s * ax, float(target[1]) + s * az), armed)
