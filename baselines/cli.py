@@ -21,7 +21,6 @@ SUBCOMMAND_MODULES: tuple[str, ...] = (
     "baselines.orientation_bench",
     "baselines.position_bench",
     "baselines.juggling_bench",
-    "baselines.juggling_levels",
     "baselines.mocap_import",
     "baselines.calibrate_cohort",
     "baselines.agents.train",

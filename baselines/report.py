@@ -126,6 +126,42 @@ _VAL_KEYS = ("n_coefficients", "normal_frac", "ftest_frac", "ci_rel", "jack_rel"
 LEARNED_RATIO_CAPTION = "Learned vs analytic criterion per group, out of sample"
 
 
+# -- Juggling-v1's levels ----------------------------------------------------------------
+
+
+def _juggling_levels_section(folder: Path, job: dict[str, Any]) -> Section:
+    doc = json.loads((folder / "results.json").read_text())
+    seeds = doc["seeds"]
+    rows = []
+    for lv in doc["levels"]:
+        for name, m in lv["methods"].items():
+            lo, hi = m["catch_rate_ci"]
+            rows.append(
+                [
+                    html.escape(lv["level"]),
+                    html.escape(name),
+                    f"{_fmt(m['catch_rate'])} [{_fmt(lo)}, {_fmt(hi)}]",
+                    _fmt(m["consecutive_catches_median"], 1),
+                    _fmt(m["deviation_m"], 4),
+                ]
+            )
+    table = _table(
+        ["level", "method", "catch rate [95 % CI]", "consecutive catches (median)",
+         "deviation from held-out demonstrations (m)"],
+        rows,
+        f"Juggling-v1, {seeds['count']} {seeds['split']} episodes per level and method "
+        f"({doc['demonstrations']})",
+    )  # fmt: skip
+    met = [k for k, t in doc["targets"].items() if t["met"]]
+    missed = [k for k, t in doc["targets"].items() if t["met"] is False]
+    reading = (
+        "The analytic juggler corrects its catch from a delayed view of the ball; the "
+        "latency-aware variant predicts the flight forward by the known delay. Targets met: "
+        f"{', '.join(met) or 'none'}; missed: {', '.join(missed) or 'none'}."
+    )
+    return Section(job.get("title", "Juggling-v1 levels"), job.get("command", ""), reading, [table])
+
+
 # -- orientation (Faraway & Choe, Table 1) ----------------------------------------------
 
 
@@ -445,6 +481,7 @@ def _juggling_section(folder: Path, job: dict[str, Any]) -> Section:
 register_section("orientation", _orientation_section)
 register_section("position", _position_section)
 register_section("juggling", _juggling_section)
+register_section("juggling_v1", _juggling_levels_section)
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1200px; margin: 2em auto; padding: 0 1em;

@@ -11,7 +11,10 @@ Runs, one after the other, with each sub-command's defaults:
 3. ``motion-bench position --data lasa``: Lippi et al.'s sine-series regression against
    the line, the mean residual, DMP and ProMP on the real LASA handwriting set;
 4. ``motion-bench juggling``: the analytic juggler of Lippi et al.'s section III-A on
-   SIMULATED demonstrations (catch rates, per-phase errors, validation statistics).
+   SIMULATED demonstrations (catch rates, per-phase errors, validation statistics);
+5. ``motion-bench juggling --levels easy,medium,hard``: Juggling-v1's levels, the
+   analytic juggler seeing the ball late against its latency-aware variant and two
+   trivial policies (200 test episodes per level and method).
 
 The orientation and position jobs include the learned rows and columns
 (docs/learned.md) at the full budget; ``--learned quick`` or ``off`` lowers the budget of
@@ -57,6 +60,7 @@ class Job:
         orientation_bench.OrientationConfig
         | position_bench.PositionConfig
         | juggling_bench.JugglingConfig
+        | juggling_bench.LevelsConfig
     )
 
     def command(self, out: Path) -> str:
@@ -65,9 +69,13 @@ class Job:
             head = f"orientation --data {self.config.data}"
         elif isinstance(self.config, juggling_bench.JugglingConfig):
             head = "juggling"
+        elif isinstance(self.config, juggling_bench.LevelsConfig):
+            head = f"juggling --levels {','.join(self.config.levels)}"
         else:
             head = f"position --data {self.config.data}"
-        if not isinstance(self.config, juggling_bench.JugglingConfig):
+        if isinstance(
+            self.config, orientation_bench.OrientationConfig | position_bench.PositionConfig
+        ):
             if self.config.learned != "full":
                 head += f" --learned {self.config.learned}"
         return f"motion-bench {head} --out {out / self.folder}"
@@ -76,7 +84,9 @@ class Job:
         """This job with the learned budget lowered to ``learned`` (``full`` leaves it;
         a job already at ``off`` stays off; the juggling job has no learned rows)."""
         config = self.config
-        if isinstance(config, juggling_bench.JugglingConfig) or learned == "full":
+        if learned == "full" or not isinstance(
+            config, orientation_bench.OrientationConfig | position_bench.PositionConfig
+        ):
             return self
         if config.learned == "off":
             return self
@@ -105,6 +115,12 @@ JOBS: tuple[Job, ...] = (
         "Juggling: the analytic juggler (SIMULATED demonstrations, MuJoCo scene)",
         juggling_bench.JugglingConfig(),
     ),
+    Job(
+        "juggling_v1-levels",
+        "Juggling-v1 levels: the analytic juggler with a delayed view of the ball, "
+        "its latency-aware variant and two trivial policies (SIMULATED demonstrations)",
+        juggling_bench.LevelsConfig(),
+    ),
 )
 
 
@@ -130,6 +146,10 @@ def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) ->
         doc = juggling_bench.run(dataclasses.replace(config, progress=progress))
         echo(juggling_bench.report(doc))
         written = juggling_bench.write(doc, out / job.folder)
+    elif isinstance(config, juggling_bench.LevelsConfig):
+        doc = juggling_bench.run_levels(config)
+        echo(juggling_bench.report_levels(doc))
+        written = juggling_bench.write_levels(doc, out / job.folder)
     else:
         position_bench.warn_missing_peers(config.use_peers)
         doc = position_bench.run(

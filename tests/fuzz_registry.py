@@ -129,8 +129,33 @@ ENVS: dict[str, dict[str, object]] = {
         "reset_options": {"cycle": "seed"},
     },
     "MotionEnvs/Juggling-v1": {
-        "skip": "its files move into the juggling subpackages in a parallel branch; "
-        "add its kwargs here when that merges",
+        "kwargs": {
+            "latency": "fraction",
+            "position_std": "fraction",
+            "release_speed_std": "fraction",
+            "gravity": "positive",
+            "max_catches": "small_int",
+            "residual_scale": "positive",
+            "width": "size",
+        },
+    },
+    "MotionEnvs/OrientationCoefficients-v0": {
+        "kwargs": {
+            "residual_scale": "positive",
+            "n_sines": "small_int",
+            "calibration": "small_int",
+            "test_fraction": "fraction",
+            "split_seed": "seed",
+            "min_deg": "angle",
+        },
+    },
+    "MotionEnvs/PositionCoefficients-v0": {
+        "kwargs": {
+            "residual_scale": "positive",
+            "n_sines": "small_int",
+            "test_fraction": "fraction",
+            "split_seed": "seed",
+        },
     },
 }
 
@@ -155,8 +180,8 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("juggling", "--demo-persons"),
     ("juggling", "--gravity"),
     ("juggling", "--mujoco-cycles"),
-    ("juggling-levels", "--episodes"),
-    ("juggling-levels", "--max-catches"),
+    ("juggling", "--episodes"),
+    ("juggling", "--max-catches"),
     ("calibrate-cohort", "--max-evaluations"),
     ("calibrate-cohort", "--check-seeds"),
     ("train", "--timesteps"),
@@ -188,6 +213,8 @@ CLI_NON_NUMERIC_TYPES = frozenset(
         "yaml_file",
         "env_kwarg",
         "sweep_file",
+        "level_names",
+        "run_folder",
         # motion-bench import: marker, joint and label names, axis letters, files
         "_source",
         "marker",

@@ -16,6 +16,7 @@ from baselines.agents import evaluate as agent_evaluate
 from baselines.agents import train as agent_train
 from baselines.agents.sweep import cli as agent_sweep
 from baselines.cli import SUBCOMMAND_MODULES, build_parser, main
+from baselines.juggling_bench import levels as juggling_levels
 from baselines.juggling_bench import runner as juggling_runner
 from baselines.orientation_bench import runner as orientation_runner
 from baselines.position_bench import runner as position_runner
@@ -57,6 +58,7 @@ def no_computation(monkeypatch):
     monkeypatch.setattr(calibrate_cohort, "calibrate", started)
     monkeypatch.setattr(juggling_runner, "load_demos", started)
     monkeypatch.setattr(mocap_import, "run", started)
+    monkeypatch.setattr(juggling_levels, "juggling_episodes", started)
     monkeypatch.setattr(agent_train, "run", started)
     monkeypatch.setattr(agent_evaluate, "run", started)
     monkeypatch.setattr(agent_sweep, "load_sweep", started)
@@ -128,6 +130,16 @@ CASES = [
     (["juggling", "--mujoco-cycles", "-3"], "argument --mujoco-cycles: expected an integer"),
     (["juggling", "--world", "moon"], "argument --world: invalid choice"),
     (["juggling", "--cycle", "5"], "unrecognized arguments: --cycle"),
+    (["juggling", "--levels", "expert"], "argument --levels: expected a comma list of distinct"),
+    (["juggling", "--levels", "easy,easy"], "argument --levels: expected a comma list of distinct"),
+    (["juggling", "--levels", ","], "argument --levels: expected a comma list of distinct"),
+    (["juggling", "--levels", "easy", "--episodes", "1"], "argument --episodes: expected an"),
+    (["juggling", "--levels", "easy", "--max-catches", "0"], "argument --max-catches: expected"),
+    (["juggling", "--levels", "easy", "--agent", "{tmp}/missing"], "argument --agent: {tmp}/"),
+    (
+        ["juggling", "--levels", "easy", "--agent", "{tmp}/folder"],
+        "argument --agent: {tmp}/folder h",
+    ),
     (["all", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
     (["all", "--only", "nothing"], "argument --only: invalid choice"),
     (["all", "--ou", "x"], "unrecognized arguments: --ou"),
@@ -452,14 +464,13 @@ def test_every_subcommand_is_registered():
         "orientation",
         "position",
         "juggling",
-        "juggling-levels",
         "import",
         "calibrate-cohort",
         "train",
         "agent",
         "sweep",
     }
-    assert len(SUBCOMMAND_MODULES) == 10
+    assert len(SUBCOMMAND_MODULES) == 9
 
 
 @pytest.mark.parametrize(
@@ -469,7 +480,6 @@ def test_every_subcommand_is_registered():
         "all",
         "orientation",
         "position",
-        "juggling-levels",
         "import",
         "calibrate-cohort",
         "train",

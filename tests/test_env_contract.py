@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import copy
+import dataclasses
 import inspect
 import pickle
 import random
@@ -80,19 +81,25 @@ def _position_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     return _replay_nominal(env, lambda g, l: np.linalg.norm(g.human[l] - g.nominal[l], axis=-1))
 
 
-def _juggling_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
-    """A zero-action episode's hand path (``info['hand']``) against the analytic juggler
-    alone in a fresh MuJoCo scene, juggling on as the environment does."""
-    from motion_envs.envs.juggling import JugglingScene
-
-    juggling = env.unwrapped
-    env.reset(seed=21)
+def _zero_action_hands(env: gym.Env, seed: int) -> list[np.ndarray]:
+    """``info['hand']`` of every step of a zero-action juggling episode (>= 1 catch)."""
+    env.reset(seed=seed)
     hands = []
     terminated = truncated = False
     while not (terminated or truncated):
         _, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
         hands.append(info["hand"])
     assert info["catches"] >= 1
+    return hands
+
+
+def _juggling_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+    """A zero-action episode's hand path (``info['hand']``) against the analytic juggler
+    alone in a fresh MuJoCo scene, juggling on as the environment does."""
+    from motion_envs.envs.juggling import JugglingScene
+
+    juggling = env.unwrapped
+    hands = _zero_action_hands(env, 21)
     expected, _ = run_juggler_alone(
         juggling.task,
         juggling.noise,
@@ -127,6 +134,35 @@ def _coefficient_nominal(step_id: str) -> Callable[[gym.Env], tuple[np.ndarray, 
         return np.array(got), np.array(expected)
 
     return nominal
+
+
+def _juggling_v1_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+    """A zero-action episode's hand path against the env's controller alone, in a fresh
+    world and sensor, seeded as the env documents (``SeedSequence(seed).spawn(3)``)."""
+    import math
+
+    from motion_envs.envs.juggling import JugglingV1World
+    from motion_envs.models.juggling import BallSensor, make_controller, v1_juggler
+
+    v1 = env.unwrapped
+    hands = _zero_action_hands(env, 21)
+    juggler = v1_juggler(v1.gravity)
+    ctrl = make_controller(v1.controller_name, juggler, v1.delay_steps * v1.task.dt)
+    world = JugglingV1World(v1.task, v1.release_speed_std, math.radians(v1.release_angle_std))
+    sensor = BallSensor(v1.delay_steps, v1.position_std, v1.velocity_std)
+    w_ss, s_ss, c_ss = np.random.SeedSequence(21).spawn(3)
+    true = world.reset(juggler.home_, rng=np.random.default_rng(w_ss))
+    m = sensor.reset(true.ball_pos, true.ball_vel, np.random.default_rng(s_ss))
+    state = dataclasses.replace(true, ball_pos=m.position, ball_vel=m.velocity)
+    ctrl.reset(state, np.random.default_rng(c_ss))
+    expected = []
+    for _ in hands:
+        target, armed = ctrl.command(state)
+        true = world.step(target, armed)
+        m = sensor.measure(true.ball_pos, true.ball_vel, true.held)
+        state = dataclasses.replace(true, ball_pos=m.position, ball_vel=m.velocity)
+        expected.append(true.hand_pos)
+    return np.array(hands), np.array(expected)
 
 
 @dataclass(frozen=True)
@@ -164,11 +200,18 @@ CASES: dict[str, Case] = {
         action_scale=0.2,
         checked=({"noise": 0.1, "frame_skip": 3}, {"noise": {"release": 0.05, "tracking": 0.002}}),
     ),
+    # a version whose arguments differ from its family's has its own case
+    "MotionEnvs/Juggling-v1": Case(
+        _juggling_v1_nominal,
+        {"level": "medium", "max_catches": 2},
+        action_scale=0.2,
+        checked=({"level": "hard", "max_catches": 1}, {"level": "easy", "gravity": 1.0}),
+    ),
 }
 
 
 def case(env_id: str) -> Case:
-    return CASES[env_id.rsplit("-v", 1)[0]]
+    return CASES.get(env_id) or CASES[env_id.rsplit("-v", 1)[0]]
 
 
 # -- helpers ------------------------------------------------------------------------------

@@ -226,6 +226,24 @@ SHIMS = {
         "motion_envs.envs.juggling",
         "SCENE_XML JugglingScene check_task load_juggling_model",
     ),
+    "motion_envs.envs.juggling_v1": (
+        "motion_envs.envs.juggling",
+        "DEFAULT_V1_REWARD_WEIGHTS HISTORY PAPER_GRAVITY V1_CYCLE_TIME V1_OBS_DIM JugglingV1Env",
+    ),
+    "motion_envs.envs.juggling_v1_scene": (
+        "motion_envs.envs.juggling",
+        "CAPTURE_SPEED HAND_ACCEL_LIMIT HAND_MASS HAND_SPEED_LIMIT SERVO_OMEGA SUBSTEPS "
+        "V1_SCENE_XML JugglingPhysics JugglingV1World load_juggling_v1_model",
+    ),
+    "motion_envs.models.juggling_sensor": (
+        "motion_envs.models.juggling",
+        "BallMeasurement BallSensor perturb_release predict_forward",
+    ),
+    "motion_envs.models.juggling_levels": (
+        "motion_envs.models.juggling",
+        "CONTROLLERS LEVELS LIKENESS_TAU HumanLikeness JugglerController JugglingLevel "
+        "make_controller",
+    ),
 }
 #: Names the shims re-export from geometry (minimum jerk's one home).
 FROM_GEOMETRY = {"quintic", "minimum_jerk"}
@@ -252,6 +270,9 @@ def test_registered_entry_point_imports_without_warning():
     import motion_envs  # noqa: F401
 
     assert gym.spec("MotionEnvs/Juggling-v0").entry_point == "motion_envs.envs.juggling:JugglingEnv"
+    assert (
+        gym.spec("MotionEnvs/Juggling-v1").entry_point == "motion_envs.envs.juggling:JugglingV1Env"
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)
         module = importlib.import_module("motion_envs.envs.juggling")

@@ -247,7 +247,7 @@ COMMON_KEYS: dict[str, Checker] = {
             "obs": _bool,
             "reward": _bool,
             "clip_obs": _float(0.0, open_lo=True),
-            "gamma": _float(0.0, 1.0, open_lo=True),
+            "gamma": _float(0.0, 1.0),  # 0: a one-step (episodic) environment
         }
     ),
     "action_head_scale": _float(0.0, 1.0),
@@ -256,7 +256,7 @@ COMMON_KEYS: dict[str, Checker] = {
     "torch_threads": _int(1, 1024),
     "vec_env": _choice("dummy", "subproc"),
     "learning_rate": _LR,
-    "gamma": _float(0.0, 1.0, open_lo=True),
+    "gamma": _float(0.0, 1.0),  # 0: a one-step (episodic) environment
     "batch_size": _int(1),
 }
 

@@ -44,6 +44,7 @@ to the nominal's".
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -59,8 +60,11 @@ __all__ = [
     "N_POINTS",
     "SPLIT_SEEDS",
     "JugglingEpisodes",
+    "catch_rate_difference",
+    "catch_rate_interval",
     "demonstration_paths",
     "departure_from_line",
+    "deviation_interval",
     "is_juggling",
     "juggling_episodes",
     "segment_deviations",
@@ -257,3 +261,43 @@ def juggling_episodes(
         segment_episode=np.asarray(seg_episode, dtype=np.int64),
         segment_deviation=np.asarray(seg_dev, dtype=np.float64),
     )
+
+
+def _pooled_rate(eps: JugglingEpisodes, rows: NDArray[np.int64]) -> float:
+    return float(eps.catches[rows].sum() / max(int(eps.tosses[rows].sum()), 1))
+
+
+def catch_rate_interval(eps: JugglingEpisodes, seed: int = 0) -> tuple[float, float, float]:
+    """``(catch_rate, low, high)``: the catch rate (catches per toss, pooled) and its 95 %
+    bootstrap interval resampling episodes (:func:`baselines.stats.group_bootstrap`)."""
+    from baselines.stats import group_bootstrap
+
+    return group_bootstrap(
+        lambda rows: _pooled_rate(eps, rows), np.arange(eps.seeds.size), seed=seed
+    )
+
+
+def catch_rate_difference(
+    a: JugglingEpisodes, b: JugglingEpisodes, seed: int = 0
+) -> tuple[float, float, float]:
+    """``(difference, low, high)``: ``a``'s catch rate minus ``b``'s on the same seeds and
+    its 95 % paired bootstrap interval (an episode of both is resampled together)."""
+    from baselines.stats import group_bootstrap
+
+    if not np.array_equal(a.seeds, b.seeds):
+        raise ValueError("the two policies were played on different seeds")
+    return group_bootstrap(
+        lambda rows: _pooled_rate(a, rows) - _pooled_rate(b, rows),
+        np.arange(a.seeds.size),
+        seed=seed,
+    )
+
+
+def deviation_interval(eps: JugglingEpisodes, seed: int = 0) -> tuple[float, float, float]:
+    """``(deviation, low, high)``: :attr:`JugglingEpisodes.deviation` (m) and its 95 %
+    interval resampling episodes (their segments together)."""
+    from baselines.stats import statistic_interval
+
+    if eps.segment_deviation.size == 0:
+        return math.nan, math.nan, math.nan
+    return statistic_interval(eps.segment_deviation, eps.segment_episode, seed=seed)

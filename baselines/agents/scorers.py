@@ -27,7 +27,13 @@ from typing import Any
 import numpy as np
 
 from baselines import options
-from baselines.agents.juggling_score import JUGGLING_ENV_IDS, SPLIT_SEEDS, juggling_episodes
+from baselines.agents.juggling_score import (
+    JUGGLING_ENV_IDS,
+    SPLIT_SEEDS,
+    catch_rate_difference,
+    catch_rate_interval,
+    juggling_episodes,
+)
 from baselines.agents.reaching_score import EpisodeErrors, Policy, episode_max_errors
 
 __all__ = [
@@ -187,6 +193,9 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
     phases = [p for p in PHASES if p in both]  # in the task's order
     from baselines.verdicts import juggling_verdicts
 
+    _, lo, hi = catch_rate_interval(agent)
+    _, nlo, nhi = catch_rate_interval(nominal)
+    diff, dlo, dhi = catch_rate_difference(agent, nominal)
     results = {
         "n_episodes": int(agent.seeds.size),
         "criterion": agent.criterion,
@@ -194,6 +203,10 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
         "ratio": agent.criterion / nominal.criterion if nominal.criterion > 0 else None,
         "catch_rate": agent.catch_rate,
         "nominal_catch_rate": nominal.catch_rate,
+        "catch_rate_ci": [lo, hi],
+        "nominal_catch_rate_ci": [nlo, nhi],
+        "catch_rate_difference": diff,
+        "catch_rate_difference_ci": [dlo, dhi],
         "tosses": int(agent.tosses.sum()),
         "nominal_tosses": int(nominal.tosses.sum()),
         "deviation": agent.deviation,

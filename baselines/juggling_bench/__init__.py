@@ -23,6 +23,9 @@ Reported:
   (Lilliefors, F-test, 95 % intervals, jackknife spread over the estimates);
 * a Figure-6-style plot and an animation (GIF) of the juggler.
 
+With ``--levels``: Juggling-v1's levels and reference controllers (and a trained agent
+with ``--agent DIR``), :mod:`~baselines.juggling_bench.levels`.
+
 :func:`run` computes (a pure function of a frozen :class:`JugglingConfig`: no argparse,
 no printing, no files), :func:`report` is the printed text, :func:`write` writes
 ``results.json``, ``results.csv``, ``juggling_fig6.png`` and ``juggling.gif`` (every file
@@ -41,6 +44,7 @@ from __future__ import annotations
 from baselines.juggling_bench.cli import (
     gravity_task,
     juggling_data,
+    level_names,
     main,
     noise_levels,
     register,
@@ -52,6 +56,13 @@ from baselines.juggling_bench.config import (
     TARGET_VARIABILITY_RATIO,
     JugglingConfig,
     check_config,
+)
+from baselines.juggling_bench.levels import (
+    LevelsConfig,
+    check_levels_config,
+    report_levels,
+    run_levels,
+    write_levels,
 )
 from baselines.juggling_bench.media import (
     PHASE_COLORS,
@@ -73,10 +84,13 @@ __all__ = [
     "TARGET_VARIABILITY_RATIO",
     "VIDEO_CAPTION",
     "JugglingConfig",
+    "LevelsConfig",
     "catch_rates",
     "check_config",
+    "check_levels_config",
     "gravity_task",
     "juggling_data",
+    "level_names",
     "load_demos",
     "main",
     "noise_levels",
@@ -84,10 +98,13 @@ __all__ = [
     "plot_figure6",
     "register",
     "report",
+    "report_levels",
     "results_csv",
     "run",
+    "run_levels",
     "validation",
     "write",
     "write_animation",
+    "write_levels",
     "write_mujoco_video",
 ]

@@ -15,7 +15,7 @@ id                              environment
 ``MotionEnvs/OrientationCoefficients-v0``  one step per movement (:mod:`.coefficients`)
 ``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.coefficients`)
 ``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
-``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling_v1.JugglingV1Env` (contacts)
+``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling.JugglingV1Env` (contacts)
 ==============================  ===================================================
 
 The two reaching environments come with a native vector environment
@@ -73,7 +73,7 @@ _SPECS: dict[str, dict[str, object]] = {
         "vector_entry_point": "motion_envs.envs.vector:juggling_v0_vector_env",
     },
     "MotionEnvs/Juggling-v1": {
-        "entry_point": "motion_envs.envs.juggling_v1:JugglingV1Env",
+        "entry_point": "motion_envs.envs.juggling:JugglingV1Env",
     },
 }
 

@@ -11,6 +11,7 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
@@ -21,6 +22,7 @@ __all__ = [
     "N_STEPS",
     "JsonSpecMixin",
     "LazyRendererMixin",
+    "SideCameraMixin",
     "as_action",
     "check_autoreset_mode",
     "check_choice",
@@ -33,6 +35,8 @@ __all__ = [
     "check_scale",
     "check_seed",
     "check_val_fraction",
+    "clipped_pair",
+    "has_render_mode",
     "timing_bounds",
 ]
 
@@ -238,3 +242,61 @@ class LazyRendererMixin:
         state = self.__dict__.copy()
         state["_renderer"] = None
         return state
+
+
+def clipped_pair(action: Any) -> tuple[float, float, bool]:
+    """A 2-vector action as ``(ax, az, invalid)``: each entry clipped to ``[-1, 1]``, NaN
+    counted as 0 (``invalid`` True when an entry was not finite); ValueError for another
+    shape (the juggling environments' residual)."""
+    a = as_action(action, (2,))
+    ax, az = float(a[0]), float(a[1])
+    invalid = not (math.isfinite(ax) and math.isfinite(az))
+    if invalid:
+        ax = 0.0 if math.isnan(ax) else ax
+        az = 0.0 if math.isnan(az) else az
+    ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
+    az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+    return ax, az, invalid
+
+
+def has_render_mode(render_mode: str | None) -> bool:
+    """False (with Gymnasium's warning) when ``render()`` is called without a mode."""
+    if render_mode is None:
+        gym.logger.warn(
+            "render() called without a render_mode; pass render_mode='rgb_array' to gym.make(...)"
+        )
+        return False
+    return True
+
+
+class SideCameraMixin(LazyRendererMixin):
+    """``render()`` of a MuJoCo environment seen through its ``side`` camera: the
+    environment has ``render_mode``, ``width``, ``height``, ``model``, ``data``, an
+    episode state ``_state`` (None before ``reset``) and :meth:`_sync_scene` (poses,
+    camera and lights recomputed for drawing)."""
+
+    render_mode: str | None
+    width: int
+    height: int
+    model: Any
+    data: Any
+    _state: Any = None
+
+    def _sync_scene(self) -> None:
+        raise NotImplementedError
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if not has_render_mode(self.render_mode):
+            return None
+        if self._state is None:
+            raise RuntimeError("call reset() before render()")
+        if self._renderer is None:
+            from motion_envs.envs.rendering import new_mujoco_renderer
+
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, self.height)
+            self._renderer = new_mujoco_renderer(self.model, self.height, self.width)
+        self._sync_scene()
+        self._renderer.update_scene(self.data, camera="side")
+        frame: NDArray[np.uint8] = self._renderer.render()
+        return frame

@@ -1,8 +1,11 @@
-"""``MotionEnvs/Juggling-v0``: the environment, its MuJoCo scene and the scene's MJCF.
+"""``MotionEnvs/Juggling-v0`` and ``-v1``: the environments, their MuJoCo scenes and MJCFs.
 
 The public names of small private modules: ``_env`` (:class:`JugglingEnv`, the registered
 entry point ``motion_envs.envs.juggling:JugglingEnv``), ``_scene`` (:class:`JugglingScene`,
-the MuJoCo world, compiled from ``juggling.xml`` beside them). The default fit the
+the MuJoCo world, compiled from ``juggling.xml`` beside them); ``_v1_env``
+(:class:`JugglingV1Env`, entry point ``motion_envs.envs.juggling:JugglingV1Env``) and
+``_v1_scene`` (:class:`JugglingV1World`: contacts, an actuated hand, compiled from
+``juggling_v1.xml``). The default fit the
 environment acts on (``load_juggler``, ``juggler_demonstrations``, ``TRACKING_NOISE``,
 ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in :mod:`motion_envs.models.juggling` and is
 re-exported here for code that imported it from this module's former place.
@@ -22,9 +25,29 @@ from motion_envs.envs.juggling._scene import (
     check_task,
     load_juggling_model,
 )
+from motion_envs.envs.juggling._v1_env import (
+    DEFAULT_V1_REWARD_WEIGHTS,
+    HISTORY,
+    V1_CYCLE_TIME,
+    V1_OBS_DIM,
+    JugglingV1Env,
+)
+from motion_envs.envs.juggling._v1_scene import (
+    CAPTURE_SPEED,
+    HAND_ACCEL_LIMIT,
+    HAND_MASS,
+    HAND_SPEED_LIMIT,
+    SERVO_OMEGA,
+    SUBSTEPS,
+    V1_SCENE_XML,
+    JugglingPhysics,
+    JugglingV1World,
+    load_juggling_v1_model,
+)
 from motion_envs.models.juggling import (
     FIT_SEED,
     FIT_TEST_FRACTION,
+    PAPER_GRAVITY,
     TRACKING_NOISE,
     cycle_rngs,
     juggler_demonstrations,
@@ -32,20 +55,36 @@ from motion_envs.models.juggling import (
 )
 
 __all__ = [
+    "CAPTURE_SPEED",
     "CYCLE_TIME_LIMIT",
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
+    "DEFAULT_V1_REWARD_WEIGHTS",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
+    "HAND_ACCEL_LIMIT",
+    "HAND_MASS",
+    "HAND_SPEED_LIMIT",
     "HAND_SPEED_MARGIN",
+    "HISTORY",
     "OBS_DIM",
+    "PAPER_GRAVITY",
     "POSITION_MARGIN",
     "SCENE_XML",
+    "SERVO_OMEGA",
+    "SUBSTEPS",
     "TRACKING_NOISE",
+    "V1_CYCLE_TIME",
+    "V1_OBS_DIM",
+    "V1_SCENE_XML",
     "JugglingEnv",
+    "JugglingPhysics",
     "JugglingScene",
+    "JugglingV1Env",
+    "JugglingV1World",
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",
     "load_juggler",
     "load_juggling_model",
+    "load_juggling_v1_model",
 ]

@@ -17,12 +17,13 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import PHASES, JugglingNoise, JugglingState, JugglingTask
 from motion_envs.envs._common import (
     MAX_FRAME_SIZE,
-    LazyRendererMixin,
-    as_action,
+    SideCameraMixin,
     check_integer,
     check_number,
     check_reward_weights,
     check_scale,
+    clipped_pair,
+    has_render_mode,
 )
 from motion_envs.envs.juggling._scene import JugglingScene
 from motion_envs.envs.rendering import (
@@ -115,7 +116,7 @@ def _check_int(value: Any, name: str, low: int, high: int = 10_000) -> int:
     return check_integer(value, name, low, high)
 
 
-class JugglingEnv(LazyRendererMixin, gym.Env):
+class JugglingEnv(SideCameraMixin, gym.Env):
     r"""Toss and catch one ball; the agent corrects the analytic juggler's hand.
 
     ## Description
@@ -357,14 +358,7 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = as_action(action, (2,))
-        ax, az = float(a[0]), float(a[1])
-        invalid = not (math.isfinite(ax) and math.isfinite(az))
-        if invalid:
-            ax = 0.0 if math.isnan(ax) else ax
-            az = 0.0 if math.isnan(az) else az
-        ax = -1.0 if ax < -1.0 else (1.0 if ax > 1.0 else ax)
-        az = -1.0 if az < -1.0 else (1.0 if az > 1.0 else az)
+        ax, az, invalid = clipped_pair(action)
         rx, rz = self.residual_scale * ax, self.residual_scale * az
         offset = math.hypot(rx, rz)
         state = self._state
@@ -445,12 +439,12 @@ class JugglingEnv(LazyRendererMixin, gym.Env):
         return np.maximum(obs, self._low, out=obs)
 
     # -- rendering ----------------------------------------------------------------------
+    def _sync_scene(self) -> None:
+        self.scene.sync()
+
     def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
+        """As :class:`SideCameraMixin`'s, drawn with matplotlib when OpenGL is unusable."""
+        if not has_render_mode(self.render_mode):
             return None
         if self._state is None:
             raise RuntimeError("call reset() before render()")

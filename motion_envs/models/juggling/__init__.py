@@ -14,8 +14,12 @@ The public names of small private modules, one concern each:
   in one object;
 * ``_run``: seeded cycles, step by step in any world or vectorised in the pure model;
 * ``_segmentation``: recordings cut into phases by the online criteria;
+* ``_sensor``: how Juggling-v1 sees the ball (:class:`BallSensor`: delay and noise) and
+  scatters a toss (:func:`perturb_release`);
+* ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
+  (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
-  its constants.
+  its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
 
 from motion_envs.models.juggling._controller import ControlOptions, JugglingController
@@ -23,15 +27,29 @@ from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
     FIT_SEED,
     FIT_TEST_FRACTION,
+    PAPER_GRAVITY,
     TRACKING_NOISE,
+    V1_N_SINES,
     DefaultFit,
     default_fit,
     fit_juggler,
     juggler_demonstrations,
     load_demonstrations,
     load_juggler,
+    v1_fit,
+    v1_juggler,
 )
 from motion_envs.models.juggling._juggler import AnalyticJuggler
+from motion_envs.models.juggling._levels import (
+    CONTROLLERS,
+    LEVELS,
+    LIKENESS_TAU,
+    HumanLikeness,
+    JugglerController,
+    JugglingLevel,
+    make_controller,
+    v1_likeness,
+)
 from motion_envs.models.juggling._model import (
     JugglerModel,
     PhaseFit,
@@ -51,27 +69,44 @@ from motion_envs.models.juggling._segmentation import (
     segment_demos,
     segment_juggling,
 )
+from motion_envs.models.juggling._sensor import (
+    BallMeasurement,
+    BallSensor,
+    perturb_release,
+    predict_forward,
+)
 from motion_envs.models.juggling._world import (
     TRACKING_ROWS,
     BallisticWorld,
     JugglingWorld,
     draw_episode_noise,
     tracked_hand,
+    xz_pair,
 )
 
 __all__ = [
+    "CONTROLLERS",
     "DEMO_CYCLES",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
+    "LEVELS",
+    "LIKENESS_TAU",
+    "PAPER_GRAVITY",
     "TRACKING_NOISE",
     "TRACKING_ROWS",
+    "V1_N_SINES",
     "AnalyticJuggler",
+    "BallMeasurement",
+    "BallSensor",
     "BallisticWorld",
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
+    "HumanLikeness",
+    "JugglerController",
     "JugglerModel",
     "JugglingController",
+    "JugglingLevel",
     "JugglingWorld",
     "PhaseFit",
     "cycle_rng",
@@ -83,12 +118,19 @@ __all__ = [
     "load_demonstrations",
     "load_juggler",
     "load_juggling_csv",
+    "make_controller",
+    "perturb_release",
     "phase_conditions",
     "plan_catch",
+    "predict_forward",
     "run_cycle",
     "run_cycles",
     "run_cycles_fast",
     "segment_demos",
     "segment_juggling",
     "tracked_hand",
+    "v1_fit",
+    "v1_juggler",
+    "v1_likeness",
+    "xz_pair",
 ]

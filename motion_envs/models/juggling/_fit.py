@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import functools
+import math
 import os
 from dataclasses import dataclass
 
@@ -27,13 +28,17 @@ __all__ = [
     "DEMO_CYCLES",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
+    "PAPER_GRAVITY",
     "TRACKING_NOISE",
+    "V1_N_SINES",
     "DefaultFit",
     "default_fit",
     "fit_juggler",
     "juggler_demonstrations",
     "load_demonstrations",
     "load_juggler",
+    "v1_fit",
+    "v1_juggler",
 ]
 
 #: Tracking noise (m) that comes with a release-noise level, as in ``motion-bench juggling
@@ -45,6 +50,12 @@ TRACKING_NOISE = 0.0005
 #: Juggling-v0 fits the same juggler.
 FIT_SEED = 0
 FIT_TEST_FRACTION = 0.25
+
+#: m/s^2, the paper's slow virtual world (``JugglingTask``'s default gravity).
+PAPER_GRAVITY = 1.0
+
+#: Sines per phase of Juggling-v1's juggler (:func:`v1_fit`).
+V1_N_SINES = 4
 
 #: Cycles per simulated person of the default demonstrations (the paper's 50 per phase).
 DEMO_CYCLES = 50
@@ -122,3 +133,25 @@ def load_juggler(data: str | os.PathLike[str] | None, task: JugglingTask) -> Ana
     on the training cycles of the built-in SIMULATED demonstrations (``data`` None) or of
     the users' juggling CSV (:func:`default_fit`)."""
     return copy.deepcopy(default_fit(data, task).juggler)
+
+
+@functools.lru_cache(maxsize=4)
+def v1_fit(gravity: float) -> DefaultFit:
+    """Juggling-v1's fit at ``gravity``: the built-in SIMULATED demonstrations generated
+    at that gravity (seed ``FIT_SEED``), the default split, the juggler fitted on the
+    training cycles. Differences from :func:`default_fit`: the release is armed after
+    ``0.25 sqrt(PAPER_GRAVITY / g)`` s (it scales with the toss's time scale; 0.25 s at the
+    paper's gravity) and every phase has ``V1_N_SINES`` sines (the cross-validated N gives
+    a toss faster than the demonstrations'; ``docs/models.md``). Computed once per
+    process and gravity; do not change the returned juggler (:func:`v1_juggler` copies)."""
+    task = JugglingTask(gravity=float(gravity))
+    demos = load_demonstrations(None, task)  # SIMULATED
+    juggler, train, test = fit_juggler(
+        demos, n_sines=V1_N_SINES, release_after=0.25 * math.sqrt(PAPER_GRAVITY / task.gravity)
+    )
+    return DefaultFit(demos, frozenset(train), frozenset(test), juggler)
+
+
+def v1_juggler(gravity: float) -> AnalyticJuggler:
+    """A fresh copy of Juggling-v1's analytic juggler at ``gravity`` (:func:`v1_fit`)."""
+    return copy.deepcopy(v1_fit(float(gravity)).juggler)

@@ -31,6 +31,7 @@ __all__ = [
     "JugglingWorld",
     "draw_episode_noise",
     "tracked_hand",
+    "xz_pair",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -92,7 +93,8 @@ def tracked_hand(hand: FloatArray, tracking: FloatArray | None, k: int) -> Float
     return out
 
 
-def _vec2(value: ArrayLike, name: str) -> tuple[float, float]:
+def xz_pair(value: ArrayLike, name: str) -> tuple[float, float]:
+    """``value`` as a finite ``(x, z)`` pair of floats; ValueError naming ``name``."""
     if isinstance(value, np.ndarray) and value.shape == (2,):
         x, z = float(value[0]), float(value[1])
     else:
@@ -125,7 +127,7 @@ class BallisticWorld:
         """Hand at rest at ``hand_pos``, ball held in it; draws the episode's noise."""
         self.noise = noise or JugglingNoise()
         self.release_factor, self.tracking_noise = draw_episode_noise(self.noise, rng)
-        x, z = _vec2(hand_pos, "hand_pos")
+        x, z = xz_pair(hand_pos, "hand_pos")
         self._hand = [x, z]
         self._prev = [x, z]
         self._prev2 = [x, z]
@@ -168,7 +170,7 @@ class BallisticWorld:
         """Advance one period ``dt`` (the rules' order in the module docstring)."""
         task = self.task
         dt = task.dt
-        x, z = _vec2(hand_target, "hand_target")
+        x, z = xz_pair(hand_target, "hand_target")
         self._k += 1
         self.time = self._k * dt
         self._prev2 = self._prev

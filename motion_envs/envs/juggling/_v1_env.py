@@ -1,0 +1,384 @@
+"""``MotionEnvs/Juggling-v1``: juggle one ball with an actuated hand, seeing the ball late."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
+from motion_envs.envs._common import (
+    SideCameraMixin,
+    check_choice,
+    check_integer,
+    check_number,
+    check_reward_weights,
+    check_scale,
+    clipped_pair,
+)
+from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT, JugglingV1World
+from motion_envs.models.juggling import (
+    CONTROLLERS,
+    LEVELS,
+    BallSensor,
+    JugglerController,
+    make_controller,
+    v1_juggler,
+    v1_likeness,
+)
+
+__all__ = [
+    "DEFAULT_V1_REWARD_WEIGHTS",
+    "HISTORY",
+    "V1_CYCLE_TIME",
+    "V1_OBS_DIM",
+    "JugglingV1Env",
+]
+
+#: Default reward weights (see the class docstring, section Rewards).
+DEFAULT_V1_REWARD_WEIGHTS: Mapping[str, float] = {
+    "catch": 10.0,
+    "drop": 10.0,
+    "likeness": 0.01,
+    "action": 0.01,
+}
+#: Delayed ball measurements in the observation (newest first).
+HISTORY = 4
+#: Observation size (see the class docstring).
+V1_OBS_DIM = 15 + 4 * HISTORY
+#: s of simulated time per catch (at 9.81 m/s^2; times ``sqrt(9.81 / g)``) after which an
+#: episode is truncated anyway; a cycle of the juggler lasts about 1.1 s at 9.81 m/s^2.
+V1_CYCLE_TIME = 4.0
+_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
+_POS_MARGIN = 10.0
+_SPEED_BOUND = 30.0
+
+
+class JugglingV1Env(SideCameraMixin, gym.Env):
+    r"""Toss and catch one ball with an actuated hand that sees the ball late.
+
+    ## Description
+    The juggling task of Lippi, Avizzano & Ruffaldi (2011, section III-A) in a physical
+    world: one ball, one hand, the vertical plane (``x`` horizontal, ``z`` up, metres),
+    real gravity (9.81 m/s^2) by default. MuJoCo does the physics with contacts on
+    (:class:`~motion_envs.envs.juggling.JugglingV1World`): the hand is a 0.5 kg body on two slide
+    joints driven by motors within a human hand's limits (``hand_speed_limit`` = 6 m/s,
+    120 m/s^2; sources in that module), the ball lands on a palm and is captured only when
+    falling, touching the palm and slower than 5 m/s relative to the hand (else it
+    bounces off), and a ball touching the floor is a drop. The ball is seen through a
+    sensor with the level's latency and noise (:class:`~motion_envs.models.juggling.BallSensor`);
+    each toss is scattered in speed and angle. The analytic juggler (Juggling-v0's, eq. 9
+    toss, eq. 10 catch correction, fitted on the training cycles of the built-in
+    **SIMULATED** demonstrations at the env's gravity) commands the hand every 5 ms from the
+    same delayed measurements; the agent adds a residual to each command. At ``level="easy"``
+    the juggler catches almost every ball; at ``"medium"`` and ``"hard"`` the delay makes it
+    drop (the latency-aware reference, ``controller="juggler_latency_aware"``, shows what
+    predicting the delay buys).
+
+    Levels (every value can also be passed on its own and then overrides the level's):
+
+    | level    | `latency` (s) | `position_std` (m) | `velocity_std` (m/s) | `release_speed_std` | `release_angle_std` (deg) |
+    |----------|---------------|--------------------|----------------------|---------------------|---------------------------|
+    | `easy`   | 0.0           | 0.0                | 0.0                  | 0.05                | 4.0                       |
+    | `medium` | 0.10          | 0.002              | 0.02                 | 0.08                | 6.0                       |
+    | `hard`   | 0.11          | 0.004              | 0.05                 | 0.12                | 12.0                      |
+
+    The zero action reproduces the reference controller exactly (the same world, sensor and
+    seeds; tested against an independent loop).
+
+    ## Action Space
+    `Box(-1, 1, (2,), float32)`: the residual added to the controller's hand target, in
+    units of `residual_scale` metres (``target + residual_scale * a``), applied once per
+    step (one 5 ms control period). Entries outside ``[-1, 1]`` are clipped; NaN counts as
+    0 (``info["action_invalid"]``). A wrong shape raises `ValueError`.
+
+    | Num | Action                              | Control Min | Control Max | Type (Unit)                  |
+    |-----|-------------------------------------|-------------|-------------|------------------------------|
+    | 0   | horizontal residual of the target   | -1          | 1           | position (residual_scale m)  |
+    | 1   | vertical residual of the target     | -1          | 1           | position (residual_scale m)  |
+
+    ## Observation Space
+    `Box(low, high, (31,), float32)`; positions within 10 m of the home point, speeds
+    within 30 m/s (values beyond are clipped). Everything the controller's plan depends on
+    is in it, and the last `HISTORY = 4` ball measurements (the sensor's delayed, noisy
+    view, newest first; exact while the ball is held).
+
+    | Num     | Observation                                                                 | Type (Unit)    |
+    |---------|-----------------------------------------------------------------------------|----------------|
+    | 0, 1    | hand position ``x, z`` (proprioception, exact)                              | position (m)   |
+    | 2, 3    | hand velocity                                                               | velocity (m/s) |
+    | 4       | 1 if the ball is held, else 0                                               | unitless       |
+    | 5..8    | phase one-hot: toss, go_down, catch, return                                 | unitless       |
+    | 9       | time within the phase                                                       | time (s)       |
+    | 10      | duration of the current phase plan                                          | time (s)       |
+    | 11, 12  | the controller's next hand target (its plan, no residual)                   | position (m)   |
+    | 13, 14  | the plan's end point (in the catch phase: the planned catch point)          | position (m)   |
+    | 15..30  | ball measurements ``x, z, vx, vz`` of the last 4 steps, newest first         | m, m/s         |
+
+    ## Rewards
+    ``reward = w_catch * caught - w_drop * dropped - w_likeness * likeness - w_action * |a|^2``
+    (default weights ``catch: 10, drop: 10, likeness: 0.01, action: 0.01``; the likeness
+    weight keeps an episode's summed likeness cost, ~0.1 m per step over ~800 steps, well
+    under the drop's: with weight 1 a drop that ends the episode early paid off, and PPO
+    learned to drop): ``likeness`` is
+    the distance (m) of the hand's state ``(x, z, 0.1 s * v)`` to the nearest state of the
+    same phase in the TRAINING demonstrations (:class:`~motion_envs.models.juggling.HumanLikeness`;
+    never the controller's own plan, so the zero action is not its optimum). `info` holds
+    each weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
+    ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``:
+    the same, Juggling-v0's name), ``phase``,
+    ``held``, ``time``, the true ``hand`` and ``ball`` positions ``(x, z)`` (m) and
+    ``action_invalid``.
+
+    ## Starting State
+    The hand rests at the juggler's home with the ball in it, time 0, toss phase.
+    `reset(seed=S)` seeds three independent streams ``SeedSequence(S).spawn(3)``: the
+    world (release noise), the sensor (measurement noise) and the controller (its random
+    phase end points and durations).
+
+    ## Episode End
+    ### Termination
+    The ball touches the floor (a drop).
+
+    ### Truncation
+    After `max_catches` catches, or ``max_catches * 4 s * sqrt(9.81 / g)`` of simulated time.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/Juggling-v1", level="medium")
+    ```
+
+    | Parameter           | Type      | Default     | Description |
+    |---------------------|-----------|-------------|-------------|
+    | `level`             | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
+    | `latency`           | **float** | `None`      | s, the ball measurement's delay (rounded to 5 ms); None: the level's |
+    | `position_std`      | **float** | `None`      | m, measurement noise of the ball position; None: the level's |
+    | `velocity_std`      | **float** | `None`      | m/s, measurement noise of the ball velocity; None: the level's |
+    | `release_speed_std` | **float** | `None`      | relative std of the release speed; None: the level's |
+    | `release_angle_std` | **float** | `None`      | degrees, std of the release direction; None: the level's |
+    | `gravity`           | **float** | `9.81`      | m/s^2; `1.0` is the paper's slow virtual world (`PAPER_GRAVITY`) |
+    | `controller`        | **str**   | `"juggler"` | the controller the residual acts on: `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
+    | `max_catches`       | **int**   | `10`        | catches after which the episode is truncated |
+    | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
+    | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
+    | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
+    | `width`             | **int**   | `480`       | frame width in pixels |
+    | `height`            | **int**   | `480`       | frame height in pixels |
+
+    ## Version History
+    * v1: MuJoCo contacts and an actuated hand with human limits, real gravity, a delayed
+      noisy ball sensor shared by agent and juggler, difficulty levels, speed-and-angle
+      release noise, a Markov observation, human-likeness against the training
+      demonstrations.
+    * v0: the paper's setting (kinematic hand, exact ball state).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+
+    def __init__(
+        self,
+        level: str = "medium",
+        latency: float | None = None,
+        position_std: float | None = None,
+        velocity_std: float | None = None,
+        release_speed_std: float | None = None,
+        release_angle_std: float | None = None,
+        gravity: float = 9.81,
+        controller: str = "juggler",
+        max_catches: int = 10,
+        residual_scale: float = 0.05,
+        reward_weights: Mapping[str, float] | None = None,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        self.level = check_choice(level, "level", tuple(LEVELS))
+        base = LEVELS[self.level]
+
+        def pick(value: float | None, name: str, default: float, high: float) -> float:
+            return default if value is None else check_number(value, name, 0.0, high)
+
+        self.latency = pick(latency, "latency", base.latency, 1.0)
+        self.position_std = pick(position_std, "position_std", base.position_std, 1.0)
+        self.velocity_std = pick(velocity_std, "velocity_std", base.velocity_std, 10.0)
+        self.release_speed_std = pick(
+            release_speed_std, "release_speed_std", base.release_speed_std, 1.0
+        )
+        self.release_angle_std = pick(
+            release_angle_std, "release_angle_std", base.release_angle_std, 90.0
+        )
+        self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
+        self.controller_name = check_choice(controller, "controller", CONTROLLERS)
+        self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
+        self.residual_scale = check_scale(residual_scale, 1.0)
+        self.reward_weights = check_reward_weights(reward_weights, DEFAULT_V1_REWARD_WEIGHTS)
+        for name, value in (("width", width), ("height", height)):
+            check_integer(value, name, 16, 8192)
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+
+        self.task = JugglingTask(gravity=self.gravity)
+        juggler = v1_juggler(self.gravity)
+        self.home = np.asarray(juggler.home_, dtype=np.float64)
+        self.delay_steps = round(self.latency / self.task.dt)
+        self.controller: JugglerController = make_controller(
+            self.controller_name, juggler, self.delay_steps * self.task.dt
+        )
+        self.likeness = v1_likeness(self.gravity, "train")
+        self.world = JugglingV1World(
+            self.task, self.release_speed_std, math.radians(self.release_angle_std)
+        )
+        self.sensor = BallSensor(self.delay_steps, self.position_std, self.velocity_std)
+        self.model, self.data = self.world.model, self.world.data
+        #: m/s, the hand's speed limit.
+        self.hand_speed_limit = HAND_SPEED_LIMIT
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
+        self._time_limit = self.max_catches * V1_CYCLE_TIME * math.sqrt(9.81 / self.gravity)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        low, high = self._bounds()
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self._low, self._high = low, high
+        self._renderer: Any = None
+        self._done = True
+        self._state: JugglingState | None = None
+        self._history: list[float] = []
+        self._catches = self._tosses = 0
+
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
+        fz = self.task.floor_z
+        low = [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m]
+        high = [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, self._time_limit, self._time_limit]
+        high += [hx + m, hz + m, hx + m, hz + m]
+        low += [hx - m, fz - m, -v, -v] * HISTORY
+        high += [hx + m, hz + m, v, v] * HISTORY
+        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+
+    @property
+    def dt(self) -> float:
+        """s of simulated time per step (one control period)."""
+        return self.task.dt
+
+    # -- episode ------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
+        world_ss, sensor_ss, controller_ss = np.random.SeedSequence(base).spawn(3)
+        true = self.world.reset(self.home, rng=np.random.default_rng(world_ss))
+        meas = self.sensor.reset(true.ball_pos, true.ball_vel, np.random.default_rng(sensor_ss))
+        state = self._measured(true, meas.position, meas.velocity)
+        self.controller.reset(state, np.random.default_rng(controller_ss))
+        self._state = state
+        row = [*meas.position.tolist(), *meas.velocity.tolist()]
+        self._history = row * HISTORY
+        self._done = False
+        self._catches = self._tosses = 0
+        info = {
+            "phase": self.controller.phase,
+            "time": true.time,
+            "hand": true.hand_pos.copy(),
+            "ball": true.ball_pos.copy(),
+            "seed": base,
+        }
+        return self._observation(true), info
+
+    @staticmethod
+    def _measured(true: JugglingState, ball_pos: Any, ball_vel: Any) -> JugglingState:
+        return JugglingState(
+            time=true.time,
+            hand_pos=true.hand_pos,
+            hand_vel=true.hand_vel,
+            ball_pos=ball_pos,
+            ball_vel=ball_vel,
+            held=true.held,
+            released=true.released,
+            caught=true.caught,
+            dropped=true.dropped,
+        )
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._done or self._state is None:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        ax, az, invalid = clipped_pair(action)
+        target, armed = self.controller.command(self._state)
+        s = self.residual_scale
+        true = self.world.step((float(target[0]) + s * ax, float(target[1]) + s * az), armed)
+        meas = self.sensor.measure(true.ball_pos, true.ball_vel, true.held)
+        self._state = self._measured(true, meas.position, meas.velocity)
+        self._history = [*meas.position.tolist(), *meas.velocity.tolist(), *self._history[:-4]]
+        caught, dropped = int(true.caught), true.dropped
+        self._catches += caught
+        self._tosses += int(true.released)
+        phase = self.controller.phase
+        like = self.likeness.distance(phase, true.hand_pos, true.hand_vel)
+        w = self.reward_weights
+        r_catch = w["catch"] * caught
+        r_drop = -w["drop"] * float(dropped)
+        r_like = -w["likeness"] * like
+        r_act = -w["action"] * (ax * ax + az * az)
+        reward = r_catch + r_drop + r_like + r_act
+        terminated = bool(dropped)
+        truncated = not terminated and (
+            self._catches >= self.max_catches or true.time >= self._time_limit
+        )
+        self._done = terminated or truncated
+        info = {
+            "reward_catch": r_catch,
+            "reward_drop": r_drop,
+            "reward_likeness": r_like,
+            "reward_action": r_act,
+            "likeness": like,
+            "caught": bool(caught),
+            "catches": self._catches,
+            "tosses": self._tosses,
+            "cycles": self._tosses,
+            "phase": phase,
+            "held": true.held,
+            "time": true.time,
+            "hand": true.hand_pos.copy(),
+            "ball": true.ball_pos.copy(),
+            "action_invalid": invalid,
+        }
+        return self._observation(true), float(reward), terminated, truncated, info
+
+    def _observation(self, true: JugglingState) -> NDArray[np.float32]:
+        c = self.controller
+        nx, nz = c.nominal_next().tolist()
+        ex, ez = c.plan_end.tolist()
+        obs = np.array(
+            (
+                *true.hand_pos.tolist(),
+                *true.hand_vel.tolist(),
+                float(true.held),
+                *_ONE_HOT[c.phase],
+                c.phase_time,
+                c.duration,
+                nx,
+                nz,
+                ex,
+                ez,
+                *self._history,
+            ),
+            dtype=np.float32,
+        )
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)
+
+    # -- rendering (SideCameraMixin.render) ----------------------------------------------
+    def _sync_scene(self) -> None:
+        self.world.sync()

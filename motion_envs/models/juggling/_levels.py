@@ -1,0 +1,272 @@
+"""Juggling-v1's difficulty levels, its four reference controllers and its human-likeness.
+
+**Levels** (:data:`LEVELS`): what a level fixes is how the ball is seen and tossed: the
+sensor's latency and noise (:class:`~motion_envs.models.juggling.BallSensor`) and
+the release noise (speed and angle, :func:`~motion_envs.models.juggling.perturb_release`).
+The values were chosen by reasoning (people juggle with a 100-200 ms visuomotor delay) and
+by running the analytic juggler on TRAINING seeds only (``SPLIT_SEEDS["train"]`` of
+``baselines.agents.juggling_score``); the env docstring has the table.
+
+**Controllers**, all with the juggler's interface (``reset(state, rng)``,
+``command(state) -> (target, armed)``, ``phase``, ``phase_time``, ``nominal_next()``,
+``plan_end``, ``duration``):
+
+* ``"juggler"``: the analytic juggler itself (eq. 9 toss, eq. 10 correction from the
+  DELAYED measurement it is given, as in the paper);
+* ``"juggler_latency_aware"``: the same juggler fed the measurement predicted forward by
+  the known latency along the ballistic flight (the strong analytic reference);
+* ``"fixed_point"``: the juggler's toss, go-down and return; the catch is a minimum-jerk
+  reach to one fixed point (the training demonstrations' mean catch point) over the
+  juggler's planned catch duration, blind to the ball;
+* ``"commanded_intercept"``: the same, to the intercept predicted from the release
+  velocity the juggler commanded (its efference copy), never corrected.
+
+**Human-likeness** (:class:`HumanLikeness`): the distance (m) from the hand's state
+``(x, z, tau vx, tau vz)`` (``tau = 0.1`` s) to the nearest sample of the same phase in a
+set of demonstrations (a k-d tree per phase): 0 when the hand moves where and as a person
+moved in that phase. Juggling-v1's reward uses the TRAINING demonstrations; the benchmark
+reports it against the held-out ones.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial import cKDTree
+
+from motion_envs.datasets.juggling import PHASES, JugglingDemos, JugglingState
+from motion_envs.geometry.minimum_jerk import minimum_jerk
+from motion_envs.models.juggling._controller import JugglingController
+from motion_envs.models.juggling._fit import v1_fit
+from motion_envs.models.juggling._juggler import AnalyticJuggler
+from motion_envs.models.juggling._sensor import predict_forward
+
+__all__ = [
+    "CONTROLLERS",
+    "LEVELS",
+    "LIKENESS_TAU",
+    "HumanLikeness",
+    "JugglerController",
+    "JugglingLevel",
+    "make_controller",
+    "v1_likeness",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class JugglingLevel:
+    """What a level fixes (every field can also be passed to the env on its own).
+
+    Attributes
+    ----------
+    latency:
+        s, the ball measurement's delay (rounded to control periods).
+    position_std, velocity_std:
+        Measurement noise of the ball, m and m/s.
+    release_speed_std:
+        Relative std of the release speed.
+    release_angle_std:
+        Std of the release direction, degrees.
+    """
+
+    latency: float
+    position_std: float
+    velocity_std: float
+    release_speed_std: float
+    release_angle_std: float
+
+
+#: The levels (see the env docstring's table).
+LEVELS: dict[str, JugglingLevel] = {
+    "easy": JugglingLevel(0.0, 0.0, 0.0, 0.05, 4.0),
+    "medium": JugglingLevel(0.10, 0.002, 0.02, 0.08, 6.0),
+    "hard": JugglingLevel(0.11, 0.004, 0.05, 0.12, 12.0),
+}
+
+#: The reference controllers' names.
+CONTROLLERS: tuple[str, ...] = (
+    "juggler",
+    "juggler_latency_aware",
+    "fixed_point",
+    "commanded_intercept",
+)
+
+#: s; weight of the velocity in the human-likeness distance.
+LIKENESS_TAU = 0.1
+
+
+class JugglerController:
+    """The analytic juggler as a controller (``"juggler"``); the base of the others.
+
+    ``latency``: s, the delay of the measurements the controller is given (used by the
+    latency-aware variant only).
+    """
+
+    def __init__(self, juggler: AnalyticJuggler, latency: float = 0.0) -> None:
+        self.juggler = juggler
+        self.latency = float(latency)
+
+    def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
+        """Start a toss from the (measured) state."""
+        self.juggler.reset(state, rng)
+
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        """Next hand target and release arming from the measured state."""
+        return self.juggler.command(state)
+
+    @property
+    def _episode(self) -> JugglingController:
+        episode = self.juggler.episode
+        if episode is None:
+            raise RuntimeError("no episode; call reset() first")
+        return episode
+
+    @property
+    def phase(self) -> str:
+        """The current phase."""
+        return str(self.juggler.phase)
+
+    @property
+    def phase_time(self) -> float:
+        """s in the current phase."""
+        return float(self.juggler.phase_time)
+
+    @property
+    def duration(self) -> float:
+        """s, the current phase plan's duration."""
+        return float(self._episode.duration)
+
+    @property
+    def plan_end(self) -> FloatArray:
+        """The current phase plan's end point (in the catch phase: the planned catch point)."""
+        return np.asarray(self._episode.end, dtype=np.float64)
+
+    def nominal_next(self) -> FloatArray:
+        """The next hand target the plan gives (without events)."""
+        return self.juggler.nominal_next()
+
+
+class _LatencyAware(JugglerController):
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        if state.held or self.latency <= 0:
+            return self.juggler.command(state)
+        p, v = predict_forward(
+            state.ball_pos, state.ball_vel, self.latency, self.juggler.task.gravity
+        )
+        return self.juggler.command(replace(state, ball_pos=p, ball_vel=v))
+
+
+class _MinimumJerkCatch(JugglerController):
+    """Toss, go-down and return of the juggler (no eq. 10); the catch is a minimum-jerk
+    reach from the catch start to :meth:`_catch_point` over the planned duration."""
+
+    def __init__(self, juggler: AnalyticJuggler, latency: float = 0.0) -> None:
+        super().__init__(juggler.variant(correction=False), latency)
+        self._catch: tuple[FloatArray, FloatArray, float] | None = None
+
+    def _catch_point(self) -> FloatArray:
+        raise NotImplementedError
+
+    def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
+        super().reset(state, rng)
+        self._catch = None
+
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        target, armed = self.juggler.command(state)
+        if self.juggler.phase != "catch":
+            self._catch = None
+            return target, armed
+        if self._catch is None:
+            start = np.asarray(state.hand_pos, dtype=np.float64)
+            self._catch = (start, self._catch_point(), float(self._episode.duration))
+        start, end, duration = self._catch
+        tau = min(self.juggler.phase_time / duration, 1.0)
+        return minimum_jerk(start, end, np.array([tau]))[0], armed
+
+    @property
+    def plan_end(self) -> FloatArray:
+        if self._catch is not None:
+            return self._catch[1].copy()
+        return super().plan_end
+
+    def nominal_next(self) -> FloatArray:
+        if self._catch is None:
+            return super().nominal_next()
+        start, end, duration = self._catch
+        dt = self.juggler.task.dt
+        tau = min(self.juggler.phase_time / duration + dt / duration, 1.0)
+        return minimum_jerk(start, end, np.array([tau]))[0]
+
+
+class _FixedPoint(_MinimumJerkCatch):
+    def _catch_point(self) -> FloatArray:
+        return np.asarray(self.juggler.phases_["catch"].end_mean, dtype=np.float64).copy()
+
+
+class _CommandedIntercept(_MinimumJerkCatch):
+    def _catch_point(self) -> FloatArray:
+        return np.asarray(self._episode.end, dtype=np.float64).copy()
+
+
+def make_controller(name: str, juggler: AnalyticJuggler, latency: float = 0.0) -> JugglerController:
+    """The controller ``name`` (one of :data:`CONTROLLERS`) around ``juggler``'s fitted
+    model (a :meth:`~AnalyticJuggler.variant`: the controller's episodes never touch
+    ``juggler``)."""
+    classes: dict[str, type[JugglerController]] = {
+        "juggler": JugglerController,
+        "juggler_latency_aware": _LatencyAware,
+        "fixed_point": _FixedPoint,
+        "commanded_intercept": _CommandedIntercept,
+    }
+    if name not in classes:
+        raise ValueError(f"controller must be one of {list(CONTROLLERS)}; got {name!r}")
+    return classes[name](juggler.variant(), latency)
+
+
+class HumanLikeness:
+    """Distance of a hand state to the nearest demonstrated state of the same phase.
+
+    Built from the ``cycles`` (``(recording, cycle)`` pairs) of ``demos``; the hand's
+    velocity is the backward difference of the recorded positions.
+    """
+
+    def __init__(
+        self, demos: JugglingDemos, cycles: set[tuple[int, int]] | frozenset[tuple[int, int]]
+    ) -> None:
+        points: dict[str, list[FloatArray]] = {p: [] for p in PHASES}
+        for s in demos.segments():
+            if (s.recording, s.cycle) not in cycles:
+                continue
+            v = np.diff(s.positions, axis=0) / np.diff(s.times)[:, None]
+            points[s.phase].append(np.hstack([s.positions[1:], LIKENESS_TAU * v]))
+        self.trees = {p: cKDTree(np.vstack(points[p])) for p in PHASES if points[p]}
+        if len(self.trees) != len(PHASES):
+            raise ValueError("human-likeness needs demonstrations of every phase")
+
+    def distance(self, phase: str, hand_pos: FloatArray, hand_vel: FloatArray) -> float:
+        """m; the distance of ``(x, z, tau vx, tau vz)`` to the phase's nearest sample."""
+        q = (
+            float(hand_pos[0]),
+            float(hand_pos[1]),
+            LIKENESS_TAU * float(hand_vel[0]),
+            LIKENESS_TAU * float(hand_vel[1]),
+        )
+        d, _ = self.trees[phase].query(q)
+        return float(d) if math.isfinite(d) else math.inf
+
+
+@functools.lru_cache(maxsize=8)
+def v1_likeness(gravity: float, split: str) -> HumanLikeness:
+    """Human-likeness against Juggling-v1's demonstrations at ``gravity``
+    (:func:`~motion_envs.models.juggling.v1_fit`): the ``"train"`` cycles (the reward's) or
+    the held-out ``"test"`` ones (the benchmark's)."""
+    if split not in ("train", "test"):
+        raise ValueError(f"split must be 'train' or 'test'; got {split!r}")
+    fit = v1_fit(float(gravity))
+    return HumanLikeness(fit.demos, fit.train if split == "train" else fit.test)
