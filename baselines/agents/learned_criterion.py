@@ -174,8 +174,9 @@ def learned_episode_errors(
     import gymnasium as gym
 
     import motion_envs  # noqa: F401  (registers the ids)
-    from motion_envs.envs.coefficients import OrientationCoefficientsEnv, PositionCoefficientsEnv
+    from motion_envs.envs.orientation_coefficients import OrientationCoefficientsEnv
     from motion_envs.envs.orientation_reach import OrientationReachEnv, orientation_split_parts
+    from motion_envs.envs.position_coefficients import PositionCoefficientsEnv
     from motion_envs.envs.position_reach import PositionReachEnv, position_split_source
 
     reason = learned_skip_reason(env_id)

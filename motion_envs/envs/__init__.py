@@ -12,8 +12,8 @@ id                              environment
 ``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
 ``MotionEnvs/OrientationReach-v1``  the same, observing duration and elapsed time
 ``MotionEnvs/PositionReach-v1``     the same, observing duration and elapsed time
-``MotionEnvs/OrientationCoefficients-v0``  one step per movement (:mod:`.coefficients`)
-``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.coefficients`)
+``MotionEnvs/OrientationCoefficients-v0``  one step per movement (:mod:`.orientation_coefficients`)
+``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.position_coefficients`)
 ``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
 ``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling.JugglingV1Env` (contacts)
 ==============================  ===================================================
@@ -59,13 +59,17 @@ _SPECS: dict[str, dict[str, object]] = {
     },
     # one step per movement: the context in, residual coefficients out (black-box)
     "MotionEnvs/OrientationCoefficients-v0": {
-        "entry_point": "motion_envs.envs.coefficients:OrientationCoefficientsEnv",
-        "vector_entry_point": "motion_envs.envs.coefficients:OrientationCoefficientsVectorEnv",
+        "entry_point": "motion_envs.envs.orientation_coefficients:OrientationCoefficientsEnv",
+        "vector_entry_point": (
+            "motion_envs.envs.orientation_coefficients:OrientationCoefficientsVectorEnv"
+        ),
         "max_episode_steps": 1,
     },
     "MotionEnvs/PositionCoefficients-v0": {
-        "entry_point": "motion_envs.envs.coefficients:PositionCoefficientsEnv",
-        "vector_entry_point": "motion_envs.envs.coefficients:PositionCoefficientsVectorEnv",
+        "entry_point": "motion_envs.envs.position_coefficients:PositionCoefficientsEnv",
+        "vector_entry_point": (
+            "motion_envs.envs.position_coefficients:PositionCoefficientsVectorEnv"
+        ),
         "max_episode_steps": 1,
     },
     "MotionEnvs/Juggling-v0": {

@@ -4,11 +4,9 @@
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -18,30 +16,32 @@ from numpy.typing import NDArray
 from motion_envs.envs import _kernels as K
 from motion_envs.envs._common import (
     N_STEPS,
-    check_choice,
-    check_integer,
-    check_number,
-    check_val_fraction,
     timing_bounds,
 )
 from motion_envs.envs._kernels import orientation_reward, orientation_step_scalar
+from motion_envs.envs._orientation_task import (
+    LAYOUT,
+    MAX_DEGREE,
+    ROW,
+    OrientationTask,
+    load_orientation_task,
+    orientation_split_parts,
+)
 from motion_envs.envs._reach import (
-    ObsLayout,
     ReachEnv,
     ReachKind,
-    ReachTask,
     checked_prediction,
-    observation_table,
-    step_table,
-    with_timing,
     zero_action_errors,
 )
 from motion_envs.envs._reach_vector import ReachVectorEnv
 
 __all__ = [
     "DEFAULT_REWARD_WEIGHTS",
+    "LAYOUT",
+    "MAX_DEGREE",
     "N_STEPS",
     "ORIENTATION",
+    "ROW",
     "OrientationKind",
     "OrientationReachEnv",
     "OrientationReachVectorEnv",
@@ -51,186 +51,11 @@ __all__ = [
     "orientation_split_parts",
 ]
 
-#: Largest Bézier degree of the ``bezier-*`` nominals (the paper uses 2 to 4).
-MAX_DEGREE = 12
 #: Largest ``residual_scale`` in radians (a half turn).
 MAX_RESIDUAL_SCALE = math.pi
 
 #: Default reward weights (see the class docstring, section Rewards).
 DEFAULT_REWARD_WEIGHTS: Mapping[str, float] = {"residual": 1.0, "geodesic": 0.0, "action": 0.0}
-_SPLITS = ("train", "val", "test")
-
-#: The observation's parts (a quaternion state): start 0-3, goal 4-7, current 8-11,
-#: tau 12, nominal 13-16, one-hot task from 17.
-LAYOUT = ObsLayout.for_dim(4)
-#: A ``task.steps`` row: ``expmap(rhat_k)`` (the nominal in the residual chart), the
-#: nominal ``n_k``, the human ``h_k`` and the human residual ``r_k`` (the layout that
-#: :func:`~motion_envs.envs._kernels.orientation_step_scalar` reads).
-ROW: dict[str, slice] = {
-    "chart": slice(0, 4),
-    "nominal": slice(4, 8),
-    "human": slice(8, 12),
-    "residual": slice(12, 15),
-}
-
-
-@dataclass(frozen=True)
-class OrientationTask(ReachTask):
-    """Precomputed episodes of one split (read-only arrays shared between environments).
-
-    ``steps[l, k]`` holds, for trajectory ``l`` and grid point ``k``, the 15 values the
-    step kernel needs: ``expmap(rhat_k)`` (4), the nominal ``n_k`` (4), the human ``h_k``
-    (4) and the human residual ``r_k`` (3). ``obs[l, j]`` is the observation before the
-    step that sets grid point ``j`` (``j = 50``: after the last step), with the current
-    orientation left at 0.
-    """
-
-    name: str
-    nominal: str
-    degree: int
-    split: str
-    steps: NDArray[np.float64]  # (L, n, 15)
-    obs: NDArray[np.float32]  # (L, n + 1, obs_dim)
-    trajectory_ids: NDArray[np.str_]
-    subjects: NDArray[np.str_]
-    tasks: NDArray[np.str_]
-    task_names: tuple[str, ...]
-    criterion: float
-    grids: Any  # motion_envs.models.nominal.OrientationGrids
-    max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
-    up: tuple[float, ...] = (0.0, 0.0, 1.0)  # the dataset's vertical axis (path frames)
-
-
-def orientation_split_parts(
-    data: str | os.PathLike[str],
-    split: str,
-    test_fraction: float,
-    split_seed: int,
-    min_deg: float,
-    val_fraction: float = 0.0,
-    fold: int | None = None,
-) -> tuple[Any, Any, Any]:
-    """``(dataset, fit, part)``: the whole dataset, the subjects the environment's nominal
-    is fitted on, and the trajectories of ``split`` (in episode order).
-
-    ``fit`` is the training split (by subject); with ``val_fraction > 0`` and a
-    ``"train"``/``"val"`` split, the training subjects minus the validation ones.
-    Anything else fitted "on the environment's training data" (the learned regressor
-    of ``motion-bench agent``) uses this same ``fit``.
-
-    ``fold = i`` (leave one person out): the test split is the ``i``-th person in sorted
-    order of the subject labels, the training split every other person
-    (``test_fraction`` and ``split_seed`` then only seed the validation carve).
-    """
-    from motion_envs.datasets import load_orientation_dataset
-    from motion_envs.datasets.splits import split_by_subject
-
-    dataset = load_orientation_dataset(data, min_deg=min_deg)
-    if len(dataset) < 2:
-        raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
-    if fold is None:
-        train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
-    else:
-        people = np.unique(np.asarray(dataset.subjects).astype(str))
-        check_integer(fold, "fold", 0, people.size - 1)
-        is_test = np.asarray(dataset.subjects).astype(str) == people[fold]
-        train, test = dataset.subset(~is_test), dataset.subset(is_test)
-    fit, part = train, (train if split == "train" else test)
-    if val_fraction > 0 and split != "test":  # validation subjects carved from training
-        fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
-        part = fit if split == "train" else val
-    return dataset, fit, part
-
-
-def _build_task(
-    data: str | os.PathLike[str],
-    split: str,
-    nominal: str,
-    degree: int,
-    test_fraction: float,
-    split_seed: int,
-    min_deg: float,
-    val_fraction: float = 0.0,
-    observe_timing: bool = False,
-    fold: int | None = None,
-) -> OrientationTask:
-    from motion_envs.geometry import quaternion as quat
-    from motion_envs.models.nominal import OrientationNominal
-
-    dataset, fit, part = orientation_split_parts(
-        data, split, test_fraction, split_seed, min_deg, val_fraction, fold
-    )
-    model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
-    g = model.grids(part)
-    parts = {
-        "chart": quat.expmap(g.predicted_residuals),
-        "nominal": g.nominal,
-        "human": g.human,
-        "residual": g.residuals,
-    }
-    steps = step_table(ROW, parts)
-    task_names = tuple(np.unique(dataset.tasks).tolist())
-    task_index = np.searchsorted(np.asarray(task_names), part.tasks)
-    obs = observation_table(
-        LAYOUT, g.starts, g.goals, g.tau, g.nominal, task_index, len(task_names), -1.0, 1.0
-    )
-    max_duration = float(max(t[-1] - t[0] for t in dataset.times))
-    if observe_timing:  # v1: the movement's duration T and the elapsed time tau T (s)
-        obs = with_timing(obs, LAYOUT, np.array([t[-1] - t[0] for t in part.times]))
-    for arr in (steps, obs, *vars(g).values()):
-        arr.flags.writeable = False  # shared by every environment built from the cache
-    return OrientationTask(
-        name=dataset.name,
-        nominal=nominal,
-        degree=int(degree),
-        split=split,
-        steps=steps,
-        obs=obs,
-        trajectory_ids=part.trajectory_ids,
-        subjects=part.subjects,
-        tasks=part.tasks,
-        task_names=task_names,
-        criterion=g.criterion(),
-        grids=g,
-        max_duration=max_duration,
-        up=tuple(float(v) for v in dataset.up),
-    )
-
-
-_build_task_cached = functools.lru_cache(maxsize=32)(_build_task)
-
-
-def load_orientation_task(
-    data: str | os.PathLike[str] = "vr-kitchen",
-    split: str = "train",
-    nominal: str = "slerp",
-    degree: int = 2,
-    test_fraction: float = 0.25,
-    split_seed: int = 0,
-    min_deg: float = 10.0,
-    val_fraction: float = 0.0,
-    observe_timing: bool = False,
-    fold: int | None = None,
-) -> OrientationTask:
-    """Build (or reuse) the precomputed episodes of a split; built-in data is cached.
-
-    ``fold`` (None or an integer >= 0): leave one person out, the ``fold``-th person
-    (sorted labels) is the test split (:func:`orientation_split_parts`)."""
-    from motion_envs.datasets import ORIENTATION_DATASETS
-    from motion_envs.models.nominal import ORIENTATION_NOMINALS
-
-    check_choice(split, "split", _SPLITS)
-    check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
-    check_integer(degree, "degree", 1, MAX_DEGREE)
-    check_number(min_deg, "min_deg", 0.0, 180.0)
-    val_fraction = check_val_fraction(val_fraction, split)
-    args: tuple[Any, ...] = (data, split, nominal, int(degree), float(test_fraction))
-    if fold is not None:
-        fold = check_integer(fold, "fold", 0, 2**31)
-    args += (int(split_seed), min_deg, val_fraction, bool(observe_timing), fold)
-    if isinstance(data, str) and data in ORIENTATION_DATASETS:
-        return _build_task_cached(*args)
-    return _build_task(*args)
 
 
 def _observation_space(task: OrientationTask, observe_timing: bool) -> gym.spaces.Box:
