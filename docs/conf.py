@@ -41,6 +41,9 @@ autosummary_generate = True
 autosummary_imported_members = False
 autodoc_default_options = {"members": True, "undoc-members": True, "show-inheritance": True}
 autodoc_member_order = "bysource"
+# a method without its own docstring shows none (Gymnasium's step/reset docstrings are
+# Google-style text that napoleon's numpy parser would misread)
+autodoc_inherit_docstrings = False
 autodoc_typehints = "description"
 autodoc_mock_imports: list[str] = []
 napoleon_google_docstring = False

@@ -511,7 +511,7 @@ def test_public_names_are_reexported(package):
         if info.name.startswith(("_", "juggling")) or info.ispkg:
             continue
         module = importlib.import_module(f"{package}.{info.name}")
-        for name in module.__all__:
+        for name in getattr(module, "__all__", ()):
             obj = getattr(module, name)
             flat = name in pkg.__all__ and getattr(pkg, name) is obj
             via_module = info.name in pkg.__all__ and getattr(getattr(pkg, info.name), name) is obj

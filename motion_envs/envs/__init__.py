@@ -5,18 +5,18 @@
 imports the package itself. The environment modules (numpy, scipy, the datasets) are
 imported only when an environment is made.
 
-==============================  ===================================================
-id                              environment
-==============================  ===================================================
-``MotionEnvs/OrientationReach-v0``  :class:`~motion_envs.envs.orientation_reach.OrientationReachEnv`
-``MotionEnvs/PositionReach-v0``     :class:`~motion_envs.envs.position_reach.PositionReachEnv`
-``MotionEnvs/OrientationReach-v1``  the same, observing duration and elapsed time
-``MotionEnvs/PositionReach-v1``     the same, observing duration and elapsed time
+=========================================  ========================================================
+id                                         environment
+=========================================  ========================================================
+``MotionEnvs/OrientationReach-v0``         :class:`~.orientation_reach.OrientationReachEnv`
+``MotionEnvs/PositionReach-v0``            :class:`~.position_reach.PositionReachEnv`
+``MotionEnvs/OrientationReach-v1``         the same, observing duration and elapsed time
+``MotionEnvs/PositionReach-v1``            the same, observing duration and elapsed time
 ``MotionEnvs/OrientationCoefficients-v0``  one step per movement (:mod:`.orientation_coefficients`)
 ``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.position_coefficients`)
-``MotionEnvs/Juggling-v0``          :class:`~motion_envs.envs.juggling.JugglingEnv` (MuJoCo)
-``MotionEnvs/Juggling-v1``          :class:`~motion_envs.envs.juggling.JugglingV1Env` (contacts)
-==============================  ===================================================
+``MotionEnvs/Juggling-v0``                 :class:`~.juggling.JugglingEnv` (MuJoCo)
+``MotionEnvs/Juggling-v1``                 :class:`~.juggling.JugglingV1Env` (contacts)
+=========================================  ========================================================
 
 The two reaching environments come with a native vector environment
 (:mod:`motion_envs.envs.vector`), which ``gym.make_vec(id, num_envs=N)`` builds by
