@@ -23,6 +23,16 @@ def slug(env_id: str) -> str:
     return env_id.split("/")[-1].lower()
 
 
+def space_text(space: Any) -> str:
+    """A one-line description of a space: a Box by shape, dtype and its bounds' range."""
+    import numpy as np
+
+    if hasattr(space, "low") and hasattr(space, "high"):
+        low, high = np.min(space.low), np.max(space.high)
+        return f"Box({low:g}, {high:g}, {space.shape}, {space.dtype})"
+    return " ".join(str(space).split())
+
+
 def _is_markdown_docstring(lines: list[str]) -> bool:
     return any(line.startswith("## ") for line in lines)
 
@@ -58,8 +68,8 @@ def _page(env_id: str, out: Path) -> str:
         has_frame = _first_frame(env, image)
         rows = [
             ("Entry point", f"`{spec.entry_point}`"),
-            ("Action space", f"`{env.action_space}`"),
-            ("Observation space", f"`{env.observation_space}`"),
+            ("Action space", f"`{space_text(env.action_space)}`"),
+            ("Observation space", f"`{space_text(env.observation_space)}`"),
             ("Episode limit", f"{spec.max_episode_steps or '-'} steps"),
             ("Native vector env", f"`{spec.vector_entry_point or 'no'}`"),
             ("Registered kwargs", f"`{spec.kwargs}`" if spec.kwargs else "-"),
