@@ -19,8 +19,8 @@ from typing import Any
 
 from baselines import options
 from motion_envs.datasets import OrientationDataset, PositionDataset
+from motion_envs.datasets.juggling import JugglingDemos
 from motion_envs.datasets.juggling_csv import write_juggling_csv
-from motion_envs.datasets.juggling_demos import JugglingDemos
 from motion_envs.datasets.mocap import (
     KINDS,
     MOCAP_SUFFIXES,

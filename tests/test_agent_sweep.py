@@ -345,17 +345,21 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     finished = [d for d in sorted(runs.iterdir()) if (d / "run.json").is_file()]
     assert len(finished) == 1, "the second trial must be cut short"
     (kept,) = finished
-    (staging,) = set(runs.iterdir()) - {kept}
-    # the second trial had started: its staging folder, nothing at its run folder yet
-    assert staging.name.startswith(".config") and ".partial-" in staging.name
-    cut = runs / staging.name[1:].split(".partial-")[0]
-    assert not cut.exists()
+    rest = set(runs.iterdir()) - {kept}
+    # the second trial had started (its staging folder, nothing at its run folder yet) or,
+    # on a busy machine, was cut before it created anything
+    assert len(rest) <= 1, rest
+    for staging in rest:
+        assert staging.name.startswith(".config") and ".partial-" in staging.name
+        assert not (runs / staging.name[1:].split(".partial-")[0]).exists()
     kept_files = _files(kept)
 
     assert _sweep(out, "--resume") == 0
     assert _files(kept) == kept_files  # not trained (nor written) again
+    after = sorted(p.name for p in runs.iterdir())
+    assert len(after) == 2 and kept.name in after, after  # the cut trial ran; no leftover
+    cut = runs / next(n for n in after if n != kept.name)
     assert (cut / "run.json").is_file()
-    assert sorted(p.name for p in runs.iterdir()) == sorted([kept.name, cut.name])  # no leftover
     ref = json.loads((finished_sweep / "results.json").read_text())
     doc = json.loads((out / "results.json").read_text())
     # the finished trial's result is Ray Tune's stored one (a rerun would say resumed);

@@ -40,7 +40,7 @@ AGENT_CASES = {
     "gamma_400_digits": ("default:\n  gamma: " + "9" * 400 + "\n", "line 2: default: gamma"),
     "lr_400_digits": ("default:\n  learning_rate: " + "1" * 400 + "\n", "learning_rate"),
     "lr_zero": ("default:\n  learning_rate: 0\n", "learning_rate: must be in (0.0, 1.0]"),
-    "gamma_zero": ("default:\n  gamma: 0.0\n", "gamma: must be in (0.0, 1.0]"),
+    "gamma_negative": ("default:\n  gamma: -0.1\n", "gamma: must be in [0.0, 1.0]"),
     "n_envs_huge": ("default:\n  n_envs: 100000000\n", "n_envs: must be an integer in [1, 256]"),
     "deep": ("default:\n  env_kwargs:\n    x: " + "[" * 5000 + "]" * 5000 + "\n", "line 3: nested"),
     "bomb": (BOMB, "aliases expand to more than"),

@@ -43,7 +43,8 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
     reader.start()
     time.sleep(delay)
     if proc.poll() is not None:
-        pytest.fail(f"finished before SIGINT at {delay} s: {''.join(lines)[-500:]}")
+        assert proc.returncode == 0, "".join(lines)[-2000:]
+        pytest.skip(f"the job finished before {delay} s on this machine")
     t0 = time.perf_counter()
     proc.send_signal(signal.SIGINT)
     try:
@@ -54,7 +55,8 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
         pytest.fail(f"SIGINT at {delay} s not honoured within 30 s")
     exited = time.perf_counter() - t0
     reader.join(5)
-    assert proc.returncode == 130, "".join(lines)[-2000:]
+    # 130, or ended by SIGINT's default action during start-up (-2; a shell reports 130)
+    assert proc.returncode in (130, -signal.SIGINT), "".join(lines)[-2000:]
     if delay > 5:  # past the imports: the handler in baselines.cli prints one line
         assert "message" in seen and seen["message"] - t0 < 5.0, "".join(lines)[-2000:]
         assert "interrupted; files written so far are complete" in lines[-1]

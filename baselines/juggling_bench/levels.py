@@ -180,7 +180,7 @@ def _targets(levels: list[dict[str, Any]]) -> dict[str, Any]:
         value = by.get(level, {}).get(method, {}).get("catch_rate")
         return None if value is None else float(value)
 
-    # (value, bound, at least): issue 16's targets
+    # (value, bound, at least): the benchmark's acceptance targets
     checks: dict[str, tuple[float | None, float, bool]] = {
         "juggler_easy>=0.95": (rate("easy", "juggler"), 0.95, True),
         "juggler_medium<=0.80": (rate("medium", "juggler"), 0.80, False),

@@ -137,19 +137,10 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
                 tune_config=tune.TuneConfig(metric="best_val_criterion", mode="min"),
                 run_config=run_config,
             )
-        # quiet unless --verbose: Ray Tune's newer console output prints its configuration
-        # box and result paths even at verbose=0; its classic reporter prints nothing then
-        quiet = {"RAY_AIR_NEW_OUTPUT": "0"} if not sweep.progress else {}
-        saved = {k: os.environ.get(k) for k in quiet}
-        os.environ.update(quiet)
-        try:
-            grid = tuner.fit()
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
+        # quiet unless --verbose (RunConfig's verbose=0); Ray Tune's newer console output
+        # still prints its configuration box: the library does not change the process's
+        # environment to hide it (export RAY_AIR_NEW_OUTPUT=0 for the classic reporter)
+        grid = tuner.fit()
     finally:
         wall = time.perf_counter() - t0
         if started_here:

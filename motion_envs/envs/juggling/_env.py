@@ -240,7 +240,7 @@ class JugglingEnv(SideCameraMixin, gym.Env):
     ## Version History
     * v0: Initial version (``info["hand"]`` added later; observations, rewards and
       dynamics unchanged).
-    * v0, issue 17 (rollouts change on purpose; the id stays v0, the paper's setting is
+    * v0, hardened (rollouts change on purpose; the id stays v0, the paper's setting is
       unchanged, its defects are mended): the catch is tested between samples (closest
       approach over the control period, ``rules.swept_distance``: no pass-through; also
       in ``BallisticWorld`` and the vectorised runner, so the zero action still equals
