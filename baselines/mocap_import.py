@@ -3,7 +3,7 @@ project's orientation, position or juggling CSV.
 
 The conversion is :mod:`motion_envs.datasets.mocap` (units to metres, Z-up, tracks,
 gaps, movements); juggling recordings are then cut into cycles by the paper's online
-criteria (:func:`motion_envs.models.juggling_segmentation.segment_demos`). The CSV
+criteria (:func:`motion_envs.models.juggling.segment_demos`). The CSV
 written is what ``--data`` of ``motion-bench orientation|position|juggling`` and the
 environments' ``data=`` take; they also take the recording itself with the same
 options after its name (``--data 'rec.c3d?markers=O,X,P'``). Guide: docs/recordings.md.
@@ -19,8 +19,7 @@ from typing import Any
 
 from baselines import options
 from motion_envs.datasets import OrientationDataset, PositionDataset
-from motion_envs.datasets.juggling import JugglingDemos
-from motion_envs.datasets.juggling_csv import write_juggling_csv
+from motion_envs.datasets.juggling import JugglingDemos, write_juggling_csv
 from motion_envs.datasets.mocap import (
     KINDS,
     MOCAP_SUFFIXES,
@@ -32,7 +31,7 @@ from motion_envs.datasets.mocap import (
     missing_option,
     parse_option,
 )
-from motion_envs.models.juggling_segmentation import segment_demos
+from motion_envs.models.juggling import segment_demos
 
 __all__ = ["ImportConfig", "ImportResults", "check", "main", "register", "report", "run", "write"]
 

@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from baselines import orientation_bench, position_bench
 from baselines.cli import main
 from motion_envs.datasets import load_orientation_dataset, load_position_dataset
-from motion_envs.datasets.juggling_demos import generate_demonstrations
+from motion_envs.datasets.juggling import generate_demonstrations
 from motion_envs.datasets.mocap import (
     YUP_TO_ZUP,
     ImportOptions,
@@ -29,7 +29,7 @@ from motion_envs.datasets.mocap import (
     import_position,
     read_bvh,
 )
-from motion_envs.models.juggling_segmentation import load_juggling_csv
+from motion_envs.models.juggling import load_juggling_csv
 
 RATE = 120.0
 N_MOVES = 8
