@@ -49,6 +49,7 @@ from motion_envs.envs._common import (
     check_num_envs,
     check_scale,
     check_seed,
+    has_render_mode,
 )
 from motion_envs.envs._reach import reset_labels
 
@@ -289,11 +290,7 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         return self._result(float(self._errors(idx, curve)[0]), curve[0])
 
     def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
+        if not has_render_mode(self.render_mode):
             return None
         if self._index < 0:
             raise RuntimeError("call reset() before render()")

@@ -51,6 +51,7 @@ from motion_envs.envs._common import (
     check_reward_weights,
     check_scale,
     check_seed,
+    has_render_mode,
 )
 
 __all__ = [
@@ -379,11 +380,7 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
 
     # -- rendering ------------------------------------------------------------------
     def render(self) -> NDArray[np.uint8] | None:
-        if self.render_mode is None:
-            gym.logger.warn(
-                "render() called without a render_mode; pass render_mode='rgb_array' to "
-                "gym.make(...)"
-            )
+        if not has_render_mode(self.render_mode):
             return None
         if self._index < 0:
             raise RuntimeError("call reset() before render()")
