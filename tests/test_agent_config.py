@@ -149,3 +149,28 @@ def test_env_kwargs_from_the_command_line():
         parse_env_kwargs(["nominal"])
     with pytest.raises(ValueError, match="set by the command"):
         parse_env_kwargs(["split=test"])
+
+
+def test_ppo_gsde_keys_reach_sb3_and_start_at_the_nominal(tmp_path):
+    """``use_sde`` / ``sde_sample_freq`` are checked, passed to SB3's PPO, and the policy
+    still starts at the zero residual (its deterministic action is 0 everywhere)."""
+    import numpy as np
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from baselines.agents.policies import build_model
+
+    path = write(
+        tmp_path,
+        "default:\n  n_envs: 1\n  n_steps: 64\n  batch_size: 64\n"
+        "  use_sde: true\n  sde_sample_freq: 4\n",
+    )
+    hp = load_hyperparams(path, "ppo", ORIENTATION)
+    assert hp["use_sde"] is True and hp["sde_sample_freq"] == 4
+    env = make_vec_env("Pendulum-v1", n_envs=1, seed=0)
+    model = build_model("ppo", hp, env, seed=0)
+    assert model.use_sde and model.sde_sample_freq == 4
+    obs = np.random.default_rng(0).normal(size=(16, 3)).astype(np.float32)
+    assert np.all(model.predict(obs, deterministic=True)[0] == 0.0)
+    bad = write(tmp_path, "default:\n  use_sde: 1\n")
+    with pytest.raises(ValueError, match="use_sde"):
+        load_hyperparams(bad, "ppo", ORIENTATION)

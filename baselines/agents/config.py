@@ -21,7 +21,10 @@ does), ``eval_freq`` (environment steps between validation evaluations),
 ``torch_threads``, ``vec_env`` (``dummy`` or ``subproc``: SB3's vector environment for
 an environment without a native one, Juggling-v0; ``subproc`` steps each copy in its own
 process, rl-zoo's ``vec_env_type``; ignored where the native vector env is used),
-``learning_rate``, ``gamma`` and the algorithm's own keys (see :data:`ALGO_KEYS`).
+``learning_rate``, ``gamma`` and the algorithm's own keys (see :data:`ALGO_KEYS`), among
+them PPO's ``use_sde`` / ``sde_sample_freq`` (SB3's generalized state-dependent
+exploration: noise that is a function of the state, redrawn every ``sde_sample_freq``
+steps, so that exploration survives a hand that low-passes per-step white noise).
 """
 
 from __future__ import annotations
@@ -280,6 +283,8 @@ ALGO_KEYS: dict[str, dict[str, Checker]] = {
         "max_grad_norm": _float(0.0),
         "target_kl": _optional(_float(0.0)),
         "normalize_advantage": _bool,
+        "use_sde": _bool,
+        "sde_sample_freq": _int(-1),
         "policy_kwargs": _sub(
             {
                 "net_arch": _net_arch,
