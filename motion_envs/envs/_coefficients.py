@@ -37,6 +37,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
+from motion_envs.envs._calibration import MAX_CALIBRATION, CalibrationDraws
 from motion_envs.envs._common import (
     MAX_FRAME_SIZE,
     N_STEPS,
@@ -51,7 +52,6 @@ from motion_envs.envs._common import (
     check_seed,
     has_render_mode,
 )
-from motion_envs.envs._calibration import MAX_CALIBRATION, CalibrationDraws
 from motion_envs.envs._reach import reset_labels
 from motion_envs.models.person_calibration import SUMMARY_BOUND, SUMMARY_SINES
 
