@@ -59,6 +59,7 @@ __all__ = [
     "ridge_nested_closed",
     "ridge_predictions",
     "stacked_design",
+    "summary_predictions",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -217,6 +218,50 @@ def mlp_predict(params: dict[str, Any], X: FloatArray) -> FloatArray:
     return np.asarray(out[0].numpy(), dtype=np.float64)
 
 
+def summary_predictions(
+    X: FloatArray,
+    Y: FloatArray,
+    features: FloatArray,
+    subjects: NDArray[np.str_],
+    draws: IntArray,
+    mlp_config: Any | None = None,
+    mlp_train_draws: int = DEFAULT_MLP_TRAIN_DRAWS,
+) -> tuple[FloatArray, list[dict[str, Any]]]:
+    """Leave-one-person-out predictions ``(R, L, m)`` of targets ``Y`` ``(L, m)`` from the
+    conditions ``X`` ``(L, p)`` and the calibration summary of every draw (``draws``
+    ``(R, L, K)``, :func:`~motion_envs.models.person_calibration.calibration_draws`, of
+    ``features`` ``(L, f)``), and what each outer fold chose.
+
+    ``mlp_config`` None: the ridge (closed form, penalty among ``RIDGE_ALPHAS`` times
+    ``R`` by inner folds over the training people, every draw a training row); else the
+    batched MLP (:func:`baselines.learned.nested.nested_mlp`) selected and fitted on the
+    first ``mlp_train_draws`` draws, then applied to every draw. For the held-out person,
+    only ``X`` of the scored row and ``features`` of its drawn rows are read.
+    """
+    from baselines.learned.orientation import RIDGE_ALPHAS
+
+    R, L, k = draws.shape
+    design, groups, folds, _ = stacked_design(
+        X, calibration_summaries(features, draws, k), subjects, R
+    )
+    Ys = np.tile(Y, (R, 1))
+    if mlp_config is None:
+        alphas = [a * R for a in RIDGE_ALPHAS]  # the penalty per trajectory of ridge_loso
+        coef, chosen = ridge_nested_closed(design, Ys, groups, folds, alphas)
+        return coef.reshape(R, L, -1), chosen
+    from baselines.learned.nested import nested_mlp
+
+    if not 1 <= mlp_train_draws <= R:
+        raise ValueError(f"mlp_train_draws must be in [1, {R}]; got {mlp_train_draws}")
+    n = mlp_train_draws * L
+    small = [(train[train < n], test[test < n]) for train, test in folds]
+    res = nested_mlp(design[:n], Ys[:n], groups[:n], small, mlp_config)
+    coef = np.full(Ys.shape, np.nan)
+    for (_, test), params in zip(folds, res.params, strict=True):
+        coef[test] = mlp_predict(params, design[test])
+    return coef.reshape(R, L, -1), res.chosen
+
+
 def learned_person_rows(
     dataset: OrientationDataset,
     ks: Sequence[int],
@@ -237,7 +282,6 @@ def learned_person_rows(
     from baselines.learned import torch_missing_reason
     from baselines.learned.orientation import (
         DEFAULT_N_SINES,
-        RIDGE_ALPHAS,
         orientation_features,
         sine_curves,
         sine_targets,
@@ -252,7 +296,6 @@ def learned_person_rows(
         )
     tr = dataset.ragged
     S, E, up = tr.starts, tr.ends, dataset.up
-    L = tr.n_trajectories
     R = slerp_residuals(tr, n_points)
     P = to_path_frame(R, S, E, up)
     Y = sine_targets(P, DEFAULT_N_SINES)
@@ -261,9 +304,8 @@ def learned_person_rows(
     features = calibration_features(P)
 
     def draw_errors(coef: FloatArray) -> FloatArray:
-        """Draw-averaged max errors of stacked predictions ``(R L, m)``."""
-        per_draw = coef.reshape(-1, L, coef.shape[-1])
-        curves = [from_path_frame(sine_curves(c, n_points), S, E, up) for c in per_draw]
+        """Draw-averaged max errors of predictions ``(R, L, m)``."""
+        curves = [from_path_frame(sine_curves(c, n_points), S, E, up) for c in coef]
         return np.mean([max_errors(R, c) for c in curves], axis=0)
 
     errors: dict[str, FloatArray] = {}
@@ -280,14 +322,9 @@ def learned_person_rows(
         seconds["mlp"] = seconds["mlp_cpu"] = 0.0
     for k in ks:
         draws = calibration_draws(subjects, int(k), n_draws, seed)
-        design, groups, folds, _ = stacked_design(
-            X, calibration_summaries(features, draws, int(k)), subjects, n_draws
-        )
-        Ys = np.tile(Y, (n_draws, 1))
         t0 = time.perf_counter()
         name = f"ridge_person_k{k}_loso"
-        alphas = [a * n_draws for a in RIDGE_ALPHAS]  # penalty per trajectory, as ridge_loso
-        coef, chosen[name] = ridge_nested_closed(design, Ys, groups, folds, alphas)
+        coef, chosen[name] = summary_predictions(X, Y, features, subjects, draws)
         errors[name] = draw_errors(coef)
         seconds["ridge"] += time.perf_counter() - t0
         name = f"mlp_person_k{k}_loso"
@@ -297,18 +334,11 @@ def learned_person_rows(
         if int(k) not in mlp_set:
             skipped[name] = f"MLP person rows only for K in {sorted(mlp_set)} (cost)"
             continue
-        from baselines.learned.nested import nested_mlp
-
         t0, c0 = time.perf_counter(), time.process_time()
-        # select and fit on the first mlp_train_draws draws only, then predict every draw
-        n = mlp_train_draws * L
-        small = [(train[train < n], test[test < n]) for train, test in folds]
-        res = nested_mlp(design[:n], Ys[:n], groups[:n], small, config)
-        coef = np.full(Ys.shape, np.nan)
-        for (_, test), params in zip(folds, res.params, strict=True):
-            coef[test] = mlp_predict(params, design[test])
+        coef, chosen[name] = summary_predictions(
+            X, Y, features, subjects, draws, config, mlp_train_draws
+        )
         errors[name] = draw_errors(coef)
-        chosen[name] = res.chosen
         seconds["mlp"] += time.perf_counter() - t0
         seconds["mlp_cpu"] += time.process_time() - c0
     criteria = {
