@@ -61,6 +61,8 @@ def calibration_label(name: str) -> str | None:
     """Printed label of a person-calibration row (None for other rows)."""
     for prefix, text in (
         ("slerp_person_timing_k", "Slerp, person's timing (K={k}), pred. timing, LOSO"),
+        ("ridge_person_k", "Ridge + person summary (K={k}), path, LOSO"),
+        ("mlp_person_k", "MLP + person summary (K={k}), path, LOSO"),
         ("person_k", "Person calibration (K={k}), d=2, LOSO"),
     ):
         if name.startswith(prefix):
@@ -101,16 +103,32 @@ def orientation_verdicts(
     calibration: PersonCalibration | None,
     ks: Sequence[int],
     subjects: NDArray[Any],
+    learned: Any | None = None,
+    learned_calibration: Any | None = None,
 ) -> list[Comparison]:
     """Comparisons of the orientation benchmark: the learned-vs-analytic readings (their
-    interval unchanged) and each person-calibration row against its reference row
-    (``null_d2_loso``; ``slerp_loso_predicted_timing`` under predicted timing), people
-    resampled."""
+    interval unchanged), each person-calibration row against its reference row
+    (``null_d2_loso``; ``slerp_loso_predicted_timing`` under predicted timing) and each
+    learned row given the calibration summary (``learned_calibration``,
+    :class:`~baselines.learned.person_rows.LearnedPersonRows`) against ``person_k{K}_loso``
+    and against the same learned row without the summary (``learned``'s ``ridge_loso``,
+    ``mlp_loso``), people resampled."""
     out = from_readings(readings, "people", ORIENTATION_CRITERION, "rad")
     if calibration is not None:
-        err = calibration.errors
-        for a, b in _calibration_pairs(ks):
-            ok = np.isfinite(err[a])
+        err = dict(calibration.errors)
+        pairs = _calibration_pairs(ks)
+        if learned_calibration is not None:
+            err.update(learned_calibration.errors)
+            if learned is not None:
+                err.update(learned.errors)
+            for m in ("ridge", "mlp"):
+                for k in ks:
+                    a = f"{m}_person_k{k}_loso"
+                    pairs += [(a, b) for b in (f"person_k{k}_loso", f"{m}_loso")]
+        for a, b in pairs:
+            if a not in err or b not in err:
+                continue
+            ok = np.isfinite(err[a]) & np.isfinite(err[b])
             out.append(compare_errors(err[a][ok], err[b][ok], subjects[ok], a, b))
     return out
 

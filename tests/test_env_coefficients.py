@@ -172,7 +172,7 @@ def test_calibration_summary_never_holds_the_current_trajectory():
     trajectory outside its person): the observation stays finite, the drawn reaches are
     the person's others of the split, and the summary is their mean."""
     env = gym.make("MotionEnvs/OrientationCoefficients-v0", calibration=5).unwrapped
-    clean = env._cal_features.copy()
+    clean = env._calibration.features.copy()
     subjects = np.asarray(env.task.subjects).astype(str)
     env.reset(seed=0)
     for _ in range(300):
@@ -180,9 +180,12 @@ def test_calibration_summary_never_holds_the_current_trajectory():
         poisoned = clean.copy()
         poisoned[l] = np.nan
         poisoned[subjects != subjects[l]] = np.nan
-        env._cal_features = poisoned
+        env._calibration.features = poisoned
         obs, info = env.reset(options={"trajectory": l})
-        drawn = info["calibration_trajectories"]
+        padded = info["calibration_trajectories"]
+        assert padded.shape == (5,)
+        drawn = padded[padded >= 0]
+        assert np.all(padded[drawn.size :] == -1)
         assert np.all(np.isfinite(obs)) and env.observation_space.contains(obs)
         assert l not in drawn and np.all(subjects[drawn] == subjects[l])
         m = min(5, int(np.sum(subjects == subjects[l])) - 1)

@@ -183,7 +183,11 @@ class Case:
 
 
 CASES: dict[str, Case] = {
-    "MotionEnvs/OrientationReach": Case(_orientation_nominal, {"nominal": "bezier-task"}),
+    "MotionEnvs/OrientationReach": Case(
+        _orientation_nominal,
+        {"nominal": "bezier-task"},
+        checked=({"calibration": 5, "split": "test"},),
+    ),
     "MotionEnvs/PositionReach": Case(_position_nominal, {"shapes": ["Angle", "CShape", "GShape"]}),
     "MotionEnvs/OrientationCoefficients": Case(
         _coefficient_nominal("MotionEnvs/OrientationReach-v1"),

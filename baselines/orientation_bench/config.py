@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from baselines.learned.person_rows import LearnedPersonRows
 from baselines.learned.rows import LearnedRows
 from baselines.stats import Comparison
 from motion_envs.datasets import OrientationDataset
@@ -65,7 +66,10 @@ class OrientationResults:
     (None for ``--learned off``); ``comparisons`` are
     :func:`baselines.learned.rows.compare`'s readings; ``calibration`` the person-
     calibration rows (None when not asked for, ``calibration_note`` then says why when
-    asked); ``verdicts`` every printed ratio with its interval (:mod:`baselines.verdicts`).
+    asked); ``verdicts`` every printed ratio with its interval (:mod:`baselines.verdicts`);
+    ``learned_calibration`` the learned rows given the calibration summary
+    (:mod:`baselines.learned.person_rows`; None unless both the learned and the
+    calibration rows are computed).
     """
 
     config: OrientationConfig
@@ -79,3 +83,4 @@ class OrientationResults:
     calibration: PersonCalibration | None = None
     calibration_note: str | None = None
     verdicts: list[Comparison] = field(default_factory=list)
+    learned_calibration: LearnedPersonRows | None = None

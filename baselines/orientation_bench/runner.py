@@ -12,6 +12,7 @@ import numpy as np
 
 from baselines import options
 from baselines.learned import LEARNED_MODES
+from baselines.learned.person_rows import LearnedPersonRows
 from baselines.learned.rows import LearnedRows
 from baselines.orientation_bench.config import OrientationConfig, OrientationResults
 from motion_envs.datasets import OrientationDataset, load_orientation_dataset
@@ -116,17 +117,25 @@ def run(config: OrientationConfig) -> OrientationResults:
         table.criteria.update(learned.criteria)
         comparisons = compare(learned, dataset.subjects)
     calibration, calibration_note = _calibration_rows(config, dataset)
+    learned_calibration = None
     if calibration is not None:
         table.criteria.update(calibration.criteria)
+        if learned is not None:
+            learned_calibration = _learned_calibration_rows(config, dataset)
+            table.criteria.update(
+                {k: v for k, v in learned_calibration.criteria.items() if np.isfinite(v)}
+            )
     from baselines.verdicts import orientation_verdicts
 
     subjects = np.asarray(dataset.subjects).astype(str)
-    verdicts = orientation_verdicts(comparisons, calibration, config.calibration, subjects)
+    verdicts = orientation_verdicts(
+        comparisons, calibration, config.calibration, subjects, learned, learned_calibration
+    )
     elapsed = time.perf_counter() - t0
     nominal = _nominal_criterion(config, full) if config.nominal is not None else None
     return OrientationResults(
         config, dataset, table, nominal, elapsed, learned, comparisons, note,
-        calibration, calibration_note, verdicts,
+        calibration, calibration_note, verdicts, learned_calibration,
     )  # fmt: skip
 
 
@@ -142,3 +151,17 @@ def _calibration_rows(
     from motion_envs.models.person_calibration import person_calibration_rows
 
     return person_calibration_rows(dataset.ragged, dataset.subjects, config.calibration), None
+
+
+def _learned_calibration_rows(
+    config: OrientationConfig, dataset: OrientationDataset
+) -> LearnedPersonRows:
+    """The learned rows given the calibration summary (:mod:`baselines.learned.person_rows`)
+    at ``config.learned``'s budget; called when both the learned and the calibration rows
+    were computed (at least 3 subjects, scikit-learn installed)."""
+    from baselines.learned import mlp_config, torch_missing_reason
+    from baselines.learned.person_rows import learned_person_rows
+
+    use_torch = torch_missing_reason() is None
+    budget = mlp_config(config.learned) if use_torch else None
+    return learned_person_rows(dataset, config.calibration, mlp_config=budget, use_torch=use_torch)

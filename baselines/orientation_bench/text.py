@@ -138,6 +138,16 @@ def _floor_and_verdicts(results: OrientationResults) -> str:
             f"draws (seed {cal.seed}) averaged per trajectory; k0 chosen on the training "
             "people (docs/protocol.md)"
         )
+        lc = results.learned_calibration
+        if lc is not None:
+            text += (
+                "\nridge/mlp_person_k{K}_loso: ridge_loso/mlp_loso given the calibration summary "
+                "of the same draws (9 path-frame sine coefficients and the share drawn; "
+                f"training people's rows, one per draw; MLP trained on {lc.mlp_train_draws} "
+                "draws per reach)"
+            )
+            for name, why in lc.skipped.items():
+                text += f"\n  {name}: skipped ({why})"
     elif results.calibration_note is not None:
         text += f"\nperson-calibration rows skipped: {results.calibration_note}"
     return text + format_verdicts(results.verdicts, "verdicts, leave one person out")
@@ -158,6 +168,14 @@ def _new_entries(results: OrientationResults) -> dict[str, Any]:
             "chosen_k0": cal.chosen_k0,
             "trajectories_with_fewer_than_k_others": {str(k): n for k, n in cal.short.items()},
         }
+        lc = results.learned_calibration
+        if lc is not None:
+            out["calibration"]["learned"] = {
+                "chosen": lc.chosen,
+                "seconds": lc.seconds,
+                "skipped": lc.skipped,
+                "mlp_train_draws": lc.mlp_train_draws,
+            }
     elif results.calibration_note is not None:
         out["calibration"] = {"skipped": results.calibration_note}
     return {**out, **verdicts_document(results.verdicts)}

@@ -37,6 +37,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
+from motion_envs.envs._calibration import MAX_CALIBRATION, CalibrationDraws
 from motion_envs.envs._common import (
     MAX_FRAME_SIZE,
     N_STEPS,
@@ -52,6 +53,7 @@ from motion_envs.envs._common import (
     has_render_mode,
 )
 from motion_envs.envs._reach import reset_labels
+from motion_envs.models.person_calibration import SUMMARY_BOUND, SUMMARY_SINES
 
 __all__ = [
     "CALIBRATION_BOUND",
@@ -66,12 +68,10 @@ __all__ = [
 
 #: Largest ``n_sines`` (the interior points of the grid).
 MAX_COEFFICIENT_SINES = N_STEPS - 2
-#: Largest ``calibration`` (reaches of the person in the summary).
-MAX_CALIBRATION = 1000
 #: Sine terms per path axis of a calibration summary (9 values).
-CALIBRATION_SINES = 3
+CALIBRATION_SINES = SUMMARY_SINES
 #: The calibration summary is clipped to ``[-CALIBRATION_BOUND, CALIBRATION_BOUND]``.
-CALIBRATION_BOUND = 3.0
+CALIBRATION_BOUND = SUMMARY_BOUND
 
 FloatArray = NDArray[np.float64]
 
@@ -153,25 +153,14 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._predicted: FloatArray | None = None
 
     def _setup_calibration(self, calibration: int, subjects: Any, features: FloatArray) -> None:
-        """``calibration = K``: the observation gains the mean of ``features`` ``(L, f)``
-        over ``K`` other trajectories of the episode's subject (within the split), drawn
-        at reset with the environment's generator, and the share drawn ``m / K``."""
-        self.calibration = check_integer(calibration, "calibration", 0, MAX_CALIBRATION)
-        self._cal_features = features
-        labels = np.asarray(subjects).astype(str)
-        self._others = [
-            np.flatnonzero((labels == s) & (np.arange(labels.size) != l))
-            for l, s in enumerate(labels)
-        ]
+        """``calibration = K``: the observation gains the summary of ``K`` other
+        trajectories of the episode's subject (within the split), drawn at reset with the
+        environment's generator (:class:`~motion_envs.envs._calibration.CalibrationDraws`,
+        ``features`` ``(L, f)``)."""
+        self._calibration = CalibrationDraws(calibration, subjects, features)
+        self.calibration = self._calibration.k
         self._drawn: NDArray[np.int64] = np.zeros(0, dtype=np.int64)
-        if self.calibration:
-            box: Any = self.observation_space
-            f = features.shape[1]
-            low = np.concatenate([box.low, np.full(f, -CALIBRATION_BOUND), [0.0]])
-            high = np.concatenate([box.high, np.full(f, CALIBRATION_BOUND), [1.0]])
-            self.observation_space = gym.spaces.Box(
-                low.astype(np.float32), high.astype(np.float32), dtype=np.float32
-            )
+        self.observation_space = self._calibration.extend(self.observation_space)  # type: ignore[arg-type]
 
     def _observe(self, index: int) -> NDArray[np.float32]:
         """The episode's observation: the context, then (``calibration = K``) the
@@ -179,14 +168,8 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         context: NDArray[np.float32] = self._context[index].copy()
         if not getattr(self, "calibration", 0):
             return context
-        others = self._others[index]
-        m = min(self.calibration, others.size)
-        drawn = np.sort(self.np_random.choice(others, size=m, replace=False)) if m else others[:0]
-        self._drawn = drawn
-        f = self._cal_features.shape[1]
-        mean = self._cal_features[drawn].mean(axis=0) if m else np.zeros(f)
-        summary = np.clip(mean, -CALIBRATION_BOUND, CALIBRATION_BOUND)
-        return np.concatenate([context, summary, [m / self.calibration]]).astype(np.float32)
+        summary, self._drawn = self._calibration.draw(self.np_random, index)
+        return np.concatenate([context, summary]).astype(np.float32)
 
     def _finish_setup(self) -> None:
         tau = np.linspace(0.0, 1.0, N_STEPS)

@@ -40,6 +40,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.envs._calibration import CalibrationDraws, check_calibration
 from motion_envs.envs._common import (
     MAX_FRAME_SIZE,
     N_STEPS,
@@ -252,7 +253,8 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
 
     A subclass sets ``kind`` (class attribute), checks its arguments with
     :meth:`_check_arguments`, sets ``task`` and ``observation_space`` and calls
-    :meth:`_setup` in ``__init__``, and implements :meth:`_render_frame`.
+    :meth:`_setup` in ``__init__`` (and :meth:`_setup_calibration` for ``calibration=K``,
+    which extends the observation space), and implements :meth:`_render_frame`.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 25}  # noqa: RUF012 (gymnasium's)
@@ -261,6 +263,9 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
     _starts: NDArray[np.float64]
     _cur: slice
     _cur_bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    #: ``calibration = K``: the draws of the person's other reaches (None for ``K = 0``).
+    _calibration: CalibrationDraws | None = None
+    calibration: int = 0
 
     def _check_arguments(
         self,
@@ -319,6 +324,17 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._end_of = tuple((key, j) for j, (key, _) in enumerate(kind.end_keys))
         self._running = [0.0] * len(kind.end_keys)
 
+    def _setup_calibration(
+        self, calibration: Any, subjects: Any, features: Callable[[], NDArray[np.float64]]
+    ) -> None:
+        """``calibration = K > 0``: every observation of an episode ends with the summary
+        of ``K`` other reaches of its person (:mod:`motion_envs.envs._calibration`;
+        ``features()`` computed only then); ``K = 0`` changes nothing."""
+        self.calibration = check_calibration(calibration)
+        if self.calibration:
+            self._calibration = CalibrationDraws(self.calibration, subjects, features())
+            self.observation_space = self._calibration.extend(self.observation_space)  # type: ignore[arg-type]
+
     # -- episode --------------------------------------------------------------------
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -338,12 +354,17 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         self._k = 0
         self._steps = self.task.steps[index].tolist()
         self._obs = self.task.obs[index]
+        info: dict[str, Any] = {"trajectory_index": index}
+        if self._calibration is not None:  # the summary, the same for every step
+            summary, drawn = self._calibration.draw(self.np_random, index)
+            tail = np.broadcast_to(summary.astype(np.float32), (self._obs.shape[0], summary.size))
+            self._obs = np.concatenate([self._obs, tail], axis=1)
+            info["calibration_trajectories"] = drawn
         start = tuple(self._starts[index].tolist())
         self._history = [start]
         self._running = [0.0] * len(self._running)
         obs = self._obs[0].copy()
         obs[self._cur] = start
-        info: dict[str, Any] = {"trajectory_index": index}
         for key, labels in self._labels.items():
             info[key] = str(labels[index])
         return obs, info

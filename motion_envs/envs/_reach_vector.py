@@ -110,6 +110,17 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._mode = _MODES[self.autoreset_mode]
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.backend = K.resolve_vector_backend(backend)
+        # calibration = K: every reset draws the trajectory, then the calibration reaches,
+        # from the sub-environment's generator (the single environment's order); the
+        # compiled loop draws trajectories from a pool, so these run the numpy backend
+        self._cal = single._calibration
+        if self._cal is not None:
+            if backend == "numba":
+                raise ValueError(
+                    "backend 'numba' does not support calibration > 0 (the compiled loop "
+                    "pools the trajectory draws); use backend='numpy' or 'auto'"
+                )
+            self.backend = "numpy"
         self.single = single  # validated arguments, spaces and rendering
         self.residual_scale = single.residual_scale
         self.reward_weights = single.reward_weights
@@ -129,7 +140,10 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         L, n, width = task.steps.shape
         self._table = np.ascontiguousarray(task.steps.reshape(L * n, width).T)  # numpy path
         self._obs_table = np.ascontiguousarray(task.obs)  # (L, n + 1, obs_dim)
-        self._obs_dim = task.obs_dim
+        self._obs_dim = task.obs_dim + (self._cal.size if self._cal is not None else 0)
+        if self._cal is not None:
+            self._summary = np.zeros((self.num_envs, self._cal.size), dtype=np.float32)
+            self._drawn = np.full((self.num_envs, self._cal.k), -1, dtype=np.int64)
         self._starts = np.ascontiguousarray(single._starts, dtype=np.float64)
         self._cur = single._cur  # the observation's slice of the current state
         self._cur_lo = self._cur.start
@@ -205,7 +219,8 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         for i, s in enumerate(seeds):
             if s is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(s)
-                self._refill(i)
+                if self._cal is None:
+                    self._refill(i)
 
     def _refill(self, i: int) -> None:
         """Draw the next :data:`_POOL` trajectories of sub-environment ``i``: the same
@@ -222,7 +237,9 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         """Start new episodes in sub-environments ``envs`` (next trajectory of each pool,
         or ``trajectories``)."""
         si, sf, dim = self._si, self._sf, self._dim
-        if trajectories is None:
+        if self._cal is not None:
+            idx = self._draw_calibrated(envs, trajectories)
+        elif trajectories is None:
             idx = self._pool[envs, si[envs, _PTR]]
             si[envs, _PTR] += 1
             self._refill_exhausted()
@@ -234,6 +251,21 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         si[envs, _AUTORESET] = 0
         sf[envs, :dim] = self._starts[idx]
         sf[envs, dim:] = 0.0
+
+    def _draw_calibrated(self, envs: NDArray[np.int64], trajectories: Any) -> NDArray[np.int64]:
+        """``calibration = K``: each sub-environment of ``envs`` draws its trajectory (unless
+        given) and then its calibration reaches from its own generator, as the single
+        environment's reset does; the summaries are kept for the observations."""
+        assert self._cal is not None
+        idx = np.empty(len(envs), dtype=np.int64)
+        for j, i in enumerate(np.asarray(envs).tolist()):
+            rng = self._rngs[i]
+            assert rng is not None
+            l = int(rng.integers(self._n_traj)) if trajectories is None else int(trajectories[j])
+            summary, self._drawn[i] = self._cal.draw(rng, l)
+            self._summary[i] = summary.astype(np.float32)
+            idx[j] = l
+        return idx
 
     def reset(
         self,
@@ -276,6 +308,11 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         info["trajectory_index"] = np.where(reset, idx, 0)
         info["_trajectory_index"] = reset
         envs = np.flatnonzero(reset)
+        if self._cal is not None:
+            drawn = np.zeros_like(self._drawn)
+            drawn[envs] = self._drawn[envs]
+            info["calibration_trajectories"] = drawn
+            info["_calibration_trajectories"] = reset
         for key, labels in self._labels.items():
             column = np.full(self.num_envs, None, dtype=object)
             column[envs] = labels[idx[envs]]
@@ -286,6 +323,8 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         si = self._si
         obs = self._obs_table[si[:, _IDX], si[:, _K]]
         obs[:, self._cur] = np.clip(self._sf[:, : self._dim], self._cur_low, self._cur_high)
+        if self._cal is not None:
+            return np.concatenate([obs, self._summary], axis=1)
         return obs
 
     def _record_history(self) -> None:

@@ -15,8 +15,8 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.envs._calibration import orientation_calibration_features
 from motion_envs.envs._coefficients import (
-    CALIBRATION_SINES,
     CoefficientEnv,
     CoefficientVectorEnv,
     FloatArray,
@@ -79,7 +79,10 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     episode's own; all of them if the person has fewer) of their own human residual's
     first 3 sine coefficients per path axis (path frame, as the action; clipped to
     ``[-3, 3]``), then the share drawn ``m / K`` in ``[0, 1]`` (0: no other reach,
-    summary 0). `info["calibration_trajectories"]` lists the drawn trajectories.
+    summary 0). `info["calibration_trajectories"]` lists the drawn trajectories
+    (sorted, padded with -1 to ``K`` entries). The summary is
+    :func:`motion_envs.models.person_calibration.calibration_summaries`, the one the
+    ``ridge_person_k{K}_loso`` rows of ``motion-bench orientation`` are given.
 
     ## Rewards
     ``-max_k |logmap(conj(e_k) q_k) - r_k|``: minus the paper's per-trajectory error of
@@ -176,22 +179,10 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         g = self.task.grids
         self._frames, self._scales = path_frames(g.starts, g.goals, self.task.up)
         self._base = np.asarray(g.predicted_residuals)
-        self._setup_calibration(calibration, self.task.subjects, self._path_coefficients())
+        self._setup_calibration(
+            calibration, self.task.subjects, orientation_calibration_features(self.task)
+        )
         self._finish_setup()
-
-    def _path_coefficients(self) -> FloatArray:
-        """``(L, 3 CALIBRATION_SINES)`` least-squares sine coefficients of each
-        trajectory's own human residual in its path frame (the calibration features:
-        each row from that trajectory alone)."""
-        from motion_envs.geometry.sine_series import basis
-
-        local = np.einsum("lij,lti->ltj", self._frames, self.task.grids.residuals)
-        local = local / self._scales[:, None, None]
-        B = basis(np.linspace(0.0, 1.0, N_STEPS), CALIBRATION_SINES)[:, 2:]
-        L, n, w = local.shape
-        coef = np.linalg.lstsq(B, local.transpose(1, 0, 2).reshape(n, -1), rcond=None)[0]
-        out: FloatArray = coef.reshape(CALIBRATION_SINES, L, w).transpose(1, 0, 2).reshape(L, -1)
-        return out
 
     def _human_curves(self) -> FloatArray:
         return np.asarray(self.task.grids.residuals)

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
+from motion_envs.envs._calibration import orientation_calibration_features
 from motion_envs.envs._common import (
     N_STEPS,
     timing_bounds,
@@ -221,7 +222,23 @@ class OrientationReachEnv(ReachEnv):
     0.1 %), so the bounds do not depend on the split. Everything else is as in ``-v0``.
 
     The subject is not observed: a split by subject holds whole people out, so a
-    subject encoding would be meaningless on the test split.
+    subject encoding would be meaningless on the test split. With ``calibration=K > 0``
+    the person is described instead by ``K`` of their other reaches: every observation
+    of the episode ends with 10 more entries (39 for ``-v1`` on ``"vr-kitchen"``),
+    the same for all its steps:
+
+    | Num      | Observation (``calibration=K > 0``)                              | Min | Max | Type (Unit) |
+    |----------|------------------------------------------------------------------|-----|-----|-------------|
+    | -10..-2  | mean over the calibration reaches of their own human residual's first 3 sine coefficients per path axis (path frame, ordered (k, axis); clipped) | -3  | 3   | rad per rad of rotation |
+    | -1       | share drawn ``m / K`` (0: the person has no other reach, summary 0) | 0   | 1   | unitless    |
+
+    The ``K`` reaches are drawn at `reset` with the environment's generator (after the
+    trajectory) among the person's trajectories *of the same split*, without
+    replacement, never the episode's own (all of them if the person has fewer);
+    `info["calibration_trajectories"]` lists them (sorted, padded with -1 to ``K``).
+    The summary is :func:`motion_envs.models.person_calibration.calibration_summaries`,
+    the one ``OrientationCoefficients-v0`` observes and ``motion-bench orientation``'s
+    ``ridge_person_k{K}_loso`` rows are given.
 
     ## Rewards
     With ``e_k`` the base slerp ``slerp(q_0, q_n, alpha_bar(tau_k))`` (training split's
@@ -279,6 +296,7 @@ class OrientationReachEnv(ReachEnv):
     | `val_fraction`   | **float**    | `0.0`          | share of the *training* subjects held out as `split="val"`; with it `"train"` holds the others and its nominal is fitted on them only (`"test"` is unchanged) |
     | `observe_timing` | **bool**     | `False`        | append the duration and the elapsed time to the observation (`True` in `-v1`) |
     | `fold`           | **int**      | `None`         | leave one person out: the `fold`-th person (sorted labels) is `"test"`, the others `"train"` (and `"val"` with `val_fraction`); replaces `test_fraction` |
+    | `calibration`    | **int**      | `0`            | ``K``, 0 to 1000: observe the summary of ``K`` other reaches of the episode's person (0: the observation is unchanged); the native vector environment then runs the numpy backend |
 
     A bad argument raises `ValueError` naming it (the same in the vector environment);
     reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
@@ -309,6 +327,7 @@ class OrientationReachEnv(ReachEnv):
         val_fraction: float = 0.0,
         observe_timing: bool = False,
         fold: int | None = None,
+        calibration: int = 0,
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
@@ -319,6 +338,9 @@ class OrientationReachEnv(ReachEnv):
         )  # fmt: skip
         self.observation_space = _observation_space(self.task, bool(observe_timing))
         self._setup(self.task.grids.starts)
+        self._setup_calibration(
+            calibration, self.task.subjects, lambda: orientation_calibration_features(self.task)
+        )
 
     # -- rendering ------------------------------------------------------------------
     def _render_frame(self) -> NDArray[np.uint8]:

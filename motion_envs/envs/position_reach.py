@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
+from motion_envs.envs._calibration import check_calibration
 from motion_envs.envs._common import N_STEPS
 from motion_envs.envs._kernels import position_reward, position_step_scalar
 from motion_envs.envs._position_task import (
@@ -236,6 +237,7 @@ class PositionReachEnv(ReachEnv):
     | `height`         | **int**      | `480`     | frame height in pixels |
     | `val_fraction`   | **float**    | `0.0`     | share of each task's *training* demonstrations held out as `split="val"`; with it `"train"` holds the others and the nominals are fitted on them only (`"test"`, `"loo"` unchanged) |
     | `observe_timing` | **bool**     | `False`   | append the duration and the elapsed time to the observation (`True` in `-v1`) |
+    | `calibration`    | **int**      | `0`       | only 0: person calibration (as `OrientationReach`'s) needs a dataset with persons, and the position data holds demonstrations of shapes; any other value raises `ValueError` |
 
     A bad argument raises `ValueError` naming it (the same in the vector environment);
     reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
@@ -265,10 +267,16 @@ class PositionReachEnv(ReachEnv):
         height: int = 480,
         val_fraction: float = 0.0,
         observe_timing: bool = False,
+        calibration: int = 0,
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
+        if check_calibration(calibration):
+            raise ValueError(
+                "calibration needs a dataset with persons; the position data holds "
+                "demonstrations of shapes, not people (use calibration=0)"
+            )
         self.task = load_position_task(
             data, shapes, split, nominal, n_sines, test_fraction, split_seed, self.residual_scale,
             val_fraction, observe_timing,

@@ -27,6 +27,14 @@ calibration reaches. A person with fewer than ``K + 1`` trajectories gives all o
     The slerp traversed with the mean speed profile of the calibration reaches (residual
     predicted as 0).
 
+The calibration *summary* (:func:`calibration_features`, :func:`calibration_summaries`) is
+what a learned model or an agent is given of the ``K`` calibration reaches: the mean over
+them of each reach's own path-frame residual's first :data:`SUMMARY_SINES` sine
+coefficients per axis, clipped to ``[-SUMMARY_BOUND, SUMMARY_BOUND]``, then the share
+drawn ``m / K`` (``K_l / K``). The coefficient and reaching environments' ``calibration=K``
+observation and the ``ridge_person_k{K}_loso``/``mlp_person_k{K}_loso`` rows
+(:mod:`baselines.learned.person_rows`) use these two functions.
+
 Calibration draws are repeated ``n_draws`` times (:func:`calibration_draws`, seeded;
 the same draws serve all three rows and the inner selection). A trajectory's error is
 its max error over time averaged over the draws (the expected error under a random
@@ -46,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
 from motion_envs.geometry import bezier
+from motion_envs.geometry.sine_series import basis
 from motion_envs.models.bezier_models import fit_control_points
 from motion_envs.models.criteria import max_errors
 from motion_envs.models.slerp_residual import (
@@ -60,9 +69,13 @@ __all__ = [
     "DEFAULT_N_DRAWS",
     "DEFAULT_SEED",
     "K0_GRID",
+    "SUMMARY_BOUND",
+    "SUMMARY_SINES",
     "PersonCalibration",
     "calibration_draws",
+    "calibration_features",
     "calibration_row_names",
+    "calibration_summaries",
     "person_blend_loso",
     "person_calibration_rows",
     "person_timing_loso",
@@ -79,6 +92,45 @@ DEFAULT_N_DRAWS = 20
 DEFAULT_SEED = 0
 #: Candidates of the shrinkage constant ``k0`` (0: the person's mean alone).
 K0_GRID: tuple[float, ...] = (0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0)
+#: Sine terms per path axis of the calibration summary (9 values).
+SUMMARY_SINES = 3
+#: The summary's mean coefficients are clipped to ``[-SUMMARY_BOUND, SUMMARY_BOUND]``.
+SUMMARY_BOUND = 3.0
+
+
+def calibration_features(path_residuals: ArrayLike) -> FloatArray:
+    """``(L, 3 SUMMARY_SINES)`` least-squares coefficients of ``sin(k pi tau)``,
+    ``k = 1..SUMMARY_SINES``, of each path-frame residual curve ``(L, n, 3)`` (uniform
+    grid; ordered ``(k, axis)``): one row per trajectory, from that trajectory alone."""
+    C = np.asarray(path_residuals, dtype=np.float64)
+    L, n, w = C.shape
+    B = basis(np.linspace(0.0, 1.0, n), SUMMARY_SINES)[:, 2:]
+    coef = np.linalg.lstsq(B, C.transpose(1, 0, 2).reshape(n, -1), rcond=None)[0]
+    out: FloatArray = coef.reshape(SUMMARY_SINES, L, w).transpose(1, 0, 2).reshape(L, -1)
+    return out
+
+
+def calibration_summaries(features: ArrayLike, draws: IntArray, k: int) -> FloatArray:
+    """The calibration summary of every draw: ``(..., f + 1)`` for ``draws`` ``(..., k)``.
+
+    ``features`` ``(L, f)`` (:func:`calibration_features`); ``draws`` holds indices into
+    its rows, ``-1`` for none (:func:`calibration_draws`: ``(n_draws, L, k)``; an
+    environment's one episode: ``(k,)``). Entry: the mean of the drawn rows' features
+    (0 when none is drawn) clipped to ``[-SUMMARY_BOUND, SUMMARY_BOUND]``, then the
+    share drawn ``m / k``. Rows not drawn are never read.
+    """
+    F = np.asarray(features, dtype=np.float64)
+    d = np.asarray(draws, dtype=np.int64)
+    if d.shape[-1] != k or k < 1:
+        raise ValueError(f"draws must end in k = {k} >= 1 entries; got shape {d.shape}")
+    valid = d >= 0
+    picked = F[np.where(valid, d, 0)]  # (..., k, f)
+    counts = valid.sum(axis=-1)
+    sums = np.where(valid[..., None], picked, 0.0).sum(axis=-2)
+    mean = sums / np.maximum(counts, 1)[..., None]
+    summary = np.clip(mean, -SUMMARY_BOUND, SUMMARY_BOUND)
+    out: FloatArray = np.concatenate([summary, (counts / k)[..., None]], axis=-1)
+    return out
 
 
 def calibration_row_names(ks: Sequence[int]) -> list[str]:
