@@ -204,7 +204,8 @@ def match(found, truth: list[TrueFlight], g: float = G, within: float = 0.01, sl
                 continue
             if not (f.start >= tf.start - slack and f.end <= tf.end + slack):
                 continue
-            dev = np.abs(f.position(ts) - tf.position(ts, g)[:, : f.coef.shape[1]]).max()
+            axes = [0, 1, 2] if f.coef.shape[1] == 3 else [0, 2]  # (x, z) of a CSV
+            dev = np.abs(f.position(ts) - tf.position(ts, g)[:, axes]).max()
             if dev <= best_dev:
                 best, best_dev = k, dev
         out.append(best)

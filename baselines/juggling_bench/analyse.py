@@ -81,6 +81,10 @@ def load_ball_markers(source: str | os.PathLike[str]) -> BallMarkers:
     text = os.fspath(source)
     if is_mocap_source(text):
         path, opts = parse_source(text)
+        if opts.ball is None and opts.balls != "unlabelled":
+            raise ValueError(
+                f"{path}: give the ball markers (?ball=NAME[,NAME...]) or ?balls=unlabelled"
+            )
         rec = read_recording(path, opts.unit)
         if rec.fmt == "bvh" and rec.scale is None:
             raise ValueError(f"{path}: BVH lengths carry no unit; add unit=m|cm|mm|in after ?")
@@ -89,14 +93,11 @@ def load_ball_markers(source: str | os.PathLike[str]) -> BallMarkers:
             if not cols:
                 raise ValueError(f"{path}: balls=unlabelled, but the file has no unlabelled marker")
             what = f"{len(cols)} unlabelled trajectories"
-        elif opts.ball is not None:
-            kind = "joint" if rec.fmt == "bvh" else "marker"
-            cols = [rec.index(n.strip(), kind) for n in opts.ball.split(",") if n.strip()]
-            what = f"{kind}(s) {opts.ball}"
         else:
-            raise ValueError(
-                f"{path}: give the ball markers (?ball=NAME[,NAME...]) or ?balls=unlabelled"
-            )
+            kind = "joint" if rec.fmt == "bvh" else "marker"
+            names = [n.strip() for n in str(opts.ball).split(",") if n.strip()]
+            cols = [rec.index(n, kind) for n in names]
+            what = f"{kind}(s) {', '.join(names)}"
         pts = rec.points[:, cols]
         if opts.up == "y":
             pts = pts @ YUP_TO_ZUP.T

@@ -19,15 +19,20 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
    horizontal one by a line (free flight, no drag). A window is a seed when its residual
    rms is at most ``2 sigma`` and its vertical acceleration points down.
 4. **Growth.** From the best seed (lowest rms) still free, a piece grows: the samples of
-   the fragment whose residual from the current fit is at most ``tol`` in every
-   coordinate, in the contiguous run that holds the seed; refit; repeat until the run
-   no longer changes. Its samples are then taken, and the next best free seed grows.
-   A piece is kept when its fitted downward acceleration is within
+   the fragment on the current fit (residual at most ``tol`` in every coordinate, or an
+   isolated outlier between two such samples), in the contiguous run that holds the
+   seed; refit; repeat until the run no longer changes. Release and catch are then
+   placed by a change point: within half a window of each end, the split between the
+   parabola and a free quadratic (the ball in the hand) with the least total squared
+   residual. The piece's samples are taken, and the next best free seed grows. A piece
+   is kept when its fitted downward acceleration is within
    :attr:`FlightOptions.gravity_range` widened by 4 standard errors of the fit.
-5. **Joining.** Pieces in time order join a flight when one parabola fits both within
-   ``tol`` (every sample) and with rms at most ``2 sigma``, with at most
-   :attr:`FlightOptions.max_join_gap` s between them: a flight split by a tracking gap,
-   continued in another column, or seen twice (a duplicated marker).
+5. **Joining.** Pieces in time order join a flight when one parabola fits both (every
+   sample on it as in step 4, rms at most ``2 sigma``; up to a window of samples at the
+   two outer ends may be left out of that fit, each piece keeping at least half its
+   samples), with at most :attr:`FlightOptions.max_join_gap` s between them: a flight
+   split by a tracking gap or a swap, continued in another column, or seen twice (a
+   duplicated marker). Flights that the order of joining left in two are joined after.
 6. **Flights.** A joined flight is kept when it lasts at least
    :attr:`FlightOptions.min_duration` s and its downward acceleration, fitted on all its
    samples, is within :attr:`FlightOptions.gravity_range` (no widening): a static or
@@ -342,6 +347,17 @@ def _window_seeds(tt: FloatArray, pts: FloatArray, n_w: int, sigma: float) -> Fl
     return out
 
 
+def _within(resid: FloatArray, tol: float) -> NDArray[np.bool_]:
+    """``(n,)`` True where a sample is on the curve: within ``tol`` in every coordinate,
+    or an isolated outlier between two samples that are (noise has tails; the hand
+    moves the ball off a parabola for several samples in a row)."""
+    ok: NDArray[np.bool_] = (np.abs(resid) <= tol).all(axis=1)
+    if ok.size >= 3:
+        lone = ~ok[1:-1] & ok[:-2] & ok[2:]
+        ok[1:-1] |= lone
+    return ok
+
+
 def _grow(
     tt: FloatArray, pts: FloatArray, free: NDArray[np.bool_], lo: int, hi: int, tol: float
 ) -> tuple[int, int]:
@@ -350,7 +366,7 @@ def _grow(
     for _ in range(50):
         t_ref = float(tt[(lo + hi) // 2])
         coef, _ = _fit(tt[lo:hi], pts[lo:hi], t_ref)
-        good = (np.abs(pts - _predict(coef, tt, t_ref)) <= tol).all(axis=1) & free
+        good = _within(pts - _predict(coef, tt, t_ref), tol) & free
         mid = (lo + hi) // 2
         if not good[mid]:
             inside = np.flatnonzero(good[lo:hi])
@@ -381,14 +397,28 @@ def _sse(t: FloatArray, pts: FloatArray, flight: bool) -> float:
     return float(np.sum(resid**2))
 
 
+def _longest(costs: dict[int, float], eps: float, first: bool) -> int:
+    """The split of least cost; of splits within ``eps`` of it, the longest flight."""
+    best = min(costs.values())
+    near = [s for s, c in costs.items() if c <= best + eps]
+    return min(near) if first else max(near)
+
+
 def _refine(
-    tt: FloatArray, pts: FloatArray, free: NDArray[np.bool_], lo: int, hi: int, k: int
+    tt: FloatArray,
+    pts: FloatArray,
+    free: NDArray[np.bool_],
+    lo: int,
+    hi: int,
+    k: int,
+    eps: float,
 ) -> tuple[int, int]:
     """Release and catch of a grown piece ``[lo, hi)`` by a change point (step 4).
 
     Within ``k`` samples of each end the split between the flight (a parabola) and the
     ball in the hand (a free quadratic, on the up to ``k`` free samples beyond the end)
-    with the least total squared residual; both sides keep at least 4 samples."""
+    with the least total squared residual (ties within ``eps``: the longest flight; a
+    sample on both curves is in the flight); both sides keep at least 4 samples."""
     a = lo
     while a > 0 and free[a - 1] and lo - a < k:
         a -= 1
@@ -398,7 +428,7 @@ def _refine(
             for s in range(max(lo, a + 4), min(lo + k, hi - 4) + 1)
         }
         if costs:
-            lo = min(costs, key=costs.__getitem__)
+            lo = _longest(costs, eps, first=True)
     b = hi
     while b < tt.size and free[b] and b - hi < k:
         b += 1
@@ -408,7 +438,7 @@ def _refine(
             for s in range(max(hi - k, lo + 4), min(hi, b - 4) + 1)
         }
         if costs:
-            hi = min(costs, key=costs.__getitem__)
+            hi = _longest(costs, eps, first=False)
     return lo, hi
 
 
@@ -437,7 +467,7 @@ def _pieces(
         if not math.isfinite(cand[w]):
             break
         lo, hi = _grow(tt, pts, free, w, w + n_w, tol)
-        lo, hi = _refine(tt, pts, free, lo, hi, max(n_w // 2, 6))
+        lo, hi = _refine(tt, pts, free, lo, hi, max(n_w // 2, 6), (1e-3 * sigma) ** 2)
         free[lo:hi] = False
         rms[max(lo - n_w + 1, 0) : hi] = np.inf
         if hi - lo < n_w:
@@ -458,30 +488,44 @@ def _merge(a: _Piece, b: _Piece, tol: float, rms_max: float, k: int) -> _Piece |
     """``a`` and ``b`` as one flight, or None (step 5).
 
     One parabola must fit every sample within ``tol`` with rms at most ``rms_max``; up to
-    ``k`` samples at the two outer ends may be cut first (a piece that ended in the hand
-    without enough samples beyond it for the change point)."""
+    ``k`` samples at each of the two outer ends may be left out of the fit (a short piece
+    that ended in the hand, without samples enough beyond it for the change point); the
+    outer samples within ``tol`` of that fit are then taken back. Each piece must keep at
+    least half its samples."""
     t = np.concatenate([a.t, b.t])
     pts = np.concatenate([a.pts, b.pts])
     order = np.argsort(t, kind="stable")
     t, pts = t[order], pts[order]
+    from_a = (order < a.t.size).astype(np.int64)
+    n = t.size
     first = a if a.t[0] <= b.t[0] else b
     last = a if a.t[-1] >= b.t[-1] else b
-    start_seen, end_seen = first.start_seen, last.end_seen
-    for _ in range(4):
-        _, resid = _fit(t, pts, float(0.5 * (t[0] + t[-1])))
-        bad = np.flatnonzero((np.abs(resid) > tol).any(axis=1))
-        if bad.size == 0:
-            if float(np.sqrt(np.mean(resid**2))) > rms_max:
-                return None
-            return _Piece(t, pts, start_seen, end_seen, first.column, a.count + b.count)
-        head, tail = bad[bad < k], bad[bad >= t.size - k]
-        if head.size + tail.size < bad.size or t.size - 2 * k < 2 * k:
-            return None
-        lo = int(head[-1]) + 1 if head.size else 0
-        hi = int(tail[0]) if tail.size else t.size
-        t, pts = t[lo:hi], pts[lo:hi]
-        start_seen |= head.size > 0
-        end_seen |= tail.size > 0
+    t_ref = float(0.5 * (t[0] + t[-1]))
+    cuts = sorted(
+        {(h, e) for h in (0, k // 2, k) for e in (0, k // 2, k) if n - h - e >= 2 * k},
+        key=sum,
+    )
+    for head, tail in cuts:
+        coef, resid = _fit(t[head : n - tail], pts[head : n - tail], t_ref)
+        if not _within(resid, tol).all() or float(np.sqrt(np.mean(resid**2))) > rms_max:
+            continue
+        good = _within(pts - _predict(coef, t, t_ref), tol)
+        lo, hi = head, n - tail
+        while lo > 0 and good[lo - 1]:
+            lo -= 1
+        while hi < n and good[hi]:
+            hi += 1
+        kept_a = int(from_a[lo:hi].sum())
+        if 2 * kept_a < a.t.size or 2 * (hi - lo - kept_a) < b.t.size:
+            continue  # most of a piece left out: not one flight
+        return _Piece(
+            t[lo:hi],
+            pts[lo:hi],
+            first.start_seen or lo > 0,
+            last.end_seen or hi < n,
+            first.column,
+            a.count + b.count,
+        )
     return None
 
 
@@ -508,6 +552,21 @@ def _join(
         else:
             groups[best[0]] = best[1]
             counts["pieces joined"] += 1
+    merged_any = True
+    while merged_any:  # groups that grew into one flight (the greedy order split them)
+        merged_any = False
+        groups.sort(key=lambda g: float(g.t[0]))
+        for i, j in itertools.combinations(range(len(groups)), 2):
+            a, b = groups[i], groups[j]
+            if b.t[0] - a.t[-1] > max_gap or a.t[0] - b.t[-1] > max_gap:
+                continue
+            merged = _merge(a, b, tol, 2.0 * sigma, k)
+            if merged is not None:
+                groups[i] = merged
+                del groups[j]
+                counts["pieces joined"] += 1
+                merged_any = True
+                break
     return groups
 
 
