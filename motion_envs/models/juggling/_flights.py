@@ -351,7 +351,7 @@ def _within(resid: FloatArray, tol: float) -> NDArray[np.bool_]:
     """``(n,)`` True where a sample is on the curve: within ``tol`` in every coordinate,
     or an isolated outlier between two samples that are (noise has tails; the hand
     moves the ball off a parabola for several samples in a row)."""
-    ok: NDArray[np.bool_] = (np.abs(resid) <= tol).all(axis=1)
+    ok: NDArray[np.bool_] = np.asarray((np.abs(resid) <= tol).all(axis=1))
     if ok.size >= 3:
         lone = ~ok[1:-1] & ok[:-2] & ok[2:]
         ok[1:-1] |= lone
@@ -720,7 +720,7 @@ def pattern_summary(
                 dwells.append(tm - before[-1])
     beat = _median(beats)
     if math.isfinite(beat):  # successive throws only (not across a missed one)
-        pairs = []
+        pairs: list[bool] = []
         for rec in dict.fromkeys(r for r, _, _ in throws):
             th = sorted((tm, hand(x)) for r, tm, x in throws if r == rec)
             pairs.extend(
