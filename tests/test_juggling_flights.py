@@ -281,3 +281,21 @@ def test_analyse_reading_errors_name_the_file(tmp_path, capsys):
 def _write(path, text: str) -> str:
     path.write_text(text)
     return str(path)
+
+
+def test_one_hand_and_no_flight(tmp_path, capsys):
+    # a one-ball column from one hand: every release at x = 0.1 m, one hand
+    flights = [_flight(k * 0.6, k * 0.6 + 0.4, 0.1 + 0.001 * (k % 3), 0.12) for k in range(10)]
+    p = pattern_summary(flights)
+    assert p.hands == 1 and math.isnan(p.midline)
+    assert p.hand_period == pytest.approx(0.6) and p.dwell == pytest.approx(0.2)
+    # static markers only: no flight, said so
+    rng = np.random.default_rng(0)
+    still = np.array([[0.1, 0.0, 1.2], [0.3, 0.1, 0.9]]) + rng.normal(0, 0.0005, (900, 2, 3))
+    path = tmp_path / "still.tsv"
+    write_tsv(path, still * 1000.0, ["Unidentified 1", "Unidentified 2"], rate=300.0)
+    assert main(["juggling", "--analyse", f"{path}?balls=unlabelled", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "0 flights" in out and "no flight found" in out
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert doc["n_flights"] == 0 and doc["gravity_median"] is None and doc["flights"] == []

@@ -180,6 +180,13 @@ def report_analysis(doc: dict[str, Any]) -> str:
         f"(pattern: {p['balls'] if p['balls'] is not None else 'n/a'}); flight time for "
         f"that N {_num(p['flight_theorem'], '.3f')} s vs measured {_num(p['flight'], '.3f')} s",
     ]
+    if doc["n_flights"] == 0:
+        low, high = doc["options"]["gravity_range"]
+        lines.append(
+            f"no flight found: a flight is ballistic for at least "
+            f"{doc['options']['min_duration']:g} s with a downward acceleration of {low:g} "
+            f"to {high:g} m/s^2 (are the lengths in metres, the up axis right?)"
+        )
     return "\n".join(lines)
 
 

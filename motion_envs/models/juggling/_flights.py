@@ -662,17 +662,17 @@ def detect_flights(
 
 
 def _two_means(x: FloatArray) -> tuple[float, float, float]:
-    """Centres (low, high) and pooled std of a 1-D two-means split (optimal, sorted)."""
+    """Centres (low, high) and pooled std of the optimal 1-D two-means split."""
     xs = np.sort(x)
-    best = (math.inf, 0)
-    for k in range(1, xs.size):
-        a, b = xs[:k], xs[k:]
-        cost = float(((a - a.mean()) ** 2).sum() + ((b - b.mean()) ** 2).sum())
-        if cost < best[0]:
-            best = (cost, k)
-    cost, k = best
-    pooled = math.sqrt(cost / max(xs.size - 2, 1))
-    return float(xs[:k].mean()), float(xs[k:].mean()), pooled
+    n = xs.size
+    k = np.arange(1, n)
+    left = np.cumsum(xs)[:-1]
+    right = xs.sum() - left
+    # within-cluster sum of squares = total sum of squares - between-cluster terms
+    cost = float((xs**2).sum()) - left**2 / k - right**2 / (n - k)
+    i = int(np.argmin(cost))
+    pooled = math.sqrt(max(float(cost[i]), 0.0) / max(n - 2, 1))
+    return float(left[i] / k[i]), float(right[i] / (n - k[i])), pooled
 
 
 def _median(values: list[float]) -> float:
