@@ -45,11 +45,13 @@ parabola), residual rms.
 
 Pattern (:func:`pattern_summary`), from the flights whose ends were seen: throws at
 releases and catches at catches; the hand of an event is its side of the midline
-between the two clusters of release positions on the lateral axis (two-means; one
-hand when the clusters are not apart); throw period = median interval between throws,
-hand period = between throws of the same hand, dwell = from a hand's catch to its next
-throw, vacant = hand period - dwell, dwell ratio = dwell / hand period, alternation =
-the fraction of successive throws made by different hands. Shannon's juggling theorem
+between the two clusters of release positions on the lateral axis (two-means; two
+hands when there are at least 4 throws and the centres are more than 6 pooled standard
+deviations apart, else one); throw period = median interval between throws, hand
+period = between throws of the same hand, dwell = from a hand's catch to its next
+throw, vacant = hand period - dwell, dwell ratio = dwell / hand period (medians),
+alternation = the fraction of successive throws (less than 1.5 throw periods apart)
+made by different hands. Shannon's juggling theorem
 ``(F + D) H = (V + D) N`` (flight F, dwell D, vacant V, hands H, balls N) then gives
 the balls ``H (F + D) / (V + D)`` and, for N balls, the flight time
 ``N (V + D) / H - D``, reported next to the measured ones.
