@@ -110,9 +110,11 @@ def write_tsv(
     points_mm: np.ndarray,
     names: list[str],
     frame_time: bool = True,
-    rate: float = RATE,
+    rate: float | None = None,
 ) -> None:
-    """A Qualisys TSV 3D export: header lines, Frame/Time header, mm, 0 = missing."""
+    """A Qualisys TSV 3D export: header lines, Frame/Time header, mm, 0 = missing (at
+    ``rate`` Hz; None: the module's ``RATE`` when called)."""
+    rate = RATE if rate is None else rate
     n = points_mm.shape[0]
     head = [
         f"NO_OF_FRAMES\t{n}",
