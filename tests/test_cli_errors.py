@@ -135,6 +135,9 @@ CASES = [
     (["juggling", "--levels", ","], "argument --levels: expected a comma list of distinct"),
     (["juggling", "--levels", "easy", "--episodes", "1"], "argument --episodes: expected an"),
     (["juggling", "--levels", "easy", "--max-catches", "0"], "argument --max-catches: expected"),
+    (["juggling", "--analyse", "{tmp}/missing.csv"], "argument --analyse: {tmp}/missing.csv"),
+    (["juggling", "--analyse", "{tmp}/rec.tsv"], "argument --analyse: motion capture file"),
+    (["juggling", "--n-balls", "0"], "argument --n-balls: expected an integer >= 1"),
     (["juggling", "--levels", "easy", "--agent", "{tmp}/missing"], "argument --agent: {tmp}/"),
     (
         ["juggling", "--levels", "easy", "--agent", "{tmp}/folder"],

@@ -105,14 +105,22 @@ def write_c3d(path: Path, points_zup: np.ndarray, labels: list[str]) -> np.ndarr
     return stored @ YUP_TO_ZUP.T
 
 
-def write_tsv(path: Path, points_mm: np.ndarray, names: list[str], frame_time: bool = True) -> None:
-    """A Qualisys TSV 3D export: header lines, Frame/Time header, mm, 0 = missing."""
+def write_tsv(
+    path: Path,
+    points_mm: np.ndarray,
+    names: list[str],
+    frame_time: bool = True,
+    rate: float | None = None,
+) -> None:
+    """A Qualisys TSV 3D export: header lines, Frame/Time header, mm, 0 = missing (at
+    ``rate`` Hz; None: the module's ``RATE`` when called)."""
+    rate = RATE if rate is None else rate
     n = points_mm.shape[0]
     head = [
         f"NO_OF_FRAMES\t{n}",
         "NO_OF_CAMERAS\t8",
         f"NO_OF_MARKERS\t{len(names)}",
-        f"FREQUENCY\t{RATE:g}",
+        f"FREQUENCY\t{rate:g}",
         "NO_OF_ANALOG\t0",
         "ANALOG_FREQUENCY\t0",
         "DESCRIPTION\t--",
@@ -123,7 +131,7 @@ def write_tsv(path: Path, points_mm: np.ndarray, names: list[str], frame_time: b
     cols = ["Frame", "Time"] + [f"{m} {a}".strip() for m in names for a in "XYZ"]
     body = np.nan_to_num(points_mm.reshape(n, -1), nan=0.0)
     rows = [
-        "\t".join([str(i + 1), repr(i / RATE), *(repr(float(v)) for v in row)])
+        "\t".join([str(i + 1), repr(i / rate), *(repr(float(v)) for v in row)])
         for i, row in enumerate(body)
     ]
     path.write_text("\n".join([*head, "\t".join(cols), *rows]) + "\n")

@@ -26,6 +26,9 @@ Reported:
 With ``--levels``: Juggling-v1's levels and reference controllers (and a trained agent
 with ``--agent DIR``), :mod:`~baselines.juggling_bench.levels`.
 
+With ``--analyse FILE``: the ball flights and pattern timing of a recording,
+:mod:`~baselines.juggling_bench.analyse`.
+
 :func:`run` computes (a pure function of a frozen :class:`JugglingConfig`: no argparse,
 no printing, no files), :func:`report` is the printed text, :func:`write` writes
 ``results.json``, ``results.csv``, ``juggling_fig6.png`` and ``juggling.gif`` (every file

@@ -10,6 +10,12 @@ import time
 
 from baselines import options
 from baselines.agents.checks import run_folder
+from baselines.juggling_bench.analyse import (
+    AnalyseConfig,
+    report_analysis,
+    run_analysis,
+    write_analysis,
+)
 from baselines.juggling_bench.config import JugglingConfig
 from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_levels, write_levels
 from baselines.juggling_bench.media import write
@@ -21,7 +27,17 @@ from motion_envs.models.juggling import LEVELS
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench juggling`` with parsed arguments: run, print, write (the levels of
-    Juggling-v1 with ``--levels``)."""
+    Juggling-v1 with ``--levels``, a recording's ball flights with ``--analyse``)."""
+    if args.analyse is not None:
+        if args.levels is not None:
+            return options.fail("motion-bench juggling", "--analyse: not with --levels")
+        out = options.results_folder(args.out, "juggling-analyse")
+        analysis = run_analysis(AnalyseConfig(source=args.analyse, balls=args.n_balls))
+        print(report_analysis(analysis))
+        print("wrote " + ", ".join(str(p) for p in write_analysis(analysis, out)))
+        return 0
+    if args.n_balls is not None:
+        return options.fail("motion-bench juggling", "--n-balls: needs --analyse")
     if args.levels is None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: needs --levels")
@@ -127,6 +143,39 @@ def juggling_data(text: str) -> str:
     return str(path)
 
 
+def analyse_source(text: str) -> str:
+    """``--analyse``: a juggling CSV with ``ball_x, ball_z``, or a C3D/BVH/TSV file with
+    ``?ball=NAME[,NAME...]`` or ``?balls=unlabelled`` (and the import's other options).
+
+    Only the name, the options and a CSV's header line are checked here."""
+    from motion_envs.datasets.mocap import is_mocap_source, parse_source
+
+    if is_mocap_source(text):
+        try:
+            path, opts = parse_source(text)
+        except (ValueError, FileNotFoundError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        options.input_file(str(path))
+        if opts.ball is None and opts.balls != "unlabelled":
+            raise argparse.ArgumentTypeError(
+                f"{path}: give the ball markers (FILE?ball=NAME[,NAME...]) or FILE?balls=unlabelled"
+            )
+        return text
+    path = options.input_file(text)
+    try:
+        with path.open(encoding="utf-8", newline="") as fh:
+            header = next(csv.reader([fh.readline()]), [])
+    except UnicodeDecodeError:
+        raise argparse.ArgumentTypeError(f"{text} is not a UTF-8 text CSV") from None
+    missing = [c for c in ("t", "ball_x", "ball_z") if c not in [h.strip() for h in header]]
+    if missing:
+        raise argparse.ArgumentTypeError(
+            f"{text}: line 1: missing column(s) {missing}; a juggling CSV with the ball "
+            "(t,x,z,ball_x,ball_z[,recording]) or a .c3d/.bvh/.tsv recording"
+        )
+    return str(path)
+
+
 DESCRIPTION = """\
 The analytic juggler of Lippi, Avizzano & Ruffaldi (section III-A). Demonstrations are
 SIMULATED by default (a seeded model of a person; the paper's recordings are not public)
@@ -148,7 +197,13 @@ correction from the delayed measurement), the same juggler predicting the flight
 by the known delay, a fixed catch point, minimum jerk to the intercept predicted from the
 commanded release velocity, and with --agent DIR a trained agent's residual on the same
 seeds. Reported: catch rate with a 95 % bootstrap interval, consecutive catches before
-the first drop (median), the hand's deviation from held-out demonstrations (SIMULATED)."""
+the first drop (median), the hand's deviation from held-out demonstrations (SIMULATED).
+
+With --analyse FILE: the ball flights of a recording (a juggling CSV with ball_x, ball_z,
+or a motion capture file with its import options after ?, e.g.
+'session.tsv?balls=unlabelled'): per flight the fitted gravity, apex and flight time;
+the pattern's throw period, dwell ratio and hand alternation against Shannon's juggling
+theorem; results.json, flights.csv and flights.png in --out."""
 
 
 def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
@@ -246,6 +301,20 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         default=None,
         metavar="DIR",
         help="a motion-bench train run folder on Juggling-v1, played as one more method (--levels)",
+    )
+    p.add_argument(
+        "--analyse",
+        type=analyse_source,
+        default=None,
+        metavar="FILE",
+        help="analyse the ball flights of a recording (juggling CSV, or FILE.c3d|.bvh|.tsv"
+        "?ball=NAME or ?balls=unlabelled) instead of running the juggler",
+    )
+    p.add_argument(
+        "--n-balls",
+        type=options.positive_int,
+        default=None,
+        help="balls in the analysed pattern (--analyse; default: Shannon's theorem's count)",
     )
     p.add_argument("--no-dmp", action="store_true", help="skip the DMP competitor")
     p.add_argument("--no-video", action="store_true", help="skip the GIF")

@@ -18,6 +18,9 @@ The public names of small private modules, one concern each:
   scatters a toss (:func:`perturb_release`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
+* ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
+  of unlabelled, gappy markers, fitted gravity, apex) and the pattern's timing against
+  Shannon's juggling theorem (:func:`pattern_summary`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
@@ -38,6 +41,15 @@ from motion_envs.models.juggling._fit import (
     load_juggler,
     v1_fit,
     v1_juggler,
+)
+from motion_envs.models.juggling._flights import (
+    Flight,
+    FlightAnalysis,
+    FlightOptions,
+    PatternSummary,
+    detect_flights,
+    estimate_noise,
+    pattern_summary,
 )
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._levels import (
@@ -102,23 +114,30 @@ __all__ = [
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
+    "Flight",
+    "FlightAnalysis",
+    "FlightOptions",
     "HumanLikeness",
     "JugglerController",
     "JugglerModel",
     "JugglingController",
     "JugglingLevel",
     "JugglingWorld",
+    "PatternSummary",
     "PhaseFit",
     "cycle_rng",
     "cycle_rngs",
     "default_fit",
+    "detect_flights",
     "draw_episode_noise",
+    "estimate_noise",
     "fit_juggler",
     "juggler_demonstrations",
     "load_demonstrations",
     "load_juggler",
     "load_juggling_csv",
     "make_controller",
+    "pattern_summary",
     "perturb_release",
     "phase_conditions",
     "plan_catch",

@@ -1,0 +1,252 @@
+"""``motion-bench juggling --analyse FILE``: ball flights and pattern timing of a recording.
+
+:func:`load_ball_markers` reads the ball markers (a juggling CSV's ``ball_x, ball_z``; a
+C3D, BVH or Qualisys TSV through the import's readers, with the import's options after
+``?``: ``ball=NAME[,NAME...]`` or ``balls=unlabelled``, ``up``, ``unit``, ``lateral``);
+:func:`run_analysis` (a pure function of :class:`AnalyseConfig`) detects the flights and
+the pattern with :func:`motion_envs.models.juggling.detect_flights` and
+:func:`~motion_envs.models.juggling.pattern_summary`; :func:`report_analysis` is the
+printed text; :func:`write_analysis` writes ``results.json``, ``flights.csv`` and
+``flights.png``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from baselines.juggling_bench.text import clean_json
+from motion_envs._io import atomic_write_text, save_figure
+from motion_envs.datasets.juggling import read_juggling_csv
+from motion_envs.datasets.mocap import YUP_TO_ZUP, is_mocap_source, parse_source, read_recording
+from motion_envs.models.juggling import (
+    FlightAnalysis,
+    FlightOptions,
+    detect_flights,
+    pattern_summary,
+)
+
+__all__ = [
+    "AnalyseConfig",
+    "BallMarkers",
+    "load_ball_markers",
+    "report_analysis",
+    "run_analysis",
+    "write_analysis",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: Gravity the fitted one is compared with (m/s^2).
+STANDARD_GRAVITY = 9.81
+
+
+@dataclass(frozen=True)
+class BallMarkers:
+    """Ball marker trajectories as read: per recording, times ``(F,)`` and positions
+    ``(F, U, D)`` (vertical last, NaN missing; D = 2 for a juggling CSV: lateral,
+    vertical), the index of the lateral coordinate, and what was read."""
+
+    source: str
+    recordings: tuple[tuple[str, FloatArray, FloatArray], ...]
+    lateral: int
+    description: str
+
+
+@dataclass(frozen=True)
+class AnalyseConfig:
+    """``source``: the file (``FILE?option=value&...`` for a motion capture file);
+    ``balls``: the number of balls of the pattern (None: Shannon's theorem's count,
+    rounded); ``options``: the flight detection's."""
+
+    source: str
+    balls: int | None = None
+    options: FlightOptions = field(default_factory=FlightOptions)
+
+
+def load_ball_markers(source: str | os.PathLike[str]) -> BallMarkers:
+    """The ball markers of ``source`` (module docstring).
+
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file
+    for a file that cannot be read or names no ball.
+    """
+    text = os.fspath(source)
+    if is_mocap_source(text):
+        path, opts = parse_source(text)
+        if opts.ball is None and opts.balls != "unlabelled":
+            raise ValueError(
+                f"{path}: give the ball markers (?ball=NAME[,NAME...]) or ?balls=unlabelled"
+            )
+        rec = read_recording(path, opts.unit)
+        if rec.fmt == "bvh" and rec.scale is None:
+            raise ValueError(f"{path}: BVH lengths carry no unit; add unit=m|cm|mm|in after ?")
+        if opts.balls == "unlabelled":
+            cols = [j for j, name in enumerate(rec.labels) if not name]
+            if not cols:
+                raise ValueError(f"{path}: balls=unlabelled, but the file has no unlabelled marker")
+            what = f"{len(cols)} unlabelled trajectories"
+        else:
+            kind = "joint" if rec.fmt == "bvh" else "marker"
+            names = [n.strip() for n in str(opts.ball).split(",") if n.strip()]
+            cols = [rec.index(n, kind) for n in names]
+            what = f"{kind}(s) {', '.join(names)}"
+        pts = rec.points[:, cols]
+        if opts.up == "y":
+            pts = pts @ YUP_TO_ZUP.T
+        lateral = 0 if opts.lateral == "x" else 1
+        desc = f"{path.name}: {rec.n_frames} frames at {rec.rate:g} Hz, {what}"
+        return BallMarkers(str(path), ((path.stem, rec.t, pts),), lateral, desc)
+    demos = read_juggling_csv(text)
+    recs = []
+    for r in demos.recordings:
+        if r.ball is None:
+            raise ValueError(f"{text}: no ball columns (ball_x, ball_z) to analyse")
+        recs.append((r.name, r.t, r.ball[:, None, :]))
+    n = sum(r[1].size for r in recs)
+    desc = f"{Path(text).name}: {len(recs)} recording(s), {n} samples, ball_x and ball_z"
+    return BallMarkers(text, tuple(recs), 0, desc)
+
+
+def run_analysis(config: AnalyseConfig) -> dict[str, Any]:
+    """Flights and pattern of ``config.source``: the results document (no files, no
+    printing). Keys starting with ``_`` hold the arrays of the plot."""
+    markers = load_ball_markers(config.source)
+    analyses: list[FlightAnalysis] = []
+    for name, t, pts in markers.recordings:
+        analyses.append(detect_flights(t, pts, config.options, recording=name))
+    flights = tuple(f for a in analyses for f in a.flights)
+    counts: dict[str, int] = {}
+    for a in analyses:
+        for k, v in a.counts.items():
+            counts[k] = counts.get(k, 0) + v
+    gravity = [f.gravity for f in flights]
+    median = float(np.median(gravity)) if gravity else math.nan
+    pattern = pattern_summary(flights, markers.lateral, config.balls)
+    return {
+        "source": markers.source,
+        "read": markers.description,
+        "noise_m": float(np.median([a.noise for a in analyses])),
+        "n_flights": len(flights),
+        "gravity_median": median,
+        "gravity_iqr": [float(q) for q in np.quantile(gravity, [0.25, 0.75])]
+        if gravity
+        else [math.nan, math.nan],
+        "gravity_error": median / STANDARD_GRAVITY - 1.0,
+        "counts": counts,
+        "pattern": pattern.as_dict(),
+        "flights": [f.row(markers.lateral) for f in flights],
+        "options": {k: getattr(config.options, k) for k in config.options.__dataclass_fields__},
+        "_markers": markers,
+        "_flights": flights,
+    }
+
+
+def _num(value: Any, fmt: str) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "n/a"
+    return format(value, fmt)
+
+
+def report_analysis(doc: dict[str, Any]) -> str:
+    """The printed summary."""
+    p = doc["pattern"]
+    c = doc["counts"]
+    iqr = doc["gravity_iqr"]
+    lines = [
+        f"ball flights of {doc['read']}",
+        f"noise {doc['noise_m'] * 1e3:.2f} mm; {c['fragments']} fragments "
+        f"({c['fragments shorter than a window']} shorter than a window), "
+        f"{c['pieces']} ballistic pieces ({c['pieces joined']} joined), "
+        f"rejected: {c['pieces not ballistic']} pieces not ballistic, "
+        f"{c['flights too short']} flights too short, "
+        f"{c['flights not ballistic']} flights not ballistic",
+        f"{doc['n_flights']} flights; gravity median {_num(doc['gravity_median'], '.3f')} "
+        f"m/s^2 (IQR {_num(iqr[0], '.3f')} to {_num(iqr[1], '.3f')}; "
+        f"{_num(100 * doc['gravity_error'], '+.2f')} % from {STANDARD_GRAVITY})",
+        f"pattern: {p['throws']} throws, {p['catches']} catches seen, {p['hands']} hand(s); "
+        f"throw period {_num(p['throw_period'], '.3f')} s, hand period "
+        f"{_num(p['hand_period'], '.3f')} s, alternation {_num(p['alternation'], '.2f')}",
+        f"flight F {_num(p['flight'], '.3f')} s, dwell D {_num(p['dwell'], '.3f')} s, "
+        f"vacant V {_num(p['vacant'], '.3f')} s, dwell ratio {_num(p['dwell_ratio'], '.3f')}",
+        f"Shannon (F + D) H = (V + D) N: balls {_num(p['balls_theorem'], '.2f')} "
+        f"(pattern: {p['balls'] if p['balls'] is not None else 'n/a'}); flight time for "
+        f"that N {_num(p['flight_theorem'], '.3f')} s vs measured {_num(p['flight'], '.3f')} s",
+    ]
+    if doc["n_flights"] == 0:
+        low, high = doc["options"]["gravity_range"]
+        lines.append(
+            f"no flight found: a flight is ballistic for at least "
+            f"{doc['options']['min_duration']:g} s with a downward acceleration of {low:g} "
+            f"to {high:g} m/s^2 (are the lengths in metres, the up axis right?)"
+        )
+    return "\n".join(lines)
+
+
+def plot_flights(doc: dict[str, Any], path: Path, span: float = 4.0) -> Path:
+    """Heights over time (the first ``span`` s of the first recording: every marker
+    sample, the fitted parabolas over each flight) and the histogram of fitted g."""
+    from matplotlib.figure import Figure
+
+    markers: BallMarkers = doc["_markers"]
+    name, t, pts = markers.recordings[0]
+    fig = Figure(figsize=(11, 4.2))
+    ax, hx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2.6, 1]})
+    t0 = float(t[0])
+    sel = t <= t0 + span
+    z = pts[sel, :, -1]
+    tt = np.broadcast_to(t[sel, None], z.shape)
+    ax.plot(tt.ravel(), z.ravel(), ".", ms=1.2, color="0.6", label="marker samples")
+    first = True
+    for f in doc["_flights"]:
+        if f.recording != name or f.start > t0 + span:
+            continue
+        ts = np.linspace(f.start, f.end, 60)
+        ax.plot(
+            ts, f.position(ts)[:, -1], color="C3", lw=1.2, label="fitted flight" if first else None
+        )
+        ax.plot(
+            [f.start, f.end], f.position(np.array([f.start, f.end]))[:, -1], "|", color="k", ms=6
+        )
+        first = False
+    ax.set_xlim(t0, t0 + span)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("height (m)")
+    ax.set_title(f"{name}: ball heights, fitted parabolas (| release and catch)", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper right", fontsize=8, markerscale=4)
+    g = np.array([r["gravity"] for r in doc["flights"]])
+    if g.size:
+        hx.hist(g, bins=min(30, max(5, g.size // 4)), color="C0", alpha=0.8)
+        hx.axvline(
+            doc["gravity_median"], color="C3", lw=1.5, label=f"median {doc['gravity_median']:.3f}"
+        )
+    hx.axvline(STANDARD_GRAVITY, color="k", ls="--", lw=1, label=f"{STANDARD_GRAVITY}")
+    hx.set_xlabel("fitted g (m/s$^2$)")
+    hx.set_ylabel("flights")
+    hx.set_title(f"{doc['n_flights']} flights", fontsize=9)
+    hx.legend(fontsize=8)
+    fig.tight_layout()
+    return save_figure(fig, path, dpi=150)
+
+
+def write_analysis(doc: dict[str, Any], out: str | os.PathLike[str]) -> list[Path]:
+    """``results.json``, ``flights.csv`` and ``flights.png`` in ``out`` (atomically)."""
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = [
+        atomic_write_text(
+            folder / "results.json", json.dumps(clean_json(doc), indent=2, allow_nan=False) + "\n"
+        )
+    ]
+    table = pd.DataFrame(doc["flights"]) if doc["flights"] else pd.DataFrame(columns=["start"])
+    paths.append(atomic_write_text(folder / "flights.csv", table.to_csv(index=False)))
+    paths.append(plot_flights(doc, folder / "flights.png"))
+    return paths

@@ -1,0 +1,759 @@
+"""Ball flights in recorded juggling: free-flight detection, gravity, pattern timing.
+
+Input: ball marker positions ``(F, U, D)`` at times ``(F,)``, NaN where a marker is
+missing, ``D`` = 2 (lateral, vertical) or 3 (two horizontal axes, vertical last). The
+``U`` columns may be labelled balls or unlabelled trajectory fragments (a column can
+hold several balls one after the other, gaps, marker swaps, spurious markers).
+
+Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalysis.counts`):
+
+1. **Noise.** The measurement noise ``sigma`` is given or estimated from the data: the
+   third difference of a polynomial of degree 2 is zero, so over every run of
+   consecutive samples ``sigma = 1.4826 MAD(diff3) / sqrt(20)``, floored at
+   :attr:`FlightOptions.min_noise`. The tolerance is ``tol = tolerance * sigma``.
+2. **Fragments.** Each column is cut into runs of present samples, and a run again
+   where one sample jumps from the last faster than :attr:`FlightOptions.max_speed`
+   (plus ``tol``): a marker swap or a label handed to another ball.
+3. **Seeds.** On every fragment a window of :attr:`FlightOptions.window` seconds slides
+   sample by sample; the vertical coordinate is fitted by a quadratic in time, each
+   horizontal one by a line (free flight, no drag). A window is a seed when its residual
+   rms is at most ``2 sigma`` and its vertical acceleration points down.
+4. **Growth.** From the best seed (lowest rms) still free, a piece grows: the samples of
+   the fragment on the current fit (residual at most ``tol`` in every coordinate, or an
+   isolated outlier between two such samples), in the contiguous run that holds the
+   seed; refit; repeat until the run no longer changes. Release and catch are then
+   placed by a change point: within half a window of each end, the split between the
+   parabola and a free quadratic (the ball in the hand) with the least total squared
+   residual. The piece's samples are taken, and the next best free seed grows. A piece
+   is kept when its fitted downward acceleration is within
+   :attr:`FlightOptions.gravity_range` widened by 4 standard errors of the fit.
+5. **Joining.** Pieces in time order join a flight when one parabola fits both (every
+   sample on it as in step 4, rms at most ``2 sigma``; up to a window of samples at the
+   two outer ends may be left out of that fit, each piece keeping at least half its
+   samples), with at most :attr:`FlightOptions.max_join_gap` s between them: a flight
+   split by a tracking gap or a swap, continued in another column, or seen twice (a
+   duplicated marker). Flights that the order of joining left in two are joined after.
+6. **Flights.** A joined flight is kept when it lasts at least
+   :attr:`FlightOptions.min_duration` s and its downward acceleration, fitted on all its
+   samples, is within :attr:`FlightOptions.gravity_range` (no widening): a static or
+   jittering spurious marker has none, a short fragment is too short.
+
+Per flight: gravity ``g = -2 c2`` of ``z = c0 + c1 tau + c2 tau^2``, apex
+``c0 - c1^2 / (4 c2)`` at ``tau = -c1 / (2 c2)``, first and last sample (release and
+catch when the ball is seen just before and after, in the same fragment, off the
+parabola), residual rms.
+
+Pattern (:func:`pattern_summary`), from the flights whose ends were seen: throws at
+releases and catches at catches; the hand of an event is its side of the midline
+between the two clusters of release positions on the lateral axis (two-means; two
+hands when there are at least 4 throws and the centres are more than 6 pooled standard
+deviations apart, else one); throw period = median interval between throws, hand
+period = between throws of the same hand, dwell = from a hand's catch to its next
+throw, vacant = hand period - dwell, dwell ratio = dwell / hand period (medians),
+alternation = the fraction of successive throws (less than 1.5 throw periods apart)
+made by different hands. Shannon's juggling theorem
+``(F + D) H = (V + D) N`` (flight F, dwell D, vacant V, hands H, balls N) then gives
+the balls ``H (F + D) / (V + D)`` and, for N balls, the flight time
+``N (V + D) / H - D``, reported next to the measured ones.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+from numpy.typing import NDArray
+
+__all__ = [
+    "Flight",
+    "FlightAnalysis",
+    "FlightOptions",
+    "PatternSummary",
+    "detect_flights",
+    "estimate_noise",
+    "pattern_summary",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: MAD to standard deviation for normal noise.
+_MAD_TO_STD = 1.4826
+#: Standard deviation of the third difference of unit white noise: sqrt(1 + 9 + 9 + 1).
+_DIFF3_STD = math.sqrt(20.0)
+
+
+@dataclass(frozen=True)
+class FlightOptions:
+    """How :func:`detect_flights` decides (module docstring, steps 1-6).
+
+    Attributes
+    ----------
+    noise:
+        Measurement noise std (m) of one coordinate; None: estimated from the data.
+    min_noise:
+        Floor of the noise (m), so that exact (synthetic) data keep a tolerance.
+    tolerance:
+        A sample is on a parabola when its residual is at most ``tolerance * noise`` in
+        every coordinate.
+    window:
+        Seed window (s); at least 6 samples.
+    min_duration:
+        Shortest flight (s), first to last sample.
+    gravity_range:
+        ``(low, high)`` downward acceleration (m/s^2) of a flight.
+    max_speed:
+        A jump between consecutive samples faster than this (m/s) cuts a fragment.
+    max_join_gap:
+        Longest time (s) between two pieces of one flight.
+    """
+
+    noise: float | None = None
+    min_noise: float = 1e-4
+    tolerance: float = 4.5
+    window: float = 0.06
+    min_duration: float = 0.1
+    gravity_range: tuple[float, float] = (4.0, 20.0)
+    max_speed: float = 20.0
+    max_join_gap: float = 0.25
+
+    def __post_init__(self) -> None:
+        positive = {
+            "min_noise": self.min_noise,
+            "tolerance": self.tolerance,
+            "window": self.window,
+            "max_speed": self.max_speed,
+        }
+        if self.noise is not None:
+            positive["noise"] = self.noise
+        for name, value in positive.items():
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name}: expected a finite number > 0; got {value!r}")
+        for name, value in {
+            "min_duration": self.min_duration,
+            "max_join_gap": self.max_join_gap,
+        }.items():
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name}: expected a finite number >= 0; got {value!r}")
+        low, high = self.gravity_range
+        if not (math.isfinite(low) and math.isfinite(high) and 0 < low < high):
+            raise ValueError(
+                f"gravity_range: expected finite 0 < low < high; got {self.gravity_range!r}"
+            )
+
+
+@dataclass(frozen=True)
+class Flight:
+    """One ball flight: samples, fit and events (times in the input's seconds).
+
+    ``coef`` is ``(3, D)``: per coordinate ``c0 + c1 tau + c2 tau^2`` with
+    ``tau = t - t_ref`` (horizontal ``c2`` = 0). ``start_seen``/``end_seen``: the ball
+    was seen just before the first (after the last) sample, off the parabola: the
+    release (catch) is then the first (last) sample, to one frame.
+    """
+
+    start: float
+    end: float
+    t_ref: float
+    coef: FloatArray
+    gravity: float
+    gravity_se: float
+    apex_height: float
+    apex_time: float
+    residual_rms: float
+    n_samples: int
+    pieces: int
+    start_seen: bool
+    end_seen: bool
+    recording: str = ""
+
+    @property
+    def duration(self) -> float:
+        return self.end - self.start
+
+    def position(self, t: FloatArray | float) -> FloatArray:
+        """``(..., D)`` the fitted position at times ``t``."""
+        tau = np.asarray(t, dtype=np.float64)[..., None] - self.t_ref
+        out: FloatArray = self.coef[0] + self.coef[1] * tau + self.coef[2] * tau**2
+        return out
+
+    def row(self, lateral: int = 0) -> dict[str, float | int | bool | str]:
+        """The flight as a table row (release and catch on the ``lateral`` axis)."""
+        ends = self.position(np.array([self.start, self.end]))
+        return {
+            "recording": self.recording,
+            "start": self.start,
+            "end": self.end,
+            "duration": self.duration,
+            "gravity": self.gravity,
+            "gravity_se": self.gravity_se,
+            "apex_height": self.apex_height,
+            "apex_time": self.apex_time,
+            "release_height": float(ends[0, -1]),
+            "release_lateral": float(ends[0, lateral]),
+            "catch_height": float(ends[1, -1]),
+            "catch_lateral": float(ends[1, lateral]),
+            "residual_rms": self.residual_rms,
+            "n_samples": self.n_samples,
+            "pieces": self.pieces,
+            "start_seen": self.start_seen,
+            "end_seen": self.end_seen,
+        }
+
+
+@dataclass(frozen=True)
+class FlightAnalysis:
+    """:func:`detect_flights`' result: the flights, the noise used, the decision counts."""
+
+    flights: tuple[Flight, ...]
+    noise: float
+    counts: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def gravity_median(self) -> float:
+        """Median fitted gravity (m/s^2); NaN without flights."""
+        if not self.flights:
+            return math.nan
+        return float(np.median([f.gravity for f in self.flights]))
+
+
+@dataclass(frozen=True)
+class PatternSummary:
+    """The pattern's timing (module docstring); NaN where the events do not tell.
+
+    Times in s. ``balls_theorem`` is Shannon's ``H (F + D) / (V + D)``;
+    ``flight_theorem`` is ``N (V + D) / H - D`` with ``balls`` (given, or the theorem's
+    count rounded).
+    """
+
+    throws: int
+    catches: int
+    hands: int
+    midline: float
+    throw_period: float
+    hand_period: float
+    flight: float
+    dwell: float
+    vacant: float
+    dwell_ratio: float
+    alternation: float
+    balls: int | None
+    balls_theorem: float
+    flight_theorem: float
+
+    def as_dict(self) -> dict[str, float | int | None]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+# ----------------------------------------------------------------------------- fits
+
+
+def _design(tau: FloatArray, degree: int) -> FloatArray:
+    return np.stack([tau**k for k in range(degree + 1)], axis=-1)
+
+
+def _fit(t: FloatArray, pts: FloatArray, t_ref: float) -> tuple[FloatArray, FloatArray]:
+    """``(3, D)`` coefficients (vertical quadratic, horizontal lines) and residuals."""
+    tau = t - t_ref
+    coef = np.zeros((3, pts.shape[1]))
+    quad = _design(tau, 2)
+    coef[:, -1] = np.linalg.lstsq(quad, pts[:, -1], rcond=None)[0]
+    if pts.shape[1] > 1:
+        coef[:2, :-1] = np.linalg.lstsq(quad[:, :2], pts[:, :-1], rcond=None)[0]
+    resid: FloatArray = pts - (coef[0] + coef[1] * tau[:, None] + coef[2] * tau[:, None] ** 2)
+    return coef, resid
+
+
+def _predict(coef: FloatArray, t: FloatArray, t_ref: float) -> FloatArray:
+    tau = (t - t_ref)[:, None]
+    out: FloatArray = coef[0] + coef[1] * tau + coef[2] * tau**2
+    return out
+
+
+def _gravity_se(t: FloatArray, t_ref: float, sigma: float) -> float:
+    """Standard error of ``-2 c2`` for white noise ``sigma``."""
+    quad = _design(t - t_ref, 2)
+    try:
+        cov = np.linalg.inv(quad.T @ quad)
+    except np.linalg.LinAlgError:
+        return math.inf
+    return float(2.0 * sigma * math.sqrt(max(cov[2, 2], 0.0)))
+
+
+def estimate_noise(points: FloatArray) -> float:
+    """Noise std of one coordinate from the third differences of ``(F, U, D)`` points
+    (NaN where missing), ``1.4826 MAD / sqrt(20)``; NaN when no four consecutive samples
+    exist."""
+    pts = np.asarray(points, dtype=np.float64)
+    d3 = np.diff(pts, n=3, axis=0)
+    vals = d3[np.isfinite(d3)]
+    if vals.size == 0:
+        return math.nan
+    return float(_MAD_TO_STD * np.median(np.abs(vals - np.median(vals))) / _DIFF3_STD)
+
+
+# ------------------------------------------------------------------------ fragments
+
+
+def _fragments(
+    t: FloatArray, points: FloatArray, max_speed: float, tol: float
+) -> list[tuple[int, IntArray]]:
+    """``(column, frame indices)`` of each fragment (step 2)."""
+    out: list[tuple[int, IntArray]] = []
+    for u in range(points.shape[1]):
+        ok = np.isfinite(points[:, u]).all(axis=1)
+        edges = np.diff(np.concatenate([[0], ok.astype(np.int8), [0]]))
+        for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            idx = np.arange(s, e, dtype=np.int64)
+            if idx.size > 1:
+                step = np.linalg.norm(np.diff(points[idx, u], axis=0), axis=1)
+                cut = np.flatnonzero(step > max_speed * np.diff(t[idx]) + tol) + 1
+                out.extend((u, part) for part in np.split(idx, cut))
+            else:
+                out.append((u, idx))
+    return out
+
+
+@dataclass
+class _Piece:
+    t: FloatArray
+    pts: FloatArray
+    start_seen: bool
+    end_seen: bool
+    column: int
+    count: int = 1
+
+
+def _window_seeds(tt: FloatArray, pts: FloatArray, n_w: int, sigma: float) -> FloatArray:
+    """rms of each window's fit; inf where the window is not a seed (step 3)."""
+    tw = sliding_window_view(tt, n_w)  # (W, n)
+    pw = sliding_window_view(pts, n_w, axis=0)  # (W, D, n)
+    tau = tw - tw[:, n_w // 2 : n_w // 2 + 1]
+    quad = _design(tau, 2)  # (W, n, 3)
+    proj = np.linalg.pinv(quad)  # (W, 3, n)
+    cz = np.einsum("wkn,wn->wk", proj, pw[:, -1, :])
+    rz = pw[:, -1, :] - np.einsum("wnk,wk->wn", quad, cz)
+    sq = np.sum(rz**2, axis=1)
+    if pts.shape[1] > 1:
+        lin = quad[:, :, :2]
+        proj1 = np.linalg.pinv(lin)
+        ch = np.einsum("wkn,wdn->wdk", proj1, pw[:, :-1, :])
+        rh = pw[:, :-1, :] - np.einsum("wnk,wdk->wdn", lin, ch)
+        sq = sq + np.sum(rh**2, axis=(1, 2))
+    rms = np.sqrt(sq / (n_w * pts.shape[1]))
+    seed = (rms <= 2.0 * sigma) & (cz[:, 2] < 0)
+    out: FloatArray = np.where(seed, rms, np.inf)
+    return out
+
+
+def _within(resid: FloatArray, tol: float) -> NDArray[np.bool_]:
+    """``(n,)`` True where a sample is on the curve: within ``tol`` in every coordinate,
+    or an isolated outlier between two samples that are (noise has tails; the hand
+    moves the ball off a parabola for several samples in a row)."""
+    ok: NDArray[np.bool_] = np.asarray((np.abs(resid) <= tol).all(axis=1))
+    if ok.size >= 3:
+        lone = ~ok[1:-1] & ok[:-2] & ok[2:]
+        ok[1:-1] |= lone
+    return ok
+
+
+def _grow(
+    tt: FloatArray, pts: FloatArray, free: NDArray[np.bool_], lo: int, hi: int, tol: float
+) -> tuple[int, int]:
+    """Grow ``[lo, hi)`` over the free samples whose residual is within ``tol`` (step 4)."""
+    n = tt.size
+    for _ in range(50):
+        t_ref = float(tt[(lo + hi) // 2])
+        coef, _ = _fit(tt[lo:hi], pts[lo:hi], t_ref)
+        good = _within(pts - _predict(coef, tt, t_ref), tol) & free
+        mid = (lo + hi) // 2
+        if not good[mid]:
+            inside = np.flatnonzero(good[lo:hi])
+            if inside.size == 0:
+                return lo, hi
+            mid = lo + int(inside[np.argmin(np.abs(inside + lo - mid))])
+        bad = np.flatnonzero(~good)
+        left = bad[bad < mid]
+        right = bad[bad > mid]
+        new_lo = int(left[-1]) + 1 if left.size else 0
+        new_hi = int(right[0]) if right.size else n
+        if (new_lo, new_hi) == (lo, hi):
+            break
+        lo, hi = new_lo, new_hi
+    return lo, hi
+
+
+def _sse(t: FloatArray, pts: FloatArray, flight: bool) -> float:
+    """Residual sum of squares of a flight (vertical quadratic, horizontal lines) or of a
+    free quadratic in every coordinate (the ball in the hand)."""
+    t_ref = float(t[t.size // 2])
+    if flight:
+        _, resid = _fit(t, pts, t_ref)
+    else:
+        quad = _design(t - t_ref, 2)
+        coef = np.linalg.lstsq(quad, pts, rcond=None)[0]
+        resid = pts - quad @ coef
+    return float(np.sum(resid**2))
+
+
+def _longest(costs: dict[int, float], eps: float, first: bool) -> int:
+    """The split of least cost; of splits within ``eps`` of it, the longest flight."""
+    best = min(costs.values())
+    near = [s for s, c in costs.items() if c <= best + eps]
+    return min(near) if first else max(near)
+
+
+def _refine(
+    tt: FloatArray,
+    pts: FloatArray,
+    free: NDArray[np.bool_],
+    lo: int,
+    hi: int,
+    k: int,
+    eps: float,
+) -> tuple[int, int]:
+    """Release and catch of a grown piece ``[lo, hi)`` by a change point (step 4).
+
+    Within ``k`` samples of each end the split between the flight (a parabola) and the
+    ball in the hand (a free quadratic, on the up to ``k`` free samples beyond the end)
+    with the least total squared residual (ties within ``eps``: the longest flight; a
+    sample on both curves is in the flight); both sides keep at least 4 samples."""
+    a = lo
+    while a > 0 and free[a - 1] and lo - a < k:
+        a -= 1
+    if lo - a >= 2:
+        costs = {
+            s: _sse(tt[s:hi], pts[s:hi], True) + _sse(tt[a:s], pts[a:s], False)
+            for s in range(max(lo, a + 4), min(lo + k, hi - 4) + 1)
+        }
+        if costs:
+            lo = _longest(costs, eps, first=True)
+    b = hi
+    while b < tt.size and free[b] and b - hi < k:
+        b += 1
+    if b - hi >= 2:
+        costs = {
+            s: _sse(tt[lo:s], pts[lo:s], True) + _sse(tt[s:b], pts[s:b], False)
+            for s in range(max(hi - k, lo + 4), min(hi, b - 4) + 1)
+        }
+        if costs:
+            hi = _longest(costs, eps, first=False)
+    return lo, hi
+
+
+def _pieces(
+    t: FloatArray,
+    points: FloatArray,
+    frag: tuple[int, IntArray],
+    n_w: int,
+    sigma: float,
+    tol: float,
+    options: FlightOptions,
+    counts: dict[str, int],
+) -> list[_Piece]:
+    column, idx = frag
+    tt = t[idx]
+    pts = points[idx, column]
+    rms = _window_seeds(tt, pts, n_w, sigma)
+    free = np.ones(idx.size, dtype=bool)
+    out: list[_Piece] = []
+    low, high = options.gravity_range
+    while True:
+        csum = np.concatenate([[0], np.cumsum(free)])
+        all_free = (csum[n_w:] - csum[:-n_w]) == n_w
+        cand = np.where(all_free, rms, np.inf)
+        w = int(np.argmin(cand))
+        if not math.isfinite(cand[w]):
+            break
+        lo, hi = _grow(tt, pts, free, w, w + n_w, tol)
+        lo, hi = _refine(tt, pts, free, lo, hi, max(n_w // 2, 6), (1e-3 * sigma) ** 2)
+        free[lo:hi] = False
+        rms[max(lo - n_w + 1, 0) : hi] = np.inf
+        if hi - lo < n_w:
+            counts["pieces too short"] += 1
+            continue
+        t_ref = float(tt[(lo + hi) // 2])
+        coef, _ = _fit(tt[lo:hi], pts[lo:hi], t_ref)
+        g = -2.0 * float(coef[2, -1])
+        se = _gravity_se(tt[lo:hi], t_ref, sigma)
+        if not (low - 4 * se <= g <= high + 4 * se):
+            counts["pieces not ballistic"] += 1
+            continue
+        out.append(_Piece(tt[lo:hi], pts[lo:hi], lo > 0, hi < idx.size, column))
+    return out
+
+
+def _merge(a: _Piece, b: _Piece, tol: float, rms_max: float, k: int) -> _Piece | None:
+    """``a`` and ``b`` as one flight, or None (step 5).
+
+    One parabola must fit every sample within ``tol`` with rms at most ``rms_max``; up to
+    ``k`` samples at each of the two outer ends may be left out of the fit (a short piece
+    that ended in the hand, without samples enough beyond it for the change point); the
+    outer samples within ``tol`` of that fit are then taken back. Each piece must keep at
+    least half its samples."""
+    t = np.concatenate([a.t, b.t])
+    pts = np.concatenate([a.pts, b.pts])
+    order = np.argsort(t, kind="stable")
+    t, pts = t[order], pts[order]
+    from_a = (order < a.t.size).astype(np.int64)
+    n = t.size
+    first = a if a.t[0] <= b.t[0] else b
+    last = a if a.t[-1] >= b.t[-1] else b
+    t_ref = float(0.5 * (t[0] + t[-1]))
+    cuts = sorted(
+        {(h, e) for h in (0, k // 2, k) for e in (0, k // 2, k) if n - h - e >= 2 * k},
+        key=sum,
+    )
+    for head, tail in cuts:
+        coef, resid = _fit(t[head : n - tail], pts[head : n - tail], t_ref)
+        if not _within(resid, tol).all() or float(np.sqrt(np.mean(resid**2))) > rms_max:
+            continue
+        good = _within(pts - _predict(coef, t, t_ref), tol)
+        lo, hi = head, n - tail
+        while lo > 0 and good[lo - 1]:
+            lo -= 1
+        while hi < n and good[hi]:
+            hi += 1
+        kept_a = int(from_a[lo:hi].sum())
+        if 2 * kept_a < a.t.size or 2 * (hi - lo - kept_a) < b.t.size:
+            continue  # most of a piece left out: not one flight
+        return _Piece(
+            t[lo:hi],
+            pts[lo:hi],
+            first.start_seen or lo > 0,
+            last.end_seen or hi < n,
+            first.column,
+            a.count + b.count,
+        )
+    return None
+
+
+def _join(
+    pieces: list[_Piece], sigma: float, tol: float, max_gap: float, k: int, counts: dict[str, int]
+) -> list[_Piece]:
+    """Join the pieces of each flight (step 5)."""
+    groups: list[_Piece] = []
+    for piece in sorted(pieces, key=lambda p: float(p.t[0])):
+        best: tuple[int, _Piece] | None = None
+        best_rms = math.inf
+        for i, group in enumerate(groups):
+            if piece.t[0] - group.t[-1] > max_gap or group.t[0] - piece.t[-1] > max_gap:
+                continue
+            merged = _merge(group, piece, tol, 2.0 * sigma, k)
+            if merged is None:
+                continue
+            _, resid = _fit(merged.t, merged.pts, float(merged.t[merged.t.size // 2]))
+            rms = float(np.sqrt(np.mean(resid**2)))
+            if rms < best_rms:
+                best, best_rms = (i, merged), rms
+        if best is None:
+            groups.append(piece)
+        else:
+            groups[best[0]] = best[1]
+            counts["pieces joined"] += 1
+    merged_any = True
+    while merged_any:  # groups that grew into one flight (the greedy order split them)
+        merged_any = False
+        groups.sort(key=lambda g: float(g.t[0]))
+        for i, j in itertools.combinations(range(len(groups)), 2):
+            a, b = groups[i], groups[j]
+            if b.t[0] - a.t[-1] > max_gap or a.t[0] - b.t[-1] > max_gap:
+                continue
+            merged = _merge(a, b, tol, 2.0 * sigma, k)
+            if merged is not None:
+                groups[i] = merged
+                del groups[j]
+                counts["pieces joined"] += 1
+                merged_any = True
+                break
+    return groups
+
+
+def detect_flights(
+    t: FloatArray,
+    points: FloatArray,
+    options: FlightOptions | None = None,
+    recording: str = "",
+) -> FlightAnalysis:
+    """The free flights in ``points`` ``(F, U, D)`` at times ``t`` ``(F,)`` (module
+    docstring). Raises ``ValueError`` for shapes that do not match, times that are not
+    finite and strictly increasing, or infinite positions."""
+    opts = options or FlightOptions()
+    t = np.asarray(t, dtype=np.float64)
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim == 2:
+        points = points[:, None, :]
+    if t.ndim != 1 or points.ndim != 3 or points.shape[0] != t.size:
+        raise ValueError(
+            f"points: expected shape (F, U, D) with F = {t.size} times; got {points.shape}"
+        )
+    if points.shape[2] not in (2, 3):
+        raise ValueError(f"points: expected D = 2 or 3 coordinates; got {points.shape[2]}")
+    if not np.isfinite(t).all() or (t.size > 1 and (np.diff(t) <= 0).any()):
+        raise ValueError("t: expected finite, strictly increasing times")
+    if np.isinf(points).any():
+        raise ValueError("points: infinite value (use NaN for a missing sample)")
+    counts = {
+        "fragments": 0,
+        "fragments shorter than a window": 0,
+        "pieces too short": 0,
+        "pieces not ballistic": 0,
+        "pieces": 0,
+        "pieces joined": 0,
+        "flights too short": 0,
+        "flights not ballistic": 0,
+        "flights": 0,
+    }
+    if opts.noise is not None:
+        sigma = max(opts.noise, opts.min_noise)
+    else:
+        est = estimate_noise(points)
+        sigma = opts.min_noise if not math.isfinite(est) else max(est, opts.min_noise)
+    tol = opts.tolerance * sigma
+    dt = float(np.median(np.diff(t))) if t.size > 1 else math.inf
+    n_w = max(6, round(opts.window / dt) + 1) if math.isfinite(dt) else 6
+    pieces: list[_Piece] = []
+    for frag in _fragments(t, points, opts.max_speed, tol):
+        counts["fragments"] += 1
+        if frag[1].size < n_w:
+            counts["fragments shorter than a window"] += 1
+            continue
+        pieces.extend(_pieces(t, points, frag, n_w, sigma, tol, opts, counts))
+    counts["pieces"] = len(pieces)
+    flights = []
+    low, high = opts.gravity_range
+    for group in _join(pieces, sigma, tol, opts.max_join_gap, n_w, counts):
+        ft = group.t
+        t_ref = float(0.5 * (ft[0] + ft[-1]))
+        coef, resid = _fit(ft, group.pts, t_ref)
+        if ft[-1] - ft[0] < opts.min_duration:
+            counts["flights too short"] += 1
+            continue
+        g = -2.0 * float(coef[2, -1])
+        if not low <= g <= high:
+            counts["flights not ballistic"] += 1
+            continue
+        c0, c1, c2 = (float(c) for c in coef[:, -1])
+        flights.append(
+            Flight(
+                start=float(ft[0]),
+                end=float(ft[-1]),
+                t_ref=t_ref,
+                coef=coef,
+                gravity=g,
+                gravity_se=_gravity_se(ft, t_ref, sigma),
+                apex_height=c0 - c1 * c1 / (4.0 * c2),
+                apex_time=t_ref - c1 / (2.0 * c2),
+                residual_rms=float(np.sqrt(np.mean(resid**2))),
+                n_samples=int(ft.size),
+                pieces=group.count,
+                start_seen=group.start_seen,
+                end_seen=group.end_seen,
+                recording=recording,
+            )
+        )
+    flights.sort(key=lambda f: f.start)
+    counts["flights"] = len(flights)
+    return FlightAnalysis(tuple(flights), sigma, counts)
+
+
+# -------------------------------------------------------------------------- pattern
+
+
+def _two_means(x: FloatArray) -> tuple[float, float, float]:
+    """Centres (low, high) and pooled std of the optimal 1-D two-means split."""
+    xs = np.sort(x)
+    n = xs.size
+    k = np.arange(1, n)
+    left = np.cumsum(xs)[:-1]
+    right = xs.sum() - left
+    # within-cluster sum of squares = total sum of squares - between-cluster terms
+    cost = float((xs**2).sum()) - left**2 / k - right**2 / (n - k)
+    i = int(np.argmin(cost))
+    pooled = math.sqrt(max(float(cost[i]), 0.0) / max(n - 2, 1))
+    return float(left[i] / k[i]), float(right[i] / (n - k[i])), pooled
+
+
+def _median(values: list[float]) -> float:
+    return float(np.median(values)) if values else math.nan
+
+
+def pattern_summary(
+    flights: tuple[Flight, ...] | list[Flight], lateral: int = 0, balls: int | None = None
+) -> PatternSummary:
+    """The pattern's timing from the flights (module docstring); ``lateral`` is the
+    coordinate across the body, ``balls`` the number of balls (None: the theorem's,
+    rounded)."""
+    if balls is not None and balls < 1:
+        raise ValueError(f"balls: expected an integer >= 1; got {balls!r}")
+    throws = [(f.recording, f.start, float(f.position(f.start)[lateral])) for f in flights]
+    throws = [e for e, f in zip(throws, flights, strict=True) if f.start_seen]
+    catches = [
+        (f.recording, f.end, float(f.position(f.end)[lateral])) for f in flights if f.end_seen
+    ]
+    both = [f.duration for f in flights if f.start_seen and f.end_seen]
+    hands, midline = 1, math.nan
+    if len(throws) >= 4:
+        low, high, pooled = _two_means(np.array([x for _, _, x in throws]))
+        if high - low > 6.0 * pooled:
+            hands, midline = 2, 0.5 * (low + high)
+
+    def hand(x: float) -> int:
+        return 0 if hands == 1 or x < midline else 1
+
+    beats: list[float] = []
+    periods: list[float] = []
+    dwells: list[float] = []
+    for rec in dict.fromkeys(r for r, _, _ in throws):
+        th = sorted((tm, hand(x)) for r, tm, x in throws if r == rec)
+        ca = sorted((tm, hand(x)) for r, tm, x in catches if r == rec)
+        beats.extend(b[0] - a[0] for a, b in itertools.pairwise(th))
+        for h in range(hands):
+            mine = [tm for tm, hh in th if hh == h]
+            periods.extend(b - a for a, b in itertools.pairwise(mine))
+        th_by = {h: [tm for tm, hh in th if hh == h] for h in range(hands)}
+        for tm, h in th:
+            before = [c for c, hh in ca if hh == h and c < tm]
+            previous = [x for x in th_by[h] if x < tm]
+            if before and (not previous or before[-1] > previous[-1]):
+                dwells.append(tm - before[-1])
+    beat = _median(beats)
+    if math.isfinite(beat):  # successive throws only (not across a missed one)
+        pairs: list[bool] = []
+        for rec in dict.fromkeys(r for r, _, _ in throws):
+            th = sorted((tm, hand(x)) for r, tm, x in throws if r == rec)
+            pairs.extend(
+                a[1] != b[1] for a, b in itertools.pairwise(th) if b[0] - a[0] < 1.5 * beat
+            )
+        alternation = float(np.mean(pairs)) if pairs else math.nan
+    else:
+        alternation = math.nan
+    hand_period = _median(periods) if hands == 2 else beat
+    dwell = _median(dwells)
+    flight = _median(both)
+    vacant = hand_period - dwell
+    ratio = dwell / hand_period
+    theorem = hands * (flight + dwell) / (vacant + dwell)
+    n = balls
+    if n is None and math.isfinite(theorem):
+        n = max(1, round(theorem))
+    flight_theorem = n * (vacant + dwell) / hands - dwell if n is not None else math.nan
+    return PatternSummary(
+        throws=len(throws),
+        catches=len(catches),
+        hands=hands,
+        midline=midline,
+        throw_period=beat,
+        hand_period=hand_period,
+        flight=flight,
+        dwell=dwell,
+        vacant=vacant,
+        dwell_ratio=ratio,
+        alternation=alternation,
+        balls=n,
+        balls_theorem=theorem,
+        flight_theorem=flight_theorem,
+    )
