@@ -59,6 +59,10 @@ napoleon_use_rtype = False
 # Attributes sections as fields of the class, not second descriptions of its members
 napoleon_use_ivar = True
 
+# Frames of each environment page's animation (a GIF rendered once and cached, see
+# docs/_ext/env_pages.py); 0 shows the first frame only (the docs test builds so).
+env_pages_animation_frames = int(os.environ.get("MOTION_ENVS_DOCS_ANIMATION_FRAMES", "60"))
+
 html_theme = "furo"
 html_title = "motion-envs"
 
