@@ -46,7 +46,9 @@ header = [
     f"NO_OF_FRAMES\t{len(hand_mm)}", "NO_OF_MARKERS\t1", f"FREQUENCY\t{rate:g}",
     "DATA_INCLUDED\t3D", "MARKER_NAMES\tHAND", "Frame\tTime\tHAND X\tHAND Y\tHAND Z",
 ]  # fmt: skip
-body = [f"{i + 1}\t{i / rate:.4f}\t" + "\t".join(f"{v:.3f}" for v in p) for i, p in enumerate(hand_mm)]
+body = [
+    f"{i + 1}\t{i / rate:.4f}\t" + "\t".join(f"{v:.3f}" for v in p) for i, p in enumerate(hand_mm)
+]
 tsv.write_text("\n".join(header + body) + "\n")
 
 # %%
@@ -79,7 +81,7 @@ for p, q in zip(reaches[-2:], conditions[-2:], strict=True):
     straight = p[0] + tau[:, None] * (p[-1] - p[0])
     error = np.linalg.norm(predicted - p, axis=1).max()
     baseline = np.linalg.norm(straight - p, axis=1).max()
-    print(f"held-out reach: max error {1000 * error:.1f} mm (straight line {1000 * baseline:.1f} mm)")
+    print(f"held-out reach: max error {1000 * error:.1f} mm, straight line {1000 * baseline:.1f}")
 
 # %%
 # 4. The recording as an environment's data

@@ -63,7 +63,6 @@ motion_bench(
     "train", "--algo", "ppo", "--env", "MotionEnvs/OrientationReach-v1", "--seed", "0",
     "--config", str(config), "--out", str(run), "--no-progress", "--no-tensorboard",
 )  # fmt: skip
-manifest = json.loads((run / "run.json").read_text())
 print(sorted(p.name for p in run.iterdir()))
 
 # %%
@@ -99,5 +98,6 @@ print("kept the initial policy:", results["kept_initial_policy"])
 # With 2,000 steps the policy barely moves from the nominal: the ratio is within a per
 # cent of 1 and the verdict "no difference". Where validation never improves, the kept
 # checkpoint is the initial policy, the nominal itself (``kept_initial_policy`` says so):
-# a checkpoint is only kept when it beats the model on the validation person. Report at least 3 seeds and the interquartile mean over seeds
-# (``baselines.stats.iqm_intervals``); a sweep (the sweep tutorial) runs them.
+# a checkpoint is only kept when it beats the model on the validation person. Report at
+# least 3 seeds and the interquartile mean over seeds (``baselines.stats.iqm_intervals``);
+# a sweep (the sweep tutorial) runs them.
