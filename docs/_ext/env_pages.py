@@ -146,7 +146,7 @@ def animation(env_id: str, static: Path, n_frames: int) -> Path | None:
     ).hexdigest()
     if path.exists() and key_path.exists() and key_path.read_text().strip() == key:
         return path
-    frames, fps = rollout_frames(env_id, n_frames)
+    frames, fps = rollout_frames(env_id, n_frames, ANIMATION_SIZE)
     if not frames:
         return None
     from PIL import Image
