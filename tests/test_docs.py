@@ -77,7 +77,7 @@ def built_site(tmp_path_factory):
         env=env,
         capture_output=True,
         text=True,
-        timeout=600,
+        timeout=1800,  # a hang guard: the build took 15 min of wall on a 2-core machine at load 18
     )
     assert proc.returncode == 0, proc.stderr[-4000:]
     return out
