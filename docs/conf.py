@@ -25,6 +25,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "env_pages",
     "docstring_sections",
+    "external_types",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -46,11 +47,21 @@ autodoc_member_order = "bysource"
 autodoc_inherit_docstrings = False
 autodoc_typehints = "description"
 autodoc_mock_imports: list[str] = []
+# shown by their names instead of numpy's expansion of the alias (a dozen union members)
+autodoc_type_aliases = {
+    "ArrayLike": "numpy.typing.ArrayLike",
+    "FloatArray": "numpy.typing.NDArray[numpy.float64]",
+    "IntArray": "numpy.typing.NDArray[numpy.int64]",
+}
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_rtype = False
 # Attributes sections as fields of the class, not second descriptions of its members
 napoleon_use_ivar = True
+
+# Frames of each environment page's animation (a GIF rendered once and cached, see
+# docs/_ext/env_pages.py); 0 shows the first frame only (the docs test builds so).
+env_pages_animation_frames = int(os.environ.get("MOTION_ENVS_DOCS_ANIMATION_FRAMES", "60"))
 
 html_theme = "furo"
 html_title = "motion-envs"

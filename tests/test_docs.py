@@ -1,4 +1,12 @@
-"""The documentation site builds with warnings as errors and documents every public name."""
+"""The documentation site builds with warnings as errors and documents every public name.
+
+The test build (about 2 minutes of CPU, under a minute and a half of wall time on 2
+cores with ``-j 2``) neither runs the gallery (``MOTION_ENVS_DOCS_RUN_EXAMPLES=0``:
+tests/test_examples.py runs every script) nor renders the environment pages' animations
+(``MOTION_ENVS_DOCS_ANIMATION_FRAMES=0``: the pages show the first frame; rendering the
+GIFs takes about a minute of CPU, done once and cached by the documented build). The
+animation code is tested on its own below with a few frames.
+"""
 
 from __future__ import annotations
 
@@ -18,7 +26,9 @@ pytest.importorskip("furo")
 pytest.importorskip("sphinx_gallery")
 
 ROOT = Path(__file__).resolve().parents[1]
-SPHINX_ARGS = ("-b", "html", "-W", "--keep-going", "-q")
+SPHINX_ARGS = ("-b", "html", "-W", "--keep-going", "-q", "-j", "2")
+#: The test build's settings (see the module docstring).
+BUILD_ENV = {"MOTION_ENVS_DOCS_RUN_EXAMPLES": "0", "MOTION_ENVS_DOCS_ANIMATION_FRAMES": "0"}
 
 
 def public_names() -> set[str]:
@@ -60,14 +70,14 @@ def canonical(qualified: str) -> str:
 @pytest.fixture(scope="module")
 def built_site(tmp_path_factory):
     out = tmp_path_factory.mktemp("site")
-    env = {**os.environ, "MOTION_ENVS_DOCS_RUN_EXAMPLES": "0"}
+    env = {**os.environ, **BUILD_ENV}
     proc = subprocess.run(
         [sys.executable, "-m", "sphinx", *SPHINX_ARGS, "docs", str(out)],
         cwd=ROOT,
         env=env,
         capture_output=True,
         text=True,
-        timeout=600,
+        timeout=1800,  # a hang guard: the build took 15 min of wall on a 2-core machine at load 18
     )
     assert proc.returncode == 0, proc.stderr[-4000:]
     return out
@@ -84,7 +94,61 @@ def test_every_environment_has_a_page(built_site):
     for env_id in motion_envs.ENV_IDS:
         page = built_site / "environments" / f"{env_id.split('/')[-1].lower()}.html"
         assert page.exists(), env_id
-        assert "Action Space" in page.read_text(encoding="utf-8"), env_id
+        text = page.read_text(encoding="utf-8")
+        assert "Action Space" in text, env_id
+        assert "Version History" in text, env_id
+
+
+def test_tutorials_are_in_the_site(built_site):
+    index = (built_site / "tutorials" / "index.html").read_text(encoding="utf-8")
+    for name in ("tutorial_train_and_compare", "tutorial_own_recordings", "tutorial_sweep"):
+        assert f"auto_examples/{name}.html" in index, name
+        assert (built_site / "auto_examples" / f"{name}.html").exists(), name
+
+
+def test_animation_is_a_seeded_nominal_rollout_and_cached(tmp_path, monkeypatch):
+    """The GIF of an environment page: frames of the zero-action episode from seed 0,
+    written once; a second build with the same inputs renders nothing."""
+    pytest.importorskip("PIL")
+    import gymnasium as gym
+    import numpy as np
+    from PIL import Image
+
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        import env_pages
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    env_id = "MotionEnvs/PositionReach-v1"  # matplotlib renderer: no OpenGL needed
+    frames, fps = env_pages.rollout_frames(env_id, 4, size=64)
+    assert len(frames) == 4 and fps == 25
+    env = gym.make(env_id, render_mode="rgb_array", width=64, height=64)
+    env.reset(seed=0)
+    np.testing.assert_array_equal(frames[0], env.render())
+    env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    np.testing.assert_array_equal(frames[1], env.render())
+    env.close()
+
+    monkeypatch.setattr(env_pages, "ANIMATION_SIZE", 64)
+    gif = env_pages.animation(env_id, tmp_path, 3)
+    assert gif is not None
+    with Image.open(gif) as image:
+        assert image.size == (64, 64)
+        total = 0  # Pillow merges identical consecutive frames, adding their durations
+        for k in range(image.n_frames):
+            image.seek(k)
+            total += image.info["duration"]
+        assert total == 3 * 40  # 3 frames, 25 per second of environment time
+    before = gif.stat().st_mtime_ns
+
+    def no_rendering(*args, **kwargs):
+        raise AssertionError("the cached GIF was rendered again")
+
+    monkeypatch.setattr(env_pages, "rollout_frames", no_rendering)
+    assert env_pages.animation(env_id, tmp_path, 3) == gif
+    assert gif.stat().st_mtime_ns == before
+    with pytest.raises(AssertionError, match="rendered again"):  # other inputs: rendered
+        env_pages.animation(env_id, tmp_path, 4)
 
 
 def test_every_public_name_is_in_the_api_reference(built_site):
