@@ -154,12 +154,13 @@ def juggling_run(tmp_path_factory):
     return out, train_run(config)
 
 
-def test_motion_bench_agent_on_juggling(juggling_run, tmp_path):
+def test_motion_bench_agent_on_juggling(juggling_run, tmp_path, capsys):
     from baselines.cli import main
 
     out, result = juggling_run
     assert result.val_nominal_criterion == result.evaluations[0]["val_criterion"]
     assert main(["agent", str(out), "--episodes", "3", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
     doc = json.loads((tmp_path / "results.json").read_text())
     assert doc["env_id"] == ENV and doc["split"] == "test" and doc["n_episodes"] == 3
     assert doc["deviation_reference"] == "held-out demonstrations"
@@ -168,6 +169,10 @@ def test_motion_bench_agent_on_juggling(juggling_run, tmp_path):
     assert doc["nominal_deviation"] == nominal.deviation
     assert doc["criterion"] == 1 - doc["catch_rate"]
     assert doc["deviation_ratio"] == doc["deviation"] / doc["nominal_deviation"]
+    lo, hi = doc["catch_rate_difference_ci"]
+    diff = doc["catch_rate_difference"]
+    assert diff == pytest.approx(doc["catch_rate"] - doc["nominal_catch_rate"])
+    assert f"catch rate agent - nominal = {diff:+.3f} (95% CI {lo:+.3f} to {hi:+.3f}" in printed
     if result.best_timesteps == 0:  # the kept checkpoint is the initial policy: the nominal
         assert doc["catch_rate"] == doc["nominal_catch_rate"]
         assert doc["deviation_ratio"] == 1.0

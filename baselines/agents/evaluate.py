@@ -222,6 +222,11 @@ def _cli(args: argparse.Namespace) -> int:
             f"nominal {1000 * results['nominal_deviation']:.2f} mm, ratio "
             f"{results['deviation_ratio']:.4f}"
         )
+        lo, hi = results["catch_rate_difference_ci"]
+        print(
+            f"catch rate agent - nominal = {results['catch_rate_difference']:+.3f} (95% CI "
+            f"{lo:+.3f} to {hi:+.3f} over {results['n_episodes']} episodes; higher is better)"
+        )
     else:
         print(
             f"{results['env_id']} {results['algo']} ({results['split']}, "
