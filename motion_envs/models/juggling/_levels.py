@@ -248,7 +248,7 @@ class HumanLikeness:
         self.trees = {p: cKDTree(np.vstack(points[p])) for p in PHASES if points[p]}
         if len(self.trees) != len(PHASES):
             raise ValueError("human-likeness needs demonstrations of every phase")
-        self._sorted = {p: _SortedSamples(tree.data) for p, tree in self.trees.items()}
+        self._sorted = {p: _SortedSamples(tree) for p, tree in self.trees.items()}
 
     def distance(self, phase: str, hand_pos: FloatArray, hand_vel: FloatArray) -> float:
         """m; the distance of ``(x, z, tau vx, tau vz)`` to the phase's nearest sample.
@@ -266,6 +266,10 @@ class HumanLikeness:
         return d if math.isfinite(d) else math.inf
 
 
+#: slabs of more samples are left to the k-d tree
+_SLAB_MAX = 400
+
+
 class _SortedSamples:
     """Exact nearest-neighbour distance among ``points (M, 4)`` for one query at a time.
 
@@ -276,12 +280,18 @@ class _SortedSamples:
     samples in it are computed in the k-d tree's order (``((d0^2 + d1^2) + d2^2) +
     d3^2``, then the square root), so the result is the tree query's bit for bit. The
     previous nearest sample only speeds the search up; any start gives the same value.
+    A slab of more than ``_SLAB_MAX`` samples (a query far from all of them) is left to
+    the phase's k-d tree.
     """
 
-    def __init__(self, points: FloatArray) -> None:
-        pts = np.asarray(points, dtype=np.float64)
+    def __init__(self, tree: cKDTree) -> None:
+        pts = np.asarray(tree.data, dtype=np.float64)
+        self.tree = tree
         self.axis = int(np.argmax(np.ptp(pts, axis=0)))
         order = np.argsort(pts[:, self.axis], kind="stable")
+        #: position in the sorted samples of the tree's sample i
+        self.rank = np.empty(len(order), dtype=np.int64)
+        self.rank[order] = np.arange(len(order))
         pts = pts[order]
         self.points = np.ascontiguousarray(pts)
         self.rows = pts.tolist()
@@ -301,6 +311,10 @@ class _SortedSamples:
         key = self.key
         lo = int(key.searchsorted(qc - width, "left"))
         hi = int(key.searchsorted(qc + width, "right"))
+        if hi - lo > _SLAB_MAX:  # far from the samples: the tree prunes better
+            d, i = self.tree.query(q)
+            self._last = int(self.rank[i])
+            return float(d)
         e = self.points[lo:hi] - q
         e *= e
         s = e.sum(axis=1)  # four terms: added in order, as the tree does
