@@ -224,7 +224,7 @@ def juggling_episodes(
     seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
     envs = [gym.make(env_id, **kwargs) for _ in range(n)]
     try:
-        first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist())]
+        first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist(), strict=True)]
         obs = np.stack([o for o, _ in first])
         times = [[float(info["time"])] for _, info in first]
         hands = [[np.asarray(info["hand"], dtype=np.float64)] for _, info in first]
