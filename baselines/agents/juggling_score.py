@@ -200,9 +200,12 @@ def juggling_episodes(
     episodes: int | None = None,
 ) -> JugglingEpisodes:
     """Play ``episodes`` (default :data:`DEFAULT_EPISODES`) deterministic episodes of
-    ``split`` (seeds ``SPLIT_SEEDS[split] + i``), all at once in a ``SyncVectorEnv``;
-    ``policy`` maps raw observations ``(N, obs_dim)`` to actions, None is the zero action
-    (the analytic juggler)."""
+    ``split`` (seeds ``SPLIT_SEEDS[split] + i``), all at once; ``policy`` maps raw
+    observations ``(N, obs_dim)`` to actions, None is the zero action (the analytic
+    juggler). Each episode is stepped until it ends and no further (a finished episode's
+    row of the batch keeps its last observation; the policy's action for it is unused):
+    the same episodes as a ``SyncVectorEnv`` of the N environments, whose autoreset would
+    play new episodes in the finished rows until the longest episode ends."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
@@ -219,29 +222,38 @@ def juggling_episodes(
         kwargs.setdefault("gravity", 9.81)
     demos = demonstration_paths(kwargs, split)
     seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
-    obs, info = venv.reset(seed=seeds.tolist())
-    times = [[float(t)] for t in info["time"]]
-    hands = [[np.asarray(h, dtype=np.float64)] for h in info["hand"]]
-    phases = [[str(p)] for p in info["phase"]]
-    tosses = np.zeros(n, dtype=np.int64)
-    catches = np.zeros(n, dtype=np.int64)
-    dropped = np.zeros(n, dtype=bool)
-    done = np.zeros(n, dtype=bool)
-    shape = (n, *(venv.single_action_space.shape or ()))
-    while not done.all():
-        actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
-        obs, _, terminated, truncated, info = venv.step(np.asarray(actions, dtype=np.float32))
-        for i in np.flatnonzero(~done).tolist():
-            times[i].append(float(info["time"][i]))
-            hands[i].append(np.asarray(info["hand"][i], dtype=np.float64))
-            phases[i].append(str(info["phase"][i]))
-            if terminated[i] or truncated[i]:
-                tosses[i] = int(info["cycles"][i])
-                catches[i] = int(info["catches"][i])
-                dropped[i] = bool(terminated[i])
-                done[i] = True
-    venv.close()
+    envs = [gym.make(env_id, **kwargs) for _ in range(n)]
+    try:
+        first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist(), strict=True)]
+        obs = np.stack([o for o, _ in first])
+        times = [[float(info["time"])] for _, info in first]
+        hands = [[np.asarray(info["hand"], dtype=np.float64)] for _, info in first]
+        phases = [[str(info["phase"])] for _, info in first]
+        tosses = np.zeros(n, dtype=np.int64)
+        catches = np.zeros(n, dtype=np.int64)
+        dropped = np.zeros(n, dtype=bool)
+        active = list(range(n))
+        shape = (n, *(envs[0].action_space.shape or ()))
+        while active:
+            actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
+            actions = np.asarray(actions, dtype=np.float32)
+            still = []
+            for i in active:
+                o, _, terminated, truncated, info = envs[i].step(actions[i])
+                obs[i] = o
+                times[i].append(float(info["time"]))
+                hands[i].append(np.asarray(info["hand"], dtype=np.float64))
+                phases[i].append(str(info["phase"]))
+                if terminated or truncated:
+                    tosses[i] = int(info["cycles"])
+                    catches[i] = int(info["catches"])
+                    dropped[i] = bool(terminated)
+                else:
+                    still.append(i)
+            active = still
+    finally:
+        for env in envs:
+            env.close()
     seg_phase: list[str] = []
     seg_episode: list[int] = []
     seg_dev: list[float] = []

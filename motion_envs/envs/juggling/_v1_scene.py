@@ -31,8 +31,12 @@ imitates can move as the demonstrations do, not faster.
 
 **The grasp rule** (the fingers): a held ball is attached to the hand (its state copied
 from the hand after each physics step; its contacts off). The controller arms the release;
-the ball is released when the hand's vertical acceleration (measured over the control
-period) is below ``-toss_threshold`` (``3 g``, the Juggling-v0 rule), with the hand's
+the ball is released when the hand's vertical acceleration is below ``-toss_threshold``
+(``3 g``), measured as the demonstrations' virtual world and Juggling-v0 measure it: the
+second backward difference of the hand's height at the control samples
+(:func:`~motion_envs.datasets.juggling.rules.hand_acceleration`; the difference of the
+hand's velocity over the period fires half a sample earlier, on a faster hand: the
+closed-loop toss was then 9.7 % faster upward than the demonstrations'), with the hand's
 velocity perturbed in speed and angle (:func:`~motion_envs.models.juggling.perturb_release`).
 A flying ball is **captured** only when (1) it is falling (``v_z < 0``), (2) it touches the
 palm (a MuJoCo contact between ``ball`` and ``palm``, the ball's centre above the palm's
@@ -53,7 +57,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.datasets.juggling import JugglingState, JugglingTask
+from motion_envs.datasets.juggling import JugglingState, JugglingTask, rules
 from motion_envs.models.juggling import perturb_release, xz_pair
 
 __all__ = [
@@ -83,6 +87,9 @@ CAPTURE_SPEED = 5.0
 SERVO_OMEGA = 60.0
 #: Physics steps per control period.
 SUBSTEPS = 5
+_FRACTIONS = tuple(j / SUBSTEPS for j in range(1, SUBSTEPS + 1))
+_KP, _KD = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
+_AMAX2 = HAND_ACCEL_LIMIT**2
 
 
 def load_juggling_v1_model(task: JugglingTask) -> mujoco.MjModel:
@@ -138,6 +145,8 @@ class JugglingPhysics:
     def ball_touches(self, geom: int) -> bool:
         """Whether a contact between the ball and ``geom`` is active."""
         d, b = self.data, self.ball_geom
+        if d.ncon == 0:
+            return False
         for i in range(d.ncon):
             c = d.contact[i]
             if (c.geom1 == b and c.geom2 == geom) or (c.geom2 == b and c.geom1 == geom):
@@ -176,6 +185,7 @@ class JugglingV1World:
         self._rng: np.random.Generator | None = None
         self._ref = (0.0, 0.0)
         self._vref = (0.0, 0.0)
+        self._z_prev = (0.0, 0.0)
         self._held = True
         self._left = False
         self._dropped = False
@@ -199,6 +209,7 @@ class JugglingV1World:
         self.data.qvel[:] = (vx, vz, vx, vz)
         self._ref = (x, z)
         self._vref = (vx, vz)
+        self._z_prev = (z - 2.0 * vz * self.task.dt, z - vz * self.task.dt)  # z_{k-2}, z_{k-1}
         self._held, self._left, self._dropped = True, False, False
         self._k = 0
         self.physics.set_ball_contacts(False)
@@ -225,16 +236,17 @@ class JugglingV1World:
         self._vref = (vrx, vrz)
         m, d, phys = self.model, self.data, self.physics
         qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
-        vz_before = float(qvel[1])
+        step = mujoco.mj_step
+        hx, hz, bx, bz = qpos.tolist()
+        vx, vz, ux, uz = qvel.tolist()
         h = m.opt.timestep
-        kp, kd = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
-        amax2, vmax = HAND_ACCEL_LIMIT**2, HAND_SPEED_LIMIT
+        kp, kd = _KP, _KD
+        amax2, vmax = _AMAX2, HAND_SPEED_LIMIT
         radius, floor_z = task.ball_radius, task.floor_z
+        palm_top = phys.palm_top
+        held, left, dropped = self._held, self._left, self._dropped
         caught = False
-        for j in range(1, SUBSTEPS + 1):
-            f = j / SUBSTEPS
-            hx, hz = qpos[0:2].tolist()
-            vx, vz = qvel[0:2].tolist()
+        for f in _FRACTIONS:
             ax = arx + kp * (sx + f * dx - hx) + kd * (vrx - vx)
             az = arz + kp * (sz + f * dz - hz) + kd * (vrz - vz)
             n2 = ax * ax + az * az
@@ -246,36 +258,48 @@ class JugglingV1World:
             if sp > vmax:  # the speed limit: aim at the limit along the new direction
                 nvx, nvz = nvx * vmax / sp, nvz * vmax / sp
                 ax, az = (nvx - vx) / h, (nvz - vz) / h
-            ctrl[0], ctrl[1] = HAND_MASS * ax, HAND_MASS * az
-            mujoco.mj_step(m, d)
-            if self._held:
-                qpos[2:4] = qpos[0:2]
-                qvel[2:4] = qvel[0:2]
+            ctrl[0] = HAND_MASS * ax
+            ctrl[1] = HAND_MASS * az
+            step(m, d)
+            if held:  # the ball rides in the hand
+                hx, hz, _, _ = qpos.tolist()
+                vx, vz, _, _ = qvel.tolist()
+                qpos[2] = hx
+                qpos[3] = hz
+                qvel[2] = vx
+                qvel[3] = vz
                 continue
             hx, hz, bx, bz = qpos.tolist()
-            if not self._left and math.hypot(bx - hx, bz - hz) > 2 * radius:
-                self._left = True
-            if not self._dropped and (bz - radius <= floor_z or phys.ball_touches(phys.floor_geom)):
-                self._dropped = True
-            if not self._dropped and self._left and bz >= hz + phys.palm_top:
-                wx, wz, ux, uz = qvel.tolist()
-                if (
-                    uz < 0.0
-                    and math.hypot(ux - wx, uz - wz) < CAPTURE_SPEED
-                    and phys.ball_touches(phys.palm_geom)
-                ):
-                    self._held = caught = True
-                    phys.set_ball_contacts(False)
-                    qpos[2:4] = qpos[0:2]
-                    qvel[2:4] = qvel[0:2]
+            vx, vz, ux, uz = qvel.tolist()
+            if not left and math.hypot(bx - hx, bz - hz) > 2 * radius:
+                left = True
+            if not dropped and (bz - radius <= floor_z or phys.ball_touches(phys.floor_geom)):
+                dropped = True
+            if (
+                not dropped
+                and left
+                and bz >= hz + palm_top
+                and uz < 0.0
+                and math.hypot(ux - vx, uz - vz) < CAPTURE_SPEED
+                and phys.ball_touches(phys.palm_geom)
+            ):
+                held = caught = True
+                phys.set_ball_contacts(False)
+                qpos[2] = hx
+                qpos[3] = hz
+                qvel[2] = vx
+                qvel[3] = vz
+        self._held, self._left, self._dropped = held, left, dropped
         self._k += 1
         d.time = self._k * dt
         released = False
-        if self._held and not caught and release_armed:
-            a_z = (float(qvel[1]) - vz_before) / dt
+        z_prev2, z_prev = self._z_prev
+        self._z_prev = (z_prev, hz)
+        if held and not caught and release_armed:
+            a_z = rules.hand_acceleration(hz, z_prev, z_prev2, dt)
             if a_z < -task.toss_threshold:
                 v = perturb_release(
-                    qvel[0:2].copy(), self.release_speed_std, self.release_angle_std, self._rng
+                    np.array((vx, vz)), self.release_speed_std, self.release_angle_std, self._rng
                 )
                 qvel[2], qvel[3] = float(v[0]), float(v[1])
                 self._held = self._left = False
@@ -308,10 +332,10 @@ class JugglingV1World:
         q, v = self.data.qpos, self.data.qvel
         return JugglingState(
             time=float(self.data.time),
-            hand_pos=np.array([q[0], q[1]]),
-            hand_vel=np.array([v[0], v[1]]),
-            ball_pos=np.array([q[2], q[3]]),
-            ball_vel=np.array([v[2], v[3]]),
+            hand_pos=q[0:2].copy(),
+            hand_vel=v[0:2].copy(),
+            ball_pos=q[2:4].copy(),
+            ball_vel=v[2:4].copy(),
             held=self._held,
             released=released,
             caught=caught,

@@ -133,16 +133,21 @@ class JugglingController:
         self.k = 0
 
     def _grid_from(self, k0: int) -> None:
-        """Evaluate the current plan on steps ``k0 .. ceil(T / dt)`` of the phase."""
-        dt = self.task.dt
-        n = math.ceil(self.duration / dt - 1e-9)
-        k = np.arange(k0, n + 1)
-        tau = np.minimum(k * dt / self.duration, 1.0)
-        grid = ss.evaluate(self.coefficients, tau)
+        """Evaluate the current plan on steps ``k0 .. ceil(T / dt)`` of the phase.
+
+        The basis on the phase's grid is computed once, at ``k0 = 0`` (the duration is
+        fixed within a phase; eq. 10 changes only the coefficients)."""
         if k0 == 0:
-            self.grid = grid
-        else:
-            self.grid = np.concatenate([self.grid[:k0], grid])
+            dt = self.task.dt
+            n = math.ceil(self.duration / dt - 1e-9)
+            k = np.arange(0, n + 1)
+            tau = np.minimum(k * dt / self.duration, 1.0)
+            self._tau = tau
+            self._basis = ss.basis(tau, self.coefficients.shape[0] - 2)
+            self._eq10: _Eq10Rows | None = None
+            self.grid = self._basis @ self.coefficients
+        else:  # the rows before k0 were executed: keep them
+            self.grid[k0:] = self._basis[k0:] @ self.coefficients
 
     def belief_at(self, t: float) -> tuple[FloatArray, FloatArray]:
         """The ball's believed position and velocity at ``t`` (flight from the release)."""
@@ -216,19 +221,68 @@ class JugglingController:
         if math.hypot(px - self.end[0], pz - self.end[1]) <= self.options.correction_tolerance:
             return False
         predicted = np.array([px, pz])
-        tau1 = self.k * self.task.dt / self.duration
-        velocity = ss.velocity(self.coefficients, np.array([tau1]), self.duration)[0]
-        model = self.model.phases_["catch"].model
-        self.coefficients = model.correct(
-            self.coefficients,
-            tau1,
-            self.grid[self.k],
-            predicted,
-            self.duration,
-            velocity=velocity,
-            mode="free",
-        )
+        k, duration = self.k, self.duration
+        tau1 = k * self.task.dt / duration
+        rows = self._eq10
+        if rows is None or k < rows.k0:
+            rows = self._eq10 = _Eq10Rows(self._tau, self._basis, k, duration)
+        if tau1 < 1.0 and k < rows.end:  # eq. 10 on the cached rows: correct_online's numbers
+            self.coefficients = rows.correct(k, self.coefficients, self.grid[k], predicted)
+        else:
+            velocity = ss.velocity(self.coefficients, np.array([tau1]), duration)[0]
+            model = self.model.phases_["catch"].model
+            self.coefficients = model.correct(
+                self.coefficients,
+                tau1,
+                self.grid[k],
+                predicted,
+                duration,
+                velocity=velocity,
+                mode="free",
+            )
         self.end = predicted
         self._grid_from(self.k + 1)
         self.corrections.append((time, tau1))
         return True
+
+
+class _Eq10Rows:
+    """The eq. 10 correction of one catch plan (free mode, position, end and velocity
+    conditions) at steps ``k0 ..`` of its grid, with the conditions' rows and their
+    pseudo-inverses computed once (they depend only on ``tau_1 = k dt / T``, ``T`` and
+    the number of sines), so that :meth:`correct` does what
+    :func:`~motion_envs.models.sine_regression.correct_online` does, with the same numbers
+    (same rows, same ``pinv``, same products), for the plan's velocity at ``tau_1`` too
+    (:func:`~motion_envs.geometry.sine_series.velocity`)."""
+
+    def __init__(self, tau: FloatArray, basis: FloatArray, k0: int, duration: float) -> None:
+        n_grid, n_basis = basis.shape
+        n = n_basis - 2
+        self.k0, self.end, self.duration = k0, n_grid, duration
+        self.derivative = ss.basis_derivative(tau[k0:], n)
+        a = np.empty((n_grid - k0, 3, n_basis))
+        a[:, 0] = basis[k0:]
+        a[:, 1] = ss.basis(1.0, n)
+        a[:, 2] = self.derivative / duration
+        self.a = a
+        self.pinv = np.linalg.pinv(a)
+
+    def correct(
+        self, k: int, coefficients: FloatArray, position: FloatArray, target: FloatArray
+    ) -> FloatArray:
+        """The corrected coefficients at step ``k``: the plan restarts from ``position``
+        with its own velocity there and ends at ``target``."""
+        i = k - self.k0
+        velocity = (self.derivative[i : i + 1] @ coefficients / self.duration)[0]
+        a1 = self.a[i]
+        r = np.stack([position, target, velocity]) - a1 @ coefficients
+        dp = self.pinv[i] @ r
+        miss = np.max(np.abs(a1 @ dp - r), initial=0.0)
+        scale = max(1.0, float(np.max(np.abs(r), initial=0.0)))
+        if miss > 1e-9 * scale:
+            raise ValueError(
+                f"correct_online: the free correction cannot meet the conditions "
+                f"(residual {miss:.3g})"
+            )
+        out: FloatArray = coefficients + dp
+        return out

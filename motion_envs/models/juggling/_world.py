@@ -95,7 +95,9 @@ def tracked_hand(hand: FloatArray, tracking: FloatArray | None, k: int) -> Float
 
 def xz_pair(value: ArrayLike, name: str) -> tuple[float, float]:
     """``value`` as a finite ``(x, z)`` pair of floats; ValueError naming ``name``."""
-    if isinstance(value, np.ndarray) and value.shape == (2,):
+    if type(value) is tuple and len(value) == 2 and all(type(v) is float for v in value):
+        x, z = value
+    elif isinstance(value, np.ndarray) and value.shape == (2,):
         x, z = float(value[0]), float(value[1])
     else:
         v = np.asarray(value, dtype=np.float64)
