@@ -32,6 +32,7 @@ def trial_settings(sweep: SweepConfig) -> TrialSettings:
         timesteps=sweep.timesteps,
         n_envs=sweep.n_envs,
         path=sweep.path,
+        inner_folds=sweep.inner_folds,
     )
 
 
@@ -52,6 +53,7 @@ def _tune_domain(value: Any) -> Any:
 def _settings(sweep: SweepConfig) -> dict[str, Any]:
     """What a sweep trains (not where or how it runs), as JSON: ``OUT/sweep.json``."""
     keys = "configurations seeds timesteps n_envs test_split search num_samples random_seed space"
+    keys += " inner_folds"
     settings: dict[str, Any] = json.loads(json.dumps({k: getattr(sweep, k) for k in keys.split()}))
     return settings
 
