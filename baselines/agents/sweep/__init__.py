@@ -11,6 +11,7 @@ configuration is trained with::
     timesteps: 100000         # optional overrides of the agent config
     n_envs: 8
     test_split: test
+    inner_folds: 3            # optional: checkpoints by inner folds over people, then a refit
     space:
       algo: [ppo]
       env_id: [MotionEnvs/OrientationReach-v0, MotionEnvs/OrientationReach-v1]
@@ -35,6 +36,12 @@ zero-action nominal (``n/a`` where the nominal's criterion is 0: the analytic ju
 hand's deviation ratio, and the plot then shows the criterion itself); the configuration
 marked ``best`` has the lowest median *validation* criterion (the test split plays no
 part in the choice).
+
+With ``inner_folds: K`` (leave-one-person-out sweeps, ``env_kwargs.fold``) each trial
+is nested (:mod:`~baselines.agents.sweep.nested`): ``K`` inner agents validated on
+groups of the fold's training people choose the kept step, then one agent is refitted on
+all of them; per fold, the configuration with the best inner score is reported
+(:mod:`~baselines.agents.sweep.lopo`).
 
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
