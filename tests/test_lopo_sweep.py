@@ -302,3 +302,18 @@ def test_lopo_summary_chooses_hyperparameters_by_inner_folds_not_test():
     assert over["iqm_ratio"] == pytest.approx(1.01)
     assert over["ridge_over_nominal_per_person"]["0"] == pytest.approx(0.3 / 0.32)
     assert "agent / ridge" in format_lopo(got)
+
+
+def test_lopo_interval_resamples_people_not_only_seeds():
+    """With the same ratio on every seed, rliable's interval (seeds within each person)
+    is a point; the people interval is not, and it is a point only when every person has
+    the same ratio."""
+    per_person = [0.8, 0.9, 1.0, 1.1, 1.2, 0.95, 1.05, 0.85]
+    configs = [{"overrides": {"env_kwargs": {"fold": f}}} for f in range(8)]
+    got = lopo_summary(_trials([[r] * 3 for r in per_person]), configs)
+    lo, hi = got["iqm_ratio_ci95"]
+    assert got["iqm_ratio_ci95_seeds"] == [pytest.approx(got["iqm_ratio"])] * 2
+    assert min(per_person) <= lo < got["iqm_ratio"] < hi <= max(per_person)
+    assert got["verdict"] == "no difference"
+    flat = lopo_summary(_trials([[0.9] * 3] * 8), configs)
+    assert flat["iqm_ratio_ci95"] == [pytest.approx(0.9)] * 2 and flat["verdict"] == "better"
