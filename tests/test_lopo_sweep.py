@@ -317,3 +317,35 @@ def test_lopo_interval_resamples_people_not_only_seeds():
     assert got["verdict"] == "no difference"
     flat = lopo_summary(_trials([[0.9] * 3] * 8), configs)
     assert flat["iqm_ratio_ci95"] == [pytest.approx(0.9)] * 2 and flat["verdict"] == "better"
+
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("how", ["--address", "RAY_ADDRESS"])
+def test_lopo_sweep_joins_a_cluster_unchanged(tmp_path, monkeypatch, how):
+    """The shipped file runs on a cluster as it is: ``--address`` or Ray's RAY_ADDRESS
+    reach ``ray.init(address=...)`` with no local CPU count (intercepted: no Ray starts)."""
+    ray = pytest.importorskip("ray")
+    from baselines.agents.sweep import load_sweep
+    from baselines.agents.sweep import run as sweep_run
+
+    seen = {}
+
+    def fake_init(**kwargs):
+        seen.update(kwargs)
+        raise _Stop
+
+    monkeypatch.setattr(ray, "init", fake_init)
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    address = "ray://head.example:10001"
+    if how == "RAY_ADDRESS":
+        monkeypatch.setenv("RAY_ADDRESS", address)
+        sweep = load_sweep(LOPO, out=str(tmp_path / "out"))
+    else:
+        monkeypatch.delenv("RAY_ADDRESS", raising=False)
+        sweep = load_sweep(LOPO, out=str(tmp_path / "out"), address=address)
+    with pytest.raises(_Stop):
+        sweep_run(sweep)
+    assert seen["address"] == address and "num_cpus" not in seen

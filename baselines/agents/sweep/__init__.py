@@ -45,7 +45,8 @@ all of them; per fold, the configuration with the best inner score is reported
 
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
-``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
+``ray start`` (so does Ray's ``RAY_ADDRESS`` environment variable when ``--address`` is
+not given). On a cluster ``--out`` must be on storage every node sees (NFS, a shared
 mount). ``--resume`` continues an interrupted sweep (Ctrl-C, which ends the command with
 that advice, or a crash) in the same ``--out``: Ray Tune keeps its finished trials as they
 are and starts the unfinished ones over (a trial whose run folder was finished is only

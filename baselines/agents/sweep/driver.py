@@ -87,11 +87,13 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     sweep = SweepConfig(**{**sweep.__dict__, "out": str(out)})
     _claim_out(sweep, out)
     started_here = False
+    # --address, else Ray's own RAY_ADDRESS (a cluster), else a local Ray with --num-cpus
+    address = sweep.address if sweep.address is not None else os.environ.get("RAY_ADDRESS")
     if not ray.is_initialized():
         # quiet unless --verbose: Ray's start-up log lines go to its log files only
         level = logging.INFO if sweep.progress else logging.ERROR
-        if sweep.address is not None:
-            ray.init(address=sweep.address, log_to_driver=False, logging_level=level)
+        if address:
+            ray.init(address=address, log_to_driver=False, logging_level=level)
         else:
             ray.init(
                 num_cpus=sweep.num_cpus or os.cpu_count(),
@@ -182,8 +184,8 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         "test_split": sweep.test_split,
         "n_trials": len(trials),
         "wall_seconds": wall,
-        "num_cpus": sweep.num_cpus or os.cpu_count(),
-        "address": sweep.address,
+        "num_cpus": None if address else sweep.num_cpus or os.cpu_count(),
+        "address": address or None,
         **summary,
         "trials": trials,
     }
