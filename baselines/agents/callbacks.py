@@ -5,6 +5,9 @@
   criterion at the start, every ``eval_freq`` steps and at the end; keeps the best
   criterion and the list of evaluations; triggers ``callback_on_new_best`` on a new best
   and ``callback_after_eval`` after every evaluation (both see it as ``self.parent``);
+* :class:`KeepAtCallback`: the same schedule without a validation split (a refit):
+  triggers ``callback_on_new_best`` once, at the first evaluation point at or after
+  ``keep_timesteps``, and then stops the training;
 * :class:`SaveBestCallback`: saves the model (and its ``VecNormalize`` statistics) of a
   new best into the run folder;
 * :class:`EvaluationHookCallback`: hands each evaluation to a plain function (the Ray
@@ -26,7 +29,7 @@ from stable_baselines3.common.callbacks import BaseCallback, EventCallback
 
 from baselines.agents.rundir import ObsNormalizer, save_model
 
-__all__ = ["EvaluationHookCallback", "SaveBestCallback", "ValidationCallback"]
+__all__ = ["EvaluationHookCallback", "KeepAtCallback", "SaveBestCallback", "ValidationCallback"]
 
 #: A validation criterion of a policy (lower is better).
 Criterion = Callable[[Callable[[NDArray[np.float32]], NDArray[np.floating]]], float]
@@ -103,6 +106,31 @@ class ValidationCallback(EventCallback):
     def _on_training_end(self) -> None:
         if self.evaluations[-1]["timesteps"] != self.num_timesteps:
             self._evaluate()
+
+
+class KeepAtCallback(ValidationCallback):
+    """:class:`ValidationCallback`'s schedule (start, every ``eval_freq`` steps, end)
+    without a criterion: the policy at the first evaluation point at or after
+    ``keep_timesteps`` is kept (``callback_on_new_best``, ``best_timesteps``) and the
+    training stops there (what follows could not change the kept policy). Evaluations
+    are listed with a NaN criterion."""
+
+    def __init__(
+        self, keep_timesteps: int, eval_freq: int, callback_on_new_best: BaseCallback
+    ) -> None:
+        super().__init__(lambda policy: math.nan, eval_freq, callback_on_new_best)
+        self.keep_timesteps = int(keep_timesteps)
+        self.kept = False
+
+    def _evaluate(self) -> None:
+        if not self.kept and self.num_timesteps >= self.keep_timesteps:
+            self.kept, self.best_timesteps = True, self.num_timesteps
+            assert self.callback_on_new_best is not None
+            self.callback_on_new_best.on_step()
+        self.evaluations.append({"timesteps": self.num_timesteps, "val_criterion": math.nan})
+
+    def _on_step(self) -> bool:
+        return super()._on_step() and not self.kept
 
 
 class SaveBestCallback(BaseCallback):

@@ -96,8 +96,8 @@ def scorer_for(env_id: str) -> Scorer:
 def check_validation_split(
     env_id: str, env_kwargs: Mapping[str, Any], seed: int, n_envs: int
 ) -> None:
-    """A data-split environment needs ``val_fraction > 0`` (its validation split is carved
-    from the training data); a seed-range environment (``first_val_seed``) needs the
+    """A data-split environment needs ``val_fraction > 0`` or ``val_folds`` (its validation
+    split is carved from the training data); a seed-range environment (``first_val_seed``) needs the
     training seeds ``seed .. seed + n_envs - 1`` below its validation seeds."""
     from baselines.agents.vec import takes_keyword
 
@@ -111,6 +111,8 @@ def check_validation_split(
             )
         return
     if not takes_keyword(env_id, "val_fraction"):
+        return
+    if env_kwargs.get("val_folds"):  # inner folds over people (checked by the environment)
         return
     val_fraction = env_kwargs.get("val_fraction", 0)
     if isinstance(val_fraction, bool) or not isinstance(val_fraction, int | float):

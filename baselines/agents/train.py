@@ -14,7 +14,11 @@ train`` and every trial of ``motion-bench sweep`` call it):
    scored on the *validation* split (``split="val"``: training subjects/demonstrations
    held out by ``val_fraction``) with the papers' criterion, the median over episodes of
    ``info["max_error"]``; the best policy so far is saved as ``agent.zip``. The test split
-   is never touched. ``Juggling-v0`` (no native vector environment: SB3's
+   is never touched. A *refit* (``keep_timesteps``, the last step of a nested
+   evaluation: :mod:`baselines.agents.sweep.nested`) has no validation split: it trains
+   on all the training data and keeps the policy at the first point of the same
+   evaluation schedule at or after ``keep_timesteps`` (a step chosen by inner folds),
+   then stops. ``Juggling-v0`` (no native vector environment: SB3's
    ``DummyVecEnv``) is validated on its own seed range by the drop rate per toss
    (:mod:`baselines.agents.juggling_score`);
 5. the run folder (:mod:`baselines.agents.rundir`) gets the final policy, the resolved
@@ -76,6 +80,11 @@ class TrainConfig:
     progress: bool = True
     tensorboard: bool = True
     command: tuple[str, ...] = ()
+    #: A refit: no validation; keep the policy at this step of the evaluation schedule.
+    keep_timesteps: int | None = None
+    #: How ``keep_timesteps`` was chosen (stored in run.json as ``selection``); its
+    #: ``val_criterion`` and ``val_nominal_criterion`` stand for the validation's.
+    selection: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -123,7 +132,14 @@ def preflight(config: TrainConfig) -> dict[str, Any]:
         overrides["env_kwargs"] = {**overrides.get("env_kwargs", {}), **config.env_kwargs}
     hp = resolve_hyperparams(config.algo, config.env_id, config.config_path, overrides)
     checks.check_env_kwargs(config.env_id, hp["env_kwargs"])
-    check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    if config.keep_timesteps is None:  # a refit has no validation split
+        check_validation_split(config.env_id, hp["env_kwargs"], config.seed, int(hp["n_envs"]))
+    elif isinstance(config.keep_timesteps, bool) or not isinstance(config.keep_timesteps, int):
+        raise ValueError(f"keep_timesteps must be an integer >= 0; got {config.keep_timesteps!r}")
+    elif not 0 <= config.keep_timesteps <= int(hp["n_timesteps"]):
+        raise ValueError(
+            f"keep_timesteps must be in [0, {hp['n_timesteps']}]; got {config.keep_timesteps}"
+        )
     return hp
 
 
@@ -178,6 +194,7 @@ def _train(
 
     from baselines.agents.callbacks import (
         EvaluationHookCallback,
+        KeepAtCallback,
         SaveBestCallback,
         ValidationCallback,
     )
@@ -201,23 +218,31 @@ def _train(
                 file=sys.stderr,
             )
     model = build_model(config.algo, hp, env, config.seed, tensorboard_log=tb)
-    val_nominal = split_criterion(
-        None, config.env_id, hp["env_kwargs"], "val", hp.get("eval_episodes")
-    )
-    validation = ValidationCallback(
-        functools.partial(
-            split_criterion,
-            env_id=config.env_id,
-            env_kwargs=hp["env_kwargs"],
-            split="val",
-            episodes=hp.get("eval_episodes"),
-        ),
-        eval_freq=int(hp["eval_freq"]),
-        callback_on_new_best=SaveBestCallback(run_dir),
-        callback_after_eval=None
-        if on_evaluation is None
-        else EvaluationHookCallback(on_evaluation, run_dir),
-    )
+    selection = dict(config.selection or {})
+    validation: ValidationCallback
+    if config.keep_timesteps is not None:  # a refit: the validation's schedule, no split
+        val_nominal = float(selection.get("val_nominal_criterion", float("nan")))
+        validation = KeepAtCallback(
+            config.keep_timesteps, int(hp["eval_freq"]), SaveBestCallback(run_dir)
+        )
+    else:
+        val_nominal = split_criterion(
+            None, config.env_id, hp["env_kwargs"], "val", hp.get("eval_episodes")
+        )
+        validation = ValidationCallback(
+            functools.partial(
+                split_criterion,
+                env_id=config.env_id,
+                env_kwargs=hp["env_kwargs"],
+                split="val",
+                episodes=hp.get("eval_episodes"),
+            ),
+            eval_freq=int(hp["eval_freq"]),
+            callback_on_new_best=SaveBestCallback(run_dir),
+            callback_after_eval=None
+            if on_evaluation is None
+            else EvaluationHookCallback(on_evaluation, run_dir),
+        )
     callbacks: list[Any] = [validation]
     total = int(hp["n_timesteps"])
     if config.progress:
@@ -226,6 +251,13 @@ def _train(
     model.learn(total_timesteps=total, callback=callbacks, tb_log_name=config.algo)
     seconds = time.perf_counter() - t0
     steps = int(model.num_timesteps)
+    best = validation.best
+    if config.keep_timesteps is not None:
+        if not getattr(validation, "kept", False):
+            raise RuntimeError(
+                f"keep_timesteps {config.keep_timesteps} was not reached in {steps} steps"
+            )
+        best = float(selection.get("val_criterion", float("nan")))
 
     save_model(model, run_dir / "final_agent.zip")
     vn = model.get_vec_normalize_env()
@@ -249,9 +281,10 @@ def _train(
             "torch_version": torch.__version__,
             "timesteps": steps,
             "train_seconds": seconds,
-            "best_val_criterion": validation.best,
+            "best_val_criterion": best,
             "best_timesteps": validation.best_timesteps,
             "val_nominal_criterion": val_nominal,
+            **({"selection": selection} if config.keep_timesteps is not None else {}),
         },
         [
             "config.json",
@@ -264,7 +297,7 @@ def _train(
     )
     return TrainResult(
         run_dir=str(run_dir),
-        best_val_criterion=validation.best,
+        best_val_criterion=best,
         best_timesteps=validation.best_timesteps,
         val_nominal_criterion=val_nominal,
         evaluations=validation.evaluations,

@@ -171,6 +171,24 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         summary, self._drawn = self._calibration.draw(self.np_random, index)
         return np.concatenate([context, summary]).astype(np.float32)
 
+    def twin(self) -> CoefficientEnv:
+        """A new environment equal to one made with the same arguments, sharing this one's
+        read-only arrays (task, frames, nominal errors: nothing to recompute) and with its
+        own episode state, generator and spaces (the vector environment's sub-envs)."""
+        import copy
+
+        own = ("_np_random", "_np_random_seed", "_obs")
+        state = {k: v for k, v in vars(self).items() if k not in own}
+        twin = copy.copy(self)
+        twin.__dict__.clear()
+        twin.__dict__.update(state)
+        twin.action_space = copy.deepcopy(self.action_space)
+        twin.observation_space = copy.deepcopy(self.observation_space)
+        twin._renderer = None
+        twin._index, twin._done, twin._predicted = -1, True, None
+        twin._drawn = np.zeros(0, dtype=np.int64)
+        return twin
+
     def _finish_setup(self) -> None:
         tau = np.linspace(0.0, 1.0, N_STEPS)
         from motion_envs.geometry.sine_series import basis
@@ -327,7 +345,7 @@ class CoefficientVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
         self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
-        self.envs = [first] + [self.single_class(**kwargs) for _ in range(self.num_envs - 1)]
+        self.envs = [first] + [first.twin() for _ in range(self.num_envs - 1)]
         self.single = first
         self.single_action_space = first.action_space
         self.single_observation_space = first.observation_space

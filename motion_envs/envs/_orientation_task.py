@@ -36,6 +36,7 @@ __all__ = [
     "OrientationTask",
     "load_orientation_task",
     "orientation_split_parts",
+    "validation_groups",
 ]
 
 #: Largest Bézier degree of the ``bezier-*`` nominals (the paper uses 2 to 4).
@@ -94,6 +95,8 @@ def orientation_split_parts(
     min_deg: float,
     val_fraction: float = 0.0,
     fold: int | None = None,
+    val_folds: int = 0,
+    val_fold: int = 0,
 ) -> tuple[Any, Any, Any]:
     """``(dataset, fit, part)``: the whole dataset, the subjects the environment's nominal
     is fitted on, and the trajectories of ``split`` (in episode order).
@@ -106,6 +109,11 @@ def orientation_split_parts(
     ``fold = i`` (leave one person out): the test split is the ``i``-th person in sorted
     order of the subject labels, the training split every other person
     (``test_fraction`` and ``split_seed`` then only seed the validation carve).
+
+    ``val_folds = K`` (instead of ``val_fraction``): the training people are permuted
+    with ``split_seed`` and cut into ``K`` groups of near-equal size
+    (:func:`validation_groups`); group ``val_fold`` is ``"val"``, the other people
+    ``"train"`` (and ``fit``): the inner folds over people of a nested evaluation.
     """
     from motion_envs.datasets import load_orientation_dataset
     from motion_envs.datasets.splits import split_by_subject
@@ -121,10 +129,29 @@ def orientation_split_parts(
         is_test = np.asarray(dataset.subjects).astype(str) == people[fold]
         train, test = dataset.subset(~is_test), dataset.subset(is_test)
     fit, part = train, (train if split == "train" else test)
-    if val_fraction > 0 and split != "test":  # validation subjects carved from training
+    if val_folds and split != "test":  # inner K-fold over the training people
+        groups = validation_groups(train.subjects, val_folds, split_seed)
+        is_val = np.isin(np.asarray(train.subjects).astype(str), groups[val_fold])
+        fit, val = train.subset(~is_val), train.subset(is_val)
+        part = fit if split == "train" else val
+    elif val_fraction > 0 and split != "test":  # validation subjects carved from training
         fit, val = split_by_subject(train, test_fraction=val_fraction, seed=split_seed)
         part = fit if split == "train" else val
     return dataset, fit, part
+
+
+def validation_groups(subjects: Any, n_groups: int, seed: int) -> list[NDArray[np.str_]]:
+    """The ``n_groups`` validation groups of ``val_folds``: the distinct ``subjects``
+    (sorted labels) permuted with ``numpy.random.default_rng(seed)`` and cut into
+    ``n_groups`` groups of near-equal size (each sorted); ``ValueError`` naming
+    ``val_folds`` unless ``2 <= n_groups <= `` the number of people."""
+    people = np.unique(np.asarray(subjects).astype(str))
+    if not 2 <= n_groups <= people.size:
+        raise ValueError(
+            f"val_folds must be 0 or in [2, {people.size}] (the training people); got {n_groups}"
+        )
+    order = np.random.default_rng(seed).permutation(people.size)
+    return [np.sort(people[g]) for g in np.array_split(order, n_groups)]
 
 
 def _build_task(
@@ -138,12 +165,14 @@ def _build_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
     fold: int | None = None,
+    val_folds: int = 0,
+    val_fold: int = 0,
 ) -> OrientationTask:
     from motion_envs.geometry import quaternion as quat
     from motion_envs.models.nominal import OrientationNominal
 
     dataset, fit, part = orientation_split_parts(
-        data, split, test_fraction, split_seed, min_deg, val_fraction, fold
+        data, split, test_fraction, split_seed, min_deg, val_fraction, fold, val_folds, val_fold
     )
     model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
     g = model.grids(part)
@@ -196,11 +225,15 @@ def load_orientation_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
     fold: int | None = None,
+    val_folds: int = 0,
+    val_fold: int = 0,
 ) -> OrientationTask:
     """Build (or reuse) the precomputed episodes of a split; built-in data is cached.
 
     ``fold`` (None or an integer >= 0): leave one person out, the ``fold``-th person
-    (sorted labels) is the test split (:func:`orientation_split_parts`)."""
+    (sorted labels) is the test split (:func:`orientation_split_parts`); ``val_folds = K``
+    and ``val_fold = j`` (0 <= j < K): the ``j``-th of ``K`` groups of the training people
+    is the validation split (instead of ``val_fraction``)."""
     from motion_envs.datasets import ORIENTATION_DATASETS
     from motion_envs.models.nominal import ORIENTATION_NOMINALS
 
@@ -208,11 +241,18 @@ def load_orientation_task(
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
     check_integer(degree, "degree", 1, MAX_DEGREE)
     check_number(min_deg, "min_deg", 0.0, 180.0)
-    val_fraction = check_val_fraction(val_fraction, split)
+    val_folds = check_integer(val_folds, "val_folds", 0, 2**31)
+    if val_folds == 1:
+        raise ValueError("val_folds must be 0 (off) or at least 2; got 1")
+    val_fold = check_integer(val_fold, "val_fold", 0, max(val_folds - 1, 0))
+    val_fraction = check_val_fraction(val_fraction, "train" if val_folds else split)
+    if val_folds and val_fraction:
+        raise ValueError("val_fraction must be 0 with val_folds (the folds choose the validation)")
     args: tuple[Any, ...] = (data, split, nominal, int(degree), float(test_fraction))
     if fold is not None:
         fold = check_integer(fold, "fold", 0, 2**31)
     args += (int(split_seed), min_deg, val_fraction, bool(observe_timing), fold)
+    args += (val_folds, val_fold)
     if isinstance(data, str) and data in ORIENTATION_DATASETS:
         return _build_task_cached(*args)
     return _build_task(*args)

@@ -430,14 +430,12 @@ def zero_action_errors(
     """``(L,)`` per-episode ``max_k`` of the step error of ``kind``'s kernel
     (:meth:`ReachKind.batch_step`) with a zero action, on a step table ``steps`` laid out
     as ``task.steps`` (the kinds' ``max_errors``: a predicted nominal in its rows)."""
-    L, n, _ = steps.shape
-    zero = np.zeros((L, kind.action_dim(task)))
+    L, n, width = steps.shape
+    # a zero action makes every grid point independent of the others: one batch of L n rows
+    zero = np.zeros((L * n, kind.action_dim(task)))
     weights = (0.0,) * len(kind.weight_keys)
-    errors = np.empty((L, n))
-    for k in range(n):
-        _, _, values = kind.batch_step(steps[:, k].T, zero, 1.0, weights)
-        errors[:, k] = values[0]
-    out: NDArray[np.float64] = errors.max(axis=1)
+    _, _, values = kind.batch_step(steps.reshape(L * n, width).T, zero, 1.0, weights)
+    out: NDArray[np.float64] = np.asarray(values[0]).reshape(L, n).max(axis=1)
     return out
 
 

@@ -123,6 +123,8 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     | `min_deg`        | **float** | `10.0`         | drop trajectories rotating less than this (degrees) |
     | `val_fraction`   | **float** | `0.0`          | share of the training subjects held out as `split="val"` |
     | `fold`           | **int**   | `None`         | leave one person out: the `fold`-th person (sorted labels) is `"test"` (as `OrientationReach`) |
+    | `val_folds`      | **int**   | `0`            | `K >= 2`: group `val_fold` of `K` groups of the training people is `"val"` (inner folds over people; as `OrientationReach`) |
+    | `val_fold`       | **int**   | `0`            | the validation group of `val_folds`, 0 to `K - 1` |
     | `calibration`    | **int**   | `0`            | ``K``: observe the summary of ``K`` other reaches of the person (0: none) |
     | `render_mode`    | **str**   | `None`         | `None` or `"rgb_array"` |
     | `width`          | **int**   | `480`          | frame width in pixels |
@@ -149,6 +151,8 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         min_deg: float = 10.0,
         val_fraction: float = 0.0,
         fold: int | None = None,
+        val_folds: int = 0,
+        val_fold: int = 0,
         calibration: int = 0,
         render_mode: str | None = None,
         width: int = 480,
@@ -161,7 +165,7 @@ class OrientationCoefficientsEnv(CoefficientEnv):
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg, val_fraction, True,
-            fold,
+            fold, val_folds, val_fold,
         )  # fmt: skip
         obs0 = self.task.obs[:, 0]
         task_part = slice(LAYOUT.task.start, obs0.shape[1] - 2)  # before the v1 timing

@@ -297,6 +297,8 @@ class OrientationReachEnv(ReachEnv):
     | `observe_timing` | **bool**     | `False`        | append the duration and the elapsed time to the observation (`True` in `-v1`) |
     | `fold`           | **int**      | `None`         | leave one person out: the `fold`-th person (sorted labels) is `"test"`, the others `"train"` (and `"val"` with `val_fraction`); replaces `test_fraction` |
     | `calibration`    | **int**      | `0`            | ``K``, 0 to 1000: observe the summary of ``K`` other reaches of the episode's person (0: the observation is unchanged); the native vector environment then runs the numpy backend |
+    | `val_folds`      | **int**      | `0`            | `K >= 2`: the training people cut into `K` groups (permuted with `split_seed`); group `val_fold` is `"val"`, the others `"train"` with the nominal fitted on them (inner folds over people; needs `val_fraction=0`) |
+    | `val_fold`       | **int**      | `0`            | the validation group of `val_folds`, 0 to `K - 1` |
 
     A bad argument raises `ValueError` naming it (the same in the vector environment);
     reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
@@ -328,13 +330,15 @@ class OrientationReachEnv(ReachEnv):
         observe_timing: bool = False,
         fold: int | None = None,
         calibration: int = 0,
+        val_folds: int = 0,
+        val_fold: int = 0,
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg,
-            val_fraction, observe_timing, fold,
+            val_fraction, observe_timing, fold, val_folds, val_fold,
         )  # fmt: skip
         self.observation_space = _observation_space(self.task, bool(observe_timing))
         self._setup(self.task.grids.starts)

@@ -11,6 +11,7 @@ configuration is trained with::
     timesteps: 100000         # optional overrides of the agent config
     n_envs: 8
     test_split: test
+    inner_folds: 3            # optional: checkpoints by inner folds over people, then a refit
     space:
       algo: [ppo]
       env_id: [MotionEnvs/OrientationReach-v0, MotionEnvs/OrientationReach-v1]
@@ -36,9 +37,16 @@ hand's deviation ratio, and the plot then shows the criterion itself); the confi
 marked ``best`` has the lowest median *validation* criterion (the test split plays no
 part in the choice).
 
+With ``inner_folds: K`` (leave-one-person-out sweeps, ``env_kwargs.fold``) each trial
+is nested (:mod:`~baselines.agents.sweep.nested`): ``K`` inner agents validated on
+groups of the fold's training people choose the kept step, then one agent is refitted on
+all of them; per fold, the configuration with the best inner score is reported
+(:mod:`~baselines.agents.sweep.lopo`).
+
 Ray: by default a local instance with ``--num-cpus`` (default: the machine's cores), one
 CPU per trial; ``--address ADDR`` (e.g. ``auto``) joins an existing cluster started with
-``ray start``. On a cluster ``--out`` must be on storage every node sees (NFS, a shared
+``ray start`` (so does Ray's ``RAY_ADDRESS`` environment variable when ``--address`` is
+not given). On a cluster ``--out`` must be on storage every node sees (NFS, a shared
 mount). ``--resume`` continues an interrupted sweep (Ctrl-C, which ends the command with
 that advice, or a crash) in the same ``--out``: Ray Tune keeps its finished trials as they
 are and starts the unfinished ones over (a trial whose run folder was finished is only

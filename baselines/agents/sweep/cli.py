@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -28,8 +29,10 @@ def sweep_file(text: str) -> Path:
 
 def _cli(args: argparse.Namespace) -> int:
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
-    if args.address is not None and args.num_cpus is not None:
-        raise options.ConfigError("num_cpus", "applies to a local Ray only; omit it with --address")
+    if args.num_cpus is not None and (args.address is not None or os.environ.get("RAY_ADDRESS")):
+        raise options.ConfigError(
+            "num_cpus", "applies to a local Ray only; omit it with --address or RAY_ADDRESS"
+        )
     name = Path(args.config).stem
     sweep = load_sweep(
         args.config,

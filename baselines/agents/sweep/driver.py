@@ -32,6 +32,7 @@ def trial_settings(sweep: SweepConfig) -> TrialSettings:
         timesteps=sweep.timesteps,
         n_envs=sweep.n_envs,
         path=sweep.path,
+        inner_folds=sweep.inner_folds,
     )
 
 
@@ -52,6 +53,7 @@ def _tune_domain(value: Any) -> Any:
 def _settings(sweep: SweepConfig) -> dict[str, Any]:
     """What a sweep trains (not where or how it runs), as JSON: ``OUT/sweep.json``."""
     keys = "configurations seeds timesteps n_envs test_split search num_samples random_seed space"
+    keys += " inner_folds"
     settings: dict[str, Any] = json.loads(json.dumps({k: getattr(sweep, k) for k in keys.split()}))
     return settings
 
@@ -85,11 +87,13 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
     sweep = SweepConfig(**{**sweep.__dict__, "out": str(out)})
     _claim_out(sweep, out)
     started_here = False
+    # --address, else Ray's own RAY_ADDRESS (a cluster), else a local Ray with --num-cpus
+    address = sweep.address if sweep.address is not None else os.environ.get("RAY_ADDRESS")
     if not ray.is_initialized():
         # quiet unless --verbose: Ray's start-up log lines go to its log files only
         level = logging.INFO if sweep.progress else logging.ERROR
-        if sweep.address is not None:
-            ray.init(address=sweep.address, log_to_driver=False, logging_level=level)
+        if address:
+            ray.init(address=address, log_to_driver=False, logging_level=level)
         else:
             ray.init(
                 num_cpus=sweep.num_cpus or os.cpu_count(),
@@ -180,8 +184,8 @@ def run(sweep: SweepConfig) -> dict[str, Any]:
         "test_split": sweep.test_split,
         "n_trials": len(trials),
         "wall_seconds": wall,
-        "num_cpus": sweep.num_cpus or os.cpu_count(),
-        "address": sweep.address,
+        "num_cpus": None if address else sweep.num_cpus or os.cpu_count(),
+        "address": address or None,
         **summary,
         "trials": trials,
     }

@@ -1,17 +1,20 @@
 """Agents judged by people: the summary of a leave-one-person-out sweep.
 
 A LOPO sweep (``configs/sweeps/orientation_lopo.yaml``) trains one agent per fold and
-seed: the environment's ``fold = i`` holds the ``i``-th person out as its test split
-(nominal fitted on the other people, for training and for scoring) and carves
-validation people from the training people (``val_fraction``: never a single person),
-on which checkpoints are chosen. Each trial's ``test_ratio`` is then the agent's
-criterion over the nominal's on one held-out person.
+seed: the environment's ``fold = i`` holds the ``i``-th person out as its test split.
+With ``inner_folds: K`` (the shipped file) each trial is nested
+(:mod:`baselines.agents.sweep.nested`): the checkpoint is chosen by ``K`` inner folds
+over the fold's training people, then one agent is refitted on all of them with the
+nominal fitted on them for training and for scoring. Without it, checkpoints are chosen
+on validation people carved from the training people (``val_fraction``). Each trial's
+``test_ratio`` is the agent's criterion over the nominal's on one held-out person.
 
 :func:`lopo_summary` gives, per person (fold), the ratio of every seed and their median;
 across people the interquartile mean of the ``(seeds, people)`` ratios with its 95 %
-interval (:func:`baselines.stats.iqm_intervals`, rliable; runs resampled within each
-person), the number of people on which the agent is below the nominal, and the verdict
-in words (:func:`baselines.stats.verdict`: lower is better).
+interval over people (:func:`baselines.stats.group_bootstrap`: a person's seeds move
+together) and rliable's over seeds within each person
+(:func:`baselines.stats.iqm_intervals`), the number of people on which the agent is below
+the nominal, and the verdict in words (:func:`baselines.stats.verdict`: lower is better).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 __all__ = ["fold_of", "format_lopo", "lopo_summary"]
 
@@ -30,50 +34,131 @@ def fold_of(configuration: Mapping[str, Any]) -> int | None:
     return None if fold is None else int(fold)
 
 
+def _inner_score(trial: Mapping[str, Any]) -> float:
+    """What chooses among a fold's configurations: the inner folds' mean ratio at the kept
+    step (nested trials), else the validation criterion over the nominal's."""
+    if trial.get("inner_val_ratio") is not None:
+        return float(trial["inner_val_ratio"])
+    nominal = trial.get("val_nominal_criterion")
+    if trial.get("best_val_criterion") is None or not nominal:
+        return float("inf")
+    return float(trial["best_val_criterion"]) / float(nominal)
+
+
+def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) -> dict[str, Any]:
+    """IQM over the ``(seeds, people)`` ratios with two 95 % intervals, medians per
+    person, the people below 1 and the verdict.
+
+    ``iqm_ratio_ci95`` resamples *people* (all seeds of a person together: the question
+    is how the agent does on new people; the verdict uses it); ``iqm_ratio_ci95_seeds``
+    is rliable's (seeds resampled within each person, the people fixed: the seed noise
+    only, a point with one seed)."""
+    from rliable import metrics
+
+    from baselines.stats import group_bootstrap, iqm_intervals, verdict
+
+    people = sorted(per_person)
+    matrix = np.array([[per_person[p][s] for p in people] for s in seeds])  # (seeds, people)
+    agg = iqm_intervals({"ratio": matrix})["ratio"]
+    flat = matrix.ravel()  # cell (seed, person) -> seed * n_people + person
+
+    def iqm(rows: NDArray[np.int64]) -> float:
+        return float(metrics.aggregate_iqm(flat[rows]))
+
+    person_of_cell = np.tile(np.asarray(people), len(seeds))
+    _, lo, hi = group_bootstrap(iqm, person_of_cell)
+    medians = np.median(matrix, axis=0)
+    return {
+        "ratio_per_person": {str(p): dict(per_person[p]) for p in people},
+        "ratio_per_person_median": {str(p): float(m) for p, m in zip(people, medians, strict=True)},
+        "iqm_ratio": agg["iqm"],
+        "iqm_ratio_ci95": [lo, hi],
+        "iqm_ratio_ci95_seeds": list(agg["ci95"]),
+        "people_below_one": int(np.sum(medians < 1.0)),
+        "verdict": verdict(lo, hi),
+    }
+
+
 def lopo_summary(
     trials: Sequence[Mapping[str, Any]], configurations: Sequence[Mapping[str, Any]]
 ) -> dict[str, Any] | None:
     """Per-person ratios, their IQM with its interval and the verdict (module docstring);
-    None when no configuration has a ``fold`` or a ratio is missing."""
-    from baselines.stats import iqm_intervals, verdict
+    None when no configuration has a ``fold`` or a ratio is missing.
 
+    Where a fold has several configurations (searched hyper-parameters), the one with
+    the lowest median over seeds of the inner score (:func:`_inner_score`: never the
+    held-out person) is the fold's, and only its test ratios are reported. The agent over
+    the learned ridge regressor fitted on the same training people (``agent_over_ridge``)
+    is summarised the same way when every trial has it."""
     folds = {i: fold_of(c) for i, c in enumerate(configurations)}
-    per_person: dict[int, dict[int, float]] = {}
+    by_fold: dict[int, dict[int, list[Mapping[str, Any]]]] = {}
     for t in trials:
         fold = folds.get(int(t["config_index"]))
         if fold is None or t.get("test_ratio") is None:
             continue
-        per_person.setdefault(fold, {})[int(t["seed"])] = float(t["test_ratio"])
-    if not per_person:
+        by_fold.setdefault(fold, {}).setdefault(int(t["config_index"]), []).append(t)
+    if not by_fold:
         return None
+    chosen = {
+        fold: min(cands, key=lambda c: (np.median([_inner_score(t) for t in cands[c]]), c))
+        for fold, cands in by_fold.items()
+    }
+    kept = {fold: by_fold[fold][c] for fold, c in chosen.items()}
+    per_person = {f: {int(t["seed"]): float(t["test_ratio"]) for t in ts} for f, ts in kept.items()}
     people = sorted(per_person)
     seeds = sorted(set.intersection(*(set(v) for v in per_person.values())))
     if not seeds:
         return None
-    matrix = np.array([[per_person[p][s] for p in people] for s in seeds])  # (seeds, people)
-    agg = iqm_intervals({"ratio": matrix})["ratio"]
-    lo, hi = agg["ci95"]
-    medians = np.median(matrix, axis=0)
-    return {
+    per_person = {p: {s: per_person[p][s] for s in seeds} for p in people}
+    block = _iqm_block(per_person, seeds)
+    nested = all(t.get("inner_val_ratio") is not None for ts in kept.values() for t in ts)
+    out: dict[str, Any] = {
         "folds": people,
         "seeds": seeds,
-        "ratio_per_person": {str(p): per_person[p] for p in people},
-        "ratio_per_person_median": {str(p): float(m) for p, m in zip(people, medians, strict=True)},
-        "iqm_ratio": agg["iqm"],
-        "iqm_ratio_ci95": [lo, hi],
-        "people_below_nominal": int(np.sum(medians < 1.0)),
+        "chosen_config_per_person": {str(p): chosen[p] for p in people},
+        "selection": "inner folds over the training people"
+        if nested
+        else "validation people carved from the training people",
+        **{k: v for k, v in block.items() if k != "people_below_one"},
+        "people_below_nominal": block["people_below_one"],
         "n_people": len(people),
-        "verdict": verdict(lo, hi),
     }
+    learned = {
+        p: {int(t["seed"]): t.get("test_learned_ratio") for t in kept[p] if t["seed"] in seeds}
+        for p in people
+    }
+    if all(r is not None for v in learned.values() for r in v.values()):
+        over = _iqm_block(
+            {p: {s: float(r) for s, r in v.items()} for p, v in learned.items()}, seeds
+        )
+        first = {p: kept[p][0] for p in people}  # the ridge and nominal: the same for all seeds
+        ridge = {
+            str(p): float(t["test_learned_criterion"]) / float(t["test_nominal_criterion"])
+            for p, t in first.items()
+        }
+        out["agent_over_ridge"] = {**over, "ridge_over_nominal_per_person": ridge}
+    return out
 
 
 def format_lopo(lopo: Mapping[str, Any]) -> str:
     """The LOPO summary in words (unit, direction, interval, verdict)."""
     lo, hi = lopo["iqm_ratio_ci95"]
     per = ", ".join(f"fold {p}: {r:.3f}" for p, r in lopo["ratio_per_person_median"].items())
-    return (
-        f"agent / nominal per held-out person (median over {len(lopo['seeds'])} seeds): {per}\n"
+    lines = [
+        f"agent / nominal per held-out person (median over {len(lopo['seeds'])} seeds; "
+        f"checkpoints chosen by {lopo['selection']}): {per}",
         f"IQM of agent / nominal over people and seeds = {lopo['iqm_ratio']:.3f} "
-        f"(95% CI {lo:.3f}-{hi:.3f}, lower is better); lower on "
-        f"{lopo['people_below_nominal']}/{lopo['n_people']} people; {lopo['verdict']} at 95 %"
-    )
+        f"(95% CI {lo:.3f}-{hi:.3f} people resampled, lower is better); lower on "
+        f"{lopo['people_below_nominal']}/{lopo['n_people']} people; {lopo['verdict']} at 95 %",
+    ]
+    over = lopo.get("agent_over_ridge")
+    if over:
+        lo, hi = over["iqm_ratio_ci95"]
+        per = ", ".join(f"fold {p}: {r:.3f}" for p, r in over["ratio_per_person_median"].items())
+        lines += [
+            f"agent / ridge regressor (fitted on the same training people) per person: {per}",
+            f"IQM of agent / ridge = {over['iqm_ratio']:.3f} (95% CI {lo:.3f}-{hi:.3f} people "
+            f"resampled, lower is better); lower on {over['people_below_one']}/"
+            f"{lopo['n_people']} people; {over['verdict']} at 95 %",
+        ]
+    return "\n".join(lines)

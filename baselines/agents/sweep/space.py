@@ -29,6 +29,7 @@ TOP_KEYS = {
     "test_split",
     "space",
     "description",
+    "inner_folds",
 }
 SPACE_KEYS = {"algo", "env_id", "hyperparams", "env_kwargs"}
 #: Searches of a sweep file.
@@ -39,6 +40,8 @@ MAX_CONFIGURATIONS = 10_000
 MAX_SEEDS = 1_000
 #: Most choices of one list of the space.
 MAX_CHOICES = 1_000
+#: Most inner folds over people of a nested trial.
+MAX_INNER_FOLDS = 1_000
 #: Most environment steps of one trial.
 MAX_TIMESTEPS = 10**10
 
@@ -60,6 +63,7 @@ class SweepFile(BaseModel):
     test_split: Literal["test", "val", "train"] = "test"
     space: dict[str, Any]
     description: str | None = Field(None, max_length=10_000)
+    inner_folds: int | None = Field(None, ge=2, le=MAX_INNER_FOLDS)
 
 
 def _schema_error(exc: ValidationError, path: str, lines: Mapping[tuple[str, ...], int]) -> str:
@@ -102,6 +106,7 @@ class SweepConfig:
     num_samples: int = 1
     random_seed: int = 0
     space: Mapping[str, Any] | None = None  # optuna: the flat space, keys "hyperparams.lr"
+    inner_folds: int | None = None  # checkpoints by inner folds over people, then a refit
 
 
 def check_domain(value: Any, where: str) -> None:
@@ -265,17 +270,31 @@ def _preflight_configurations(
     return out
 
 
+def _check_inner_folds(env_id: str, env_kwargs: Mapping[str, Any]) -> None:
+    """Build the validation split of the last inner fold (``inner_folds`` larger than the
+    training people fails here, naming ``val_folds``)."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids)
+
+    gym.make(env_id, **{**env_kwargs, "split": "val"}).close()
+
+
 def preflight_sweep(top: SweepFile, configs: list[dict[str, Any]], path: str) -> None:
     """``motion-bench train``'s checks (:func:`baselines.agents.train.preflight`: registered
     id, constructor keywords, ``n_envs`` and the validation split) for every configuration
     and seed the sweep can run, before Ray starts; a ``ValueError`` naming the file and the
     configuration."""
+    from baselines.agents.sweep.nested import inner_overrides
     from baselines.agents.train import TrainConfig, preflight
 
     for cfg in _preflight_configurations(top, configs, path):
-        for seed in top.seeds:
+        overrides = cfg["overrides"]
+        if top.inner_folds:  # the last inner fold's setup (the refit's differs in val only)
+            overrides = inner_overrides(overrides, top.inner_folds, top.inner_folds - 1)
+        for i, seed in enumerate(top.seeds):
             try:
-                preflight(
+                hp = preflight(
                     TrainConfig(
                         algo=cfg["algo"],
                         env_id=cfg["env_id"],
@@ -283,9 +302,11 @@ def preflight_sweep(top: SweepFile, configs: list[dict[str, Any]], path: str) ->
                         seed=seed,
                         timesteps=top.timesteps,
                         n_envs=top.n_envs,
-                        overrides=cfg["overrides"],
+                        overrides=overrides,
                     )
                 )
+                if top.inner_folds and i == 0:  # the people can be cut into K groups
+                    _check_inner_folds(cfg["env_id"], hp["env_kwargs"])
             except ValueError as exc:
                 message = str(exc).removeprefix("--env ")
                 if isinstance(exc, options.ConfigError):
@@ -333,5 +354,6 @@ def load_sweep(path: str | os.PathLike[str], **kwargs: Any) -> SweepConfig:
         test_split=split,
         timesteps=top.timesteps,
         n_envs=top.n_envs,
+        inner_folds=top.inner_folds,
         **kwargs,
     )

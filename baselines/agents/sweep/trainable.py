@@ -35,6 +35,9 @@ class TrialSettings:
     timesteps: int | None = None
     n_envs: int | None = None
     path: str = "sweep"
+    #: ``K``: checkpoints chosen by ``K`` inner folds over the training people, then a
+    #: refit (:mod:`baselines.agents.sweep.nested`); None: on the validation split.
+    inner_folds: int | None = None
 
 
 #: The metrics of one (configuration, seed) trial, in ``trials.csv`` order.
@@ -50,6 +53,10 @@ TRIAL_KEYS = (
     "test_catch_rate",
     "test_nominal_catch_rate",
     "test_deviation_ratio",
+    "test_learned_criterion",
+    "test_learned_ratio",
+    "kept_timesteps",
+    "inner_val_ratio",
     "train_seconds",
     "trial_seconds",
     "run_dir",
@@ -61,7 +68,9 @@ def train_and_score(
     cfg: Mapping[str, Any], seed: int, run_dir: Path, settings: TrialSettings, intermediate: bool
 ) -> dict[str, Any]:
     """``train.run`` for one configuration and seed (unless ``run_dir`` already holds a
-    finished run), then the test split; the trial's metrics."""
+    finished run), then the test split; the trial's metrics. With
+    ``settings.inner_folds`` the run is the refit of a nested trial
+    (:func:`~baselines.agents.sweep.nested.nested_train`)."""
     from ray import tune
 
     import motion_envs  # noqa: F401  (registers the environments inside the worker)
@@ -73,7 +82,11 @@ def train_and_score(
     warnings.filterwarnings("ignore", message=".*is out of date", category=DeprecationWarning)
     t0 = time.perf_counter()
     resumed = (run_dir / "run.json").exists()  # finished before an interruption: rescore it
-    if not resumed:
+    if not resumed and settings.inner_folds:
+        from baselines.agents.sweep.nested import nested_train
+
+        nested_train(cfg, seed, run_dir, settings.inner_folds, settings.timesteps, settings.n_envs)
+    elif not resumed:
         import shutil
 
         if run_dir.exists():  # an interrupted trial: start it over
@@ -102,6 +115,7 @@ def train_and_score(
         )
     test = evaluate(AgentConfig(str(run_dir), settings.test_split))
     manifest = json.loads((run_dir / "run.json").read_text())
+    selection = manifest.get("selection") or {}
     return {
         "seed": seed,
         "timesteps": manifest["timesteps"],
@@ -114,6 +128,11 @@ def train_and_score(
         "test_catch_rate": test.get("catch_rate"),
         "test_nominal_catch_rate": test.get("nominal_catch_rate"),
         "test_deviation_ratio": test.get("deviation_ratio"),
+        # the learned ridge regressor fitted on the same training people (reaching envs)
+        "test_learned_criterion": test.get("learned_criterion"),
+        "test_learned_ratio": test.get("learned_ratio"),
+        "kept_timesteps": manifest["best_timesteps"],
+        "inner_val_ratio": selection.get("val_ratio"),
         "train_seconds": manifest["train_seconds"],
         "trial_seconds": time.perf_counter() - t0,
         "run_dir": str(run_dir),
