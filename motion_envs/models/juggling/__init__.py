@@ -18,10 +18,25 @@ The public names of small private modules, one concern each:
   scatters a toss (:func:`perturb_release`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
+* ``_cascade``: the three-ball cascade juggler (two hands of the one-ball juggler
+  scheduled by Shannon's theorem, :class:`CascadeController`), its fit
+  (:func:`cascade_fit`) and reference controllers (:func:`make_cascade_controller`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
 
+from motion_envs.models.juggling._cascade import (
+    CASCADE_CONTROLLERS,
+    CascadeController,
+    CascadeFit,
+    CascadeHand,
+    CascadePattern,
+    CascadeSensor,
+    CascadeState,
+    cascade_fit,
+    cascade_likeness,
+    make_cascade_controller,
+)
 from motion_envs.models.juggling._controller import ControlOptions, JugglingController
 from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
@@ -85,6 +100,7 @@ from motion_envs.models.juggling._world import (
 )
 
 __all__ = [
+    "CASCADE_CONTROLLERS",
     "CONTROLLERS",
     "DEMO_CYCLES",
     "FIT_SEED",
@@ -99,6 +115,12 @@ __all__ = [
     "BallMeasurement",
     "BallSensor",
     "BallisticWorld",
+    "CascadeController",
+    "CascadeFit",
+    "CascadeHand",
+    "CascadePattern",
+    "CascadeSensor",
+    "CascadeState",
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
@@ -109,6 +131,8 @@ __all__ = [
     "JugglingLevel",
     "JugglingWorld",
     "PhaseFit",
+    "cascade_fit",
+    "cascade_likeness",
     "cycle_rng",
     "cycle_rngs",
     "default_fit",
@@ -118,6 +142,7 @@ __all__ = [
     "load_demonstrations",
     "load_juggler",
     "load_juggling_csv",
+    "make_cascade_controller",
     "make_controller",
     "perturb_release",
     "phase_conditions",
