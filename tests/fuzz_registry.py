@@ -139,6 +139,17 @@ ENVS: dict[str, dict[str, object]] = {
             "width": "size",
         },
     },
+    "MotionEnvs/Cascade-v0": {
+        "kwargs": {
+            "latency": "fraction",
+            "position_std": "fraction",
+            "release_speed_std": "fraction",
+            "dwell_ratio": "fraction",
+            "max_catches": "small_int",
+            "residual_scale": "positive",
+            "width": "size",
+        },
+    },
     "MotionEnvs/OrientationCoefficients-v0": {
         "kwargs": {
             "residual_scale": "positive",
@@ -182,6 +193,7 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("juggling", "--mujoco-cycles"),
     ("juggling", "--episodes"),
     ("juggling", "--max-catches"),
+    ("juggling", "--pattern"),
     ("calibrate-cohort", "--max-evaluations"),
     ("calibrate-cohort", "--check-seeds"),
     ("train", "--timesteps"),

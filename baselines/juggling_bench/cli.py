@@ -10,6 +10,13 @@ import time
 
 from baselines import options
 from baselines.agents.checks import run_folder
+from baselines.juggling_bench.cascade import (
+    PATTERNS,
+    CascadeConfig,
+    report_cascade,
+    run_cascade,
+    write_cascade,
+)
 from baselines.juggling_bench.config import JugglingConfig
 from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_levels, write_levels
 from baselines.juggling_bench.media import write
@@ -22,14 +29,28 @@ from motion_envs.models.juggling import LEVELS
 def main(args: argparse.Namespace) -> int:
     """``motion-bench juggling`` with parsed arguments: run, print, write (the levels of
     Juggling-v1 with ``--levels``)."""
+    if args.pattern is not None:
+        if args.agent is not None:
+            return options.fail("motion-bench juggling", "--agent: not with --pattern")
+        cascade = CascadeConfig(
+            pattern=args.pattern,
+            levels=args.levels or CascadeConfig.levels,
+            episodes=args.episodes or CascadeConfig.episodes,
+            max_catches=args.max_catches or CascadeConfig.max_catches,
+        )
+        doc = run_cascade(cascade)
+        print(report_cascade(doc))
+        out = options.results_folder(args.out, f"juggling-pattern-{args.pattern}")
+        print("wrote " + ", ".join(str(p) for p in write_cascade(doc, out)))
+        return 0
     if args.levels is None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: needs --levels")
     else:
         levels = LevelsConfig(
             levels=args.levels,
-            episodes=args.episodes,
-            max_catches=args.max_catches,
+            episodes=args.episodes or LevelsConfig.episodes,
+            max_catches=args.max_catches or LevelsConfig.max_catches,
             agent=None if args.agent is None else str(args.agent),
         )
         doc = run_levels(levels)
@@ -93,6 +114,14 @@ def level_names(text: str) -> tuple[str, ...]:
     return names
 
 
+def siteswap_pattern(text: str) -> str:
+    """``--pattern``: one of the offered siteswaps (:data:`.cascade.PATTERNS`)."""
+    value = text.strip()
+    if value not in PATTERNS:
+        raise argparse.ArgumentTypeError(f"expected one of {list(PATTERNS)}; got {text!r}")
+    return value
+
+
 def gravity_task(text: str) -> JugglingTask:
     """``--gravity``: a finite number in :data:`GRAVITY_RANGE` (m/s^2), as the task it
     defines."""
@@ -148,7 +177,14 @@ correction from the delayed measurement), the same juggler predicting the flight
 by the known delay, a fixed catch point, minimum jerk to the intercept predicted from the
 commanded release velocity, and with --agent DIR a trained agent's residual on the same
 seeds. Reported: catch rate with a 95 % bootstrap interval, consecutive catches before
-the first drop (median), the hand's deviation from held-out demonstrations (SIMULATED)."""
+the first drop (median), the hand's deviation from held-out demonstrations (SIMULATED).
+
+With --pattern 3: the three-ball cascade (MotionEnvs/Cascade-v0: two hands, three balls,
+Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theorem). Per
+level, --episodes (50) test-seed episodes of the analytic cascade juggler, its
+latency-aware variant and the two trivial catches, each ending at the first drop or after
+--max-catches (20) catches. Reported with 95 % bootstrap intervals: catches before the
+first drop (median), catch rate, time to the first drop (SIMULATED demonstrations)."""
 
 
 def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
@@ -229,16 +265,23 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "benchmark instead of the paper's",
     )
     p.add_argument(
+        "--pattern",
+        type=siteswap_pattern,
+        default=None,
+        help="a juggling pattern (siteswap; offered: 3, the three-ball cascade on "
+        "MotionEnvs/Cascade-v0): run its levels benchmark (every level unless --levels)",
+    )
+    p.add_argument(
         "--episodes",
         type=options.int_at_least(2),
-        default=200,
-        help="test episodes per level and method (--levels)",
+        default=None,
+        help="test episodes per level and method (--levels: default 200; --pattern: 50)",
     )
     p.add_argument(
         "--max-catches",
         type=options.positive_int,
-        default=3,
-        help="catches after which an episode ends (--levels)",
+        default=None,
+        help="catches after which an episode ends (--levels: default 3; --pattern: 20)",
     )
     p.add_argument(
         "--agent",

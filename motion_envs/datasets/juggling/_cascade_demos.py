@@ -190,7 +190,7 @@ def nominal_toss(style: CascadeStyle, task: JugglingTask) -> NominalToss:
     start = np.asarray(style.home, dtype=np.float64)
     duration = style.toss_time * scale
     c = _toss_plan(start, start + np.asarray(style.toss), style, scale, duration)
-    k = np.arange(int(math.floor(duration / task.dt)) + 1)
+    k = np.arange(math.floor(duration / task.dt) + 1)
     y = quintic_evaluate(c, k * task.dt)
     j = _release_index(y, np.repeat(y[:1], 2, axis=0), task)
     if j is None or j == 0:

@@ -207,12 +207,13 @@ class CascadeWorld:
         radius, floor_z = task.ball_radius, task.floor_z
         holder, left, dropped = self._holder, self._left, self._dropped
         caught = [-1, -1]
+        q, v = qpos.tolist(), qvel.tolist()
+        forces = [0.0] * (2 * CASCADE_HANDS)
         for j in range(1, SUBSTEPS + 1):
             f = j / SUBSTEPS
             for h in range(CASCADE_HANDS):
                 sx, sz, dx, dz, vrx, vrz, arx, arz = servo[h]
-                hx, hz = float(qpos[2 * h]), float(qpos[2 * h + 1])
-                vx, vz = float(qvel[2 * h]), float(qvel[2 * h + 1])
+                hx, hz, vx, vz = q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1]
                 ax = arx + kp * (sx + f * dx - hx) + kd * (vrx - vx)
                 az = arz + kp * (sz + f * dz - hz) + kd * (vrz - vz)
                 n2 = ax * ax + az * az
@@ -224,45 +225,54 @@ class CascadeWorld:
                 if sp > vmax:
                     nvx, nvz = nvx * vmax / sp, nvz * vmax / sp
                     ax, az = (nvx - vx) / h_step, (nvz - vz) / h_step
-                ctrl[2 * h], ctrl[2 * h + 1] = HAND_MASS * ax, HAND_MASS * az
+                forces[2 * h] = HAND_MASS * ax
+                forces[2 * h + 1] = HAND_MASS * az
+            ctrl[:] = forces
             mujoco.mj_step(m, d)
+            q, v = qpos.tolist(), qvel.tolist()
             touching: set[tuple[int, int]] | None = None
+            moved = False
             for i in range(CASCADE_BALLS):
                 b = 4 + 2 * i
                 h = holder[i]
                 if h >= 0:
-                    qpos[b : b + 2] = qpos[2 * h : 2 * h + 2]
-                    qvel[b : b + 2] = qvel[2 * h : 2 * h + 2]
+                    q[b], q[b + 1], v[b], v[b + 1] = q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1]
+                    moved = True
                     continue
-                bx, bz = float(qpos[b]), float(qpos[b + 1])
+                bx, bz = q[b], q[b + 1]
                 if not left[i]:
                     t = self._thrower[i]
-                    if math.hypot(bx - qpos[2 * t], bz - qpos[2 * t + 1]) > 2 * radius:
+                    if math.hypot(bx - q[2 * t], bz - q[2 * t + 1]) > 2 * radius:
                         left[i] = True
+                if dropped[i] or (not left[i] and bz - radius > floor_z):
+                    continue
                 if touching is None:
                     touching = self._touching()
                 g = self.ball_geoms[i]
-                if not dropped[i] and (bz - radius <= floor_z or (g, self.floor_geom) in touching):
+                if bz - radius <= floor_z or (g, self.floor_geom) in touching:
                     dropped[i] = True
-                if dropped[i] or not left[i] or float(qvel[b + 1]) >= 0.0:
+                    continue
+                if v[b + 1] >= 0.0 or not left[i]:
                     continue
                 for h in range(CASCADE_HANDS):
-                    if h in holder:
+                    if h in holder or bz < q[2 * h + 1] + self.palm_top:
                         continue
-                    hx, hz = float(qpos[2 * h]), float(qpos[2 * h + 1])
-                    if bz < hz + self.palm_top:
-                        continue
-                    rel = math.hypot(
-                        float(qvel[b]) - float(qvel[2 * h]),
-                        float(qvel[b + 1]) - float(qvel[2 * h + 1]),
-                    )
+                    rel = math.hypot(v[b] - v[2 * h], v[b + 1] - v[2 * h + 1])
                     if rel < CAPTURE_SPEED and (g, self.palm_geoms[h]) in touching:
                         holder[i] = h
                         caught[h] = i
                         self._set_contacts(i, False)
-                        qpos[b : b + 2] = qpos[2 * h : 2 * h + 2]
-                        qvel[b : b + 2] = qvel[2 * h : 2 * h + 2]
+                        q[b], q[b + 1], v[b], v[b + 1] = (
+                            q[2 * h],
+                            q[2 * h + 1],
+                            v[2 * h],
+                            v[2 * h + 1],
+                        )
+                        moved = True
                         break
+            if moved:  # held balls follow their hands
+                qpos[4:] = q[4:]
+                qvel[4:] = v[4:]
         self._k += 1
         d.time = self._k * dt
         released = [-1, -1]

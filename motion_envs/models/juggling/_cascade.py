@@ -442,7 +442,9 @@ class CascadeHand(JugglingController):
 
 
 def _own(h: int, xz: FloatArray) -> FloatArray:
-    return mirror_x(xz) if h == 1 else np.asarray(xz, dtype=np.float64)
+    """``(2,)`` world <-> hand ``h``'s own frame (the left hand's is mirrored)."""
+    x, z = float(xz[0]), float(xz[1])
+    return np.array((-x if h == 1 else x, z))
 
 
 class CascadeController:
