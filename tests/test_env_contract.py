@@ -182,9 +182,7 @@ def _cascade_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
         got.append(info["hands"].ravel())
     assert info["catches"] >= 1
     fit = cascade_fit(c.gravity)
-    ctrl = make_cascade_controller(
-        c.controller_name, fit, c.delay_steps * c.task.dt, c.dwell_ratio
-    )
+    ctrl = make_cascade_controller(c.controller_name, fit, c.delay_steps * c.task.dt, c.dwell_ratio)
     world = CascadeWorld(c.task, c.release_speed_std, math.radians(c.release_angle_std))
     sensor = CascadeSensor(c.delay_steps, c.position_std, c.velocity_std, c.task.dt)
     w_ss, s_ss, c_ss = np.random.SeedSequence(21).spawn(3)
