@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -74,6 +74,8 @@ from motion_envs.models.juggling._sensor import BallSensor, predict_forward
 __all__ = [
     "CASCADE_CONTROLLERS",
     "CATCH_WINDOW",
+    "REAIM_AFTER",
+    "RELEASE_ARMED",
     "CascadeController",
     "CascadeFit",
     "CascadeHand",
@@ -94,6 +96,10 @@ CASCADE_CONTROLLERS: tuple[str, ...] = CONTROLLERS
 #: the longest plus this share of a beat (the flights scatter more than one hand's catch
 #: reach did in the demonstrations; a late ball is waited for).
 CATCH_WINDOW = 0.5
+#: Share of the nominal toss's release time after which a toss's release is armed.
+RELEASE_ARMED = 0.75
+#: Beats after the end of its catch plan at which an empty hand re-plans its catch.
+REAIM_AFTER = 0.3
 #: Sign of ``x`` in each hand's own frame (right: the world's; left: mirrored).
 _SIGN = (1.0, -1.0)
 
@@ -223,7 +229,7 @@ def cascade_fit(gravity: float) -> CascadeFit:
     """The cascade juggler's fit at ``gravity``: the built-in SIMULATED two-hand
     demonstrations (seed ``FIT_SEED``, two persons), split by demonstration (held-out
     share ``FIT_TEST_FRACTION``), the hand model (``V1_N_SINES`` sines per phase, the
-    release armed after ``0.25 sqrt(1 / g)`` s as Juggling-v1's) and the pattern fitted
+    release first armed as Juggling-v1's) and the pattern fitted
     on the training cycles. Computed once per process and gravity; do not change it."""
     task = JugglingTask(gravity=float(gravity))
     demos = generate_cascade_demonstrations(n_persons=2, seed=FIT_SEED, task=task)
@@ -231,6 +237,11 @@ def cascade_fit(gravity: float) -> CascadeFit:
     juggler = AnalyticJuggler(
         task=task, n_sines=V1_N_SINES, release_after=0.25 * math.sqrt(1.0 / task.gravity)
     ).fit(demos, train)
+    # armed from RELEASE_ARMED of the nominal toss's release on (the nominal is unchanged:
+    # its threshold is first crossed at its release): a toss started from a hand still
+    # moving must not release early and low
+    lead, _, _ = nominal_release(juggler)
+    juggler = juggler.variant(release_after=RELEASE_ARMED * lead)
     pattern = _measure_pattern(demos, frozenset(train), juggler)
     return CascadeFit(demos, frozenset(train), frozenset(test), juggler, pattern)
 
@@ -370,6 +381,7 @@ class CascadeHand(JugglingController):
         if phase == "catch" and self.incoming:
             p, v, t_r = self._incoming_belief()
             self.release_belief = (t_r, p, v)
+            self._catch_ball = self.incoming[0][0]
         if phase == "toss":
             self.tosses += 1
         if phase != "catch":
@@ -390,6 +402,28 @@ class CascadeHand(JugglingController):
         self.end_k = -1
         self.plans.append((phase, t, duration, p_plan.copy()))
         self.k = 0
+
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        """The one-ball juggler's command; an empty hand in the catch phase re-plans its
+        catch on the ball now first in its queue when that is another ball than the one
+        planned on (the planned one went elsewhere) or when the plan ended more than
+        :data:`REAIM_AFTER` beats ago without a catch. A hand that holds a ball in its
+        go-down or catch (a ball that came early) ends its catch there: the return starts."""
+        if self.phase in ("go_down", "catch") and state.held:
+            self.phase = "catch"
+            return super().command(replace(state, caught=True))
+        if (
+            self.phase == "catch"
+            and self.incoming
+            and not state.held
+            and not state.caught
+            and (
+                self.incoming[0][0] != self._catch_ball
+                or self.k * self.task.dt > self.duration + REAIM_AFTER * self.beat
+            )
+        ):
+            self.start_phase("catch", state.time, np.asarray(state.hand_pos, dtype=np.float64))
+        return super().command(state)
 
     def next_phase(
         self, time: float, hand: FloatArray, last_commands: tuple[FloatArray, FloatArray]
@@ -415,6 +449,7 @@ class CascadeHand(JugglingController):
         self.outgoing: tuple[float, FloatArray, FloatArray] | None = None
         self.last_release: float | None = None
         self.other_release: float | None = None
+        self._catch_ball = -1
         self.tosses = 0
         self._t_phase = state.time
         self._rng = rng
@@ -558,10 +593,10 @@ class CascadeController:
     def command(self, state: CascadeState) -> tuple[FloatArray, tuple[bool, bool]]:
         """Both hands' next targets ``(2, 2)`` (world) and release arming, given the
         (measured) state."""
-        for h, hand in enumerate(self.hands):
-            caught = state.caught[h]
+        for caught in state.caught:  # a caught ball is no longer expected by either hand
             if caught >= 0:
-                hand.incoming[:] = [e for e in hand.incoming if e[0] != caught]
+                for hand in self.hands:
+                    hand.incoming[:] = [e for e in hand.incoming if e[0] != caught]
         targets = np.empty((CASCADE_HANDS, 2))
         armed = [False, False]
         for h, hand in enumerate(self.hands):
