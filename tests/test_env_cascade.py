@@ -204,3 +204,20 @@ def test_pattern_option():
     assert args.pattern == "3"
     with pytest.raises(SystemExit):
         parser.parse_args(["juggling", "--pattern", "5"])
+
+
+def test_pattern_cli_writes_results_json(tmp_path, capsys):
+    import json
+
+    from baselines.cli import main
+
+    argv = ["juggling", "--pattern", "3", "--levels", "medium", "--episodes", "2",
+            "--max-catches", "1", "--out", str(tmp_path)]  # fmt: skip
+    assert main(argv) == 0
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert [lv["level"] for lv in doc["levels"]] == ["medium"]
+    assert set(doc["levels"][0]["methods"]) == {
+        "juggler", "juggler_latency_aware", "fixed_point", "commanded_intercept",
+    }  # fmt: skip
+    assert all(m["catches_median"] <= 1 for m in doc["levels"][0]["methods"].values())
+    assert "catches median" in capsys.readouterr().out
