@@ -76,7 +76,7 @@ class CascadeConfig:
     levels: tuple[str, ...] = ("easy", "medium", "hard")
     methods: tuple[str, ...] = CASCADE_CONTROLLERS
     episodes: int = 50
-    max_catches: int = 20
+    max_catches: int = 10
     gravity: float = 9.81
     split: str = "test"
 

@@ -183,7 +183,7 @@ With --pattern 3: the three-ball cascade (MotionEnvs/Cascade-v0: two hands, thre
 Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theorem). Per
 level, --episodes (50) test-seed episodes of the analytic cascade juggler, its
 latency-aware variant and the two trivial catches, each ending at the first drop or after
---max-catches (20) catches. Reported with 95 % bootstrap intervals: catches before the
+--max-catches (10) catches. Reported with 95 % bootstrap intervals: catches before the
 first drop (median), catch rate, time to the first drop (SIMULATED demonstrations)."""
 
 
@@ -281,7 +281,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--max-catches",
         type=options.positive_int,
         default=None,
-        help="catches after which an episode ends (--levels: default 3; --pattern: 20)",
+        help="catches after which an episode ends (--levels: default 3; --pattern: 10)",
     )
     p.add_argument(
         "--agent",

@@ -104,8 +104,8 @@ class CascadeWorld:
             m.geom_pos[self.palm_geoms[0], 2] + m.geom_size[self.palm_geoms[0], 2]
         )
         self._rng: np.random.Generator | None = None
-        self._ref = np.zeros((CASCADE_HANDS, 2))
-        self._vref = np.zeros((CASCADE_HANDS, 2))
+        self._ref: list[tuple[float, float]] = [(0.0, 0.0)] * CASCADE_HANDS
+        self._vref: list[tuple[float, float]] = [(0.0, 0.0)] * CASCADE_HANDS
         self._holder = [-1] * CASCADE_BALLS
         self._thrower = [-1] * CASCADE_BALLS
         self._left = [True] * CASCADE_BALLS
@@ -152,8 +152,8 @@ class CascadeWorld:
         q[8:10] = bp
         self.data.qvel[:] = 0.0
         self.data.qvel[8:10] = bv
-        self._ref = hands.copy()
-        self._vref = np.zeros((CASCADE_HANDS, 2))
+        self._ref = [(float(x), float(z)) for x, z in hands]
+        self._vref = [(0.0, 0.0)] * CASCADE_HANDS
         self._holder = [0, 1, -1]
         self._thrower = [-1, -1, 1]
         self._left = [False, False, True]
@@ -181,20 +181,23 @@ class CascadeWorld:
         if self.state is None:
             raise RuntimeError("call reset() before step()")
         tg = np.asarray(targets, dtype=np.float64)
-        if tg.shape != (CASCADE_HANDS, 2) or not np.isfinite(tg).all():
+        if tg.shape != (CASCADE_HANDS, 2):
+            raise ValueError(f"targets must be a finite (2, 2) array; got {targets!r}")
+        flat = tg.ravel().tolist()
+        if not all(math.isfinite(x) for x in flat):
             raise ValueError(f"targets must be a finite (2, 2) array; got {targets!r}")
         task, dt = self.task, self.task.dt
         step_max = HAND_SPEED_LIMIT * dt
         servo = []
         for h in range(CASCADE_HANDS):
-            sx, sz = float(self._ref[h, 0]), float(self._ref[h, 1])
-            dx, dz = float(tg[h, 0]) - sx, float(tg[h, 1]) - sz
+            sx, sz = self._ref[h]
+            dx, dz = flat[2 * h] - sx, flat[2 * h + 1] - sz
             dist = math.hypot(dx, dz)
             if dist > step_max:
                 dx, dz = dx * step_max / dist, dz * step_max / dist
             vrx, vrz = dx / dt, dz / dt
-            arx = (vrx - float(self._vref[h, 0])) / dt
-            arz = (vrz - float(self._vref[h, 1])) / dt
+            arx = (vrx - self._vref[h][0]) / dt
+            arz = (vrz - self._vref[h][1]) / dt
             self._ref[h] = (sx + dx, sz + dz)
             self._vref[h] = (vrx, vrz)
             servo.append((sx, sz, dx, dz, vrx, vrz, arx, arz))
@@ -231,13 +234,10 @@ class CascadeWorld:
             mujoco.mj_step(m, d)
             q, v = qpos.tolist(), qvel.tolist()
             touching: set[tuple[int, int]] | None = None
-            moved = False
             for i in range(CASCADE_BALLS):
                 b = 4 + 2 * i
                 h = holder[i]
-                if h >= 0:
-                    q[b], q[b + 1], v[b], v[b + 1] = q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1]
-                    moved = True
+                if h >= 0:  # held: follows its hand (written after the last physics step)
                     continue
                 bx, bz = q[b], q[b + 1]
                 if not left[i]:
@@ -262,17 +262,16 @@ class CascadeWorld:
                         holder[i] = h
                         caught[h] = i
                         self._set_contacts(i, False)
-                        q[b], q[b + 1], v[b], v[b + 1] = (
-                            q[2 * h],
-                            q[2 * h + 1],
-                            v[2 * h],
-                            v[2 * h + 1],
-                        )
-                        moved = True
                         break
-            if moved:  # held balls follow their hands
-                qpos[4:] = q[4:]
-                qvel[4:] = v[4:]
+        # held balls follow their hands (contacts off: their own flight in between
+        # touches nothing, so writing them once per period is the same world)
+        for i in range(CASCADE_BALLS):
+            h = holder[i]
+            if h >= 0:
+                b = 4 + 2 * i
+                q[b], q[b + 1], v[b], v[b + 1] = q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1]
+        qpos[4:] = q[4:]
+        qvel[4:] = v[4:]
         self._k += 1
         d.time = self._k * dt
         released = [-1, -1]
