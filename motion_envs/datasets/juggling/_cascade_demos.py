@@ -62,6 +62,7 @@ __all__ = [
     "CASCADE_HANDS",
     "CascadeStyle",
     "CascadeTiming",
+    "NominalToss",
     "cascade_timing",
     "draw_cascade_person",
     "generate_cascade_demonstrations",

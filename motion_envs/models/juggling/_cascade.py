@@ -6,27 +6,33 @@ by the pattern.
 own frame, the left hand mirrored ``x -> -x``) are split by demonstration and the
 per-phase sine-series models (:class:`~motion_envs.models.juggling.AnalyticJuggler`, the
 one-ball juggler's fit with ``V1_N_SINES`` sines per phase) are fitted on the training
-cycles of both hands pooled. The pattern's timing is measured on the same training
-cycles (:class:`CascadePattern`): the median dwell ratio ``r`` (return plus toss to the
-release, over the hand's cycle) and the median hand period ``C``, from which Shannon's
-theorem ``(F + D) H = (V + D) N`` (``H = 2``, ``N = 3``) gives the flight
-``F = C (N / H - r)``; a juggler with another dwell ratio keeps the flight (its toss is
-the same) and takes the period ``C = F / (N / H - r)``.
+cycles of both hands pooled. The pattern's timing (:class:`CascadePattern`): the dwell
+ratio ``r`` is the training cycles' median (return plus toss to the release, over the
+hand's cycle); the flight ``F`` is that of the juggler's own nominal toss to the mean
+catch height; Shannon's theorem ``(F + D) H = (V + D) N`` (``H = 2``, ``N = 3``) gives the
+period ``C = F / (N / H - r)``; a juggler with another dwell ratio keeps the flight.
 
 **Control** (:class:`CascadeController`): each hand runs the one-ball juggler's episode
 controller (:class:`~motion_envs.models.juggling.JugglingController`: eq. 9 toss, catch
 planned on the predicted flight with the eq. 10 correction) in its own frame, the left
 hand's mirrored. What the pattern changes:
 
-* the beat: hand ``h`` releases its ``k``-th ball at ``t_0 + (2 k + h) C / 2``; a hand's
-  return (the carry) lasts until ``lead`` (the training tosses' median time from the toss
-  start to the release) before its next beat, at least the shortest training return;
+* the beat: the hands release in turn, a beat ``C / 2`` apart; after a catch a hand's
+  return (the carry) lasts until ``lead`` (the nominal toss's time from the toss start to
+  the release) before its next beat, at least the shortest training return; its next
+  beat is the mean of its own (its last release plus two beats) and the other hand's
+  (the other hand's last release plus an odd number of beats), so the hands stay in
+  turn while the tempo may drift;
 * the ball a hand catches is the other hand's: at each release the thrower's efference
   copy (its last command and the velocity of its last two commands) is queued, mirrored,
   for the other hand; a hand plans its go-down and catch on the oldest ball in its queue
   and corrects the catch from that ball's (delayed, noisy) measurement;
 * the go-down lasts until the preferred catch duration before the queued ball reaches the
-  preferred catch point (within the training go-down durations).
+  preferred catch point (within the training go-down durations);
+* the catch duration is chosen up to :data:`CATCH_WINDOW` beats beyond the longest
+  training catch; an empty hand re-aims its catch when its ball went elsewhere or its plan
+  ended :data:`REAIM_AFTER` beats ago; a ball caught early (in the go-down) ends the catch;
+* the release is armed from :data:`RELEASE_ARMED` of the nominal toss's release time on.
 
 At ``t = 0`` the right hand holds ball 0 and starts its toss, the left hand holds ball 1
 and waits for its beat, and ball 2 is in flight towards the right hand, thrown by the
@@ -338,7 +344,6 @@ class CascadeHand(JugglingController):
         self.index = index
         self.beat = float(beat)
         self.first_release = float(first_release)
-        self._catch_mean = float(np.mean(model.phases_["catch"].duration_range))
 
     # -- timing by the pattern ------------------------------------------------------
     def _draw_duration(self, phase: str) -> float:
