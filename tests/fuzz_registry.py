@@ -143,6 +143,17 @@ ENVS: dict[str, dict[str, object]] = {
             "width": "size",
         },
     },
+    "MotionEnvs/Cascade-v0": {
+        "kwargs": {
+            "latency": "fraction",
+            "position_std": "fraction",
+            "release_speed_std": "fraction",
+            "dwell_ratio": "fraction",
+            "max_catches": "small_int",
+            "residual_scale": "positive",
+            "width": "size",
+        },
+    },
     "MotionEnvs/OrientationCoefficients-v0": {
         "kwargs": {
             "residual_scale": "positive",
@@ -188,6 +199,7 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("juggling", "--episodes"),
     ("juggling", "--max-catches"),
     ("juggling", "--n-balls"),
+    ("juggling", "--pattern"),
     ("calibrate-cohort", "--max-evaluations"),
     ("calibrate-cohort", "--check-seeds"),
     ("train", "--timesteps"),

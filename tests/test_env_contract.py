@@ -165,6 +165,40 @@ def _juggling_v1_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     return np.array(hands), np.array(expected)
 
 
+def _cascade_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+    """A zero-action Cascade-v0 episode's hand paths (``info['hands']``) against the
+    controller alone in a fresh world and sensor, seeded as the env documents."""
+    import math
+
+    from motion_envs.envs.juggling import CascadeWorld
+    from motion_envs.models.juggling import CascadeSensor, cascade_fit, make_cascade_controller
+
+    c = env.unwrapped
+    env.reset(seed=21)
+    got = []
+    terminated = truncated = False
+    while not (terminated or truncated):
+        _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        got.append(info["hands"].ravel())
+    assert info["catches"] >= 1
+    fit = cascade_fit(c.gravity)
+    ctrl = make_cascade_controller(c.controller_name, fit, c.delay_steps * c.task.dt, c.dwell_ratio)
+    world = CascadeWorld(c.task, c.release_speed_std, math.radians(c.release_angle_std))
+    sensor = CascadeSensor(c.delay_steps, c.position_std, c.velocity_std, c.task.dt)
+    w_ss, s_ss, c_ss = np.random.SeedSequence(21).spawn(3)
+    p, v, _ = ctrl.initial_flight()
+    true = world.reset(ctrl.home, flying=(p, v), rng=np.random.default_rng(w_ss))
+    state = sensor.reset(true, np.random.default_rng(s_ss), c.task.gravity)
+    ctrl.reset(state, np.random.default_rng(c_ss))
+    expected = []
+    for _ in got:
+        targets, armed = ctrl.command(state)
+        true = world.step(targets, armed)
+        state = sensor.measure(true)
+        expected.append(true.hand_pos.ravel())
+    return np.array(got), np.array(expected)
+
+
 @dataclass(frozen=True)
 class Case:
     """What the contract needs to know about one environment (all its versions).
@@ -210,6 +244,12 @@ CASES: dict[str, Case] = {
         {"level": "medium", "max_catches": 2},
         action_scale=0.2,
         checked=({"level": "hard", "max_catches": 1}, {"level": "easy", "gravity": 1.0}),
+    ),
+    "MotionEnvs/Cascade": Case(
+        _cascade_nominal,
+        {"level": "medium", "max_catches": 2},
+        action_scale=0.2,
+        checked=({"level": "hard", "max_catches": 1}, {"level": "easy", "dwell_ratio": 0.6}),
     ),
 }
 

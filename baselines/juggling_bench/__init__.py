@@ -24,7 +24,9 @@ Reported:
 * a Figure-6-style plot and an animation (GIF) of the juggler.
 
 With ``--levels``: Juggling-v1's levels and reference controllers (and a trained agent
-with ``--agent DIR``), :mod:`~baselines.juggling_bench.levels`.
+with ``--agent DIR``), :mod:`~baselines.juggling_bench.levels`. With ``--pattern 3``: the
+three-ball cascade (``MotionEnvs/Cascade-v0``) at the same levels,
+:mod:`~baselines.juggling_bench.cascade`.
 
 With ``--analyse FILE``: the ball flights and pattern timing of a recording,
 :mod:`~baselines.juggling_bench.analyse`.
@@ -44,6 +46,16 @@ catch rates), :mod:`~baselines.juggling_bench.runner` (:func:`run`),
 
 from __future__ import annotations
 
+from baselines.juggling_bench.cascade import (
+    CascadeConfig,
+    CascadeEpisodes,
+    cascade_episode,
+    cascade_episodes,
+    check_cascade_config,
+    report_cascade,
+    run_cascade,
+    write_cascade,
+)
 from baselines.juggling_bench.cli import (
     gravity_task,
     juggling_data,
@@ -51,6 +63,7 @@ from baselines.juggling_bench.cli import (
     main,
     noise_levels,
     register,
+    siteswap_pattern,
 )
 from baselines.juggling_bench.config import (
     MIN_CYCLES,
@@ -86,9 +99,14 @@ __all__ = [
     "TARGET_UNPERTURBED",
     "TARGET_VARIABILITY_RATIO",
     "VIDEO_CAPTION",
+    "CascadeConfig",
+    "CascadeEpisodes",
     "JugglingConfig",
     "LevelsConfig",
+    "cascade_episode",
+    "cascade_episodes",
     "catch_rates",
+    "check_cascade_config",
     "check_config",
     "check_levels_config",
     "gravity_task",
@@ -101,13 +119,17 @@ __all__ = [
     "plot_figure6",
     "register",
     "report",
+    "report_cascade",
     "report_levels",
     "results_csv",
     "run",
+    "run_cascade",
     "run_levels",
+    "siteswap_pattern",
     "validation",
     "write",
     "write_animation",
+    "write_cascade",
     "write_levels",
     "write_mujoco_video",
 ]

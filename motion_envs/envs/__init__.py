@@ -16,6 +16,7 @@ id                                         environment
 ``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.position_coefficients`)
 ``MotionEnvs/Juggling-v0``                 :class:`~.juggling.JugglingEnv` (MuJoCo)
 ``MotionEnvs/Juggling-v1``                 :class:`~.juggling.JugglingV1Env` (contacts)
+``MotionEnvs/Cascade-v0``                  :class:`~.juggling.CascadeEnv` (three balls, two hands)
 =========================================  ========================================================
 
 The two reaching environments come with a native vector environment
@@ -78,6 +79,9 @@ _SPECS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Juggling-v1": {
         "entry_point": "motion_envs.envs.juggling:JugglingV1Env",
+    },
+    "MotionEnvs/Cascade-v0": {
+        "entry_point": "motion_envs.envs.juggling:CascadeEnv",
     },
 }
 

@@ -12,10 +12,25 @@ The public names of small private modules, one concern each:
 * ``_records``: recordings, phase examples, demonstration sets and their split;
 * ``_paths``: paths on normalised time (resampling, departure from the line);
 * ``_person``: the SIMULATED demonstrations (a seeded model of a person);
+* ``_cascade_demos``: SIMULATED three-ball cascade demonstrations (two hands, each in its
+  own frame) and the pattern's timing from Shannon's juggling theorem;
 * ``_csv``: the users' juggling CSV, read as raw recordings.
 """
 
 from motion_envs.datasets.juggling import rules
+from motion_envs.datasets.juggling._cascade_demos import (
+    CASCADE_BALLS,
+    CASCADE_HANDS,
+    CascadeStyle,
+    CascadeTiming,
+    NominalToss,
+    cascade_timing,
+    draw_cascade_person,
+    generate_cascade_demonstrations,
+    mirror_x,
+    nominal_toss,
+    style_timing,
+)
 from motion_envs.datasets.juggling._csv import (
     JUGGLING_COLUMNS,
     MIN_SAMPLES,
@@ -46,26 +61,37 @@ from motion_envs.datasets.juggling._task import (
 )
 
 __all__ = [
+    "CASCADE_BALLS",
+    "CASCADE_HANDS",
     "JUGGLING_COLUMNS",
     "MIN_SAMPLES",
     "MIN_SPLIT_CYCLES",
     "PHASES",
     "SIMULATED_LABEL",
+    "CascadeStyle",
+    "CascadeTiming",
     "JugglingDemos",
     "JugglingNoise",
     "JugglingRecording",
     "JugglingState",
     "JugglingTask",
+    "NominalToss",
     "PersonStyle",
     "PhaseSegment",
     "ballistic_position",
     "ballistic_velocity",
+    "cascade_timing",
     "departure_from_line",
+    "draw_cascade_person",
     "draw_person",
+    "generate_cascade_demonstrations",
     "generate_demonstrations",
+    "mirror_x",
+    "nominal_toss",
     "read_juggling_csv",
     "resample_path",
     "rules",
     "split_cycles",
+    "style_timing",
     "write_juggling_csv",
 ]

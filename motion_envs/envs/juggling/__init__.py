@@ -5,12 +5,26 @@ entry point ``motion_envs.envs.juggling:JugglingEnv``), ``_scene`` (:class:`Jugg
 the MuJoCo world, compiled from ``juggling.xml`` beside them); ``_v1_env``
 (:class:`JugglingV1Env`, entry point ``motion_envs.envs.juggling:JugglingV1Env``) and
 ``_v1_scene`` (:class:`JugglingV1World`: contacts, an actuated hand, compiled from
-``juggling_v1.xml``). The default fit the
+``juggling_v1.xml``); ``_cascade_env`` (:class:`CascadeEnv`, ``MotionEnvs/Cascade-v0``,
+entry point ``motion_envs.envs.juggling:CascadeEnv``) and ``_cascade_scene``
+(:class:`CascadeWorld`: two hands, three balls, compiled from ``cascade.xml``). The default fit the
 environment acts on (``load_juggler``, ``juggler_demonstrations``, ``TRACKING_NOISE``,
 ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in :mod:`motion_envs.models.juggling` and is
 re-exported here for code that imported it from this module's former place.
 """
 
+from motion_envs.envs.juggling._cascade_env import (
+    CASCADE_HISTORY,
+    CASCADE_OBS_DIM,
+    CASCADE_TIME_PER_CATCH,
+    DEFAULT_CASCADE_REWARD_WEIGHTS,
+    CascadeEnv,
+)
+from motion_envs.envs.juggling._cascade_scene import (
+    CASCADE_SCENE_XML,
+    CascadeWorld,
+    load_cascade_model,
+)
 from motion_envs.envs.juggling._env import (
     CYCLE_TIME_LIMIT,
     DEFAULT_JUGGLING_REWARD_WEIGHTS,
@@ -56,7 +70,12 @@ from motion_envs.models.juggling import (
 
 __all__ = [
     "CAPTURE_SPEED",
+    "CASCADE_HISTORY",
+    "CASCADE_OBS_DIM",
+    "CASCADE_SCENE_XML",
+    "CASCADE_TIME_PER_CATCH",
     "CYCLE_TIME_LIMIT",
+    "DEFAULT_CASCADE_REWARD_WEIGHTS",
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
     "DEFAULT_V1_REWARD_WEIGHTS",
     "FIT_SEED",
@@ -76,6 +95,8 @@ __all__ = [
     "V1_CYCLE_TIME",
     "V1_OBS_DIM",
     "V1_SCENE_XML",
+    "CascadeEnv",
+    "CascadeWorld",
     "JugglingEnv",
     "JugglingPhysics",
     "JugglingScene",
@@ -84,6 +105,7 @@ __all__ = [
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",
+    "load_cascade_model",
     "load_juggler",
     "load_juggling_model",
     "load_juggling_v1_model",

@@ -21,10 +21,25 @@ The public names of small private modules, one concern each:
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
   of unlabelled, gappy markers, fitted gravity, apex) and the pattern's timing against
   Shannon's juggling theorem (:func:`pattern_summary`);
+* ``_cascade``: the three-ball cascade juggler (two hands of the one-ball juggler
+  scheduled by Shannon's theorem, :class:`CascadeController`), its fit
+  (:func:`cascade_fit`) and reference controllers (:func:`make_cascade_controller`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
 
+from motion_envs.models.juggling._cascade import (
+    CASCADE_CONTROLLERS,
+    CascadeController,
+    CascadeFit,
+    CascadeHand,
+    CascadePattern,
+    CascadeSensor,
+    CascadeState,
+    cascade_fit,
+    cascade_likeness,
+    make_cascade_controller,
+)
 from motion_envs.models.juggling._controller import ControlOptions, JugglingController
 from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
@@ -97,6 +112,7 @@ from motion_envs.models.juggling._world import (
 )
 
 __all__ = [
+    "CASCADE_CONTROLLERS",
     "CONTROLLERS",
     "DEMO_CYCLES",
     "FIT_SEED",
@@ -111,6 +127,12 @@ __all__ = [
     "BallMeasurement",
     "BallSensor",
     "BallisticWorld",
+    "CascadeController",
+    "CascadeFit",
+    "CascadeHand",
+    "CascadePattern",
+    "CascadeSensor",
+    "CascadeState",
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
@@ -125,6 +147,8 @@ __all__ = [
     "JugglingWorld",
     "PatternSummary",
     "PhaseFit",
+    "cascade_fit",
+    "cascade_likeness",
     "cycle_rng",
     "cycle_rngs",
     "default_fit",
@@ -136,6 +160,7 @@ __all__ = [
     "load_demonstrations",
     "load_juggler",
     "load_juggling_csv",
+    "make_cascade_controller",
     "make_controller",
     "pattern_summary",
     "perturb_release",

@@ -1,0 +1,300 @@
+"""``motion-bench juggling --pattern 3``: the three-ball cascade (``MotionEnvs/Cascade-v0``)
+at Juggling-v1's levels, for the analytic cascade juggler, its latency-aware variant and
+the two trivial policies.
+
+For each level (:data:`motion_envs.models.juggling.LEVELS`) and each controller
+(:data:`~motion_envs.models.juggling.CASCADE_CONTROLLERS`), plays ``episodes`` episodes
+reset with the TEST seeds ``SPLIT_SEEDS["test"] + i`` of
+:mod:`baselines.agents.juggling_score` (the cascade juggler's timing and the levels were
+chosen on other seeds). An episode is Cascade-v0's zero-action episode (the controller
+alone; :func:`cascade_episode` steps the env's world, sensor and controller directly, the
+same loop the env runs, tested equal to it): it ends at the first drop or after
+``max_catches`` catches. Reported per method, with 95 % bootstrap intervals resampling
+episodes (:func:`baselines.stats.group_bootstrap`):
+
+* ``catches_median``: the median over episodes of the catches before the first drop
+  (censored at ``max_catches``: ``censored`` episodes reached it without a drop);
+* ``catch_rate``: catches per toss, pooled over the episodes;
+* ``time_to_drop_median``: the median over episodes of the simulated time (s) to the
+  first drop; a censored episode counts with its length (a lower bound).
+
+At a level without latency the latency-aware juggler IS the juggler (it predicts the
+measurement forward by zero seconds): its episodes are the juggler's (``"same_as"``).
+The demonstrations are SIMULATED. :func:`run_cascade` is pure, :func:`report_cascade`
+the printed text, :func:`write_cascade` writes ``results.json``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines import options
+from baselines.agents.juggling_score import SPLIT_SEEDS
+from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
+from motion_envs.models.juggling import (
+    CASCADE_CONTROLLERS,
+    LEVELS,
+    CascadeSensor,
+    cascade_fit,
+    make_cascade_controller,
+)
+
+__all__ = [
+    "CASCADE_ENV_ID",
+    "PATTERNS",
+    "CascadeConfig",
+    "CascadeEpisodes",
+    "cascade_episode",
+    "cascade_episodes",
+    "check_cascade_config",
+    "report_cascade",
+    "run_cascade",
+    "write_cascade",
+]
+
+#: The environment the pattern is played in.
+CASCADE_ENV_ID = "MotionEnvs/Cascade-v0"
+#: The siteswap patterns offered (``3``: the three-ball cascade).
+PATTERNS: tuple[str, ...] = ("3",)
+#: Catches before the first drop the analytic juggler should sustain on ``easy``.
+TARGET_EASY_CATCHES = 100
+
+
+@dataclass(frozen=True)
+class CascadeConfig:
+    """What ``motion-bench juggling --pattern 3`` runs."""
+
+    pattern: str = "3"
+    levels: tuple[str, ...] = ("easy", "medium", "hard")
+    methods: tuple[str, ...] = CASCADE_CONTROLLERS
+    episodes: int = 50
+    max_catches: int = 10
+    gravity: float = 9.81
+    split: str = "test"
+
+
+def check_cascade_config(config: CascadeConfig) -> None:
+    """Raise :class:`baselines.options.ConfigError` naming the first bad field."""
+    if config.pattern not in PATTERNS:
+        raise options.ConfigError("pattern", f"must be one of {list(PATTERNS)}")
+    if not config.levels or any(lv not in LEVELS for lv in config.levels):
+        raise options.ConfigError("levels", f"must be among {list(LEVELS)}")
+    for m in config.methods:
+        if m not in CASCADE_CONTROLLERS:
+            raise options.ConfigError("methods", f"must be among {list(CASCADE_CONTROLLERS)}")
+    if config.episodes < 2:
+        raise options.ConfigError("episodes", f"must be >= 2; got {config.episodes}")
+    if config.max_catches < 1:
+        raise options.ConfigError("max_catches", f"must be >= 1; got {config.max_catches}")
+    if not (math.isfinite(config.gravity) and config.gravity > 0):
+        raise options.ConfigError("gravity", f"must be > 0; got {config.gravity}")
+    if config.split not in SPLIT_SEEDS:
+        raise options.ConfigError("split", f"must be one of {sorted(SPLIT_SEEDS)}")
+
+
+@dataclass(frozen=True)
+class CascadeEpisodes:
+    """Per episode: ``catches`` before the first drop, ``tosses``, ``dropped``, ``time``
+    (s, at the drop or at the end)."""
+
+    seeds: NDArray[np.int64]
+    catches: NDArray[np.int64]
+    tosses: NDArray[np.int64]
+    dropped: NDArray[np.bool_]
+    time: NDArray[np.float64]
+
+
+def cascade_episode(
+    level: str, method: str, seed: int, max_catches: int, gravity: float = 9.81
+) -> tuple[int, int, bool, float]:
+    """One zero-action episode of Cascade-v0 (``level``, ``controller=method``, reset with
+    ``seed``): ``(catches, tosses, dropped, time)``. The env's own loop: world, sensor
+    and controller seeded by ``SeedSequence(seed).spawn(3)``."""
+    from motion_envs.envs.juggling import CASCADE_TIME_PER_CATCH, CascadeWorld
+
+    lv = LEVELS[level]
+    task = JugglingTask(gravity=gravity)
+    delay = round(lv.latency / task.dt)
+    ctrl = make_cascade_controller(method, cascade_fit(gravity), delay * task.dt)
+    world = CascadeWorld(task, lv.release_speed_std, math.radians(lv.release_angle_std))
+    sensor = CascadeSensor(delay, lv.position_std, lv.velocity_std, task.dt)
+    w_ss, s_ss, c_ss = np.random.SeedSequence(seed).spawn(3)
+    p, v, _ = ctrl.initial_flight()
+    true = world.reset(ctrl.home, flying=(p, v), rng=np.random.default_rng(w_ss))
+    state = sensor.reset(true, np.random.default_rng(s_ss), gravity)
+    ctrl.reset(state, np.random.default_rng(c_ss))
+    limit = max_catches * CASCADE_TIME_PER_CATCH * math.sqrt(9.81 / gravity)
+    catches = tosses = 0
+    while True:
+        targets, armed = ctrl.command(state)
+        true = world.step(targets, armed)
+        state = sensor.measure(true)
+        catches += sum(int(c >= 0) for c in true.caught)
+        tosses += sum(int(r >= 0) for r in true.released)
+        if true.any_dropped:
+            return catches, tosses, True, true.time
+        if catches >= max_catches or true.time >= limit:
+            return catches, tosses, False, true.time
+
+
+def cascade_episodes(level: str, method: str, config: CascadeConfig) -> CascadeEpisodes:
+    """The episodes of ``method`` on ``level``, seeds of ``config.split``."""
+    seeds = SPLIT_SEEDS[config.split] + np.arange(config.episodes, dtype=np.int64)
+    rows = [
+        cascade_episode(level, method, int(s), config.max_catches, config.gravity) for s in seeds
+    ]
+    return CascadeEpisodes(
+        seeds=seeds,
+        catches=np.array([r[0] for r in rows], dtype=np.int64),
+        tosses=np.array([r[1] for r in rows], dtype=np.int64),
+        dropped=np.array([r[2] for r in rows], dtype=bool),
+        time=np.array([r[3] for r in rows], dtype=np.float64),
+    )
+
+
+def summary(eps: CascadeEpisodes) -> dict[str, Any]:
+    """One method's entry of ``results.json`` (module docstring)."""
+    from baselines.stats import group_bootstrap
+
+    idx = np.arange(eps.seeds.size)
+
+    def median_of(values: NDArray[Any]) -> tuple[float, float, float]:
+        v = values.astype(np.float64)
+        return group_bootstrap(lambda rows: float(np.median(v[rows])), idx)
+
+    c, clo, chi = median_of(eps.catches)
+    t, tlo, thi = median_of(eps.time)
+    rate, rlo, rhi = group_bootstrap(
+        lambda rows: float(eps.catches[rows].sum() / max(int(eps.tosses[rows].sum()), 1)), idx
+    )
+    return {
+        "catches_median": c,
+        "catches_median_ci": [clo, chi],
+        "catches_mean": float(eps.catches.mean()),
+        "catch_rate": rate,
+        "catch_rate_ci": [rlo, rhi],
+        "time_to_drop_median": t,
+        "time_to_drop_median_ci": [tlo, thi],
+        "drops": int(eps.dropped.sum()),
+        "censored": int((~eps.dropped).sum()),
+        "tosses": int(eps.tosses.sum()),
+        "catches": int(eps.catches.sum()),
+    }
+
+
+def run_cascade(config: CascadeConfig) -> dict[str, Any]:
+    """Every level x method (module docstring); JSON-ready."""
+    check_cascade_config(config)
+    t0 = time.process_time()
+    levels = []
+    task = JugglingTask(gravity=config.gravity)
+    for level in config.levels:
+        methods: dict[str, Any] = {}
+        played: dict[str, CascadeEpisodes] = {}
+        no_delay = round(LEVELS[level].latency / task.dt) == 0
+        for method in config.methods:
+            if method == "juggler_latency_aware" and no_delay and "juggler" in played:
+                methods[method] = {**summary(played["juggler"]), "same_as": "juggler"}
+                continue
+            played[method] = cascade_episodes(level, method, config)
+            methods[method] = summary(played[method])
+        levels.append({"level": level, "values": asdict(LEVELS[level]), "methods": methods})
+    fit = cascade_fit(config.gravity)
+    p = fit.pattern
+    return {
+        "benchmark": f"juggling pattern {config.pattern} ({CASCADE_ENV_ID})",
+        "config": asdict(config),
+        "demonstrations": SIMULATED_LABEL,
+        "pattern": {
+            "siteswap": config.pattern,
+            "hands": 2,
+            "balls": 3,
+            "dwell_ratio": p.dwell_ratio,
+            "flight_s": p.flight,
+            "period_s": p.timing()[0],
+            "beat_s": p.timing()[1],
+            "demonstrations_period_s": p.demo_period,
+        },
+        "seeds": {
+            "split": config.split,
+            "first": SPLIT_SEEDS[config.split],
+            "count": config.episodes,
+        },
+        "levels": levels,
+        "targets": _targets(levels, config),
+        "timing": {"cpu_s": time.process_time() - t0},
+    }
+
+
+def _targets(levels: list[dict[str, Any]], config: CascadeConfig) -> dict[str, Any]:
+    by = {lv["level"]: lv["methods"] for lv in levels}
+
+    def value(level: str, method: str, key: str) -> float | None:
+        v = by.get(level, {}).get(method, {}).get(key)
+        return None if v is None else float(v)
+
+    out: dict[str, Any] = {}
+    easy = value("easy", "juggler", "catches_median")
+    checkable = config.max_catches >= TARGET_EASY_CATCHES
+    out[f"juggler_easy_catches_median>={TARGET_EASY_CATCHES}"] = {
+        "value": easy,
+        "met": None if easy is None or not checkable else easy >= TARGET_EASY_CATCHES,
+        "note": None if checkable else f"needs --max-catches >= {TARGET_EASY_CATCHES}",
+    }
+    for level in by:
+        j = value(level, "juggler", "catches_mean")
+        la = value(level, "juggler_latency_aware", "catches_mean")
+        if level != "easy" and j is not None and la is not None:
+            out[f"juggler<latency_aware_{level}"] = {"value": j, "reference": la, "met": j < la}
+        for trivial in ("fixed_point", "commanded_intercept"):
+            t = value(level, trivial, "catches_mean")
+            if j is not None and t is not None:
+                out[f"{trivial}<juggler_{level}"] = {"value": t, "juggler": j, "met": t < j}
+    return out
+
+
+def report_cascade(doc: dict[str, Any]) -> str:
+    """The printed table of :func:`run_cascade`'s document."""
+    seeds, pat = doc["seeds"], doc["pattern"]
+    lines = [
+        f"Cascade-v0, pattern {pat['siteswap']} ({doc['demonstrations']}); beat "
+        f"{pat['beat_s']:.3f} s, flight {pat['flight_s']:.3f} s, dwell ratio "
+        f"{pat['dwell_ratio']:.3f}; {seeds['count']} {seeds['split']} episodes per level and "
+        f"method (seeds from {seeds['first']}), at most {doc['config']['max_catches']} catches",
+        f"{'level':8s} {'method':22s} {'catches median [95% CI]':26s} {'mean':>6s} "
+        f"{'catch rate [95% CI]':24s} {'s to drop [95% CI]':22s} {'censored':>8s}",
+    ]
+    for lv in doc["levels"]:
+        for name, m in lv["methods"].items():
+            c, (clo, chi) = m["catches_median"], m["catches_median_ci"]
+            r, (rlo, rhi) = m["catch_rate"], m["catch_rate_ci"]
+            t, (tlo, thi) = m["time_to_drop_median"], m["time_to_drop_median_ci"]
+            same = " (= juggler)" if m.get("same_as") else ""
+            lines.append(
+                f"{lv['level']:8s} {name:22s} {c:6.1f} [{clo:5.1f}, {chi:5.1f}]{'':7s} "
+                f"{m['catches_mean']:6.1f} {r:.3f} [{rlo:.3f}, {rhi:.3f}]{'':4s} "
+                f"{t:5.2f} [{tlo:5.2f}, {thi:5.2f}]{'':3s} {m['censored']:8d}{same}"
+            )
+    for key, t in doc["targets"].items():
+        met = "met" if t["met"] else ("n/a" if t["met"] is None else "NOT met")
+        v = "-" if t["value"] is None else f"{t['value']:.2f}"
+        note = f"; {t['note']}" if t.get("note") else ""
+        lines.append(f"target {key}: {v} ({met}{note})")
+    lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
+    return "\n".join(lines)
+
+
+def write_cascade(doc: dict[str, Any], out: str | Path) -> list[Path]:
+    """``results.json`` in ``out`` (through :mod:`motion_envs._io`)."""
+    from motion_envs._io import atomic_write_text
+
+    path = Path(out) / "results.json"
+    return [atomic_write_text(path, json.dumps(doc, indent=2) + "\n")]

@@ -1,0 +1,404 @@
+"""``MotionEnvs/Cascade-v0``: the three-ball cascade with two actuated hands, seeing the
+balls late."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
+from motion_envs.envs._common import (
+    SideCameraMixin,
+    as_action,
+    check_choice,
+    check_integer,
+    check_number,
+    check_reward_weights,
+    check_scale,
+)
+from motion_envs.envs.juggling._cascade_scene import CascadeWorld
+from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT
+from motion_envs.models.juggling import (
+    CASCADE_CONTROLLERS,
+    LEVELS,
+    CascadeController,
+    CascadeSensor,
+    CascadeState,
+    cascade_fit,
+    cascade_likeness,
+    make_cascade_controller,
+)
+
+__all__ = [
+    "CASCADE_HISTORY",
+    "CASCADE_OBS_DIM",
+    "CASCADE_TIME_PER_CATCH",
+    "DEFAULT_CASCADE_REWARD_WEIGHTS",
+    "CascadeEnv",
+]
+
+#: Default reward weights (see the class docstring, section Rewards).
+DEFAULT_CASCADE_REWARD_WEIGHTS: Mapping[str, float] = {
+    "catch": 10.0,
+    "drop": 10.0,
+    "likeness": 0.01,
+    "action": 0.01,
+}
+#: Delayed measurements of each ball in the observation (newest first).
+CASCADE_HISTORY = 4
+_PER_HAND = 15
+#: Observation size (see the class docstring).
+CASCADE_OBS_DIM = (
+    CASCADE_HANDS * _PER_HAND + 2 * CASCADE_BALLS + 4 * CASCADE_BALLS * CASCADE_HISTORY
+)
+#: s of simulated time per catch (at 9.81 m/s^2; times ``sqrt(9.81 / g)``) after which an
+#: episode is truncated anyway; the pattern catches a ball every ~0.4 s.
+CASCADE_TIME_PER_CATCH = 2.0
+_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
+_POS_MARGIN = 10.0
+_SPEED_BOUND = 30.0
+
+
+class CascadeEnv(SideCameraMixin, gym.Env):
+    r"""Juggle three balls in a cascade with two actuated hands that see the balls late.
+
+    ## Description
+    The three-ball cascade in Juggling-v1's physical world: two hands, three balls, the
+    vertical plane (``x`` horizontal with the body's midline at 0 and the right hand at
+    ``x > 0``, ``z`` up, metres), 9.81 m/s^2 by default. MuJoCo does the physics with
+    contacts on (:class:`~motion_envs.envs.juggling.CascadeWorld`, ``cascade.xml``): each
+    hand is Juggling-v1's actuated hand (0.5 kg on two slide joints, motors within
+    ``hand_speed_limit`` = 6 m/s and 120 m/s^2), a falling ball touching an EMPTY hand's
+    palm slower than 5 m/s relative to it is captured (a hand holds one ball), a ball
+    touching the floor is a drop. Balls collide with palms and the floor, not with each
+    other (``contype``/``conaffinity``: crossing balls pass). Each ball is seen through
+    Juggling-v1's sensor with the level's latency and noise; each toss is scattered in
+    speed and angle.
+
+    The analytic cascade juggler (:class:`~motion_envs.models.juggling.CascadeController`)
+    commands both hands every 5 ms: each hand runs the one-ball juggler's per-phase
+    sine-series models (eq. 9 toss, catch on the predicted flight with the eq. 10
+    correction; the left hand mirrored), fitted on the training cycles of the built-in
+    **SIMULATED** two-hand demonstrations; the hands throw in turn on the beat of
+    Shannon's theorem ``(F + D) H = (V + D) N`` (``H = 2``, ``N = 3``, dwell ratio
+    ``D / (V + D)`` = `dwell_ratio`); a hand catches the other hand's ball, planned on the
+    thrower's efference copy and corrected from the delayed measurement. The agent adds
+    a residual to each hand's command. The pattern starts with ball 0 in the right hand,
+    ball 1 in the left and ball 2 in flight towards the right hand.
+
+    Levels: Juggling-v1's (every value can also be passed on its own):
+
+    | level    | `latency` (s) | `position_std` (m) | `velocity_std` (m/s) | `release_speed_std` | `release_angle_std` (deg) |
+    |----------|---------------|--------------------|----------------------|---------------------|---------------------------|
+    | `easy`   | 0.0           | 0.0                | 0.0                  | 0.05                | 4.0                       |
+    | `medium` | 0.10          | 0.002              | 0.02                 | 0.08                | 6.0                       |
+    | `hard`   | 0.11          | 0.004              | 0.05                 | 0.12                | 12.0                      |
+
+    The zero action reproduces the reference controller exactly (the same world, sensor
+    and seeds; tested against an independent loop).
+
+    ## Action Space
+    `Box(-1, 1, (4,), float32)`: the residuals added to the controller's hand targets, in
+    units of `residual_scale` metres, applied once per step (one 5 ms control period).
+    Entries outside ``[-1, 1]`` are clipped; NaN counts as 0 (``info["action_invalid"]``).
+    A wrong shape raises `ValueError`.
+
+    | Num | Action                                   | Control Min | Control Max | Type (Unit)                 |
+    |-----|------------------------------------------|-------------|-------------|-----------------------------|
+    | 0   | right hand: horizontal residual          | -1          | 1           | position (residual_scale m) |
+    | 1   | right hand: vertical residual            | -1          | 1           | position (residual_scale m) |
+    | 2   | left hand: horizontal residual           | -1          | 1           | position (residual_scale m) |
+    | 3   | left hand: vertical residual             | -1          | 1           | position (residual_scale m) |
+
+    ## Observation Space
+    `Box(low, high, (84,), float32)`; positions within 10 m of the right hand's home,
+    speeds within 30 m/s (values beyond are clipped); world frame.
+
+    | Num     | Observation                                                                  | Type (Unit)    |
+    |---------|------------------------------------------------------------------------------|----------------|
+    | 0, 1    | right hand position ``x, z`` (proprioception, exact)                         | position (m)   |
+    | 2, 3    | right hand velocity                                                          | velocity (m/s) |
+    | 4       | 1 if the right hand holds a ball, else 0                                     | unitless       |
+    | 5..8    | the right hand's phase one-hot: toss, go_down, catch, return                 | unitless       |
+    | 9       | time within the phase                                                        | time (s)       |
+    | 10      | duration of the current phase plan                                           | time (s)       |
+    | 11, 12  | the controller's next target for the right hand (no residual)                | position (m)   |
+    | 13, 14  | the right hand's plan end point (in the catch phase: the planned catch)      | position (m)   |
+    | 15..29  | the same for the left hand                                                   |                |
+    | 30..35  | per ball 0, 1, 2: 1 if held by the right hand, 1 if held by the left hand    | unitless       |
+    | 36..83  | per ball, its measurements ``x, z, vx, vz`` of the last 4 steps, newest first | m, m/s         |
+
+    ## Rewards
+    ``reward = w_catch * catches - w_drop * dropped - w_likeness * likeness - w_action * |a|^2``
+    (default weights ``catch: 10, drop: 10, likeness: 0.01, action: 0.01``): ``catches``
+    counts the catches of the step (both hands), ``dropped`` is 1 at the step a ball
+    touches the floor, ``likeness`` the mean over the hands of the distance (m) of the
+    hand's state ``(x, z, 0.1 s * v)`` (own frame) to the nearest state of the same phase
+    in the TRAINING demonstrations (never the controller's own plan). `info` holds each
+    weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
+    ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``: the
+    same as ``tosses``), ``phase`` (the right hand's) and ``phases`` (both), ``held``
+    (per hand), ``time``, the true ``hands`` ``(2, 2)`` and ``balls`` ``(3, 2)`` positions,
+    ``hand`` (the right hand's position), and ``action_invalid``.
+
+    ## Starting State
+    The hands at their homes (the training tosses' mean start, the left mirrored), ball 0
+    in the right hand, ball 1 in the left, ball 2 in flight towards the right hand as if
+    thrown by the left hand's nominal toss one beat earlier; time 0; the right hand starts
+    its toss. `reset(seed=S)` seeds three independent streams
+    ``SeedSequence(S).spawn(3)``: the world (release noise), the sensor (measurement
+    noise) and the controller (its random phase end points and durations).
+
+    ## Episode End
+    ### Termination
+    A ball touches the floor (a drop).
+
+    ### Truncation
+    After `max_catches` catches, or ``max_catches * 2 s * sqrt(9.81 / g)`` of simulated time.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/Cascade-v0", level="medium")
+    ```
+
+    | Parameter           | Type      | Default     | Description |
+    |---------------------|-----------|-------------|-------------|
+    | `level`             | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
+    | `latency`           | **float** | `None`      | s, the ball measurements' delay (rounded to 5 ms); None: the level's |
+    | `position_std`      | **float** | `None`      | m, measurement noise of the ball positions; None: the level's |
+    | `velocity_std`      | **float** | `None`      | m/s, measurement noise of the ball velocities; None: the level's |
+    | `release_speed_std` | **float** | `None`      | relative std of the release speed; None: the level's |
+    | `release_angle_std` | **float** | `None`      | degrees, std of the release direction; None: the level's |
+    | `dwell_ratio`       | **float** | `None`      | ``D / (V + D)`` in (0.2, 0.8); None: the demonstrations' median (~0.56) |
+    | `gravity`           | **float** | `9.81`      | m/s^2 (the demonstrations are generated at this gravity) |
+    | `controller`        | **str**   | `"juggler"` | `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
+    | `max_catches`       | **int**   | `30`        | catches after which the episode is truncated |
+    | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
+    | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
+    | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
+    | `width`             | **int**   | `480`       | frame width in pixels |
+    | `height`            | **int**   | `480`       | frame height in pixels |
+
+    ## Version History
+    * v0: the three-ball cascade on Juggling-v1's physics, sensor and levels.
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+
+    def __init__(
+        self,
+        level: str = "medium",
+        latency: float | None = None,
+        position_std: float | None = None,
+        velocity_std: float | None = None,
+        release_speed_std: float | None = None,
+        release_angle_std: float | None = None,
+        dwell_ratio: float | None = None,
+        gravity: float = 9.81,
+        controller: str = "juggler",
+        max_catches: int = 30,
+        residual_scale: float = 0.05,
+        reward_weights: Mapping[str, float] | None = None,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        self.level = check_choice(level, "level", tuple(LEVELS))
+        base = LEVELS[self.level]
+
+        def pick(value: float | None, name: str, default: float, high: float) -> float:
+            return default if value is None else check_number(value, name, 0.0, high)
+
+        self.latency = pick(latency, "latency", base.latency, 1.0)
+        self.position_std = pick(position_std, "position_std", base.position_std, 1.0)
+        self.velocity_std = pick(velocity_std, "velocity_std", base.velocity_std, 10.0)
+        self.release_speed_std = pick(
+            release_speed_std, "release_speed_std", base.release_speed_std, 1.0
+        )
+        self.release_angle_std = pick(
+            release_angle_std, "release_angle_std", base.release_angle_std, 90.0
+        )
+        self.dwell_ratio = (
+            None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
+        )
+        self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
+        self.controller_name = check_choice(controller, "controller", CASCADE_CONTROLLERS)
+        self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
+        self.residual_scale = check_scale(residual_scale, 1.0)
+        self.reward_weights = check_reward_weights(reward_weights, DEFAULT_CASCADE_REWARD_WEIGHTS)
+        for name, value in (("width", width), ("height", height)):
+            check_integer(value, name, 16, 8192)
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+
+        self.task = JugglingTask(gravity=self.gravity)
+        self.delay_steps = round(self.latency / self.task.dt)
+        self.controller: CascadeController = make_cascade_controller(
+            self.controller_name,
+            cascade_fit(self.gravity),
+            self.delay_steps * self.task.dt,
+            self.dwell_ratio,
+        )
+        self.home = self.controller.home
+        self.likeness = cascade_likeness(self.gravity, "train")
+        self.world = CascadeWorld(
+            self.task, self.release_speed_std, math.radians(self.release_angle_std)
+        )
+        self.sensor = CascadeSensor(
+            self.delay_steps, self.position_std, self.velocity_std, self.task.dt
+        )
+        self.model, self.data = self.world.model, self.world.data
+        #: m/s, each hand's speed limit.
+        self.hand_speed_limit = HAND_SPEED_LIMIT
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
+        self._time_limit = (
+            self.max_catches * CASCADE_TIME_PER_CATCH * math.sqrt(9.81 / self.gravity)
+        )
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2 * CASCADE_HANDS,), dtype=np.float32)
+        low, high = self._bounds()
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self._low, self._high = low, high
+        self._renderer: Any = None
+        self._done = True
+        self._state: CascadeState | None = None
+        self._history: list[list[float]] = []
+        self._catches = self._tosses = 0
+
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        hx, hz = self.home[0]
+        m, v = _POS_MARGIN, _SPEED_BOUND
+        fz = self.task.floor_z
+        t = self._time_limit
+        low: list[float] = []
+        high: list[float] = []
+        for _ in range(CASCADE_HANDS):
+            low += [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m]
+            high += [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, t, t, hx + m, hz + m, hx + m, hz + m]
+        low += [0.0] * (2 * CASCADE_BALLS)
+        high += [1.0] * (2 * CASCADE_BALLS)
+        low += [hx - m, fz - m, -v, -v] * (CASCADE_BALLS * CASCADE_HISTORY)
+        high += [hx + m, hz + m, v, v] * (CASCADE_BALLS * CASCADE_HISTORY)
+        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+
+    @property
+    def dt(self) -> float:
+        """s of simulated time per step (one control period)."""
+        return self.task.dt
+
+    # -- episode ------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
+        world_ss, sensor_ss, controller_ss = np.random.SeedSequence(base).spawn(3)
+        p, v, _ = self.controller.initial_flight()
+        true = self.world.reset(self.home, flying=(p, v), rng=np.random.default_rng(world_ss))
+        state = self.sensor.reset(true, np.random.default_rng(sensor_ss), self.task.gravity)
+        self.controller.reset(state, np.random.default_rng(controller_ss))
+        self._state = state
+        rows = [self._ball_row(state, i) for i in range(CASCADE_BALLS)]
+        self._history = [row * CASCADE_HISTORY for row in rows]
+        self._done = False
+        self._catches = self._tosses = 0
+        return self._observation(true), self._info(true, seed=base)
+
+    @staticmethod
+    def _ball_row(state: CascadeState, i: int) -> list[float]:
+        return [*state.ball_pos[i].tolist(), *state.ball_vel[i].tolist()]
+
+    def _info(self, true: CascadeState, **extra: Any) -> dict[str, Any]:
+        c = self.controller
+        return {
+            "phase": c.phase(0),
+            "phases": (c.phase(0), c.phase(1)),
+            "held": tuple(h in true.holder for h in range(CASCADE_HANDS)),
+            "time": true.time,
+            "hand": true.hand_pos[0].copy(),
+            "hands": true.hand_pos.copy(),
+            "balls": true.ball_pos.copy(),
+            **extra,
+        }
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._done or self._state is None:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        a = as_action(action, (2 * CASCADE_HANDS,))
+        invalid = not bool(np.isfinite(a).all())
+        a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
+        targets, armed = self.controller.command(self._state)
+        true = self.world.step(targets + self.residual_scale * a.reshape(2, 2), armed)
+        state = self.sensor.measure(true)
+        self._state = state
+        for i in range(CASCADE_BALLS):
+            self._history[i] = self._ball_row(state, i) + self._history[i][:-4]
+        caught = sum(int(c >= 0) for c in true.caught)
+        dropped = true.any_dropped
+        self._catches += caught
+        self._tosses += sum(int(r >= 0) for r in true.released)
+        like = 0.0
+        for h in range(CASCADE_HANDS):
+            sign = 1.0 if h == 0 else -1.0
+            pos = true.hand_pos[h] * (sign, 1.0)
+            vel = true.hand_vel[h] * (sign, 1.0)
+            like += self.likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
+        w = self.reward_weights
+        r_catch = w["catch"] * caught
+        r_drop = -w["drop"] * float(dropped)
+        r_like = -w["likeness"] * like
+        r_act = -w["action"] * float(a @ a)
+        reward = r_catch + r_drop + r_like + r_act
+        terminated = bool(dropped)
+        truncated = not terminated and (
+            self._catches >= self.max_catches or true.time >= self._time_limit
+        )
+        self._done = terminated or truncated
+        info = self._info(
+            true,
+            reward_catch=r_catch,
+            reward_drop=r_drop,
+            reward_likeness=r_like,
+            reward_action=r_act,
+            likeness=like,
+            caught=caught,
+            catches=self._catches,
+            tosses=self._tosses,
+            cycles=self._tosses,
+            action_invalid=invalid,
+        )
+        return self._observation(true), float(reward), terminated, truncated, info
+
+    def _observation(self, true: CascadeState) -> NDArray[np.float32]:
+        c = self.controller
+        row: list[float] = []
+        for h in range(CASCADE_HANDS):
+            row += [*true.hand_pos[h].tolist(), *true.hand_vel[h].tolist()]
+            row.append(float(h in true.holder))
+            row += _ONE_HOT[c.phase(h)]
+            row += [c.phase_time(h), c.duration(h)]
+            row += [*c.nominal_next(h).tolist(), *c.plan_end(h).tolist()]
+        for i in range(CASCADE_BALLS):
+            row += [float(true.holder[i] == 0), float(true.holder[i] == 1)]
+        for i in range(CASCADE_BALLS):
+            row += self._history[i]
+        obs = np.array(row, dtype=np.float32)
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)
+
+    # -- rendering (SideCameraMixin.render) ----------------------------------------------
+    def _sync_scene(self) -> None:
+        self.world.sync()

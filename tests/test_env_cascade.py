@@ -1,0 +1,223 @@
+"""Cascade-v0: Shannon's timing, the SIMULATED two-hand demonstrations, the two-hand world
+(capture rule per hand, no tunnelling at the fastest hand, balls passing each other), the
+analytic cascade juggler on the levels and ``motion-bench juggling --pattern 3``.
+
+The contract (checkers with warnings as errors, determinism, pickling, zero action =
+the controller alone) is in ``tests/test_env_contract.py``."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import motion_envs  # noqa: F401
+from baselines.juggling_bench.cascade import (
+    CascadeConfig,
+    cascade_episode,
+    report_cascade,
+    run_cascade,
+)
+from motion_envs.datasets.juggling import (
+    SIMULATED_LABEL,
+    JugglingTask,
+    cascade_timing,
+    draw_cascade_person,
+    generate_cascade_demonstrations,
+    style_timing,
+)
+from motion_envs.envs.juggling import CAPTURE_SPEED, HAND_SPEED_LIMIT, CascadeWorld
+
+TASK = JugglingTask(gravity=9.81)
+TEST_SEED = 2_000_000_000
+
+
+@pytest.mark.parametrize(("flight", "ratio"), [(0.6, 0.5), (0.69, 0.557), (1.0, 0.75)])
+def test_cascade_timing_is_shannons_theorem(flight, ratio):
+    t = cascade_timing(flight, ratio)
+    d, v = t.dwell, t.vacant
+    assert (flight + d) * 2 == pytest.approx((v + d) * 3, rel=1e-12)
+    assert d / (v + d) == pytest.approx(ratio, rel=1e-12)
+    assert t.period == pytest.approx(v + d) and t.beat == pytest.approx(t.period / 2)
+
+
+@pytest.mark.parametrize(("flight", "ratio"), [(0.0, 0.5), (0.6, 0.0), (0.6, 1.0), (math.nan, 0.5)])
+def test_cascade_timing_rejects_bad_values(flight, ratio):
+    with pytest.raises(ValueError):
+        cascade_timing(flight, ratio)
+
+
+def _releases(rec):
+    lab = rec.phase
+    return rec.t[1:][(lab[:-1] == "toss") & (lab[1:] == "go_down")]
+
+
+def test_demonstrations_are_simulated_alternate_on_the_beat_and_mirror_the_left_hand():
+    style = draw_cascade_person(np.random.default_rng(np.random.SeedSequence(3).spawn(1)[0]))
+    demos = generate_cascade_demonstrations(n_cycles=12, seed=3, task=TASK)
+    again = generate_cascade_demonstrations(n_cycles=12, seed=3, task=TASK)
+    assert demos.simulated and SIMULATED_LABEL in demos.label()
+    assert np.array_equal(demos.recordings[1].hand, again.recordings[1].hand)
+    right, left = demos.recordings
+    _, timing = style_timing(style, TASK)
+    # the hands throw in turn, one beat apart (Shannon's timing of the generator)
+    times = np.sort(np.concatenate([_releases(right), _releases(left)]))
+    hand = np.concatenate([np.zeros(len(_releases(right))), np.ones(len(_releases(left)))])
+    order = hand[np.argsort(np.concatenate([_releases(right), _releases(left)]))]
+    assert np.all(np.diff(order) != 0)  # R, L, R, L, ...
+    assert np.median(np.diff(times)) == pytest.approx(timing.beat, abs=2 * TASK.dt)
+    # in its own frame every hand catches outside (x larger) of where it throws
+    for rec in demos.recordings:
+        segs = rec.segments()
+        throw_x = np.mean([s.positions[0, 0] for s in segs if s.phase == "toss"])
+        catch_x = np.mean([s.positions[-1, 0] for s in segs if s.phase == "catch"])
+        assert catch_x > throw_x + 0.1
+    # every phase; the dwell ratio of the cycles (toss to the release plus return, over
+    # the cycle) is the style's
+    assert {s.phase for s in demos.segments()} == {"toss", "go_down", "catch", "return"}
+    by_cycle: dict[tuple[int, int], dict[str, float]] = {}
+    for s in demos.segments():
+        by_cycle.setdefault((s.recording, s.cycle), {})[s.phase] = s.duration
+    ratios = [(d["toss"] + d["return"]) / sum(d.values()) for d in by_cycle.values() if len(d) == 4]
+    assert np.median(ratios) == pytest.approx(style.dwell_ratio, abs=0.03)
+
+
+def _world_with_empty_right_hand() -> CascadeWorld:
+    world = CascadeWorld(TASK)
+    home = np.array([[0.1, 1.0], [-0.1, 1.0]])
+    world.reset(home, flying=((0.8, 2.0), (0.0, 0.0)))
+    world.launch(0, (1.2, 0.8), (0.0, 0.0))  # ball 0 out of the right hand (drops far away)
+    return world
+
+
+def test_capture_rule_per_hand_and_no_tunnelling_at_the_fastest_closing_speed():
+    # a slow falling ball landing on the empty right palm is captured by it
+    world = _world_with_empty_right_hand()
+    world.launch(2, (0.1, 1.1), (0.0, -1.0))
+    caught = [world.step([[0.1, 1.0], [-0.1, 1.0]], (False, False)).caught for _ in range(40)]
+    assert (0, -1) not in caught and any(c[0] == 2 for c in caught)
+    # a ball landing on a FULL hand (the left holds ball 1) is not captured
+    world = _world_with_empty_right_hand()
+    world.launch(2, (-0.1, 1.15), (0.0, -1.0))
+    for _ in range(40):
+        st = world.step([[0.1, 1.0], [-0.1, 1.0]], (False, False))
+        assert st.caught == (-1, -1)
+    # the fastest closing speed: a ball falling from 2 m onto the right hand rising at its
+    # speed limit bounces off (relative speed > CAPTURE_SPEED), never through the palm
+    v_fall = math.sqrt(2 * 9.81 * 2.0)
+    assert v_fall + HAND_SPEED_LIMIT > CAPTURE_SPEED
+    world = _world_with_empty_right_hand()
+    z = 0.8
+    world.step([[0.1, z], [-0.1, 1.0]], (False, False))
+    for _ in range(80):  # accelerate the hand to its speed limit, upwards
+        z += HAND_SPEED_LIMIT * TASK.dt
+        st = world.step([[0.1, z], [-0.1, 1.0]], (False, False))
+    assert st.hand_vel[0, 1] > 0.95 * HAND_SPEED_LIMIT
+    hz = st.hand_pos[0, 1]
+    world.launch(2, (0.1, hz + 0.09), (0.0, -v_fall))
+    above = []
+    for _ in range(30):
+        z += HAND_SPEED_LIMIT * TASK.dt
+        st = world.step([[0.1, z], [-0.1, 1.0]], (False, False))
+        above.append(st.ball_pos[2, 1] - st.hand_pos[0, 1])
+        assert st.caught == (-1, -1)
+    assert min(above) > -0.035 - 0.008  # the ball centre never got below the palm's middle
+
+
+def test_balls_pass_each_other_and_the_floor_is_a_drop():
+    world = _world_with_empty_right_hand()
+    world.launch(0, (-0.3, 1.5), (1.5, 0.0))
+    world.launch(2, (0.3, 1.5), (-1.5, 0.0))
+    for k in range(1, 40):  # they cross at x = 0 after 0.2 s; no contact between balls
+        st = world.step([[0.6, 0.9], [-0.6, 0.9]], (False, False))
+        assert st.ball_pos[0, 0] == pytest.approx(-0.3 + 1.5 * k * TASK.dt, abs=1e-9)
+        assert st.ball_pos[2, 0] == pytest.approx(0.3 - 1.5 * k * TASK.dt, abs=1e-9)
+    for _ in range(200):
+        st = world.step([[0.6, 0.9], [-0.6, 0.9]], (False, False))
+        assert np.all(st.ball_pos[[0, 2], 1] > TASK.floor_z)  # the floor holds them up
+    assert st.dropped[0] and st.dropped[2]
+
+
+def test_env_spaces_errors_and_dwell_ratio():
+    env = gym.make("MotionEnvs/Cascade-v0", level="easy", dwell_ratio=0.6)
+    obs, _ = env.reset(seed=1)
+    assert obs.shape == env.observation_space.shape == (84,)
+    c = env.unwrapped.controller
+    flight = c.pattern.flight
+    assert c.beat == pytest.approx(flight / (1.5 - 0.6) / 2)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(2, np.float32))
+    _, _, _, _, info = env.step(np.array([np.nan, 0, 0, 0], np.float32))
+    assert info["action_invalid"]
+    with pytest.raises(ValueError, match="dwell_ratio"):
+        gym.make("MotionEnvs/Cascade-v0", dwell_ratio=0.95)
+
+
+def test_latency_aware_is_the_juggler_without_delay():
+    paths = []
+    for controller in ("juggler", "juggler_latency_aware"):
+        env = gym.make("MotionEnvs/Cascade-v0", level="easy", controller=controller)
+        env.reset(seed=5)
+        hands = [env.step(np.zeros(4, np.float32))[4]["hands"] for _ in range(300)]
+        paths.append(np.array(hands))
+    assert np.array_equal(paths[0], paths[1])
+
+
+def test_juggler_juggles_on_easy_and_the_levels_separate_it():
+    easy = [cascade_episode("easy", "juggler", TEST_SEED + i, 20)[0] for i in range(1, 4)]
+    assert min(easy) == 20  # 20 catches without a drop on these seeds
+    medium = {
+        m: np.mean([cascade_episode("medium", m, TEST_SEED + i, 10)[0] for i in range(6)])
+        for m in ("juggler", "juggler_latency_aware")
+    }
+    assert medium["juggler"] < medium["juggler_latency_aware"]
+    trivial = np.mean(
+        [cascade_episode("easy", "fixed_point", TEST_SEED + i, 10)[0] for i in range(3)]
+    )
+    assert trivial < 10
+
+
+def test_pattern_benchmark_document():
+    config = CascadeConfig(
+        levels=("easy", "medium"), methods=("juggler", "juggler_latency_aware"), episodes=2,
+        max_catches=2,
+    )  # fmt: skip
+    doc = run_cascade(config)
+    assert doc["demonstrations"] == SIMULATED_LABEL
+    easy, medium = doc["levels"]
+    assert easy["methods"]["juggler_latency_aware"]["same_as"] == "juggler"
+    m = medium["methods"]["juggler"]
+    assert set(m) >= {"catches_median", "catches_median_ci", "catch_rate", "catch_rate_ci",
+                      "time_to_drop_median", "time_to_drop_median_ci", "censored"}  # fmt: skip
+    assert m["catch_rate_ci"][0] <= m["catch_rate"] <= m["catch_rate_ci"][1]
+    assert doc["targets"]["juggler_easy_catches_median>=100"]["met"] is None  # max 2 catches
+    assert "SIMULATED" in report_cascade(doc)
+
+
+def test_pattern_option():
+    from baselines.cli import build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(["juggling", "--pattern", "3"])
+    assert args.pattern == "3"
+    with pytest.raises(SystemExit):
+        parser.parse_args(["juggling", "--pattern", "5"])
+
+
+def test_pattern_cli_writes_results_json(tmp_path, capsys):
+    import json
+
+    from baselines.cli import main
+
+    argv = ["juggling", "--pattern", "3", "--levels", "medium", "--episodes", "2",
+            "--max-catches", "1", "--out", str(tmp_path)]  # fmt: skip
+    assert main(argv) == 0
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert [lv["level"] for lv in doc["levels"]] == ["medium"]
+    assert set(doc["levels"][0]["methods"]) == {
+        "juggler", "juggler_latency_aware", "fixed_point", "commanded_intercept",
+    }  # fmt: skip
+    assert all(m["catches_median"] <= 1 for m in doc["levels"][0]["methods"].values())
+    assert "catches median" in capsys.readouterr().out
