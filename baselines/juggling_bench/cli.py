@@ -34,7 +34,8 @@ from motion_envs.models.juggling import LEVELS
 
 def main(args: argparse.Namespace) -> int:
     """``motion-bench juggling`` with parsed arguments: run, print, write (the levels of
-    Juggling-v1 with ``--levels``, a recording's ball flights with ``--analyse``, the three-ball cascade with ``--pattern``)."""
+    Juggling-v1 with ``--levels``, a recording's ball flights with ``--analyse``, the
+    three-ball cascade with ``--pattern``)."""
     if args.analyse is not None:
         if args.levels is not None:
             return options.fail("motion-bench juggling", "--analyse: not with --levels")
