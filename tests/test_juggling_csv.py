@@ -129,6 +129,16 @@ def test_absurd_positions_are_rejected_with_their_line(tmp_path):
     assert "bad.csv" in str(info.value)
 
 
+def test_an_integer_too_large_for_a_float_is_rejected_with_its_line(tmp_path):
+    """pandas reads a 400-digit integer as an int and overflows converting it (found by
+    the fuzz harness): one ValueError naming the file and the line instead."""
+    rows = _rows()
+    rows[3] = "0.015," + "9" * 400 + ",1,0,1,toss"
+    with pytest.raises(ValueError, match=r"non-numeric value .* line\(s\) 5 ") as info:
+        read_juggling_csv(_write(tmp_path, GOOD + "\n".join(rows) + "\n"))
+    assert "bad.csv" in str(info.value)
+
+
 def test_absurd_time_is_rejected(tmp_path):
     rows = [f"{1e11 + k},0.1,1,0.1,1,toss" for k in range(25)]
     with pytest.raises(ValueError, match=r"time 't' beyond the plausible range"):

@@ -223,7 +223,10 @@ def numeric_columns(
     lines of NaN, infinite or non-numeric cells, a time beyond :data:`MAX_ABS_TIME` or a
     value beyond ``max_abs_value`` (in ``value_unit``)."""
     numeric = list(columns)
-    data = frame[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
+    try:
+        data = frame[numeric].apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
+    except OverflowError:  # pandas reads an integer of hundreds of digits as an int first
+        data = frame[numeric].map(_cell_float).to_numpy(dtype=np.float64)
     nonfinite = ~np.isfinite(data).all(axis=1)
     if nonfinite.any():
         _fail(path, nonfinite, f"NaN, infinite or non-numeric value in {'/'.join(numeric)}")
@@ -244,6 +247,15 @@ def numeric_columns(
             f"|value| <= {max_abs_value:g}{unit}",
         )
     return data
+
+
+def _cell_float(cell: object) -> float:
+    """One cell as a float as :func:`float` reads it (an integer too large for a float is
+    infinite), NaN where it is not a number."""
+    try:
+        return float(str(cell))
+    except ValueError:
+        return float("nan")
 
 
 def _encoding_error(path: Path, exc: UnicodeDecodeError) -> ValueError:
