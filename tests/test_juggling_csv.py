@@ -132,8 +132,8 @@ def test_absurd_positions_are_rejected_with_their_line(tmp_path):
 def test_an_integer_too_large_for_a_float_is_rejected_with_its_line(tmp_path):
     """pandas reads a 400-digit integer as an int and overflows converting it (found by
     the fuzz harness): one ValueError naming the file and the line instead."""
-    rows = _rows()
-    rows[3] = "0.015," + "9" * 400 + ",1,0,1,toss"
+    rows = [f"{k * 0.005},0,1,0,1,toss" for k in range(25)]  # integer columns
+    rows[3] = "0.015,0,1,0," + "9" * 400 + ",toss"
     with pytest.raises(ValueError, match=r"non-numeric value .* line\(s\) 5 ") as info:
         read_juggling_csv(_write(tmp_path, GOOD + "\n".join(rows) + "\n"))
     assert "bad.csv" in str(info.value)
