@@ -1,0 +1,193 @@
+"""Choose the cascade juggler's three constants on TRAINING seeds only.
+
+The analytic cascade juggler (:mod:`motion_envs.models.juggling._cascade`) has three
+hand-set constants: ``CATCH_WINDOW`` (beats a catch may last beyond the longest training
+catch), ``RELEASE_ARMED`` (share of the nominal toss's release time after which a release
+is armed) and ``REAIM_AFTER`` (beats after its catch plan's end at which an empty hand
+re-aims). This script plays the juggler's zero-action Cascade-v0 episodes
+(:func:`baselines.juggling_bench.cascade.cascade_episode`, controller ``"juggler"``) on the
+TRAINING seeds ``SPLIT_SEEDS["train"] + i`` (never the test seeds), levels ``easy`` and
+``medium``, ``--episodes`` episodes per level, at most ``--max-catches`` catches, for a
+one-at-a-time grid around each constant (the other two at their current values).
+
+A value is passed without editing the module: the script sets the module constant
+(``_cascade.CATCH_WINDOW = v``; the controller reads it when it plans) and, for
+``RELEASE_ARMED`` (read when the juggler is fitted), clears :func:`cascade_fit`'s cache
+so the fit is redone with it; the values are restored afterwards.
+
+Objective: the mean over episodes of the catches before the first drop, summed over the
+levels (easy + medium). Noise: the episodes share their seeds across values, so each
+value's difference from the current value is paired by seed; its standard error is the
+standard deviation of the per-seed differences (summed over the levels) over
+``sqrt(episodes)``. A value replaces the current one only if it beats it by more than
+two standard errors; otherwise the current value is kept (a tie within noise). If more
+than one constant changes, the combination is played too and reported.
+
+    python benchmarks/cascade_constants.py [--episodes 40] [--max-catches 10]
+        [--levels easy medium]
+
+Prints a table and, as its last line, one JSON object with every value's figures, the
+choices and the CPU seconds. The demonstrations the juggler is fitted on are SIMULATED.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from baselines.agents.juggling_score import SPLIT_SEEDS
+from baselines.juggling_bench.cascade import cascade_episode
+from motion_envs.datasets.juggling import SIMULATED_LABEL
+from motion_envs.models.juggling import _cascade
+
+#: The grid: each constant's candidate values (its current value among them).
+GRID: dict[str, tuple[float, ...]] = {
+    "CATCH_WINDOW": (0.3, 0.5, 0.7),
+    "RELEASE_ARMED": (0.6, 0.75, 0.9),
+    "REAIM_AFTER": (0.2, 0.3, 0.4),
+}
+#: A value must beat the current one by this many paired standard errors to replace it.
+MARGIN_SE = 2.0
+
+
+@contextmanager
+def constants(values: dict[str, float]) -> Iterator[None]:
+    """Set the cascade module's constants to ``values`` (refitting the juggler), restore
+    them on exit."""
+    old = {name: getattr(_cascade, name) for name in values}
+    try:
+        for name, v in values.items():
+            setattr(_cascade, name, float(v))
+        _cascade.cascade_fit.cache_clear()
+        yield
+    finally:
+        for name, v in old.items():
+            setattr(_cascade, name, v)
+        _cascade.cascade_fit.cache_clear()
+
+
+def play(
+    values: dict[str, float], levels: list[str], episodes: int, max_catches: int
+) -> dict[str, np.ndarray]:
+    """Catches before the first drop per training seed and level, at ``values``."""
+    seeds = SPLIT_SEEDS["train"] + np.arange(episodes, dtype=np.int64)
+    out: dict[str, np.ndarray] = {}
+    with constants(values):
+        for level in levels:
+            out[level] = np.array(
+                [cascade_episode(level, "juggler", int(s), max_catches)[0] for s in seeds],
+                dtype=np.float64,
+            )
+    return out
+
+
+def objective(catches: dict[str, np.ndarray]) -> float:
+    """Mean catches before the first drop, summed over the levels."""
+    return float(sum(c.mean() for c in catches.values()))
+
+
+def paired(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> tuple[float, float]:
+    """``(difference, standard error)`` of objective(a) - objective(b), paired by seed."""
+    d = sum(a[lv] - b[lv] for lv in a)
+    assert isinstance(d, np.ndarray)
+    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(d.size))
+
+
+def main(argv: list[str] | None = None) -> dict[str, Any]:
+    """Run the grid; print the table and the JSON line."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--episodes", type=int, default=40, help="training episodes per level")
+    ap.add_argument("--max-catches", type=int, default=10, help="episode ends after this")
+    ap.add_argument("--levels", nargs="+", default=["easy", "medium"], help="levels played")
+    args = ap.parse_args(argv)
+    if args.episodes < 2:
+        ap.error(f"--episodes must be >= 2; got {args.episodes}")
+    if args.max_catches < 1:
+        ap.error(f"--max-catches must be >= 1; got {args.max_catches}")
+
+    t0 = time.process_time()
+    current = {name: float(getattr(_cascade, name)) for name in GRID}
+    runs: dict[tuple[str, float], dict[str, np.ndarray]] = {}
+    base = play(current, args.levels, args.episodes, args.max_catches)
+    rows: list[dict[str, Any]] = []
+    chosen = dict(current)
+    for name, grid in GRID.items():
+        best, best_diff = current[name], 0.0
+        for v in grid:
+            c = (
+                base
+                if v == current[name]
+                else play({**current, name: v}, args.levels, args.episodes, args.max_catches)
+            )
+            runs[(name, v)] = c
+            diff, se = paired(c, base)
+            rows.append({
+                "constant": name,
+                "value": v,
+                "current": v == current[name],
+                "objective": objective(c),
+                "per_level_mean": {lv: float(x.mean()) for lv, x in c.items()},
+                "diff_vs_current": diff,
+                "diff_se": se,
+            })  # fmt: skip
+            if diff > MARGIN_SE * se and diff > best_diff:
+                best, best_diff = v, diff
+        chosen[name] = best
+    combined = None
+    if sum(chosen[n] != current[n] for n in GRID) > 1:
+        c = play(chosen, args.levels, args.episodes, args.max_catches)
+        diff, se = paired(c, base)
+        combined = {"values": chosen, "objective": objective(c), "diff_vs_current": diff,
+                    "diff_se": se}  # fmt: skip
+    cpu = time.process_time() - t0
+
+    print(
+        f"Cascade juggler constants on TRAINING seeds {SPLIT_SEEDS['train']}.."
+        f"{SPLIT_SEEDS['train'] + args.episodes - 1}, levels {' + '.join(args.levels)}, "
+        f"at most {args.max_catches} catches ({SIMULATED_LABEL} demonstrations)"
+    )
+    print("objective: mean catches before the first drop, summed over the levels")
+    print(f"{'constant':14s} {'value':>6s} {'objective':>9s} {'per level':28s} {'diff [SE]':>16s}")
+    for r in rows:
+        per = ", ".join(f"{lv} {m:.2f}" for lv, m in r["per_level_mean"].items())
+        mark = " (current)" if r["current"] else ""
+        print(
+            f"{r['constant']:14s} {r['value']:6.2f} {r['objective']:9.2f} {per:28s} "
+            f"{r['diff_vs_current']:+7.2f} [{r['diff_se']:.2f}]{mark}"
+        )
+    for name in GRID:
+        kept = "kept" if chosen[name] == current[name] else "changed"
+        print(f"chosen {name} = {chosen[name]} ({kept}; current {current[name]})")
+    if combined is not None:
+        print(
+            f"combination {combined['values']}: objective {combined['objective']:.2f}, "
+            f"{combined['diff_vs_current']:+.2f} [{combined['diff_se']:.2f}] vs current"
+        )
+    print(f"CPU {cpu:.1f} s")
+    doc = {
+        "benchmark": "cascade juggler constants (training seeds)",
+        "demonstrations": SIMULATED_LABEL,
+        "seeds": {"split": "train", "first": SPLIT_SEEDS["train"], "count": args.episodes},
+        "levels": args.levels,
+        "max_catches": args.max_catches,
+        "objective": "sum over levels of the mean catches before the first drop",
+        "margin_se": MARGIN_SE,
+        "current": current,
+        "rows": rows,
+        "chosen": chosen,
+        "combined": combined,
+        "cpu_s": cpu,
+    }
+    print(json.dumps(doc))
+    return doc
+
+
+if __name__ == "__main__":
+    main()
