@@ -39,8 +39,17 @@ def test_env_family_drops_the_version_only():
     assert env_family("MotionEnvs/Odd-v1-name") == "MotionEnvs/Odd-v1-name"
 
 
+#: Ids that ``motion-bench train/agent`` cannot score yet (their scorer is still to be
+#: written): they must be refused with the one-line error, not half-trained.
+NOT_YET_SCORED = {"MotionEnvs/Cascade-v0"}
+
+
 @pytest.mark.parametrize("env_id", MOTION_IDS)
 def test_every_registered_id_has_its_familys_scorer(env_id):
+    if env_id in NOT_YET_SCORED:
+        with pytest.raises(ValueError, match=f"no agent scorer for {env_id}"):
+            scorer_for(env_id)
+        return
     scorer = scorer_for(env_id)
     if "Juggling" in env_id:
         assert scorer.episodes is juggling_episodes
