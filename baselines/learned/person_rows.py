@@ -306,7 +306,8 @@ def learned_person_rows(
     def draw_errors(coef: FloatArray) -> FloatArray:
         """Draw-averaged max errors of predictions ``(R, L, m)``."""
         curves = [from_path_frame(sine_curves(c, n_points), S, E, up) for c in coef]
-        return np.mean([max_errors(R, c) for c in curves], axis=0)
+        out: FloatArray = np.mean([max_errors(R, c) for c in curves], axis=0)
+        return out
 
     errors: dict[str, FloatArray] = {}
     chosen: dict[str, list[dict[str, Any]]] = {}

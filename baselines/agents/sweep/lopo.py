@@ -129,7 +129,8 @@ def lopo_summary(
     }
     if all(r is not None for v in learned.values() for r in v.values()):
         over = _iqm_block(
-            {p: {s: float(r) for s, r in v.items()} for p, v in learned.items()}, seeds
+            {p: {s: float(r) for s, r in v.items() if r is not None} for p, v in learned.items()},
+            seeds,
         )
         first = {p: kept[p][0] for p in people}  # the ridge and nominal: the same for all seeds
         ridge = {

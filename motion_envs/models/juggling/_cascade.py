@@ -339,6 +339,9 @@ class CascadeHand(JugglingController):
     hand's first beat.
     """
 
+    outgoing: tuple[float, FloatArray, FloatArray] | None
+    last_release: float | None
+
     def __init__(
         self,
         model: AnalyticJuggler,
@@ -460,8 +463,8 @@ class CascadeHand(JugglingController):
         """Start the episode: the toss at once (``first_release <= lead``) or a wait at
         the hand's position until ``lead`` before the first beat (a return phase)."""
         self.incoming = incoming
-        self.outgoing: tuple[float, FloatArray, FloatArray] | None = None
-        self.last_release: float | None = None
+        self.outgoing = None
+        self.last_release = None
         self.other_release: float | None = None
         self._catch_ball = -1
         self.tosses = 0

@@ -95,7 +95,7 @@ def tracked_hand(hand: FloatArray, tracking: FloatArray | None, k: int) -> Float
 
 def xz_pair(value: ArrayLike, name: str) -> tuple[float, float]:
     """``value`` as a finite ``(x, z)`` pair of floats; ValueError naming ``name``."""
-    if type(value) is tuple and len(value) == 2 and all(type(v) is float for v in value):
+    if isinstance(value, tuple) and len(value) == 2 and all(type(v) is float for v in value):
         x, z = value
     elif isinstance(value, np.ndarray) and value.shape == (2,):
         x, z = float(value[0]), float(value[1])
