@@ -346,9 +346,11 @@ def test_release_arming_scales_with_gravity_and_paper_gravity_runs():
 
 def test_closed_loop_toss_like_the_training_demonstrations():
     """Release velocity and catch height of the zero-action juggler (no noise, 50 seeds,
-    250 tosses) against the TRAINING demonstrations' medians at 9.81 m/s^2. Measured: release
-    speed +5.7 %, vertical release speed +9.7 %, catch height +10.3 % (the issue's 10 % is
-    missed by 0.3 points there; docs/models.md section 4): a regression guard at 11 %."""
+    250 tosses) against the TRAINING demonstrations' medians at 9.81 m/s^2, each within 10 %.
+    Measured: release speed +2.7 %, vertical release speed +5.9 %, catch height +8.0 % (the
+    world detects the release as the demonstrations do: second backward difference of the
+    hand's height at the control samples; with the velocity difference over the period it
+    fired half a sample earlier and the catch height was +10.3 %)."""
     fit = v1_fit(9.81)
     demos, train = fit.demos, fit.train
     rel, catch = [], []
@@ -377,9 +379,10 @@ def test_closed_loop_toss_like_the_training_demonstrations():
             if term or trunc:
                 break
     d_vel, j_vel = np.median(rel, axis=0), np.median(jr, axis=0)
+    assert np.linalg.norm(j_vel - d_vel) / np.linalg.norm(d_vel) <= 0.10  # velocity (7.4 %)
     assert abs(np.linalg.norm(j_vel) / np.linalg.norm(d_vel) - 1) <= 0.10  # speed
     assert abs(j_vel[1] / d_vel[1] - 1) <= 0.10  # vertical speed
-    assert abs(np.median(jc) / np.median(catch) - 1) <= 0.11  # catch height (10.3 %)
+    assert abs(np.median(jc) / np.median(catch) - 1) <= 0.10  # catch height
 
 
 def test_motion_bench_train_and_agent_smoke(tmp_path):

@@ -31,8 +31,11 @@ imitates can move as the demonstrations do, not faster.
 
 **The grasp rule** (the fingers): a held ball is attached to the hand (its state copied
 from the hand after each physics step; its contacts off). The controller arms the release;
-the ball is released when the hand's vertical acceleration (measured over the control
-period) is below ``-toss_threshold`` (``3 g``, the Juggling-v0 rule), with the hand's
+the ball is released when the hand's vertical acceleration is below ``-toss_threshold``
+(``3 g``), measured as the demonstrations measure it: the second backward difference of
+the hand's height at the control samples, ``(z_k - 2 z_{k-1} + z_{k-2}) / dt^2``
+(:func:`~motion_envs.datasets.juggling.rules.hand_acceleration`; before time 0 the hand
+moves at its reset velocity), with the hand's
 velocity perturbed in speed and angle (:func:`~motion_envs.models.juggling.perturb_release`).
 A flying ball is **captured** only when (1) it is falling (``v_z < 0``), (2) it touches the
 palm (a MuJoCo contact between ``ball`` and ``palm``, the ball's centre above the palm's
@@ -53,7 +56,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from motion_envs.datasets.juggling import JugglingState, JugglingTask
+from motion_envs.datasets.juggling import JugglingState, JugglingTask, rules
 from motion_envs.models.juggling import perturb_release, xz_pair
 
 __all__ = [
@@ -181,6 +184,8 @@ class JugglingV1World:
         self._rng: np.random.Generator | None = None
         self._ref = (0.0, 0.0)
         self._vref = (0.0, 0.0)
+        #: the hand's height one control sample before the current one (the release rule's)
+        self._z_before = 0.0
         self._held = True
         self._left = False
         self._dropped = False
@@ -204,6 +209,8 @@ class JugglingV1World:
         self.data.qvel[:] = (vx, vz, vx, vz)
         self._ref = (x, z)
         self._vref = (vx, vz)
+        dt = self.task.dt
+        self._z_before = z - vz * dt
         self._held, self._left, self._dropped = True, False, False
         self._k = 0
         self.physics.set_ball_contacts(False)
@@ -233,7 +240,7 @@ class JugglingV1World:
         step = mujoco.mj_step
         hx, hz, bx, bz = qpos.tolist()
         vx, vz, ux, uz = qvel.tolist()
-        vz_before = vz
+        z_prev, z_prev2 = hz, self._z_before
         h = m.opt.timestep
         kp, kd = _KP, _KD
         amax2, vmax = _AMAX2, HAND_SPEED_LIMIT
@@ -287,10 +294,11 @@ class JugglingV1World:
         self._held, self._left, self._dropped = held, left, dropped
         self._k += 1
         d.time = self._k * dt
+        self._z_before = z_prev
         released = False
         if held and not caught and release_armed:
-            a_z = (vz - vz_before) / dt
-            if a_z < -task.toss_threshold:
+            a_z = rules.hand_acceleration(hz, z_prev, z_prev2, dt)
+            if rules.release_fires(True, a_z, task.toss_threshold):
                 v = perturb_release(
                     np.array((vx, vz)), self.release_speed_std, self.release_angle_std, self._rng
                 )
