@@ -205,7 +205,10 @@ def juggling_episodes(
     juggler). Each episode is stepped until it ends and no further (a finished episode's
     row of the batch keeps its last observation; the policy's action for it is unused):
     the same episodes as a ``SyncVectorEnv`` of the N environments, whose autoreset would
-    play new episodes in the finished rows until the longest episode ends."""
+    play new episodes in the finished rows until the longest episode ends. The zero action
+    on an environment with ``nominal_episode`` (Juggling-v1) is played by it, one episode
+    after the other in one environment: the same numbers without the observations and
+    the reward."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401  (registers the ids, also inside Ray workers)
@@ -222,6 +225,25 @@ def juggling_episodes(
         kwargs.setdefault("gravity", 9.81)
     demos = demonstration_paths(kwargs, split)
     seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
+    if policy is None:  # the controller alone: one env plays the episodes one by one
+        env = gym.make(env_id, **kwargs)
+        play = getattr(env.unwrapped, "nominal_episode", None)
+        if play is not None:
+            try:
+                played = [play(int(seed)) for seed in seeds.tolist()]
+            finally:
+                env.close()
+            return _episodes(
+                seeds,
+                [p["time"] for p in played],
+                [p["hand"] for p in played],
+                [p["phase"] for p in played],
+                np.array([p["tosses"] for p in played], dtype=np.int64),
+                np.array([p["catches"] for p in played], dtype=np.int64),
+                np.array([p["dropped"] for p in played], dtype=bool),
+                demos,
+            )
+        env.close()
     envs = [gym.make(env_id, **kwargs) for _ in range(n)]
     try:
         first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist(), strict=True)]
@@ -254,13 +276,35 @@ def juggling_episodes(
     finally:
         for env in envs:
             env.close()
+    return _episodes(
+        seeds,
+        [np.asarray(t) for t in times],
+        [np.stack(h) for h in hands],
+        phases,
+        tosses,
+        catches,
+        dropped,
+        demos,
+    )
+
+
+def _episodes(
+    seeds: NDArray[np.int64],
+    times: list[FloatArray],
+    hands: list[FloatArray],
+    phases: list[list[str]],
+    tosses: NDArray[np.int64],
+    catches: NDArray[np.int64],
+    dropped: NDArray[np.bool_],
+    demos: Mapping[str, FloatArray],
+) -> JugglingEpisodes:
+    """The :class:`JugglingEpisodes` of played episodes (per episode ``times (n,)``,
+    ``hands (n, 2)`` and ``phases`` at its steps, the reset's included)."""
     seg_phase: list[str] = []
     seg_episode: list[int] = []
     seg_dev: list[float] = []
-    for i in range(n):
-        for phase, dev in segment_deviations(
-            np.asarray(times[i]), np.stack(hands[i]), phases[i], demos
-        ):
+    for i in range(seeds.size):
+        for phase, dev in segment_deviations(times[i], hands[i], phases[i], demos):
             seg_phase.append(phase)
             seg_episode.append(i)
             seg_dev.append(dev)

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Mapping
 from typing import Any
 
@@ -254,7 +255,8 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         self._renderer: Any = None
         self._done = True
         self._state: JugglingState | None = None
-        self._history: list[float] = []
+        #: the last HISTORY ball measurements ``(x, z, vx, vz)``, newest first
+        self._history: deque[tuple[float, ...]] = deque(maxlen=HISTORY)
         self._catches = self._tosses = 0
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
@@ -284,8 +286,8 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         state = self._measured(true, meas.position, meas.velocity)
         self.controller.reset(state, np.random.default_rng(controller_ss))
         self._state = state
-        row = [*meas.position.tolist(), *meas.velocity.tolist()]
-        self._history = row * HISTORY
+        row = (*meas.position.tolist(), *meas.velocity.tolist())
+        self._history = deque([row] * HISTORY, maxlen=HISTORY)
         self._done = False
         self._catches = self._tosses = 0
         info = {
@@ -315,15 +317,8 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         ax, az, invalid = clipped_pair(action)
-        target, armed = self.controller.command(self._state)
-        s = self.residual_scale
-        true = self.world.step((float(target[0]) + s * ax, float(target[1]) + s * az), armed)
-        meas = self.sensor.measure(true.ball_pos, true.ball_vel, true.held)
-        self._state = self._measured(true, meas.position, meas.velocity)
-        self._history = [*meas.position.tolist(), *meas.velocity.tolist(), *self._history[:-4]]
+        true, terminated, truncated = self._advance(ax, az)
         caught, dropped = int(true.caught), true.dropped
-        self._catches += caught
-        self._tosses += int(true.released)
         phase = self.controller.phase
         like = self.likeness.distance(phase, true.hand_pos, true.hand_vel)
         w = self.reward_weights
@@ -332,11 +327,6 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         r_like = -w["likeness"] * like
         r_act = -w["action"] * (ax * ax + az * az)
         reward = r_catch + r_drop + r_like + r_act
-        terminated = bool(dropped)
-        truncated = not terminated and (
-            self._catches >= self.max_catches or true.time >= self._time_limit
-        )
-        self._done = terminated or truncated
         info = {
             "reward_catch": r_catch,
             "reward_drop": r_drop,
@@ -356,6 +346,55 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         }
         return self._observation(true), float(reward), terminated, truncated, info
 
+    def _advance(self, ax: float, az: float) -> tuple[JugglingState, bool, bool]:
+        """One control period with the residual ``(ax, az)`` (clipped, finite): the
+        controller's command, the world, the sensor, the history and the episode's counts
+        and end; returns ``(true state, terminated, truncated)``. :meth:`step` and
+        :meth:`nominal_episode` play through it (the reward and observation are step's)."""
+        target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
+        s = self.residual_scale
+        true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
+        meas = self.sensor.measure(true.ball_pos, true.ball_vel, true.held)
+        self._state = self._measured(true, meas.position, meas.velocity)
+        self._history.appendleft((*meas.position.tolist(), *meas.velocity.tolist()))
+        self._catches += int(true.caught)
+        self._tosses += int(true.released)
+        terminated = bool(true.dropped)
+        truncated = not terminated and (
+            self._catches >= self.max_catches or true.time >= self._time_limit
+        )
+        self._done = terminated or truncated
+        return true, terminated, truncated
+
+    def nominal_episode(self, seed: int) -> dict[str, Any]:
+        """``reset(seed=seed)``, then the zero action until the episode ends, without the
+        reward and the observations (the controller alone; what the benchmarks score).
+
+        Returns ``time (n,)``, ``hand (n, 2)`` and ``phase`` (n labels) at the reset and
+        after every step (the values of the infos ``time``, ``hand`` and ``phase``), and the
+        episode's ``tosses``, ``catches`` and ``dropped`` (it ended by a drop): the same
+        numbers as stepping the zero action (one code path, :meth:`_advance`)."""
+        _, info = self.reset(seed=seed)
+        times = [float(info["time"])]
+        hands = [(float(info["hand"][0]), float(info["hand"][1]))]
+        phases = [str(info["phase"])]
+        controller = self.controller
+        terminated = truncated = False
+        while not (terminated or truncated):
+            true, terminated, truncated = self._advance(0.0, 0.0)
+            times.append(true.time)
+            hand = true.hand_pos
+            hands.append((float(hand[0]), float(hand[1])))
+            phases.append(controller.phase)
+        return {
+            "time": np.array(times, dtype=np.float64),
+            "hand": np.array(hands, dtype=np.float64),
+            "phase": phases,
+            "tosses": self._tosses,
+            "catches": self._catches,
+            "dropped": terminated,
+        }
+
     def _observation(self, true: JugglingState) -> NDArray[np.float32]:
         c = self.controller
         nx, nz = c.nominal_next().tolist()
@@ -372,7 +411,7 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
                 nz,
                 ex,
                 ez,
-                *self._history,
+                *(v for row in self._history for v in row),
             ),
             dtype=np.float32,
         )

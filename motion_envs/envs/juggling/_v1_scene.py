@@ -224,6 +224,11 @@ class JugglingV1World:
         if self.state is None:
             raise RuntimeError("call reset() before step()")
         tx, tz = xz_pair(hand_target, "hand_target")
+        return self.advance(tx, tz, release_armed)
+
+    def advance(self, tx: float, tz: float, release_armed: bool) -> JugglingState:
+        """:meth:`step` toward the finite floats ``(tx, tz)``, unchecked (the env's hot
+        path; the episode must have been reset)."""
         task, dt = self.task, self.task.dt
         step_max = HAND_SPEED_LIMIT * dt
         sx, sz = self._ref
