@@ -268,13 +268,9 @@ class JugglingV1World:
             ctrl[0] = HAND_MASS * ax
             ctrl[1] = HAND_MASS * az
             step(m, d)
-            if held:  # the ball rides in the hand
+            if held:  # the ball rides in the hand (its state written after the loop)
                 hx, hz, _, _ = qpos.tolist()
                 vx, vz, _, _ = qvel.tolist()
-                qpos[2] = hx
-                qpos[3] = hz
-                qvel[2] = vx
-                qvel[3] = vz
                 continue
             hx, hz, bx, bz = qpos.tolist()
             vx, vz, ux, uz = qvel.tolist()
@@ -296,9 +292,17 @@ class JugglingV1World:
                 qpos[3] = hz
                 qvel[2] = vx
                 qvel[3] = vz
+        if held:  # a held ball is copied from the hand after the physics steps: with its
+            # contacts off it acts on nothing, so only its state after the last one counts
+            bx, bz, ux, uz = hx, hz, vx, vz
+            qpos[2] = hx
+            qpos[3] = hz
+            qvel[2] = vx
+            qvel[3] = vz
         self._held, self._left, self._dropped = held, left, dropped
         self._k += 1
-        d.time = self._k * dt
+        time = self._k * dt
+        d.time = time
         self._z_before = z_prev
         released = False
         if held and not caught and release_armed:
@@ -307,11 +311,22 @@ class JugglingV1World:
                 v = perturb_release(
                     np.array((vx, vz)), self.release_speed_std, self.release_angle_std, self._rng
                 )
-                qvel[2], qvel[3] = float(v[0]), float(v[1])
+                ux, uz = float(v[0]), float(v[1])
+                qvel[2], qvel[3] = ux, uz
                 self._held = self._left = False
                 released = True
                 phys.set_ball_contacts(True)
-        self.state = self._make_state(released, caught)
+        self.state = JugglingState(
+            time=time,
+            hand_pos=np.array((hx, hz)),
+            hand_vel=np.array((vx, vz)),
+            ball_pos=np.array((bx, bz)),
+            ball_vel=np.array((ux, uz)),
+            held=self._held,
+            released=released,
+            caught=caught,
+            dropped=dropped,
+        )
         return self.state
 
     def launch(self, ball_pos: ArrayLike, ball_vel: ArrayLike) -> JugglingState:
