@@ -10,7 +10,9 @@ were chosen on training seeds), with :func:`~baselines.agents.juggling_score.jug
 the function ``motion-bench agent`` scores agents with. With ``agent`` (a run folder of
 ``motion-bench train`` on Juggling-v1) the trained agent is played on the same seeds of
 every level as one more method (its residual on the analytic juggler). An episode ends
-at the first drop or after ``max_catches`` catches. Reported per method:
+at the first drop or after ``max_catches`` catches. At a zero latency (``easy``) the
+latency-aware juggler is the juggler step for step: its entry is the juggler's episodes,
+not played twice. Reported per method:
 
 * ``catch_rate``: catches per toss pooled over the episodes, with a 95 % bootstrap
   interval resampling episodes (:func:`~baselines.agents.juggling_score.catch_rate_interval`);
@@ -28,6 +30,7 @@ The demonstrations are SIMULATED. :func:`run` is pure (a frozen :class:`LevelsCo
 
 from __future__ import annotations
 
+import copy
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -45,7 +48,7 @@ from baselines.agents.juggling_score import (
     deviation_interval,
     juggling_episodes,
 )
-from motion_envs.datasets.juggling import SIMULATED_LABEL
+from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
 from motion_envs.models.juggling import CONTROLLERS, LEVELS
 
 __all__ = [
@@ -131,6 +134,16 @@ def summary(eps: JugglingEpisodes) -> dict[str, Any]:
     }
 
 
+def _same_controller(level: str, method: str, gravity: float) -> str:
+    """The controller ``method`` is on ``level``: the latency-aware juggler predicts the
+    ball forward by the delay, which rounds to no control period at a zero latency
+    (``easy``): there it is the juggler, step for step."""
+    dt = JugglingTask(gravity=gravity).dt
+    if method == "juggler_latency_aware" and round(LEVELS[level].latency / dt) == 0:
+        return "juggler"
+    return method
+
+
 def run_levels(config: LevelsConfig) -> dict[str, Any]:
     """Every level x method, and the agent when given (module docstring); JSON-ready."""
     check_levels_config(config)
@@ -147,6 +160,11 @@ def run_levels(config: LevelsConfig) -> dict[str, Any]:
         methods: dict[str, Any] = {}
         played: dict[str, JugglingEpisodes] = {}
         for method in config.methods:
+            same = _same_controller(level, method, config.gravity)
+            if same in played:  # the same controller on the same seeds: not played twice
+                played[method] = played[same]
+                methods[method] = copy.deepcopy(methods[same])
+                continue
             played[method] = level_episodes(level, config, method)
             methods[method] = summary(played[method])
         if loaded is not None:

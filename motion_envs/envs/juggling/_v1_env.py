@@ -354,9 +354,12 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
         s = self.residual_scale
         true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
-        meas = self.sensor.measure(true.ball_pos, true.ball_vel, true.held)
-        self._state = self._measured(true, meas.position, meas.velocity)
-        self._history.appendleft((*meas.position.tolist(), *meas.velocity.tolist()))
+        row = self.sensor.measure_values(*true.ball_pos.tolist(), *true.ball_vel.tolist(), true.held)
+        if true.held:  # measured exactly: the true state is the measured one
+            self._state = true
+        else:
+            self._state = self._measured(true, np.array(row[:2]), np.array(row[2:]))
+        self._history.appendleft(row)
         self._catches += int(true.caught)
         self._tosses += int(true.released)
         terminated = bool(true.dropped)
@@ -376,15 +379,14 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         numbers as stepping the zero action (one code path, :meth:`_advance`)."""
         _, info = self.reset(seed=seed)
         times = [float(info["time"])]
-        hands = [(float(info["hand"][0]), float(info["hand"][1]))]
+        hands = [info["hand"].tolist()]
         phases = [str(info["phase"])]
         controller = self.controller
         terminated = truncated = False
         while not (terminated or truncated):
             true, terminated, truncated = self._advance(0.0, 0.0)
             times.append(true.time)
-            hand = true.hand_pos
-            hands.append((float(hand[0]), float(hand[1])))
+            hands.append(true.hand_pos.tolist())
             phases.append(controller.phase)
         return {
             "time": np.array(times, dtype=np.float64),

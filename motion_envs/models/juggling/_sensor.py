@@ -118,11 +118,18 @@ class BallSensor:
         A held ball is measured exactly (the hand feels it). A flying ball is reported as it
         was ``delay_steps`` steps ago (held then: exactly; flying: plus the noise).
         """
-        px, pz = float(position[0]), float(position[1])
-        vx, vz = float(velocity[0]), float(velocity[1])
+        px, pz, vx, vz = self.measure_values(
+            float(position[0]), float(position[1]), float(velocity[0]), float(velocity[1]), held
+        )
+        return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
+
+    def measure_values(
+        self, px: float, pz: float, vx: float, vz: float, held: bool
+    ) -> tuple[float, float, float, float]:
+        """:meth:`measure` of the true ``(x, z, vx, vz)`` as floats (the env's hot path)."""
         self._buffer.append((px, pz, vx, vz, held))
         if held:
-            return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
+            return px, pz, vx, vz
         px, pz, vx, vz, was_held = self._buffer[0]
         if not was_held and (self.position_std > 0 or self.velocity_std > 0):
             if self._rng is None:
@@ -132,4 +139,4 @@ class BallSensor:
             pz += self.position_std * e[1]
             vx += self.velocity_std * e[2]
             vz += self.velocity_std * e[3]
-        return BallMeasurement(np.array([px, pz]), np.array([vx, vz]))
+        return px, pz, vx, vz
