@@ -14,20 +14,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
-from motion_envs.envs._common import (
-    SideCameraMixin,
-    as_action,
-    check_choice,
-    check_integer,
-    check_number,
-    check_reward_weights,
-    check_scale,
-)
+from motion_envs.envs._common import SideCameraMixin, as_action, check_number
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
+from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
-    LEVELS,
     CascadeController,
     CascadeSensor,
     CascadeState,
@@ -66,7 +58,7 @@ _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
 
 
-class CascadeEnv(SideCameraMixin, gym.Env):
+class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     r"""Juggle three balls in a cascade with two actuated hands that see the balls late.
 
     ## Description
@@ -193,6 +185,8 @@ class CascadeEnv(SideCameraMixin, gym.Env):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+    _CONTROLLERS = CASCADE_CONTROLLERS
+    _DEFAULT_WEIGHTS = DEFAULT_CASCADE_REWARD_WEIGHTS
 
     def __init__(
         self,
@@ -212,39 +206,14 @@ class CascadeEnv(SideCameraMixin, gym.Env):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        self.level = check_choice(level, "level", tuple(LEVELS))
-        base = LEVELS[self.level]
-
-        def pick(value: float | None, name: str, default: float, high: float) -> float:
-            return default if value is None else check_number(value, name, 0.0, high)
-
-        self.latency = pick(latency, "latency", base.latency, 1.0)
-        self.position_std = pick(position_std, "position_std", base.position_std, 1.0)
-        self.velocity_std = pick(velocity_std, "velocity_std", base.velocity_std, 10.0)
-        self.release_speed_std = pick(
-            release_speed_std, "release_speed_std", base.release_speed_std, 1.0
-        )
-        self.release_angle_std = pick(
-            release_angle_std, "release_angle_std", base.release_angle_std, 90.0
+        self._init_arguments(
+            (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
+            (gravity, controller, max_catches, residual_scale, reward_weights),
+            (render_mode, width, height),
         )
         self.dwell_ratio = (
             None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )
-        self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
-        self.controller_name = check_choice(controller, "controller", CASCADE_CONTROLLERS)
-        self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
-        self.residual_scale = check_scale(residual_scale, 1.0)
-        self.reward_weights = check_reward_weights(reward_weights, DEFAULT_CASCADE_REWARD_WEIGHTS)
-        for name, value in (("width", width), ("height", height)):
-            check_integer(value, name, 16, 8192)
-        self.render_mode = render_mode
-        self.width, self.height = int(width), int(height)
-
         self.task = JugglingTask(gravity=self.gravity)
         self.delay_steps = round(self.latency / self.task.dt)
         self.controller: CascadeController = make_cascade_controller(
@@ -356,31 +325,18 @@ class CascadeEnv(SideCameraMixin, gym.Env):
             pos = true.hand_pos[h] * (sign, 1.0)
             vel = true.hand_vel[h] * (sign, 1.0)
             like += self.likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
-        w = self.reward_weights
-        r_catch = w["catch"] * caught
-        r_drop = -w["drop"] * float(dropped)
-        r_like = -w["likeness"] * like
-        r_act = -w["action"] * float(a @ a)
-        reward = r_catch + r_drop + r_like + r_act
-        terminated = bool(dropped)
-        truncated = not terminated and (
-            self._catches >= self.max_catches or true.time >= self._time_limit
-        )
-        self._done = terminated or truncated
+        reward, terms = self._rewards(caught, dropped, like, float(a @ a))
+        terminated, truncated = self._episode_end(dropped, true.time)
         info = self._info(
             true,
-            reward_catch=r_catch,
-            reward_drop=r_drop,
-            reward_likeness=r_like,
-            reward_action=r_act,
-            likeness=like,
+            **terms,
             caught=caught,
             catches=self._catches,
             tosses=self._tosses,
             cycles=self._tosses,
             action_invalid=invalid,
         )
-        return self._observation(true), float(reward), terminated, truncated, info
+        return self._observation(true), reward, terminated, truncated, info
 
     def _observation(self, true: CascadeState) -> NDArray[np.float32]:
         c = self.controller

@@ -35,9 +35,10 @@ from motion_envs.envs.juggling._v1_scene import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
     HAND_MASS,
-    HAND_SPEED_LIMIT,
-    SERVO_OMEGA,
     SUBSTEPS,
+    _HandsWorld,
+    servo_acceleration,
+    servo_plan,
 )
 from motion_envs.models.juggling import CascadeState, perturb_release
 
@@ -72,27 +73,21 @@ def load_cascade_model(task: JugglingTask) -> mujoco.MjModel:
     return model
 
 
-class CascadeWorld:
+class CascadeWorld(_HandsWorld):
     """The cascade task on MuJoCo (see the module docstring).
 
     ``reset(hand_pos, flying=..., rng=...)`` and ``step(targets, armed)`` return the TRUE
     :class:`~motion_envs.models.juggling.CascadeState`. qpos/qvel layout: right hand
-    ``x, z``, left hand ``x, z``, then ``x, z`` of balls 0, 1, 2.
-
-    Parameters
-    ----------
-    task:
-        The task constants (gravity, dt, ball, floor, toss threshold).
-    release_speed_std, release_angle_std:
-        Release noise: relative speed error and direction error (rad), per toss.
+    ``x, z``, left hand ``x, z``, then ``x, z`` of balls 0, 1, 2. The parameters are
+    :class:`~motion_envs.envs.juggling.JugglingV1World`'s (the task constants, the release
+    noise per toss); each hand is servoed as its hand is
+    (:func:`~motion_envs.envs.juggling._v1_scene.servo_plan`).
     """
 
     def __init__(
         self, task: JugglingTask, release_speed_std: float = 0.0, release_angle_std: float = 0.0
     ) -> None:
-        self.task = task
-        self.release_speed_std = float(release_speed_std)
-        self.release_angle_std = float(release_angle_std)
+        super().__init__(task, release_speed_std, release_angle_std)
         self.model = load_cascade_model(task)
         self.data = mujoco.MjData(self.model)
         m, geom = self.model, mujoco.mjtObj.mjOBJ_GEOM
@@ -103,7 +98,6 @@ class CascadeWorld:
         self.palm_top = float(
             m.geom_pos[self.palm_geoms[0], 2] + m.geom_size[self.palm_geoms[0], 2]
         )
-        self._rng: np.random.Generator | None = None
         self._ref: list[tuple[float, float]] = [(0.0, 0.0)] * CASCADE_HANDS
         self._vref: list[tuple[float, float]] = [(0.0, 0.0)] * CASCADE_HANDS
         self._holder = [-1] * CASCADE_BALLS
@@ -187,26 +181,16 @@ class CascadeWorld:
         if not all(math.isfinite(x) for x in flat):
             raise ValueError(f"targets must be a finite (2, 2) array; got {targets!r}")
         task, dt = self.task, self.task.dt
-        step_max = HAND_SPEED_LIMIT * dt
         servo = []
         for h in range(CASCADE_HANDS):
-            sx, sz = self._ref[h]
-            dx, dz = flat[2 * h] - sx, flat[2 * h + 1] - sz
-            dist = math.hypot(dx, dz)
-            if dist > step_max:
-                dx, dz = dx * step_max / dist, dz * step_max / dist
-            vrx, vrz = dx / dt, dz / dt
-            arx = (vrx - self._vref[h][0]) / dt
-            arz = (vrz - self._vref[h][1]) / dt
-            self._ref[h] = (sx + dx, sz + dz)
-            self._vref[h] = (vrx, vrz)
-            servo.append((sx, sz, dx, dz, vrx, vrz, arx, arz))
+            plan = servo_plan(self._ref[h], self._vref[h], flat[2 * h], flat[2 * h + 1], dt)
+            self._ref[h] = (plan[0] + plan[2], plan[1] + plan[3])
+            self._vref[h] = (plan[4], plan[5])
+            servo.append(plan)
         m, d = self.model, self.data
         qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
         vz_before = [float(qvel[1]), float(qvel[3])]
         h_step = m.opt.timestep
-        kp, kd = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
-        amax2, vmax = HAND_ACCEL_LIMIT**2, HAND_SPEED_LIMIT
         radius, floor_z = task.ball_radius, task.floor_z
         holder, left, dropped = self._holder, self._left, self._dropped
         caught = [-1, -1]
@@ -215,19 +199,9 @@ class CascadeWorld:
         for j in range(1, SUBSTEPS + 1):
             f = j / SUBSTEPS
             for h in range(CASCADE_HANDS):
-                sx, sz, dx, dz, vrx, vrz, arx, arz = servo[h]
-                hx, hz, vx, vz = q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1]
-                ax = arx + kp * (sx + f * dx - hx) + kd * (vrx - vx)
-                az = arz + kp * (sz + f * dz - hz) + kd * (vrz - vz)
-                n2 = ax * ax + az * az
-                if n2 > amax2:
-                    s = math.sqrt(amax2 / n2)
-                    ax, az = ax * s, az * s
-                nvx, nvz = vx + ax * h_step, vz + az * h_step
-                sp = math.hypot(nvx, nvz)
-                if sp > vmax:
-                    nvx, nvz = nvx * vmax / sp, nvz * vmax / sp
-                    ax, az = (nvx - vx) / h_step, (nvz - vz) / h_step
+                ax, az = servo_acceleration(
+                    f, servo[h], q[2 * h], q[2 * h + 1], v[2 * h], v[2 * h + 1], h_step
+                )
                 forces[2 * h] = HAND_MASS * ax
                 forces[2 * h + 1] = HAND_MASS * az
             ctrl[:] = forces

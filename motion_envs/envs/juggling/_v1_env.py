@@ -14,19 +14,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
-from motion_envs.envs._common import (
-    SideCameraMixin,
-    check_choice,
-    check_integer,
-    check_number,
-    check_reward_weights,
-    check_scale,
-    clipped_pair,
-)
+from motion_envs.envs._common import SideCameraMixin, clipped_pair
+from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT, JugglingV1World
 from motion_envs.models.juggling import (
     CONTROLLERS,
-    LEVELS,
     BallSensor,
     JugglerController,
     make_controller,
@@ -61,7 +53,7 @@ _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
 
 
-class JugglingV1Env(SideCameraMixin, gym.Env):
+class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     r"""Toss and catch one ball with an actuated hand that sees the ball late.
 
     ## Description
@@ -183,6 +175,8 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+    _CONTROLLERS = CONTROLLERS
+    _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
 
     def __init__(
         self,
@@ -201,36 +195,11 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         width: int = 480,
         height: int = 480,
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        self.level = check_choice(level, "level", tuple(LEVELS))
-        base = LEVELS[self.level]
-
-        def pick(value: float | None, name: str, default: float, high: float) -> float:
-            return default if value is None else check_number(value, name, 0.0, high)
-
-        self.latency = pick(latency, "latency", base.latency, 1.0)
-        self.position_std = pick(position_std, "position_std", base.position_std, 1.0)
-        self.velocity_std = pick(velocity_std, "velocity_std", base.velocity_std, 10.0)
-        self.release_speed_std = pick(
-            release_speed_std, "release_speed_std", base.release_speed_std, 1.0
+        self._init_arguments(
+            (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
+            (gravity, controller, max_catches, residual_scale, reward_weights),
+            (render_mode, width, height),
         )
-        self.release_angle_std = pick(
-            release_angle_std, "release_angle_std", base.release_angle_std, 90.0
-        )
-        self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
-        self.controller_name = check_choice(controller, "controller", CONTROLLERS)
-        self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
-        self.residual_scale = check_scale(residual_scale, 1.0)
-        self.reward_weights = check_reward_weights(reward_weights, DEFAULT_V1_REWARD_WEIGHTS)
-        for name, value in (("width", width), ("height", height)):
-            check_integer(value, name, 16, 8192)
-        self.render_mode = render_mode
-        self.width, self.height = int(width), int(height)
-
         self.task = JugglingTask(gravity=self.gravity)
         juggler = v1_juggler(self.gravity)
         self.home = np.asarray(juggler.home_, dtype=np.float64)
@@ -318,21 +287,12 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         ax, az, invalid = clipped_pair(action)
         true, terminated, truncated = self._advance(ax, az)
-        caught, dropped = int(true.caught), true.dropped
+        caught = int(true.caught)
         phase = self.controller.phase
         like = self.likeness.distance(phase, true.hand_pos, true.hand_vel)
-        w = self.reward_weights
-        r_catch = w["catch"] * caught
-        r_drop = -w["drop"] * float(dropped)
-        r_like = -w["likeness"] * like
-        r_act = -w["action"] * (ax * ax + az * az)
-        reward = r_catch + r_drop + r_like + r_act
+        reward, terms = self._rewards(caught, true.dropped, like, ax * ax + az * az)
         info = {
-            "reward_catch": r_catch,
-            "reward_drop": r_drop,
-            "reward_likeness": r_like,
-            "reward_action": r_act,
-            "likeness": like,
+            **terms,
             "caught": bool(caught),
             "catches": self._catches,
             "tosses": self._tosses,
@@ -344,7 +304,7 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
             "ball": true.ball_pos.copy(),
             "action_invalid": invalid,
         }
-        return self._observation(true), float(reward), terminated, truncated, info
+        return self._observation(true), reward, terminated, truncated, info
 
     def _advance(self, ax: float, az: float) -> tuple[JugglingState, bool, bool]:
         """One control period with the residual ``(ax, az)`` (clipped, finite): the
@@ -354,7 +314,9 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
         s = self.residual_scale
         true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
-        row = self.sensor.measure_values(*true.ball_pos.tolist(), *true.ball_vel.tolist(), true.held)
+        row = self.sensor.measure_values(
+            *true.ball_pos.tolist(), *true.ball_vel.tolist(), true.held
+        )
         if true.held:  # measured exactly: the true state is the measured one
             self._state = true
         else:
@@ -362,11 +324,7 @@ class JugglingV1Env(SideCameraMixin, gym.Env):
         self._history.appendleft(row)
         self._catches += int(true.caught)
         self._tosses += int(true.released)
-        terminated = bool(true.dropped)
-        truncated = not terminated and (
-            self._catches >= self.max_catches or true.time >= self._time_limit
-        )
-        self._done = terminated or truncated
+        terminated, truncated = self._episode_end(true.dropped, true.time)
         return true, terminated, truncated
 
     def nominal_episode(self, seed: int) -> dict[str, Any]:

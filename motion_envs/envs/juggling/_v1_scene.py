@@ -91,6 +91,51 @@ _KP, _KD = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
 _AMAX2 = HAND_ACCEL_LIMIT**2
 
 
+def servo_plan(
+    ref: tuple[float, float], vref: tuple[float, float], tx: float, tz: float, dt: float
+) -> tuple[float, float, float, float, float, float, float, float]:
+    """One control period's servo reference (module docstring): the command from the last
+    reference point ``ref`` toward ``(tx, tz)``, rate limited to ``HAND_SPEED_LIMIT``;
+    ``(sx, sz, dx, dz, vrx, vrz, arx, arz)``: the period's start, step, reference velocity
+    and its backward difference from the last reference velocity ``vref``."""
+    step_max = HAND_SPEED_LIMIT * dt
+    sx, sz = ref
+    dx, dz = tx - sx, tz - sz
+    dist = math.hypot(dx, dz)
+    if dist > step_max:  # the command moves at most at the speed limit
+        dx, dz = dx * step_max / dist, dz * step_max / dist
+    vrx, vrz = dx / dt, dz / dt
+    return sx, sz, dx, dz, vrx, vrz, (vrx - vref[0]) / dt, (vrz - vref[1]) / dt
+
+
+def servo_acceleration(
+    f: float,
+    plan: tuple[float, float, float, float, float, float, float, float],
+    hx: float,
+    hz: float,
+    vx: float,
+    vz: float,
+    h: float,
+) -> tuple[float, float]:
+    """The hand's commanded acceleration at the fraction ``f`` of the period
+    (:func:`servo_plan`'s ``plan``), the hand at ``(hx, hz)`` moving at ``(vx, vz)``,
+    physics step ``h``: the computed-torque servo clipped to ``HAND_ACCEL_LIMIT`` and so
+    that the speed after the step stays within ``HAND_SPEED_LIMIT``."""
+    sx, sz, dx, dz, vrx, vrz, arx, arz = plan
+    ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
+    az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
+    n2 = ax * ax + az * az
+    if n2 > _AMAX2:
+        s = math.sqrt(_AMAX2 / n2)
+        ax, az = ax * s, az * s
+    nvx, nvz = vx + ax * h, vz + az * h
+    sp = math.hypot(nvx, nvz)
+    if sp > HAND_SPEED_LIMIT:  # the speed limit: aim at the limit along the new direction
+        nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
+        ax, az = (nvx - vx) / h, (nvz - vz) / h
+    return ax, az
+
+
 def load_juggling_v1_model(task: JugglingTask) -> mujoco.MjModel:
     """Compile ``juggling_v1.xml`` with ``task``'s gravity, ball and floor; the
     timestep is ``task.dt / SUBSTEPS``."""
@@ -158,7 +203,20 @@ class JugglingPhysics:
         self.model.geom_conaffinity[self.ball_geom] = int(on)
 
 
-class JugglingV1World:
+class _HandsWorld:
+    """The task constants and the release noise of a world of actuated hands
+    (:class:`JugglingV1World`, :class:`~motion_envs.envs.juggling.CascadeWorld`)."""
+
+    def __init__(
+        self, task: JugglingTask, release_speed_std: float = 0.0, release_angle_std: float = 0.0
+    ) -> None:
+        self.task = task
+        self.release_speed_std = float(release_speed_std)
+        self.release_angle_std = float(release_angle_std)
+        self._rng: np.random.Generator | None = None
+
+
+class JugglingV1World(_HandsWorld):
     """The task on top of :class:`JugglingPhysics` (see the module docstring).
 
     ``reset(hand_pos, rng=...)`` and ``step(hand_target, release_armed)`` return the TRUE
@@ -176,12 +234,9 @@ class JugglingV1World:
     def __init__(
         self, task: JugglingTask, release_speed_std: float = 0.0, release_angle_std: float = 0.0
     ) -> None:
-        self.task = task
-        self.release_speed_std = float(release_speed_std)
-        self.release_angle_std = float(release_angle_std)
+        super().__init__(task, release_speed_std, release_angle_std)
         self.physics = JugglingPhysics(task)
         self.model, self.data = self.physics.model, self.physics.data
-        self._rng: np.random.Generator | None = None
         self._ref = (0.0, 0.0)
         self._vref = (0.0, 0.0)
         #: the hand's height one control sample before the current one (the release rule's)
@@ -230,41 +285,22 @@ class JugglingV1World:
         """:meth:`step` toward the finite floats ``(tx, tz)``, unchecked (the env's hot
         path; the episode must have been reset)."""
         task, dt = self.task, self.task.dt
-        step_max = HAND_SPEED_LIMIT * dt
-        sx, sz = self._ref
-        dx, dz = tx - sx, tz - sz
-        dist = math.hypot(dx, dz)
-        if dist > step_max:  # the command moves at most at the speed limit
-            dx, dz = dx * step_max / dist, dz * step_max / dist
-        vrx, vrz = dx / dt, dz / dt
-        arx, arz = (vrx - self._vref[0]) / dt, (vrz - self._vref[1]) / dt
-        self._ref = (sx + dx, sz + dz)
-        self._vref = (vrx, vrz)
+        plan = servo_plan(self._ref, self._vref, tx, tz, dt)
+        self._ref = (plan[0] + plan[2], plan[1] + plan[3])
+        self._vref = (plan[4], plan[5])
         m, d, phys = self.model, self.data, self.physics
         qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
-        step = mujoco.mj_step
+        step, accel = mujoco.mj_step, servo_acceleration
         hx, hz, bx, bz = qpos.tolist()
         vx, vz, ux, uz = qvel.tolist()
         z_prev, z_prev2 = hz, self._z_before
         h = m.opt.timestep
-        kp, kd = _KP, _KD
-        amax2, vmax = _AMAX2, HAND_SPEED_LIMIT
         radius, floor_z = task.ball_radius, task.floor_z
         palm_top = phys.palm_top
         held, left, dropped = self._held, self._left, self._dropped
         caught = False
         for f in _FRACTIONS:
-            ax = arx + kp * (sx + f * dx - hx) + kd * (vrx - vx)
-            az = arz + kp * (sz + f * dz - hz) + kd * (vrz - vz)
-            n2 = ax * ax + az * az
-            if n2 > amax2:
-                s = math.sqrt(amax2 / n2)
-                ax, az = ax * s, az * s
-            nvx, nvz = vx + ax * h, vz + az * h
-            sp = math.hypot(nvx, nvz)
-            if sp > vmax:  # the speed limit: aim at the limit along the new direction
-                nvx, nvz = nvx * vmax / sp, nvz * vmax / sp
-                ax, az = (nvx - vx) / h, (nvz - vz) / h
+            ax, az = accel(f, plan, hx, hz, vx, vz, h)
             ctrl[0] = HAND_MASS * ax
             ctrl[1] = HAND_MASS * az
             step(m, d)

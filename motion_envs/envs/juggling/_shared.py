@@ -1,0 +1,123 @@
+"""What Juggling-v1's and Cascade-v0's environments share: their arguments (a level and
+the values that override it, the world's gravity, the controller, the episode's length,
+the residual's scale, the reward's weights, the rendering) and a step's bookkeeping (the
+weighted reward terms, termination at a drop, truncation after ``max_catches`` catches or
+the time limit)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from motion_envs.envs._common import (
+    check_choice,
+    check_integer,
+    check_number,
+    check_reward_weights,
+    check_scale,
+)
+from motion_envs.models.juggling import LEVELS
+
+__all__ = ["LevelsEnvMixin"]
+
+
+class LevelsEnvMixin:
+    """The shared arguments and step bookkeeping of the juggling environments with levels.
+
+    A subclass sets ``_CONTROLLERS`` (the controller names) and ``_DEFAULT_WEIGHTS`` (the
+    reward weights), calls :meth:`_init_arguments` first in ``__init__`` and sets
+    ``_time_limit`` (s), ``_catches`` and ``_done``."""
+
+    _CONTROLLERS: tuple[str, ...]
+    _DEFAULT_WEIGHTS: Mapping[str, float]
+    metadata: dict[str, Any]
+    level: str
+    latency: float
+    position_std: float
+    velocity_std: float
+    release_speed_std: float
+    release_angle_std: float
+    gravity: float
+    controller_name: str
+    max_catches: int
+    residual_scale: float
+    reward_weights: dict[str, float]
+    render_mode: str | None
+    width: int
+    height: int
+    _time_limit: float
+    _catches: int
+    _done: bool
+
+    def _init_arguments(
+        self,
+        level: tuple[str, float | None, float | None, float | None, float | None, float | None],
+        world: tuple[float, str, int, float, Mapping[str, float] | None],
+        rendering: tuple[str | None, int, int],
+    ) -> None:
+        """Check and set the arguments: ``level`` is ``(level, latency, position_std,
+        velocity_std, release_speed_std, release_angle_std)`` (None: the level's value),
+        ``world`` ``(gravity, controller, max_catches, residual_scale, reward_weights)``,
+        ``rendering`` ``(render_mode, width, height)``."""
+        render_mode, width, height = rendering
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        name, latency, position_std, velocity_std, release_speed_std, release_angle_std = level
+        self.level = check_choice(name, "level", tuple(LEVELS))
+        base = LEVELS[self.level]
+
+        def pick(value: float | None, name: str, default: float, high: float) -> float:
+            return default if value is None else check_number(value, name, 0.0, high)
+
+        self.latency = pick(latency, "latency", base.latency, 1.0)
+        self.position_std = pick(position_std, "position_std", base.position_std, 1.0)
+        self.velocity_std = pick(velocity_std, "velocity_std", base.velocity_std, 10.0)
+        self.release_speed_std = pick(
+            release_speed_std, "release_speed_std", base.release_speed_std, 1.0
+        )
+        self.release_angle_std = pick(
+            release_angle_std, "release_angle_std", base.release_angle_std, 90.0
+        )
+        gravity, controller, max_catches, residual_scale, reward_weights = world
+        self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
+        self.controller_name = check_choice(controller, "controller", self._CONTROLLERS)
+        self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
+        self.residual_scale = check_scale(residual_scale, 1.0)
+        self.reward_weights = check_reward_weights(reward_weights, self._DEFAULT_WEIGHTS)
+        for key, value in (("width", width), ("height", height)):
+            check_integer(value, key, 16, 8192)
+        self.render_mode = render_mode
+        self.width, self.height = int(width), int(height)
+
+    def _rewards(
+        self, caught: int, dropped: bool, likeness: float, action_sq: float
+    ) -> tuple[float, dict[str, float]]:
+        """The reward and its info terms: ``caught`` catches and ``dropped`` this step, the
+        hand's ``likeness`` cost (m) and the action's squared norm ``action_sq``."""
+        w = self.reward_weights
+        r_catch = w["catch"] * caught
+        r_drop = -w["drop"] * float(dropped)
+        r_like = -w["likeness"] * likeness
+        r_act = -w["action"] * action_sq
+        reward = r_catch + r_drop + r_like + r_act
+        terms = {
+            "reward_catch": r_catch,
+            "reward_drop": r_drop,
+            "reward_likeness": r_like,
+            "reward_action": r_act,
+            "likeness": likeness,
+        }
+        return float(reward), terms
+
+    def _episode_end(self, dropped: bool, time: float) -> tuple[bool, bool]:
+        """``(terminated, truncated)`` after a step ending at ``time`` (s): terminated by a
+        drop, truncated after ``max_catches`` catches or at the time limit."""
+        terminated = bool(dropped)
+        truncated = not terminated and (
+            self._catches >= self.max_catches or time >= self._time_limit
+        )
+        self._done = terminated or truncated
+        return terminated, truncated
