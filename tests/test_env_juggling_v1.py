@@ -175,6 +175,20 @@ def test_human_likeness_against_a_brute_force_oracle():
         v1_likeness(9.81, "val")
 
 
+def test_human_likeness_is_the_tree_query_bit_for_bit():
+    # the sorted-sample search returns the k-d tree's number exactly, near the samples
+    # (small slabs) and far from them (a slab of most samples), in any query order
+    like = v1_likeness(9.81, "train")
+    rng = np.random.default_rng(1)
+    for phase, tree in like.trees.items():
+        for i in range(300):
+            base = tree.data[rng.integers(tree.n)]
+            p = base[:2] + rng.normal(0, (1e-3, 1e-2, 0.1, 1.0)[i % 4], 2)
+            v = base[2:] / 0.1 + rng.normal(0, (1e-2, 0.1, 1.0, 10.0)[i % 4], 2)
+            q = (float(p[0]), float(p[1]), 0.1 * float(v[0]), 0.1 * float(v[1]))
+            assert like.distance(phase, p, v) == float(tree.query(q)[0])
+
+
 def test_hand_respects_its_speed_and_acceleration_limits():
     world = JugglingV1World(TASK)
     world.reset((0.2, 1.0))

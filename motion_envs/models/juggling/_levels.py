@@ -266,10 +266,6 @@ class HumanLikeness:
         return d if math.isfinite(d) else math.inf
 
 
-#: slabs of more samples are left to the k-d tree
-_SLAB_MAX = 400
-
-
 class _SortedSamples:
     """Exact nearest-neighbour distance among ``points (M, 4)`` for one query at a time.
 
@@ -279,9 +275,9 @@ class _SortedSamples:
     1e-9 against rounding): two binary searches find it, and the distances to the
     samples in it are computed in the k-d tree's order (``((d0^2 + d1^2) + d2^2) +
     d3^2``, then the square root), so the result is the tree query's bit for bit. The
-    previous nearest sample only speeds the search up; any start gives the same value.
-    A slab of more than ``_SLAB_MAX`` samples (a query far from all of them) is left to
-    the phase's k-d tree.
+    previous nearest sample only speeds the search up; any start gives the same value
+    (a query far from all samples searches a slab of most of them, which costs less than
+    the tree query's call).
     """
 
     def __init__(self, tree: cKDTree) -> None:
@@ -289,13 +285,11 @@ class _SortedSamples:
         self.tree = tree
         self.axis = int(np.argmax(np.ptp(pts, axis=0)))
         order = np.argsort(pts[:, self.axis], kind="stable")
-        #: position in the sorted samples of the tree's sample i
-        self.rank = np.empty(len(order), dtype=np.int64)
-        self.rank[order] = np.arange(len(order))
         pts = pts[order]
-        self.points = np.ascontiguousarray(pts)
+        #: the sorted samples, one row per coordinate ``(4, M)``
+        self.columns = np.ascontiguousarray(pts.T)
         self.rows = pts.tolist()
-        self.key = np.ascontiguousarray(pts[:, self.axis])
+        self.key = self.columns[self.axis]
         self._last = 0
 
     def nearest(self, q: tuple[float, float, float, float]) -> float:
@@ -311,13 +305,11 @@ class _SortedSamples:
         key = self.key
         lo = int(key.searchsorted(qc - width, "left"))
         hi = int(key.searchsorted(qc + width, "right"))
-        if hi - lo > _SLAB_MAX:  # far from the samples: the tree prunes better
-            d, i = self.tree.query(q)
-            self._last = int(self.rank[i])
-            return float(d)
-        e = self.points[lo:hi] - q
+        e = self.columns[:, lo:hi] - np.array(q)[:, None]
         e *= e
-        s = e.sum(axis=1)  # four terms: added in order, as the tree does
+        s = e[0] + e[1]  # the four terms added in order, as the tree does
+        s += e[2]
+        s += e[3]
         j = int(s.argmin())
         self._last = lo + j
         return math.sqrt(float(s[j]))
