@@ -248,8 +248,11 @@ def clipped_pair(action: Any) -> tuple[float, float, bool]:
     """A 2-vector action as ``(ax, az, invalid)``: each entry clipped to ``[-1, 1]``, NaN
     counted as 0 (``invalid`` True when an entry was not finite); ValueError for another
     shape (the juggling environments' residual)."""
-    a = as_action(action, (2,))
-    ax, az = float(a[0]), float(a[1])
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.kind == "f":
+        ax, az = action.tolist()  # a float array (the usual action): its values as floats
+    else:
+        a = as_action(action, (2,))
+        ax, az = float(a[0]), float(a[1])
     invalid = not (math.isfinite(ax) and math.isfinite(az))
     if invalid:
         ax = 0.0 if math.isnan(ax) else ax

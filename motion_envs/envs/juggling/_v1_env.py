@@ -357,24 +357,16 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     def _observation(self, true: JugglingState) -> NDArray[np.float32]:
         c = self.controller
-        nx, nz = c.nominal_next().tolist()
-        ex, ez = c.plan_end.tolist()
-        obs = np.array(
-            (
-                *true.hand_pos.tolist(),
-                *true.hand_vel.tolist(),
-                float(true.held),
-                *_ONE_HOT[c.phase],
-                c.phase_time,
-                c.duration,
-                nx,
-                nz,
-                ex,
-                ez,
-                *(v for row in self._history for v in row),
-            ),
-            dtype=np.float32,
-        )
+        row = true.hand_pos.tolist()
+        row += true.hand_vel.tolist()
+        row.append(float(true.held))
+        row += _ONE_HOT[c.phase]
+        row += (c.phase_time, c.duration)
+        row += c.nominal_next().tolist()
+        row += c.plan_end.tolist()
+        for measurement in self._history:
+            row += measurement
+        obs = np.array(row, dtype=np.float32)
         np.minimum(obs, self._high, out=obs)
         return np.maximum(obs, self._low, out=obs)
 
