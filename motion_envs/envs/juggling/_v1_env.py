@@ -314,9 +314,9 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
         s = self.residual_scale
         true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
-        row = self.sensor.measure_values(
-            *true.ball_pos.tolist(), *true.ball_vel.tolist(), true.held
-        )
+        bx, bz = true.ball_pos.tolist()
+        ux, uz = true.ball_vel.tolist()
+        row = self.sensor.measure_values(bx, bz, ux, uz, true.held)
         if true.held:  # measured exactly: the true state is the measured one
             self._state = true
         else:
