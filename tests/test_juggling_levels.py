@@ -11,6 +11,7 @@ from baselines.agents.juggling_score import (
     JugglingEpisodes,
     catch_rate_difference,
     catch_rate_interval,
+    juggling_episodes,
 )
 from baselines.cli import main
 from baselines.juggling_bench import LevelsConfig, check_levels_config, run_levels
@@ -181,3 +182,37 @@ def test_all_has_a_levels_job_and_the_report_shows_it(tmp_path):
     page = build_report(tmp_path)
     assert "no report section" not in page
     assert "catch rate [95 % CI]" in page and "SIMULATED" in page
+
+
+def _same_episodes(a, b) -> bool:
+    return all(
+        np.array_equal(getattr(a, f), getattr(b, f))
+        for f in (
+            "seeds",
+            "tosses",
+            "catches",
+            "dropped",
+            "segment_phase",
+            "segment_episode",
+            "segment_deviation",
+        )
+    )
+
+
+def test_nominal_episodes_are_the_stepped_zero_action_episodes():
+    # juggling_episodes plays the zero action by nominal_episode (no observation, no
+    # likeness reward); a zero policy goes through step(): the same episodes bit for bit
+    kwargs = {"level": "hard", "controller": "fixed_point", "max_catches": 3}
+    fast = juggling_episodes(None, "MotionEnvs/Juggling-v1", kwargs, "val", 4)
+    stepped = juggling_episodes(
+        lambda obs: np.zeros((obs.shape[0], 2)), "MotionEnvs/Juggling-v1", kwargs, "val", 4
+    )
+    assert _same_episodes(fast, stepped)
+    assert fast.tosses.sum() > 0 and fast.segment_deviation.size > 0
+
+
+def test_latency_aware_juggler_at_zero_latency_is_the_juggler():
+    # run_levels reuses the juggler's episodes for it on easy (zero latency)
+    config = LevelsConfig(episodes=3, split="val")
+    aware = level_episodes("easy", config, "juggler_latency_aware")
+    assert _same_episodes(aware, level_episodes("easy", config, "juggler"))
