@@ -24,7 +24,11 @@ criterion the drop rate per toss (:mod:`baselines.agents.juggling_score`;
 rates of the agent and of the zero action (the analytic juggler) on the same seeds and
 the hand's deviation from the demonstrations (held-out ones on ``--split test``):
 ``catch_rate``, ``nominal_catch_rate``, ``deviation``, ``nominal_deviation``,
-``deviation_ratio``, per phase, and per episode in results.csv.
+``deviation_ratio``, per phase, and per episode in results.csv. ``Cascade-v0`` plays the
+same seed ranges (:mod:`baselines.agents.cascade_score`): catches before the first drop
+(``catches_median`` with its interval, ``nominal_catches_median``, the paired
+``catches_median_difference``), catch rates and their difference; its criterion is the
+drops per catch.
 """
 
 from __future__ import annotations
