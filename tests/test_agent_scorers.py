@@ -17,6 +17,7 @@ from baselines.agents.callbacks import (
     SaveBestCallback,
     ValidationCallback,
 )
+from baselines.agents.cascade_score import cascade_agent_episodes
 from baselines.agents.evaluate import split_criterion
 from baselines.agents.juggling_score import SPLIT_SEEDS, juggling_episodes
 from baselines.agents.reaching_score import episode_max_errors
@@ -39,19 +40,13 @@ def test_env_family_drops_the_version_only():
     assert env_family("MotionEnvs/Odd-v1-name") == "MotionEnvs/Odd-v1-name"
 
 
-#: Ids that ``motion-bench train/agent`` cannot score yet (their scorer is still to be
-#: written): they must be refused with the one-line error, not half-trained.
-NOT_YET_SCORED = {"MotionEnvs/Cascade-v0"}
-
-
 @pytest.mark.parametrize("env_id", MOTION_IDS)
 def test_every_registered_id_has_its_familys_scorer(env_id):
-    if env_id in NOT_YET_SCORED:
-        with pytest.raises(ValueError, match=f"no agent scorer for {env_id}"):
-            scorer_for(env_id)
-        return
     scorer = scorer_for(env_id)
-    if "Juggling" in env_id:
+    if "Cascade" in env_id:
+        assert scorer.episodes is cascade_agent_episodes
+        assert scorer.first_val_seed == SPLIT_SEEDS["val"]
+    elif "Juggling" in env_id:
         assert scorer.episodes is juggling_episodes
         assert scorer.first_val_seed == SPLIT_SEEDS["val"]
     else:
@@ -79,6 +74,9 @@ def test_validation_split_checks_follow_the_family():
     with pytest.raises(ConfigError, match="validation seeds"):
         check_validation_split("MotionEnvs/Juggling-v0", {}, SPLIT_SEEDS["val"] - 1, 2)
     check_validation_split("MotionEnvs/Juggling-v0", {}, SPLIT_SEEDS["val"] - 2, 2)
+    with pytest.raises(ConfigError, match="validation seeds"):
+        check_validation_split("MotionEnvs/Cascade-v0", {}, SPLIT_SEEDS["val"] - 3, 4)
+    check_validation_split("MotionEnvs/Cascade-v0", {}, SPLIT_SEEDS["val"] - 4, 4)
     with pytest.raises(ValueError, match="val_fraction must be > 0"):
         check_validation_split("MotionEnvs/OrientationReach-v1", {}, 0, 2)
     check_validation_split("MotionEnvs/OrientationReach-v1", {"val_fraction": 0.2}, 0, 2)

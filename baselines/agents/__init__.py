@@ -17,6 +17,8 @@
 * :mod:`~baselines.agents.reaching_score`: the papers' criterion on a data split;
 * :mod:`~baselines.agents.juggling_score`: Juggling-v0's seed-range splits, catch rate and
   the hand's deviation from the demonstrations;
+* :mod:`~baselines.agents.cascade_score`: Cascade-v0's catches before the first drop,
+  catch rate and drops per catch, agent and juggler on the same seeds;
 * :mod:`~baselines.agents.sweep`: ``motion-bench sweep`` on Ray Tune (a package: search
   space, trainable, driver, summary, plot, CLI).
 

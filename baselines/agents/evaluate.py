@@ -24,7 +24,11 @@ criterion the drop rate per toss (:mod:`baselines.agents.juggling_score`;
 rates of the agent and of the zero action (the analytic juggler) on the same seeds and
 the hand's deviation from the demonstrations (held-out ones on ``--split test``):
 ``catch_rate``, ``nominal_catch_rate``, ``deviation``, ``nominal_deviation``,
-``deviation_ratio``, per phase, and per episode in results.csv.
+``deviation_ratio``, per phase, and per episode in results.csv. ``Cascade-v0`` plays the
+same seed ranges (:mod:`baselines.agents.cascade_score`): catches before the first drop
+(``catches_median`` with its interval, ``nominal_catches_median``, the paired
+``catches_median_difference``), catch rates and their difference; its criterion is the
+drops per catch.
 """
 
 from __future__ import annotations
@@ -123,6 +127,8 @@ def write_results(results: Mapping[str, Any], out: Path) -> None:
     atomic_write_text(out / "results.csv", table.to_csv(index=False, float_format="%.17g"))
     if "agent_deviation" in results["episodes"]:
         plot_juggling_agent_vs_nominal(results, out / "agent_vs_nominal.png")
+    elif "catches_median" in results:
+        plot_cascade_agent_vs_nominal(results, out / "agent_vs_nominal.png")
     else:
         plot_agent_vs_nominal(results, out / "agent_vs_nominal.png")
 
@@ -199,11 +205,61 @@ def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> No
     save_figure(fig, path, dpi=120)
 
 
+def plot_cascade_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> None:
+    """Cascade: per-episode catches before the first drop, agent against nominal (one
+    point per episode), and both sorted by the nominal's, with the medians."""
+    from baselines.plots import new_figure
+
+    ep = results["episodes"]
+    a = np.asarray(ep["agent_catches"], dtype=float)
+    n = np.asarray(ep["nominal_catches"], dtype=float)
+    fig = new_figure(10, 4.2)
+    ax1, ax2 = fig.subplots(1, 2)
+    _agent_against_nominal(ax1, n, a, "catches before the first drop", results["algo"])
+    ax1.set_title(
+        f"{results['env_id']} [SIMULATED demonstrations], {results['split']}, per episode",
+        fontsize=9,
+    )
+    order = np.lexsort((a, n))
+    ax2.plot(n[order], "o-", ms=3, label=f"nominal (median {results['nominal_catches_median']:g})")
+    ax2.plot(a[order], "o-", ms=3, label=f"agent (median {results['catches_median']:g})")
+    ax2.axhline(results["max_catches"], color="k", lw=0.8, ls=":", label="max_catches")
+    ax2.set_xlabel("episode (sorted by the nominal's catches)")
+    ax2.set_ylabel("catches before the first drop")
+    ax2.legend(loc="upper left", fontsize=8)
+    save_figure(fig, path, dpi=120)
+
+
 def eval_folder_name(args: argparse.Namespace) -> str:
     """The default output folder of ``motion-bench agent``: ``eval-SPLIT`` for the best
     checkpoint, ``eval-SPLIT-final`` for the final one (never overwriting the other)."""
     suffix = "" if args.checkpoint == "best" else f"-{args.checkpoint}"
     return f"eval-{args.split}{suffix}"
+
+
+def _cascade_lines(results: Mapping[str, Any]) -> str:
+    """The printed summary of a cascade agent's results (catches before the first drop)."""
+    r = results
+    clo, chi = r["catches_median_ci"]
+    nlo, nhi = r["nominal_catches_median_ci"]
+    dlo, dhi = r["catches_median_difference_ci"]
+    rlo, rhi = r["catch_rate_difference_ci"]
+    return "\n".join(
+        [
+            f"{r['env_id']} {r['algo']} ({r['split']}, {r['n_episodes']} episodes, at most "
+            f"{r['max_catches']} catches): catches before the first drop, median agent "
+            f"{r['catches_median']:g} (95% CI {clo:g} to {chi:g}), nominal "
+            f"{r['nominal_catches_median']:g} ({nlo:g} to {nhi:g}); censored agent "
+            f"{r['censored']}, nominal {r['nominal_censored']}",
+            f"median catches agent - nominal = {r['catches_median_difference']:+g} (95% CI "
+            f"{dlo:+g} to {dhi:+g}, paired over the same seeds; higher is better): "
+            + ("the agent BEATS the juggler" if r["beats_nominal_median"] else "not better"),
+            f"catch rate agent {r['catch_rate']:.4f}, nominal {r['nominal_catch_rate']:.4f}; "
+            f"agent - nominal = {r['catch_rate_difference']:+.3f} (95% CI {rlo:+.3f} to "
+            f"{rhi:+.3f}); drops per catch agent {r['criterion']:.4f}, nominal "
+            f"{r['nominal_criterion']:.4f}",
+        ]
+    )
 
 
 def _cli(args: argparse.Namespace) -> int:
@@ -213,7 +269,9 @@ def _cli(args: argparse.Namespace) -> int:
     results = run(config)
     out = Path(args.out) if args.out else Path(args.run_dir) / eval_folder_name(args)
     write_results(results, out)
-    if "catch_rate" in results:
+    if "catches_median" in results:
+        print(_cascade_lines(results))
+    elif "catch_rate" in results:
         print(
             f"{results['env_id']} {results['algo']} ({results['split']}, {results['n_episodes']} "
             f"episodes): catch rate agent {results['catch_rate']:.4f} ({results['tosses']} "

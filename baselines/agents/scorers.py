@@ -14,7 +14,10 @@ branching on the id:
   (``val_fraction > 0``);
 * ``Juggling`` plays seeded runs: the drop rate per toss, catch rates and the hand's
   deviation from the demonstrations (:mod:`baselines.agents.juggling_score`); its splits
-  are seed ranges that the training seeds must stay below.
+  are seed ranges that the training seeds must stay below;
+* ``Cascade`` plays seeded runs on the same seed ranges: catches before the first drop
+  (median, the headline), catch rate and the drop hazard per catch (the criterion), agent
+  and juggler on the same seeds (:mod:`baselines.agents.cascade_score`).
 """
 
 from __future__ import annotations
@@ -27,6 +30,11 @@ from typing import Any
 import numpy as np
 
 from baselines import options
+from baselines.agents.cascade_score import (
+    CASCADE_ENV_IDS,
+    cascade_agent_episodes,
+    cascade_agent_results,
+)
 from baselines.agents.juggling_score import (
     JUGGLING_ENV_IDS,
     SPLIT_SEEDS,
@@ -247,3 +255,7 @@ for _family in (
     register_scorer(Scorer(_family, episode_max_errors, reaching_agent_results))
 for _family in sorted({env_family(i) for i in JUGGLING_ENV_IDS}):
     register_scorer(Scorer(_family, juggling_episodes, juggling_agent_results, SPLIT_SEEDS["val"]))
+for _family in sorted({env_family(i) for i in CASCADE_ENV_IDS}):
+    register_scorer(
+        Scorer(_family, cascade_agent_episodes, cascade_agent_results, SPLIT_SEEDS["val"])
+    )
