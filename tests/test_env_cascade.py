@@ -26,6 +26,7 @@ from motion_envs.datasets.juggling import (
     cascade_timing,
     draw_cascade_person,
     generate_cascade_demonstrations,
+    rules,
     style_timing,
 )
 from motion_envs.envs.juggling import CAPTURE_SPEED, HAND_SPEED_LIMIT, CascadeWorld
@@ -221,3 +222,27 @@ def test_pattern_cli_writes_results_json(tmp_path, capsys):
     }  # fmt: skip
     assert all(m["catches_median"] <= 1 for m in doc["levels"][0]["methods"].values())
     assert "catches median" in capsys.readouterr().out
+
+
+def test_release_fires_on_the_second_difference_of_the_hand_height():
+    """Each hand releases on the demonstrations' rule (``rules.hand_acceleration`` of its
+    height at the control samples, at rest before time 0), not on a velocity change."""
+    env = gym.make("MotionEnvs/Cascade-v0", level="easy", max_catches=12)
+    env.reset(seed=3)
+    world = env.unwrapped.world
+    heights = [world.state.hand_pos[:, 1].copy()] * 2  # at rest before time 0
+    thr, dt = world.task.toss_threshold, world.task.dt
+    fired = 0
+    while True:
+        _, _, term, trunc, _ = env.step(np.zeros(4, np.float32))
+        st = world.state
+        heights.append(st.hand_pos[:, 1].copy())
+        a_z = rules.hand_acceleration(heights[-1], heights[-2], heights[-3], dt)
+        for h in range(2):
+            if st.released[h] >= 0:
+                fired += 1
+                assert a_z[h] < -thr
+        if term or trunc:
+            break
+    env.close()
+    assert fired >= 10

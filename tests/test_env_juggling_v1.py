@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import motion_envs
-from motion_envs.datasets.juggling import JugglingTask
+from motion_envs.datasets.juggling import JugglingTask, rules
 from motion_envs.envs.juggling import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
@@ -414,3 +414,24 @@ def test_motion_bench_train_and_agent_smoke(tmp_path):
     doc = json.loads((out / "eval-test" / "results.json").read_text())
     assert doc["env_id"] == ENV_ID
     assert 0 <= doc["nominal_catch_rate"] <= 1 and 0 <= doc["catch_rate"] <= 1
+
+
+def test_release_fires_on_the_second_difference_of_the_hand_height():
+    """The world releases on the demonstrations' rule (``rules.hand_acceleration`` of the
+    hand's height at the control samples, at rest before time 0), not on a velocity
+    change over the period (which fires half a sample earlier)."""
+    env = JugglingV1Env(level="easy", max_catches=5)
+    env.reset(seed=4)
+    world = env.world
+    heights = [float(world.state.hand_pos[1])] * 2
+    fired = 0
+    while True:
+        _, _, term, trunc, _ = env.step(np.zeros(2, np.float32))
+        heights.append(float(world.state.hand_pos[1]))
+        if world.state.released:
+            fired += 1
+            a_z = rules.hand_acceleration(heights[-1], heights[-2], heights[-3], TASK.dt)
+            assert a_z < -TASK.toss_threshold
+        if term or trunc:
+            break
+    assert fired >= 5

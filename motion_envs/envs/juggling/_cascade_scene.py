@@ -9,8 +9,11 @@ servo of ``SERVO_OMEGA``, the command rate limited), and applies the grasp rule 
 * a hand holds at most one ball; a held ball follows the hand origin with its contacts
   off (in the fingers);
 * a held ball is released at the end of a control period when its hand's release is
-  armed and the hand's vertical acceleration over the period is below
-  ``-toss_threshold``; it leaves with the hand's velocity scattered in speed and angle
+  armed and the hand's vertical acceleration is below ``-toss_threshold``, measured as
+  the demonstrations and Juggling-v1 measure it (the second backward difference of the
+  hand's height at the control samples,
+  :func:`~motion_envs.datasets.juggling.rules.hand_acceleration`; the hands rest before
+  time 0); it leaves with the hand's velocity scattered in speed and angle
   (:func:`~motion_envs.models.juggling.perturb_release`);
 * a flying ball that has left its thrower (farther than two radii from it) is captured by
   an EMPTY hand when it falls, touches that hand's palm and is slower than
@@ -30,7 +33,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike
 
-from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, JugglingTask
+from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, JugglingTask, rules
 from motion_envs.envs.juggling._v1_scene import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
@@ -104,6 +107,8 @@ class CascadeWorld(_HandsWorld):
         self._thrower = [-1] * CASCADE_BALLS
         self._left = [True] * CASCADE_BALLS
         self._dropped = [False] * CASCADE_BALLS
+        #: each hand's height one control sample before the current one (the release rule's)
+        self._z_before = [0.0] * CASCADE_HANDS
         self._k = 0
         self.state: CascadeState | None = None
 
@@ -152,6 +157,7 @@ class CascadeWorld(_HandsWorld):
         self._thrower = [-1, -1, 1]
         self._left = [False, False, True]
         self._dropped = [False] * CASCADE_BALLS
+        self._z_before = [float(z) for _, z in hands]  # at rest before time 0
         self._k = 0
         for i in range(CASCADE_BALLS):
             self._set_contacts(i, self._holder[i] < 0)
@@ -189,7 +195,7 @@ class CascadeWorld(_HandsWorld):
             servo.append(plan)
         m, d = self.model, self.data
         qpos, qvel, ctrl = d.qpos, d.qvel, d.ctrl
-        vz_before = [float(qvel[1]), float(qvel[3])]
+        z_prev, z_prev2 = [float(qpos[1]), float(qpos[3])], self._z_before
         h_step = m.opt.timestep
         radius, floor_z = task.ball_radius, task.floor_z
         holder, left, dropped = self._holder, self._left, self._dropped
@@ -248,12 +254,13 @@ class CascadeWorld(_HandsWorld):
         qvel[4:] = v[4:]
         self._k += 1
         d.time = self._k * dt
+        self._z_before = z_prev
         released = [-1, -1]
         for h in range(CASCADE_HANDS):
             if h not in holder or caught[h] >= 0 or not armed[h]:
                 continue
-            a_z = (float(qvel[2 * h + 1]) - vz_before[h]) / dt
-            if a_z < -task.toss_threshold:
+            a_z = rules.hand_acceleration(float(qpos[2 * h + 1]), z_prev[h], z_prev2[h], dt)
+            if rules.release_fires(True, a_z, task.toss_threshold):
                 i = holder.index(h)
                 v = perturb_release(
                     qvel[2 * h : 2 * h + 2].copy(),
