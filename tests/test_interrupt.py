@@ -21,6 +21,13 @@ ROOT = Path(__file__).resolve().parents[1]
 MOMENTS = (3.0, 12.0, 25.0)
 
 
+def _sigint_default() -> None:
+    """In the child before exec: SIGINT's default disposition. A shell's background job
+    (``cmd &`` without job control) inherits SIGINT ignored, and Python keeps an
+    inherited SIG_IGN, so a test started that way could never interrupt the job."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("delay", MOMENTS)
 def test_sigint_exits_130_within_seconds(tmp_path, delay):
     argv = [sys.executable, "-m", "baselines.cli", "position", "--no-progress", "--no-peers"]
@@ -28,6 +35,7 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
     proc = subprocess.Popen(
         [*argv, "--out", str(tmp_path / "out")],
         cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        preexec_fn=_sigint_default,
     )  # fmt: skip
     seen: dict[str, float] = {}
     lines: list[str] = []

@@ -39,7 +39,7 @@ from motion_envs.envs.juggling._v1_scene import (
     HAND_ACCEL_LIMIT,
     HAND_MASS,
     SUBSTEPS,
-    _HandsWorld,
+    HandsWorld,
     servo_acceleration,
     servo_plan,
 )
@@ -76,7 +76,7 @@ def load_cascade_model(task: JugglingTask) -> mujoco.MjModel:
     return model
 
 
-class CascadeWorld(_HandsWorld):
+class CascadeWorld(HandsWorld):
     """The cascade task on MuJoCo (see the module docstring).
 
     ``reset(hand_pos, flying=..., rng=...)`` and ``step(targets, armed)`` return the TRUE

@@ -203,7 +203,7 @@ class JugglingPhysics:
         self.model.geom_conaffinity[self.ball_geom] = int(on)
 
 
-class _HandsWorld:
+class HandsWorld:
     """The task constants and the release noise of a world of actuated hands
     (:class:`JugglingV1World`, :class:`~motion_envs.envs.juggling.CascadeWorld`)."""
 
@@ -216,7 +216,7 @@ class _HandsWorld:
         self._rng: np.random.Generator | None = None
 
 
-class JugglingV1World(_HandsWorld):
+class JugglingV1World(HandsWorld):
     """The task on top of :class:`JugglingPhysics` (see the module docstring).
 
     ``reset(hand_pos, rng=...)`` and ``step(hand_target, release_armed)`` return the TRUE
