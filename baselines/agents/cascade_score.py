@@ -34,7 +34,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.agents.juggling_score import DEFAULT_EPISODES, SPLIT_SEEDS
+from baselines.agents.juggling_score import (
+    DEFAULT_EPISODES,
+    SPLIT_SEEDS,
+    catch_rate_difference,
+    catch_rate_interval,
+    pooled_catch_rate,
+)
 
 __all__ = [
     "CASCADE_ENV_IDS",
@@ -79,7 +85,7 @@ class CascadeAgentEpisodes:
     @property
     def catch_rate(self) -> float:
         """Catches per toss over all episodes."""
-        return _pooled_rate(self, np.arange(self.seeds.size))
+        return pooled_catch_rate(self, np.arange(self.seeds.size))
 
     @property
     def drop_hazard(self) -> float:
@@ -97,10 +103,6 @@ class CascadeAgentEpisodes:
         with np.errstate(divide="ignore", invalid="ignore"):
             h = self.dropped.astype(np.float64) / self.catches.astype(np.float64)
         return np.where(self.dropped, h, 0.0)
-
-
-def _pooled_rate(eps: CascadeAgentEpisodes, rows: NDArray[np.int64]) -> float:
-    return float(eps.catches[rows].sum() / max(int(eps.tosses[rows].sum()), 1))
 
 
 def _hazard(eps: CascadeAgentEpisodes, rows: NDArray[np.int64]) -> float:
@@ -188,21 +190,6 @@ def catches_median_difference(
     )
 
 
-def catch_rate_difference(
-    a: CascadeAgentEpisodes, b: CascadeAgentEpisodes, seed: int = 0
-) -> tuple[float, float, float]:
-    """``(difference, low, high)``: ``a``'s catch rate minus ``b``'s on the same seeds and
-    its 95 % paired bootstrap interval."""
-    from baselines.stats import group_bootstrap
-
-    _check_same_seeds(a, b)
-    return group_bootstrap(
-        lambda rows: _pooled_rate(a, rows) - _pooled_rate(b, rows),
-        np.arange(a.seeds.size),
-        seed=seed,
-    )
-
-
 def _hazard_comparison(agent: CascadeAgentEpisodes, nominal: CascadeAgentEpisodes) -> Any:
     """The agent's drop hazard over the juggler's (lower is better), episodes resampled;
     wins: episodes where the agent's drops per catch are below the juggler's."""
@@ -230,7 +217,7 @@ def _summary(eps: CascadeAgentEpisodes) -> dict[str, Any]:
     idx = np.arange(eps.seeds.size)
     v = eps.catches.astype(np.float64)
     c, clo, chi = group_bootstrap(lambda rows: float(np.median(v[rows])), idx)
-    r, rlo, rhi = group_bootstrap(lambda rows: _pooled_rate(eps, rows), idx)
+    r, rlo, rhi = catch_rate_interval(eps)
     return {
         "catches_median": c,
         "catches_median_ci": [clo, chi],

@@ -47,7 +47,7 @@ import functools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -60,6 +60,7 @@ __all__ = [
     "N_POINTS",
     "SPLIT_SEEDS",
     "JugglingEpisodes",
+    "TossCounts",
     "catch_rate_difference",
     "catch_rate_interval",
     "demonstration_paths",
@@ -67,6 +68,7 @@ __all__ = [
     "deviation_interval",
     "is_juggling",
     "juggling_episodes",
+    "pooled_catch_rate",
     "segment_deviations",
 ]
 
@@ -319,22 +321,35 @@ def _episodes(
     )
 
 
-def _pooled_rate(eps: JugglingEpisodes, rows: NDArray[np.int64]) -> float:
+class TossCounts(Protocol):
+    """Per-episode seeds, catches and tosses: what a pooled catch rate needs (one ball's
+    :class:`JugglingEpisodes`, the cascade's episodes)."""
+
+    @property
+    def seeds(self) -> NDArray[np.int64]: ...
+    @property
+    def catches(self) -> NDArray[np.int64]: ...
+    @property
+    def tosses(self) -> NDArray[np.int64]: ...
+
+
+def pooled_catch_rate(eps: TossCounts, rows: NDArray[np.int64]) -> float:
+    """Catches per toss over the episodes ``rows`` (pooled)."""
     return float(eps.catches[rows].sum() / max(int(eps.tosses[rows].sum()), 1))
 
 
-def catch_rate_interval(eps: JugglingEpisodes, seed: int = 0) -> tuple[float, float, float]:
+def catch_rate_interval(eps: TossCounts, seed: int = 0) -> tuple[float, float, float]:
     """``(catch_rate, low, high)``: the catch rate (catches per toss, pooled) and its 95 %
     bootstrap interval resampling episodes (:func:`baselines.stats.group_bootstrap`)."""
     from baselines.stats import group_bootstrap
 
     return group_bootstrap(
-        lambda rows: _pooled_rate(eps, rows), np.arange(eps.seeds.size), seed=seed
+        lambda rows: pooled_catch_rate(eps, rows), np.arange(eps.seeds.size), seed=seed
     )
 
 
 def catch_rate_difference(
-    a: JugglingEpisodes, b: JugglingEpisodes, seed: int = 0
+    a: TossCounts, b: TossCounts, seed: int = 0
 ) -> tuple[float, float, float]:
     """``(difference, low, high)``: ``a``'s catch rate minus ``b``'s on the same seeds and
     its 95 % paired bootstrap interval (an episode of both is resampled together)."""
@@ -343,7 +358,7 @@ def catch_rate_difference(
     if not np.array_equal(a.seeds, b.seeds):
         raise ValueError("the two policies were played on different seeds")
     return group_bootstrap(
-        lambda rows: _pooled_rate(a, rows) - _pooled_rate(b, rows),
+        lambda rows: pooled_catch_rate(a, rows) - pooled_catch_rate(b, rows),
         np.arange(a.seeds.size),
         seed=seed,
     )
