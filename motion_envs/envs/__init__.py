@@ -23,7 +23,11 @@ The two reaching environments come with a native vector environment
 (:mod:`motion_envs.envs.vector`), which ``gym.make_vec(id, num_envs=N)`` builds by
 default: one compiled loop over the sub-environments (numpy without numba), bit-identical
 to ``SyncVectorEnv``, with
-``autoreset_mode=`` ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``. Processes that
+``autoreset_mode=`` ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``. Juggling-v1's
+(:class:`~.juggling.JugglingV1VectorEnv`) batches the episodes' control periods and calls
+MuJoCo's ``mj_step`` from one compiled loop; Cascade-v0's
+(:class:`~.juggling.CascadeVectorEnv`) keeps the same bookkeeping over single
+environments; both are bit-identical to ``SyncVectorEnv``. Processes that
 never imported the package (SB3's ``SubprocVecEnv`` workers, ``python -c``) use the
 ``motion_envs:MotionEnvs/...`` form of an id.
 """
@@ -79,9 +83,11 @@ _SPECS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Juggling-v1": {
         "entry_point": "motion_envs.envs.juggling:JugglingV1Env",
+        "vector_entry_point": "motion_envs.envs.juggling:JugglingV1VectorEnv",
     },
     "MotionEnvs/Cascade-v0": {
         "entry_point": "motion_envs.envs.juggling:CascadeEnv",
+        "vector_entry_point": "motion_envs.envs.juggling:CascadeVectorEnv",
     },
 }
 

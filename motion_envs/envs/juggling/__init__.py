@@ -7,10 +7,14 @@ the MuJoCo world, compiled from ``juggling.xml`` beside them); ``_v1_env``
 ``_v1_scene`` (:class:`JugglingV1World`: contacts, an actuated hand, compiled from
 ``juggling_v1.xml``); ``_cascade_env`` (:class:`CascadeEnv`, ``MotionEnvs/Cascade-v0``,
 entry point ``motion_envs.envs.juggling:CascadeEnv``) and ``_cascade_scene``
-(:class:`CascadeWorld`: two hands, three balls, compiled from ``cascade.xml``). The default fit the
-environment acts on (``load_juggler``, ``juggler_demonstrations``, ``TRACKING_NOISE``,
-``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in :mod:`motion_envs.models.juggling` and is
-re-exported here for code that imported it from this module's former place.
+(:class:`CascadeWorld`: two hands, three balls, compiled from ``cascade.xml``); the native
+vector environments ``_vector`` (:class:`JugglingVectorEnv`, the episode bookkeeping),
+``_v1_vector`` (:class:`JugglingV1VectorEnv`, batched, with ``_compiled``: the world's
+control period compiled by numba) and ``_cascade_vector`` (:class:`CascadeVectorEnv`).
+The default fit the environment acts on (``load_juggler``, ``juggler_demonstrations``,
+``TRACKING_NOISE``, ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in
+:mod:`motion_envs.models.juggling` and is re-exported here for code that imported it
+from this module's former place.
 """
 
 from motion_envs.envs.juggling._cascade_env import (
@@ -25,6 +29,7 @@ from motion_envs.envs.juggling._cascade_scene import (
     CascadeWorld,
     load_cascade_model,
 )
+from motion_envs.envs.juggling._cascade_vector import CascadeVectorEnv
 from motion_envs.envs.juggling._env import (
     CYCLE_TIME_LIMIT,
     DEFAULT_JUGGLING_REWARD_WEIGHTS,
@@ -58,6 +63,8 @@ from motion_envs.envs.juggling._v1_scene import (
     JugglingV1World,
     load_juggling_v1_model,
 )
+from motion_envs.envs.juggling._v1_vector import JugglingV1VectorEnv
+from motion_envs.envs.juggling._vector import JugglingVectorEnv
 from motion_envs.models.juggling import (
     FIT_SEED,
     FIT_TEST_FRACTION,
@@ -96,12 +103,15 @@ __all__ = [
     "V1_OBS_DIM",
     "V1_SCENE_XML",
     "CascadeEnv",
+    "CascadeVectorEnv",
     "CascadeWorld",
     "JugglingEnv",
     "JugglingPhysics",
     "JugglingScene",
     "JugglingV1Env",
+    "JugglingV1VectorEnv",
     "JugglingV1World",
+    "JugglingVectorEnv",
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",

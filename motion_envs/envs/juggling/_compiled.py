@@ -1,0 +1,262 @@
+r"""The juggling worlds' control period for many episodes at once, compiled by numba.
+
+The native vector environments (:mod:`motion_envs.envs.juggling._vector`) step ``N``
+MuJoCo worlds, each its own ``MjModel``/``MjData`` as in ``N`` single environments. Per
+control period a single world runs Python around five ``mj_step`` calls: the servo
+(:func:`~motion_envs.envs.juggling.servo_plan`,
+:func:`~motion_envs.envs.juggling.servo_acceleration`), the physics and the grasp rule
+(:class:`~motion_envs.envs.juggling.JugglingV1World`). Here the same arithmetic runs
+compiled, in one loop over the worlds, and calls MuJoCo's own ``mj_step`` from it (the C
+function of the ``libmujoco`` the ``mujoco`` package loads, through ``ctypes``): the
+physics is MuJoCo's, call for call, so the worlds are bit-identical to the single
+environments' (tested). The contacts the grasp rule asks about come from the scene's
+``contact`` sensors (``ball_palm``, ``ball_floor``: MuJoCo's count of those contacts,
+computed in the same ``mj_step``).
+
+Every expression is written as the scalar code writes it, in the same order (IEEE
+``+ - * / sqrt`` are correctly rounded in both), and ``math.hypot`` is
+:func:`py_hypot`: CPython's ``math.hypot`` (since 3.10 an exactly rounded
+``sqrt(x^2 + y^2)`` from an error-free square and compensated sum; the C library's
+``hypot``, which numba's ``math.hypot`` calls, differs from it in about 0.3 % of
+arguments).
+
+Importing this module imports numba (the ``fast`` extra).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+from numba import njit
+
+from motion_envs.envs.juggling._v1_scene import (
+    CAPTURE_SPEED,
+    HAND_ACCEL_LIMIT,
+    HAND_MASS,
+    HAND_SPEED_LIMIT,
+    SERVO_OMEGA,
+    SUBSTEPS,
+)
+
+__all__ = ["hypot_rows", "mj_step_c", "py_hypot", "v1_periods"]
+
+_DBL_MIN = 2.2250738585072014e-308
+_SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
+_KP, _KD = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
+_AMAX2 = HAND_ACCEL_LIMIT**2
+
+
+def _libmujoco() -> ctypes.CDLL:
+    """The ``libmujoco`` shared library of the installed ``mujoco`` package (the one its
+    Python bindings use: loading it again returns the same handle)."""
+    package = Path(str(resources.files(mujoco)))
+    found = sorted(package.glob("libmujoco.so*")) + sorted(package.glob("libmujoco*.dylib"))
+    found += sorted(package.glob("mujoco*.dll"))
+    if not found:
+        raise ImportError(f"no libmujoco shared library in {package}")
+    return ctypes.CDLL(str(found[0]))
+
+
+#: ``mj_step(const mjModel*, mjData*)`` as a ctypes function of two addresses
+#: (``MjModel._address``, ``MjData._address``), callable from compiled code.
+mj_step_c: Any = _libmujoco().mj_step
+mj_step_c.argtypes = [ctypes.c_uint64, ctypes.c_uint64]
+mj_step_c.restype = None
+
+
+@njit(cache=True)
+def _two_product(a: float, b: float) -> tuple[float, float]:
+    """``a b = hi + lo`` exactly (Dekker's product with Veltkamp's split)."""
+    hi = a * b
+    c = _SPLIT * a
+    ah = c - (c - a)
+    al = a - ah
+    c = _SPLIT * b
+    bh = c - (c - b)
+    bl = b - bh
+    lo = ((ah * bh - hi) + ah * bl + al * bh) + al * bl
+    return hi, lo
+
+
+@njit(cache=True)
+def _norm(x: float, y: float, largest: float) -> float:
+    """CPython's ``vector_norm`` of the two magnitudes ``x, y <= largest`` (finite,
+    ``largest`` > 0 and normal)."""
+    _, e = math.frexp(largest)
+    scale = math.ldexp(1.0, -e)
+    csum, frac1, frac2 = 1.0, 0.0, 0.0
+    for v in (x, y):
+        v = v * scale  # lossless
+        hi, lo = _two_product(v, v)  # lossless square
+        s = csum + hi  # lossless sum (|csum| >= |hi|)
+        frac2 += (csum - s) + hi
+        csum = s
+        frac1 += lo
+    h = math.sqrt(csum - 1.0 + (frac1 + frac2))
+    hi, lo = _two_product(-h, h)
+    s = csum + hi
+    frac2 += (csum - s) + hi
+    csum = s
+    frac1 += lo
+    v = csum - 1.0 + (frac1 + frac2)
+    h += v / (2.0 * h)  # differential correction
+    return h / scale
+
+
+@njit(cache=True)
+def py_hypot(x: float, y: float) -> float:
+    """``math.hypot(x, y)`` as CPython (>= 3.10) computes it, bit for bit (tested on
+    random and special arguments)."""
+    x, y = abs(x), abs(y)
+    if math.isinf(x) or math.isinf(y):
+        return math.inf
+    if math.isnan(x) or math.isnan(y):
+        return math.nan
+    largest = x if x > y else y
+    if largest == 0.0:
+        return largest
+    _, e = math.frexp(largest)
+    if e < -1023:  # deep subnormal: scale to normals first, as CPython does
+        return _DBL_MIN * _norm(x / _DBL_MIN, y / _DBL_MIN, largest / _DBL_MIN)
+    return _norm(x, y, largest)
+
+
+@njit(cache=True)
+def hypot_rows(x: Any, y: Any) -> Any:
+    """:func:`py_hypot` of each pair ``x[i], y[i]`` (1-d arrays)."""
+    out = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        out[i] = py_hypot(x[i], y[i])
+    return out
+
+
+@njit  # not cached: it calls a ctypes function, which numba cannot cache
+def v1_periods(
+    envs: Any,
+    model_addr: Any,
+    data_addr: Any,
+    qpos: Any,
+    qvel: Any,
+    ctrl: Any,
+    sensors: Any,
+    contype: Any,
+    conaffinity: Any,
+    ball_geom: int,
+    target: Any,
+    armed: Any,
+    ref: Any,
+    vref: Any,
+    z_before: Any,
+    flags: Any,
+    k: Any,
+    constants: Any,
+    hand: Any,
+    hand_vel: Any,
+    ball: Any,
+    ball_vel: Any,
+    events: Any,
+) -> None:
+    """One control period of Juggling-v1's world for each world ``i`` in ``envs``: what
+    :meth:`~motion_envs.envs.juggling.JugglingV1World.advance` does, up to the release's
+    noise (drawn in Python: ``events[i, 1]`` says the release fires).
+
+    ``qpos, qvel, ctrl, sensors, contype, conaffinity``: per world, the ``MjData``'s and
+    ``MjModel``'s arrays (numba typed lists of views); ``target (N, 2)`` the commanded
+    hand targets (the residual added); ``armed (N,)``; the world's state ``ref, vref (N,
+    2)``, ``z_before (N,)``, ``flags (N, 3)`` (held, left the palm, dropped) and ``k (N,)``
+    (control periods since the reset), updated in place; ``constants`` = ``(dt, h,
+    ball_radius, floor_z, palm_top, toss_threshold)``. Out: the true ``hand``,
+    ``hand_vel``, ``ball``, ``ball_vel`` and ``events[i] = (caught, release fires)``.
+    """
+    dt, h, radius, floor_z, palm_top, threshold = (
+        constants[0],
+        constants[1],
+        constants[2],
+        constants[3],
+        constants[4],
+        constants[5],
+    )
+    step_max = HAND_SPEED_LIMIT * dt
+    for i in envs:
+        # servo_plan
+        sx, sz = ref[i, 0], ref[i, 1]
+        dx, dz = target[i, 0] - sx, target[i, 1] - sz
+        dist = py_hypot(dx, dz)
+        if dist > step_max:
+            dx, dz = dx * step_max / dist, dz * step_max / dist
+        vrx, vrz = dx / dt, dz / dt
+        arx, arz = (vrx - vref[i, 0]) / dt, (vrz - vref[i, 1]) / dt
+        ref[i, 0], ref[i, 1] = sx + dx, sz + dz
+        vref[i, 0], vref[i, 1] = vrx, vrz
+        qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
+        hx, hz, bx, bz = qp[0], qp[1], qp[2], qp[3]
+        vx, vz, ux, uz = qv[0], qv[1], qv[2], qv[3]
+        z_prev, z_prev2 = hz, z_before[i]
+        held, left, dropped = flags[i, 0], flags[i, 1], flags[i, 2]
+        caught = False
+        for j in range(1, SUBSTEPS + 1):
+            f = j / SUBSTEPS
+            # servo_acceleration
+            ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
+            az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
+            n2 = ax * ax + az * az
+            if n2 > _AMAX2:
+                s = math.sqrt(_AMAX2 / n2)
+                ax, az = ax * s, az * s
+            nvx, nvz = vx + ax * h, vz + az * h
+            sp = py_hypot(nvx, nvz)
+            if sp > HAND_SPEED_LIMIT:
+                nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
+                ax, az = (nvx - vx) / h, (nvz - vz) / h
+            u[0] = HAND_MASS * ax
+            u[1] = HAND_MASS * az
+            mj_step_c(model_addr[i], data_addr[i])
+            if held:
+                hx, hz = qp[0], qp[1]
+                vx, vz = qv[0], qv[1]
+                continue
+            hx, hz, bx, bz = qp[0], qp[1], qp[2], qp[3]
+            vx, vz, ux, uz = qv[0], qv[1], qv[2], qv[3]
+            if not left and py_hypot(bx - hx, bz - hz) > 2 * radius:
+                left = True
+            if not dropped and (bz - radius <= floor_z or sens[1] > 0.0):
+                dropped = True
+            if (
+                not dropped
+                and left
+                and bz >= hz + palm_top
+                and uz < 0.0
+                and py_hypot(ux - vx, uz - vz) < CAPTURE_SPEED
+                and sens[0] > 0.0
+            ):
+                held = caught = True
+                contype[i][ball_geom] = 0
+                conaffinity[i][ball_geom] = 0
+                qp[2] = hx
+                qp[3] = hz
+                qv[2] = vx
+                qv[3] = vz
+        if held:
+            bx, bz, ux, uz = hx, hz, vx, vz
+            qp[2] = hx
+            qp[3] = hz
+            qv[2] = vx
+            qv[3] = vz
+        flags[i, 0], flags[i, 1], flags[i, 2] = held, left, dropped
+        k[i] += 1
+        z_before[i] = z_prev
+        fires = False
+        if held and not caught and armed[i]:
+            a_z = (hz - 2.0 * z_prev + z_prev2) / (dt * dt)
+            fires = a_z < -threshold
+        hand[i, 0], hand[i, 1] = hx, hz
+        hand_vel[i, 0], hand_vel[i, 1] = vx, vz
+        ball[i, 0], ball[i, 1] = bx, bz
+        ball_vel[i, 0], ball_vel[i, 1] = ux, uz
+        events[i, 0], events[i, 1] = caught, fires

@@ -1,0 +1,453 @@
+"""Juggling-v1's native vector environment: the ``N`` episodes' control periods batched.
+
+:class:`JugglingV1VectorEnv` is ``gym.make_vec("MotionEnvs/Juggling-v1", N)``. Each
+sub-environment is bit-identical to ``JugglingV1Env`` seeded with ``seed + i`` (as under
+``SyncVectorEnv``; tested for the three autoreset modes). With numba (the ``fast``
+extra, ``backend="numba"``, the default when installed) a step runs:
+
+* the controller's plan in arrays: between the plan's events (a release, a catch, a
+  reached end point, an eq. 10 correction, all decided as the controller decides them)
+  a command is an index into the plan on the control grid; at an event the
+  sub-environment's own controller runs in Python and its new plan is copied back
+  (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
+  Python);
+* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
+  (:func:`~motion_envs.envs.juggling._compiled.v1_periods`); the release's noise in
+  Python, from the world's generator;
+* the sensor's delay line, the human-likeness (the k-d tree of each phase queried once
+  for all sub-environments in it), the reward and the observation as array operations.
+
+``backend="python"`` runs each single environment's ``step`` (no numba needed).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES
+from motion_envs.envs._kernels import numba_available
+from motion_envs.envs.juggling._v1_env import HISTORY, JugglingV1Env
+from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
+from motion_envs.models.juggling import LIKENESS_TAU, JugglingController, perturb_release
+
+__all__ = ["JugglingV1VectorEnv"]
+
+_TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
+_PHASE_NAMES = np.array(PHASES, dtype=object)
+_FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
+_BACKENDS = ("auto", "numba", "python")
+
+
+class JugglingV1VectorEnv(JugglingVectorEnv):
+    """``num_envs`` Juggling-v1 episodes stepped together (see the module docstring and
+    :mod:`motion_envs.envs.juggling._vector`).
+
+    Parameters
+    ----------
+    num_envs : int
+        Number of sub-environments.
+    autoreset_mode : AutoresetMode or str
+        ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+    backend : str
+        ``"auto"`` (numba when installed), ``"numba"`` or ``"python"``.
+    **kwargs
+        :class:`~motion_envs.envs.juggling.JugglingV1Env`'s keyword arguments.
+    """
+
+    single_class = JugglingV1Env
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        autoreset_mode: Any = "NextStep",
+        backend: str = "auto",
+        **kwargs: Any,
+    ) -> None:
+        if backend not in _BACKENDS:
+            raise ValueError(f"backend must be one of {list(_BACKENDS)}; got {backend!r}")
+        if backend == "numba" and not numba_available():
+            raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
+        super().__init__(num_envs, autoreset_mode, **kwargs)
+        self.backend = "python" if backend == "python" or not numba_available() else "numba"
+        if self.backend == "numba":
+            self._setup_arrays()
+
+    # -- state ----------------------------------------------------------------------------
+    def _setup_arrays(self) -> None:
+        from numba.typed import List
+
+        from motion_envs.envs.juggling import _compiled
+
+        self._compiled = _compiled
+        n, first = self.num_envs, self.envs[0]
+        worlds = [env.world for env in self.envs]
+        self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
+        self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
+        self._datas = [w.data for w in worlds]
+        self._qpos = List([w.data.qpos for w in worlds])
+        self._qvel = List([w.data.qvel for w in worlds])
+        self._ctrl = List([w.data.ctrl for w in worlds])
+        self._sensors = List([w.data.sensordata for w in worlds])
+        self._contype = List([w.model.geom_contype for w in worlds])
+        self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
+        task, phys = first.task, first.world.physics
+        self._ball_geom = int(phys.ball_geom)
+        self._constants = np.array(
+            [
+                task.dt,
+                first.model.opt.timestep,
+                task.ball_radius,
+                task.floor_z,
+                phys.palm_top,
+                task.toss_threshold,
+            ]
+        )
+        self._dt, self._gravity = task.dt, task.gravity
+        # the world
+        self._ref = np.zeros((n, 2))
+        self._vref = np.zeros((n, 2))
+        self._z_before = np.zeros(n)
+        self._flags = np.zeros((n, 3), dtype=np.bool_)  # held, left, dropped
+        self._k = np.zeros(n, dtype=np.int64)
+        self._hand = np.zeros((n, 2))
+        self._hand_vel = np.zeros((n, 2))
+        self._ball = np.zeros((n, 2))
+        self._ball_vel = np.zeros((n, 2))
+        self._events = np.zeros((n, 2), dtype=np.bool_)
+        # what the controller was last shown (the measured state)
+        self._m_time = np.zeros(n)
+        self._m_ball = np.zeros((n, 2))
+        self._m_ball_vel = np.zeros((n, 2))
+        self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
+        # the sensor's delay line (a ring shared by all sub-environments: a reset fills
+        # every slot of its own) and the observation's measurement history
+        d = first.delay_steps
+        self._ring = np.zeros((d + 1, n, 5))
+        self._slot = 0
+        self._history = np.zeros((n, HISTORY, 4))
+        self._noisy = first.position_std > 0 or first.velocity_std > 0
+        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        # the controller's plan
+        self._fast = first.controller_name in _FAST_CONTROLLERS
+        self._latency = first.delay_steps * task.dt
+        self._ahead = first.controller_name == "juggler_latency_aware" and self._latency > 0
+        self._phase = np.zeros(n, dtype=np.int64)
+        self._pk = np.zeros(n, dtype=np.int64)
+        self._end_k = np.zeros(n, dtype=np.int64)
+        self._grid = np.zeros((n, 1, 2))
+        self._glen = np.ones(n, dtype=np.int64)
+        self._last = np.zeros((n, 2, 2))
+        self._t_start = np.zeros(n)
+        self._duration = np.zeros(n)
+        self._end = np.zeros((n, 2))
+        self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
+        self._likeness = first.likeness
+        weights = first.reward_weights
+        self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
+        self._low, self._high = first._low, first._high
+
+    def _episode(self, i: int) -> JugglingController:
+        episode = self.envs[i].controller.juggler.episode
+        assert episode is not None
+        return episode  # type: ignore[no-any-return]
+
+    def _after_reset(self, i: int) -> None:
+        if self.backend != "numba":
+            return
+        env = self.envs[i]
+        w = env.world
+        self._ref[i], self._vref[i] = w._ref, w._vref
+        self._z_before[i] = w._z_before
+        self._flags[i] = (w._held, w._left, w._dropped)
+        self._k[i] = w._k
+        state = env._state
+        self._hand[i] = state.hand_pos
+        self._hand_vel[i] = state.hand_vel
+        self._m_time[i] = state.time
+        self._m_ball[i] = state.ball_pos
+        self._m_ball_vel[i] = state.ball_vel
+        self._m_flags[i] = (state.held, state.released, state.caught)
+        self._ring[:, i] = env.sensor._buffer[0]
+        self._history[i] = list(env._history)
+        self._counts[i] = 0
+        self._load_plan(i)
+
+    def _load_plan(self, i: int) -> None:
+        """Copy sub-environment ``i``'s controller state into the arrays."""
+        c = self.envs[i].controller
+        if not self._fast:
+            self._phase[i] = PHASES.index(c.phase)
+            self._pk[i] = self._episode(i).k
+            self._duration[i] = c.duration
+            self._end[i] = c.plan_end
+            self._next[i] = c.nominal_next()
+            return
+        ep = self._episode(i)
+        self._phase[i] = PHASES.index(ep.phase)
+        self._pk[i] = ep.k
+        self._end_k[i] = ep.end_k
+        grid = ep.grid
+        if grid.shape[0] > self._grid.shape[1]:
+            wider = np.zeros((self.num_envs, grid.shape[0], 2))
+            wider[:, : self._grid.shape[1]] = self._grid
+            self._grid = wider
+        self._grid[i, : grid.shape[0]] = grid
+        self._glen[i] = grid.shape[0]
+        self._last[i, 0], self._last[i, 1] = ep._last[0], ep._last[1]
+        self._t_start[i] = ep.t_start
+        self._duration[i] = ep.duration
+        self._end[i] = ep.end
+
+    # -- the step -------------------------------------------------------------------------
+    def _step_batch(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
+        NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], Columns
+    ]:  # fmt: skip
+        if self.backend != "numba":
+            return super()._step_batch(envs, actions)
+        # the action (clipped_pair)
+        invalid = np.logical_not(np.isfinite(actions).all(axis=1))
+        a = np.clip(np.where(np.isnan(actions), 0.0, actions), -1.0, 1.0)
+        target, armed = self._commands(envs)
+        s = self.envs[0].residual_scale
+        target = target + s * a
+        full_target = np.zeros((self.num_envs, 2))
+        full_armed = np.zeros(self.num_envs, dtype=np.bool_)
+        full_target[envs], full_armed[envs] = target, armed
+        self._compiled.v1_periods(
+            envs,
+            self._model_addr,
+            self._data_addr,
+            self._qpos,
+            self._qvel,
+            self._ctrl,
+            self._sensors,
+            self._contype,
+            self._conaffinity,
+            self._ball_geom,
+            full_target,
+            full_armed,
+            self._ref,
+            self._vref,
+            self._z_before,
+            self._flags,
+            self._k,
+            self._constants,
+            self._hand,
+            self._hand_vel,
+            self._ball,
+            self._ball_vel,
+            self._events,
+        )
+        caught = self._events[envs, 0]
+        released = self._events[envs, 1]
+        if released.any():
+            self._release(envs[released])
+        time = self._k[envs] * self._dt
+        for i, t in zip(envs.tolist(), time.tolist(), strict=True):
+            self._datas[i].time = t
+        held = self._flags[envs, 0]
+        dropped = self._flags[envs, 2]
+        rows = self._measure(envs, held)
+        # the measured state the controller sees next
+        self._m_time[envs] = time
+        self._m_ball[envs] = rows[:, :2]
+        self._m_ball_vel[envs] = rows[:, 2:]
+        self._m_flags[envs, 0], self._m_flags[envs, 1] = held, released
+        self._m_flags[envs, 2] = caught
+        self._history[envs, 1:] = self._history[envs, :-1]
+        self._history[envs, 0] = rows
+        self._counts[envs, 0] += caught
+        self._counts[envs, 1] += released
+        first = self.envs[0]
+        terminated = dropped.copy()
+        truncated = ~terminated & (
+            (self._counts[envs, 0] >= first.max_catches) | (time >= first._time_limit)
+        )
+        phase = self._phase[envs]
+        likeness = self._likeness_of(envs, phase)
+        action_sq = a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1]
+        w_catch, w_drop, w_like, w_act = self._w
+        r_catch = w_catch * caught.astype(np.int64)
+        r_drop = -w_drop * dropped.astype(np.float64)
+        r_like = -w_like * likeness
+        r_act = -w_act * action_sq
+        reward = r_catch + r_drop + r_like + r_act
+        obs = self._observations(envs, held)
+        columns: Columns = {
+            "reward_catch": r_catch.astype(np.float64),
+            "reward_drop": r_drop,
+            "reward_likeness": r_like,
+            "reward_action": r_act,
+            "likeness": likeness,
+            "caught": caught.copy(),
+            "catches": self._counts[envs, 0].copy(),
+            "tosses": self._counts[envs, 1].copy(),
+            "cycles": self._counts[envs, 1].copy(),
+            "phase": _PHASE_NAMES[phase],
+            "held": held.copy(),
+            "time": time,
+            "hand": self._hand[envs].copy(),
+            "ball": self._ball[envs].copy(),
+            "action_invalid": invalid,
+        }
+        return obs, reward, terminated, truncated, columns
+
+    def _commands(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The controllers' hand targets and release arming for ``envs``: array indexing
+        between events, the controller itself at them (see the module docstring)."""
+        if not self._fast:
+            return self._python_commands(envs)
+        phase, k = self._phase[envs], self._pk[envs]
+        held, released, caught = (self._m_flags[envs, j] for j in range(3))
+        end_k = self._end_k[envs]
+        event = (
+            ((phase == _TOSS) & released)
+            | ((phase == _CATCH) & caught)
+            | ((end_k >= 0) & (k >= end_k))
+        )
+        options = self._episode(int(envs[0])).options
+        python = event
+        if options.correction:
+            check = ~event & (phase == _CATCH) & ~held
+            if check.any():
+                python = python | self._correction_due(envs, check, options.correction_tolerance)
+        target = np.empty((envs.size, 2))
+        armed = np.empty(envs.size, dtype=np.bool_)
+        fast = ~python
+        if fast.any():
+            rows = envs[fast]
+            kf = self._pk[rows] + 1
+            self._pk[rows] = kf
+            tf = self._grid[rows, np.minimum(kf, self._glen[rows] - 1)]
+            self._last[rows, 0] = self._last[rows, 1]
+            self._last[rows, 1] = tf
+            target[fast] = tf
+            armed[fast] = (self._phase[rows] == _TOSS) & (kf * self._dt >= options.release_after)
+        if python.any():
+            t, a = self._python_commands(envs[python])
+            target[python], armed[python] = t, a
+        return target, armed
+
+    def _correction_due(
+        self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float
+    ) -> NDArray[np.bool_]:
+        """Where :meth:`JugglingController.correct` would re-plan (its test, with its
+        arithmetic; the latency-aware controller's forward prediction first)."""
+        rows = envs[check]
+        g, dt = self._gravity, self._dt
+        bx, bz = self._m_ball[rows, 0], self._m_ball[rows, 1]
+        vx, vz = self._m_ball_vel[rows, 0], self._m_ball_vel[rows, 1]
+        if self._ahead:  # predict_forward(..., latency): rules.flight from time 0
+            s = self._latency - 0.0
+            bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
+            vz = vz - g * s
+        s = self._t_start[rows] + self._duration[rows] - self._m_time[rows]
+        px = bx + vx * (s - 0.0)
+        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+        miss = self._compiled.hypot_rows(px - self._end[rows, 0], pz - self._end[rows, 1])
+        due = np.zeros(envs.size, dtype=np.bool_)
+        due[check] = (s > dt) & (miss > tolerance)
+        return due
+
+    def _python_commands(
+        self, envs: NDArray[np.int64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The controllers of ``envs`` run in Python on the measured state; their plans
+        are copied back into the arrays."""
+        from motion_envs.datasets.juggling import JugglingState
+
+        target = np.empty((envs.size, 2))
+        armed = np.empty(envs.size, dtype=np.bool_)
+        for j, i in enumerate(envs.tolist()):
+            if self._fast:
+                ep = self._episode(i)
+                ep.k = int(self._pk[i])
+                ep._last = [self._last[i, 0].copy(), self._last[i, 1].copy()]
+            held, released, caught = self._m_flags[i].tolist()
+            state = JugglingState(
+                time=float(self._m_time[i]),
+                hand_pos=self._hand[i].copy(),
+                hand_vel=self._hand_vel[i].copy(),
+                ball_pos=self._m_ball[i].copy(),
+                ball_vel=self._m_ball_vel[i].copy(),
+                held=held,
+                released=released,
+                caught=caught,
+                dropped=bool(self._flags[i, 2]),
+            )
+            t, a = self.envs[i].controller.command(state)
+            target[j], armed[j] = t, a
+            self._load_plan(i)
+        return target, armed
+
+    def _release(self, envs: NDArray[np.int64]) -> None:
+        """The release of ``envs`` (their world's rule fired): the ball leaves the hand with
+        the hand's velocity, scattered by the world's generator."""
+        for i in envs.tolist():
+            w = self.envs[i].world
+            v = perturb_release(
+                self._hand_vel[i].copy(), w.release_speed_std, w.release_angle_std, w._rng
+            )
+            ux, uz = float(v[0]), float(v[1])
+            qvel = self._qvel[i]
+            qvel[2], qvel[3] = ux, uz
+            self._ball_vel[i] = ux, uz
+            self._flags[i, 0] = self._flags[i, 1] = False
+            w.physics.set_ball_contacts(True)
+
+    def _measure(self, envs: NDArray[np.int64], held: NDArray[np.bool_]) -> NDArray[np.float64]:
+        """The sensor (:meth:`BallSensor.measure_values`) for ``envs``: ``(x, z, vx, vz)``
+        rows, the true state while held, the delayed (noisy) one else."""
+        true = np.concatenate([self._ball[envs], self._ball_vel[envs]], axis=1)
+        ring = self._ring
+        self._slot = slot = (self._slot + 1) % ring.shape[0]
+        ring[slot, envs, :4] = true
+        ring[slot, envs, 4] = held
+        oldest = ring[(slot + 1) % ring.shape[0], envs]
+        rows = np.where(held[:, None], true, oldest[:, :4])
+        if self._noisy:
+            first = self.envs[0]
+            noisy = ~held & (oldest[:, 4] == 0.0)
+            if noisy.any():
+                std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
+                for j in np.flatnonzero(noisy).tolist():
+                    rng = self.envs[int(envs[j])].sensor._rng
+                    rows[j] += std * rng.standard_normal(4)
+        return rows
+
+    def _likeness_of(self, envs: NDArray[np.int64], phase: NDArray[np.int64]) -> Any:
+        """m; :meth:`HumanLikeness.distance` of each hand state (one tree query per phase)."""
+        points = np.concatenate([self._hand[envs], LIKENESS_TAU * self._hand_vel[envs]], axis=1)
+        out = np.empty(envs.size)
+        for p, name in enumerate(PHASES):
+            sel = phase == p
+            if sel.any():
+                out[sel] = self._likeness.trees[name].query(points[sel])[0]
+        out[~np.isfinite(out)] = math.inf
+        return out
+
+    def _observations(self, envs: NDArray[np.int64], held: NDArray[np.bool_]) -> Any:
+        n = envs.size
+        rows = np.empty((n, 15 + 4 * HISTORY))
+        rows[:, 0:2] = self._hand[envs]
+        rows[:, 2:4] = self._hand_vel[envs]
+        rows[:, 4] = held
+        phase = self._phase[envs]
+        rows[:, 5:9] = phase[:, None] == np.arange(len(PHASES))
+        if self._fast:
+            k = self._pk[envs]
+            rows[:, 9] = k * self._dt
+            rows[:, 11:13] = self._grid[envs, np.minimum(k + 1, self._glen[envs] - 1)]
+        else:
+            rows[:, 9] = self._pk[envs] * self._dt
+            rows[:, 11:13] = self._next[envs]
+        rows[:, 10] = self._duration[envs]
+        rows[:, 13:15] = self._end[envs]
+        rows[:, 15:] = self._history[envs].reshape(n, -1)
+        obs = rows.astype(np.float32)
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)

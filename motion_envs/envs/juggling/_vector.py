@@ -1,0 +1,256 @@
+"""The juggling ids' native vector environments: ``N`` episodes in one object.
+
+:class:`JugglingVectorEnv` holds ``N`` single environments (each its own MuJoCo model and
+data, controller, sensor and generators), resets them with the single environment's own
+``reset`` and keeps the episode bookkeeping of :class:`gymnasium.vector.SyncVectorEnv`:
+seeds (``seed + i``), the three autoreset modes and the infos, batched as
+``SyncVectorEnv`` batches them (``VectorEnv._add_info``). A subclass steps the episodes
+together (:meth:`JugglingVectorEnv._step_batch`); this class's own step runs each single
+environment's ``step`` (the reference, and the path without numba).
+
+Autoreset (``autoreset_mode=``, as ``SyncVectorEnv``):
+
+* ``NEXT_STEP`` (default): the step after an episode's end resets that sub-environment,
+  ignores its action and returns reward 0, not terminated/truncated, and the reset's
+  infos;
+* ``SAME_STEP``: the step that ends an episode returns the next one's first observation;
+  the last observation and infos are in ``infos["final_obs"]`` and
+  ``infos["final_info"]``;
+* ``DISABLED``: no autoreset; reset ended sub-environments with
+  ``reset(options={"reset_mask": mask})`` before stepping them again (stepping an ended
+  one raises ``RuntimeError``).
+
+Infos: ``infos[key]`` is an ``(N, ...)`` array and ``infos["_" + key]`` marks the
+sub-environments it applies to; entries outside the mask are unspecified.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from motion_envs.envs._common import as_action, check_autoreset_mode, check_num_envs
+
+__all__ = ["Columns", "JugglingVectorEnv"]
+
+#: A step's per-sub-environment values by info key: arrays with the stepped
+#: sub-environments along the first axis.
+Columns = dict[str, NDArray[Any]]
+_StepResult = tuple[
+    NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
+]
+
+
+class JugglingVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` copies of ``single_class(**kwargs)`` (see the module docstring).
+
+    Parameters
+    ----------
+    num_envs : int
+        Number of sub-environments, 1 to ``MAX_NUM_ENVS``.
+    autoreset_mode : AutoresetMode or str
+        ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+    **kwargs
+        The single environment's keyword arguments (``level``, ``controller``, ...),
+        checked by ``single_class``.
+    """
+
+    metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's instance attribute)
+        "render_modes": ["rgb_array"],
+        "autoreset_mode": AutoresetMode.NEXT_STEP,
+    }
+    single_class: ClassVar[type[gym.Env[Any, Any]]]
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        **kwargs: Any,
+    ) -> None:
+        n = check_num_envs(num_envs)
+        mode = check_autoreset_mode(autoreset_mode)
+        first = self.single_class(**kwargs)  # checks the arguments once
+        self.envs: list[Any] = [first] + [self.single_class(**kwargs) for _ in range(n - 1)]
+        self.num_envs = n
+        self.autoreset_mode = mode
+        self.single_observation_space = first.observation_space
+        self.single_action_space = first.action_space
+        self.observation_space = batch_space(first.observation_space, n)
+        self.action_space = batch_space(first.action_space, n)
+        self.metadata = {**first.metadata, "autoreset_mode": mode}
+        self.render_mode = first.render_mode
+        action_shape = tuple(first.action_space.shape or ())
+        obs_shape = tuple(first.observation_space.shape or ())
+        self._action_shape = (n, *action_shape)
+        self._obs = np.zeros((n, *obs_shape), dtype=np.float32)
+        self._ended = np.zeros(n, dtype=bool)
+        self._started = np.zeros(n, dtype=bool)
+        self._arange = np.arange(n)
+
+    # -- resets -------------------------------------------------------------------------
+    def _seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
+        n = self.num_envs
+        if seed is None:
+            return [None] * n
+        if isinstance(seed, bool):
+            raise ValueError(f"seed must be an int or a list of {n} seeds; got {seed!r}")
+        if isinstance(seed, (int, np.integer)):
+            return [int(seed) + i for i in range(n)]
+        seeds = list(seed)
+        if len(seeds) != n:
+            raise ValueError(f"seed must be an int or a list of {n} seeds; got {len(seeds)}")
+        return seeds
+
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        seeds = self._seeds(seed)
+        options = dict(options) if options else {}
+        mask = options.pop("reset_mask", None)
+        if mask is None:
+            envs = self._arange
+        else:
+            if not isinstance(mask, np.ndarray) or mask.shape != (self.num_envs,):
+                raise ValueError(f"options['reset_mask'] must be a bool array ({self.num_envs},)")
+            if mask.dtype != np.bool_ or not mask.any():
+                raise ValueError("options['reset_mask'] must be a bool array with a True entry")
+            envs = np.flatnonzero(mask)
+        infos: dict[str, Any] = {}
+        for i in envs.tolist():
+            info = self._reset_env(i, seeds[i], options or None)
+            infos = self._add_info(infos, info, i)
+        return self._obs.copy(), infos
+
+    def _reset_env(self, i: int, seed: int | None, options: dict[str, Any] | None = None) -> Any:
+        """Reset sub-environment ``i`` with the single environment's ``reset``; its
+        observation goes to ``self._obs[i]``; returns its info."""
+        obs, info = self.envs[i].reset(seed=seed, options=options)
+        self._obs[i] = obs
+        self._ended[i] = False
+        self._started[i] = True
+        self._after_reset(i)
+        return info
+
+    def _after_reset(self, i: int) -> None:
+        """Hook: sub-environment ``i`` was reset (a batched step loads its state here)."""
+
+    # -- steps --------------------------------------------------------------------------
+    def step(self, actions: Any) -> _StepResult:
+        a = as_action(actions, self._action_shape, "actions")
+        if not self._started.all():
+            raise RuntimeError("call reset() before step()")
+        n, mode = self.num_envs, self.autoreset_mode
+        rewards = np.zeros(n, dtype=np.float64)
+        terminated = np.zeros(n, dtype=bool)
+        truncated = np.zeros(n, dtype=bool)
+        resetting = self._ended.copy() if mode == AutoresetMode.NEXT_STEP else np.zeros(n, bool)
+        if mode == AutoresetMode.DISABLED and self._ended.any():
+            i = int(np.flatnonzero(self._ended)[0])
+            raise RuntimeError(
+                f"sub-environment {i} has ended and autoreset_mode is DISABLED; call "
+                "reset(options={'reset_mask': mask}) for the ended sub-environments first"
+            )
+        stepped = np.flatnonzero(~resetting)
+        infos: dict[str, Any] = {}
+        if stepped.size:
+            obs, rew, term, trunc, columns = self._step_batch(stepped, a[stepped])
+            self._obs[stepped] = obs
+            rewards[stepped], terminated[stepped], truncated[stepped] = rew, term, trunc
+            ended = term | trunc
+            self._ended[stepped] = ended
+            if mode == AutoresetMode.SAME_STEP and ended.any():
+                keep = ~ended
+                infos = self._scatter(columns, stepped, keep) if keep.any() else {}
+                for j in np.flatnonzero(ended).tolist():
+                    i = int(stepped[j])
+                    final = {"final_obs": obs[j].copy(), "final_info": _row(columns, j)}
+                    infos = self._add_info(infos, final, i)
+                    infos = self._add_info(infos, self._reset_env(i, None), i)
+            else:
+                infos = self._scatter(columns, stepped, np.ones(stepped.size, dtype=bool))
+        for i in np.flatnonzero(resetting).tolist():
+            infos = self._add_info(infos, self._reset_env(i, None), i)
+        return self._obs.copy(), rewards, terminated, truncated, infos
+
+    def _scatter(
+        self, columns: Columns, stepped: NDArray[np.int64], keep: NDArray[np.bool_]
+    ) -> dict[str, Any]:
+        """The step columns of ``stepped[keep]`` as vector infos (``(N, ...)`` arrays
+        and masks)."""
+        n = self.num_envs
+        mask = np.zeros(n, dtype=bool)
+        mask[stepped[keep]] = True
+        rows = stepped[keep]
+        infos: dict[str, Any] = {}
+        for key, column in columns.items():
+            if column.dtype == object:
+                full = np.full(n, None, dtype=object)
+            else:
+                full = np.zeros((n, *column.shape[1:]), dtype=column.dtype)
+            full[rows] = column[keep]
+            infos[key] = full
+            infos["_" + key] = mask.copy()  # own masks: _add_info sets them one by one
+        return infos
+
+    def _step_batch(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
+        NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], Columns
+    ]:  # fmt: skip
+        """Step sub-environments ``envs`` with ``actions`` (one row each); returns their
+        observations, rewards, terminations, truncations and info columns. This one runs
+        each single environment's ``step``."""
+        results = [self.envs[i].step(row) for i, row in zip(envs.tolist(), actions, strict=True)]
+        obs = np.stack([r[0] for r in results]).astype(np.float32, copy=False)
+        rew = np.array([r[1] for r in results], dtype=np.float64)
+        term = np.array([r[2] for r in results], dtype=bool)
+        trunc = np.array([r[3] for r in results], dtype=bool)
+        return obs, rew, term, trunc, _columns([r[4] for r in results])
+
+    # -- the rest -----------------------------------------------------------------------
+    def render(self) -> tuple[Any, ...] | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode")
+            return None
+        return tuple(env.render() for env in self.envs)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        for env in self.envs:
+            env.close()
+
+
+def _columns(infos: list[dict[str, Any]]) -> Columns:
+    """Info dicts of single steps (same keys) as columns, typed as ``_add_info`` types
+    them (``float`` to float64, ``int`` to int64, ``bool`` to bool, arrays stacked,
+    anything else an object array)."""
+    out: Columns = {}
+    for key, first in infos[0].items():
+        values = [info[key] for info in infos]
+        if type(first) in (int, float, bool) or isinstance(first, np.number):
+            out[key] = np.array(values, dtype=type(first))
+        elif isinstance(first, np.ndarray):
+            out[key] = np.stack(values).astype(first.dtype, copy=False)
+        else:
+            column = np.empty(len(values), dtype=object)
+            column[:] = values
+            out[key] = column
+    return out
+
+
+def _row(columns: Columns, j: int) -> dict[str, Any]:
+    """Row ``j`` of ``columns`` as a single environment's info dict (Python scalars,
+    arrays copied)."""
+    row: dict[str, Any] = {}
+    for key, column in columns.items():
+        value = column[j]
+        row[key] = value.copy() if isinstance(value, np.ndarray) else (
+            value.item() if isinstance(value, np.generic) else value
+        )  # fmt: skip
+    return row
