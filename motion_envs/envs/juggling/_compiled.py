@@ -7,7 +7,8 @@ control period a single world runs Python around five ``mj_step`` calls: the ser
 :func:`~motion_envs.envs.juggling.servo_acceleration`), the physics and the grasp rule
 (:class:`~motion_envs.envs.juggling.JugglingV1World`). Here the same arithmetic runs
 compiled, in one loop over the worlds, and calls MuJoCo's own ``mj_step`` from it (the C
-function of the ``libmujoco`` the ``mujoco`` package loads, through ``ctypes``): the
+function of the ``libmujoco`` the ``mujoco`` package loads, declared to numba as an
+external function): the
 physics is MuJoCo's, call for call, so the worlds are bit-identical to the single
 environments' (tested). The contacts the grasp rule asks about come from the scene's
 ``contact`` sensors (``ball_palm``, ``ball_floor``: MuJoCo's count of those contacts,
@@ -25,15 +26,15 @@ Importing this module imports numba (the ``fast`` extra).
 
 from __future__ import annotations
 
-import ctypes
 import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import llvmlite.binding as llvm
 import mujoco
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from motion_envs.envs.juggling._v1_scene import (
     CAPTURE_SPEED,
@@ -44,7 +45,13 @@ from motion_envs.envs.juggling._v1_scene import (
     SUBSTEPS,
 )
 
-__all__ = ["hypot_rows", "mj_step_c", "py_hypot", "v1_periods"]
+__all__ = [
+    "hypot_rows",
+    "mj_step_c",
+    "nearest_rows",
+    "py_hypot",
+    "v1_periods",
+]
 
 _DBL_MIN = 2.2250738585072014e-308
 _SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
@@ -52,22 +59,23 @@ _KP, _KD = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
 _AMAX2 = HAND_ACCEL_LIMIT**2
 
 
-def _libmujoco() -> ctypes.CDLL:
+def _libmujoco_path() -> str:
     """The ``libmujoco`` shared library of the installed ``mujoco`` package (the one its
-    Python bindings use: loading it again returns the same handle)."""
+    Python bindings use)."""
     package = Path(str(resources.files(mujoco)))
     found = sorted(package.glob("libmujoco.so*")) + sorted(package.glob("libmujoco*.dylib"))
     found += sorted(package.glob("mujoco*.dll"))
     if not found:
         raise ImportError(f"no libmujoco shared library in {package}")
-    return ctypes.CDLL(str(found[0]))
+    return str(found[0])
 
 
-#: ``mj_step(const mjModel*, mjData*)`` as a ctypes function of two addresses
-#: (``MjModel._address``, ``MjData._address``), callable from compiled code.
-mj_step_c: Any = _libmujoco().mj_step
-mj_step_c.argtypes = [ctypes.c_uint64, ctypes.c_uint64]
-mj_step_c.restype = None
+# The symbol is resolved in the library the bindings loaded (loading it again returns the
+# same handle), so compiled code calls the very mj_step that mujoco.mj_step calls.
+llvm.load_library_permanently(_libmujoco_path())
+#: ``void mj_step(const mjModel*, mjData*)`` for compiled code, called with the two
+#: addresses ``MjModel._address`` and ``MjData._address`` (pointer-sized integers).
+mj_step_c = types.ExternalFunction("mj_step", types.void(types.uint64, types.uint64))
 
 
 @njit(cache=True)
@@ -136,8 +144,7 @@ def hypot_rows(x: Any, y: Any) -> Any:
     return out
 
 
-@njit  # not cached: it calls a ctypes function, which numba cannot cache
-def v1_periods(
+def _v1_periods(
     envs: Any,
     model_addr: Any,
     data_addr: Any,
@@ -260,3 +267,38 @@ def v1_periods(
         ball[i, 0], ball[i, 1] = bx, bz
         ball_vel[i, 0], ball_vel[i, 1] = ux, uz
         events[i, 0], events[i, 1] = caught, fires
+
+
+v1_periods = njit(cache=True)(_v1_periods)
+
+
+@njit(cache=True)
+def nearest_rows(columns: Any, key: Any, axis: int, queries: Any, last: Any, out: Any) -> None:
+    """Nearest-sample distances of ``queries (n, 4)`` among the samples ``columns (4, M)``
+    sorted along coordinate ``axis`` (``key = columns[axis]``): what
+    :class:`~motion_envs.models.juggling.HumanLikeness` computes (its ``_SortedSamples``,
+    the k-d tree's number), for many queries. ``last (n,)`` holds each query's previous
+    nearest sample (a start only: any start gives the same distance) and is updated;
+    ``out (n,)`` receives the distances (NaN for a NaN query)."""
+    for r in range(queries.shape[0]):
+        q0, q1, q2, q3 = queries[r, 0], queries[r, 1], queries[r, 2], queries[r, 3]
+        j = last[r]
+        d0, d1 = columns[0, j] - q0, columns[1, j] - q1
+        d2, d3 = columns[2, j] - q2, columns[3, j] - q3
+        bound = math.sqrt(((d0 * d0 + d1 * d1) + d2 * d2) + d3 * d3)
+        if not math.isfinite(bound):
+            out[r] = math.nan
+            continue
+        width = bound * (1.0 + 1e-9) + 1e-12
+        qc = queries[r, axis]
+        lo = np.searchsorted(key, qc - width, side="left")
+        hi = np.searchsorted(key, qc + width, side="right")
+        best, at = math.inf, lo
+        for m in range(lo, hi):
+            e0, e1 = columns[0, m] - q0, columns[1, m] - q1
+            e2, e3 = columns[2, m] - q2, columns[3, m] - q3
+            s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
+            if s < best:
+                best, at = s, m
+        last[r] = at
+        out[r] = math.sqrt(best)

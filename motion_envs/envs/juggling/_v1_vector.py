@@ -32,7 +32,12 @@ from motion_envs.datasets.juggling import PHASES
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._v1_env import HISTORY, JugglingV1Env
 from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
-from motion_envs.models.juggling import LIKENESS_TAU, JugglingController, perturb_release
+from motion_envs.models.juggling import (
+    LIKENESS_TAU,
+    JugglingController,
+    perturb_release,
+    replan_many,
+)
 
 __all__ = ["JugglingV1VectorEnv"]
 
@@ -40,6 +45,8 @@ _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _PHASE_NAMES = np.array(PHASES, dtype=object)
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 _BACKENDS = ("auto", "numba", "python")
+#: Measurement-noise rows drawn from a sensor's generator at a time.
+_NOISE_BLOCK = 64
 
 
 class JugglingV1VectorEnv(JugglingVectorEnv):
@@ -130,6 +137,9 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._slot = 0
         self._history = np.zeros((n, HISTORY, 4))
         self._noisy = first.position_std > 0 or first.velocity_std > 0
+        self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
+        self._noise = np.zeros((n, _NOISE_BLOCK, 4))
+        self._noise_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)  # next unused row
         self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
         # the controller's plan
         self._fast = first.controller_name in _FAST_CONTROLLERS
@@ -145,7 +155,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
-        self._likeness = first.likeness
+        self._likeness = [first.likeness.sorted_samples(name) for name in PHASES]
+        self._nearest = np.zeros((n, len(PHASES)), dtype=np.int64)  # search starts
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
@@ -172,6 +183,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._m_ball_vel[i] = state.ball_vel
         self._m_flags[i] = (state.held, state.released, state.caught)
         self._ring[:, i] = env.sensor._buffer[0]
+        self._noise_at[i] = _NOISE_BLOCK  # the reset's new generator: draw afresh
         self._history[i] = list(env._history)
         self._counts[i] = 0
         self._load_plan(i)
@@ -314,7 +326,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         if options.correction:
             check = ~event & (phase == _CATCH) & ~held
             if check.any():
-                python = python | self._correction_due(envs, check, options.correction_tolerance)
+                self._correct(envs, check, options.correction_tolerance)
         target = np.empty((envs.size, 2))
         armed = np.empty(envs.size, dtype=np.bool_)
         fast = ~python
@@ -332,11 +344,11 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             target[python], armed[python] = t, a
         return target, armed
 
-    def _correction_due(
-        self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float
-    ) -> NDArray[np.bool_]:
-        """Where :meth:`JugglingController.correct` would re-plan (its test, with its
-        arithmetic; the latency-aware controller's forward prediction first)."""
+    def _correct(self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float) -> None:
+        """The eq. 10 corrections of the catches ``envs[check]``: where
+        :meth:`JugglingController.correct` would re-plan (its test, with its arithmetic;
+        the latency-aware controller's forward prediction first), it re-plans (the
+        sub-environment's own controller) and the new rows of its plan are copied back."""
         rows = envs[check]
         g, dt = self._gravity, self._dt
         bx, bz = self._m_ball[rows, 0], self._m_ball[rows, 1]
@@ -349,9 +361,20 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         px = bx + vx * (s - 0.0)
         pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
         miss = self._compiled.hypot_rows(px - self._end[rows, 0], pz - self._end[rows, 1])
-        due = np.zeros(envs.size, dtype=np.bool_)
-        due[check] = (s > dt) & (miss > tolerance)
-        return due
+        due = (s > dt) & (miss > tolerance)
+        if not due.any():
+            return
+        position = np.stack([px, pz], axis=1)[due]
+        rows = rows[due]
+        episodes = []
+        for i, k in zip(rows.tolist(), self._pk[rows].tolist(), strict=True):
+            ep = self._episode(i)
+            ep.k = k
+            episodes.append(ep)
+        replan_many(episodes, self._m_time[rows].tolist(), position)
+        for i, k, ep in zip(rows.tolist(), self._pk[rows].tolist(), episodes, strict=True):
+            self._grid[i, k + 1 : self._glen[i]] = ep.grid[k + 1 :]
+            self._end[i] = ep.end
 
     def _python_commands(
         self, envs: NDArray[np.int64]
@@ -410,23 +433,32 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         oldest = ring[(slot + 1) % ring.shape[0], envs]
         rows = np.where(held[:, None], true, oldest[:, :4])
         if self._noisy:
-            first = self.envs[0]
-            noisy = ~held & (oldest[:, 4] == 0.0)
-            if noisy.any():
-                std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
-                for j in np.flatnonzero(noisy).tolist():
-                    rng = self.envs[int(envs[j])].sensor._rng
-                    rows[j] += std * rng.standard_normal(4)
+            noisy = np.flatnonzero(~held & (oldest[:, 4] == 0.0))
+            if noisy.size:
+                at = envs[noisy]
+                for i in at[self._noise_at[at] == _NOISE_BLOCK].tolist():
+                    # the sensor's own generator, read ahead: a block of 4-normal rows
+                    # is the sequence of as many standard_normal(4) calls
+                    self._noise[i] = self.envs[i].sensor._rng.standard_normal((_NOISE_BLOCK, 4))
+                    self._noise_at[i] = 0
+                rows[noisy] += self._noise_std * self._noise[at, self._noise_at[at]]
+                self._noise_at[at] += 1
         return rows
 
     def _likeness_of(self, envs: NDArray[np.int64], phase: NDArray[np.int64]) -> Any:
-        """m; :meth:`HumanLikeness.distance` of each hand state (one tree query per phase)."""
+        """m; :meth:`HumanLikeness.distance` of each hand state (compiled, per phase)."""
         points = np.concatenate([self._hand[envs], LIKENESS_TAU * self._hand_vel[envs]], axis=1)
         out = np.empty(envs.size)
-        for p, name in enumerate(PHASES):
+        for p in range(len(PHASES)):
             sel = phase == p
             if sel.any():
-                out[sel] = self._likeness.trees[name].query(points[sel])[0]
+                columns, axis = self._likeness[p]
+                rows = envs[sel]
+                last = self._nearest[rows, p]
+                found = np.empty(rows.size)
+                self._compiled.nearest_rows(columns, columns[axis], axis, points[sel], last, found)
+                self._nearest[rows, p] = last
+                out[sel] = found
         out[~np.isfinite(out)] = math.inf
         return out
 

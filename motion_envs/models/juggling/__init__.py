@@ -40,7 +40,11 @@ from motion_envs.models.juggling._cascade import (
     cascade_likeness,
     make_cascade_controller,
 )
-from motion_envs.models.juggling._controller import ControlOptions, JugglingController
+from motion_envs.models.juggling._controller import (
+    ControlOptions,
+    JugglingController,
+    replan_many,
+)
 from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
     FIT_SEED,
@@ -167,6 +171,7 @@ __all__ = [
     "phase_conditions",
     "plan_catch",
     "predict_forward",
+    "replan_many",
     "run_cycle",
     "run_cycles",
     "run_cycles_fast",

@@ -38,7 +38,7 @@ from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_posit
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.juggling._model import JugglerModel, plan_catch
 
-__all__ = ["ControlOptions", "JugglingController"]
+__all__ = ["ControlOptions", "JugglingController", "replan_many"]
 
 FloatArray = NDArray[np.float64]
 
@@ -220,18 +220,39 @@ class JugglingController:
         px, pz, _, _ = rules.flight((0.0, bx, bz, vx, vz), s, self.task.gravity)
         if math.hypot(px - self.end[0], pz - self.end[1]) <= self.options.correction_tolerance:
             return False
-        predicted = np.array([px, pz])
+        self.replan(time, np.array([px, pz]))
+        return True
+
+    def _rows(self) -> _Eq10Rows | None:
+        """The eq. 10 rows for step ``k`` (computed at the phase's first correction), or
+        None when ``k`` is past them or ``tau_1 >= 1`` (then :meth:`replan` corrects with
+        the model's own ``correct``)."""
         k, duration = self.k, self.duration
-        tau1 = k * self.task.dt / duration
         rows = self._eq10
         if rows is None or k < rows.k0:
             rows = self._eq10 = _Eq10Rows(self._tau, self._basis, k, duration)
-        if tau1 < 1.0 and k < rows.end:  # eq. 10 on the cached rows: correct_online's numbers
-            self.coefficients = rows.correct(k, self.coefficients, self.grid[k], predicted)
+        tau1 = k * self.task.dt / duration
+        return rows if tau1 < 1.0 and k < rows.end else None
+
+    def _replanned(self, time: float, predicted: FloatArray, coefficients: FloatArray) -> None:
+        """Take the corrected ``coefficients``: the plan now ends at ``predicted``."""
+        self.coefficients = coefficients
+        self.end = predicted
+        self._grid_from(self.k + 1)
+        self.corrections.append((time, self.k * self.task.dt / self.duration))
+
+    def replan(self, time: float, predicted: FloatArray) -> None:
+        """Eq. 10 at step ``k`` of the catch: the rest of the plan re-planned to end at
+        ``predicted`` (what :meth:`correct` does once its test asks for it)."""
+        k, duration = self.k, self.duration
+        rows = self._rows()
+        if rows is not None:  # eq. 10 on the cached rows: correct_online's numbers
+            coefficients = rows.correct(k, self.coefficients, self.grid[k], predicted)
         else:
+            tau1 = k * self.task.dt / duration
             velocity = ss.velocity(self.coefficients, np.array([tau1]), duration)[0]
             model = self.model.phases_["catch"].model
-            self.coefficients = model.correct(
+            coefficients = model.correct(
                 self.coefficients,
                 tau1,
                 self.grid[k],
@@ -240,10 +261,48 @@ class JugglingController:
                 velocity=velocity,
                 mode="free",
             )
-        self.end = predicted
-        self._grid_from(self.k + 1)
-        self.corrections.append((time, tau1))
-        return True
+        self._replanned(time, predicted, coefficients)
+
+
+def replan_many(
+    episodes: list[JugglingController], times: list[float], predicted: FloatArray
+) -> None:
+    """:meth:`JugglingController.replan` of each episode ``j`` at ``times[j]`` toward
+    ``predicted[j]`` (``(n, 2)``), the eq. 10 products of all of them computed together:
+    numpy's ``matmul`` over a stack calls the same BLAS routine per matrix as the
+    single products do, so every episode gets its own numbers bit for bit (tested
+    against :meth:`~JugglingController.replan`). The native vector environment's
+    corrections."""
+    batch: list[tuple[int, JugglingController, _Eq10Rows]] = []
+    for j, ep in enumerate(episodes):
+        rows = ep._rows()
+        if rows is None:
+            ep.replan(times[j], predicted[j])
+        else:
+            batch.append((j, ep, rows))
+    if not batch:
+        return
+    at = [(rows, ep.k - rows.k0) for _, ep, rows in batch]
+    derivative = np.stack([rows.derivative[i : i + 1] for rows, i in at])
+    a1 = np.stack([rows.a[i] for rows, i in at])
+    pinv = np.stack([rows.pinv[i] for rows, i in at])
+    c = np.stack([ep.coefficients for _, ep, _ in batch])
+    duration = np.array([rows.duration for _, _, rows in batch])
+    position = np.stack([ep.grid[ep.k] for _, ep, _ in batch])
+    target = predicted[[j for j, _, _ in batch]]
+    velocity = (derivative @ c / duration[:, None, None])[:, 0]
+    r = np.stack([position, target, velocity], axis=1) - a1 @ c
+    dp = pinv @ r
+    miss = np.max(np.abs(a1 @ dp - r), axis=(1, 2), initial=0.0)
+    scale = np.maximum(1.0, np.max(np.abs(r), axis=(1, 2), initial=0.0))
+    if np.any(miss > 1e-9 * scale):
+        worst = float(np.max(miss))
+        raise ValueError(
+            f"correct_online: the free correction cannot meet the conditions (residual {worst:.3g})"
+        )
+    out = c + dp
+    for m, (j, ep, _) in enumerate(batch):
+        ep._replanned(times[j], target[m].copy(), out[m])
 
 
 class _Eq10Rows:

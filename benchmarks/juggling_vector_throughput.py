@@ -1,0 +1,106 @@
+"""Native vector environments of the juggling ids against ``SyncVectorEnv``, same run.
+
+For ``MotionEnvs/Juggling-v1`` and ``MotionEnvs/Cascade-v0`` at ``--level`` and each
+``N`` in ``--num-envs``: ``gym.make_vec(id, N)`` (the native vector environment) against
+``gymnasium.vector.SyncVectorEnv`` of ``N`` ``gym.make(id)`` copies (the anchor), both
+stepping the same pre-sampled actions (the zero action, and ``0.3 N(0, 1)`` residuals),
+autoresetting (NEXT_STEP). A figure is the median env-steps per second over
+``--repeats`` timed runs after a warm-up run; the ratio is native / sync.
+
+Prints a table, then, as its last line, one JSON object with the figures and ratios.
+
+    python benchmarks/juggling_vector_throughput.py [--num-envs 64 256] [--steps 16384]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from _timing import machine, print_json, print_machine, print_table  # benchmarks/ on sys.path
+from tqdm import tqdm
+
+import motion_envs  # noqa: F401  (registers the environments)
+
+IDS = ("MotionEnvs/Juggling-v1", "MotionEnvs/Cascade-v0")
+
+
+def _rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> float:
+    """Env-steps per second (wall clock) of ``env`` over ``actions (T, N, ...)``."""
+    env.reset(seed=0)
+    step = env.step
+    t0 = time.perf_counter()
+    for a in actions:
+        step(a)
+    return actions.shape[0] * actions.shape[1] / (time.perf_counter() - t0)
+
+
+def _median_rate(env: gym.vector.VectorEnv, actions: np.ndarray, repeats: int) -> float:
+    _rate(env, actions[: max(100, actions.shape[0] // 4)])  # warm-up (numba loads its code)
+    return statistics.median(_rate(env, actions) for _ in range(repeats))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--num-envs", type=int, nargs="+", default=[64, 256])
+    parser.add_argument("--steps", type=int, default=16_384, help="env-steps per timed run")
+    parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure")
+    parser.add_argument("--level", default="medium", help="the envs' level")
+    parser.add_argument("--ids", nargs="+", default=list(IDS), help="env ids")
+    args = parser.parse_args(argv)
+    for name in ("steps", "repeats"):
+        if getattr(args, name) < 1:
+            parser.error(f"--{name} must be >= 1")
+    if any(n < 1 for n in args.num_envs):
+        parser.error("--num-envs must be >= 1")
+    rows: list[list[Any]] = []
+    out: dict[str, Any] = {"machine": machine(), "level": args.level, "figures": []}
+    jobs = [
+        (env_id, n, policy)
+        for env_id in args.ids
+        for n in args.num_envs
+        for policy in ("zero", "residual 0.3 N(0,1)")
+    ]
+    for env_id, n, policy in tqdm(jobs, desc="settings", file=sys.stderr):
+        kw = {"level": args.level}
+        sync = gym.vector.SyncVectorEnv(
+            [lambda env_id=env_id, kw=kw: gym.make(env_id, **kw) for _ in range(n)]
+        )
+        shape = (max(1, args.steps // n), n, *sync.single_action_space.shape)
+        rng = np.random.default_rng(0)
+        actions = (
+            np.zeros(shape, dtype=np.float32)
+            if policy == "zero"
+            else (0.3 * rng.standard_normal(shape)).astype(np.float32)
+        )
+        figures = {"sync": _median_rate(sync, actions, args.repeats)}
+        sync.close()
+        env = gym.make_vec(env_id, n, **kw)
+        figures["native"] = _median_rate(env, actions, args.repeats)
+        env.close()
+        for name, rate in figures.items():
+            ratio = rate / figures["sync"]
+            rows.append([env_id, n, policy, name, f"{rate:,.0f}", f"{ratio:.2f}"])
+            out["figures"].append(
+                {
+                    "id": env_id,
+                    "num_envs": n,
+                    "policy": policy,
+                    "variant": name,
+                    "env_steps_per_s": round(rate, 1),
+                    "ratio_to_sync": round(ratio, 3),
+                }
+            )
+    print_machine(out["machine"])
+    print_table(["id", "N", "actions", "vector env", "env-steps/s", "x sync"], rows)
+    print_json(out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
