@@ -5,7 +5,8 @@ For ``MotionEnvs/Juggling-v1`` and ``MotionEnvs/Cascade-v0`` at ``--level`` and 
 ``gymnasium.vector.SyncVectorEnv`` of ``N`` ``gym.make(id)`` copies (the anchor), both
 stepping the same pre-sampled actions (the zero action, and ``0.3 N(0, 1)`` residuals),
 autoresetting (NEXT_STEP). A figure is the median env-steps per second over
-``--repeats`` timed runs after a warm-up run; the ratio is native / sync.
+``--repeats`` timed runs after a warm-up run, per wall-clock second and per CPU second of
+the process (read the CPU ratio on a shared machine); the ratio is native / sync.
 
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 
@@ -30,19 +31,25 @@ import motion_envs  # noqa: F401  (registers the environments)
 IDS = ("MotionEnvs/Juggling-v1", "MotionEnvs/Cascade-v0")
 
 
-def _rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> float:
-    """Env-steps per second (wall clock) of ``env`` over ``actions (T, N, ...)``."""
+def _rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> tuple[float, float]:
+    """Env-steps per second of ``env`` over ``actions (T, N, ...)``: per wall-clock second
+    and per CPU second of this process (both single-threaded: the CPU figure does not
+    count the time another process took from this one)."""
     env.reset(seed=0)
     step = env.step
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for a in actions:
         step(a)
-    return actions.shape[0] * actions.shape[1] / (time.perf_counter() - t0)
+    n = actions.shape[0] * actions.shape[1]
+    return n / (time.perf_counter() - t0), n / (time.process_time() - c0)
 
 
-def _median_rate(env: gym.vector.VectorEnv, actions: np.ndarray, repeats: int) -> float:
+def _median_rate(
+    env: gym.vector.VectorEnv, actions: np.ndarray, repeats: int
+) -> tuple[float, float]:
     _rate(env, actions[: max(100, actions.shape[0] // 4)])  # warm-up (numba loads its code)
-    return statistics.median(_rate(env, actions) for _ in range(repeats))
+    runs = [_rate(env, actions) for _ in range(repeats)]
+    return statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -83,21 +90,26 @@ def main(argv: list[str] | None = None) -> int:
         env = gym.make_vec(env_id, n, **kw)
         figures["native"] = _median_rate(env, actions, args.repeats)
         env.close()
-        for name, rate in figures.items():
-            ratio = rate / figures["sync"]
-            rows.append([env_id, n, policy, name, f"{rate:,.0f}", f"{ratio:.2f}"])
+        for name, (wall, cpu) in figures.items():
+            ratio, ratio_cpu = wall / figures["sync"][0], cpu / figures["sync"][1]
+            rows.append(
+                [env_id, n, policy, name, f"{wall:,.0f}", f"{ratio:.2f}", f"{ratio_cpu:.2f}"]
+            )
             out["figures"].append(
                 {
                     "id": env_id,
                     "num_envs": n,
                     "policy": policy,
                     "variant": name,
-                    "env_steps_per_s": round(rate, 1),
+                    "env_steps_per_s": round(wall, 1),
+                    "env_steps_per_cpu_s": round(cpu, 1),
                     "ratio_to_sync": round(ratio, 3),
+                    "ratio_to_sync_cpu": round(ratio_cpu, 3),
                 }
             )
     print_machine(out["machine"])
-    print_table(["id", "N", "actions", "vector env", "env-steps/s", "x sync"], rows)
+    header = ["id", "N", "actions", "vector env", "env-steps/s", "x sync", "x sync (CPU)"]
+    print_table(header, rows)
     print_json(out)
     return 0
 

@@ -207,3 +207,49 @@ def test_compiled_hypot_on_many_random_pairs() -> None:
     expected = np.array([math.hypot(a, b) for a, b in zip(x.tolist(), y.tolist(), strict=True)])
     assert np.count_nonzero(np.hypot(x, y) != expected) > 100  # the trap is real
     assert np.array_equal(hypot_rows(x, y), expected)
+
+
+def _catching_episodes(count: int) -> list[Any]:
+    """Juggler episodes (Juggling-v1, medium, zero action) stopped in catch phases whose
+    eq. 10 rows exist (after their first correction), one per seed."""
+    import copy
+
+    out = []
+    seed = 0
+    while len(out) < count:
+        env = gym.make(V1, level="medium").unwrapped
+        env.reset(seed=seed)
+        seed += 1
+        for _ in range(600):
+            _, _, term, trunc, _ = env.step(np.zeros(2, dtype=np.float32))
+            ep = env.controller.juggler.episode
+            if ep.phase == "catch" and ep._eq10 is not None and ep.k >= ep._eq10.k0 + 2:
+                out.append(copy.deepcopy(ep))
+                break
+            if term or trunc:
+                break
+    return out
+
+
+def test_replan_many_is_replan_of_each() -> None:
+    """The stacked eq. 10 products give each episode its own scalar numbers."""
+    import copy
+
+    from motion_envs.models.juggling import replan_many
+
+    episodes = _catching_episodes(3)
+    shifts = np.array([[0.01, -0.02], [-0.03, 0.005], [0.0, 0.04]])
+    predicted = np.stack([ep.end for ep in episodes]) + shifts
+    times = [ep.t_start + ep.k * ep.task.dt for ep in episodes]
+    before = [ep.grid.copy() for ep in episodes]
+    alone = [copy.deepcopy(ep) for ep in episodes]
+    for ep, t, p in zip(alone, times, predicted, strict=True):
+        ep.replan(t, p.copy())
+    replan_many(episodes, times, predicted)
+    for j, (a, b) in enumerate(zip(alone, episodes, strict=True)):
+        assert np.array_equal(a.coefficients, b.coefficients)
+        assert np.array_equal(a.grid, b.grid)
+        assert np.array_equal(b.end, predicted[j])
+        assert a.corrections == b.corrections
+        assert np.array_equal(b.grid[: b.k + 1], before[j][: b.k + 1])  # the past is kept
+        assert not np.array_equal(b.grid[b.k + 1 :], before[j][b.k + 1 :])  # re-planned
