@@ -50,6 +50,7 @@ __all__ = [
     "mj_step_c",
     "nearest_rows",
     "py_hypot",
+    "v1_finish",
     "v1_periods",
 ]
 
@@ -302,3 +303,154 @@ def nearest_rows(columns: Any, key: Any, axis: int, queries: Any, last: Any, out
                 best, at = s, m
         last[r] = at
         out[r] = math.sqrt(best)
+
+
+@njit(cache=True)
+def v1_finish(
+    envs: Any,
+    hand: Any,
+    hand_vel: Any,
+    ball: Any,
+    ball_vel: Any,
+    flags: Any,
+    events: Any,
+    k: Any,
+    scalars: Any,
+    ring: Any,
+    slot: int,
+    noise: Any,
+    noise_at: Any,
+    noise_std: Any,
+    counts: Any,
+    history: Any,
+    phases: Any,
+    plan_k: Any,
+    duration: Any,
+    plan_end: Any,
+    grid: Any,
+    glen: Any,
+    nominal: Any,
+    fast: bool,
+    samples: Any,
+    bounds: Any,
+    nearest: Any,
+    actions: Any,
+    measured: Any,
+    m_flags: Any,
+    obs: Any,
+    out: Any,
+    ends: Any,
+) -> None:
+    """The rest of Juggling-v1's step for each world ``i = envs[j]`` after its period
+    (:meth:`JugglingV1Env._advance` after the world, then ``step``'s likeness, reward and
+    observation), written as those write it:
+
+    * the sensor (:meth:`~motion_envs.models.juggling.BallSensor.measure_values`): the
+      delay line ``ring (R, N, 5)`` takes the true ball ``(x, z, vx, vz, held)`` at
+      ``slot``; the measurement is the true state while held, else the oldest entry,
+      plus the next row of ``noise[i]`` (drawn ahead from the sensor's generator; every
+      world has one left) times ``noise_std`` when that entry was flying and
+      ``noise_std`` is not zero;
+    * the measured state for the controller ``measured[i] = (time, x, z, vx, vz)``,
+      ``m_flags[i] = (held, released, caught)``; the ``history`` shifted; the catches
+      and tosses ``counts``; the episode's end;
+    * the human-likeness (:func:`nearest_rows` on the phase's sorted samples
+      ``samples[phase] = (columns, axis)``, start ``nearest[i, phase]``), the reward
+      terms and the reward;
+    * the observation, clipped to ``bounds = (low, high)``.
+
+    ``scalars = (dt, likeness_tau, w_catch, w_drop, w_likeness, w_action, max_catches,
+    time_limit, noisy)``; ``phases, plan_k, duration, plan_end`` the plans after the
+    commands (phase index, step in the phase, duration, end point); ``nominal[i]`` the
+    next nominal target when not ``fast`` (else it is read from ``grid``). Out per row
+    ``j``: ``obs[j]``, ``out[j] = (reward, r_catch, r_drop, r_likeness, r_action,
+    likeness, time)``, ``ends[j] = (terminated, truncated)``.
+    """
+    dt, tau = scalars[0], scalars[1]
+    w_catch, w_drop, w_like, w_act = scalars[2], scalars[3], scalars[4], scalars[5]
+    max_catches, time_limit, noisy = scalars[6], scalars[7], scalars[8] > 0.0
+    size = ring.shape[0]
+    oldest_slot = (slot + 1) % size
+    n_hist = history.shape[1]
+    q = np.empty((1, 4))
+    last = np.empty(1, dtype=np.int64)
+    found = np.empty(1)
+    low, high = bounds[0], bounds[1]
+    for j in range(envs.shape[0]):
+        i = envs[j]
+        held, dropped = flags[i, 0], flags[i, 2]
+        caught, released = events[i, 0], events[i, 1]
+        time = k[i] * dt
+        bx, bz, ux, uz = ball[i, 0], ball[i, 1], ball_vel[i, 0], ball_vel[i, 1]
+        # the sensor
+        ring[slot, i, 0], ring[slot, i, 1] = bx, bz
+        ring[slot, i, 2], ring[slot, i, 3] = ux, uz
+        ring[slot, i, 4] = 1.0 if held else 0.0
+        if held:
+            px, pz, vx, vz = bx, bz, ux, uz
+        else:
+            px, pz = ring[oldest_slot, i, 0], ring[oldest_slot, i, 1]
+            vx, vz = ring[oldest_slot, i, 2], ring[oldest_slot, i, 3]
+            if ring[oldest_slot, i, 4] == 0.0 and noisy:
+                r = noise_at[i]
+                px += noise_std[0] * noise[i, r, 0]
+                pz += noise_std[1] * noise[i, r, 1]
+                vx += noise_std[2] * noise[i, r, 2]
+                vz += noise_std[3] * noise[i, r, 3]
+                noise_at[i] = r + 1
+        measured[i, 0], measured[i, 1], measured[i, 2] = time, px, pz
+        measured[i, 3], measured[i, 4] = vx, vz
+        m_flags[i, 0], m_flags[i, 1], m_flags[i, 2] = held, released, caught
+        for h in range(n_hist - 1, 0, -1):
+            for c in range(4):
+                history[i, h, c] = history[i, h - 1, c]
+        history[i, 0, 0], history[i, 0, 1] = px, pz
+        history[i, 0, 2], history[i, 0, 3] = vx, vz
+        if caught:
+            counts[i, 0] += 1
+        if released:
+            counts[i, 1] += 1
+        terminated = dropped
+        truncated = not terminated and (counts[i, 0] >= max_catches or time >= time_limit)
+        # the likeness of the hand's state in the plan's phase
+        phase = phases[i]
+        q[0, 0], q[0, 1] = hand[i, 0], hand[i, 1]
+        q[0, 2], q[0, 3] = tau * hand_vel[i, 0], tau * hand_vel[i, 1]
+        columns, axis = samples[phase]
+        last[0] = nearest[i, phase]
+        nearest_rows(columns, columns[axis], axis, q, last, found)
+        nearest[i, phase] = last[0]
+        like = found[0] if math.isfinite(found[0]) else math.inf
+        # the reward (LevelsEnvMixin._rewards)
+        ax, az = actions[j, 0], actions[j, 1]
+        r_catch = w_catch * (1 if caught else 0)
+        r_drop = -w_drop * (1.0 if dropped else 0.0)
+        r_like = -w_like * like
+        r_act = -w_act * (ax * ax + az * az)
+        out[j, 0] = r_catch + r_drop + r_like + r_act
+        out[j, 1], out[j, 2], out[j, 3], out[j, 4] = r_catch, r_drop, r_like, r_act
+        out[j, 5], out[j, 6] = like, time
+        ends[j, 0], ends[j, 1] = terminated, truncated
+        # the observation (JugglingV1Env._observation)
+        row = obs[j]
+        row[0], row[1] = hand[i, 0], hand[i, 1]
+        row[2], row[3] = hand_vel[i, 0], hand_vel[i, 1]
+        row[4] = 1.0 if held else 0.0
+        for p in range(4):
+            row[5 + p] = 1.0 if p == phase else 0.0
+        row[9] = plan_k[i] * dt
+        row[10] = duration[i]
+        if fast:
+            g = min(plan_k[i] + 1, glen[i] - 1)
+            row[11], row[12] = grid[i, g, 0], grid[i, g, 1]
+        else:
+            row[11], row[12] = nominal[i, 0], nominal[i, 1]
+        row[13], row[14] = plan_end[i, 0], plan_end[i, 1]
+        for h in range(n_hist):
+            for c in range(4):
+                row[15 + 4 * h + c] = history[i, h, c]
+        for c in range(row.shape[0]):
+            if row[c] > high[c]:
+                row[c] = high[c]
+            if row[c] < low[c]:
+                row[c] = low[c]

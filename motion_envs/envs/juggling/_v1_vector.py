@@ -14,15 +14,15 @@ extra, ``backend="numba"``, the default when installed) a step runs:
 * the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
   (:func:`~motion_envs.envs.juggling._compiled.v1_periods`); the release's noise in
   Python, from the world's generator;
-* the sensor's delay line, the human-likeness (the k-d tree of each phase queried once
-  for all sub-environments in it), the reward and the observation as array operations.
+* the rest of the step compiled too (:func:`~motion_envs.envs.juggling._compiled.v1_finish`):
+  the sensor's delay line (its noise drawn ahead in blocks from the sensor's own
+  generator), the human-likeness search, the reward and the observation.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -126,9 +126,10 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._ball_vel = np.zeros((n, 2))
         self._events = np.zeros((n, 2), dtype=np.bool_)
         # what the controller was last shown (the measured state)
-        self._m_time = np.zeros(n)
-        self._m_ball = np.zeros((n, 2))
-        self._m_ball_vel = np.zeros((n, 2))
+        self._measured = np.zeros((n, 5))  # time, ball x, z, vx, vz
+        self._m_time = self._measured[:, 0]
+        self._m_ball = self._measured[:, 1:3]
+        self._m_ball_vel = self._measured[:, 3:5]
         self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
         # the sensor's delay line (a ring shared by all sub-environments: a reset fills
         # every slot of its own) and the observation's measurement history
@@ -155,11 +156,23 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
-        self._likeness = [first.likeness.sorted_samples(name) for name in PHASES]
+        self._likeness = tuple(first.likeness.sorted_samples(name) for name in PHASES)
         self._nearest = np.zeros((n, len(PHASES)), dtype=np.int64)  # search starts
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
+        self._bounds = np.stack([first._low, first._high])
+        self._obs_dim = first._low.shape[0]
+        self._scalars = np.array(
+            [
+                task.dt,
+                LIKENESS_TAU,
+                *self._w,
+                first.max_catches,
+                first._time_limit,
+                float(self._noisy),
+            ]
+        )
 
     def _episode(self, i: int) -> JugglingController:
         episode = self.envs[i].controller.juggler.episode
@@ -254,59 +267,77 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball_vel,
             self._events,
         )
-        caught = self._events[envs, 0]
         released = self._events[envs, 1]
         if released.any():
             self._release(envs[released])
-        time = self._k[envs] * self._dt
+        if self._noisy:  # every world keeps a row of noise drawn ahead
+            for i in envs[self._noise_at[envs] == _NOISE_BLOCK].tolist():
+                # the sensor's own generator read ahead: a block of rows is the sequence
+                # of as many standard_normal(4) calls
+                self._noise[i] = self.envs[i].sensor._rng.standard_normal((_NOISE_BLOCK, 4))
+                self._noise_at[i] = 0
+        self._slot = (self._slot + 1) % self._ring.shape[0]
+        n = envs.size
+        obs = np.empty((n, self._obs_dim), dtype=np.float32)
+        out = np.empty((n, 7))
+        ends = np.empty((n, 2), dtype=np.bool_)
+        self._compiled.v1_finish(
+            envs,
+            self._hand,
+            self._hand_vel,
+            self._ball,
+            self._ball_vel,
+            self._flags,
+            self._events,
+            self._k,
+            self._scalars,
+            self._ring,
+            self._slot,
+            self._noise,
+            self._noise_at,
+            self._noise_std,
+            self._counts,
+            self._history,
+            self._phase,
+            self._pk,
+            self._duration,
+            self._end,
+            self._grid,
+            self._glen,
+            self._next,
+            self._fast,
+            self._likeness,
+            self._bounds,
+            self._nearest,
+            a,
+            self._measured,
+            self._m_flags,
+            obs,
+            out,
+            ends,
+        )
+        time = out[:, 6]
         for i, t in zip(envs.tolist(), time.tolist(), strict=True):
             self._datas[i].time = t
-        held = self._flags[envs, 0]
-        dropped = self._flags[envs, 2]
-        rows = self._measure(envs, held)
-        # the measured state the controller sees next
-        self._m_time[envs] = time
-        self._m_ball[envs] = rows[:, :2]
-        self._m_ball_vel[envs] = rows[:, 2:]
-        self._m_flags[envs, 0], self._m_flags[envs, 1] = held, released
-        self._m_flags[envs, 2] = caught
-        self._history[envs, 1:] = self._history[envs, :-1]
-        self._history[envs, 0] = rows
-        self._counts[envs, 0] += caught
-        self._counts[envs, 1] += released
-        first = self.envs[0]
-        terminated = dropped.copy()
-        truncated = ~terminated & (
-            (self._counts[envs, 0] >= first.max_catches) | (time >= first._time_limit)
-        )
-        phase = self._phase[envs]
-        likeness = self._likeness_of(envs, phase)
-        action_sq = a[:, 0] * a[:, 0] + a[:, 1] * a[:, 1]
-        w_catch, w_drop, w_like, w_act = self._w
-        r_catch = w_catch * caught.astype(np.int64)
-        r_drop = -w_drop * dropped.astype(np.float64)
-        r_like = -w_like * likeness
-        r_act = -w_act * action_sq
-        reward = r_catch + r_drop + r_like + r_act
-        obs = self._observations(envs, held)
+        counts = self._counts[envs]
         columns: Columns = {
-            "reward_catch": r_catch.astype(np.float64),
-            "reward_drop": r_drop,
-            "reward_likeness": r_like,
-            "reward_action": r_act,
-            "likeness": likeness,
-            "caught": caught.copy(),
-            "catches": self._counts[envs, 0].copy(),
-            "tosses": self._counts[envs, 1].copy(),
-            "cycles": self._counts[envs, 1].copy(),
-            "phase": _PHASE_NAMES[phase],
-            "held": held.copy(),
+            "reward_catch": out[:, 1],
+            "reward_drop": out[:, 2],
+            "reward_likeness": out[:, 3],
+            "reward_action": out[:, 4],
+            "likeness": out[:, 5],
+            "caught": self._events[envs, 0],
+            "catches": counts[:, 0],
+            "tosses": counts[:, 1],
+            "cycles": counts[:, 1].copy(),
+            "phase": _PHASE_NAMES[self._phase[envs]],
+            "held": self._flags[envs, 0],
             "time": time,
-            "hand": self._hand[envs].copy(),
-            "ball": self._ball[envs].copy(),
+            "hand": self._hand[envs],
+            "ball": self._ball[envs],
             "action_invalid": invalid,
         }
-        return obs, reward, terminated, truncated, columns
+        return obs, out[:, 0], ends[:, 0], ends[:, 1], columns
 
     def _commands(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """The controllers' hand targets and release arming for ``envs``: array indexing
@@ -421,65 +452,3 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball_vel[i] = ux, uz
             self._flags[i, 0] = self._flags[i, 1] = False
             w.physics.set_ball_contacts(True)
-
-    def _measure(self, envs: NDArray[np.int64], held: NDArray[np.bool_]) -> NDArray[np.float64]:
-        """The sensor (:meth:`BallSensor.measure_values`) for ``envs``: ``(x, z, vx, vz)``
-        rows, the true state while held, the delayed (noisy) one else."""
-        true = np.concatenate([self._ball[envs], self._ball_vel[envs]], axis=1)
-        ring = self._ring
-        self._slot = slot = (self._slot + 1) % ring.shape[0]
-        ring[slot, envs, :4] = true
-        ring[slot, envs, 4] = held
-        oldest = ring[(slot + 1) % ring.shape[0], envs]
-        rows = np.where(held[:, None], true, oldest[:, :4])
-        if self._noisy:
-            noisy = np.flatnonzero(~held & (oldest[:, 4] == 0.0))
-            if noisy.size:
-                at = envs[noisy]
-                for i in at[self._noise_at[at] == _NOISE_BLOCK].tolist():
-                    # the sensor's own generator, read ahead: a block of 4-normal rows
-                    # is the sequence of as many standard_normal(4) calls
-                    self._noise[i] = self.envs[i].sensor._rng.standard_normal((_NOISE_BLOCK, 4))
-                    self._noise_at[i] = 0
-                rows[noisy] += self._noise_std * self._noise[at, self._noise_at[at]]
-                self._noise_at[at] += 1
-        return rows
-
-    def _likeness_of(self, envs: NDArray[np.int64], phase: NDArray[np.int64]) -> Any:
-        """m; :meth:`HumanLikeness.distance` of each hand state (compiled, per phase)."""
-        points = np.concatenate([self._hand[envs], LIKENESS_TAU * self._hand_vel[envs]], axis=1)
-        out = np.empty(envs.size)
-        for p in range(len(PHASES)):
-            sel = phase == p
-            if sel.any():
-                columns, axis = self._likeness[p]
-                rows = envs[sel]
-                last = self._nearest[rows, p]
-                found = np.empty(rows.size)
-                self._compiled.nearest_rows(columns, columns[axis], axis, points[sel], last, found)
-                self._nearest[rows, p] = last
-                out[sel] = found
-        out[~np.isfinite(out)] = math.inf
-        return out
-
-    def _observations(self, envs: NDArray[np.int64], held: NDArray[np.bool_]) -> Any:
-        n = envs.size
-        rows = np.empty((n, 15 + 4 * HISTORY))
-        rows[:, 0:2] = self._hand[envs]
-        rows[:, 2:4] = self._hand_vel[envs]
-        rows[:, 4] = held
-        phase = self._phase[envs]
-        rows[:, 5:9] = phase[:, None] == np.arange(len(PHASES))
-        if self._fast:
-            k = self._pk[envs]
-            rows[:, 9] = k * self._dt
-            rows[:, 11:13] = self._grid[envs, np.minimum(k + 1, self._glen[envs] - 1)]
-        else:
-            rows[:, 9] = self._pk[envs] * self._dt
-            rows[:, 11:13] = self._next[envs]
-        rows[:, 10] = self._duration[envs]
-        rows[:, 13:15] = self._end[envs]
-        rows[:, 15:] = self._history[envs].reshape(n, -1)
-        obs = rows.astype(np.float32)
-        np.minimum(obs, self._high, out=obs)
-        return np.maximum(obs, self._low, out=obs)
