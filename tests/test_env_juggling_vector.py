@@ -116,6 +116,24 @@ def test_v1_zero_action_equal_sync(mode: Any, level: str, controller: str) -> No
     assert run_both(V1, vec, 3, mode, 1200, "zero", **kw) >= 3
 
 
+@pytest.mark.parametrize("cls", [JugglingV1VectorEnv, CascadeVectorEnv])
+def test_pickled_vector_env_continues_as_the_original(cls: Any) -> None:
+    import pickle
+
+    vec = cls(3, level="medium")
+    vec.reset(seed=1)
+    rng = np.random.default_rng(0)
+    shape = (3, *vec.single_action_space.shape)
+    for _ in range(150):
+        vec.step((0.2 * rng.standard_normal(shape)).astype(np.float32))
+    copy = pickle.loads(pickle.dumps(vec))
+    for _ in range(300):
+        a = (0.2 * rng.standard_normal(shape)).astype(np.float32)
+        r1, r2 = vec.step(a), copy.step(a)
+        for k in range(4):
+            assert np.array_equal(r1[k], r2[k])
+
+
 def test_v1_python_backend_equal_sync() -> None:
     vec = JugglingV1VectorEnv(3, backend="python", level="medium")
     assert vec.backend == "python"

@@ -45,6 +45,23 @@ _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _PHASE_NAMES = np.array(PHASES, dtype=object)
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 _BACKENDS = ("auto", "numba", "python")
+#: Attributes made from the worlds by ``_link`` (not pickled: made again).
+_LINKED = (
+    "_compiled",
+    "_model_addr",
+    "_data_addr",
+    "_datas",
+    "_qpos",
+    "_qvel",
+    "_ctrl",
+    "_sensors",
+    "_contype",
+    "_conaffinity",
+    "_likeness",
+    "_m_time",
+    "_m_ball",
+    "_m_ball_vel",
+)
 #: Measurement-noise rows drawn from a sensor's generator at a time.
 _NOISE_BLOCK = 64
 
@@ -84,13 +101,14 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._setup_arrays()
 
     # -- state ----------------------------------------------------------------------------
-    def _setup_arrays(self) -> None:
+    def _link(self) -> None:
+        """The compiled code and what it reads in place: the worlds' addresses and array
+        views (made again after unpickling, which copies the worlds)."""
         from numba.typed import List
 
         from motion_envs.envs.juggling import _compiled
 
         self._compiled = _compiled
-        n, first = self.num_envs, self.envs[0]
         worlds = [env.world for env in self.envs]
         self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
         self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
@@ -101,6 +119,24 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._sensors = List([w.data.sensordata for w in worlds])
         self._contype = List([w.model.geom_contype for w in worlds])
         self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
+        self._likeness = tuple(self.envs[0].likeness.sorted_samples(name) for name in PHASES)
+        self._m_time = self._measured[:, 0]
+        self._m_ball = self._measured[:, 1:3]
+        self._m_ball_vel = self._measured[:, 3:5]
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for key in _LINKED:
+            state.pop(key, None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if self.backend == "numba":
+            self._link()
+
+    def _setup_arrays(self) -> None:
+        n, first = self.num_envs, self.envs[0]
         task, phys = first.task, first.world.physics
         self._ball_geom = int(phys.ball_geom)
         self._constants = np.array(
@@ -127,9 +163,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._events = np.zeros((n, 2), dtype=np.bool_)
         # what the controller was last shown (the measured state)
         self._measured = np.zeros((n, 5))  # time, ball x, z, vx, vz
-        self._m_time = self._measured[:, 0]
-        self._m_ball = self._measured[:, 1:3]
-        self._m_ball_vel = self._measured[:, 3:5]
         self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
         # the sensor's delay line (a ring shared by all sub-environments: a reset fills
         # every slot of its own) and the observation's measurement history
@@ -156,13 +189,13 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
-        self._likeness = tuple(first.likeness.sorted_samples(name) for name in PHASES)
         self._nearest = np.zeros((n, len(PHASES)), dtype=np.int64)  # search starts
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
         self._bounds = np.stack([first._low, first._high])
         self._obs_dim = first._low.shape[0]
+        self._link()
         self._scalars = np.array(
             [
                 task.dt,
