@@ -43,10 +43,13 @@ def _train(kind: str, env_id: str, n_envs: int, timesteps: int, seed: int) -> di
 
     from baselines.agents.config import resolve_hyperparams
     from baselines.agents.policies import build_model
+    from baselines.agents.vec import takes_keyword
     from baselines.sb3 import GymnasiumVecEnv
 
     hp = resolve_hyperparams("ppo", env_id, overrides={"n_envs": n_envs})
-    kwargs = {"split": "train", **hp["env_kwargs"]}
+    kwargs = dict(hp["env_kwargs"])
+    if takes_keyword(env_id, "split"):  # the reaching ids; not the juggling ones
+        kwargs["split"] = "train"
     if kind == "native":
         venv = gym.make_vec(
             env_id, num_envs=n_envs, vectorization_mode="vector_entry_point", **kwargs
