@@ -271,3 +271,23 @@ def test_replan_many_is_replan_of_each() -> None:
         assert a.corrections == b.corrections
         assert np.array_equal(b.grid[: b.k + 1], before[j][: b.k + 1])  # the past is kept
         assert not np.array_equal(b.grid[b.k + 1 :], before[j][b.k + 1 :])  # re-planned
+
+
+@pytest.mark.parametrize("env_id", [V1, CASCADE])
+def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
+    """render() draws each sub-environment's world as SyncVectorEnv's copies draw theirs."""
+    kw = {"level": "medium", "render_mode": "rgb_array", "width": 64, "height": 64}
+    vec = gym.make_vec(env_id, 2, **kw)
+    sync = gym.vector.SyncVectorEnv([lambda: gym.make(env_id, **kw) for _ in range(2)])
+    vec.reset(seed=0)
+    sync.reset(seed=0)
+    a = np.full((2, *sync.single_action_space.shape), 0.1, dtype=np.float32)
+    for _ in range(120):
+        vec.step(a)
+        sync.step(a)
+    frames, expected = vec.render(), sync.render()
+    assert frames is not None and expected is not None
+    assert len(frames) == 2
+    for f, e in zip(frames, expected, strict=True):
+        assert f.shape == (64, 64, 3) and np.array_equal(f, e)
+    assert not np.array_equal(frames[0], frames[1])  # two different worlds
