@@ -1,23 +1,69 @@
-"""Cascade-v0's vector environment: ``N`` cascades in one object.
+"""Cascade-v0's native vector environment: the ``N`` cascades' control periods batched.
 
-:class:`CascadeVectorEnv` is ``gym.make_vec("MotionEnvs/Cascade-v0", N)``: the episode
-bookkeeping of :class:`~motion_envs.envs.juggling._vector.JugglingVectorEnv` (seeds, the
-three autoreset modes, batched infos) over ``N`` single
-:class:`~motion_envs.envs.juggling.CascadeEnv`, each stepped by its own ``step``:
-bit-identical to ``SyncVectorEnv`` (tested), without its per-step overhead, but not
-batched (the cascade's world is not compiled yet).
+:class:`CascadeVectorEnv` is ``gym.make_vec("MotionEnvs/Cascade-v0", N)``. Each
+sub-environment is bit-identical to ``CascadeEnv`` seeded with ``seed + i`` (as under
+``SyncVectorEnv``; tested for the three autoreset modes). With numba (the ``fast``
+extra, ``backend="numba"``, the default when installed) a step runs:
+
+* each hand's plan in arrays: between the controller's events (a release, a catch, a
+  reached end point, a re-aimed catch, all decided as
+  :class:`~motion_envs.models.juggling.CascadeHand` decides them) a hand's command is an
+  index into its plan on the control grid; an eq. 10 correction found due (the
+  controller's own test, in arrays) is made by the hand's own ``correct`` and its new plan
+  copied back; at any other event the sub-environment's own
+  :class:`~motion_envs.models.juggling.CascadeController` runs in Python on the measured
+  state and both hands' plans are copied back (controllers other than ``juggler`` and
+  ``juggler_latency_aware`` always run in Python);
+* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
+  (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
+  ``cascade.xml``'s contact sensors); the releases' noise in Python, from each world's
+  generator, hand 0 before hand 1;
+* the sensor's delay line (one ring for all balls of all sub-environments), the
+  human-likeness (each phase's k-d tree queried once per hand for all sub-environments
+  in it), the reward and the observation as array operations.
+
+``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
 from __future__ import annotations
 
-from motion_envs.envs.juggling._cascade_env import CascadeEnv
-from motion_envs.envs.juggling._vector import JugglingVectorEnv
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES
+from motion_envs.envs._kernels import numba_available
+from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
+from motion_envs.envs.juggling._cascade_scene import _BALL_CONAFFINITY, _BALL_CONTYPE
+from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
+from motion_envs.models.juggling import (
+    LIKENESS_TAU,
+    REAIM_AFTER,
+    CascadeHand,
+    CascadeState,
+    perturb_release,
+)
 
 __all__ = ["CascadeVectorEnv"]
 
+_TOSS, _GO_DOWN, _CATCH = PHASES.index("toss"), PHASES.index("go_down"), PHASES.index("catch")
+_NP = len(PHASES)
+_PHASE_NAMES = np.array(PHASES, dtype=object)
+_PHASE_PAIRS = np.empty(_NP * _NP, dtype=object)
+_PHASE_PAIRS[:] = [(a, b) for a in PHASES for b in PHASES]
+_HELD_PAIRS = np.empty(4, dtype=object)
+_HELD_PAIRS[:] = [(a, b) for a in (False, True) for b in (False, True)]
+_FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
+_BACKENDS = ("auto", "numba", "python")
+_SIGN = np.array([1.0, -1.0])  # x in each hand's own frame (the left hand's mirrored)
+_HIST = 4 * CASCADE_HISTORY
+
 
 class CascadeVectorEnv(JugglingVectorEnv):
-    """``num_envs`` Cascade-v0 episodes (see the module docstring).
+    """``num_envs`` Cascade-v0 episodes stepped together (see the module docstring and
+    :mod:`motion_envs.envs.juggling._vector`).
 
     Parameters
     ----------
@@ -25,8 +71,503 @@ class CascadeVectorEnv(JugglingVectorEnv):
         Number of sub-environments.
     autoreset_mode : AutoresetMode or str
         ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+    backend : str
+        ``"auto"`` (numba when installed), ``"numba"`` or ``"python"``.
     **kwargs
         :class:`~motion_envs.envs.juggling.CascadeEnv`'s keyword arguments.
     """
 
     single_class = CascadeEnv
+
+    def __init__(
+        self,
+        num_envs: int = 1,
+        autoreset_mode: Any = "NextStep",
+        backend: str = "auto",
+        **kwargs: Any,
+    ) -> None:
+        if backend not in _BACKENDS:
+            raise ValueError(f"backend must be one of {list(_BACKENDS)}; got {backend!r}")
+        if backend == "numba" and not numba_available():
+            raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
+        super().__init__(num_envs, autoreset_mode, **kwargs)
+        self.backend = "python" if backend == "python" or not numba_available() else "numba"
+        if self.backend == "numba":
+            self._setup_arrays()
+
+    # -- state ----------------------------------------------------------------------------
+    def _setup_arrays(self) -> None:
+        from numba.typed import List
+
+        from motion_envs.envs.juggling import _compiled
+
+        self._compiled = _compiled
+        n, first = self.num_envs, self.envs[0]
+        worlds = [env.world for env in self.envs]
+        self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
+        self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
+        self._datas = [w.data for w in worlds]
+        self._qpos = List([w.data.qpos for w in worlds])
+        self._qvel = List([w.data.qvel for w in worlds])
+        self._ctrl = List([w.data.ctrl for w in worlds])
+        self._sensors = List([w.data.sensordata for w in worlds])
+        self._contype = List([w.model.geom_contype for w in worlds])
+        self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
+        task, world = first.task, first.world
+        self._ball_geoms = np.array(world.ball_geoms, dtype=np.int64)
+        self._constants = np.array(
+            [
+                task.dt,
+                first.model.opt.timestep,
+                task.ball_radius,
+                task.floor_z,
+                world.palm_top,
+                task.toss_threshold,
+                _BALL_CONTYPE,
+                _BALL_CONAFFINITY,
+            ]
+        )
+        self._dt, self._gravity = task.dt, task.gravity
+        # the world
+        self._ref = np.zeros((n, 2, 2))
+        self._vref = np.zeros((n, 2, 2))
+        self._z_before = np.zeros((n, 2))
+        self._holder = np.full((n, 3), -1, dtype=np.int64)
+        self._thrower = np.full((n, 3), -1, dtype=np.int64)
+        self._left = np.zeros((n, 3), dtype=np.bool_)
+        self._dropped = np.zeros((n, 3), dtype=np.bool_)
+        self._k = np.zeros(n, dtype=np.int64)
+        self._q = np.zeros((n, 10))
+        self._v = np.zeros((n, 10))
+        self._caught = np.full((n, 2), -1, dtype=np.int64)  # the last step's events
+        self._released = np.full((n, 2), -1, dtype=np.int64)
+        self._full_target = np.zeros((n, 2, 2))
+        self._full_armed = np.zeros((n, 2), dtype=np.bool_)
+        # what the controller was last shown (the measured balls)
+        self._m_time = np.zeros(n)
+        self._m_ball = np.zeros((n, 3, 2))
+        self._m_ball_vel = np.zeros((n, 3, 2))
+        # the sensor's delay line (a ring shared by all sub-environments: a reset fills
+        # every slot of its own) and the observation's measurement history
+        d = first.delay_steps
+        self._ring = np.zeros((d + 1, n, 3, 5))
+        self._slot = 0
+        self._history = np.zeros((n, 3, _HIST))
+        self._noisy = first.position_std > 0 or first.velocity_std > 0
+        self._std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
+        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        # the hands' plans
+        self._fast = first.controller_name in _FAST_CONTROLLERS
+        self._latency = first.controller.latency
+        self._ahead = first.controller_name == "juggler_latency_aware" and self._latency > 0
+        self._phase = np.zeros((n, 2), dtype=np.int64)
+        self._pk = np.zeros((n, 2), dtype=np.int64)
+        self._end_k = np.zeros((n, 2), dtype=np.int64)
+        self._grid = np.zeros((n, 2, 1, 2))
+        self._glen = np.ones((n, 2), dtype=np.int64)
+        self._last = np.zeros((n, 2, 2, 2))
+        self._t_start = np.zeros((n, 2))
+        self._duration = np.zeros((n, 2))
+        self._end = np.zeros((n, 2, 2))  # own frame (fast) / world (slow)
+        self._incoming = np.full((n, 2), -1, dtype=np.int64)  # first queued ball
+        self._catch_ball = np.full((n, 2), -1, dtype=np.int64)
+        self._phase_time = np.zeros((n, 2))  # the slow controllers' observation
+        self._next = np.zeros((n, 2, 2))
+        options = first.controller.options
+        self._options = options
+        self._reaim = REAIM_AFTER * first.controller.beat
+        self._likeness = first.likeness
+        weights = first.reward_weights
+        self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
+        self._low, self._high = first._low, first._high
+
+    def _after_reset(self, i: int) -> None:
+        if self.backend != "numba":
+            return
+        env = self.envs[i]
+        w = env.world
+        self._ref[i], self._vref[i] = w._ref, w._vref
+        self._z_before[i] = w._z_before
+        self._holder[i], self._thrower[i] = w._holder, w._thrower
+        self._left[i], self._dropped[i] = w._left, w._dropped
+        self._k[i] = w._k
+        self._q[i], self._v[i] = w.data.qpos, w.data.qvel
+        state = env._state
+        self._caught[i], self._released[i] = state.caught, state.released
+        self._m_time[i] = state.time
+        self._m_ball[i] = state.ball_pos
+        self._m_ball_vel[i] = state.ball_vel
+        size = self._ring.shape[0]
+        for b, sensor in enumerate(env.sensor.sensors):
+            for j, entry in enumerate(sensor._buffer):
+                self._ring[(self._slot + 1 + j) % size, i, b] = entry
+        self._history[i] = env._history
+        self._counts[i] = 0
+        for h in range(CASCADE_HANDS):
+            self._load_hand(i, h)
+
+    def _load_hand(self, i: int, h: int) -> None:
+        """Copy hand ``h`` of sub-environment ``i``'s controller into the arrays."""
+        c = self.envs[i].controller
+        hand: CascadeHand = c.hands[h]
+        self._phase[i, h] = PHASES.index(hand.phase)
+        if not self._fast:
+            self._phase_time[i, h] = c.phase_time(h)
+            self._duration[i, h] = c.duration(h)
+            self._next[i, h] = c.nominal_next(h)
+            self._end[i, h] = c.plan_end(h)
+            return
+        self._pk[i, h] = hand.k
+        self._end_k[i, h] = hand.end_k
+        self._load_grid(i, h, hand)
+        self._last[i, h, 0], self._last[i, h, 1] = hand._last[0], hand._last[1]
+        self._t_start[i, h] = hand.t_start
+        self._duration[i, h] = hand.duration
+        self._end[i, h] = hand.end
+        self._incoming[i, h] = hand.incoming[0][0] if hand.incoming else -1
+        self._catch_ball[i, h] = hand._catch_ball
+
+    def _load_grid(self, i: int, h: int, hand: CascadeHand) -> None:
+        grid = hand.grid
+        if grid.shape[0] > self._grid.shape[2]:
+            wider = np.zeros((self.num_envs, 2, grid.shape[0], 2))
+            wider[:, :, : self._grid.shape[2]] = self._grid
+            self._grid = wider
+        self._grid[i, h, : grid.shape[0]] = grid
+        self._glen[i, h] = grid.shape[0]
+
+    # -- the step -------------------------------------------------------------------------
+    def _step_batch(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
+        NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], Columns
+    ]:  # fmt: skip
+        if self.backend != "numba":
+            return super()._step_batch(envs, actions)
+        m = envs.size
+        # the action (as CascadeEnv.step)
+        invalid = np.logical_not(np.isfinite(actions).all(axis=1))
+        a = np.clip(np.where(np.isnan(actions), 0.0, actions), -1.0, 1.0)
+        targets, armed = self._commands(envs)
+        s = self.envs[0].residual_scale
+        self._full_target[envs] = targets + s * a.reshape(m, 2, 2)
+        self._full_armed[envs] = armed
+        self._compiled.cascade_periods(
+            envs,
+            self._model_addr,
+            self._data_addr,
+            self._qpos,
+            self._qvel,
+            self._ctrl,
+            self._sensors,
+            self._contype,
+            self._conaffinity,
+            self._ball_geoms,
+            self._full_target,
+            self._full_armed,
+            self._ref,
+            self._vref,
+            self._z_before,
+            self._holder,
+            self._thrower,
+            self._left,
+            self._dropped,
+            self._k,
+            self._constants,
+            self._q,
+            self._v,
+            self._caught,
+            self._released,
+        )
+        released = self._released[envs]
+        if (released >= 0).any():
+            self._release(envs[(released >= 0).any(axis=1)])
+        time = self._k[envs] * self._dt
+        for i, t in zip(envs.tolist(), time.tolist(), strict=True):
+            self._datas[i].time = t
+        q, v = self._q[envs], self._v[envs]
+        holder = self._holder[envs]
+        rows = self._measure(envs, q, v, holder)
+        self._m_time[envs] = time
+        self._m_ball[envs] = rows[:, :, :2]
+        self._m_ball_vel[envs] = rows[:, :, 2:]
+        hist = self._history[envs]
+        hist[:, :, 4:] = hist[:, :, :-4].copy()
+        hist[:, :, :4] = rows
+        self._history[envs] = hist
+        caught_n = (self._caught[envs] >= 0).sum(axis=1)
+        released_n = (released >= 0).sum(axis=1)
+        dropped = self._dropped[envs].any(axis=1)
+        counts = self._counts
+        counts[envs, 0] += caught_n
+        counts[envs, 1] += released_n
+        first = self.envs[0]
+        terminated = dropped.copy()
+        truncated = ~terminated & (
+            (counts[envs, 0] >= first.max_catches) | (time >= first._time_limit)
+        )
+        phase = self._phase[envs]
+        likeness = self._likeness_of(phase, q, v)
+        action_sq = np.array([row @ row for row in a])  # CascadeEnv's a @ a, row by row
+        w_catch, w_drop, w_like, w_act = self._w
+        r_catch = w_catch * caught_n
+        r_drop = -w_drop * dropped.astype(np.float64)
+        r_like = -w_like * likeness
+        r_act = -w_act * action_sq
+        reward = r_catch + r_drop + r_like + r_act
+        held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
+        obs = self._observations(envs, q, v, held, holder, phase)
+        columns: Columns = {
+            "phase": _PHASE_NAMES[phase[:, 0]],
+            "phases": _PHASE_PAIRS[phase[:, 0] * _NP + phase[:, 1]],
+            "held": _HELD_PAIRS[held[:, 0] * 2 + held[:, 1]],
+            "time": time,
+            "hand": q[:, 0:2].copy(),
+            "hands": q[:, 0:4].reshape(m, 2, 2).copy(),
+            "balls": q[:, 4:10].reshape(m, 3, 2).copy(),
+            "reward_catch": r_catch.astype(np.float64),
+            "reward_drop": r_drop,
+            "reward_likeness": r_like,
+            "reward_action": r_act,
+            "likeness": likeness,
+            "caught": caught_n.astype(np.int64),
+            "catches": counts[envs, 0].copy(),
+            "tosses": counts[envs, 1].copy(),
+            "cycles": counts[envs, 1].copy(),
+            "action_invalid": invalid,
+        }
+        return obs, reward, terminated, truncated, columns
+
+    # -- the controllers ----------------------------------------------------------------
+    def _commands(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Both hands' targets ``(m, 2, 2)`` (world) and release arming ``(m, 2)`` for
+        ``envs``: array indexing between events, the controller itself at them (see the
+        module docstring)."""
+        if not self._fast:
+            return self._python_commands(envs)
+        dt = self._dt
+        phase, k = self._phase[envs], self._pk[envs]
+        holder = self._holder[envs]
+        held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
+        caught = self._caught[envs] >= 0
+        released = self._released[envs] >= 0
+        incoming = self._incoming[envs]
+        duration = self._duration[envs]
+        end_k = self._end_k[envs]
+        event = (
+            (((phase == _GO_DOWN) | (phase == _CATCH)) & held)
+            | (
+                (phase == _CATCH)
+                & (incoming >= 0)
+                & ~held
+                & ~caught
+                & ((incoming != self._catch_ball[envs]) | (k * dt > duration + self._reaim)))
+            | ((phase == _TOSS) & released)
+            | ((phase == _CATCH) & caught)
+            | ((end_k >= 0) & (k >= end_k))
+        )  # fmt: skip
+        python = event.any(axis=1) | caught.any(axis=1)
+        targets = np.empty((envs.size, 2, 2))
+        armed = np.empty((envs.size, 2), dtype=np.bool_)
+        fast = ~python
+        if fast.any():
+            rows = envs[fast]
+            if self._options.correction:
+                check = (phase[fast] == _CATCH) & ~held[fast]
+                if check.any():
+                    self._corrections(rows, check, incoming[fast])
+            kf = self._pk[rows] + 1
+            self._pk[rows] = kf
+            e2 = np.repeat(rows, 2)
+            h2 = np.tile(np.arange(2), rows.size)
+            tf = self._grid[e2, h2, np.minimum(kf.ravel(), self._glen[rows].ravel() - 1)]
+            tf = tf.reshape(rows.size, 2, 2)
+            self._last[rows, :, 0] = self._last[rows, :, 1]
+            self._last[rows, :, 1] = tf
+            targets[fast] = tf * np.stack([_SIGN, np.ones(2)], axis=1)
+            armed[fast] = (self._phase[rows] == _TOSS) & (kf * dt >= self._options.release_after)
+        if python.any():
+            t, a = self._python_commands(envs[python])
+            targets[python], armed[python] = t, a
+        return targets, armed
+
+    def _corrections(
+        self, rows: NDArray[np.int64], check: NDArray[np.bool_], incoming: NDArray[np.int64]
+    ) -> None:
+        """Where :meth:`JugglingController.correct` would re-plan a hand's catch (its test,
+        with its arithmetic, on the view :meth:`CascadeController._view` gives the hand:
+        the oldest queued ball, predicted forward by the latency-aware controller), the
+        hand's own ``correct`` does it and its plan is copied back."""
+        e, h = np.nonzero(check)
+        i = rows[e]
+        ball = incoming[e, h]
+        queued = ball >= 0
+        b = np.where(queued, ball, 0)
+        bx = np.where(queued, self._m_ball[i, b, 0], self._q[i, 2 * h])
+        bz = np.where(queued, self._m_ball[i, b, 1], self._q[i, 2 * h + 1])
+        vx = np.where(queued, self._m_ball_vel[i, b, 0], self._v[i, 2 * h])
+        vz = np.where(queued, self._m_ball_vel[i, b, 1], self._v[i, 2 * h + 1])
+        g, dt = self._gravity, self._dt
+        if self._ahead:  # predict_forward(p, v, latency) of a flying queued ball
+            s = self._latency - 0.0
+            ahead = queued & (self._holder[i, b] < 0)
+            bx = np.where(ahead, bx + vx * s, bx)
+            bz = np.where(ahead, bz + vz * s - 0.5 * g * s * s, bz)
+            vz = np.where(ahead, vz - g * s, vz)
+        sign = _SIGN[h]
+        bx, vx = bx * sign, vx * sign  # the hand's own frame
+        time = self._m_time[i]
+        s = self._t_start[i, h] + self._duration[i, h] - time
+        px = bx + vx * (s - 0.0)
+        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+        miss = self._compiled.hypot_rows(px - self._end[i, h, 0], pz - self._end[i, h, 1])
+        due = (s > dt) & (miss > self._options.correction_tolerance)
+        for j in np.flatnonzero(due).tolist():
+            ii, hh = int(i[j]), int(h[j])
+            hand: CascadeHand = self.envs[ii].controller.hands[hh]
+            hand.k = int(self._pk[ii, hh])
+            hand.correct(
+                float(time[j]), np.array([bx[j], bz[j]]), np.array([vx[j], vz[j]])
+            )
+            self._load_grid(ii, hh, hand)
+            self._end[ii, hh] = hand.end
+
+    def _python_commands(
+        self, envs: NDArray[np.int64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The controllers of ``envs`` run in Python on the measured state; their plans
+        are copied back into the arrays."""
+        targets = np.empty((envs.size, 2, 2))
+        armed = np.empty((envs.size, 2), dtype=np.bool_)
+        for j, i in enumerate(envs.tolist()):
+            c = self.envs[i].controller
+            if self._fast:
+                for h, hand in enumerate(c.hands):
+                    hand.k = int(self._pk[i, h])
+                    hand._last = [self._last[i, h, 0].copy(), self._last[i, h, 1].copy()]
+            q, v = self._q[i], self._v[i]
+            state = CascadeState(
+                time=float(self._m_time[i]),
+                hand_pos=q[0:4].reshape(2, 2).copy(),
+                hand_vel=v[0:4].reshape(2, 2).copy(),
+                ball_pos=self._m_ball[i].copy(),
+                ball_vel=self._m_ball_vel[i].copy(),
+                holder=tuple(self._holder[i].tolist()),
+                released=(int(self._released[i, 0]), int(self._released[i, 1])),
+                caught=(int(self._caught[i, 0]), int(self._caught[i, 1])),
+                dropped=tuple(self._dropped[i].tolist()),
+            )
+            t, a = c.command(state)
+            targets[j], armed[j] = t, a
+            for h in range(CASCADE_HANDS):
+                self._load_hand(i, h)
+        return targets, armed
+
+    # -- the world's releases, the sensor, the likeness, the observation -----------------
+    def _release(self, envs: NDArray[np.int64]) -> None:
+        """The releases of ``envs`` (their world's rule fired; hand 0 first): the ball
+        leaves with its hand's velocity, scattered by the world's generator."""
+        for i in envs.tolist():
+            w = self.envs[i].world
+            qvel = self._qvel[i]
+            for h in range(CASCADE_HANDS):
+                b = int(self._released[i, h])
+                if b < 0:
+                    continue
+                u = perturb_release(
+                    qvel[2 * h : 2 * h + 2].copy(), w.release_speed_std, w.release_angle_std,
+                    w._rng,
+                )  # fmt: skip
+                c = 4 + 2 * b
+                qvel[c], qvel[c + 1] = float(u[0]), float(u[1])
+                self._v[i, c], self._v[i, c + 1] = qvel[c], qvel[c + 1]
+
+    def _measure(
+        self,
+        envs: NDArray[np.int64],
+        q: NDArray[np.float64],
+        v: NDArray[np.float64],
+        holder: NDArray[np.int64],
+    ) -> Any:
+        """The sensor (:meth:`CascadeSensor.measure`) for ``envs``: ``(m, 3, 4)`` rows
+        ``(x, z, vx, vz)`` per ball, the true state while held, the delayed (noisy) one
+        else."""
+        m = envs.size
+        true = np.concatenate([q[:, 4:].reshape(m, 3, 2), v[:, 4:].reshape(m, 3, 2)], axis=2)
+        held = holder >= 0
+        ring = self._ring
+        self._slot = slot = (self._slot + 1) % ring.shape[0]
+        ring[slot, envs, :, :4] = true
+        ring[slot, envs, :, 4] = held
+        oldest = ring[(slot + 1) % ring.shape[0], envs]
+        rows = np.where(held[:, :, None], true, oldest[:, :, :4])
+        if self._noisy:
+            noisy = ~held & (oldest[:, :, 4] == 0.0)
+            if noisy.any():
+                std = self._std
+                for j, b in zip(*np.nonzero(noisy), strict=True):
+                    rng = self.envs[int(envs[j])].sensor.sensors[0]._rng
+                    rows[j, b] += std * rng.standard_normal(4)
+        return rows
+
+    def _likeness_of(
+        self, phase: NDArray[np.int64], q: NDArray[np.float64], v: NDArray[np.float64]
+    ) -> Any:
+        """m; the mean over the hands of :meth:`HumanLikeness.distance` (own frame; one
+        tree query per phase and hand), summed as ``CascadeEnv.step`` sums it."""
+        like = np.zeros(q.shape[0])
+        for h in range(CASCADE_HANDS):
+            sign = _SIGN[h]
+            points = np.stack(
+                [
+                    q[:, 2 * h] * sign,
+                    q[:, 2 * h + 1] * 1.0,
+                    LIKENESS_TAU * (v[:, 2 * h] * sign),
+                    LIKENESS_TAU * (v[:, 2 * h + 1] * 1.0),
+                ],
+                axis=1,
+            )
+            d = np.empty(q.shape[0])
+            for p, name in enumerate(PHASES):
+                sel = phase[:, h] == p
+                if sel.any():
+                    d[sel] = self._likeness.trees[name].query(points[sel])[0]
+            d[~np.isfinite(d)] = math.inf
+            like = like + d / CASCADE_HANDS
+        return like
+
+    def _observations(
+        self,
+        envs: NDArray[np.int64],
+        q: NDArray[np.float64],
+        v: NDArray[np.float64],
+        held: NDArray[np.bool_],
+        holder: NDArray[np.int64],
+        phase: NDArray[np.int64],
+    ) -> Any:
+        m = envs.size
+        rows = np.empty((m, self._high.shape[0]))
+        for h in range(CASCADE_HANDS):
+            o = 15 * h
+            rows[:, o : o + 2] = q[:, 2 * h : 2 * h + 2]
+            rows[:, o + 2 : o + 4] = v[:, 2 * h : 2 * h + 2]
+            rows[:, o + 4] = held[:, h]
+            rows[:, o + 5 : o + 9] = phase[:, h, None] == np.arange(_NP)
+            rows[:, o + 10] = self._duration[envs, h]
+            if self._fast:
+                k = self._pk[envs, h]
+                rows[:, o + 9] = k * self._dt
+                nxt = self._grid[envs, h, np.minimum(k + 1, self._glen[envs, h] - 1)]
+                rows[:, o + 11] = nxt[:, 0] * _SIGN[h]
+                rows[:, o + 12] = nxt[:, 1]
+                rows[:, o + 13] = self._end[envs, h, 0] * _SIGN[h]
+                rows[:, o + 14] = self._end[envs, h, 1]
+            else:
+                rows[:, o + 9] = self._phase_time[envs, h]
+                rows[:, o + 11 : o + 13] = self._next[envs, h]
+                rows[:, o + 13 : o + 15] = self._end[envs, h]
+        o = 15 * CASCADE_HANDS
+        rows[:, o : o + 2 * CASCADE_BALLS : 2] = holder == 0
+        rows[:, o + 1 : o + 2 * CASCADE_BALLS : 2] = holder == 1
+        rows[:, o + 2 * CASCADE_BALLS :] = self._history[envs].reshape(m, -1)
+        obs = rows.astype(np.float32)
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)

@@ -44,7 +44,7 @@ from motion_envs.envs.juggling._v1_scene import (
     SUBSTEPS,
 )
 
-__all__ = ["hypot_rows", "mj_step_c", "py_hypot", "v1_periods"]
+__all__ = ["cascade_periods", "hypot_rows", "mj_step_c", "py_hypot", "v1_periods"]
 
 _DBL_MIN = 2.2250738585072014e-308
 _SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
@@ -260,3 +260,159 @@ def v1_periods(
         ball[i, 0], ball[i, 1] = bx, bz
         ball_vel[i, 0], ball_vel[i, 1] = ux, uz
         events[i, 0], events[i, 1] = caught, fires
+
+
+@njit  # not cached: it calls a ctypes function
+def cascade_periods(
+    envs: Any,
+    model_addr: Any,
+    data_addr: Any,
+    qpos: Any,
+    qvel: Any,
+    ctrl: Any,
+    sensors: Any,
+    contype: Any,
+    conaffinity: Any,
+    ball_geoms: Any,
+    target: Any,
+    armed: Any,
+    ref: Any,
+    vref: Any,
+    z_before: Any,
+    holder: Any,
+    thrower: Any,
+    left: Any,
+    dropped: Any,
+    k: Any,
+    constants: Any,
+    q_out: Any,
+    v_out: Any,
+    caught: Any,
+    released: Any,
+) -> None:
+    """One control period of Cascade-v0's world for each world ``i`` in ``envs``: what
+    :meth:`~motion_envs.envs.juggling.CascadeWorld.step` does, up to the release's noise
+    (drawn in Python afterwards: ``released[i, h]`` is the ball hand ``h`` lets go, or
+    -1; its velocity is still the hand's).
+
+    ``qpos, qvel, ctrl, sensors, contype, conaffinity``: per world, the ``MjData``'s and
+    ``MjModel``'s arrays (numba typed lists of views); ``sensors`` holds per ball the
+    ``contact`` sensors of ``cascade.xml`` (floor, right palm, left palm);
+    ``ball_geoms (3,)``; ``target (N, 2, 2)`` both hands' targets (the residual added);
+    ``armed (N, 2)``; the world's state ``ref, vref (N, 2, 2)``, ``z_before (N, 2)``,
+    ``holder, thrower (N, 3)`` (a hand or -1), ``left, dropped (N, 3)`` and ``k (N,)``,
+    updated in place (the contacts of a caught or released ball switched as
+    ``CascadeWorld._set_contacts`` switches them); ``constants`` = ``(dt, h,
+    ball_radius, floor_z, palm_top, toss_threshold, ball_contype, ball_conaffinity)``.
+    Out: ``q_out, v_out (N, 10)`` (qpos, qvel after the period), ``caught (N, 2)`` (the
+    ball each hand caught, or -1) and ``released``.
+    """
+    dt, h, radius, floor_z, palm_top, threshold = (
+        constants[0],
+        constants[1],
+        constants[2],
+        constants[3],
+        constants[4],
+        constants[5],
+    )
+    ball_contype, ball_conaffinity = int(constants[6]), int(constants[7])
+    step_max = HAND_SPEED_LIMIT * dt
+    plan = np.empty((2, 8))
+    for i in envs:
+        # servo_plan, hand by hand
+        for hh in range(2):
+            sx, sz = ref[i, hh, 0], ref[i, hh, 1]
+            dx, dz = target[i, hh, 0] - sx, target[i, hh, 1] - sz
+            dist = py_hypot(dx, dz)
+            if dist > step_max:
+                dx, dz = dx * step_max / dist, dz * step_max / dist
+            vrx, vrz = dx / dt, dz / dt
+            plan[hh, 0], plan[hh, 1], plan[hh, 2], plan[hh, 3] = sx, sz, dx, dz
+            plan[hh, 4], plan[hh, 5] = vrx, vrz
+            plan[hh, 6] = (vrx - vref[i, hh, 0]) / dt
+            plan[hh, 7] = (vrz - vref[i, hh, 1]) / dt
+            ref[i, hh, 0], ref[i, hh, 1] = sx + dx, sz + dz
+            vref[i, hh, 0], vref[i, hh, 1] = vrx, vrz
+        qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
+        ct, ca = contype[i], conaffinity[i]
+        z_prev0, z_prev1 = qp[1], qp[3]
+        caught[i, 0] = caught[i, 1] = -1
+        released[i, 0] = released[i, 1] = -1
+        for j in range(1, SUBSTEPS + 1):
+            f = j / SUBSTEPS
+            for hh in range(2):
+                # servo_acceleration
+                sx, sz, dx, dz = plan[hh, 0], plan[hh, 1], plan[hh, 2], plan[hh, 3]
+                vrx, vrz, arx, arz = plan[hh, 4], plan[hh, 5], plan[hh, 6], plan[hh, 7]
+                hx, hz, vx, vz = qp[2 * hh], qp[2 * hh + 1], qv[2 * hh], qv[2 * hh + 1]
+                ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
+                az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
+                n2 = ax * ax + az * az
+                if n2 > _AMAX2:
+                    s = math.sqrt(_AMAX2 / n2)
+                    ax, az = ax * s, az * s
+                nvx, nvz = vx + ax * h, vz + az * h
+                sp = py_hypot(nvx, nvz)
+                if sp > HAND_SPEED_LIMIT:
+                    nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
+                    ax, az = (nvx - vx) / h, (nvz - vz) / h
+                u[2 * hh] = HAND_MASS * ax
+                u[2 * hh + 1] = HAND_MASS * az
+            mj_step_c(model_addr[i], data_addr[i])
+            for b in range(3):
+                c = 4 + 2 * b
+                if holder[i, b] >= 0:  # held: follows its hand (written at the period's end)
+                    continue
+                bx, bz = qp[c], qp[c + 1]
+                if not left[i, b]:
+                    t = thrower[i, b]
+                    if py_hypot(bx - qp[2 * t], bz - qp[2 * t + 1]) > 2 * radius:
+                        left[i, b] = True
+                if dropped[i, b] or (not left[i, b] and bz - radius > floor_z):
+                    continue
+                if bz - radius <= floor_z or sens[3 * b] > 0.0:
+                    dropped[i, b] = True
+                    continue
+                if qv[c + 1] >= 0.0 or not left[i, b]:
+                    continue
+                for hh in range(2):
+                    busy = holder[i, 0] == hh or holder[i, 1] == hh or holder[i, 2] == hh
+                    if busy or bz < qp[2 * hh + 1] + palm_top:
+                        continue
+                    rel = py_hypot(qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1])
+                    if rel < CAPTURE_SPEED and sens[3 * b + 1 + hh] > 0.0:
+                        holder[i, b] = hh
+                        caught[i, hh] = b
+                        ct[ball_geoms[b]] = 0
+                        ca[ball_geoms[b]] = 0
+                        break
+        # held balls follow their hands
+        for b in range(3):
+            hh = holder[i, b]
+            if hh >= 0:
+                c = 4 + 2 * b
+                qp[c], qp[c + 1] = qp[2 * hh], qp[2 * hh + 1]
+                qv[c], qv[c + 1] = qv[2 * hh], qv[2 * hh + 1]
+        k[i] += 1
+        z_prev20, z_prev21 = z_before[i, 0], z_before[i, 1]
+        z_before[i, 0], z_before[i, 1] = z_prev0, z_prev1
+        for hh in range(2):
+            b = -1
+            for bb in range(3):
+                if holder[i, bb] == hh:
+                    b = bb
+                    break
+            if b < 0 or caught[i, hh] >= 0 or not armed[i, hh]:
+                continue
+            zp, zp2 = (z_prev0, z_prev20) if hh == 0 else (z_prev1, z_prev21)
+            a_z = (qp[2 * hh + 1] - 2.0 * zp + zp2) / (dt * dt)
+            if a_z < -threshold:
+                holder[i, b] = -1
+                thrower[i, b] = hh
+                left[i, b] = False
+                released[i, hh] = b
+                ct[ball_geoms[b]] = ball_contype
+                ca[ball_geoms[b]] = ball_conaffinity
+        for m in range(10):
+            q_out[i, m] = qp[m]
+            v_out[i, m] = qv[m]
