@@ -18,16 +18,16 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
   ``cascade.xml``'s contact sensors); the releases' noise in Python, from each world's
   generator, hand 0 before hand 1;
-* the sensor's delay line (one ring for all balls of all sub-environments), the
-  human-likeness (each phase's k-d tree queried once per hand for all sub-environments
-  in it), the reward and the observation as array operations.
+* the sensor's delay line (one ring for all balls of all sub-environments), the reward
+  and the observation as array operations; the human-likeness compiled (the nearest
+  demonstrated state searched as :class:`~motion_envs.models.juggling.HumanLikeness`
+  searches it, the same numbers).
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
-from motion_envs.envs.juggling._cascade_scene import _BALL_CONAFFINITY, _BALL_CONTYPE
+from motion_envs.envs.juggling._cascade_scene import BALL_CONAFFINITY, BALL_CONTYPE
 from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
@@ -123,8 +123,8 @@ class CascadeVectorEnv(JugglingVectorEnv):
                 task.floor_z,
                 world.palm_top,
                 task.toss_threshold,
-                _BALL_CONTYPE,
-                _BALL_CONAFFINITY,
+                BALL_CONTYPE,
+                BALL_CONAFFINITY,
             ]
         )
         self._dt, self._gravity = task.dt, task.gravity
@@ -156,6 +156,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         self._noisy = first.position_std > 0 or first.velocity_std > 0
         self._std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
         self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        self._sensor_rngs: list[Any] = [None] * n  # the generator of each sensor
         # the hands' plans
         self._fast = first.controller_name in _FAST_CONTROLLERS
         self._latency = first.controller.latency
@@ -176,7 +177,14 @@ class CascadeVectorEnv(JugglingVectorEnv):
         options = first.controller.options
         self._options = options
         self._reaim = REAIM_AFTER * first.controller.beat
-        self._likeness = first.likeness
+        # the likeness's samples per phase, sorted as HumanLikeness sorts them
+        sorted_ = [first.likeness._sorted[name] for name in PHASES]
+        self._sizes = np.array([ss.columns.shape[1] for ss in sorted_], dtype=np.int64)
+        self._axes = np.array([ss.axis for ss in sorted_], dtype=np.int64)
+        self._samples = np.full((_NP, 4, int(self._sizes.max())), np.inf)
+        for p, ss in enumerate(sorted_):
+            self._samples[p, :, : ss.columns.shape[1]] = ss.columns
+        self._near = np.zeros((n, 2, _NP), dtype=np.int64)  # where each hand's search starts
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
@@ -202,6 +210,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             for j, entry in enumerate(sensor._buffer):
                 self._ring[(self._slot + 1 + j) % size, i, b] = entry
         self._history[i] = env._history
+        self._sensor_rngs[i] = env.sensor.sensors[0]._rng
         self._counts[i] = 0
         for h in range(CASCADE_HANDS):
             self._load_hand(i, h)
@@ -305,7 +314,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             (counts[envs, 0] >= first.max_catches) | (time >= first._time_limit)
         )
         phase = self._phase[envs]
-        likeness = self._likeness_of(phase, q, v)
+        likeness = self._likeness_of(envs, phase, q, v)
         action_sq = np.array([row @ row for row in a])  # CascadeEnv's a @ a, row by row
         w_catch, w_drop, w_like, w_act = self._w
         r_catch = w_catch * caught_n
@@ -424,9 +433,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             ii, hh = int(i[j]), int(h[j])
             hand: CascadeHand = self.envs[ii].controller.hands[hh]
             hand.k = int(self._pk[ii, hh])
-            hand.correct(
-                float(time[j]), np.array([bx[j], bz[j]]), np.array([vx[j], vz[j]])
-            )
+            hand.correct(float(time[j]), np.array([bx[j], bz[j]]), np.array([vx[j], vz[j]]))
             self._load_grid(ii, hh, hand)
             self._end[ii, hh] = hand.end
 
@@ -502,17 +509,28 @@ class CascadeVectorEnv(JugglingVectorEnv):
         if self._noisy:
             noisy = ~held & (oldest[:, :, 4] == 0.0)
             if noisy.any():
-                std = self._std
-                for j, b in zip(*np.nonzero(noisy), strict=True):
-                    rng = self.envs[int(envs[j])].sensor.sensors[0]._rng
-                    rows[j, b] += std * rng.standard_normal(4)
+                # per sub-environment one draw for its noisy balls in order (a
+                # generator's normals are a stream: 4 k at once are k draws of 4)
+                counts = noisy.sum(axis=1)
+                rngs = self._sensor_rngs
+                draws = [
+                    rngs[i].standard_normal(4 * c)
+                    for i, c in zip(envs.tolist(), counts.tolist(), strict=True)
+                    if c
+                ]
+                rows[noisy] += self._std * np.concatenate(draws).reshape(-1, 4)
         return rows
 
     def _likeness_of(
-        self, phase: NDArray[np.int64], q: NDArray[np.float64], v: NDArray[np.float64]
+        self,
+        envs: NDArray[np.int64],
+        phase: NDArray[np.int64],
+        q: NDArray[np.float64],
+        v: NDArray[np.float64],
     ) -> Any:
-        """m; the mean over the hands of :meth:`HumanLikeness.distance` (own frame; one
-        tree query per phase and hand), summed as ``CascadeEnv.step`` sums it."""
+        """m; the mean over the hands of :meth:`HumanLikeness.distance` (own frame, the
+        same numbers, compiled: :func:`~motion_envs.envs.juggling._compiled.nearest_rows`),
+        summed as ``CascadeEnv.step`` sums it."""
         like = np.zeros(q.shape[0])
         for h in range(CASCADE_HANDS):
             sign = _SIGN[h]
@@ -525,12 +543,12 @@ class CascadeVectorEnv(JugglingVectorEnv):
                 ],
                 axis=1,
             )
-            d = np.empty(q.shape[0])
-            for p, name in enumerate(PHASES):
-                sel = phase[:, h] == p
-                if sel.any():
-                    d[sel] = self._likeness.trees[name].query(points[sel])[0]
-            d[~np.isfinite(d)] = math.inf
+            ph = phase[:, h]
+            last = self._near[envs, h, ph]
+            d = self._compiled.nearest_rows(
+                points, ph, self._samples, self._sizes, self._axes, last
+            )
+            self._near[envs, h, ph] = last
             like = like + d / CASCADE_HANDS
         return like
 

@@ -44,7 +44,7 @@ from motion_envs.envs.juggling._v1_scene import (
     SUBSTEPS,
 )
 
-__all__ = ["cascade_periods", "hypot_rows", "mj_step_c", "py_hypot", "v1_periods"]
+__all__ = ["cascade_periods", "hypot_rows", "mj_step_c", "nearest_rows", "py_hypot", "v1_periods"]
 
 _DBL_MIN = 2.2250738585072014e-308
 _SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
@@ -416,3 +416,41 @@ def cascade_periods(
         for m in range(10):
             q_out[i, m] = qp[m]
             v_out[i, m] = qv[m]
+
+
+@njit(cache=True)
+def nearest_rows(points: Any, phase: Any, columns: Any, sizes: Any, axes: Any, last: Any) -> Any:
+    """m; per row ``j`` of ``points (m, 4)``, the distance to the nearest sample of phase
+    ``phase[j]``: :meth:`HumanLikeness.distance`'s number (``_SortedSamples.nearest``: the
+    phase's samples sorted along their widest coordinate ``axes[p]``, ``columns (P, 4,
+    M)`` of which the first ``sizes[p]`` count, the slab of the bound searched, the squared
+    differences summed in coordinate order, then the square root), ``inf`` where it is not
+    finite. ``last (m,)``: a sample index per row to start the bound from (any works),
+    updated to the nearest."""
+    out = np.empty(points.shape[0])
+    for j in range(points.shape[0]):
+        p = phase[j]
+        cols = columns[p]
+        size = sizes[p]
+        q0, q1, q2, q3 = points[j, 0], points[j, 1], points[j, 2], points[j, 3]
+        s0 = min(max(last[j], 0), size - 1)
+        d0, d1, d2, d3 = cols[0, s0] - q0, cols[1, s0] - q1, cols[2, s0] - q2, cols[3, s0] - q3
+        bound = math.sqrt(((d0 * d0 + d1 * d1) + d2 * d2) + d3 * d3)
+        if not math.isfinite(bound):
+            out[j] = math.inf
+            continue
+        width = bound * (1.0 + 1e-9) + 1e-12
+        qc = points[j, axes[p]]
+        key = cols[axes[p], :size]
+        lo = np.searchsorted(key, qc - width, side="left")
+        hi = np.searchsorted(key, qc + width, side="right")
+        best, at = math.inf, s0
+        for m in range(lo, hi):
+            e0, e1, e2, e3 = cols[0, m] - q0, cols[1, m] - q1, cols[2, m] - q2, cols[3, m] - q3
+            s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
+            if s < best:
+                best, at = s, m
+        last[j] = at
+        d = math.sqrt(best)
+        out[j] = d if math.isfinite(d) else math.inf
+    return out
