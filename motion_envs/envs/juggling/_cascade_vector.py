@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES
+from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
 from motion_envs.envs.juggling._cascade_scene import BALL_CONAFFINITY, BALL_CONTYPE
@@ -294,7 +294,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             self._datas[i].time = t
         q, v = self._q[envs], self._v[envs]
         holder = self._holder[envs]
-        rows = self._measure(envs, q, v, holder)
+        rows = self._measure(envs)
         self._m_time[envs] = time
         self._m_ball[envs] = rows[:, :, :2]
         self._m_ball_vel[envs] = rows[:, :, 2:]
@@ -315,7 +315,9 @@ class CascadeVectorEnv(JugglingVectorEnv):
         )
         phase = self._phase[envs]
         likeness = self._likeness_of(envs, phase, q, v)
-        action_sq = np.array([row @ row for row in a])  # CascadeEnv's a @ a, row by row
+        # CascadeEnv's a @ a: the same dot product per row (numpy's matmul loop over the
+        # stack calls it as for one row; the BLAS dot's order is not the naive sum's)
+        action_sq = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
         w_catch, w_drop, w_like, w_act = self._w
         r_catch = w_catch * caught_n
         r_drop = -w_drop * dropped.astype(np.float64)
@@ -323,7 +325,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         r_act = -w_act * action_sq
         reward = r_catch + r_drop + r_like + r_act
         held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
-        obs = self._observations(envs, q, v, held, holder, phase)
+        obs = self._observations(envs)
         columns: Columns = {
             "phase": _PHASE_NAMES[phase[:, 0]],
             "phases": _PHASE_PAIRS[phase[:, 0] * _NP + phase[:, 1]],
@@ -487,38 +489,25 @@ class CascadeVectorEnv(JugglingVectorEnv):
                 qvel[c], qvel[c + 1] = float(u[0]), float(u[1])
                 self._v[i, c], self._v[i, c + 1] = qvel[c], qvel[c + 1]
 
-    def _measure(
-        self,
-        envs: NDArray[np.int64],
-        q: NDArray[np.float64],
-        v: NDArray[np.float64],
-        holder: NDArray[np.int64],
-    ) -> Any:
+    def _measure(self, envs: NDArray[np.int64]) -> Any:
         """The sensor (:meth:`CascadeSensor.measure`) for ``envs``: ``(m, 3, 4)`` rows
         ``(x, z, vx, vz)`` per ball, the true state while held, the delayed (noisy) one
         else."""
-        m = envs.size
-        true = np.concatenate([q[:, 4:].reshape(m, 3, 2), v[:, 4:].reshape(m, 3, 2)], axis=2)
-        held = holder >= 0
-        ring = self._ring
-        self._slot = slot = (self._slot + 1) % ring.shape[0]
-        ring[slot, envs, :, :4] = true
-        ring[slot, envs, :, 4] = held
-        oldest = ring[(slot + 1) % ring.shape[0], envs]
-        rows = np.where(held[:, :, None], true, oldest[:, :, :4])
-        if self._noisy:
-            noisy = ~held & (oldest[:, :, 4] == 0.0)
-            if noisy.any():
-                # per sub-environment one draw for its noisy balls in order (a
-                # generator's normals are a stream: 4 k at once are k draws of 4)
-                counts = noisy.sum(axis=1)
-                rngs = self._sensor_rngs
-                draws = [
-                    rngs[i].standard_normal(4 * c)
-                    for i, c in zip(envs.tolist(), counts.tolist(), strict=True)
-                    if c
-                ]
-                rows[noisy] += self._std * np.concatenate(draws).reshape(-1, 4)
+        self._slot = slot = (self._slot + 1) % self._ring.shape[0]
+        rows, noisy = self._compiled.cascade_measure(
+            envs, self._q, self._v, self._holder, self._ring, slot
+        )
+        if self._noisy and noisy.any():
+            # per sub-environment one draw for its noisy balls in order (a generator's
+            # normals are a stream: 4 k at once are k draws of 4)
+            counts = noisy.sum(axis=1)
+            rngs = self._sensor_rngs
+            draws = [
+                rngs[i].standard_normal(4 * c)
+                for i, c in zip(envs.tolist(), counts.tolist(), strict=True)
+                if c
+            ]
+            rows[noisy] += self._std * np.concatenate(draws).reshape(-1, 4)
         return rows
 
     def _likeness_of(
@@ -552,40 +541,20 @@ class CascadeVectorEnv(JugglingVectorEnv):
             like = like + d / CASCADE_HANDS
         return like
 
-    def _observations(
-        self,
-        envs: NDArray[np.int64],
-        q: NDArray[np.float64],
-        v: NDArray[np.float64],
-        held: NDArray[np.bool_],
-        holder: NDArray[np.int64],
-        phase: NDArray[np.int64],
-    ) -> Any:
-        m = envs.size
-        rows = np.empty((m, self._high.shape[0]))
-        for h in range(CASCADE_HANDS):
-            o = 15 * h
-            rows[:, o : o + 2] = q[:, 2 * h : 2 * h + 2]
-            rows[:, o + 2 : o + 4] = v[:, 2 * h : 2 * h + 2]
-            rows[:, o + 4] = held[:, h]
-            rows[:, o + 5 : o + 9] = phase[:, h, None] == np.arange(_NP)
-            rows[:, o + 10] = self._duration[envs, h]
-            if self._fast:
-                k = self._pk[envs, h]
-                rows[:, o + 9] = k * self._dt
-                nxt = self._grid[envs, h, np.minimum(k + 1, self._glen[envs, h] - 1)]
-                rows[:, o + 11] = nxt[:, 0] * _SIGN[h]
-                rows[:, o + 12] = nxt[:, 1]
-                rows[:, o + 13] = self._end[envs, h, 0] * _SIGN[h]
-                rows[:, o + 14] = self._end[envs, h, 1]
-            else:
-                rows[:, o + 9] = self._phase_time[envs, h]
-                rows[:, o + 11 : o + 13] = self._next[envs, h]
-                rows[:, o + 13 : o + 15] = self._end[envs, h]
-        o = 15 * CASCADE_HANDS
-        rows[:, o : o + 2 * CASCADE_BALLS : 2] = holder == 0
-        rows[:, o + 1 : o + 2 * CASCADE_BALLS : 2] = holder == 1
-        rows[:, o + 2 * CASCADE_BALLS :] = self._history[envs].reshape(m, -1)
+    def _observations(self, envs: NDArray[np.int64]) -> Any:
+        rows = self._compiled.cascade_observations(
+            envs,
+            self._q,
+            self._v,
+            self._holder,
+            self._history,
+            self._phase,
+            self._duration,
+            (self._pk, self._grid, self._glen, self._end),
+            self._dt,
+            self._fast,
+            (self._phase_time, self._next, self._end),
+        )
         obs = rows.astype(np.float32)
         np.minimum(obs, self._high, out=obs)
         return np.maximum(obs, self._low, out=obs)

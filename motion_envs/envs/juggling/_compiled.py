@@ -44,7 +44,16 @@ from motion_envs.envs.juggling._v1_scene import (
     SUBSTEPS,
 )
 
-__all__ = ["cascade_periods", "hypot_rows", "mj_step_c", "nearest_rows", "py_hypot", "v1_periods"]
+__all__ = [
+    "cascade_measure",
+    "cascade_observations",
+    "cascade_periods",
+    "hypot_rows",
+    "mj_step_c",
+    "nearest_rows",
+    "py_hypot",
+    "v1_periods",
+]
 
 _DBL_MIN = 2.2250738585072014e-308
 _SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
@@ -454,3 +463,89 @@ def nearest_rows(points: Any, phase: Any, columns: Any, sizes: Any, axes: Any, l
         d = math.sqrt(best)
         out[j] = d if math.isfinite(d) else math.inf
     return out
+
+
+@njit(cache=True)
+def cascade_measure(envs: Any, q: Any, v: Any, holder: Any, ring: Any, slot: int) -> Any:
+    """The cascade's sensors (:meth:`CascadeSensor.measure`) for ``envs`` before their
+    noise: the true balls of ``q, v (N, 10)`` go into the delay line ``ring (S, N, 3,
+    5)`` at ``slot``; returns ``rows (m, 3, 4)`` (the true state of a held ball, the
+    delayed one of a flying ball) and ``noisy (m, 3)`` (flying now and then: the noise
+    applies)."""
+    m, size = envs.shape[0], ring.shape[0]
+    rows = np.empty((m, 3, 4))
+    noisy = np.zeros((m, 3), dtype=np.bool_)
+    old = (slot + 1) % size
+    for j in range(m):
+        i = envs[j]
+        for b in range(3):
+            held = holder[i, b] >= 0
+            x, z = q[i, 4 + 2 * b], q[i, 5 + 2 * b]
+            vx, vz = v[i, 4 + 2 * b], v[i, 5 + 2 * b]
+            ring[slot, i, b, 0], ring[slot, i, b, 1] = x, z
+            ring[slot, i, b, 2], ring[slot, i, b, 3] = vx, vz
+            ring[slot, i, b, 4] = 1.0 if held else 0.0
+            if held:
+                rows[j, b, 0], rows[j, b, 1], rows[j, b, 2], rows[j, b, 3] = x, z, vx, vz
+            else:
+                for c in range(4):
+                    rows[j, b, c] = ring[old, i, b, c]
+                noisy[j, b] = ring[old, i, b, 4] == 0.0
+    return rows, noisy
+
+
+@njit(cache=True)
+def cascade_observations(
+    envs: Any,
+    q: Any,
+    v: Any,
+    holder: Any,
+    history: Any,
+    phase: Any,
+    duration: Any,
+    plan: Any,
+    dt: float,
+    fast: bool,
+    shown: Any,
+) -> Any:
+    """``CascadeEnv._observation``'s rows for ``envs`` (float64, before the float32 cast
+    and the bounds): per hand its true state, whether it holds a ball, its phase one-hot,
+    the time in the phase, the plan's duration, the next target and the plan's end
+    (world frame); per ball its holder; the measurement ``history (N, 3, 16)``.
+
+    ``plan = (k, grid, glen, end)``: the hands' plans in their own frames, read when
+    ``fast``; else ``shown = (phase_time, next, end)`` as the controller reported them."""
+    k, grid, glen, end = plan
+    phase_time, nxt, end_shown = shown
+    m = envs.shape[0]
+    n_hist = history.shape[2]
+    rows = np.zeros((m, 2 * 15 + 6 + 3 * n_hist))
+    for j in range(m):
+        i = envs[j]
+        for h in range(2):
+            o = 15 * h
+            rows[j, o], rows[j, o + 1] = q[i, 2 * h], q[i, 2 * h + 1]
+            rows[j, o + 2], rows[j, o + 3] = v[i, 2 * h], v[i, 2 * h + 1]
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            rows[j, o + 4] = 1.0 if held else 0.0
+            rows[j, o + 5 + phase[i, h]] = 1.0
+            rows[j, o + 10] = duration[i, h]
+            if fast:
+                rows[j, o + 9] = k[i, h] * dt
+                r = min(k[i, h] + 1, glen[i, h] - 1)
+                x, ex = grid[i, h, r, 0], end[i, h, 0]
+                rows[j, o + 11] = -x if h == 1 else x
+                rows[j, o + 12] = grid[i, h, r, 1]
+                rows[j, o + 13] = -ex if h == 1 else ex
+                rows[j, o + 14] = end[i, h, 1]
+            else:
+                rows[j, o + 9] = phase_time[i, h]
+                rows[j, o + 11], rows[j, o + 12] = nxt[i, h, 0], nxt[i, h, 1]
+                rows[j, o + 13], rows[j, o + 14] = end_shown[i, h, 0], end_shown[i, h, 1]
+        for b in range(3):
+            rows[j, 30 + 2 * b] = 1.0 if holder[i, b] == 0 else 0.0
+            rows[j, 31 + 2 * b] = 1.0 if holder[i, b] == 1 else 0.0
+        for b in range(3):
+            for c in range(n_hist):
+                rows[j, 36 + n_hist * b + c] = history[i, b, c]
+    return rows
