@@ -50,6 +50,7 @@ __all__ = ["CascadeVectorEnv"]
 
 _TOSS, _GO_DOWN, _CATCH = PHASES.index("toss"), PHASES.index("go_down"), PHASES.index("catch")
 _NP = len(PHASES)
+_PHASE_CODES = np.array([_TOSS, _GO_DOWN, _CATCH], dtype=np.int64)
 _PHASE_NAMES = np.array(PHASES, dtype=object)
 _PHASE_PAIRS = np.empty(_NP * _NP, dtype=object)
 _PHASE_PAIRS[:] = [(a, b) for a in PHASES for b in PHASES]
@@ -176,7 +177,17 @@ class CascadeVectorEnv(JugglingVectorEnv):
         self._next = np.zeros((n, 2, 2))
         options = first.controller.options
         self._options = options
-        self._reaim = REAIM_AFTER * first.controller.beat
+        ctask = first.controller.task  # the controller's (the same numbers)
+        self._event_constants = np.array(
+            [
+                ctask.dt,
+                ctask.gravity,
+                REAIM_AFTER * first.controller.beat,
+                self._latency,
+                options.correction_tolerance,
+            ]
+        )
+        self._advance_constants = np.array([ctask.dt, options.release_after, _TOSS])
         # the likeness's samples per phase, sorted as HumanLikeness sorts them
         sorted_ = [first.likeness._sorted[name] for name in PHASES]
         self._sizes = np.array([ss.columns.shape[1] for ss in sorted_], dtype=np.int64)
@@ -350,94 +361,66 @@ class CascadeVectorEnv(JugglingVectorEnv):
     # -- the controllers ----------------------------------------------------------------
     def _commands(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Both hands' targets ``(m, 2, 2)`` (world) and release arming ``(m, 2)`` for
-        ``envs``: array indexing between events, the controller itself at them (see the
-        module docstring)."""
+        ``envs``: array indexing between events, the hand's own ``correct`` where an eq.
+        10 correction is due, the controller itself at other events (see the module
+        docstring)."""
         if not self._fast:
             return self._python_commands(envs)
-        dt = self._dt
-        phase, k = self._phase[envs], self._pk[envs]
-        holder = self._holder[envs]
-        held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
-        caught = self._caught[envs] >= 0
-        released = self._released[envs] >= 0
-        incoming = self._incoming[envs]
-        duration = self._duration[envs]
-        end_k = self._end_k[envs]
-        event = (
-            (((phase == _GO_DOWN) | (phase == _CATCH)) & held)
-            | (
-                (phase == _CATCH)
-                & (incoming >= 0)
-                & ~held
-                & ~caught
-                & ((incoming != self._catch_ball[envs]) | (k * dt > duration + self._reaim)))
-            | ((phase == _TOSS) & released)
-            | ((phase == _CATCH) & caught)
-            | ((end_k >= 0) & (k >= end_k))
-        )  # fmt: skip
-        python = event.any(axis=1) | caught.any(axis=1)
+        c = self._compiled
+        python, due, ball = c.cascade_events(
+            envs,
+            (
+                self._phase,
+                self._pk,
+                self._end_k,
+                self._t_start,
+                self._duration,
+                self._end,
+                self._incoming,
+                self._catch_ball,
+            ),
+            (self._holder, self._caught, self._released, self._q, self._v),
+            (self._m_time, self._m_ball, self._m_ball_vel),
+            self._event_constants,
+            _PHASE_CODES,
+            self._options.correction,
+            self._ahead,
+        )
+        if due.any():
+            self._correct(envs, due, ball)
         targets = np.empty((envs.size, 2, 2))
         armed = np.empty((envs.size, 2), dtype=np.bool_)
         fast = ~python
         if fast.any():
-            rows = envs[fast]
-            if self._options.correction:
-                check = (phase[fast] == _CATCH) & ~held[fast]
-                if check.any():
-                    self._corrections(rows, check, incoming[fast])
-            kf = self._pk[rows] + 1
-            self._pk[rows] = kf
-            e2 = np.repeat(rows, 2)
-            h2 = np.tile(np.arange(2), rows.size)
-            tf = self._grid[e2, h2, np.minimum(kf.ravel(), self._glen[rows].ravel() - 1)]
-            tf = tf.reshape(rows.size, 2, 2)
-            self._last[rows, :, 0] = self._last[rows, :, 1]
-            self._last[rows, :, 1] = tf
-            targets[fast] = tf * np.stack([_SIGN, np.ones(2)], axis=1)
-            armed[fast] = (self._phase[rows] == _TOSS) & (kf * dt >= self._options.release_after)
+            t, a = c.cascade_advance(
+                envs[fast],
+                self._pk,
+                self._grid,
+                self._glen,
+                self._last,
+                self._phase,
+                self._advance_constants,
+            )
+            targets[fast], armed[fast] = t, a
         if python.any():
             t, a = self._python_commands(envs[python])
             targets[python], armed[python] = t, a
         return targets, armed
 
-    def _corrections(
-        self, rows: NDArray[np.int64], check: NDArray[np.bool_], incoming: NDArray[np.int64]
+    def _correct(
+        self, envs: NDArray[np.int64], due: NDArray[np.bool_], ball: NDArray[np.float64]
     ) -> None:
-        """Where :meth:`JugglingController.correct` would re-plan a hand's catch (its test,
-        with its arithmetic, on the view :meth:`CascadeController._view` gives the hand:
-        the oldest queued ball, predicted forward by the latency-aware controller), the
-        hand's own ``correct`` does it and its plan is copied back."""
-        e, h = np.nonzero(check)
-        i = rows[e]
-        ball = incoming[e, h]
-        queued = ball >= 0
-        b = np.where(queued, ball, 0)
-        bx = np.where(queued, self._m_ball[i, b, 0], self._q[i, 2 * h])
-        bz = np.where(queued, self._m_ball[i, b, 1], self._q[i, 2 * h + 1])
-        vx = np.where(queued, self._m_ball_vel[i, b, 0], self._v[i, 2 * h])
-        vz = np.where(queued, self._m_ball_vel[i, b, 1], self._v[i, 2 * h + 1])
-        g, dt = self._gravity, self._dt
-        if self._ahead:  # predict_forward(p, v, latency) of a flying queued ball
-            s = self._latency - 0.0
-            ahead = queued & (self._holder[i, b] < 0)
-            bx = np.where(ahead, bx + vx * s, bx)
-            bz = np.where(ahead, bz + vz * s - 0.5 * g * s * s, bz)
-            vz = np.where(ahead, vz - g * s, vz)
-        sign = _SIGN[h]
-        bx, vx = bx * sign, vx * sign  # the hand's own frame
-        time = self._m_time[i]
-        s = self._t_start[i, h] + self._duration[i, h] - time
-        px = bx + vx * (s - 0.0)
-        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
-        miss = self._compiled.hypot_rows(px - self._end[i, h, 0], pz - self._end[i, h, 1])
-        due = (s > dt) & (miss > self._options.correction_tolerance)
-        for j in np.flatnonzero(due).tolist():
-            ii, hh = int(i[j]), int(h[j])
-            hand: CascadeHand = self.envs[ii].controller.hands[hh]
-            hand.k = int(self._pk[ii, hh])
-            hand.correct(float(time[j]), np.array([bx[j], bz[j]]), np.array([vx[j], vz[j]]))
-            self._load_grid(ii, hh, hand)
-            self._end[ii, hh] = hand.end
+        """The eq. 10 corrections found due: each hand's own
+        :meth:`JugglingController.correct` on its view's ball (own frame), its new plan
+        copied back."""
+        for j, h in zip(*np.nonzero(due), strict=True):
+            i, hh = int(envs[j]), int(h)
+            hand: CascadeHand = self.envs[i].controller.hands[hh]
+            hand.k = int(self._pk[i, hh])
+            b = ball[j, hh]
+            hand.correct(float(self._m_time[i]), b[:2].copy(), b[2:].copy())
+            self._load_grid(i, hh, hand)
+            self._end[i, hh] = hand.end
 
     def _python_commands(
         self, envs: NDArray[np.int64]

@@ -45,6 +45,8 @@ from motion_envs.envs.juggling._v1_scene import (
 )
 
 __all__ = [
+    "cascade_advance",
+    "cascade_events",
     "cascade_measure",
     "cascade_observations",
     "cascade_periods",
@@ -549,3 +551,120 @@ def cascade_observations(
             for c in range(n_hist):
                 rows[j, 36 + n_hist * b + c] = history[i, b, c]
     return rows
+
+
+@njit(cache=True)
+def cascade_events(
+    envs: Any,
+    plan: Any,
+    world: Any,
+    measured: Any,
+    constants: Any,
+    phases: Any,
+    correction: bool,
+    ahead: bool,
+) -> Any:
+    """Which of ``envs`` need their :class:`CascadeController` in Python this step, and
+    which hands' eq. 10 correction is due: the tests of ``CascadeHand.command`` and
+    ``JugglingController.command``/``correct`` on the measured state, with their
+    arithmetic (the hand's view: its oldest queued ball, predicted forward by the
+    latency-aware controller, else the hand itself; own frame).
+
+    ``plan = (phase, k, end_k, t_start, duration, end, incoming, catch_ball)`` per
+    ``(N, 2)`` hand (``end`` own frame); ``world = (holder, caught, released, q, v)``
+    (the last step's); ``measured = (time, ball, ball_vel)``; ``constants = (dt,
+    gravity, reaim, latency, tolerance)`` (``reaim``: ``REAIM_AFTER`` beats, s);
+    ``phases = (toss, go_down, catch)`` indices. Returns ``python (m,)``, ``due (m,
+    2)`` and the view's ball ``(m, 2, 4)`` where due."""
+    phase, pk, end_k, t_start, duration, end, incoming, catch_ball = plan
+    holder, caught, released, q, v = world
+    m_time, m_ball, m_ball_vel = measured
+    dt, g, reaim, latency, tolerance = (
+        constants[0],
+        constants[1],
+        constants[2],
+        constants[3],
+        constants[4],
+    )
+    toss, go_down, catch = phases[0], phases[1], phases[2]
+    m = envs.shape[0]
+    python = np.zeros(m, dtype=np.bool_)
+    due = np.zeros((m, 2), dtype=np.bool_)
+    ball = np.zeros((m, 2, 4))
+    for j in range(m):
+        i = envs[j]
+        event = caught[i, 0] >= 0 or caught[i, 1] >= 0
+        for h in range(2):
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            ph, k, inc = phase[i, h], pk[i, h], incoming[i, h]
+            was_caught, was_released = caught[i, h] >= 0, released[i, h] >= 0
+            if (
+                ((ph == go_down or ph == catch) and held)
+                or (
+                    ph == catch
+                    and inc >= 0
+                    and not held
+                    and not was_caught
+                    and (inc != catch_ball[i, h] or k * dt > duration[i, h] + reaim)
+                )
+                or (ph == toss and was_released)
+                or (ph == catch and was_caught)
+                or (end_k[i, h] >= 0 and k >= end_k[i, h])
+            ):
+                event = True
+        python[j] = event
+        if event or not correction:
+            continue
+        for h in range(2):
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            if phase[i, h] != catch or held:
+                continue
+            inc = incoming[i, h]
+            if inc >= 0:
+                bx, bz = m_ball[i, inc, 0], m_ball[i, inc, 1]
+                vx, vz = m_ball_vel[i, inc, 0], m_ball_vel[i, inc, 1]
+                if ahead and holder[i, inc] < 0:  # predict_forward(p, v, latency)
+                    s = latency - 0.0
+                    bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
+                    vz = vz - g * s
+            else:
+                bx, bz = q[i, 2 * h], q[i, 2 * h + 1]
+                vx, vz = v[i, 2 * h], v[i, 2 * h + 1]
+            if h == 1:  # the left hand's own frame
+                bx, vx = -bx, -vx
+            s = t_start[i, h] + duration[i, h] - m_time[i]
+            if s <= dt:
+                continue
+            px = bx + vx * (s - 0.0)
+            pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+            if py_hypot(px - end[i, h, 0], pz - end[i, h, 1]) > tolerance:
+                due[j, h] = True
+                ball[j, h, 0], ball[j, h, 1], ball[j, h, 2], ball[j, h, 3] = bx, bz, vx, vz
+    return python, due, ball
+
+
+@njit(cache=True)
+def cascade_advance(
+    rows: Any, pk: Any, grid: Any, glen: Any, last: Any, phase: Any, constants: Any
+) -> Any:
+    """``JugglingController.command`` without events for both hands of ``rows``: the
+    next grid point (``k + 1``), the last two commands, the release armed in the toss
+    after ``release_after``; ``constants = (dt, release_after, toss)``. Returns the
+    targets ``(r, 2, 2)`` (world frame) and ``armed (r, 2)``."""
+    dt, release_after, toss = constants[0], constants[1], int(constants[2])
+    r = rows.shape[0]
+    targets = np.empty((r, 2, 2))
+    armed = np.empty((r, 2), dtype=np.bool_)
+    for j in range(r):
+        i = rows[j]
+        for h in range(2):
+            k = pk[i, h] + 1
+            pk[i, h] = k
+            g = min(k, glen[i, h] - 1)
+            tx, tz = grid[i, h, g, 0], grid[i, h, g, 1]
+            last[i, h, 0, 0], last[i, h, 0, 1] = last[i, h, 1, 0], last[i, h, 1, 1]
+            last[i, h, 1, 0], last[i, h, 1, 1] = tx, tz
+            targets[j, h, 0] = -tx if h == 1 else tx
+            targets[j, h, 1] = tz
+            armed[j, h] = phase[i, h] == toss and k * dt >= release_after
+    return targets, armed
