@@ -5,23 +5,26 @@ sub-environment is bit-identical to ``CascadeEnv`` seeded with ``seed + i`` (as 
 ``SyncVectorEnv``; tested for the three autoreset modes). With numba (the ``fast``
 extra, ``backend="numba"``, the default when installed) a step runs:
 
-* each hand's plan in arrays: between the controller's events (a release, a catch, a
-  reached end point, a re-aimed catch, all decided as
-  :class:`~motion_envs.models.juggling.CascadeHand` decides them) a hand's command is an
-  index into its plan on the control grid; an eq. 10 correction found due (the
-  controller's own test, in arrays) is made by the hand's own ``correct`` and its new plan
-  copied back; at any other event the sub-environment's own
-  :class:`~motion_envs.models.juggling.CascadeController` runs in Python on the measured
-  state and both hands' plans are copied back (controllers other than ``juggler`` and
-  ``juggler_latency_aware`` always run in Python);
+* the controllers compiled between their events: the tests of
+  :class:`~motion_envs.models.juggling.CascadeHand`'s ``command`` (a release, a catch,
+  a ball held early, a reached end point, a re-aimed catch) and of the eq. 10
+  correction (on the hand's view of its oldest queued ball, predicted forward by the
+  latency-aware controller) with the controller's arithmetic
+  (:func:`~motion_envs.envs.juggling._compiled.cascade_events`), and each hand's command
+  an index into its plan on the control grid
+  (:func:`~motion_envs.envs.juggling._compiled.cascade_advance`). A correction found due
+  is made by the hand's own ``correct`` and its plan copied back; at any other event the
+  sub-environment's own :class:`~motion_envs.models.juggling.CascadeController` runs in
+  Python on the measured state and both hands' plans are copied back (controllers other
+  than ``juggler`` and ``juggler_latency_aware`` always run in Python);
 * the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
   (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
   ``cascade.xml``'s contact sensors); the releases' noise in Python, from each world's
   generator, hand 0 before hand 1;
-* the sensor's delay line (one ring for all balls of all sub-environments), the reward
-  and the observation as array operations; the human-likeness compiled (the nearest
-  demonstrated state searched as :class:`~motion_envs.models.juggling.HumanLikeness`
-  searches it, the same numbers).
+* the sensors' delay line and the observation rows compiled, the measurement noise drawn
+  in Python from each sensor's generator; the human-likeness compiled (the nearest
+  demonstrated state found as :class:`~motion_envs.models.juggling.HumanLikeness`
+  finds it: the same numbers); the reward and the infos as array operations.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
