@@ -191,6 +191,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             ]
         )
         self._advance_constants = np.array([ctask.dt, options.release_after, _TOSS])
+        self._record_constants = np.array([task.dt, first.max_catches, first._time_limit])
         # the likeness's samples per phase, sorted as HumanLikeness sorts them
         sorted_ = [first.likeness._sorted[name] for name in PHASES]
         self._sizes = np.array([ss.columns.shape[1] for ss in sorted_], dtype=np.int64)
@@ -303,30 +304,20 @@ class CascadeVectorEnv(JugglingVectorEnv):
         released = self._released[envs]
         if (released >= 0).any():
             self._release(envs[(released >= 0).any(axis=1)])
-        time = self._k[envs] * self._dt
+        rows = self._measure(envs)
+        time, caught_n, dropped, terminated, truncated = self._compiled.cascade_record(
+            envs,
+            rows,
+            (self._k, self._caught, self._released, self._dropped),
+            (self._m_time, self._m_ball, self._m_ball_vel, self._history),
+            self._counts,
+            self._record_constants,
+        )
         for i, t in zip(envs.tolist(), time.tolist(), strict=True):
             self._datas[i].time = t
         q, v = self._q[envs], self._v[envs]
         holder = self._holder[envs]
-        rows = self._measure(envs)
-        self._m_time[envs] = time
-        self._m_ball[envs] = rows[:, :, :2]
-        self._m_ball_vel[envs] = rows[:, :, 2:]
-        hist = self._history[envs]
-        hist[:, :, 4:] = hist[:, :, :-4].copy()
-        hist[:, :, :4] = rows
-        self._history[envs] = hist
-        caught_n = (self._caught[envs] >= 0).sum(axis=1)
-        released_n = (released >= 0).sum(axis=1)
-        dropped = self._dropped[envs].any(axis=1)
         counts = self._counts
-        counts[envs, 0] += caught_n
-        counts[envs, 1] += released_n
-        first = self.envs[0]
-        terminated = dropped.copy()
-        truncated = ~terminated & (
-            (counts[envs, 0] >= first.max_catches) | (time >= first._time_limit)
-        )
         phase = self._phase[envs]
         likeness = self._likeness_of(envs, phase, q, v)
         # CascadeEnv's a @ a: the same dot product per row (numpy's matmul loop over the

@@ -50,6 +50,7 @@ __all__ = [
     "cascade_measure",
     "cascade_observations",
     "cascade_periods",
+    "cascade_record",
     "hypot_rows",
     "mj_step_c",
     "nearest_rows",
@@ -668,3 +669,50 @@ def cascade_advance(
             targets[j, h, 1] = tz
             armed[j, h] = phase[i, h] == toss and k * dt >= release_after
     return targets, armed
+
+
+@njit(cache=True)
+def cascade_record(
+    envs: Any, rows: Any, world: Any, measured: Any, counts: Any, constants: Any
+) -> Any:
+    """The bookkeeping of ``CascadeEnv.step`` after the world and the sensor for
+    ``envs``: the measured balls ``rows (m, 3, 4)`` become what the controller sees next
+    (``measured = (time, ball, ball_vel, history)``, the history shifted by one
+    measurement, newest first), the step's catches and releases are counted
+    (``counts (N, 2)``: catches, tosses) from ``world = (k, caught, released,
+    dropped)``; ``constants = (dt, max_catches, time_limit)``. Returns ``time``,
+    ``caught`` (catches this step), ``dropped``, ``terminated`` and ``truncated``
+    ``(m,)``."""
+    k, caught, released, dropped = world
+    m_time, m_ball, m_ball_vel, history = measured
+    dt, max_catches, time_limit = constants[0], constants[1], constants[2]
+    m = envs.shape[0]
+    n_hist = history.shape[2]
+    time = np.empty(m)
+    caught_n = np.zeros(m, dtype=np.int64)
+    any_dropped = np.zeros(m, dtype=np.bool_)
+    terminated = np.zeros(m, dtype=np.bool_)
+    truncated = np.zeros(m, dtype=np.bool_)
+    for j in range(m):
+        i = envs[j]
+        t = k[i] * dt
+        time[j] = t
+        m_time[i] = t
+        for b in range(3):
+            m_ball[i, b, 0], m_ball[i, b, 1] = rows[j, b, 0], rows[j, b, 1]
+            m_ball_vel[i, b, 0], m_ball_vel[i, b, 1] = rows[j, b, 2], rows[j, b, 3]
+            for c in range(n_hist - 1, 3, -1):
+                history[i, b, c] = history[i, b, c - 4]
+            for c in range(4):
+                history[i, b, c] = rows[j, b, c]
+            if dropped[i, b]:
+                any_dropped[j] = True
+        for h in range(2):
+            if caught[i, h] >= 0:
+                caught_n[j] += 1
+            if released[i, h] >= 0:
+                counts[i, 1] += 1
+        counts[i, 0] += caught_n[j]
+        terminated[j] = any_dropped[j]
+        truncated[j] = not any_dropped[j] and (counts[i, 0] >= max_catches or t >= time_limit)
+    return time, caught_n, any_dropped, terminated, truncated
