@@ -21,10 +21,11 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
   ``cascade.xml``'s contact sensors); the releases' noise in Python, from each world's
   generator, hand 0 before hand 1;
-* the sensors' delay line and the observation rows compiled, the measurement noise drawn
-  in Python from each sensor's generator; the human-likeness compiled (the nearest
-  demonstrated state found as :class:`~motion_envs.models.juggling.HumanLikeness`
-  finds it: the same numbers); the reward and the infos as array operations.
+* the sensors' delay line, the step's bookkeeping and the observation rows compiled, the
+  measurement noise drawn in Python from each sensor's generator; the human-likeness
+  compiled (the nearest demonstrated state found in a compiled k-d tree of
+  :class:`~motion_envs.models.juggling.HumanLikeness`'s samples: the same numbers); the
+  reward and the infos as array operations.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
@@ -192,14 +193,10 @@ class CascadeVectorEnv(JugglingVectorEnv):
         )
         self._advance_constants = np.array([ctask.dt, options.release_after, _TOSS])
         self._record_constants = np.array([task.dt, first.max_catches, first._time_limit])
-        # the likeness's samples per phase, sorted as HumanLikeness sorts them
-        sorted_ = [first.likeness._sorted[name] for name in PHASES]
-        self._sizes = np.array([ss.columns.shape[1] for ss in sorted_], dtype=np.int64)
-        self._axes = np.array([ss.axis for ss in sorted_], dtype=np.int64)
-        self._samples = np.full((_NP, 4, int(self._sizes.max())), np.inf)
-        for p, ss in enumerate(sorted_):
-            self._samples[p, :, : ss.columns.shape[1]] = ss.columns
-        self._near = np.zeros((n, 2, _NP), dtype=np.int64)  # where each hand's search starts
+        # the likeness's samples per phase (its k-d trees'), in a compiled k-d tree
+        self._trees = tuple(
+            _compiled.likeness_tree(first.likeness.trees[name].data) for name in PHASES
+        )
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
@@ -319,7 +316,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         holder = self._holder[envs]
         counts = self._counts
         phase = self._phase[envs]
-        likeness = self._likeness_of(envs, phase, q, v)
+        likeness = self._likeness_of(phase, q, v)
         # CascadeEnv's a @ a: the same dot product per row (numpy's matmul loop over the
         # stack calls it as for one row; the BLAS dot's order is not the naive sum's)
         action_sq = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
@@ -488,11 +485,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         return rows
 
     def _likeness_of(
-        self,
-        envs: NDArray[np.int64],
-        phase: NDArray[np.int64],
-        q: NDArray[np.float64],
-        v: NDArray[np.float64],
+        self, phase: NDArray[np.int64], q: NDArray[np.float64], v: NDArray[np.float64]
     ) -> Any:
         """m; the mean over the hands of :meth:`HumanLikeness.distance` (own frame, the
         same numbers, compiled: :func:`~motion_envs.envs.juggling._compiled.nearest_rows`),
@@ -509,12 +502,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
                 ],
                 axis=1,
             )
-            ph = phase[:, h]
-            last = self._near[envs, h, ph]
-            d = self._compiled.nearest_rows(
-                points, ph, self._samples, self._sizes, self._axes, last
-            )
-            self._near[envs, h, ph] = last
+            d = self._compiled.nearest_rows(points, phase[:, h], self._trees)
             like = like + d / CASCADE_HANDS
         return like
 

@@ -52,6 +52,7 @@ __all__ = [
     "cascade_periods",
     "cascade_record",
     "hypot_rows",
+    "likeness_tree",
     "mj_step_c",
     "nearest_rows",
     "py_hypot",
@@ -430,39 +431,108 @@ def cascade_periods(
             v_out[i, m] = qv[m]
 
 
+def likeness_tree(samples: Any, leaf: int = 8) -> tuple[Any, ...]:
+    """A k-d tree over one phase's samples ``(M, 4)`` for :func:`nearest_rows`: the
+    samples reordered so that each node's are contiguous, split at the median of the
+    node's widest coordinate. Returns ``(points (M, 4), start, stop, left, right, lo,
+    hi)``: per node its samples ``points[start:stop]``, its children (-1 at a leaf) and
+    its samples' bounding box."""
+    pts = np.asarray(samples, dtype=np.float64)
+    order = np.arange(len(pts))
+    start: list[int] = []
+    stop: list[int] = []
+    left: list[int] = []
+    right: list[int] = []
+
+    def build(a: int, b: int) -> int:
+        node = len(start)
+        start.append(a)
+        stop.append(b)
+        left.append(-1)
+        right.append(-1)
+        if b - a > leaf:
+            block = pts[order[a:b]]
+            axis = int(np.argmax(np.ptp(block, axis=0)))
+            mid = (b - a) // 2
+            order[a:b] = order[a:b][np.argsort(block[:, axis], kind="stable")]
+            left[node] = build(a, a + mid)
+            right[node] = build(a + mid, b)
+        return node
+
+    build(0, len(pts))
+    points = np.ascontiguousarray(pts[order])
+    lo = np.array([points[s:e].min(axis=0) for s, e in zip(start, stop, strict=True)])
+    hi = np.array([points[s:e].max(axis=0) for s, e in zip(start, stop, strict=True)])
+    as_int = np.asarray
+    return (
+        points,
+        as_int(start, dtype=np.int64),
+        as_int(stop, dtype=np.int64),
+        as_int(left, dtype=np.int64),
+        as_int(right, dtype=np.int64),
+        lo,
+        hi,
+    )
+
+
 @njit(cache=True)
-def nearest_rows(points: Any, phase: Any, columns: Any, sizes: Any, axes: Any, last: Any) -> Any:
-    """m; per row ``j`` of ``points (m, 4)``, the distance to the nearest sample of phase
-    ``phase[j]``: :meth:`HumanLikeness.distance`'s number (``_SortedSamples.nearest``: the
-    phase's samples sorted along their widest coordinate ``axes[p]``, ``columns (P, 4,
-    M)`` of which the first ``sizes[p]`` count, the slab of the bound searched, the squared
-    differences summed in coordinate order, then the square root), ``inf`` where it is not
-    finite. ``last (m,)``: a sample index per row to start the bound from (any works),
-    updated to the nearest."""
+def _box(lo: Any, hi: Any, node: int, q: Any) -> float:
+    """The squared distance of ``q`` to a node's box (0 inside)."""
+    s = 0.0
+    for c in range(4):
+        e = lo[node, c] - q[c]
+        if e < 0.0:
+            e = q[c] - hi[node, c]
+            if e < 0.0:
+                e = 0.0
+        s += e * e
+    return s
+
+
+@njit(cache=True)
+def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
+    """m; per row ``j`` of ``points (m, 4)``, the distance to the nearest demonstrated
+    sample of phase ``phase[j]``: :meth:`HumanLikeness.distance`'s number (the squared
+    differences summed in coordinate order as the k-d tree sums them, the least one's
+    square root; ``inf`` where not finite). ``trees``: per phase :func:`likeness_tree`.
+    A node is skipped when its box is farther than the best sum with a margin of 1e-9
+    against rounding (a sample's sum is at least its box's): exact."""
     out = np.empty(points.shape[0])
+    stack = np.empty(256, dtype=np.int64)
     for j in range(points.shape[0]):
-        p = phase[j]
-        cols = columns[p]
-        size = sizes[p]
-        q0, q1, q2, q3 = points[j, 0], points[j, 1], points[j, 2], points[j, 3]
-        s0 = min(max(last[j], 0), size - 1)
-        d0, d1, d2, d3 = cols[0, s0] - q0, cols[1, s0] - q1, cols[2, s0] - q2, cols[3, s0] - q3
-        bound = math.sqrt(((d0 * d0 + d1 * d1) + d2 * d2) + d3 * d3)
-        if not math.isfinite(bound):
+        pts, start, stop, left, right, lo, hi = trees[phase[j]]
+        q = points[j]
+        q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+        if not (math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)):
             out[j] = math.inf
             continue
-        width = bound * (1.0 + 1e-9) + 1e-12
-        qc = points[j, axes[p]]
-        key = cols[axes[p], :size]
-        lo = np.searchsorted(key, qc - width, side="left")
-        hi = np.searchsorted(key, qc + width, side="right")
-        best, at = math.inf, s0
-        for m in range(lo, hi):
-            e0, e1, e2, e3 = cols[0, m] - q0, cols[1, m] - q1, cols[2, m] - q2, cols[3, m] - q3
-            s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
-            if s < best:
-                best, at = s, m
-        last[j] = at
+        if not math.isfinite(q3):
+            out[j] = math.inf
+            continue
+        best = math.inf
+        top = 0
+        stack[0] = 0
+        top = 1
+        while top > 0:
+            top -= 1
+            node = stack[top]
+            if _box(lo, hi, node, q) > best * (1.0 + 1e-9):
+                continue
+            a, b = left[node], right[node]
+            if a < 0:
+                for m in range(start[node], stop[node]):
+                    e0, e1 = pts[m, 0] - q0, pts[m, 1] - q1
+                    e2, e3 = pts[m, 2] - q2, pts[m, 3] - q3
+                    s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
+                    if s < best:
+                        best = s
+                continue
+            # the nearer child last (searched first)
+            if _box(lo, hi, a, q) <= _box(lo, hi, b, q):
+                stack[top], stack[top + 1] = b, a
+            else:
+                stack[top], stack[top + 1] = a, b
+            top += 2
         d = math.sqrt(best)
         out[j] = d if math.isfinite(d) else math.inf
     return out
