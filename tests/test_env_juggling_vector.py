@@ -275,3 +275,27 @@ def test_compiled_hypot_on_many_random_pairs() -> None:
     expected = np.array([math.hypot(a, b) for a, b in zip(x.tolist(), y.tolist(), strict=True)])
     assert np.count_nonzero(np.hypot(x, y) != expected) > 100  # the trap is real
     assert np.array_equal(hypot_rows(x, y), expected)
+
+
+@needs_numba
+def test_compiled_likeness_is_human_likeness() -> None:
+    """The cascade vector env's compiled nearest-sample search gives
+    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN."""
+    from motion_envs.datasets.juggling import PHASES
+    from motion_envs.envs.juggling._compiled import likeness_tree, nearest_rows
+    from motion_envs.models.juggling import LIKENESS_TAU, cascade_likeness
+
+    likeness = cascade_likeness(9.81, "train")
+    trees = tuple(likeness_tree(likeness.trees[name].data) for name in PHASES)
+    rng = np.random.default_rng(11)
+    n = 4000
+    phase = rng.integers(0, len(PHASES), n)
+    near = np.stack([likeness.trees[PHASES[p]].data[0] for p in phase])
+    state = near + rng.normal(0.0, 0.05, (n, 4)) * rng.uniform(0.0, 4.0, (n, 1))
+    state[::37] *= 20.0
+    pos, vel = state[:, :2], state[:, 2:] / LIKENESS_TAU
+    vel[5, 0] = np.nan
+    points = np.concatenate([pos, LIKENESS_TAU * vel], axis=1)  # as distance() forms it
+    got = nearest_rows(points, phase, trees)
+    for j in range(n):
+        assert got[j] == likeness.distance(PHASES[phase[j]], pos[j], vel[j]), j
