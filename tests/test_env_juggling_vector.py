@@ -1,10 +1,10 @@
 """The juggling ids' native vector environments: bit-identical to SyncVectorEnv.
 
-Juggling-v1's (batched, numba) and Cascade-v0's (the same bookkeeping over single
-environments) against ``gymnasium.vector.SyncVectorEnv`` of ``gym.make`` copies, in the
-three autoreset modes, with the zero action (long episodes: catches, corrections,
-releases) and random actions (drops, resets); the compiled ``math.hypot``; the arguments'
-errors.
+Juggling-v1's and Cascade-v0's (both batched with numba, and their ``backend="python"``)
+against ``gymnasium.vector.SyncVectorEnv`` of ``gym.make`` copies, in the three autoreset
+modes, with the zero action (long episodes: catches, corrections, releases) and random
+actions (drops, resets); the cascade's contact sensors against MuJoCo's contact list; the
+compiled ``math.hypot``; the arguments' errors.
 """
 
 from __future__ import annotations
@@ -140,11 +140,77 @@ def test_v1_python_backend_equal_sync() -> None:
     run_both(V1, vec, 3, AutoresetMode.NEXT_STEP, 150, "random", level="medium")
 
 
+@needs_numba
 @pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
-def test_cascade_equal_sync(mode: Any) -> None:
-    vec = gym.make_vec(CASCADE, 3, autoreset_mode=mode, level="medium")
+@pytest.mark.parametrize(
+    ("level", "controller"),
+    [("medium", "juggler"), ("hard", "juggler_latency_aware"), ("easy", "fixed_point")],
+)
+def test_cascade_random_actions_equal_sync(mode: Any, level: str, controller: str) -> None:
+    kw = {"level": level, "controller": controller}
+    vec = gym.make_vec(CASCADE, 3, autoreset_mode=mode, **kw)
     assert isinstance(vec, CascadeVectorEnv)
-    assert run_both(CASCADE, vec, 3, mode, 500, "random", level="medium") >= 3
+    assert vec.backend == "numba"
+    assert run_both(CASCADE, vec, 3, mode, 500, "random", **kw) >= 3
+
+
+@needs_numba
+@pytest.mark.parametrize("mode", MODES[:2], ids=lambda m: m.value)
+@pytest.mark.parametrize(
+    ("level", "controller"),
+    [
+        ("medium", "juggler"),
+        ("hard", "juggler_latency_aware"),
+        ("medium", "juggler_latency_aware"),
+        ("hard", "commanded_intercept"),
+    ],
+)
+def test_cascade_zero_action_equal_sync(mode: Any, level: str, controller: str) -> None:
+    """Long episodes: releases in turn, catches (early ones too), re-aimed catches, eq. 10
+    corrections, truncation."""
+    kw = {"level": level, "controller": controller, "max_catches": 4}
+    vec = CascadeVectorEnv(3, autoreset_mode=mode, **kw)
+    assert run_both(CASCADE, vec, 3, mode, 1200, "zero", **kw) >= 3
+
+
+def test_cascade_python_backend_equal_sync() -> None:
+    vec = CascadeVectorEnv(3, backend="python", level="medium")
+    assert vec.backend == "python"
+    run_both(CASCADE, vec, 3, AutoresetMode.NEXT_STEP, 200, "random", level="medium")
+
+
+def test_cascade_contact_sensors_are_the_contact_list() -> None:
+    """The batched world reads ``cascade.xml``'s contact sensors (per ball: floor, right
+    palm, left palm) where ``CascadeWorld`` reads the contact list: after every physics
+    step they agree, and they touch at times."""
+    from motion_envs.envs.juggling import CascadeEnv, _cascade_scene
+
+    env = CascadeEnv(level="medium", max_catches=6)
+    world = env.world
+    step = _cascade_scene.mujoco.mj_step
+    seen = np.zeros(9, dtype=bool)
+
+    def checked(model: Any, data: Any) -> None:
+        step(model, data)
+        pairs = world._touching()
+        others = [world.floor_geom, *world.palm_geoms]
+        for i, g in enumerate(world.ball_geoms):
+            for j, o in enumerate(others):
+                touching = bool(data.sensordata[3 * i + j] > 0)
+                assert touching == ((g, o) in pairs), (i, j)
+                seen[3 * i + j] |= touching
+
+    rng = np.random.default_rng(3)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(_cascade_scene.mujoco, "mj_step", checked)
+        for episode in range(4):
+            env.reset(seed=episode)
+            done = False
+            while not done:
+                a = np.zeros(4) if episode < 2 else 0.3 * rng.standard_normal(4)
+                _, _, terminated, truncated, _ = env.step(a)
+                done = terminated or truncated
+    assert seen[[1, 2, 4, 5, 7, 8]].any() and seen[[0, 3, 6]].any()
 
 
 @needs_numba
@@ -165,6 +231,8 @@ def test_v1_disabled_mode_refuses_an_ended_episode() -> None:
 def test_vector_arguments_are_checked() -> None:
     with pytest.raises(ValueError, match="backend"):
         JugglingV1VectorEnv(2, backend="gpu")
+    with pytest.raises(ValueError, match="backend"):
+        CascadeVectorEnv(2, backend="gpu")
     with pytest.raises(ValueError, match="num_envs"):
         JugglingV1VectorEnv(0)
     with pytest.raises(ValueError, match="autoreset_mode"):
@@ -291,3 +359,27 @@ def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
     for f, e in zip(frames, expected, strict=True):
         assert f.shape == (64, 64, 3) and np.array_equal(f, e)
     assert not np.array_equal(frames[0], frames[1])  # two different worlds
+
+
+@needs_numba
+def test_compiled_likeness_is_human_likeness() -> None:
+    """The cascade vector env's compiled nearest-sample search gives
+    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN."""
+    from motion_envs.datasets.juggling import PHASES
+    from motion_envs.envs.juggling._compiled import likeness_tree, nearest_rows
+    from motion_envs.models.juggling import LIKENESS_TAU, cascade_likeness
+
+    likeness = cascade_likeness(9.81, "train")
+    trees = tuple(likeness_tree(likeness.trees[name].data) for name in PHASES)
+    rng = np.random.default_rng(11)
+    n = 4000
+    phase = rng.integers(0, len(PHASES), n)
+    near = np.stack([likeness.trees[PHASES[p]].data[0] for p in phase])
+    state = near + rng.normal(0.0, 0.05, (n, 4)) * rng.uniform(0.0, 4.0, (n, 1))
+    state[::37] *= 20.0
+    pos, vel = state[:, :2], state[:, 2:] / LIKENESS_TAU
+    vel[5, 0] = np.nan
+    points = np.concatenate([pos, LIKENESS_TAU * vel], axis=1)  # as distance() forms it
+    got = nearest_rows(points, phase, trees)
+    for j in range(n):
+        assert got[j] == likeness.distance(PHASES[phase[j]], pos[j], vel[j]), j

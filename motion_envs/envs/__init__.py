@@ -25,9 +25,8 @@ default: one compiled loop over the sub-environments (numpy without numba), bit-
 to ``SyncVectorEnv``, with
 ``autoreset_mode=`` ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``. Juggling-v1's
 (:class:`~.juggling.JugglingV1VectorEnv`) batches the episodes' control periods and calls
-MuJoCo's ``mj_step`` from one compiled loop; Cascade-v0's
-(:class:`~.juggling.CascadeVectorEnv`) keeps the same bookkeeping over single
-environments; both are bit-identical to ``SyncVectorEnv``. Processes that
+MuJoCo's ``mj_step`` from one compiled loop, and so does Cascade-v0's
+(:class:`~.juggling.CascadeVectorEnv`); both are bit-identical to ``SyncVectorEnv``. Processes that
 never imported the package (SB3's ``SubprocVecEnv`` workers, ``python -c``) use the
 ``motion_envs:MotionEnvs/...`` form of an id.
 """

@@ -9,8 +9,9 @@ the MuJoCo world, compiled from ``juggling.xml`` beside them); ``_v1_env``
 entry point ``motion_envs.envs.juggling:CascadeEnv``) and ``_cascade_scene``
 (:class:`CascadeWorld`: two hands, three balls, compiled from ``cascade.xml``); the native
 vector environments ``_vector`` (:class:`JugglingVectorEnv`, the episode bookkeeping),
-``_v1_vector`` (:class:`JugglingV1VectorEnv`, batched, with ``_compiled``: the world's
-control period compiled by numba) and ``_cascade_vector`` (:class:`CascadeVectorEnv`).
+``_v1_vector`` (:class:`JugglingV1VectorEnv`) and ``_cascade_vector``
+(:class:`CascadeVectorEnv`), batched, with ``_compiled``: the worlds' control periods
+compiled by numba.
 The default fit the environment acts on (``load_juggler``, ``juggler_demonstrations``,
 ``TRACKING_NOISE``, ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in
 :mod:`motion_envs.models.juggling` and is re-exported here for code that imported it

@@ -45,12 +45,19 @@ from motion_envs.envs.juggling._v1_scene import (
 )
 from motion_envs.models.juggling import CascadeState, perturb_release
 
-__all__ = ["CASCADE_SCENE_XML", "CascadeWorld", "load_cascade_model"]
+__all__ = [
+    "BALL_CONAFFINITY",
+    "BALL_CONTYPE",
+    "CASCADE_SCENE_XML",
+    "CascadeWorld",
+    "load_cascade_model",
+]
 
 #: The world's MJCF (package data).
 CASCADE_SCENE_XML = "cascade.xml"
 _HANDS = ("right", "left")
-_BALL_CONTYPE, _BALL_CONAFFINITY = 2, 1
+#: A flying ball's ``contype`` and ``conaffinity`` (a held ball's are 0: in the fingers).
+BALL_CONTYPE, BALL_CONAFFINITY = 2, 1
 
 
 def load_cascade_model(task: JugglingTask) -> mujoco.MjModel:
@@ -115,8 +122,8 @@ class CascadeWorld(HandsWorld):
     # -- setup ----------------------------------------------------------------------------
     def _set_contacts(self, ball: int, on: bool) -> None:
         g = self.ball_geoms[ball]
-        self.model.geom_contype[g] = _BALL_CONTYPE if on else 0
-        self.model.geom_conaffinity[g] = _BALL_CONAFFINITY if on else 0
+        self.model.geom_contype[g] = BALL_CONTYPE if on else 0
+        self.model.geom_conaffinity[g] = BALL_CONAFFINITY if on else 0
 
     def reset(
         self,

@@ -46,10 +46,19 @@ from motion_envs.envs.juggling._v1_scene import (
 )
 
 __all__ = [
+    "cascade_advance",
+    "cascade_events",
+    "cascade_measure",
+    "cascade_observations",
+    "cascade_periods",
+    "cascade_record",
     "hypot_rows",
+    "likeness_tree",
     "mj_step_c",
     "nearest_rows",
     "py_hypot",
+    "servo_acceleration",
+    "servo_plan",
     "v1_finish",
     "v1_periods",
 ]
@@ -145,16 +154,50 @@ def hypot_rows(x: Any, y: Any) -> Any:
     return out
 
 
+@njit(cache=True)
+def servo_plan(ref: Any, vref: Any, tx: float, tz: float, dt: float, plan: Any) -> None:
+    """:func:`~motion_envs.envs.juggling.servo_plan` compiled: ``plan (8,)`` receives
+    ``(sx, sz, dx, dz, vrx, vrz, arx, arz)``; the hand's reference point ``ref (2,)`` and
+    velocity ``vref (2,)`` move on to the period's end (as the worlds keep them)."""
+    step_max = HAND_SPEED_LIMIT * dt
+    sx, sz = ref[0], ref[1]
+    dx, dz = tx - sx, tz - sz
+    dist = py_hypot(dx, dz)
+    if dist > step_max:  # the command moves at most at the speed limit
+        dx, dz = dx * step_max / dist, dz * step_max / dist
+    vrx, vrz = dx / dt, dz / dt
+    plan[0], plan[1], plan[2], plan[3] = sx, sz, dx, dz
+    plan[4], plan[5] = vrx, vrz
+    plan[6], plan[7] = (vrx - vref[0]) / dt, (vrz - vref[1]) / dt
+    ref[0], ref[1] = sx + dx, sz + dz
+    vref[0], vref[1] = vrx, vrz
+
+
+@njit(cache=True)
+def servo_acceleration(
+    f: float, plan: Any, hx: float, hz: float, vx: float, vz: float, h: float
+) -> tuple[float, float]:
+    """:func:`~motion_envs.envs.juggling.servo_acceleration` compiled (the same
+    expressions, :func:`py_hypot` for ``math.hypot``)."""
+    sx, sz, dx, dz = plan[0], plan[1], plan[2], plan[3]
+    vrx, vrz, arx, arz = plan[4], plan[5], plan[6], plan[7]
+    ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
+    az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
+    n2 = ax * ax + az * az
+    if n2 > _AMAX2:
+        s = math.sqrt(_AMAX2 / n2)
+        ax, az = ax * s, az * s
+    nvx, nvz = vx + ax * h, vz + az * h
+    sp = py_hypot(nvx, nvz)
+    if sp > HAND_SPEED_LIMIT:  # the speed limit: aim at the limit along the new direction
+        nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
+        ax, az = (nvx - vx) / h, (nvz - vz) / h
+    return ax, az
+
+
 def _v1_periods(
     envs: Any,
-    model_addr: Any,
-    data_addr: Any,
-    qpos: Any,
-    qvel: Any,
-    ctrl: Any,
-    sensors: Any,
-    contype: Any,
-    conaffinity: Any,
+    worlds: Any,
     ball_geom: int,
     target: Any,
     armed: Any,
@@ -174,14 +217,16 @@ def _v1_periods(
     :meth:`~motion_envs.envs.juggling.JugglingV1World.advance` does, up to the release's
     noise (drawn in Python: ``events[i, 1]`` says the release fires).
 
-    ``qpos, qvel, ctrl, sensors, contype, conaffinity``: per world, the ``MjData``'s and
-    ``MjModel``'s arrays (numba typed lists of views); ``target (N, 2)`` the commanded
+    ``worlds``: ``(model_addr, data_addr, qpos, qvel, ctrl, sensors, contype,
+    conaffinity)``, each world's ``MjModel``/``MjData`` address and arrays (numba typed
+    lists of views; ``JugglingVectorEnv._link_worlds``); ``target (N, 2)`` the commanded
     hand targets (the residual added); ``armed (N,)``; the world's state ``ref, vref (N,
     2)``, ``z_before (N,)``, ``flags (N, 3)`` (held, left the palm, dropped) and ``k (N,)``
     (control periods since the reset), updated in place; ``constants`` = ``(dt, h,
     ball_radius, floor_z, palm_top, toss_threshold)``. Out: the true ``hand``,
     ``hand_vel``, ``ball``, ``ball_vel`` and ``events[i] = (caught, release fires)``.
     """
+    model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
     dt, h, radius, floor_z, palm_top, threshold = (
         constants[0],
         constants[1],
@@ -190,18 +235,9 @@ def _v1_periods(
         constants[4],
         constants[5],
     )
-    step_max = HAND_SPEED_LIMIT * dt
+    plan = np.empty(8)
     for i in envs:
-        # servo_plan
-        sx, sz = ref[i, 0], ref[i, 1]
-        dx, dz = target[i, 0] - sx, target[i, 1] - sz
-        dist = py_hypot(dx, dz)
-        if dist > step_max:
-            dx, dz = dx * step_max / dist, dz * step_max / dist
-        vrx, vrz = dx / dt, dz / dt
-        arx, arz = (vrx - vref[i, 0]) / dt, (vrz - vref[i, 1]) / dt
-        ref[i, 0], ref[i, 1] = sx + dx, sz + dz
-        vref[i, 0], vref[i, 1] = vrx, vrz
+        servo_plan(ref[i], vref[i], target[i, 0], target[i, 1], dt, plan)
         qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
         hx, hz, bx, bz = qp[0], qp[1], qp[2], qp[3]
         vx, vz, ux, uz = qv[0], qv[1], qv[2], qv[3]
@@ -209,19 +245,7 @@ def _v1_periods(
         held, left, dropped = flags[i, 0], flags[i, 1], flags[i, 2]
         caught = False
         for j in range(1, SUBSTEPS + 1):
-            f = j / SUBSTEPS
-            # servo_acceleration
-            ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
-            az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
-            n2 = ax * ax + az * az
-            if n2 > _AMAX2:
-                s = math.sqrt(_AMAX2 / n2)
-                ax, az = ax * s, az * s
-            nvx, nvz = vx + ax * h, vz + az * h
-            sp = py_hypot(nvx, nvz)
-            if sp > HAND_SPEED_LIMIT:
-                nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
-                ax, az = (nvx - vx) / h, (nvz - vz) / h
+            ax, az = servo_acceleration(j / SUBSTEPS, plan, hx, hz, vx, vz, h)
             u[0] = HAND_MASS * ax
             u[1] = HAND_MASS * az
             mj_step_c(model_addr[i], data_addr[i])
@@ -274,38 +298,6 @@ v1_periods = njit(cache=True)(_v1_periods)
 
 
 @njit(cache=True)
-def nearest_rows(columns: Any, key: Any, axis: int, queries: Any, last: Any, out: Any) -> None:
-    """Nearest-sample distances of ``queries (n, 4)`` among the samples ``columns (4, M)``
-    sorted along coordinate ``axis`` (``key = columns[axis]``): what
-    :class:`~motion_envs.models.juggling.HumanLikeness` computes (its ``_SortedSamples``,
-    the k-d tree's number), for many queries. ``last (n,)`` holds each query's previous
-    nearest sample (a start only: any start gives the same distance) and is updated;
-    ``out (n,)`` receives the distances (NaN for a NaN query)."""
-    for r in range(queries.shape[0]):
-        q0, q1, q2, q3 = queries[r, 0], queries[r, 1], queries[r, 2], queries[r, 3]
-        j = last[r]
-        d0, d1 = columns[0, j] - q0, columns[1, j] - q1
-        d2, d3 = columns[2, j] - q2, columns[3, j] - q3
-        bound = math.sqrt(((d0 * d0 + d1 * d1) + d2 * d2) + d3 * d3)
-        if not math.isfinite(bound):
-            out[r] = math.nan
-            continue
-        width = bound * (1.0 + 1e-9) + 1e-12
-        qc = queries[r, axis]
-        lo = np.searchsorted(key, qc - width, side="left")
-        hi = np.searchsorted(key, qc + width, side="right")
-        best, at = math.inf, lo
-        for m in range(lo, hi):
-            e0, e1 = columns[0, m] - q0, columns[1, m] - q1
-            e2, e3 = columns[2, m] - q2, columns[3, m] - q3
-            s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
-            if s < best:
-                best, at = s, m
-        last[r] = at
-        out[r] = math.sqrt(best)
-
-
-@njit(cache=True)
 def v1_finish(
     envs: Any,
     hand: Any,
@@ -331,9 +323,8 @@ def v1_finish(
     glen: Any,
     nominal: Any,
     fast: bool,
-    samples: Any,
+    likeness: Any,
     bounds: Any,
-    nearest: Any,
     actions: Any,
     measured: Any,
     m_flags: Any,
@@ -354,9 +345,8 @@ def v1_finish(
     * the measured state for the controller ``measured[i] = (time, x, z, vx, vz)``,
       ``m_flags[i] = (held, released, caught)``; the ``history`` shifted; the catches
       and tosses ``counts``; the episode's end;
-    * the human-likeness (:func:`nearest_rows` on the phase's sorted samples
-      ``samples[phase] = (columns, axis)``, start ``nearest[i, phase]``), the reward
-      terms and the reward;
+    * the reward terms and the reward, with the hand's human-likeness ``likeness[j]``
+      (:func:`nearest_rows`);
     * the observation, clipped to ``bounds = (low, high)``.
 
     ``scalars = (dt, likeness_tau, w_catch, w_drop, w_likeness, w_action, max_catches,
@@ -366,15 +356,12 @@ def v1_finish(
     ``j``: ``obs[j]``, ``out[j] = (reward, r_catch, r_drop, r_likeness, r_action,
     likeness, time)``, ``ends[j] = (terminated, truncated)``.
     """
-    dt, tau = scalars[0], scalars[1]
+    dt = scalars[0]  # scalars[1], the likeness weight of the velocity, is used outside
     w_catch, w_drop, w_like, w_act = scalars[2], scalars[3], scalars[4], scalars[5]
     max_catches, time_limit, noisy = scalars[6], scalars[7], scalars[8] > 0.0
     size = ring.shape[0]
     oldest_slot = (slot + 1) % size
     n_hist = history.shape[1]
-    q = np.empty((1, 4))
-    last = np.empty(1, dtype=np.int64)
-    found = np.empty(1)
     low, high = bounds[0], bounds[1]
     for j in range(envs.shape[0]):
         i = envs[j]
@@ -412,15 +399,8 @@ def v1_finish(
             counts[i, 1] += 1
         terminated = dropped
         truncated = not terminated and (counts[i, 0] >= max_catches or time >= time_limit)
-        # the likeness of the hand's state in the plan's phase
         phase = phases[i]
-        q[0, 0], q[0, 1] = hand[i, 0], hand[i, 1]
-        q[0, 2], q[0, 3] = tau * hand_vel[i, 0], tau * hand_vel[i, 1]
-        columns, axis = samples[phase]
-        last[0] = nearest[i, phase]
-        nearest_rows(columns, columns[axis], axis, q, last, found)
-        nearest[i, phase] = last[0]
-        like = found[0] if math.isfinite(found[0]) else math.inf
+        like = likeness[j]
         # the reward (LevelsEnvMixin._rewards)
         ax, az = actions[j, 0], actions[j, 1]
         r_catch = w_catch * (1 if caught else 0)
@@ -454,3 +434,484 @@ def v1_finish(
                 row[c] = high[c]
             if row[c] < low[c]:
                 row[c] = low[c]
+
+
+@njit(cache=True)
+def cascade_periods(
+    envs: Any,
+    worlds: Any,
+    ball_geoms: Any,
+    target: Any,
+    armed: Any,
+    ref: Any,
+    vref: Any,
+    z_before: Any,
+    holder: Any,
+    thrower: Any,
+    left: Any,
+    dropped: Any,
+    k: Any,
+    constants: Any,
+    q_out: Any,
+    v_out: Any,
+    caught: Any,
+    released: Any,
+) -> None:
+    """One control period of Cascade-v0's world for each world ``i`` in ``envs``: what
+    :meth:`~motion_envs.envs.juggling.CascadeWorld.step` does, up to the release's noise
+    (drawn in Python afterwards: ``released[i, h]`` is the ball hand ``h`` lets go, or
+    -1; its velocity is still the hand's).
+
+    ``worlds``: each world's addresses and arrays, as :func:`v1_periods` takes them;
+    ``sensors`` holds per ball the
+    ``contact`` sensors of ``cascade.xml`` (floor, right palm, left palm);
+    ``ball_geoms (3,)``; ``target (N, 2, 2)`` both hands' targets (the residual added);
+    ``armed (N, 2)``; the world's state ``ref, vref (N, 2, 2)``, ``z_before (N, 2)``,
+    ``holder, thrower (N, 3)`` (a hand or -1), ``left, dropped (N, 3)`` and ``k (N,)``,
+    updated in place (the contacts of a caught or released ball switched as
+    ``CascadeWorld._set_contacts`` switches them); ``constants`` = ``(dt, h,
+    ball_radius, floor_z, palm_top, toss_threshold, ball_contype, ball_conaffinity)``.
+    Out: ``q_out, v_out (N, 10)`` (qpos, qvel after the period), ``caught (N, 2)`` (the
+    ball each hand caught, or -1) and ``released``.
+    """
+    model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
+    dt, h, radius, floor_z, palm_top, threshold = (
+        constants[0],
+        constants[1],
+        constants[2],
+        constants[3],
+        constants[4],
+        constants[5],
+    )
+    ball_contype, ball_conaffinity = int(constants[6]), int(constants[7])
+    plan = np.empty((2, 8))
+    for i in envs:
+        for hh in range(2):  # servo_plan, hand by hand
+            servo_plan(ref[i, hh], vref[i, hh], target[i, hh, 0], target[i, hh, 1], dt, plan[hh])
+        qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
+        ct, ca = contype[i], conaffinity[i]
+        z_prev0, z_prev1 = qp[1], qp[3]
+        caught[i, 0] = caught[i, 1] = -1
+        released[i, 0] = released[i, 1] = -1
+        for j in range(1, SUBSTEPS + 1):
+            f = j / SUBSTEPS
+            for hh in range(2):
+                hx, hz, vx, vz = qp[2 * hh], qp[2 * hh + 1], qv[2 * hh], qv[2 * hh + 1]
+                ax, az = servo_acceleration(f, plan[hh], hx, hz, vx, vz, h)
+                u[2 * hh] = HAND_MASS * ax
+                u[2 * hh + 1] = HAND_MASS * az
+            mj_step_c(model_addr[i], data_addr[i])
+            for b in range(3):
+                c = 4 + 2 * b
+                if holder[i, b] >= 0:  # held: follows its hand (written at the period's end)
+                    continue
+                bx, bz = qp[c], qp[c + 1]
+                if not left[i, b]:
+                    t = thrower[i, b]
+                    if py_hypot(bx - qp[2 * t], bz - qp[2 * t + 1]) > 2 * radius:
+                        left[i, b] = True
+                if dropped[i, b] or (not left[i, b] and bz - radius > floor_z):
+                    continue
+                if bz - radius <= floor_z or sens[3 * b] > 0.0:
+                    dropped[i, b] = True
+                    continue
+                if qv[c + 1] >= 0.0 or not left[i, b]:
+                    continue
+                for hh in range(2):
+                    busy = holder[i, 0] == hh or holder[i, 1] == hh or holder[i, 2] == hh
+                    if busy or bz < qp[2 * hh + 1] + palm_top:
+                        continue
+                    rel = py_hypot(qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1])
+                    if rel < CAPTURE_SPEED and sens[3 * b + 1 + hh] > 0.0:
+                        holder[i, b] = hh
+                        caught[i, hh] = b
+                        ct[ball_geoms[b]] = 0
+                        ca[ball_geoms[b]] = 0
+                        break
+        # held balls follow their hands
+        for b in range(3):
+            hh = holder[i, b]
+            if hh >= 0:
+                c = 4 + 2 * b
+                qp[c], qp[c + 1] = qp[2 * hh], qp[2 * hh + 1]
+                qv[c], qv[c + 1] = qv[2 * hh], qv[2 * hh + 1]
+        k[i] += 1
+        z_prev20, z_prev21 = z_before[i, 0], z_before[i, 1]
+        z_before[i, 0], z_before[i, 1] = z_prev0, z_prev1
+        for hh in range(2):
+            b = -1
+            for bb in range(3):
+                if holder[i, bb] == hh:
+                    b = bb
+                    break
+            if b < 0 or caught[i, hh] >= 0 or not armed[i, hh]:
+                continue
+            zp, zp2 = (z_prev0, z_prev20) if hh == 0 else (z_prev1, z_prev21)
+            a_z = (qp[2 * hh + 1] - 2.0 * zp + zp2) / (dt * dt)
+            if a_z < -threshold:
+                holder[i, b] = -1
+                thrower[i, b] = hh
+                left[i, b] = False
+                released[i, hh] = b
+                ct[ball_geoms[b]] = ball_contype
+                ca[ball_geoms[b]] = ball_conaffinity
+        for m in range(10):
+            q_out[i, m] = qp[m]
+            v_out[i, m] = qv[m]
+
+
+def likeness_tree(samples: Any, leaf: int = 8) -> tuple[Any, ...]:
+    """A k-d tree over one phase's samples ``(M, 4)`` for :func:`nearest_rows`: the
+    samples reordered so that each node's are contiguous, split at the median of the
+    node's widest coordinate. Returns ``(points (M, 4), start, stop, left, right, lo,
+    hi)``: per node its samples ``points[start:stop]``, its children (-1 at a leaf) and
+    its samples' bounding box."""
+    pts = np.asarray(samples, dtype=np.float64)
+    order = np.arange(len(pts))
+    start: list[int] = []
+    stop: list[int] = []
+    left: list[int] = []
+    right: list[int] = []
+
+    def build(a: int, b: int) -> int:
+        node = len(start)
+        start.append(a)
+        stop.append(b)
+        left.append(-1)
+        right.append(-1)
+        if b - a > leaf:
+            block = pts[order[a:b]]
+            axis = int(np.argmax(np.ptp(block, axis=0)))
+            mid = (b - a) // 2
+            order[a:b] = order[a:b][np.argsort(block[:, axis], kind="stable")]
+            left[node] = build(a, a + mid)
+            right[node] = build(a + mid, b)
+        return node
+
+    build(0, len(pts))
+    points = np.ascontiguousarray(pts[order])
+    lo = np.array([points[s:e].min(axis=0) for s, e in zip(start, stop, strict=True)])
+    hi = np.array([points[s:e].max(axis=0) for s, e in zip(start, stop, strict=True)])
+    as_int = np.asarray
+    return (
+        points,
+        as_int(start, dtype=np.int64),
+        as_int(stop, dtype=np.int64),
+        as_int(left, dtype=np.int64),
+        as_int(right, dtype=np.int64),
+        lo,
+        hi,
+    )
+
+
+@njit(cache=True)
+def _box(lo: Any, hi: Any, node: int, q: Any) -> float:
+    """The squared distance of ``q`` to a node's box (0 inside)."""
+    s = 0.0
+    for c in range(4):
+        e = lo[node, c] - q[c]
+        if e < 0.0:
+            e = q[c] - hi[node, c]
+            if e < 0.0:
+                e = 0.0
+        s += e * e
+    return s
+
+
+@njit(cache=True)
+def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
+    """m; per row ``j`` of ``points (m, 4)``, the distance to the nearest demonstrated
+    sample of phase ``phase[j]``: :meth:`HumanLikeness.distance`'s number (the squared
+    differences summed in coordinate order as the k-d tree sums them, the least one's
+    square root; ``inf`` where not finite). ``trees``: per phase :func:`likeness_tree`.
+    A node is skipped when its box is farther than the best sum with a margin of 1e-9
+    against rounding (a sample's sum is at least its box's): exact."""
+    out = np.empty(points.shape[0])
+    stack = np.empty(256, dtype=np.int64)
+    for j in range(points.shape[0]):
+        pts, start, stop, left, right, lo, hi = trees[phase[j]]
+        q = points[j]
+        q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+        if not (math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)):
+            out[j] = math.inf
+            continue
+        if not math.isfinite(q3):
+            out[j] = math.inf
+            continue
+        best = math.inf
+        top = 0
+        stack[0] = 0
+        top = 1
+        while top > 0:
+            top -= 1
+            node = stack[top]
+            if _box(lo, hi, node, q) > best * (1.0 + 1e-9):
+                continue
+            a, b = left[node], right[node]
+            if a < 0:
+                for m in range(start[node], stop[node]):
+                    e0, e1 = pts[m, 0] - q0, pts[m, 1] - q1
+                    e2, e3 = pts[m, 2] - q2, pts[m, 3] - q3
+                    s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
+                    if s < best:
+                        best = s
+                continue
+            # the nearer child last (searched first)
+            if _box(lo, hi, a, q) <= _box(lo, hi, b, q):
+                stack[top], stack[top + 1] = b, a
+            else:
+                stack[top], stack[top + 1] = a, b
+            top += 2
+        d = math.sqrt(best)
+        out[j] = d if math.isfinite(d) else math.inf
+    return out
+
+
+@njit(cache=True)
+def cascade_measure(envs: Any, q: Any, v: Any, holder: Any, ring: Any, slot: int) -> Any:
+    """The cascade's sensors (:meth:`CascadeSensor.measure`) for ``envs`` before their
+    noise: the true balls of ``q, v (N, 10)`` go into the delay line ``ring (S, N, 3,
+    5)`` at ``slot``; returns ``rows (m, 3, 4)`` (the true state of a held ball, the
+    delayed one of a flying ball) and ``noisy (m, 3)`` (flying now and then: the noise
+    applies)."""
+    m, size = envs.shape[0], ring.shape[0]
+    rows = np.empty((m, 3, 4))
+    noisy = np.zeros((m, 3), dtype=np.bool_)
+    old = (slot + 1) % size
+    for j in range(m):
+        i = envs[j]
+        for b in range(3):
+            held = holder[i, b] >= 0
+            x, z = q[i, 4 + 2 * b], q[i, 5 + 2 * b]
+            vx, vz = v[i, 4 + 2 * b], v[i, 5 + 2 * b]
+            ring[slot, i, b, 0], ring[slot, i, b, 1] = x, z
+            ring[slot, i, b, 2], ring[slot, i, b, 3] = vx, vz
+            ring[slot, i, b, 4] = 1.0 if held else 0.0
+            if held:
+                rows[j, b, 0], rows[j, b, 1], rows[j, b, 2], rows[j, b, 3] = x, z, vx, vz
+            else:
+                for c in range(4):
+                    rows[j, b, c] = ring[old, i, b, c]
+                noisy[j, b] = ring[old, i, b, 4] == 0.0
+    return rows, noisy
+
+
+@njit(cache=True)
+def cascade_observations(
+    envs: Any,
+    q: Any,
+    v: Any,
+    holder: Any,
+    history: Any,
+    phase: Any,
+    duration: Any,
+    plan: Any,
+    dt: float,
+    fast: bool,
+    shown: Any,
+) -> Any:
+    """``CascadeEnv._observation``'s rows for ``envs`` (float64, before the float32 cast
+    and the bounds): per hand its true state, whether it holds a ball, its phase one-hot,
+    the time in the phase, the plan's duration, the next target and the plan's end
+    (world frame); per ball its holder; the measurement ``history (N, 3, 16)``.
+
+    ``plan = (k, grid, glen, end)``: the hands' plans in their own frames, read when
+    ``fast``; else ``shown = (phase_time, next, end)`` as the controller reported them."""
+    k, grid, glen, end = plan
+    phase_time, nxt, end_shown = shown
+    m = envs.shape[0]
+    n_hist = history.shape[2]
+    rows = np.zeros((m, 2 * 15 + 6 + 3 * n_hist))
+    for j in range(m):
+        i = envs[j]
+        for h in range(2):
+            o = 15 * h
+            rows[j, o], rows[j, o + 1] = q[i, 2 * h], q[i, 2 * h + 1]
+            rows[j, o + 2], rows[j, o + 3] = v[i, 2 * h], v[i, 2 * h + 1]
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            rows[j, o + 4] = 1.0 if held else 0.0
+            rows[j, o + 5 + phase[i, h]] = 1.0
+            rows[j, o + 10] = duration[i, h]
+            if fast:
+                rows[j, o + 9] = k[i, h] * dt
+                r = min(k[i, h] + 1, glen[i, h] - 1)
+                x, ex = grid[i, h, r, 0], end[i, h, 0]
+                rows[j, o + 11] = -x if h == 1 else x
+                rows[j, o + 12] = grid[i, h, r, 1]
+                rows[j, o + 13] = -ex if h == 1 else ex
+                rows[j, o + 14] = end[i, h, 1]
+            else:
+                rows[j, o + 9] = phase_time[i, h]
+                rows[j, o + 11], rows[j, o + 12] = nxt[i, h, 0], nxt[i, h, 1]
+                rows[j, o + 13], rows[j, o + 14] = end_shown[i, h, 0], end_shown[i, h, 1]
+        for b in range(3):
+            rows[j, 30 + 2 * b] = 1.0 if holder[i, b] == 0 else 0.0
+            rows[j, 31 + 2 * b] = 1.0 if holder[i, b] == 1 else 0.0
+        for b in range(3):
+            for c in range(n_hist):
+                rows[j, 36 + n_hist * b + c] = history[i, b, c]
+    return rows
+
+
+@njit(cache=True)
+def cascade_events(
+    envs: Any,
+    plan: Any,
+    world: Any,
+    measured: Any,
+    constants: Any,
+    phases: Any,
+    correction: bool,
+    ahead: bool,
+) -> Any:
+    """Which of ``envs`` need their :class:`CascadeController` in Python this step, and
+    which hands' eq. 10 correction is due: the tests of ``CascadeHand.command`` and
+    ``JugglingController.command``/``correct`` on the measured state, with their
+    arithmetic (the hand's view: its oldest queued ball, predicted forward by the
+    latency-aware controller, else the hand itself; own frame).
+
+    ``plan = (phase, k, end_k, t_start, duration, end, incoming, catch_ball)`` per
+    ``(N, 2)`` hand (``end`` own frame); ``world = (holder, caught, released, q, v)``
+    (the last step's); ``measured = (time, ball, ball_vel)``; ``constants = (dt,
+    gravity, reaim, latency, tolerance)`` (``reaim``: ``REAIM_AFTER`` beats, s);
+    ``phases = (toss, go_down, catch)`` indices. Returns ``python (m,)``, ``due (m,
+    2)`` and the view's ball ``(m, 2, 4)`` where due."""
+    phase, pk, end_k, t_start, duration, end, incoming, catch_ball = plan
+    holder, caught, released, q, v = world
+    m_time, m_ball, m_ball_vel = measured
+    dt, g, reaim, latency, tolerance = (
+        constants[0],
+        constants[1],
+        constants[2],
+        constants[3],
+        constants[4],
+    )
+    toss, go_down, catch = phases[0], phases[1], phases[2]
+    m = envs.shape[0]
+    python = np.zeros(m, dtype=np.bool_)
+    due = np.zeros((m, 2), dtype=np.bool_)
+    ball = np.zeros((m, 2, 4))
+    for j in range(m):
+        i = envs[j]
+        event = caught[i, 0] >= 0 or caught[i, 1] >= 0
+        for h in range(2):
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            ph, k, inc = phase[i, h], pk[i, h], incoming[i, h]
+            was_caught, was_released = caught[i, h] >= 0, released[i, h] >= 0
+            if (
+                ((ph == go_down or ph == catch) and held)
+                or (
+                    ph == catch
+                    and inc >= 0
+                    and not held
+                    and not was_caught
+                    and (inc != catch_ball[i, h] or k * dt > duration[i, h] + reaim)
+                )
+                or (ph == toss and was_released)
+                or (ph == catch and was_caught)
+                or (end_k[i, h] >= 0 and k >= end_k[i, h])
+            ):
+                event = True
+        python[j] = event
+        if event or not correction:
+            continue
+        for h in range(2):
+            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            if phase[i, h] != catch or held:
+                continue
+            inc = incoming[i, h]
+            if inc >= 0:
+                bx, bz = m_ball[i, inc, 0], m_ball[i, inc, 1]
+                vx, vz = m_ball_vel[i, inc, 0], m_ball_vel[i, inc, 1]
+                if ahead and holder[i, inc] < 0:  # predict_forward(p, v, latency)
+                    s = latency - 0.0
+                    bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
+                    vz = vz - g * s
+            else:
+                bx, bz = q[i, 2 * h], q[i, 2 * h + 1]
+                vx, vz = v[i, 2 * h], v[i, 2 * h + 1]
+            if h == 1:  # the left hand's own frame
+                bx, vx = -bx, -vx
+            s = t_start[i, h] + duration[i, h] - m_time[i]
+            if s <= dt:
+                continue
+            px = bx + vx * (s - 0.0)
+            pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+            if py_hypot(px - end[i, h, 0], pz - end[i, h, 1]) > tolerance:
+                due[j, h] = True
+                ball[j, h, 0], ball[j, h, 1], ball[j, h, 2], ball[j, h, 3] = bx, bz, vx, vz
+    return python, due, ball
+
+
+@njit(cache=True)
+def cascade_advance(
+    rows: Any, pk: Any, grid: Any, glen: Any, last: Any, phase: Any, constants: Any
+) -> Any:
+    """``JugglingController.command`` without events for both hands of ``rows``: the
+    next grid point (``k + 1``), the last two commands, the release armed in the toss
+    after ``release_after``; ``constants = (dt, release_after, toss)``. Returns the
+    targets ``(r, 2, 2)`` (world frame) and ``armed (r, 2)``."""
+    dt, release_after, toss = constants[0], constants[1], int(constants[2])
+    r = rows.shape[0]
+    targets = np.empty((r, 2, 2))
+    armed = np.empty((r, 2), dtype=np.bool_)
+    for j in range(r):
+        i = rows[j]
+        for h in range(2):
+            k = pk[i, h] + 1
+            pk[i, h] = k
+            g = min(k, glen[i, h] - 1)
+            tx, tz = grid[i, h, g, 0], grid[i, h, g, 1]
+            last[i, h, 0, 0], last[i, h, 0, 1] = last[i, h, 1, 0], last[i, h, 1, 1]
+            last[i, h, 1, 0], last[i, h, 1, 1] = tx, tz
+            targets[j, h, 0] = -tx if h == 1 else tx
+            targets[j, h, 1] = tz
+            armed[j, h] = phase[i, h] == toss and k * dt >= release_after
+    return targets, armed
+
+
+@njit(cache=True)
+def cascade_record(
+    envs: Any, rows: Any, world: Any, measured: Any, counts: Any, constants: Any
+) -> Any:
+    """The bookkeeping of ``CascadeEnv.step`` after the world and the sensor for
+    ``envs``: the measured balls ``rows (m, 3, 4)`` become what the controller sees next
+    (``measured = (time, ball, ball_vel, history)``, the history shifted by one
+    measurement, newest first), the step's catches and releases are counted
+    (``counts (N, 2)``: catches, tosses) from ``world = (k, caught, released,
+    dropped)``; ``constants = (dt, max_catches, time_limit)``. Returns ``time``,
+    ``caught`` (catches this step), ``dropped``, ``terminated`` and ``truncated``
+    ``(m,)``."""
+    k, caught, released, dropped = world
+    m_time, m_ball, m_ball_vel, history = measured
+    dt, max_catches, time_limit = constants[0], constants[1], constants[2]
+    m = envs.shape[0]
+    n_hist = history.shape[2]
+    time = np.empty(m)
+    caught_n = np.zeros(m, dtype=np.int64)
+    any_dropped = np.zeros(m, dtype=np.bool_)
+    terminated = np.zeros(m, dtype=np.bool_)
+    truncated = np.zeros(m, dtype=np.bool_)
+    for j in range(m):
+        i = envs[j]
+        t = k[i] * dt
+        time[j] = t
+        m_time[i] = t
+        for b in range(3):
+            m_ball[i, b, 0], m_ball[i, b, 1] = rows[j, b, 0], rows[j, b, 1]
+            m_ball_vel[i, b, 0], m_ball_vel[i, b, 1] = rows[j, b, 2], rows[j, b, 3]
+            for c in range(n_hist - 1, 3, -1):
+                history[i, b, c] = history[i, b, c - 4]
+            for c in range(4):
+                history[i, b, c] = rows[j, b, c]
+            if dropped[i, b]:
+                any_dropped[j] = True
+        for h in range(2):
+            if caught[i, h] >= 0:
+                caught_n[j] += 1
+            if released[i, h] >= 0:
+                counts[i, 1] += 1
+        counts[i, 0] += caught_n[j]
+        terminated[j] = any_dropped[j]
+        truncated[j] = not any_dropped[j] and (counts[i, 0] >= max_catches or t >= time_limit)
+    return time, caught_n, any_dropped, terminated, truncated

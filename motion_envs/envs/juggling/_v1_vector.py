@@ -23,15 +23,12 @@ extra, ``backend="numba"``, the default when installed) a step runs:
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES
-from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._v1_env import HISTORY, JugglingV1Env
-from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
+from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
     JugglingController,
@@ -44,24 +41,8 @@ __all__ = ["JugglingV1VectorEnv"]
 _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _PHASE_NAMES = np.array(PHASES, dtype=object)
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
-_BACKENDS = ("auto", "numba", "python")
 #: Attributes made from the worlds by ``_link`` (not pickled: made again).
-_LINKED = (
-    "_compiled",
-    "_model_addr",
-    "_data_addr",
-    "_datas",
-    "_qpos",
-    "_qvel",
-    "_ctrl",
-    "_sensors",
-    "_contype",
-    "_conaffinity",
-    "_likeness",
-    "_m_time",
-    "_m_ball",
-    "_m_ball_vel",
-)
+_LINKED = (*WORLD_LINKS, "_trees", "_m_time", "_m_ball", "_m_ball_vel")
 #: Measurement-noise rows drawn from a sensor's generator at a time.
 _NOISE_BLOCK = 64
 
@@ -83,72 +64,26 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
     """
 
     single_class = JugglingV1Env
-
-    def __init__(
-        self,
-        num_envs: int = 1,
-        autoreset_mode: Any = "NextStep",
-        backend: str = "auto",
-        **kwargs: Any,
-    ) -> None:
-        if backend not in _BACKENDS:
-            raise ValueError(f"backend must be one of {list(_BACKENDS)}; got {backend!r}")
-        if backend == "numba" and not numba_available():
-            raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
-        super().__init__(num_envs, autoreset_mode, **kwargs)
-        self.backend = "python" if backend == "python" or not numba_available() else "numba"
-        if self.backend == "numba":
-            self._setup_arrays()
+    _LINKED = _LINKED
+    _batched = True
 
     # -- state ----------------------------------------------------------------------------
     def _link(self) -> None:
-        """The compiled code and what it reads in place: the worlds' addresses and array
-        views (made again after unpickling, which copies the worlds)."""
-        from numba.typed import List
-
-        from motion_envs.envs.juggling import _compiled
-
-        self._compiled = _compiled
-        worlds = [env.world for env in self.envs]
-        self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
-        self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
-        self._datas = [w.data for w in worlds]
-        self._qpos = List([w.data.qpos for w in worlds])
-        self._qvel = List([w.data.qvel for w in worlds])
-        self._ctrl = List([w.data.ctrl for w in worlds])
-        self._sensors = List([w.data.sensordata for w in worlds])
-        self._contype = List([w.model.geom_contype for w in worlds])
-        self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
-        self._likeness = tuple(self.envs[0].likeness.sorted_samples(name) for name in PHASES)
+        """The worlds' links, the likeness's compiled k-d trees and the views of the
+        measured state (made again after unpickling, which copies the worlds)."""
+        self._link_worlds()
+        likeness = self.envs[0].likeness
+        compiled = self._compiled
+        self._trees = tuple(compiled.likeness_tree(likeness.trees[p].data) for p in PHASES)
         self._m_time = self._measured[:, 0]
         self._m_ball = self._measured[:, 1:3]
         self._m_ball_vel = self._measured[:, 3:5]
-
-    def __getstate__(self) -> dict[str, Any]:
-        state = self.__dict__.copy()
-        for key in _LINKED:
-            state.pop(key, None)
-        return state
-
-    def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        if self.backend == "numba":
-            self._link()
 
     def _setup_arrays(self) -> None:
         n, first = self.num_envs, self.envs[0]
         task, phys = first.task, first.world.physics
         self._ball_geom = int(phys.ball_geom)
-        self._constants = np.array(
-            [
-                task.dt,
-                first.model.opt.timestep,
-                task.ball_radius,
-                task.floor_z,
-                phys.palm_top,
-                task.toss_threshold,
-            ]
-        )
+        self._constants = self._world_constants(phys.palm_top)
         self._dt, self._gravity = task.dt, task.gravity
         # the world
         self._ref = np.zeros((n, 2))
@@ -189,7 +124,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
-        self._nearest = np.zeros((n, len(PHASES)), dtype=np.int64)  # search starts
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._low, self._high = first._low, first._high
@@ -277,14 +211,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         full_target[envs], full_armed[envs] = target, armed
         self._compiled.v1_periods(
             envs,
-            self._model_addr,
-            self._data_addr,
-            self._qpos,
-            self._qvel,
-            self._ctrl,
-            self._sensors,
-            self._contype,
-            self._conaffinity,
+            self._worlds,
             self._ball_geom,
             full_target,
             full_armed,
@@ -311,6 +238,10 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 self._noise_at[i] = 0
         self._slot = (self._slot + 1) % self._ring.shape[0]
         n = envs.size
+        points = np.empty((n, 4))
+        points[:, :2] = self._hand[envs]
+        points[:, 2:] = LIKENESS_TAU * self._hand_vel[envs]
+        likeness = self._compiled.nearest_rows(points, self._phase[envs], self._trees)
         obs = np.empty((n, self._obs_dim), dtype=np.float32)
         out = np.empty((n, 7))
         ends = np.empty((n, 2), dtype=np.bool_)
@@ -339,9 +270,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._glen,
             self._next,
             self._fast,
-            self._likeness,
+            likeness,
             self._bounds,
-            self._nearest,
             a,
             self._measured,
             self._m_flags,

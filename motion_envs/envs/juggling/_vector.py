@@ -36,8 +36,25 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs._common import as_action, check_autoreset_mode, check_num_envs
+from motion_envs.envs._kernels import numba_available
 
-__all__ = ["Columns", "JugglingVectorEnv"]
+__all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
+
+_BACKENDS = ("auto", "numba", "python")
+#: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
+WORLD_LINKS = (
+    "_compiled",
+    "_model_addr",
+    "_data_addr",
+    "_datas",
+    "_qpos",
+    "_qvel",
+    "_ctrl",
+    "_sensors",
+    "_contype",
+    "_conaffinity",
+    "_worlds",
+)
 
 #: A step's per-sub-environment values by info key: arrays with the stepped
 #: sub-environments along the first axis.
@@ -56,6 +73,9 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         Number of sub-environments, 1 to ``MAX_NUM_ENVS``.
     autoreset_mode : AutoresetMode or str
         ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+    backend : str
+        ``"auto"`` (default: numba when installed and the subclass batches),
+        ``"numba"`` or ``"python"`` (each single environment's ``step``).
     **kwargs
         The single environment's keyword arguments (``level``, ``controller``, ...),
         checked by ``single_class``.
@@ -66,13 +86,25 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         "autoreset_mode": AutoresetMode.NEXT_STEP,
     }
     single_class: ClassVar[type[gym.Env[Any, Any]]]
+    #: Attributes :meth:`_link` makes from the worlds: not pickled, made again.
+    _LINKED: ClassVar[tuple[str, ...]] = ()
+    #: ``"python"`` (each single environment's ``step``) or ``"numba"`` (batched).
+    backend = "python"
+    #: Whether the subclass batches the episodes with numba (``_setup_arrays``,
+    #: ``_link``, ``_after_reset``, ``_step_batch``).
+    _batched: ClassVar[bool] = False
 
     def __init__(
         self,
         num_envs: int = 1,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        backend: str = "auto",
         **kwargs: Any,
     ) -> None:
+        if backend not in _BACKENDS:
+            raise ValueError(f"backend must be one of {list(_BACKENDS)}; got {backend!r}")
+        if backend == "numba" and not numba_available():
+            raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
         n = check_num_envs(num_envs)
         mode = check_autoreset_mode(autoreset_mode)
         first = self.single_class(**kwargs)  # checks the arguments once
@@ -92,6 +124,76 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         self._ended = np.zeros(n, dtype=bool)
         self._started = np.zeros(n, dtype=bool)
         self._arange = np.arange(n)
+        batched = backend != "python" and numba_available() and self._batched
+        self.backend = "numba" if batched else "python"
+        if batched:
+            self._setup_arrays()
+
+    # -- the compiled code's links to the worlds -------------------------------------------
+    def _setup_arrays(self) -> None:
+        """Hook: the batched state's arrays (a batched subclass)."""
+
+    def _link(self) -> None:
+        """Hook: make the ``_LINKED`` attributes (a batched subclass)."""
+
+    def _link_worlds(self) -> None:
+        """The compiled code and what it reads and writes in place: each world's
+        ``MjModel``/``MjData`` address and array views (:data:`WORLD_LINKS`)."""
+        from numba.typed import List
+
+        from motion_envs.envs.juggling import _compiled
+
+        self._compiled = _compiled
+        worlds = [env.world for env in self.envs]
+        self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
+        self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
+        self._datas = [w.data for w in worlds]
+        self._qpos = List([w.data.qpos for w in worlds])
+        self._qvel = List([w.data.qvel for w in worlds])
+        self._ctrl = List([w.data.ctrl for w in worlds])
+        self._sensors = List([w.data.sensordata for w in worlds])
+        self._contype = List([w.model.geom_contype for w in worlds])
+        self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
+        #: what the compiled periods take, in their order
+        self._worlds = (
+            self._model_addr,
+            self._data_addr,
+            self._qpos,
+            self._qvel,
+            self._ctrl,
+            self._sensors,
+            self._contype,
+            self._conaffinity,
+        )
+
+    def _world_constants(self, palm_top: float, *extra: float) -> NDArray[np.float64]:
+        """The compiled periods' ``constants``: ``(dt, physics step, ball radius, floor
+        height, palm_top, toss threshold, *extra)`` of the first sub-environment (all
+        share them)."""
+        first = self.envs[0]
+        task = first.task
+        return np.array(
+            [
+                task.dt,
+                first.model.opt.timestep,
+                task.ball_radius,
+                task.floor_z,
+                palm_top,
+                task.toss_threshold,
+                *extra,
+            ]
+        )
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for key in self._LINKED:
+            state.pop(key, None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        if self.backend == "numba":  # the unpickled worlds are copies: link them
+            self._link()
 
     # -- resets -------------------------------------------------------------------------
     def _seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:

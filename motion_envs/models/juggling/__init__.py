@@ -30,6 +30,7 @@ The public names of small private modules, one concern each:
 
 from motion_envs.models.juggling._cascade import (
     CASCADE_CONTROLLERS,
+    REAIM_AFTER,
     CascadeController,
     CascadeFit,
     CascadeHand,
@@ -124,6 +125,7 @@ __all__ = [
     "LEVELS",
     "LIKENESS_TAU",
     "PAPER_GRAVITY",
+    "REAIM_AFTER",
     "TRACKING_NOISE",
     "TRACKING_ROWS",
     "V1_N_SINES",

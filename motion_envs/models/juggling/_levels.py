@@ -265,13 +265,6 @@ class HumanLikeness:
         d = self._sorted[phase].nearest(q)
         return d if math.isfinite(d) else math.inf
 
-    def sorted_samples(self, phase: str) -> tuple[FloatArray, int]:
-        """The phase's samples as ``(columns (4, M), axis)``: one row per coordinate,
-        sorted along coordinate ``axis`` (the widest), for a search of many queries at
-        once (the native vector environment's)."""
-        samples = self._sorted[phase]
-        return samples.columns, samples.axis
-
 
 class _SortedSamples:
     """Exact nearest-neighbour distance among ``points (M, 4)`` for one query at a time.
