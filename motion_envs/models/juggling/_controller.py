@@ -290,17 +290,7 @@ def replan_many(
     duration = np.array([rows.duration for _, _, rows in batch])
     position = np.stack([ep.grid[ep.k] for _, ep, _ in batch])
     target = predicted[[j for j, _, _ in batch]]
-    velocity = (derivative @ c / duration[:, None, None])[:, 0]
-    r = np.stack([position, target, velocity], axis=1) - a1 @ c
-    dp = pinv @ r
-    miss = np.max(np.abs(a1 @ dp - r), axis=(1, 2), initial=0.0)
-    scale = np.maximum(1.0, np.max(np.abs(r), axis=(1, 2), initial=0.0))
-    if np.any(miss > 1e-9 * scale):
-        worst = float(np.max(miss))
-        raise ValueError(
-            f"correct_online: the free correction cannot meet the conditions (residual {worst:.3g})"
-        )
-    out = c + dp
+    out = _eq10(derivative, a1, pinv, c, duration, position, target)
     for m, (j, ep, _) in enumerate(batch):
         ep._replanned(times[j], target[m].copy(), out[m])
 
@@ -332,16 +322,42 @@ class _Eq10Rows:
         """The corrected coefficients at step ``k``: the plan restarts from ``position``
         with its own velocity there and ends at ``target``."""
         i = k - self.k0
-        velocity = (self.derivative[i : i + 1] @ coefficients / self.duration)[0]
-        a1 = self.a[i]
-        r = np.stack([position, target, velocity]) - a1 @ coefficients
-        dp = self.pinv[i] @ r
-        miss = np.max(np.abs(a1 @ dp - r), initial=0.0)
-        scale = max(1.0, float(np.max(np.abs(r), initial=0.0)))
-        if miss > 1e-9 * scale:
-            raise ValueError(
-                f"correct_online: the free correction cannot meet the conditions "
-                f"(residual {miss:.3g})"
-            )
-        out: FloatArray = coefficients + dp
-        return out
+        out = _eq10(
+            self.derivative[None, i : i + 1],
+            self.a[None, i],
+            self.pinv[None, i],
+            coefficients[None],
+            np.array([self.duration]),
+            np.asarray(position, dtype=np.float64)[None],
+            np.asarray(target, dtype=np.float64)[None],
+        )
+        return out[0]
+
+
+def _eq10(
+    derivative: FloatArray,
+    a1: FloatArray,
+    pinv: FloatArray,
+    c: FloatArray,
+    duration: FloatArray,
+    position: FloatArray,
+    target: FloatArray,
+) -> FloatArray:
+    """Eq. 10 (free mode) for ``n`` plans at once: coefficients ``c (n, nb, 2)``, the
+    rows at their steps (``derivative (n, 1, nb)``, conditions ``a1 (n, 3, nb)`` and
+    their pseudo-inverses ``pinv (n, nb, 3)``), durations ``(n,)``, positions and end
+    targets ``(n, 2)``; returns the corrected coefficients. Stacked products: numpy's
+    ``matmul`` calls the same BLAS routine for each matrix of a stack, so a plan's
+    numbers do not depend on the others (tested)."""
+    velocity = (derivative @ c / duration[:, None, None])[:, 0]
+    r = np.stack([position, target, velocity], axis=1) - a1 @ c
+    dp = pinv @ r
+    miss = np.max(np.abs(a1 @ dp - r), axis=(1, 2), initial=0.0)
+    scale = np.maximum(1.0, np.max(np.abs(r), axis=(1, 2), initial=0.0))
+    if np.any(miss > 1e-9 * scale):
+        raise ValueError(
+            "correct_online: the free correction cannot meet the conditions "
+            f"(residual {float(np.max(miss)):.3g})"
+        )
+    out: FloatArray = c + dp
+    return out
