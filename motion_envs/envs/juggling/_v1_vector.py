@@ -126,7 +126,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
-        self._low, self._high = first._low, first._high
         self._bounds = np.stack([first._low, first._high])
         self._obs_dim = first._low.shape[0]
         self._link()
