@@ -47,6 +47,7 @@ from motion_envs.models.juggling import (
     CascadeHand,
     CascadeState,
     perturb_release,
+    replan_many,
 )
 
 __all__ = ["CascadeVectorEnv"]
@@ -357,15 +358,27 @@ class CascadeVectorEnv(JugglingVectorEnv):
     def _correct(
         self, envs: NDArray[np.int64], due: NDArray[np.bool_], ball: NDArray[np.float64]
     ) -> None:
-        """The eq. 10 corrections found due: each hand's own
-        :meth:`JugglingController.correct` on its view's ball (own frame), its new plan
-        copied back."""
-        for j, h in zip(*np.nonzero(due), strict=True):
-            i, hh = int(envs[j]), int(h)
-            hand: CascadeHand = self.envs[i].controller.hands[hh]
+        """The eq. 10 corrections found due: each hand re-plans toward its view's ball's
+        predicted intercept (:meth:`JugglingController.correct`'s flight, own frame),
+        all of them together (:func:`~motion_envs.models.juggling.replan_many`); the new
+        plans are copied back."""
+        rows, hands_at = np.nonzero(due)
+        if rows.size == 0:
+            return
+        at = envs[rows]
+        g = float(self._event_constants[1])
+        b = ball[rows, hands_at]
+        s = self._t_start[at, hands_at] + self._duration[at, hands_at] - self._m_time[at]
+        predicted = np.empty((rows.size, 2))
+        predicted[:, 0] = b[:, 0] + b[:, 2] * (s - 0.0)
+        predicted[:, 1] = b[:, 1] + b[:, 3] * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+        hands: list[CascadeHand] = []
+        for i, hh in zip(at.tolist(), hands_at.tolist(), strict=True):
+            hand = self.envs[i].controller.hands[hh]
             hand.k = int(self._pk[i, hh])
-            b = ball[j, hh]
-            hand.correct(float(self._m_time[i]), b[:2].copy(), b[2:].copy())
+            hands.append(hand)
+        replan_many(hands, self._m_time[at].tolist(), predicted)
+        for i, hh, hand in zip(at.tolist(), hands_at.tolist(), hands, strict=True):
             self._load_grid(i, hh, hand)
             self._end[i, hh] = hand.end
 

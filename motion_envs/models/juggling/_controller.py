@@ -349,15 +349,18 @@ def _eq10(
     targets ``(n, 2)``; returns the corrected coefficients. Stacked products: numpy's
     ``matmul`` calls the same BLAS routine for each matrix of a stack, so a plan's
     numbers do not depend on the others (tested)."""
-    velocity = (derivative @ c / duration[:, None, None])[:, 0]
-    r = np.stack([position, target, velocity], axis=1) - a1 @ c
+    n = c.shape[0]
+    r = np.empty((n, 3, 2))
+    r[:, 0], r[:, 1] = position, target
+    r[:, 2] = (derivative @ c / duration[:, None, None])[:, 0]  # the plan's velocity
+    r -= a1 @ c
     dp = pinv @ r
-    miss = np.max(np.abs(a1 @ dp - r), axis=(1, 2), initial=0.0)
-    scale = np.maximum(1.0, np.max(np.abs(r), axis=(1, 2), initial=0.0))
-    if np.any(miss > 1e-9 * scale):
+    miss = np.abs(a1 @ dp - r).reshape(n, 6).max(axis=1)
+    scale = np.abs(r).reshape(n, 6).max(axis=1)
+    if (miss > 1e-9 * np.maximum(scale, 1.0)).any():
         raise ValueError(
             "correct_online: the free correction cannot meet the conditions "
-            f"(residual {float(np.max(miss)):.3g})"
+            f"(residual {float(miss.max()):.3g})"
         )
     out: FloatArray = c + dp
     return out
