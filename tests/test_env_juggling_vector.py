@@ -383,3 +383,35 @@ def test_compiled_likeness_is_human_likeness() -> None:
     got = nearest_rows(points, phase, trees)
     for j in range(n):
         assert got[j] == likeness.distance(PHASES[phase[j]], pos[j], vel[j]), j
+
+
+@pytest.mark.parametrize(("env_id", "dim"), [(V1, 2), (CASCADE, 4)])
+def test_sb3_sees_the_episodes_of_dummy_vec_env(env_id: str, dim: int) -> None:
+    """What ``motion-bench train`` steps now (the native vector env through
+    ``GymnasiumVecEnv``) gives SB3 the episodes DummyVecEnv gave it before: the agents
+    trained on DummyVecEnv stay reproducible."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from baselines.agents.vec import make_sb3_vec_env
+    from baselines.sb3 import GymnasiumVecEnv
+
+    kw = {"level": "hard", "max_catches": 2, "residual_scale": 0.15}
+    native = make_sb3_vec_env(env_id, 3, kw)
+    assert isinstance(native, GymnasiumVecEnv)
+    dummy = DummyVecEnv([lambda: gym.make(env_id, **kw)] * 3)
+    native.seed(7)
+    dummy.seed(7)
+    assert np.array_equal(native.reset(), dummy.reset())
+    rng = np.random.default_rng(0)
+    ends = 0
+    for _ in range(500):
+        a = (0.5 * rng.standard_normal((3, dim))).astype(np.float32)
+        r1, r2 = native.step(a), dummy.step(a)
+        for k in range(3):
+            assert np.array_equal(r1[k], r2[k])
+        for i in np.flatnonzero(r1[2]).tolist():
+            final = r2[3][i]["terminal_observation"]
+            assert np.array_equal(r1[3][i]["terminal_observation"], final)
+        ends += int(r1[2].sum())
+    assert ends >= 3
