@@ -29,6 +29,7 @@ The controller sees only the state (observed hand, ball); it never imports Gymna
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -265,7 +266,7 @@ class JugglingController:
 
 
 def replan_many(
-    episodes: list[JugglingController], times: list[float], predicted: FloatArray
+    episodes: Sequence[JugglingController], times: Sequence[float], predicted: FloatArray
 ) -> None:
     """:meth:`JugglingController.replan` of each episode ``j`` at ``times[j]`` toward
     ``predicted[j]`` (``(n, 2)``), the eq. 10 products of all of them computed together:
