@@ -419,7 +419,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         leaves with its hand's velocity, scattered by the world's generator."""
         for i in envs.tolist():
             w = self.envs[i].world
-            qvel = self._qvel[i]
+            qvel = self._datas[i].qvel
             for h in range(CASCADE_HANDS):
                 b = int(self._released[i, h])
                 if b < 0:

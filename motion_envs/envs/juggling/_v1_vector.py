@@ -409,7 +409,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 self._hand_vel[i].copy(), w.release_speed_std, w.release_angle_std, w._rng
             )
             ux, uz = float(v[0]), float(v[1])
-            qvel = self._qvel[i]
+            qvel = self._datas[i].qvel
             qvel[2], qvel[3] = ux, uz
             self._ball_vel[i] = ux, uz
             self._flags[i, 0] = self._flags[i, 1] = False

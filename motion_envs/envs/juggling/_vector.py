@@ -42,19 +42,7 @@ __all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
 
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
-WORLD_LINKS = (
-    "_compiled",
-    "_model_addr",
-    "_data_addr",
-    "_datas",
-    "_qpos",
-    "_qvel",
-    "_ctrl",
-    "_sensors",
-    "_contype",
-    "_conaffinity",
-    "_worlds",
-)
+WORLD_LINKS = ("_compiled", "_datas", "_worlds")
 
 #: A step's per-sub-environment values by info key: arrays with the stepped
 #: sub-environments along the first axis.
@@ -145,25 +133,19 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
 
         self._compiled = _compiled
         worlds = [env.world for env in self.envs]
-        self._model_addr = np.array([w.model._address for w in worlds], dtype=np.uint64)
-        self._data_addr = np.array([w.data._address for w in worlds], dtype=np.uint64)
         self._datas = [w.data for w in worlds]
-        self._qpos = List([w.data.qpos for w in worlds])
-        self._qvel = List([w.data.qvel for w in worlds])
-        self._ctrl = List([w.data.ctrl for w in worlds])
-        self._sensors = List([w.data.sensordata for w in worlds])
-        self._contype = List([w.model.geom_contype for w in worlds])
-        self._conaffinity = List([w.model.geom_conaffinity for w in worlds])
-        #: what the compiled periods take, in their order
+        #: what the compiled periods take, in their order: each world's ``MjModel`` and
+        #: ``MjData`` address, then views of its qpos, qvel, ctrl, sensordata and the
+        #: model's geom_contype and geom_conaffinity
         self._worlds = (
-            self._model_addr,
-            self._data_addr,
-            self._qpos,
-            self._qvel,
-            self._ctrl,
-            self._sensors,
-            self._contype,
-            self._conaffinity,
+            np.array([w.model._address for w in worlds], dtype=np.uint64),
+            np.array([w.data._address for w in worlds], dtype=np.uint64),
+            List([w.data.qpos for w in worlds]),
+            List([w.data.qvel for w in worlds]),
+            List([w.data.ctrl for w in worlds]),
+            List([w.data.sensordata for w in worlds]),
+            List([w.model.geom_contype for w in worlds]),
+            List([w.model.geom_conaffinity for w in worlds]),
         )
 
     def _world_constants(self, palm_top: float, *extra: float) -> NDArray[np.float64]:
