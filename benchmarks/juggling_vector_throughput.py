@@ -4,18 +4,23 @@ For ``MotionEnvs/Juggling-v1`` and ``MotionEnvs/Cascade-v0`` at ``--level`` and 
 ``N`` in ``--num-envs``: ``gym.make_vec(id, N)`` (the native vector environment) against
 ``gymnasium.vector.SyncVectorEnv`` of ``N`` ``gym.make(id)`` copies (the anchor), both
 stepping the same pre-sampled actions (the zero action, and ``0.3 N(0, 1)`` residuals),
-autoresetting (NEXT_STEP). A figure is the median env-steps per second over
-``--repeats`` timed runs after a warm-up run, per wall-clock second and per CPU second of
-the process (read the CPU ratio on a shared machine); the ratio is native / sync.
+autoresetting (NEXT_STEP). The native env runs with each ``--threads`` count (default:
+1, and every CPU this process may use; its worlds' control periods are split among the
+threads, see ``motion_envs.envs.juggling._vector``). A figure is the median env-steps per
+second over ``--repeats`` timed runs after a warm-up run, per wall-clock second and per
+CPU second of the process (all its threads: a threaded run's CPU figure is what it costs,
+its wall figure what a user waits); the ratio is native / sync.
 
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 
     python benchmarks/juggling_vector_throughput.py [--num-envs 64 256] [--steps 16384]
+        [--threads 1 2]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -33,8 +38,8 @@ IDS = ("MotionEnvs/Juggling-v1", "MotionEnvs/Cascade-v0")
 
 def _rate(env: gym.vector.VectorEnv, actions: np.ndarray) -> tuple[float, float]:
     """Env-steps per second of ``env`` over ``actions (T, N, ...)``: per wall-clock second
-    and per CPU second of this process (both single-threaded: the CPU figure does not
-    count the time another process took from this one)."""
+    and per CPU second of this process (the CPU figure does not count the time another
+    process took from this one)."""
     env.reset(seed=0)
     step = env.step
     t0, c0 = time.perf_counter(), time.process_time()
@@ -59,7 +64,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure")
     parser.add_argument("--level", default="medium", help="the envs' level")
     parser.add_argument("--ids", nargs="+", default=list(IDS), help="env ids")
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    parser.add_argument(
+        "--threads",
+        type=int,
+        nargs="+",
+        default=sorted({1, cpus}),
+        help="thread counts of the native env (default: 1 and the CPUs available)",
+    )
     args = parser.parse_args(argv)
+    if any(t < 1 for t in args.threads):
+        parser.error("--threads must be >= 1")
     for name in ("steps", "repeats"):
         if getattr(args, name) < 1:
             parser.error(f"--{name} must be >= 1")
@@ -87,9 +102,12 @@ def main(argv: list[str] | None = None) -> int:
         )
         figures = {"sync": _median_rate(sync, actions, args.repeats)}
         sync.close()
-        env = gym.make_vec(env_id, n, **kw)
-        figures["native"] = _median_rate(env, actions, args.repeats)
-        env.close()
+        for threads in args.threads:
+            env = gym.make_vec(env_id, n, threads=threads, **kw)
+            figures[f"native, {threads} thread{'s' if threads > 1 else ''}"] = _median_rate(
+                env, actions, args.repeats
+            )
+            env.close()
         for name, (wall, cpu) in figures.items():
             ratio, ratio_cpu = wall / figures["sync"][0], cpu / figures["sync"][1]
             rows.append(

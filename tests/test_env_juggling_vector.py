@@ -116,14 +116,31 @@ def test_v1_zero_action_equal_sync(mode: Any, level: str, controller: str) -> No
     assert run_both(V1, vec, 3, mode, 1200, "zero", **kw) >= 3
 
 
+@needs_numba
+@pytest.mark.parametrize(
+    ("env_id", "cls"), [(V1, JugglingV1VectorEnv), (CASCADE, CascadeVectorEnv)]
+)
+def test_threaded_periods_equal_sync(env_id: str, cls: Any) -> None:
+    """The worlds' periods in three threads (blocks of 8 sub-environments, fewer while
+    some reset) give SyncVectorEnv's episodes bit for bit."""
+    kw = {"level": "hard"}
+    vec = cls(24, threads=3, **kw)
+    assert vec.threads == 3
+    ends = run_both(env_id, vec, 24, AutoresetMode.NEXT_STEP, 300, "random", **kw)
+    assert ends >= 12  # some sub-environments reset while the others stepped
+    assert vec._pool is None  # closed with the env
+    with pytest.raises(ValueError, match="threads"):
+        cls(2, threads=0)
+
+
 @pytest.mark.parametrize("cls", [JugglingV1VectorEnv, CascadeVectorEnv])
 def test_pickled_vector_env_continues_as_the_original(cls: Any) -> None:
     import pickle
 
-    vec = cls(3, level="medium")
+    vec = cls(16, level="medium", threads=2)  # two blocks of 8: the pool is made
     vec.reset(seed=1)
     rng = np.random.default_rng(0)
-    shape = (3, *vec.single_action_space.shape)
+    shape = (16, *vec.single_action_space.shape)
     for _ in range(150):
         vec.step((0.2 * rng.standard_normal(shape)).astype(np.float32))
     copy = pickle.loads(pickle.dumps(vec))

@@ -235,7 +235,8 @@ class CascadeVectorEnv(JugglingVectorEnv):
         s = self.envs[0].residual_scale
         self._full_target[envs] = targets + s * a.reshape(m, 2, 2)
         self._full_armed[envs] = armed
-        self._compiled.cascade_periods(
+        self._in_threads(
+            self._compiled.cascade_periods,
             envs,
             self._worlds,
             self._ball_geoms,

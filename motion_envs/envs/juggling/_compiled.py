@@ -294,7 +294,7 @@ def _v1_periods(
         events[i, 0], events[i, 1] = caught, fires
 
 
-v1_periods = njit(cache=True)(_v1_periods)
+v1_periods = njit(cache=True, nogil=True)(_v1_periods)
 
 
 @njit(cache=True)
@@ -436,7 +436,7 @@ def v1_finish(
                 row[c] = low[c]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cascade_periods(
     envs: Any,
     worlds: Any,

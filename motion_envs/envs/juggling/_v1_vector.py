@@ -208,7 +208,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         full_target = np.zeros((self.num_envs, 2))
         full_armed = np.zeros(self.num_envs, dtype=np.bool_)
         full_target[envs], full_armed[envs] = target, armed
-        self._compiled.v1_periods(
+        self._in_threads(
+            self._compiled.v1_periods,
             envs,
             self._worlds,
             self._ball_geom,

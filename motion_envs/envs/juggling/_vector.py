@@ -22,11 +22,20 @@ Autoreset (``autoreset_mode=``, as ``SyncVectorEnv``):
 
 Infos: ``infos[key]`` is an ``(N, ...)`` array and ``infos["_" + key]`` marks the
 sub-environments it applies to; entries outside the mask are unspecified.
+
+Threads (``threads=``, numba backend): the worlds' control periods (MuJoCo's ``mj_step``
+and the servo, the bulk of a step) run in up to ``threads`` threads, each on its own
+contiguous block of sub-environments; the compiled periods release the GIL (as MuJoCo's
+own bindings do around ``mj_step``). Each world is stepped by exactly the code that steps
+it in one thread (its own model and data, nothing shared), so the result does not depend
+on the number of threads (tested bit for bit).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -43,6 +52,9 @@ __all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
 WORLD_LINKS = ("_compiled", "_datas", "_worlds")
+#: Fewest sub-environments a thread is given (below, handing work to a thread costs more
+#: than it saves).
+MIN_ENVS_PER_THREAD = 8
 
 #: A step's per-sub-environment values by info key: arrays with the stepped
 #: sub-environments along the first axis.
@@ -64,6 +76,9 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
     backend : str
         ``"auto"`` (default: numba when installed and the subclass batches),
         ``"numba"`` or ``"python"`` (each single environment's ``step``).
+    threads : int or None
+        Threads stepping the worlds' control periods (numba backend): ``None`` (default)
+        uses the CPUs this process may run on, ``1`` none but the caller's.
     **kwargs
         The single environment's keyword arguments (``level``, ``controller``, ...),
         checked by ``single_class``.
@@ -87,10 +102,15 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         num_envs: int = 1,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         backend: str = "auto",
+        threads: int | None = None,
         **kwargs: Any,
     ) -> None:
         if backend not in _BACKENDS:
             raise ValueError(f"backend must be one of {list(_BACKENDS)}; got {backend!r}")
+        if threads is None:
+            threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+        elif isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+            raise ValueError(f"threads must be a positive int or None; got {threads!r}")
         if backend == "numba" and not numba_available():
             raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
         n = check_num_envs(num_envs)
@@ -112,6 +132,8 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         self._ended = np.zeros(n, dtype=bool)
         self._started = np.zeros(n, dtype=bool)
         self._arange = np.arange(n)
+        self.threads = threads
+        self._pool: ThreadPoolExecutor | None = None
         batched = backend != "python" and numba_available() and self._batched
         self.backend = "numba" if batched else "python"
         if batched:
@@ -166,10 +188,29 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             ]
         )
 
+    def _in_threads(
+        self, periods: Callable[..., None], envs: NDArray[np.int64], *args: Any
+    ) -> None:
+        """``periods(envs, *args)`` (a compiled kernel that releases the GIL and touches
+        only its sub-environments' rows and worlds), ``envs`` split into contiguous blocks
+        run in up to :attr:`threads` threads, the caller's thread among them."""
+        blocks = min(self.threads, envs.size // MIN_ENVS_PER_THREAD)
+        if blocks <= 1:
+            periods(envs, *args)
+            return
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(self.threads - 1, thread_name_prefix="juggling")
+        first, *rest = np.array_split(envs, blocks)
+        futures = [self._pool.submit(periods, block, *args) for block in rest]
+        periods(first, *args)
+        for future in futures:
+            future.result()
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for key in self._LINKED:
             state.pop(key, None)
+        state["_pool"] = None  # threads are not pickled: made again when needed
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -306,6 +347,9 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         return tuple(env.render() for env in self.envs)
 
     def close_extras(self, **kwargs: Any) -> None:
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
         for env in self.envs:
             env.close()
 
