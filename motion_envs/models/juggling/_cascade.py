@@ -375,15 +375,15 @@ class CascadeHand(JugglingController):
     def next_release(self) -> float:
         """s, when this hand should release next: the mean of its own beat (its last
         release plus two beats) and the other hand's (the other hand's last release plus
-        an odd number of beats, the first after this hand's last release); the first
-        beat before any release."""
+        the odd number of beats nearest to this hand's own beat); the first beat before
+        any release."""
         own, other = self.last_release, self.other_release
         if own is None:
             return self.first_release
         mine = own + 2.0 * self.beat
         if other is None:
             return mine
-        m = math.floor((own - other - self.beat) / (2.0 * self.beat)) + 1
+        m = round((mine - other - self.beat) / (2.0 * self.beat))
         theirs = other + self.beat + 2.0 * self.beat * m
         return 0.5 * (mine + theirs)
 
