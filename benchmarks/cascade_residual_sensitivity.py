@@ -1,0 +1,134 @@
+"""How much a residual's jitter costs the cascade juggler: why PPO's agents lose to it.
+
+Not a timing: a diagnosis. Cascade-v0 (``--level``, the shipped PPO block's
+``residual_scale`` 0.15 and ``max_catches`` 10) on VALIDATION seeds
+``SPLIT_SEEDS["val"] + i`` (never the test seeds), ``--episodes`` episodes stepped
+together in the native vector environment, under residual actions that carry no
+information:
+
+* ``zero``: the juggler itself (the reference);
+* ``white``: an independent ``N(0, s^2)`` draw per step and action entry (what a policy
+  whose output follows the sensor's noise, or PPO's per-step exploration, adds);
+* ``white x`` / ``white z``: the same on the hands' horizontal / vertical entries only;
+* ``held 16``: a draw held for 16 steps (80 ms; gSDE's ``sde_sample_freq`` 16);
+* ``constant``: one draw per episode (a fixed offset of the hands' targets).
+
+For each: mean catches before the first drop, drops per catch (the agents' validation
+criterion) and the paired difference of catches from ``zero`` (same seeds) with a 95 %
+normal interval over episodes. The demonstrations the juggler is fitted on are SIMULATED.
+
+    python benchmarks/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
+        [--scales 0.02 0.05 0.1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from typing import Any
+
+import numpy as np
+from _timing import machine, print_json, print_machine, print_table  # benchmarks/ on sys.path
+from tqdm import tqdm
+
+from baselines.agents.juggling_score import SPLIT_SEEDS
+from motion_envs.datasets.juggling import SIMULATED_LABEL
+from motion_envs.envs.juggling import CascadeVectorEnv
+
+KINDS = ("white", "white x", "white z", "held 16", "constant")
+_COLUMNS = {"white x": [0, 2], "white z": [1, 3]}
+
+
+def first_episodes(level: str, episodes: int, kind: str, scale: float) -> tuple[Any, Any]:
+    """Catches and drop flags of each sub-environment's first episode under ``kind``."""
+    env = CascadeVectorEnv(episodes, level=level, max_catches=10, residual_scale=0.15, threads=1)
+    env.reset(seed=SPLIT_SEEDS["val"])
+    rng = np.random.default_rng(0)
+    catches = np.zeros(episodes)
+    dropped = np.zeros(episodes, dtype=bool)
+    done = np.zeros(episodes, dtype=bool)
+    a = np.zeros((episodes, 4))
+    bias = scale * rng.standard_normal((episodes, 4))
+    step = 0
+    while not done.all():
+        if kind == "constant":
+            a = bias
+        elif kind == "held 16":
+            if step % 16 == 0:
+                a = scale * rng.standard_normal((episodes, 4))
+        elif kind != "zero":
+            a = np.zeros((episodes, 4))
+            cols = _COLUMNS.get(kind, [0, 1, 2, 3])
+            a[:, cols] = scale * rng.standard_normal((episodes, len(cols)))
+        _, _, terminated, truncated, info = env.step(a.astype(np.float32))
+        live = ~done
+        catches[live] = info["catches"][live]
+        dropped[live] |= terminated[live]
+        done |= terminated | truncated
+        step += 1
+    env.close()
+    return catches, dropped
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--level", default="medium")
+    parser.add_argument("--episodes", type=int, default=80)
+    parser.add_argument("--scales", type=float, nargs="+", default=[0.02, 0.05, 0.1])
+    args = parser.parse_args(argv)
+    if args.episodes < 2:
+        parser.error("--episodes must be >= 2")
+    if any(s <= 0 for s in args.scales):
+        parser.error("--scales must be > 0")
+    c0 = time.process_time()
+    jobs = [("zero", 0.0)] + [(k, s) for s in args.scales for k in KINDS]
+    results: dict[tuple[str, float], tuple[Any, Any]] = {}
+    for kind, scale in tqdm(jobs, desc="residuals", file=sys.stderr):
+        results[kind, scale] = first_episodes(args.level, args.episodes, kind, scale)
+    base = results["zero", 0.0][0]
+    rows: list[list[Any]] = []
+    out: dict[str, Any] = {
+        "machine": machine(),
+        "level": args.level,
+        "episodes": args.episodes,
+        "data": SIMULATED_LABEL,
+        "rows": [],
+    }
+    for (kind, scale), (catches, dropped) in results.items():
+        diff = catches - base
+        half = 1.96 * float(diff.std(ddof=1)) / math.sqrt(diff.size) if kind != "zero" else 0.0
+        per_catch = float(dropped.sum()) / max(float(catches.sum()), 1.0)
+        lo, hi = float(diff.mean()) - half, float(diff.mean()) + half
+        row = {
+            "residual": kind,
+            "std_action": scale,
+            "std_m": round(0.15 * scale, 5),
+            "mean_catches": round(float(catches.mean()), 3),
+            "drops_per_catch": round(per_catch, 3),
+            "diff_vs_zero": round(float(diff.mean()), 3),
+            "diff_ci95": [round(lo, 3), round(hi, 3)],
+        }
+        out["rows"].append(row)
+        rows.append(
+            [
+                kind,
+                f"{scale:g}",
+                f"{1000 * 0.15 * scale:.1f}",
+                f"{row['mean_catches']:.2f}",
+                f"{per_catch:.3f}",
+                f"{float(diff.mean()):+.2f} [{lo:+.2f}, {hi:+.2f}]",
+            ]
+        )
+    out["cpu_seconds"] = round(time.process_time() - c0, 1)
+    print_machine(out["machine"])
+    print(f"Cascade-v0 {args.level}, {args.episodes} validation seeds ({SIMULATED_LABEL})")
+    header = ["residual", "std (action)", "std (mm)", "catches", "drops/catch", "vs zero [95 %]"]
+    print_table(header, rows)
+    print_json(out)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
