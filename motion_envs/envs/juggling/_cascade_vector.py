@@ -19,7 +19,8 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   than ``juggler`` and ``juggler_latency_aware`` always run in Python);
 * the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
   (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
-  ``cascade.xml``'s contact sensors); the releases' noise in Python, from each world's
+  ``cascade.xml``'s contact sensors; in ``threads`` threads over blocks of worlds); the
+  releases' noise in Python, from each world's
   generator, hand 0 before hand 1;
 * the sensors' delay line, the step's bookkeeping and the observation rows compiled, the
   measurement noise drawn in Python from each sensor's generator; the human-likeness
@@ -77,6 +78,9 @@ class CascadeVectorEnv(JugglingVectorEnv):
         ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
     backend : str
         ``"auto"`` (numba when installed), ``"numba"`` or ``"python"``.
+    threads : int or None
+        Threads stepping the worlds' control periods (numba backend); ``None``: the
+        CPUs available. The episodes do not depend on it.
     **kwargs
         :class:`~motion_envs.envs.juggling.CascadeEnv`'s keyword arguments.
     """

@@ -12,8 +12,8 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
   Python);
 * the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
-  (:func:`~motion_envs.envs.juggling._compiled.v1_periods`); the release's noise in
-  Python, from the world's generator;
+  (:func:`~motion_envs.envs.juggling._compiled.v1_periods`, in ``threads`` threads over
+  blocks of worlds); the release's noise in Python, from the world's generator;
 * the rest of the step compiled too (:func:`~motion_envs.envs.juggling._compiled.v1_finish`):
   the sensor's delay line (its noise drawn ahead in blocks from the sensor's own
   generator), the human-likeness search, the reward and the observation.
@@ -59,6 +59,9 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
     backend : str
         ``"auto"`` (numba when installed), ``"numba"`` or ``"python"``.
+    threads : int or None
+        Threads stepping the worlds' control periods (numba backend); ``None``: the
+        CPUs available. The episodes do not depend on it.
     **kwargs
         :class:`~motion_envs.envs.juggling.JugglingV1Env`'s keyword arguments.
     """
