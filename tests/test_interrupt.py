@@ -69,3 +69,43 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
         assert "message" in seen and seen["message"] - t0 < 5.0, "".join(lines)[-2000:]
         assert "interrupted; files written so far are complete" in lines[-1]
     assert exited < 15.0  # interpreter shutdown included (a few seconds on a busy machine)
+
+
+def test_a_swallowed_ctrl_c_is_raised_again(capsys):
+    """Python raises KeyboardInterrupt wherever the main thread is; if that is a weakref
+    callback or a ``__del__`` (the garbage collector's), it is swallowed and the job ran
+    on (seen in ``motion-bench all``). ``run_command`` raises it again until caught."""
+    from baselines import cli
+
+    ticks: list[int] = []
+
+    def job(_: object) -> int:
+        try:  # what the garbage collector does with an exception in a callback
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+        except KeyboardInterrupt:
+            pass
+        for i in range(500):  # 5 s of work the Ctrl-C should stop
+            ticks.append(i)
+            time.sleep(0.01)
+        return 0
+
+    before = signal.getsignal(signal.SIGINT)
+    t0 = time.perf_counter()
+    assert cli.run_command("motion-bench test", job, None) == 130
+    assert time.perf_counter() - t0 < 2.0 and len(ticks) < 200
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["motion-bench test: interrupted; files written so far are complete"]
+    assert signal.getsignal(signal.SIGINT) is before  # restored
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+
+
+def test_run_command_statuses(capsys):
+    from baselines import cli
+
+    def bad(_: object) -> int:
+        raise ValueError("data.csv, line 3: not a number")
+
+    assert cli.run_command("motion-bench x", bad, None) == 2
+    assert capsys.readouterr().err.strip().endswith("data.csv, line 3: not a number")
+    assert cli.run_command("motion-bench x", lambda _: None, None) == 0

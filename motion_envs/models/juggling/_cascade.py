@@ -103,7 +103,7 @@ CASCADE_CONTROLLERS: tuple[str, ...] = CONTROLLERS
 # catches before the first drop summed over the levels) by benchmarks/cascade_constants.py,
 # one at a time; a value replaces the current one only if it beats it by two paired
 # standard errors. First with 40 episodes, at most 10 catches, over {0.3, 0.5, 0.7},
-# {0.6, 0.75, 0.9} and {0.2, 0.3, 0.4}; re-chosen after the next-beat fix (issue 20) with
+# {0.6, 0.75, 0.9} and {0.2, 0.3, 0.4}; re-chosen after the next-beat fix with
 # 80 episodes, at most 100 catches, over {0.3, 0.5, 0.7, 1.0}, {0.6, 0.75, 0.9} and
 # {0.1, 0.2, 0.3, 0.5}: no other value beat these, so they were kept.
 #: The catch window: a hand's catch reach may last from the shortest training catch to
