@@ -28,6 +28,10 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   :class:`~motion_envs.models.juggling.HumanLikeness`'s samples: the same numbers); the
   reward and the infos as array operations.
 
+With ``frame_skip=k`` a step runs these ``k`` times (``CascadeVectorEnv._period``),
+each time for the sub-environments whose episode has not ended in the step, and sums
+the rewards, reward terms, likeness and catches as ``CascadeEnv.step`` does.
+
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
