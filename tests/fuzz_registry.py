@@ -150,6 +150,7 @@ ENVS: dict[str, dict[str, object]] = {
             "release_speed_std": "fraction",
             "dwell_ratio": "fraction",
             "max_catches": "small_int",
+            "frame_skip": "small_int",
             "residual_scale": "positive",
             "width": "size",
         },

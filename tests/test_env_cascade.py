@@ -294,3 +294,67 @@ def test_the_tempo_keeps_the_beat_on_easy():
     assert np.all(np.diff(hands) != 0)  # in turn
     beat = float(np.mean(np.diff(times)))
     assert beat == pytest.approx(ctrl.beat, rel=0.03)
+
+
+# -- frame_skip ---------------------------------------------------------------------------
+#: The info keys a step with frame_skip > 1 sums over its periods (the others are its last
+#: period's).
+SUMMED = ("reward_catch", "reward_drop", "reward_likeness", "reward_action", "likeness", "caught")
+
+
+def _held_episode(k: int, seed: int, scale: float, **kw) -> tuple[str, int]:
+    """An episode of Cascade-v0 with ``frame_skip=k`` against ``frame_skip=1`` holding
+    each action ``k`` periods: every step's output equal (reward, reward terms, likeness
+    and catches summed in period order; the rest the last period's). Returns how the
+    episode ended and the period of its last step it ended at."""
+    skip = gym.make("MotionEnvs/Cascade-v0", frame_skip=k, **kw)
+    one = gym.make("MotionEnvs/Cascade-v0", **kw)
+    o1, _ = skip.reset(seed=seed)
+    o2, _ = one.reset(seed=seed)
+    assert np.array_equal(o1, o2)
+    rng = np.random.default_rng(seed)
+    while True:
+        a = (scale * rng.uniform(-1, 1, 4)).astype(np.float32)
+        obs, reward, term, trunc, info = skip.step(a)
+        for p in range(k):
+            o, r, te, tr, inf = one.step(a)
+            if p == 0:
+                total, summed = r, {key: inf[key] for key in SUMMED}
+            else:
+                total += r
+                for key in SUMMED:
+                    summed[key] += inf[key]
+            if te or tr:
+                break
+        assert np.array_equal(obs, o)
+        assert reward == total
+        assert (term, trunc) == (te, tr)
+        assert set(info) == set(inf)
+        for key, value in info.items():
+            expected = summed[key] if key in SUMMED else inf[key]
+            assert np.array_equal(value, expected), key
+        if term or trunc:
+            skip.close()
+            one.close()
+            return ("terminated" if term else "truncated"), p
+
+
+def test_frame_skip_is_the_action_held_over_single_periods():
+    """``frame_skip=k`` plays ``k`` periods with the action held; the episode ends at the
+    period that ends it (mid-step too: the rest of the step is not played)."""
+    ends = [_held_episode(4, seed, 0.5, level="medium") for seed in range(4)]
+    ends += [_held_episode(3, 7, 0.0, level="easy", max_catches=3)]
+    assert {how for how, _ in ends} == {"terminated", "truncated"}
+    assert any(p < 3 for _, p in ends[:4])  # an episode ended before its step's last period
+
+
+def test_frame_skip_time_and_arguments():
+    env = gym.make("MotionEnvs/Cascade-v0", frame_skip=5)
+    assert env.unwrapped.dt == pytest.approx(0.025)
+    assert env.unwrapped.metadata["render_fps"] == 40
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(4, np.float32))
+    assert info["time"] == pytest.approx(0.025)
+    for bad in (0, -1, 1.0, 2.5, True, "2", None, 10_001):
+        with pytest.raises(ValueError, match="frame_skip"):
+            gym.make("MotionEnvs/Cascade-v0", frame_skip=bad)

@@ -249,7 +249,11 @@ CASES: dict[str, Case] = {
         _cascade_nominal,
         {"level": "medium", "max_catches": 2},
         action_scale=0.2,
-        checked=({"level": "hard", "max_catches": 1}, {"level": "easy", "dwell_ratio": 0.6}),
+        checked=(
+            {"level": "hard", "max_catches": 1},
+            {"level": "easy", "dwell_ratio": 0.6},
+            {"level": "medium", "frame_skip": 3},
+        ),
     ),
 }
 

@@ -196,6 +196,28 @@ def test_cascade_python_backend_equal_sync() -> None:
     run_both(CASCADE, vec, 3, AutoresetMode.NEXT_STEP, 200, "random", level="medium")
 
 
+@pytest.mark.parametrize("mode", MODES, ids=lambda m: m.value)
+def test_cascade_frame_skip_equals_sync(mode: Any) -> None:
+    """``frame_skip=3``: the periods of each sub-environment until its episode ends (drops
+    and resets mid-step with random actions; the numba backend when installed)."""
+    kw = {"level": "medium", "frame_skip": 3}
+    vec = gym.make_vec(CASCADE, 3, autoreset_mode=mode, **kw)
+    assert isinstance(vec, CascadeVectorEnv)
+    assert run_both(CASCADE, vec, 3, mode, 200, "random", **kw) >= 3
+
+
+def test_cascade_frame_skip_zero_action_and_python_backend_equal_sync() -> None:
+    """Long zero-action episodes with ``frame_skip=4`` (catches, truncation mid-step) on
+    both backends."""
+    kw = {"level": "easy", "max_catches": 3, "frame_skip": 4}
+    mode = AutoresetMode.SAME_STEP
+    for backend in ("auto", "python"):
+        vec = CascadeVectorEnv(3, autoreset_mode=mode, backend=backend, **kw)
+        assert run_both(CASCADE, vec, 3, mode, 300, "zero", **kw) >= 3
+    with pytest.raises(ValueError, match="frame_skip"):
+        CascadeVectorEnv(2, frame_skip=0)
+
+
 def test_cascade_contact_sensors_are_the_contact_list() -> None:
     """The batched world reads ``cascade.xml``'s contact sensors (per ball: floor, right
     palm, left palm) where ``CascadeWorld`` reads the contact list: after every physics

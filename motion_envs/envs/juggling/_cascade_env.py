@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
-from motion_envs.envs._common import SideCameraMixin, as_action, check_number
+from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, check_number
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT
@@ -54,6 +54,8 @@ CASCADE_OBS_DIM = (
 #: episode is truncated anyway; the pattern catches a ball every ~0.4 s.
 CASCADE_TIME_PER_CATCH = 2.0
 _ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
+#: Most control periods per step (as Juggling-v0's ``frame_skip``).
+MAX_FRAME_SKIP = 10_000
 _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
 
@@ -98,7 +100,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     ## Action Space
     `Box(-1, 1, (4,), float32)`: the residuals added to the controller's hand targets, in
-    units of `residual_scale` metres, applied once per step (one 5 ms control period).
+    units of `residual_scale` metres, held over the step's `frame_skip` control periods
+    (5 ms each; one by default).
     Entries outside ``[-1, 1]`` are clipped; NaN counts as 0 (``info["action_invalid"]``).
     A wrong shape raises `ValueError`.
 
@@ -125,20 +128,24 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | 13, 14  | the right hand's plan end point (in the catch phase: the planned catch)      | position (m)   |
     | 15..29  | the same for the left hand                                                   |                |
     | 30..35  | per ball 0, 1, 2: 1 if held by the right hand, 1 if held by the left hand    | unitless       |
-    | 36..83  | per ball, its measurements ``x, z, vx, vz`` of the last 4 steps, newest first | m, m/s         |
+    | 36..83  | per ball, its measurements ``x, z, vx, vz`` of the last 4 periods, newest first | m, m/s       |
 
     ## Rewards
     ``reward = w_catch * catches - w_drop * dropped - w_likeness * likeness - w_action * |a|^2``
-    (default weights ``catch: 10, drop: 10, likeness: 0.01, action: 0.01``): ``catches``
-    counts the catches of the step (both hands), ``dropped`` is 1 at the step a ball
-    touches the floor, ``likeness`` the mean over the hands of the distance (m) of the
-    hand's state ``(x, z, 0.1 s * v)`` (own frame) to the nearest state of the same phase
-    in the TRAINING demonstrations (never the controller's own plan). `info` holds each
-    weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
-    ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``: the
-    same as ``tosses``), ``phase`` (the right hand's) and ``phases`` (both), ``held``
-    (per hand), ``time``, the true ``hands`` ``(2, 2)`` and ``balls`` ``(3, 2)`` positions,
-    ``hand`` (the right hand's position), and ``action_invalid``.
+    per control period (default weights ``catch: 10, drop: 10, likeness: 0.01, action:
+    0.01``): ``catches`` counts the catches of the period (both hands), ``dropped`` is 1 at
+    the period a ball touches the floor, ``likeness`` the mean over the hands of the
+    distance (m) of the hand's state ``(x, z, 0.1 s * v)`` (own frame) to the nearest state
+    of the same phase in the TRAINING demonstrations (never the controller's own plan).
+    A step's reward is the sum over its `frame_skip` periods (the periods played: the
+    step stops at the period that ends the episode), so a held action earns the same
+    return whatever `frame_skip`. `info` holds each weighted term (``reward_catch``,
+    ``reward_drop``, ``reward_likeness``, ``reward_action``), ``likeness`` and the
+    step's catches ``caught`` (all summed over the step's periods), ``catches`` and
+    ``tosses`` so far (``cycles``: the same as ``tosses``), and at the end of the step's
+    last period ``phase`` (the right hand's) and ``phases`` (both), ``held`` (per hand),
+    ``time``, the true ``hands`` ``(2, 2)`` and ``balls`` ``(3, 2)`` positions, ``hand``
+    (the right hand's position); ``action_invalid``.
 
     ## Starting State
     The hands at their homes (the training tosses' mean start, the left mirrored), ball 0
@@ -154,6 +161,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     ### Truncation
     After `max_catches` catches, or ``max_catches * 2 s * sqrt(9.81 / g)`` of simulated time.
+
+    Both are tested after every control period: with `frame_skip` > 1 the step ends at the
+    period that ends the episode (the step's remaining periods are not played).
 
     ## Arguments
     ```python
@@ -176,12 +186,14 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `max_catches`       | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
     | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
+    | `frame_skip`        | **int**   | `1`         | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them (at most 10,000) |
     | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`             | **int**   | `480`       | frame width in pixels |
     | `height`            | **int**   | `480`       | frame height in pixels |
 
     ## Version History
-    * v0: the three-ball cascade on Juggling-v1's physics, sensor and levels.
+    * v0: the three-ball cascade on Juggling-v1's physics, sensor and levels
+      (``frame_skip`` added later; the default, 1, leaves every rollout unchanged).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
@@ -202,6 +214,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         max_catches: int = 30,
         residual_scale: float = 0.05,
         reward_weights: Mapping[str, float] | None = None,
+        frame_skip: int = 1,
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
@@ -211,6 +224,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             (gravity, controller, max_catches, residual_scale, reward_weights),
             (render_mode, width, height),
         )
+        #: Control periods (5 ms each) per step; the action is held over them.
+        self.frame_skip = check_integer(frame_skip, "frame_skip", 1, MAX_FRAME_SKIP)
         self.dwell_ratio = (
             None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )
@@ -233,7 +248,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.model, self.data = self.world.model, self.world.data
         #: m/s, each hand's speed limit.
         self.hand_speed_limit = HAND_SPEED_LIMIT
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.dt)}
         self._time_limit = (
             self.max_catches * CASCADE_TIME_PER_CATCH * math.sqrt(9.81 / self.gravity)
         )
@@ -265,8 +280,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     @property
     def dt(self) -> float:
-        """s of simulated time per step (one control period)."""
-        return self.task.dt
+        """s of simulated time per step (``frame_skip`` control periods)."""
+        return self.task.dt * self.frame_skip
 
     # -- episode ------------------------------------------------------------------------
     def reset(
@@ -309,8 +324,39 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         a = as_action(action, (2 * CASCADE_HANDS,))
         invalid = not bool(np.isfinite(a).all())
         a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
-        targets, armed = self.controller.command(self._state)
-        true = self.world.step(targets + self.residual_scale * a.reshape(2, 2), armed)
+        residual = self.residual_scale * a.reshape(2, 2)
+        action_sq = float(a @ a)
+        reward = 0.0
+        summed: dict[str, Any] = {}
+        state = self._state
+        for period in range(self.frame_skip):
+            state, true, r, terms, terminated, truncated = self._period(state, residual, action_sq)
+            if period == 0:  # frame_skip 1: the period's own values (no 0.0 + -0.0)
+                reward, summed = r, terms
+            else:
+                reward += r
+                for key, value in terms.items():
+                    summed[key] += value
+            if terminated or truncated:
+                break
+        info = self._info(
+            true,
+            **summed,
+            catches=self._catches,
+            tosses=self._tosses,
+            cycles=self._tosses,
+            action_invalid=invalid,
+        )
+        return self._observation(true), reward, terminated, truncated, info
+
+    def _period(
+        self, measured: CascadeState, residual: NDArray[np.float64], action_sq: float
+    ) -> tuple[CascadeState, CascadeState, float, dict[str, Any], bool, bool]:
+        """One control period from the ``measured`` state with the residual ``residual
+        (2, 2)`` (m): the measured and the true state after it, its reward, its reward
+        terms with ``likeness`` and ``caught``, and ``(terminated, truncated)``."""
+        targets, armed = self.controller.command(measured)
+        true = self.world.step(targets + residual, armed)
         state = self.sensor.measure(true)
         self._state = state
         for i in range(CASCADE_BALLS):
@@ -325,18 +371,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             pos = true.hand_pos[h] * (sign, 1.0)
             vel = true.hand_vel[h] * (sign, 1.0)
             like += self.likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
-        reward, terms = self._rewards(caught, dropped, like, float(a @ a))
+        reward, terms = self._rewards(caught, dropped, like, action_sq)
         terminated, truncated = self._episode_end(dropped, true.time)
-        info = self._info(
-            true,
-            **terms,
-            caught=caught,
-            catches=self._catches,
-            tosses=self._tosses,
-            cycles=self._tosses,
-            action_invalid=invalid,
-        )
-        return self._observation(true), reward, terminated, truncated, info
+        return state, true, reward, {**terms, "caught": caught}, terminated, truncated
 
     def _observation(self, true: CascadeState) -> NDArray[np.float32]:
         c = self.controller

@@ -28,6 +28,10 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   :class:`~motion_envs.models.juggling.HumanLikeness`'s samples: the same numbers); the
   reward and the infos as array operations.
 
+With ``frame_skip=k`` a step runs these ``k`` times (``CascadeVectorEnv._period``),
+each time for the sub-environments whose episode has not ended in the step, and sums
+the rewards, reward terms, likeness and catches as ``CascadeEnv.step`` does.
+
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
@@ -235,9 +239,56 @@ class CascadeVectorEnv(JugglingVectorEnv):
         # the action (as CascadeEnv.step)
         invalid = np.logical_not(np.isfinite(actions).all(axis=1))
         a = np.clip(np.where(np.isnan(actions), 0.0, actions), -1.0, 1.0)
+        residual = self.envs[0].residual_scale * a.reshape(m, 2, 2)
+        # CascadeEnv's a @ a: the same dot product per row (numpy's matmul loop over the
+        # stack calls it as for one row; the BLAS dot's order is not the naive sum's)
+        action_sq = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
+        # the control periods, each sub-environment's until its episode ends (as
+        # CascadeEnv.step: the reward terms, the likeness and the catches summed)
+        live = np.arange(m)
+        for period in range(self.envs[0].frame_skip):
+            out = self._period(envs[live], residual[live], action_sq[live])
+            if period == 0:  # the first period's own values (frame_skip 1: unchanged)
+                time, terminated, truncated, sums = out
+            else:
+                t, term, trunc, terms = out
+                time[live], terminated[live], truncated[live] = t, term, trunc
+                for key, value in terms.items():
+                    sums[key][live] += value
+            live = live[np.logical_not(terminated[live] | truncated[live])]
+            if live.size == 0:
+                break
+        q = self._q[envs]
+        holder = self._holder[envs]
+        counts = self._counts
+        phase = self._phase[envs]
+        held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
+        obs = self._observations(envs)
+        reward = sums.pop("reward")
+        columns: Columns = {
+            "phase": _PHASE_NAMES[phase[:, 0]],
+            "phases": _PHASE_PAIRS[phase[:, 0] * _NP + phase[:, 1]],
+            "held": _HELD_PAIRS[held[:, 0] * 2 + held[:, 1]],
+            "time": time,
+            "hand": q[:, 0:2].copy(),
+            "hands": q[:, 0:4].reshape(m, 2, 2).copy(),
+            "balls": q[:, 4:10].reshape(m, 3, 2).copy(),
+            **sums,
+            "catches": counts[envs, 0].copy(),
+            "tosses": counts[envs, 1].copy(),
+            "cycles": counts[envs, 1].copy(),
+            "action_invalid": invalid,
+        }
+        return obs, reward, terminated, truncated, columns
+
+    def _period(
+        self, envs: NDArray[np.int64], residual: NDArray[np.float64], action_sq: NDArray[Any]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], Columns]:
+        """One control period of ``envs`` with the residuals ``residual (m, 2, 2)`` (m):
+        their time, terminations and truncations, and the period's reward (``"reward"``),
+        reward terms, likeness and catches (``"caught"``)."""
         targets, armed = self._commands(envs)
-        s = self.envs[0].residual_scale
-        self._full_target[envs] = targets + s * a.reshape(m, 2, 2)
+        self._full_target[envs] = targets + residual
         self._full_armed[envs] = armed
         self._in_threads(
             self._compiled.cascade_periods,
@@ -274,42 +325,22 @@ class CascadeVectorEnv(JugglingVectorEnv):
         )
         for i, t in zip(envs.tolist(), time.tolist(), strict=True):
             self._datas[i].time = t
-        q, v = self._q[envs], self._v[envs]
-        holder = self._holder[envs]
-        counts = self._counts
-        phase = self._phase[envs]
-        likeness = self._likeness_of(phase, q, v)
-        # CascadeEnv's a @ a: the same dot product per row (numpy's matmul loop over the
-        # stack calls it as for one row; the BLAS dot's order is not the naive sum's)
-        action_sq = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
+        likeness = self._likeness_of(self._phase[envs], self._q[envs], self._v[envs])
         w_catch, w_drop, w_like, w_act = self._w
         r_catch = w_catch * caught_n
         r_drop = -w_drop * dropped.astype(np.float64)
         r_like = -w_like * likeness
         r_act = -w_act * action_sq
-        reward = r_catch + r_drop + r_like + r_act
-        held = np.stack([(holder == h).any(axis=1) for h in range(CASCADE_HANDS)], axis=1)
-        obs = self._observations(envs)
-        columns: Columns = {
-            "phase": _PHASE_NAMES[phase[:, 0]],
-            "phases": _PHASE_PAIRS[phase[:, 0] * _NP + phase[:, 1]],
-            "held": _HELD_PAIRS[held[:, 0] * 2 + held[:, 1]],
-            "time": time,
-            "hand": q[:, 0:2].copy(),
-            "hands": q[:, 0:4].reshape(m, 2, 2).copy(),
-            "balls": q[:, 4:10].reshape(m, 3, 2).copy(),
+        terms: Columns = {
+            "reward": r_catch + r_drop + r_like + r_act,
             "reward_catch": r_catch.astype(np.float64),
             "reward_drop": r_drop,
             "reward_likeness": r_like,
             "reward_action": r_act,
             "likeness": likeness,
             "caught": caught_n.astype(np.int64),
-            "catches": counts[envs, 0].copy(),
-            "tosses": counts[envs, 1].copy(),
-            "cycles": counts[envs, 1].copy(),
-            "action_invalid": invalid,
         }
-        return obs, reward, terminated, truncated, columns
+        return time, terminated, truncated, terms
 
     # -- the controllers ----------------------------------------------------------------
     def _commands(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
