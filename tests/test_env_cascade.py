@@ -370,3 +370,23 @@ def test_near_vertical_tosses_do_not_end_easy_episodes(seed):
     catches; 6 and 19: the thrower caught its own ball out of turn, 13 and 5; 28: the ball
     hit the tossing palm, a weak toss, 9): with the toss moved aside each reaches 40."""
     assert cascade_episode("easy", "juggler", seed, 40)[0] == 40
+
+
+def test_cascade_paired_plays_no_test_seeds_and_pairs_by_seed():
+    """``benchmarks/cascade_paired.py`` refuses the test split; ``compare`` pairs by seed."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "cascade_paired.py"
+    spec = importlib.util.spec_from_file_location("cascade_paired", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    with pytest.raises(ValueError, match="split"):
+        mod.play("test", 2, 1)
+    a = {"split": "train", "first_seed": 0, "max_catches": 10, "catches": {"r": [1, 10, 4]}}
+    b = {**a, "catches": {"r": [3, 10, 7]}}
+    (row,) = mod.compare(a, b)
+    assert row["diff"] == pytest.approx(5 / 3)
+    assert row["after"]["at_cap"] == 1 and row["before"]["median"] == 4
+    with pytest.raises(ValueError, match="seeds"):
+        mod.compare(a, {**b, "split": "val"})
