@@ -1,10 +1,11 @@
-"""Choose the cascade juggler's three constants on TRAINING seeds only.
+"""Choose the cascade juggler's hand-set constants on TRAINING seeds only.
 
-The analytic cascade juggler (:mod:`motion_envs.models.juggling._cascade`) has three
+The analytic cascade juggler (:mod:`motion_envs.models.juggling._cascade`) has four
 hand-set constants: ``CATCH_WINDOW`` (beats a catch may last beyond the longest training
 catch), ``RELEASE_ARMED`` (share of the nominal toss's release time after which a release
-is armed) and ``REAIM_AFTER`` (beats after its catch plan's end at which an empty hand
-re-aims). This script plays the juggler's zero-action Cascade-v0 episodes
+is armed), ``REAIM_AFTER`` (beats after its catch plan's end at which an empty hand
+re-aims) and ``TOSS_CLEARANCE`` (m a hand's own falling ball must keep from its toss's
+column, else the toss moves aside). This script plays the juggler's zero-action Cascade-v0 episodes
 (:func:`baselines.juggling_bench.cascade.cascade_episode`, controller ``"juggler"``) on the
 TRAINING seeds ``SPLIT_SEEDS["train"] + i`` (never the test seeds), levels ``easy`` and
 ``medium``, ``--episodes`` episodes per level, at most ``--max-catches`` catches (default
@@ -57,6 +58,7 @@ GRID: dict[str, tuple[float, ...]] = {
     "CATCH_WINDOW": (0.3, 0.5, 0.7, 1.0),
     "RELEASE_ARMED": (0.6, 0.75, 0.9),
     "REAIM_AFTER": (0.1, 0.2, 0.3, 0.5),
+    "TOSS_CLEARANCE": (0.08, 0.1, 0.12),
 }
 #: A value must beat the current one by this many paired standard errors to replace it.
 MARGIN_SE = 2.0

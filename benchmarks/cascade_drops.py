@@ -12,8 +12,10 @@ test seeds), at most ``--max-catches`` catches. For the dropped ball's last rele
   ball's release on: the pattern's turn-taking broke (a hand holds a ball when the other
   hand's arrives, or throws out of turn);
 * ``weak_toss``: the thrower's hand left the ball slower than ``WEAK`` of the nominal
-  toss's release speed (the toss started while the hand was still moving from a late
-  catch: the carry between catch and toss was cut short);
+  toss's release speed (first thought a toss started from a hand still moving after a
+  late catch; played step by step, these were the thrower's own previous, near-vertical
+  ball hitting the rising palm, whose deceleration fires the release early: the toss now
+  moves aside from that ball, see ``CascadeHand.toss_shift``);
 * ``release_angle``: the release direction (ball velocity after the release scatter) was
   more than ``WIDE_DEG`` degrees off the nominal toss's: the tail of the level's release
   angle noise; the catcher reaches near the ball but it misses or bounces off the palm;

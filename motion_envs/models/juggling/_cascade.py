@@ -32,7 +32,12 @@ hand's mirrored. What the pattern changes:
 * the catch duration is chosen up to :data:`CATCH_WINDOW` beats beyond the longest
   training catch; an empty hand re-aims its catch when its ball went elsewhere or its plan
   ended :data:`REAIM_AFTER` beats ago; a ball caught early (in the go-down) ends the catch;
-* the release is armed from :data:`RELEASE_ARMED` of the nominal toss's release time on.
+* the release is armed from :data:`RELEASE_ARMED` of the nominal toss's release time on;
+* a toss moves aside from the hand's own last ball: when that ball's measured flight
+  comes down within :data:`TOSS_CLEARANCE` of the toss's column (a near-vertical toss:
+  the cycle is about the flight, so such a ball falls back over its thrower while the
+  thrower tosses its next ball), the hand's return and toss end points move along ``x``
+  until it clears (:meth:`CascadeHand.toss_shift`), the toss on the side its return took.
 
 At ``t = 0`` the right hand holds ball 0 and starts its toss, the left hand holds ball 1
 and waits for its beat, and ball 2 is in flight towards the right hand, thrown by the
@@ -43,7 +48,8 @@ The latency-aware variant (``"juggler_latency_aware"``) is the same juggler fed 
 flying ball's measurement predicted forward by the known latency; the two trivial ones
 (``"fixed_point"``, ``"commanded_intercept"``) replace each hand's catch by a minimum-jerk
 reach, blind to the ball, to the training mean catch point or to the intercept predicted
-from the thrower's commanded release, as in Juggling-v1 (:func:`make_controller`).
+from the thrower's commanded release, as in Juggling-v1 (:func:`make_controller`); the
+rest of their hands' cycle is the juggler's (their tosses move aside too).
 """
 
 from __future__ import annotations
@@ -82,6 +88,7 @@ __all__ = [
     "CATCH_WINDOW",
     "REAIM_AFTER",
     "RELEASE_ARMED",
+    "TOSS_CLEARANCE",
     "CascadeController",
     "CascadeFit",
     "CascadeHand",
@@ -117,6 +124,11 @@ RELEASE_ARMED = 0.75
 #: Beats after the end of its catch plan at which an empty hand re-plans its catch.
 #: Chosen on training seeds (benchmarks/cascade_constants.py).
 REAIM_AFTER = 0.3
+#: m: the horizontal distance a falling ball's centre must keep from a tossing hand's
+#: column (:meth:`CascadeHand.toss_shift`): the palm's half width (4.5 cm) plus the ball's
+#: radius (3.5 cm) plus 2 cm. Hand-set from the geometry, then checked on training seeds
+#: (benchmarks/cascade_constants.py).
+TOSS_CLEARANCE = 0.1
 #: Sign of ``x`` in each hand's own frame (right: the world's; left: mirrored).
 _SIGN = (1.0, -1.0)
 
@@ -338,7 +350,9 @@ class CascadeHand(JugglingController):
     oldest ball queued for it (module docstring).
 
     ``index``: 0 right, 1 left; ``beat``, ``lead``: s; ``first_release``: s, the time of the
-    hand's first beat.
+    hand's first beat. ``own_ball``: the ball the hand released last (-1 before its first
+    release); ``own_flight``: that ball's measured ``(position, velocity)`` in the own
+    frame while it flies, else None (set by :class:`CascadeController` each step).
     """
 
     outgoing: tuple[float, FloatArray, FloatArray] | None
@@ -358,6 +372,53 @@ class CascadeHand(JugglingController):
         self.index = index
         self.beat = float(beat)
         self.first_release = float(first_release)
+
+    # -- the toss out of the way of the hand's own last ball ------------------------
+    def _draw_end(self, phase: str) -> FloatArray:
+        """The one-ball juggler's draw; the return's and the toss's end moved sideways
+        by :meth:`toss_shift` (the draw itself unchanged, so the generator's stream is
+        too). The toss keeps the side its return moved to: a hand already beside the
+        ball does not cross under it."""
+        end = super()._draw_end(phase)
+        if phase == "return":
+            self._shift = self.toss_shift()
+            end[0] += self._shift
+        elif phase == "toss":
+            end[0] += self.toss_shift(int(np.sign(self._shift)))
+        return end
+
+    def toss_shift(self, side: int = 0) -> float:
+        """m along the own ``x``: how far the coming toss moves aside so that the hand's
+        own last ball (``own_flight``, its measured flight) does not fall onto the
+        tossing palm; 0 when it passes clear.
+
+        The toss's column is the ``x`` span from home to the nominal release; its band the
+        heights from home to the nominal release, each widened by
+        :data:`TOSS_CLEARANCE`. If the ball's predicted centre, falling through the band,
+        comes within :data:`TOSS_CLEARANCE` of the column, the column moves away from the
+        ball until it clears it: to ``side`` (+1 out, -1 in) if given, else to the side
+        opposite the ball's mean ``x`` there."""
+        if self.own_flight is None:
+            return 0.0
+        p, v = self.own_flight
+        home, release = self.model.home_, self.pattern.release_position
+        lo, hi = float(min(home[0], release[0])), float(max(home[0], release[0]))
+        bottom = float(min(home[1], release[1])) - TOSS_CLEARANCE
+        top = float(max(home[1], release[1])) + TOSS_CLEARANCE
+        g = self.task.gravity
+        ts = np.linspace(0.0, 2.0 * self.pattern.flight, 401)
+        pts = ballistic_position(p, v, ts, g)
+        band = (v[1] - g * ts < 0.0) & (pts[:, 1] >= bottom) & (pts[:, 1] <= top)
+        if not band.any():
+            return 0.0
+        xa, xb = float(pts[band, 0].min()), float(pts[band, 0].max())
+        if xb <= lo - TOSS_CLEARANCE or xa >= hi + TOSS_CLEARANCE:
+            return 0.0
+        if side == 0:  # the ball falls on the outer side: toss further in, and vice versa
+            side = -1 if xa + xb >= lo + hi else 1
+        if side < 0:
+            return min((xa - TOSS_CLEARANCE) - hi, 0.0)
+        return max((xb + TOSS_CLEARANCE) - lo, 0.0)
 
     # -- timing by the pattern ------------------------------------------------------
     def _draw_duration(self, phase: str) -> float:
@@ -469,6 +530,9 @@ class CascadeHand(JugglingController):
         self.last_release = None
         self.other_release: float | None = None
         self._catch_ball = -1
+        self.own_ball = -1
+        self.own_flight: tuple[FloatArray, FloatArray] | None = None
+        self._shift = 0.0
         self.tosses = 0
         self._t_phase = state.time
         self._rng = rng
@@ -619,12 +683,20 @@ class CascadeController:
         targets = np.empty((CASCADE_HANDS, 2))
         armed = [False, False]
         for h, hand in enumerate(self.hands):
+            b = hand.own_ball
+            if b >= 0 and state.holder[b] < 0:
+                p, v = self._ball_measurement(state, b)
+                hand.own_flight = (_own(h, p), _own(h, v))
+            else:
+                hand.own_flight = None
+        for h, hand in enumerate(self.hands):
             target, arm = self._hand_command(h, hand, state)
             targets[h] = _own(h, target)
             armed[h] = bool(arm)
             if hand.outgoing is not None:  # released this step: queue it for the other
                 t_r, p, v = hand.outgoing
                 ball = state.released[h]
+                hand.own_ball = ball
                 self.hands[1 - h].incoming.append((ball, t_r, mirror_x(p), mirror_x(v)))
                 self.hands[1 - h].other_release = t_r
                 hand.outgoing = None
