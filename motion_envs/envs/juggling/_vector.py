@@ -51,7 +51,7 @@ __all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
 
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
-WORLD_LINKS = ("_compiled", "_datas", "_worlds")
+WORLD_LINKS = ("_compiled", "_datas", "_worlds", "_entries")
 #: Fewest sub-environments a thread is given (below, handing work to a thread costs more
 #: than it saves).
 MIN_ENVS_PER_THREAD = 8
@@ -154,6 +154,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         from motion_envs.envs.juggling import _compiled
 
         self._compiled = _compiled
+        self._entries: dict[str, Callable[..., None]] = {}
         worlds = [env.world for env in self.envs]
         self._datas = [w.data for w in worlds]
         #: what the compiled periods take, in their order: each world's ``MjModel`` and
@@ -194,6 +195,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         """``periods(envs, *args)`` (a compiled kernel that releases the GIL and touches
         only its sub-environments' rows and worlds), ``envs`` split into contiguous blocks
         run in up to :attr:`threads` threads, the caller's thread among them."""
+        periods = self._entry(periods, envs, *args)
         blocks = min(self.threads, envs.size // MIN_ENVS_PER_THREAD)
         if blocks <= 1:
             periods(envs, *args)
@@ -205,6 +207,21 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         periods(first, *args)
         for future in futures:
             future.result()
+
+    def _entry(self, kernel: Any, *args: Any) -> Callable[..., None]:
+        """The compiled function numba's dispatcher ``kernel`` runs for ``args``, found
+        once per kernel and then called directly: the dispatcher types a tuple of typed
+        lists (the worlds' views) in Python on every call (~40 µs, holding the GIL, in
+        every thread), while the arguments' types here never change (``envs`` a 1-d
+        int64 array, the rest this environment's own arrays; a block of ``envs`` has the
+        type of ``envs``)."""
+        name = kernel.py_func.__name__
+        entry = self._entries.get(name)
+        if entry is None:
+            kernel(args[0][:0], *args[1:])  # compiles or loads the version for these types
+            signature = tuple(kernel.typeof_pyval(a) for a in args)
+            entry = self._entries[name] = kernel.overloads[signature].entry_point
+        return entry
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
