@@ -358,6 +358,33 @@ def test_replan_many_is_replan_of_each() -> None:
         assert not np.array_equal(b.grid[b.k + 1 :], before[j][b.k + 1 :])  # re-planned
 
 
+def test_shared_eq10_rows_are_the_rows_from_any_step() -> None:
+    """A catch's eq. 10 rows computed once for every step (shared by the plans of its
+    duration) hold, at every step k, the numbers of rows computed from k on: every
+    candidate duration of the juggler's catch, several basis sizes."""
+    import math
+
+    from motion_envs.geometry import sine_series as ss
+    from motion_envs.models.juggling import Eq10Rows, eq10_rows, v1_juggler
+
+    juggler = v1_juggler(9.81)
+    lo, hi = juggler.phases_["catch"].duration_range
+    dt = juggler.task.dt
+    for n_sines, durations in ((4, np.linspace(lo, hi, 201)), (2, [0.3]), (9, [0.2, 0.41])):
+        for duration in np.asarray(durations).tolist():
+            n = math.ceil(duration / dt - 1e-9)
+            tau = np.minimum(np.arange(0, n + 1) * dt / duration, 1.0)
+            basis = ss.basis(tau, n_sines)
+            shared = eq10_rows(tau, basis, duration, dt)
+            assert eq10_rows(tau, basis, duration, dt) is shared
+            assert not shared.pinv.flags.writeable
+            for k0 in range(n + 1):
+                own = Eq10Rows(tau, basis, k0, duration)
+                assert np.array_equal(own.derivative, shared.derivative[k0:])
+                assert np.array_equal(own.a, shared.a[k0:])
+                assert np.array_equal(own.pinv, shared.pinv[k0:])
+
+
 @pytest.mark.parametrize("env_id", [V1, CASCADE])
 def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
     """render() draws each sub-environment's world as SyncVectorEnv's copies draw theirs."""

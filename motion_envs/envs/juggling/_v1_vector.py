@@ -32,8 +32,9 @@ from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVect
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
     JugglingController,
+    eq10_many,
+    eq10_rows,
     perturb_release,
-    replan_many,
 )
 
 __all__ = ["JugglingV1VectorEnv"]
@@ -127,6 +128,14 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
+        # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step
+        options = first.controller.juggler.options if self._fast else None
+        self._correcting = options is not None and options.correction
+        self._coef = np.zeros((n, 1, 2))
+        self._c_basis = np.zeros((n, 1, 1))
+        self._c_derivative = np.zeros((n, 1, 1))
+        self._c_a = np.zeros((n, 1, 3, 1))
+        self._c_pinv = np.zeros((n, 1, 1, 3))
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._bounds = np.stack([first._low, first._high])
@@ -195,6 +204,29 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._t_start[i] = ep.t_start
         self._duration[i] = ep.duration
         self._end[i] = ep.end
+        if self._correcting and ep.phase == "catch":
+            self._load_rows(i, ep)
+
+    def _load_rows(self, i: int, ep: JugglingController) -> None:
+        """Copy the eq. 10 rows of ``ep``'s catch plan (shared by the plans of its
+        duration: :func:`~motion_envs.models.juggling.eq10_rows`), its basis on the grid
+        and its coefficients into row ``i`` of the arrays the corrections gather from."""
+        rows = eq10_rows(ep._tau, ep._basis, ep.duration, self._dt)
+        m, nb = ep._basis.shape
+        if m > self._c_basis.shape[1] or nb != self._c_basis.shape[2]:
+            n, width = self.num_envs, max(m, self._c_basis.shape[1])
+            if nb != self._c_basis.shape[2]:  # the first catch (one model: one basis size)
+                width = m
+            self._c_basis = _wider(self._c_basis, (n, width, nb))
+            self._c_derivative = _wider(self._c_derivative, (n, width, nb))
+            self._c_a = _wider(self._c_a, (n, width, 3, nb))
+            self._c_pinv = _wider(self._c_pinv, (n, width, nb, 3))
+            self._coef = _wider(self._coef, (n, nb, 2))
+        self._c_basis[i, :m] = ep._basis
+        self._c_derivative[i, :m] = rows.derivative
+        self._c_a[i, :m] = rows.a
+        self._c_pinv[i, :m] = rows.pinv
+        self._coef[i] = ep.coefficients
 
     # -- the step -------------------------------------------------------------------------
     def _step_batch(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
@@ -344,8 +376,12 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
     def _correct(self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float) -> None:
         """The eq. 10 corrections of the catches ``envs[check]``: where
         :meth:`JugglingController.correct` would re-plan (its test, with its arithmetic;
-        the latency-aware controller's forward prediction first), it re-plans (the
-        sub-environment's own controller) and the new rows of its plan are copied back."""
+        the latency-aware controller's forward prediction first), it re-plans: on the
+        catch's rows (:meth:`JugglingController.replan`'s numbers: the same stacked
+        products, :func:`~motion_envs.models.juggling.eq10_many`, and the same product
+        of the basis and the new coefficients for the rest of the grid), or, where the
+        controller has no rows for the step, the sub-environment's own controller. Each
+        controller is kept current (coefficients, end, grid, corrections)."""
         rows = envs[check]
         g, dt = self._gravity, self._dt
         bx, bz = self._m_ball[rows, 0], self._m_ball[rows, 1]
@@ -361,17 +397,55 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         due = (s > dt) & (miss > tolerance)
         if not due.any():
             return
-        position = np.stack([px, pz], axis=1)[due]
+        target = np.stack([px, pz], axis=1)[due]
         rows = rows[due]
-        episodes = []
-        for i, k in zip(rows.tolist(), self._pk[rows].tolist(), strict=True):
+        k = self._pk[rows]
+        duration = self._duration[rows]
+        tau1 = k * dt / duration
+        glen = self._glen[rows]
+        on_rows = (tau1 < 1.0) & (k < glen)  # JugglingController._rows is not None
+        times = self._m_time[rows].tolist()
+        if not on_rows.all():
+            for j in np.flatnonzero(~on_rows).tolist():
+                i, kj = int(rows[j]), int(k[j])
+                ep = self._episode(i)
+                ep.k = kj
+                ep.replan(times[j], target[j].copy())
+                self._grid[i, kj + 1 : self._glen[i]] = ep.grid[kj + 1 :]
+                self._end[i] = ep.end
+                self._coef[i] = ep.coefficients
+            rows, k, duration, tau1, glen, target = (
+                x[on_rows] for x in (rows, k, duration, tau1, glen, target)
+            )
+            times = [t for t, on in zip(times, on_rows.tolist(), strict=True) if on]
+            if not rows.size:
+                return
+        n, nb = rows.size, self._coef.shape[1]
+        derivative = np.empty((n, 1, nb))
+        derivative[:, 0] = self._c_derivative[rows, k]
+        out = eq10_many(
+            derivative,
+            self._c_a[rows, k],
+            self._c_pinv[rows, k],
+            self._coef[rows],
+            duration,
+            self._grid[rows, k],
+            target,
+        )
+        self._coef[rows] = out
+        self._end[rows] = target
+        for j, (i, kj, gj, t, tj) in enumerate(
+            zip(rows.tolist(), k.tolist(), glen.tolist(), times, tau1.tolist(), strict=True)
+        ):
+            c = out[j]
+            new = self._c_basis[i, kj + 1 : gj] @ c  # JugglingController._grid_from
+            self._grid[i, kj + 1 : gj] = new
             ep = self._episode(i)
-            ep.k = k
-            episodes.append(ep)
-        replan_many(episodes, self._m_time[rows].tolist(), position)
-        for i, k, ep in zip(rows.tolist(), self._pk[rows].tolist(), episodes, strict=True):
-            self._grid[i, k + 1 : self._glen[i]] = ep.grid[k + 1 :]
-            self._end[i] = ep.end
+            ep.k = kj
+            ep.coefficients = c
+            ep.end = target[j].copy()
+            ep.grid[kj + 1 :] = new
+            ep.corrections.append((t, tj))
 
     def _python_commands(
         self, envs: NDArray[np.int64]
@@ -418,3 +492,12 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball_vel[i] = ux, uz
             self._flags[i, 0] = self._flags[i, 1] = False
             w.physics.set_ball_contacts(True)
+
+
+def _wider(array: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """``array`` in a zero array of ``shape``, its old content kept where it fits (the
+    basis size axis only grows from the placeholder's 1)."""
+    out = np.zeros(shape)
+    if array.shape[2:] == shape[2:]:
+        out[:, : array.shape[1]] = array
+    return out
