@@ -59,6 +59,8 @@ __all__ = [
     "py_hypot",
     "servo_acceleration",
     "servo_plan",
+    "v1_advance",
+    "v1_events",
     "v1_finish",
     "v1_periods",
 ]
@@ -295,6 +297,79 @@ def _v1_periods(
 
 
 v1_periods = njit(cache=True, nogil=True)(_v1_periods)
+
+
+@njit(cache=True)
+def v1_events(envs: Any, plan: Any, measured: Any, m_flags: Any, constants: Any, flags: Any) -> Any:
+    """Which of ``envs`` need Juggling-v1's controller in Python this step (a phase
+    event) and which eq. 10 corrections are due: the tests of
+    ``JugglingController.command`` and ``correct`` on the measured state, with their
+    arithmetic (the latency-aware controller's forward prediction first).
+
+    ``plan = (phase, k, end_k, t_start, duration, end)`` per sub-environment;
+    ``measured (N, 5)`` (time, ball x, z, vx, vz) and ``m_flags (N, 3)`` (held,
+    released, caught); ``constants = (dt, gravity, latency, tolerance, toss, catch)``;
+    ``flags = (correction, ahead)``. Returns ``python (m,)``, ``due (m,)`` and the
+    predicted intercepts ``(m, 2)`` where due."""
+    phase, pk, end_k, t_start, duration, end = plan
+    dt, g, latency, tolerance = constants[0], constants[1], constants[2], constants[3]
+    toss, catch = int(constants[4]), int(constants[5])
+    correction, ahead = flags[0], flags[1]
+    m = envs.shape[0]
+    python = np.zeros(m, dtype=np.bool_)
+    due = np.zeros(m, dtype=np.bool_)
+    predicted = np.zeros((m, 2))
+    for j in range(m):
+        i = envs[j]
+        ph, k = phase[i], pk[i]
+        held, released, caught = m_flags[i, 0], m_flags[i, 1], m_flags[i, 2]
+        if (
+            (ph == toss and released)
+            or (ph == catch and caught)
+            or (end_k[i] >= 0 and k >= end_k[i])
+        ):
+            python[j] = True
+            continue
+        if not correction or ph != catch or held:
+            continue
+        bx, bz = measured[i, 1], measured[i, 2]
+        vx, vz = measured[i, 3], measured[i, 4]
+        if ahead:  # predict_forward(..., latency): rules.flight from time 0
+            s = latency - 0.0
+            bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
+            vz = vz - g * s
+        s = t_start[i] + duration[i] - measured[i, 0]
+        px = bx + vx * (s - 0.0)
+        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+        if s > dt and py_hypot(px - end[i, 0], pz - end[i, 1]) > tolerance:
+            due[j] = True
+            predicted[j, 0], predicted[j, 1] = px, pz
+    return python, due, predicted
+
+
+@njit(cache=True)
+def v1_advance(
+    rows: Any, pk: Any, grid: Any, glen: Any, last: Any, phase: Any, constants: Any
+) -> Any:
+    """``JugglingController.command`` without events for ``rows``: the next grid point
+    (``k + 1``), the last two commands, the release armed in the toss after
+    ``release_after``; ``constants = (dt, release_after, toss)``. Returns the targets
+    ``(r, 2)`` and ``armed (r,)``."""
+    dt, release_after, toss = constants[0], constants[1], int(constants[2])
+    r = rows.shape[0]
+    targets = np.empty((r, 2))
+    armed = np.empty(r, dtype=np.bool_)
+    for j in range(r):
+        i = rows[j]
+        k = pk[i] + 1
+        pk[i] = k
+        g = min(k, glen[i] - 1)
+        tx, tz = grid[i, g, 0], grid[i, g, 1]
+        last[i, 0, 0], last[i, 0, 1] = last[i, 1, 0], last[i, 1, 1]
+        last[i, 1, 0], last[i, 1, 1] = tx, tz
+        targets[j, 0], targets[j, 1] = tx, tz
+        armed[j] = phase[i] == toss and k * dt >= release_after
+    return targets, armed
 
 
 @njit(cache=True)

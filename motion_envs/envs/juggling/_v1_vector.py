@@ -31,6 +31,7 @@ from motion_envs.envs.juggling._v1_env import HISTORY, JugglingV1Env
 from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
+    ControlOptions,
     JugglingController,
     eq10_many,
     eq10_rows,
@@ -129,8 +130,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
         # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step
-        options = first.controller.juggler.options if self._fast else None
-        self._correcting = options is not None and options.correction
         self._coef = np.zeros((n, 1, 2))
         self._c_basis = np.zeros((n, 1, 1))
         self._c_derivative = np.zeros((n, 1, 1))
@@ -139,6 +138,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._bounds = np.stack([first._low, first._high])
+        if self._fast:
+            self._use_options(first.controller.juggler.options)
         self._obs_dim = first._low.shape[0]
         self._link()
         self._scalars = np.array(
@@ -151,6 +152,16 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 float(self._noisy),
             ]
         )
+
+    def _use_options(self, options: ControlOptions) -> None:
+        """The juggler's options as the compiled events and advance read them."""
+        self._options = options
+        task = self.envs[0].task
+        self._flags_ctl = (options.correction, self._ahead)
+        self._event_constants = np.array(
+            [task.dt, task.gravity, self._latency, options.correction_tolerance, _TOSS, _CATCH]
+        )
+        self._advance = np.array([task.dt, options.release_after, _TOSS], dtype=np.float64)
 
     def _episode(self, i: int) -> JugglingController:
         episode = self.envs[i].controller.juggler.episode
@@ -204,7 +215,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._t_start[i] = ep.t_start
         self._duration[i] = ep.duration
         self._end[i] = ep.end
-        if self._correcting and ep.phase == "catch":
+        if ep.phase == "catch":
             self._load_rows(i, ep)
 
     def _load_rows(self, i: int, ep: JugglingController) -> None:
@@ -342,63 +353,43 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         between events, the controller itself at them (see the module docstring)."""
         if not self._fast:
             return self._python_commands(envs)
-        phase, k = self._phase[envs], self._pk[envs]
-        held, released, caught = (self._m_flags[envs, j] for j in range(3))
-        end_k = self._end_k[envs]
-        event = (
-            ((phase == _TOSS) & released)
-            | ((phase == _CATCH) & caught)
-            | ((end_k >= 0) & (k >= end_k))
-        )
         options = self._episode(int(envs[0])).options
-        python = event
-        if options.correction:
-            check = ~event & (phase == _CATCH) & ~held
-            if check.any():
-                self._correct(envs, check, options.correction_tolerance)
+        if options is not self._options:  # the juggler's options were replaced
+            self._use_options(options)
+        python, due, predicted = self._compiled.v1_events(
+            envs,
+            (self._phase, self._pk, self._end_k, self._t_start, self._duration, self._end),
+            self._measured,
+            self._m_flags,
+            self._event_constants,
+            self._flags_ctl,
+        )
+        if due.any():
+            self._correct(envs[due], predicted[due])
+        if not python.any():
+            return self._compiled.v1_advance(  # type: ignore[no-any-return]
+                envs, self._pk, self._grid, self._glen, self._last, self._phase, self._advance
+            )
         target = np.empty((envs.size, 2))
         armed = np.empty(envs.size, dtype=np.bool_)
         fast = ~python
         if fast.any():
-            rows = envs[fast]
-            kf = self._pk[rows] + 1
-            self._pk[rows] = kf
-            tf = self._grid[rows, np.minimum(kf, self._glen[rows] - 1)]
-            self._last[rows, 0] = self._last[rows, 1]
-            self._last[rows, 1] = tf
-            target[fast] = tf
-            armed[fast] = (self._phase[rows] == _TOSS) & (kf * self._dt >= options.release_after)
-        if python.any():
-            t, a = self._python_commands(envs[python])
-            target[python], armed[python] = t, a
+            target[fast], armed[fast] = self._compiled.v1_advance(
+                envs[fast], self._pk, self._grid, self._glen, self._last, self._phase, self._advance
+            )
+        target[python], armed[python] = self._python_commands(envs[python])
         return target, armed
 
-    def _correct(self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float) -> None:
-        """The eq. 10 corrections of the catches ``envs[check]``: where
-        :meth:`JugglingController.correct` would re-plan (its test, with its arithmetic;
-        the latency-aware controller's forward prediction first), it re-plans: on the
-        catch's rows (:meth:`JugglingController.replan`'s numbers: the same stacked
-        products, :func:`~motion_envs.models.juggling.eq10_many`, and the same product
-        of the basis and the new coefficients for the rest of the grid), or, where the
-        controller has no rows for the step, the sub-environment's own controller. Each
-        controller is kept current (coefficients, end, grid, corrections)."""
-        rows = envs[check]
-        g, dt = self._gravity, self._dt
-        bx, bz = self._m_ball[rows, 0], self._m_ball[rows, 1]
-        vx, vz = self._m_ball_vel[rows, 0], self._m_ball_vel[rows, 1]
-        if self._ahead:  # predict_forward(..., latency): rules.flight from time 0
-            s = self._latency - 0.0
-            bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
-            vz = vz - g * s
-        s = self._t_start[rows] + self._duration[rows] - self._m_time[rows]
-        px = bx + vx * (s - 0.0)
-        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
-        miss = self._compiled.hypot_rows(px - self._end[rows, 0], pz - self._end[rows, 1])
-        due = (s > dt) & (miss > tolerance)
-        if not due.any():
-            return
-        target = np.stack([px, pz], axis=1)[due]
-        rows = rows[due]
+    def _correct(self, rows: NDArray[np.int64], target: NDArray[np.float64]) -> None:
+        """The eq. 10 corrections of the catches ``rows`` toward the predicted intercepts
+        ``target (r, 2)`` (where :meth:`JugglingController.correct` would re-plan:
+        :func:`~motion_envs.envs.juggling._compiled.v1_events`): on the catch's rows
+        (:meth:`JugglingController.replan`'s numbers: the same stacked products,
+        :func:`~motion_envs.models.juggling.eq10_many`, and the same product of the basis
+        and the new coefficients for the rest of the grid), or, where the controller has
+        no rows for the step, by the sub-environment's own controller. Each controller is
+        kept current (coefficients, end, grid, corrections)."""
+        dt = self._dt
         k = self._pk[rows]
         duration = self._duration[rows]
         tau1 = k * dt / duration
