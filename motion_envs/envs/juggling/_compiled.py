@@ -214,10 +214,12 @@ def _v1_periods(
     ball: Any,
     ball_vel: Any,
     events: Any,
+    likeness: Any,
 ) -> None:
     """One control period of Juggling-v1's world for each world ``i`` in ``envs``: what
     :meth:`~motion_envs.envs.juggling.JugglingV1World.advance` does, up to the release's
-    noise (drawn in Python: ``events[i, 1]`` says the release fires).
+    noise (drawn in Python: ``events[i, 1]`` says the release fires), then the hand's
+    human-likeness (:func:`nearest_rows`' number for the world's hand).
 
     ``worlds``: ``(model_addr, data_addr, qpos, qvel, ctrl, sensors, contype,
     conaffinity)``, each world's ``MjModel``/``MjData`` address and arrays (numba typed
@@ -227,8 +229,14 @@ def _v1_periods(
     (control periods since the reset), updated in place; ``constants`` = ``(dt, h,
     ball_radius, floor_z, palm_top, toss_threshold)``. Out: the true ``hand``,
     ``hand_vel``, ``ball``, ``ball_vel`` and ``events[i] = (caught, release fires)``.
+    ``likeness = (phase, trees, tau, out)``: the hand's distance to the demonstrations
+    of its plan's phase ``phase[i]`` (``trees``: per phase :func:`likeness_tree`; the
+    velocity weighted by ``tau``) goes to ``out[i]``.
     """
     model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
+    phase, trees, tau, distance = likeness
+    point = np.empty(4)
+    stack = np.empty(256, dtype=np.int64)
     dt, h, radius, floor_z, palm_top, threshold = (
         constants[0],
         constants[1],
@@ -294,6 +302,8 @@ def _v1_periods(
         ball[i, 0], ball[i, 1] = bx, bz
         ball_vel[i, 0], ball_vel[i, 1] = ux, uz
         events[i, 0], events[i, 1] = caught, fires
+        point[0], point[1], point[2], point[3] = hx, hz, tau * vx, tau * vz
+        distance[i] = _nearest(trees[phase[i]], point, stack)
 
 
 v1_periods = njit(cache=True, nogil=True)(_v1_periods)
@@ -694,6 +704,45 @@ def _box(lo: Any, hi: Any, node: int, q: Any) -> float:
 
 
 @njit(cache=True)
+def _nearest(tree: Any, q: Any, stack: Any) -> float:
+    """m; the distance of ``q (4,)`` to the nearest sample of ``tree``
+    (:func:`likeness_tree`), ``inf`` where not finite (:func:`nearest_rows`' search;
+    ``stack``: the search's node stack, 256 entries)."""
+    pts, start, stop, left, right, lo, hi = tree
+    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+    if not (math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)):
+        return math.inf
+    if not math.isfinite(q3):
+        return math.inf
+    best = math.inf
+    top = 0
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if _box(lo, hi, node, q) > best * (1.0 + 1e-9):
+            continue
+        a, b = left[node], right[node]
+        if a < 0:
+            for m in range(start[node], stop[node]):
+                e0, e1 = pts[m, 0] - q0, pts[m, 1] - q1
+                e2, e3 = pts[m, 2] - q2, pts[m, 3] - q3
+                s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
+                if s < best:
+                    best = s
+            continue
+        # the nearer child last (searched first)
+        if _box(lo, hi, a, q) <= _box(lo, hi, b, q):
+            stack[top], stack[top + 1] = b, a
+        else:
+            stack[top], stack[top + 1] = a, b
+        top += 2
+    d = math.sqrt(best)
+    return d if math.isfinite(d) else math.inf
+
+
+@njit(cache=True)
 def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
     """m; per row ``j`` of ``points (m, 4)``, the distance to the nearest demonstrated
     sample of phase ``phase[j]``: :meth:`HumanLikeness.distance`'s number (the squared
@@ -704,41 +753,7 @@ def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
     out = np.empty(points.shape[0])
     stack = np.empty(256, dtype=np.int64)
     for j in range(points.shape[0]):
-        pts, start, stop, left, right, lo, hi = trees[phase[j]]
-        q = points[j]
-        q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
-        if not (math.isfinite(q0) and math.isfinite(q1) and math.isfinite(q2)):
-            out[j] = math.inf
-            continue
-        if not math.isfinite(q3):
-            out[j] = math.inf
-            continue
-        best = math.inf
-        top = 0
-        stack[0] = 0
-        top = 1
-        while top > 0:
-            top -= 1
-            node = stack[top]
-            if _box(lo, hi, node, q) > best * (1.0 + 1e-9):
-                continue
-            a, b = left[node], right[node]
-            if a < 0:
-                for m in range(start[node], stop[node]):
-                    e0, e1 = pts[m, 0] - q0, pts[m, 1] - q1
-                    e2, e3 = pts[m, 2] - q2, pts[m, 3] - q3
-                    s = ((e0 * e0 + e1 * e1) + e2 * e2) + e3 * e3
-                    if s < best:
-                        best = s
-                continue
-            # the nearer child last (searched first)
-            if _box(lo, hi, a, q) <= _box(lo, hi, b, q):
-                stack[top], stack[top + 1] = b, a
-            else:
-                stack[top], stack[top + 1] = a, b
-            top += 2
-        d = math.sqrt(best)
-        out[j] = d if math.isfinite(d) else math.inf
+        out[j] = _nearest(trees[phase[j]], points[j], stack)
     return out
 
 

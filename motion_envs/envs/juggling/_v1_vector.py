@@ -101,6 +101,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._ball = np.zeros((n, 2))
         self._ball_vel = np.zeros((n, 2))
         self._events = np.zeros((n, 2), dtype=np.bool_)
+        self._likeness = np.zeros(n)  # the hand's distance to the demonstrations
         # what the controller was last shown (the measured state)
         self._measured = np.zeros((n, 5))  # time, ball x, z, vx, vz
         self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
@@ -272,6 +273,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball,
             self._ball_vel,
             self._events,
+            (self._phase, self._trees, LIKENESS_TAU, self._likeness),
         )
         released = self._events[envs, 1]
         if released.any():
@@ -284,10 +286,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 self._noise_at[i] = 0
         self._slot = (self._slot + 1) % self._ring.shape[0]
         n = envs.size
-        points = np.empty((n, 4))
-        points[:, :2] = self._hand[envs]
-        points[:, 2:] = LIKENESS_TAU * self._hand_vel[envs]
-        likeness = self._compiled.nearest_rows(points, self._phase[envs], self._trees)
+        likeness = self._likeness[envs]
         obs = np.empty((n, self._obs_dim), dtype=np.float32)
         out = np.empty((n, 7))
         ends = np.empty((n, 2), dtype=np.bool_)
