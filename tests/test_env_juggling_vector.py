@@ -358,6 +358,36 @@ def test_replan_many_is_replan_of_each() -> None:
         assert not np.array_equal(b.grid[b.k + 1 :], before[j][b.k + 1 :])  # re-planned
 
 
+@needs_numba
+def test_v1_controllers_get_the_corrections_at_their_events() -> None:
+    """The vector env's eq. 10 corrections reach each sub-environment's controller at
+    its next event: at a reset and after _sync the controller holds the single
+    environment's plan and corrections."""
+    n, steps = 3, 400
+    vec = JugglingV1VectorEnv(n, level="medium")
+    singles = [gym.make(V1, level="medium").unwrapped for _ in range(n)]
+    vec.reset(seed=5)
+    for i, env in enumerate(singles):
+        env.reset(seed=5 + i)
+    corrected = 0
+    for _ in range(steps):
+        _, _, term, trunc, _ = vec.step(np.zeros((n, 2), dtype=np.float32))
+        for env in singles:
+            env.step(np.zeros(2, dtype=np.float32))
+        if (term | trunc).any():  # compare before the autoreset
+            break
+    for i, env in enumerate(singles):
+        vec._sync(i)
+        a, b = vec._episode(i), env.controller.juggler.episode
+        assert a.phase == b.phase
+        assert a.corrections == b.corrections
+        assert np.array_equal(a.coefficients, b.coefficients)
+        assert np.array_equal(a.end, b.end)
+        assert np.array_equal(a.grid, b.grid)
+        corrected += len(b.corrections)
+    assert corrected > 10  # corrections happened
+
+
 def test_shared_eq10_rows_are_the_rows_from_any_step() -> None:
     """A catch's eq. 10 rows computed once for every step (shared by the plans of its
     duration) hold, at every step k, the numbers of rows computed from k on: every

@@ -23,6 +23,8 @@ extra, ``backend="numba"``, the default when installed) a step runs:
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -130,7 +132,10 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
-        # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step
+        # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step;
+        # corrections made here reach the controller at its next event (_sync)
+        self._stale = np.zeros(n, dtype=np.bool_)
+        self._pending: list[list[tuple[float, float]]] = [[] for _ in range(n)]
         self._coef = np.zeros((n, 1, 2))
         self._c_basis = np.zeros((n, 1, 1))
         self._c_derivative = np.zeros((n, 1, 1))
@@ -386,8 +391,9 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         (:meth:`JugglingController.replan`'s numbers: the same stacked products,
         :func:`~motion_envs.models.juggling.eq10_many`, and the same product of the basis
         and the new coefficients for the rest of the grid), or, where the controller has
-        no rows for the step, by the sub-environment's own controller. Each controller is
-        kept current (coefficients, end, grid, corrections)."""
+        no rows for the step, by the sub-environment's own controller. A controller gets
+        the corrections made here at its next event or reset (:meth:`_sync`), as it gets
+        its step count there."""
         dt = self._dt
         k = self._pk[rows]
         duration = self._duration[rows]
@@ -398,6 +404,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         if not on_rows.all():
             for j in np.flatnonzero(~on_rows).tolist():
                 i, kj = int(rows[j]), int(k[j])
+                self._sync(i)
                 ep = self._episode(i)
                 ep.k = kj
                 ep.replan(times[j], target[j].copy())
@@ -424,18 +431,31 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         )
         self._coef[rows] = out
         self._end[rows] = target
+        self._stale[rows] = True
+        basis, grid, pending = self._c_basis, self._grid, self._pending
         for j, (i, kj, gj, t, tj) in enumerate(
             zip(rows.tolist(), k.tolist(), glen.tolist(), times, tau1.tolist(), strict=True)
         ):
-            c = out[j]
-            new = self._c_basis[i, kj + 1 : gj] @ c  # JugglingController._grid_from
-            self._grid[i, kj + 1 : gj] = new
-            ep = self._episode(i)
-            ep.k = kj
-            ep.coefficients = c
-            ep.end = target[j].copy()
-            ep.grid[kj + 1 :] = new
-            ep.corrections.append((t, tj))
+            grid[i, kj + 1 : gj] = basis[i, kj + 1 : gj] @ out[j]  # as _grid_from does
+            pending[i].append((t, tj))
+
+    def _sync(self, i: int) -> None:
+        """Give sub-environment ``i``'s controller the corrections made here since its
+        last event (its coefficients, end, grid and their record)."""
+        if not self._stale[i]:
+            return
+        self._stale[i] = False
+        ep = self._episode(i)
+        ep.coefficients = self._coef[i].copy()
+        ep.end = self._end[i].copy()
+        ep.grid[:] = self._grid[i, : self._glen[i]]
+        ep.corrections.extend(self._pending[i])
+        self._pending[i].clear()
+
+    def _reset_env(self, i: int, seed: int | None, options: dict[str, Any] | None = None) -> Any:
+        if self.backend == "numba":
+            self._sync(i)  # the ending episode's controller complete
+        return super()._reset_env(i, seed, options)
 
     def _python_commands(
         self, envs: NDArray[np.int64]
@@ -448,6 +468,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         armed = np.empty(envs.size, dtype=np.bool_)
         for j, i in enumerate(envs.tolist()):
             if self._fast:
+                self._sync(i)
                 ep = self._episode(i)
                 ep.k = int(self._pk[i])
                 ep._last = [self._last[i, 0].copy(), self._last[i, 1].copy()]
