@@ -362,7 +362,7 @@ def test_replan_many_is_replan_of_each() -> None:
 def test_v1_controllers_get_the_corrections_at_their_events() -> None:
     """The vector env's eq. 10 corrections reach each sub-environment's controller at
     its next event: at a reset and after _sync the controller holds the single
-    environment's plan and corrections."""
+    environment's plan and corrections (and the world its time)."""
     n, steps = 3, 400
     vec = JugglingV1VectorEnv(n, level="medium")
     singles = [gym.make(V1, level="medium").unwrapped for _ in range(n)]
@@ -384,6 +384,7 @@ def test_v1_controllers_get_the_corrections_at_their_events() -> None:
         assert np.array_equal(a.coefficients, b.coefficients)
         assert np.array_equal(a.end, b.end)
         assert np.array_equal(a.grid, b.grid)
+        assert vec._datas[i].time == env.world.data.time  # set by the compiled periods
         corrected += len(b.corrections)
     assert corrected > 10  # corrections happened
 
