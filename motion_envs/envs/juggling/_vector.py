@@ -342,7 +342,12 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         mask[stepped[keep]] = True
         rows = stepped[keep]
         infos: dict[str, Any] = {}
+        every = rows.size == n  # all sub-environments, in order: the columns as they are
         for key, column in columns.items():
+            if every:
+                infos[key] = np.ascontiguousarray(column)  # a copy of a strided view
+                infos["_" + key] = mask.copy()
+                continue
             if column.dtype == object:
                 full = np.full(n, None, dtype=object)
             else:
