@@ -6,17 +6,25 @@ sub-environment is bit-identical to ``JugglingV1Env`` seeded with ``seed + i`` (
 extra, ``backend="numba"``, the default when installed) a step runs:
 
 * the controller's plan in arrays: between the plan's events (a release, a catch, a
-  reached end point, an eq. 10 correction, all decided as the controller decides them)
-  a command is an index into the plan on the control grid; at an event the
-  sub-environment's own controller runs in Python and its new plan is copied back
-  (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
-  Python);
-* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
+  reached end point, all decided as the controller decides them:
+  :func:`~motion_envs.envs.juggling._compiled.v1_events`) a command is an index into the
+  plan on the control grid (:func:`~motion_envs.envs.juggling._compiled.v1_advance`); at
+  an event the sub-environment's own controller runs in Python and its new plan is
+  copied back (controllers other than ``juggler`` and ``juggler_latency_aware`` always
+  run in Python);
+* the eq. 10 corrections (found due by ``v1_events`` with the controller's test) made in
+  the arrays with the controller's numbers: the catch's rows and pseudo-inverses are
+  shared by the catches of its duration
+  (:func:`~motion_envs.models.juggling.eq10_rows`), the products stacked
+  (:func:`~motion_envs.models.juggling.eq10_many`); the controller gets them at its
+  next event or reset, as it gets its step count there;
+* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop, then
+  the hand's human-likeness search
   (:func:`~motion_envs.envs.juggling._compiled.v1_periods`, in ``threads`` threads over
   blocks of worlds); the release's noise in Python, from the world's generator;
 * the rest of the step compiled too (:func:`~motion_envs.envs.juggling._compiled.v1_finish`):
   the sensor's delay line (its noise drawn ahead in blocks from the sensor's own
-  generator), the human-likeness search, the reward and the observation.
+  generator), the reward and the observation.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
