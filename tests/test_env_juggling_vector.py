@@ -437,15 +437,17 @@ def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
 
 
 @needs_numba
-def test_compiled_likeness_is_human_likeness() -> None:
+@pytest.mark.parametrize("leaf", [1, 8, 64, 10_000])
+def test_compiled_likeness_is_human_likeness(leaf: int) -> None:
     """The cascade vector env's compiled nearest-sample search gives
-    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN."""
+    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN,
+    whatever the tree's leaf size."""
     from motion_envs.datasets.juggling import PHASES
     from motion_envs.envs.juggling._compiled import likeness_tree, nearest_rows
     from motion_envs.models.juggling import LIKENESS_TAU, cascade_likeness
 
     likeness = cascade_likeness(9.81, "train")
-    trees = tuple(likeness_tree(likeness.trees[name].data) for name in PHASES)
+    trees = tuple(likeness_tree(likeness.trees[name].data, leaf) for name in PHASES)
     rng = np.random.default_rng(11)
     n = 4000
     phase = rng.integers(0, len(PHASES), n)
