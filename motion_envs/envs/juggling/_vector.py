@@ -228,8 +228,12 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         entry = self._entries.get(name)
         if entry is None:
             kernel(args[0][:0], *args[1:])  # compiles or loads the version for these types
-            signature = tuple(kernel.typeof_pyval(a) for a in args)
-            entry = self._entries[name] = kernel.overloads[signature].entry_point
+            try:
+                signature = tuple(kernel.typeof_pyval(a) for a in args)
+                entry = kernel.overloads[signature].entry_point
+            except (AttributeError, KeyError):  # a numba without them: the dispatcher
+                entry = kernel
+            self._entries[name] = entry
         return entry
 
     def __getstate__(self) -> dict[str, Any]:
