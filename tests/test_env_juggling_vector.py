@@ -380,6 +380,64 @@ def test_replan_many_is_replan_of_each() -> None:
         assert not np.array_equal(b.grid[b.k + 1 :], before[j][b.k + 1 :])  # re-planned
 
 
+@needs_numba
+def test_v1_controllers_get_the_corrections_at_their_events() -> None:
+    """The vector env's eq. 10 corrections reach each sub-environment's controller at
+    its next event: at a reset and after _sync the controller holds the single
+    environment's plan and corrections (and the world its time)."""
+    n, steps = 3, 400
+    vec = JugglingV1VectorEnv(n, level="medium")
+    singles = [gym.make(V1, level="medium").unwrapped for _ in range(n)]
+    vec.reset(seed=5)
+    for i, env in enumerate(singles):
+        env.reset(seed=5 + i)
+    corrected = 0
+    for _ in range(steps):
+        _, _, term, trunc, _ = vec.step(np.zeros((n, 2), dtype=np.float32))
+        for env in singles:
+            env.step(np.zeros(2, dtype=np.float32))
+        if (term | trunc).any():  # compare before the autoreset
+            break
+    for i, env in enumerate(singles):
+        vec._sync(i)
+        a, b = vec._episode(i), env.controller.juggler.episode
+        assert a.phase == b.phase
+        assert a.corrections == b.corrections
+        assert np.array_equal(a.coefficients, b.coefficients)
+        assert np.array_equal(a.end, b.end)
+        assert np.array_equal(a.grid, b.grid)
+        assert vec._datas[i].time == env.world.data.time  # set by the compiled periods
+        corrected += len(b.corrections)
+    assert corrected > 10  # corrections happened
+
+
+def test_shared_eq10_rows_are_the_rows_from_any_step() -> None:
+    """A catch's eq. 10 rows computed once for every step (shared by the plans of its
+    duration) hold, at every step k, the numbers of rows computed from k on: every
+    candidate duration of the juggler's catch, several basis sizes."""
+    import math
+
+    from motion_envs.geometry import sine_series as ss
+    from motion_envs.models.juggling import Eq10Rows, eq10_rows, v1_juggler
+
+    juggler = v1_juggler(9.81)
+    lo, hi = juggler.phases_["catch"].duration_range
+    dt = juggler.task.dt
+    for n_sines, durations in ((4, np.linspace(lo, hi, 201)), (2, [0.3]), (9, [0.2, 0.41])):
+        for duration in np.asarray(durations).tolist():
+            n = math.ceil(duration / dt - 1e-9)
+            tau = np.minimum(np.arange(0, n + 1) * dt / duration, 1.0)
+            basis = ss.basis(tau, n_sines)
+            shared = eq10_rows(tau, basis, duration, dt)
+            assert eq10_rows(tau, basis, duration, dt) is shared
+            assert not shared.pinv.flags.writeable
+            for k0 in range(n + 1):
+                own = Eq10Rows(tau, basis, k0, duration)
+                assert np.array_equal(own.derivative, shared.derivative[k0:])
+                assert np.array_equal(own.a, shared.a[k0:])
+                assert np.array_equal(own.pinv, shared.pinv[k0:])
+
+
 @pytest.mark.parametrize("env_id", [V1, CASCADE])
 def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
     """render() draws each sub-environment's world as SyncVectorEnv's copies draw theirs."""
@@ -401,15 +459,17 @@ def test_vector_frames_equal_sync_frames(env_id: str, mujoco_gl: None) -> None:
 
 
 @needs_numba
-def test_compiled_likeness_is_human_likeness() -> None:
+@pytest.mark.parametrize("leaf", [1, 8, 64, 10_000])
+def test_compiled_likeness_is_human_likeness(leaf: int) -> None:
     """The cascade vector env's compiled nearest-sample search gives
-    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN."""
+    HumanLikeness.distance's numbers, near the demonstrations, far from them and for NaN,
+    whatever the tree's leaf size."""
     from motion_envs.datasets.juggling import PHASES
     from motion_envs.envs.juggling._compiled import likeness_tree, nearest_rows
     from motion_envs.models.juggling import LIKENESS_TAU, cascade_likeness
 
     likeness = cascade_likeness(9.81, "train")
-    trees = tuple(likeness_tree(likeness.trees[name].data) for name in PHASES)
+    trees = tuple(likeness_tree(likeness.trees[name].data, leaf) for name in PHASES)
     rng = np.random.default_rng(11)
     n = 4000
     phase = rng.integers(0, len(PHASES), n)

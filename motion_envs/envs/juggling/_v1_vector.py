@@ -6,22 +6,32 @@ sub-environment is bit-identical to ``JugglingV1Env`` seeded with ``seed + i`` (
 extra, ``backend="numba"``, the default when installed) a step runs:
 
 * the controller's plan in arrays: between the plan's events (a release, a catch, a
-  reached end point, an eq. 10 correction, all decided as the controller decides them)
-  a command is an index into the plan on the control grid; at an event the
-  sub-environment's own controller runs in Python and its new plan is copied back
-  (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
-  Python);
-* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
+  reached end point, all decided as the controller decides them:
+  :func:`~motion_envs.envs.juggling._compiled.v1_events`) a command is an index into the
+  plan on the control grid (:func:`~motion_envs.envs.juggling._compiled.v1_advance`); at
+  an event the sub-environment's own controller runs in Python and its new plan is
+  copied back (controllers other than ``juggler`` and ``juggler_latency_aware`` always
+  run in Python);
+* the eq. 10 corrections (found due by ``v1_events`` with the controller's test) made in
+  the arrays with the controller's numbers: the catch's rows and pseudo-inverses are
+  shared by the catches of its duration
+  (:func:`~motion_envs.models.juggling.eq10_rows`), the products stacked
+  (:func:`~motion_envs.models.juggling.eq10_many`); the controller gets them at its
+  next event or reset, as it gets its step count there;
+* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop, then
+  the hand's human-likeness search
   (:func:`~motion_envs.envs.juggling._compiled.v1_periods`, in ``threads`` threads over
   blocks of worlds); the release's noise in Python, from the world's generator;
 * the rest of the step compiled too (:func:`~motion_envs.envs.juggling._compiled.v1_finish`):
   the sensor's delay line (its noise drawn ahead in blocks from the sensor's own
-  generator), the human-likeness search, the reward and the observation.
+  generator), the reward and the observation.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,9 +41,11 @@ from motion_envs.envs.juggling._v1_env import HISTORY, JugglingV1Env
 from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
+    ControlOptions,
     JugglingController,
+    eq10_many,
+    eq10_rows,
     perturb_release,
-    replan_many,
 )
 
 __all__ = ["JugglingV1VectorEnv"]
@@ -99,6 +111,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._ball = np.zeros((n, 2))
         self._ball_vel = np.zeros((n, 2))
         self._events = np.zeros((n, 2), dtype=np.bool_)
+        self._likeness = np.zeros(n)  # the hand's distance to the demonstrations
         # what the controller was last shown (the measured state)
         self._measured = np.zeros((n, 5))  # time, ball x, z, vx, vz
         self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
@@ -127,9 +140,20 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._duration = np.zeros(n)
         self._end = np.zeros((n, 2))
         self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
+        # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step;
+        # corrections made here reach the controller at its next event (_sync)
+        self._stale = np.zeros(n, dtype=np.bool_)
+        self._pending: list[list[tuple[float, float]]] = [[] for _ in range(n)]
+        self._coef = np.zeros((n, 1, 2))
+        self._c_basis = np.zeros((n, 1, 1))
+        self._c_derivative = np.zeros((n, 1, 1))
+        self._c_a = np.zeros((n, 1, 3, 1))
+        self._c_pinv = np.zeros((n, 1, 1, 3))
         weights = first.reward_weights
         self._w = (weights["catch"], weights["drop"], weights["likeness"], weights["action"])
         self._bounds = np.stack([first._low, first._high])
+        if self._fast:
+            self._use_options(first.controller.juggler.options)
         self._obs_dim = first._low.shape[0]
         self._link()
         self._scalars = np.array(
@@ -142,6 +166,16 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 float(self._noisy),
             ]
         )
+
+    def _use_options(self, options: ControlOptions) -> None:
+        """The juggler's options as the compiled events and advance read them."""
+        self._options = options
+        task = self.envs[0].task
+        self._flags_ctl = (options.correction, self._ahead)
+        self._event_constants = np.array(
+            [task.dt, task.gravity, self._latency, options.correction_tolerance, _TOSS, _CATCH]
+        )
+        self._advance = np.array([task.dt, options.release_after, _TOSS], dtype=np.float64)
 
     def _episode(self, i: int) -> JugglingController:
         episode = self.envs[i].controller.juggler.episode
@@ -195,6 +229,29 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         self._t_start[i] = ep.t_start
         self._duration[i] = ep.duration
         self._end[i] = ep.end
+        if ep.phase == "catch":
+            self._load_rows(i, ep)
+
+    def _load_rows(self, i: int, ep: JugglingController) -> None:
+        """Copy the eq. 10 rows of ``ep``'s catch plan (shared by the plans of its
+        duration: :func:`~motion_envs.models.juggling.eq10_rows`), its basis on the grid
+        and its coefficients into row ``i`` of the arrays the corrections gather from."""
+        rows = eq10_rows(ep._tau, ep._basis, ep.duration, self._dt)
+        m, nb = ep._basis.shape
+        if m > self._c_basis.shape[1] or nb != self._c_basis.shape[2]:
+            n, width = self.num_envs, max(m, self._c_basis.shape[1])
+            if nb != self._c_basis.shape[2]:  # the first catch (one model: one basis size)
+                width = m
+            self._c_basis = _wider(self._c_basis, (n, width, nb))
+            self._c_derivative = _wider(self._c_derivative, (n, width, nb))
+            self._c_a = _wider(self._c_a, (n, width, 3, nb))
+            self._c_pinv = _wider(self._c_pinv, (n, width, nb, 3))
+            self._coef = _wider(self._coef, (n, nb, 2))
+        self._c_basis[i, :m] = ep._basis
+        self._c_derivative[i, :m] = rows.derivative
+        self._c_a[i, :m] = rows.a
+        self._c_pinv[i, :m] = rows.pinv
+        self._coef[i] = ep.coefficients
 
     # -- the step -------------------------------------------------------------------------
     def _step_batch(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
@@ -229,6 +286,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball,
             self._ball_vel,
             self._events,
+            (self._phase, self._trees, LIKENESS_TAU, self._likeness),
+            self._clocks,
         )
         released = self._events[envs, 1]
         if released.any():
@@ -241,10 +300,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 self._noise_at[i] = 0
         self._slot = (self._slot + 1) % self._ring.shape[0]
         n = envs.size
-        points = np.empty((n, 4))
-        points[:, :2] = self._hand[envs]
-        points[:, 2:] = LIKENESS_TAU * self._hand_vel[envs]
-        likeness = self._compiled.nearest_rows(points, self._phase[envs], self._trees)
+        likeness = self._likeness[envs]
         obs = np.empty((n, self._obs_dim), dtype=np.float32)
         out = np.empty((n, 7))
         ends = np.empty((n, 2), dtype=np.bool_)
@@ -283,8 +339,9 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             ends,
         )
         time = out[:, 6]
-        for i, t in zip(envs.tolist(), time.tolist(), strict=True):
-            self._datas[i].time = t
+        if not self._clocks_direct:  # the periods set them otherwise
+            for i, t in zip(envs.tolist(), time.tolist(), strict=True):
+                self._datas[i].time = t
         counts = self._counts[envs]
         columns: Columns = {
             "reward_catch": out[:, 1],
@@ -310,68 +367,105 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         between events, the controller itself at them (see the module docstring)."""
         if not self._fast:
             return self._python_commands(envs)
-        phase, k = self._phase[envs], self._pk[envs]
-        held, released, caught = (self._m_flags[envs, j] for j in range(3))
-        end_k = self._end_k[envs]
-        event = (
-            ((phase == _TOSS) & released)
-            | ((phase == _CATCH) & caught)
-            | ((end_k >= 0) & (k >= end_k))
-        )
         options = self._episode(int(envs[0])).options
-        python = event
-        if options.correction:
-            check = ~event & (phase == _CATCH) & ~held
-            if check.any():
-                self._correct(envs, check, options.correction_tolerance)
+        if options is not self._options:  # the juggler's options were replaced
+            self._use_options(options)
+        python, due, predicted = self._compiled.v1_events(
+            envs,
+            (self._phase, self._pk, self._end_k, self._t_start, self._duration, self._end),
+            self._measured,
+            self._m_flags,
+            self._event_constants,
+            self._flags_ctl,
+        )
+        if due.any():
+            self._correct(envs[due], predicted[due])
+        if not python.any():
+            return self._compiled.v1_advance(  # type: ignore[no-any-return]
+                envs, self._pk, self._grid, self._glen, self._last, self._phase, self._advance
+            )
         target = np.empty((envs.size, 2))
         armed = np.empty(envs.size, dtype=np.bool_)
         fast = ~python
         if fast.any():
-            rows = envs[fast]
-            kf = self._pk[rows] + 1
-            self._pk[rows] = kf
-            tf = self._grid[rows, np.minimum(kf, self._glen[rows] - 1)]
-            self._last[rows, 0] = self._last[rows, 1]
-            self._last[rows, 1] = tf
-            target[fast] = tf
-            armed[fast] = (self._phase[rows] == _TOSS) & (kf * self._dt >= options.release_after)
-        if python.any():
-            t, a = self._python_commands(envs[python])
-            target[python], armed[python] = t, a
+            target[fast], armed[fast] = self._compiled.v1_advance(
+                envs[fast], self._pk, self._grid, self._glen, self._last, self._phase, self._advance
+            )
+        target[python], armed[python] = self._python_commands(envs[python])
         return target, armed
 
-    def _correct(self, envs: NDArray[np.int64], check: NDArray[np.bool_], tolerance: float) -> None:
-        """The eq. 10 corrections of the catches ``envs[check]``: where
-        :meth:`JugglingController.correct` would re-plan (its test, with its arithmetic;
-        the latency-aware controller's forward prediction first), it re-plans (the
-        sub-environment's own controller) and the new rows of its plan are copied back."""
-        rows = envs[check]
-        g, dt = self._gravity, self._dt
-        bx, bz = self._m_ball[rows, 0], self._m_ball[rows, 1]
-        vx, vz = self._m_ball_vel[rows, 0], self._m_ball_vel[rows, 1]
-        if self._ahead:  # predict_forward(..., latency): rules.flight from time 0
-            s = self._latency - 0.0
-            bx, bz = bx + vx * s, bz + vz * s - 0.5 * g * s * s
-            vz = vz - g * s
-        s = self._t_start[rows] + self._duration[rows] - self._m_time[rows]
-        px = bx + vx * (s - 0.0)
-        pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
-        miss = self._compiled.hypot_rows(px - self._end[rows, 0], pz - self._end[rows, 1])
-        due = (s > dt) & (miss > tolerance)
-        if not due.any():
+    def _correct(self, rows: NDArray[np.int64], target: NDArray[np.float64]) -> None:
+        """The eq. 10 corrections of the catches ``rows`` toward the predicted intercepts
+        ``target (r, 2)`` (where :meth:`JugglingController.correct` would re-plan:
+        :func:`~motion_envs.envs.juggling._compiled.v1_events`): on the catch's rows
+        (:meth:`JugglingController.replan`'s numbers: the same stacked products,
+        :func:`~motion_envs.models.juggling.eq10_many`, and the same product of the basis
+        and the new coefficients for the rest of the grid), or, where the controller has
+        no rows for the step, by the sub-environment's own controller. A controller gets
+        the corrections made here at its next event or reset (:meth:`_sync`), as it gets
+        its step count there."""
+        dt = self._dt
+        k = self._pk[rows]
+        duration = self._duration[rows]
+        tau1 = k * dt / duration
+        glen = self._glen[rows]
+        on_rows = (tau1 < 1.0) & (k < glen)  # JugglingController._rows is not None
+        times = self._m_time[rows].tolist()
+        if not on_rows.all():
+            for j in np.flatnonzero(~on_rows).tolist():
+                i, kj = int(rows[j]), int(k[j])
+                self._sync(i)
+                ep = self._episode(i)
+                ep.k = kj
+                ep.replan(times[j], target[j].copy())
+                self._grid[i, kj + 1 : self._glen[i]] = ep.grid[kj + 1 :]
+                self._end[i] = ep.end
+                self._coef[i] = ep.coefficients
+            rows, k, duration, tau1, glen, target = (
+                x[on_rows] for x in (rows, k, duration, tau1, glen, target)
+            )
+            times = [t for t, on in zip(times, on_rows.tolist(), strict=True) if on]
+            if not rows.size:
+                return
+        n, nb = rows.size, self._coef.shape[1]
+        derivative = np.empty((n, 1, nb))
+        derivative[:, 0] = self._c_derivative[rows, k]
+        out = eq10_many(
+            derivative,
+            self._c_a[rows, k],
+            self._c_pinv[rows, k],
+            self._coef[rows],
+            duration,
+            self._grid[rows, k],
+            target,
+        )
+        self._coef[rows] = out
+        self._end[rows] = target
+        self._stale[rows] = True
+        basis, grid, pending = self._c_basis, self._grid, self._pending
+        for j, (i, kj, gj, t, tj) in enumerate(
+            zip(rows.tolist(), k.tolist(), glen.tolist(), times, tau1.tolist(), strict=True)
+        ):
+            grid[i, kj + 1 : gj] = basis[i, kj + 1 : gj] @ out[j]  # as _grid_from does
+            pending[i].append((t, tj))
+
+    def _sync(self, i: int) -> None:
+        """Give sub-environment ``i``'s controller the corrections made here since its
+        last event (its coefficients, end, grid and their record)."""
+        if not self._stale[i]:
             return
-        position = np.stack([px, pz], axis=1)[due]
-        rows = rows[due]
-        episodes = []
-        for i, k in zip(rows.tolist(), self._pk[rows].tolist(), strict=True):
-            ep = self._episode(i)
-            ep.k = k
-            episodes.append(ep)
-        replan_many(episodes, self._m_time[rows].tolist(), position)
-        for i, k, ep in zip(rows.tolist(), self._pk[rows].tolist(), episodes, strict=True):
-            self._grid[i, k + 1 : self._glen[i]] = ep.grid[k + 1 :]
-            self._end[i] = ep.end
+        self._stale[i] = False
+        ep = self._episode(i)
+        ep.coefficients = self._coef[i].copy()
+        ep.end = self._end[i].copy()
+        ep.grid[:] = self._grid[i, : self._glen[i]]
+        ep.corrections.extend(self._pending[i])
+        self._pending[i].clear()
+
+    def _reset_env(self, i: int, seed: int | None, options: dict[str, Any] | None = None) -> Any:
+        if self.backend == "numba":
+            self._sync(i)  # the ending episode's controller complete
+        return super()._reset_env(i, seed, options)
 
     def _python_commands(
         self, envs: NDArray[np.int64]
@@ -384,6 +478,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         armed = np.empty(envs.size, dtype=np.bool_)
         for j, i in enumerate(envs.tolist()):
             if self._fast:
+                self._sync(i)
                 ep = self._episode(i)
                 ep.k = int(self._pk[i])
                 ep._last = [self._last[i, 0].copy(), self._last[i, 1].copy()]
@@ -418,3 +513,12 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball_vel[i] = ux, uz
             self._flags[i, 0] = self._flags[i, 1] = False
             w.physics.set_ball_contacts(True)
+
+
+def _wider(array: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """``array`` in a zero array of ``shape``, its old content kept where it fits (the
+    basis size axis only grows from the placeholder's 1)."""
+    out = np.zeros(shape)
+    if array.shape[2:] == shape[2:]:
+        out[:, : array.shape[1]] = array
+    return out

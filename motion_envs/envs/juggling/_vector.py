@@ -33,6 +33,7 @@ on the number of threads (tested bit for bit).
 
 from __future__ import annotations
 
+import ctypes
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -51,7 +52,7 @@ __all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
 
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
-WORLD_LINKS = ("_compiled", "_datas", "_worlds")
+WORLD_LINKS = ("_compiled", "_datas", "_worlds", "_entries", "_clocks", "_clocks_direct")
 #: Fewest sub-environments a thread is given (below, handing work to a thread costs more
 #: than it saves).
 MIN_ENVS_PER_THREAD = 8
@@ -154,6 +155,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         from motion_envs.envs.juggling import _compiled
 
         self._compiled = _compiled
+        self._entries: dict[str, Callable[..., None]] = {}
         worlds = [env.world for env in self.envs]
         self._datas = [w.data for w in worlds]
         #: what the compiled periods take, in their order: each world's ``MjModel`` and
@@ -168,6 +170,14 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             List([w.data.sensordata for w in worlds]),
             List([w.model.geom_contype for w in worlds]),
             List([w.model.geom_conaffinity for w in worlds]),
+        )
+        #: each world's ``MjData.time`` as a ``(1,)`` view, for compiled periods that set
+        #: it; where the field is not found (:func:`_clock`), scratch arrays, and
+        #: ``_clocks_direct`` False: the caller sets the times
+        views = [_clock(d) for d in self._datas]
+        self._clocks_direct = all(v is not None for v in views)
+        self._clocks = List(
+            [v if self._clocks_direct and v is not None else np.zeros(1) for v in views]
         )
 
     def _world_constants(self, palm_top: float, *extra: float) -> NDArray[np.float64]:
@@ -194,6 +204,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         """``periods(envs, *args)`` (a compiled kernel that releases the GIL and touches
         only its sub-environments' rows and worlds), ``envs`` split into contiguous blocks
         run in up to :attr:`threads` threads, the caller's thread among them."""
+        periods = self._entry(periods, envs, *args)
         blocks = min(self.threads, envs.size // MIN_ENVS_PER_THREAD)
         if blocks <= 1:
             periods(envs, *args)
@@ -205,6 +216,25 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         periods(first, *args)
         for future in futures:
             future.result()
+
+    def _entry(self, kernel: Any, *args: Any) -> Callable[..., None]:
+        """The compiled function numba's dispatcher ``kernel`` runs for ``args``, found
+        once per kernel and then called directly: the dispatcher types a tuple of typed
+        lists (the worlds' views) in Python on every call (~40 µs, holding the GIL, in
+        every thread), while the arguments' types here never change (``envs`` a 1-d
+        int64 array, the rest this environment's own arrays; a block of ``envs`` has the
+        type of ``envs``)."""
+        name = kernel.py_func.__name__
+        entry = self._entries.get(name)
+        if entry is None:
+            kernel(args[0][:0], *args[1:])  # compiles or loads the version for these types
+            try:
+                signature = tuple(kernel.typeof_pyval(a) for a in args)
+                entry = kernel.overloads[signature].entry_point
+            except (AttributeError, KeyError):  # a numba without them: the dispatcher
+                entry = kernel
+            self._entries[name] = entry
+        return entry
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -316,7 +346,12 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         mask[stepped[keep]] = True
         rows = stepped[keep]
         infos: dict[str, Any] = {}
+        every = rows.size == n  # all sub-environments, in order: the columns as they are
         for key, column in columns.items():
+            if every:
+                infos[key] = np.ascontiguousarray(column)  # a copy of a strided view
+                infos["_" + key] = mask.copy()
+                continue
             if column.dtype == object:
                 full = np.full(n, None, dtype=object)
             else:
@@ -352,6 +387,29 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             self._pool = None
         for env in self.envs:
             env.close()
+
+
+def _clock(data: Any) -> NDArray[np.float64] | None:
+    """``data.time`` (an ``MjData``'s) as a ``(1,)`` float64 view of its memory, or None.
+
+    The bindings give ``time`` as a property only; in ``mjData`` it is the ``mjtNum``
+    just before ``energy``, which the bindings do give as an array. The view is returned
+    only if it is that field: two values set through the property are read through it,
+    then one set through it is read through the property (the time is restored)."""
+    address = data.energy.ctypes.data - 8
+    view = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(address))
+    saved = data.time
+    try:
+        for probe in (1234.5, -0.0625):
+            data.time = probe
+            if view[0] != probe:
+                return None
+        view[0] = 0.375
+        if data.time != 0.375:
+            return None
+    finally:
+        data.time = saved
+    return view
 
 
 def _columns(infos: list[dict[str, Any]]) -> Columns:

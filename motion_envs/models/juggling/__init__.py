@@ -43,7 +43,10 @@ from motion_envs.models.juggling._cascade import (
 )
 from motion_envs.models.juggling._controller import (
     ControlOptions,
+    Eq10Rows,
     JugglingController,
+    eq10_many,
+    eq10_rows,
     replan_many,
 )
 from motion_envs.models.juggling._fit import (
@@ -142,6 +145,7 @@ __all__ = [
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
+    "Eq10Rows",
     "Flight",
     "FlightAnalysis",
     "FlightOptions",
@@ -160,6 +164,8 @@ __all__ = [
     "default_fit",
     "detect_flights",
     "draw_episode_noise",
+    "eq10_many",
+    "eq10_rows",
     "estimate_noise",
     "fit_juggler",
     "juggler_demonstrations",

@@ -39,7 +39,14 @@ from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_posit
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.juggling._model import JugglerModel, plan_catch
 
-__all__ = ["ControlOptions", "JugglingController", "replan_many"]
+__all__ = [
+    "ControlOptions",
+    "Eq10Rows",
+    "JugglingController",
+    "eq10_many",
+    "eq10_rows",
+    "replan_many",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -145,7 +152,7 @@ class JugglingController:
             tau = np.minimum(k * dt / self.duration, 1.0)
             self._tau = tau
             self._basis = ss.basis(tau, self.coefficients.shape[0] - 2)
-            self._eq10: _Eq10Rows | None = None
+            self._eq10: Eq10Rows | None = None
             self.grid = self._basis @ self.coefficients
         else:  # the rows before k0 were executed: keep them
             self.grid[k0:] = self._basis[k0:] @ self.coefficients
@@ -224,14 +231,14 @@ class JugglingController:
         self.replan(time, np.array([px, pz]))
         return True
 
-    def _rows(self) -> _Eq10Rows | None:
-        """The eq. 10 rows for step ``k`` (computed at the phase's first correction), or
-        None when ``k`` is past them or ``tau_1 >= 1`` (then :meth:`replan` corrects with
-        the model's own ``correct``)."""
+    def _rows(self) -> Eq10Rows | None:
+        """The eq. 10 rows for step ``k`` (:func:`eq10_rows`, looked up at the phase's
+        first correction), or None when ``k`` is past them or ``tau_1 >= 1`` (then
+        :meth:`replan` corrects with the model's own ``correct``)."""
         k, duration = self.k, self.duration
         rows = self._eq10
-        if rows is None or k < rows.k0:
-            rows = self._eq10 = _Eq10Rows(self._tau, self._basis, k, duration)
+        if rows is None:
+            rows = self._eq10 = eq10_rows(self._tau, self._basis, duration, self.task.dt)
         tau1 = k * self.task.dt / duration
         return rows if tau1 < 1.0 and k < rows.end else None
 
@@ -274,7 +281,7 @@ def replan_many(
     single products do, so every episode gets its own numbers bit for bit (tested
     against :meth:`~JugglingController.replan`). The native vector environment's
     corrections."""
-    batch: list[tuple[int, JugglingController, _Eq10Rows]] = []
+    batch: list[tuple[int, JugglingController, Eq10Rows]] = []
     for j, ep in enumerate(episodes):
         rows = ep._rows()
         if rows is None:
@@ -291,19 +298,20 @@ def replan_many(
     duration = np.array([rows.duration for _, _, rows in batch])
     position = np.stack([ep.grid[ep.k] for _, ep, _ in batch])
     target = predicted[[j for j, _, _ in batch]]
-    out = _eq10(derivative, a1, pinv, c, duration, position, target)
+    out = eq10_many(derivative, a1, pinv, c, duration, position, target)
     for m, (j, ep, _) in enumerate(batch):
         ep._replanned(times[j], target[m].copy(), out[m])
 
 
-class _Eq10Rows:
+class Eq10Rows:
     """The eq. 10 correction of one catch plan (free mode, position, end and velocity
     conditions) at steps ``k0 ..`` of its grid, with the conditions' rows and their
     pseudo-inverses computed once (they depend only on ``tau_1 = k dt / T``, ``T`` and
     the number of sines), so that :meth:`correct` does what
     :func:`~motion_envs.models.sine_regression.correct_online` does, with the same numbers
     (same rows, same ``pinv``, same products), for the plan's velocity at ``tau_1`` too
-    (:func:`~motion_envs.geometry.sine_series.velocity`)."""
+    (:func:`~motion_envs.geometry.sine_series.velocity`). Read-only (shared through
+    :func:`eq10_rows`)."""
 
     def __init__(self, tau: FloatArray, basis: FloatArray, k0: int, duration: float) -> None:
         n_grid, n_basis = basis.shape
@@ -316,6 +324,8 @@ class _Eq10Rows:
         a[:, 2] = self.derivative / duration
         self.a = a
         self.pinv = np.linalg.pinv(a)
+        for array in (self.derivative, self.a, self.pinv):
+            array.flags.writeable = False
 
     def correct(
         self, k: int, coefficients: FloatArray, position: FloatArray, target: FloatArray
@@ -323,7 +333,7 @@ class _Eq10Rows:
         """The corrected coefficients at step ``k``: the plan restarts from ``position``
         with its own velocity there and ends at ``target``."""
         i = k - self.k0
-        out = _eq10(
+        out = eq10_many(
             self.derivative[None, i : i + 1],
             self.a[None, i],
             self.pinv[None, i],
@@ -335,7 +345,34 @@ class _Eq10Rows:
         return out[0]
 
 
-def _eq10(
+#: :func:`eq10_rows`'s rows by catch duration, control step and basis size.
+_EQ10_ROWS: dict[tuple[float, float, int], Eq10Rows] = {}
+#: Entries :data:`_EQ10_ROWS` holds at most (emptied when full; a fitted catch model has
+#: ``plan_catch``'s 201 candidate durations).
+_EQ10_ROWS_MAX = 1024
+
+
+def eq10_rows(tau: FloatArray, basis: FloatArray, duration: float, dt: float) -> Eq10Rows:
+    """The eq. 10 rows of a catch plan of ``duration`` on the control grid ``tau`` (``k dt
+    / T``, clipped at 1) with its ``basis`` (``ss.basis(tau, n)``), for every step
+    (``k0 = 0``), shared by every plan of the same duration, step and basis size.
+
+    A catch's duration is one of
+    :func:`~motion_envs.models.juggling.plan_catch`'s candidates, so the catches of
+    later cycles and episodes find their rows (above all the pseudo-inverses) computed.
+    The numbers at step ``k`` are those of rows computed from any ``k0 <= k``: the
+    rows are elementwise in ``tau``, and ``np.linalg.pinv`` of a stack decomposes and
+    multiplies each matrix on its own (tested)."""
+    key = (duration, dt, basis.shape[1])
+    rows = _EQ10_ROWS.get(key)
+    if rows is None:
+        if len(_EQ10_ROWS) >= _EQ10_ROWS_MAX:
+            _EQ10_ROWS.clear()
+        rows = _EQ10_ROWS[key] = Eq10Rows(tau, basis, 0, duration)
+    return rows
+
+
+def eq10_many(
     derivative: FloatArray,
     a1: FloatArray,
     pinv: FloatArray,
