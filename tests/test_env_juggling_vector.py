@@ -406,7 +406,7 @@ def test_v1_controllers_get_the_corrections_at_their_events() -> None:
         assert np.array_equal(a.coefficients, b.coefficients)
         assert np.array_equal(a.end, b.end)
         assert np.array_equal(a.grid, b.grid)
-        assert vec._datas[i].time == env.world.data.time  # set by the compiled periods
+        assert vec._datas[i].time == env.world.data.time
         corrected += len(b.corrections)
     assert corrected > 10  # corrections happened
 

@@ -215,7 +215,6 @@ def _v1_periods(
     ball_vel: Any,
     events: Any,
     likeness: Any,
-    clocks: Any,
 ) -> None:
     """One control period of Juggling-v1's world for each world ``i`` in ``envs``: what
     :meth:`~motion_envs.envs.juggling.JugglingV1World.advance` does, up to the release's
@@ -232,8 +231,7 @@ def _v1_periods(
     ``hand_vel``, ``ball``, ``ball_vel`` and ``events[i] = (caught, release fires)``.
     ``likeness = (phase, trees, tau, out)``: the hand's distance to the demonstrations
     of its plan's phase ``phase[i]`` (``trees``: per phase :func:`likeness_tree`; the
-    velocity weighted by ``tau``) goes to ``out[i]``. ``clocks[i] (1,)``: the world's
-    ``MjData.time`` (``JugglingVectorEnv._link_worlds``), set to ``k dt``.
+    velocity weighted by ``tau``) goes to ``out[i]``.
     """
     model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
     phase, trees, tau, distance = likeness
@@ -294,7 +292,6 @@ def _v1_periods(
             qv[3] = vz
         flags[i, 0], flags[i, 1], flags[i, 2] = held, left, dropped
         k[i] += 1
-        clocks[i][0] = k[i] * dt
         z_before[i] = z_prev
         fires = False
         if held and not caught and armed[i]:

@@ -287,7 +287,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._ball_vel,
             self._events,
             (self._phase, self._trees, LIKENESS_TAU, self._likeness),
-            self._clocks,
         )
         released = self._events[envs, 1]
         if released.any():
@@ -339,9 +338,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             ends,
         )
         time = out[:, 6]
-        if not self._clocks_direct:  # the periods set them otherwise
-            for i, t in zip(envs.tolist(), time.tolist(), strict=True):
-                self._datas[i].time = t
+        for i, t in zip(envs.tolist(), time.tolist(), strict=True):
+            self._datas[i].time = t
         counts = self._counts[envs]
         columns: Columns = {
             "reward_catch": out[:, 1],

@@ -33,7 +33,6 @@ on the number of threads (tested bit for bit).
 
 from __future__ import annotations
 
-import ctypes
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -52,7 +51,7 @@ __all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
 
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
-WORLD_LINKS = ("_compiled", "_datas", "_worlds", "_entries", "_clocks", "_clocks_direct")
+WORLD_LINKS = ("_compiled", "_datas", "_worlds", "_entries")
 #: Fewest sub-environments a thread is given (below, handing work to a thread costs more
 #: than it saves).
 MIN_ENVS_PER_THREAD = 8
@@ -170,14 +169,6 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             List([w.data.sensordata for w in worlds]),
             List([w.model.geom_contype for w in worlds]),
             List([w.model.geom_conaffinity for w in worlds]),
-        )
-        #: each world's ``MjData.time`` as a ``(1,)`` view, for compiled periods that set
-        #: it; where the field is not found (:func:`_clock`), scratch arrays, and
-        #: ``_clocks_direct`` False: the caller sets the times
-        views = [_clock(d) for d in self._datas]
-        self._clocks_direct = all(v is not None for v in views)
-        self._clocks = List(
-            [v if self._clocks_direct and v is not None else np.zeros(1) for v in views]
         )
 
     def _world_constants(self, palm_top: float, *extra: float) -> NDArray[np.float64]:
@@ -387,29 +378,6 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             self._pool = None
         for env in self.envs:
             env.close()
-
-
-def _clock(data: Any) -> NDArray[np.float64] | None:
-    """``data.time`` (an ``MjData``'s) as a ``(1,)`` float64 view of its memory, or None.
-
-    The bindings give ``time`` as a property only; in ``mjData`` it is the ``mjtNum``
-    just before ``energy``, which the bindings do give as an array. The view is returned
-    only if it is that field: two values set through the property are read through it,
-    then one set through it is read through the property (the time is restored)."""
-    address = data.energy.ctypes.data - 8
-    view = np.ctypeslib.as_array((ctypes.c_double * 1).from_address(address))
-    saved = data.time
-    try:
-        for probe in (1234.5, -0.0625):
-            data.time = probe
-            if view[0] != probe:
-                return None
-        view[0] = 0.375
-        if data.time != 0.375:
-            return None
-    finally:
-        data.time = saved
-    return view
 
 
 def _columns(infos: list[dict[str, Any]]) -> Columns:
