@@ -23,7 +23,7 @@ import re
 import sys
 import tempfile
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -45,6 +45,7 @@ __all__ = [
     "output_folder",
     "positive_int",
     "results_folder",
+    "wrote",
 ]
 
 
@@ -283,6 +284,17 @@ def mocap_data(text: str, kind: str) -> str | None:
         field, message = missing
         raise argparse.ArgumentTypeError(f"{message} (add {field.replace('_', '-')}=... after ?)")
     return text
+
+
+def wrote(paths: Sequence[object]) -> str:
+    """The line a sub-command prints after writing ``paths``: ``wrote a``, ``wrote a and
+    b``, ``wrote a, b and c``."""
+    names = [str(p) for p in paths]
+    if not names:
+        return "wrote nothing"
+    if len(names) == 1:
+        return f"wrote {names[0]}"
+    return f"wrote {', '.join(names[:-1])} and {names[-1]}"
 
 
 def fail(prog: str, message: str, status: int = 2) -> int:

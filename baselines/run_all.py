@@ -157,7 +157,7 @@ def _run_job(job: Job, out: Path, progress: bool, echo: Callable[[str], Any]) ->
         )
         echo(position_bench.report(doc))
         written = position_bench.write(doc, out / job.folder)
-    echo(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+    echo(options.wrote(written))
 
 
 def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> dict[str, Any]:

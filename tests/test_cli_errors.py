@@ -528,3 +528,14 @@ def test_calibrate_writes_to_out_not_the_shipped_config():
         "results/calibrate-cohort/faraway2008.yaml"
     )
     assert run_all.JOBS[0].folder == "orientation-vr-kitchen"
+
+
+def test_the_written_files_line() -> None:
+    """Once ``motion-bench all`` printed "wrote  and results/juggling_v1-levels/results.json"
+    for a job that writes one file."""
+    from baselines.options import wrote
+
+    assert wrote([Path("a/results.json")]) == "wrote a/results.json"
+    assert wrote(["a", "b"]) == "wrote a and b"
+    assert wrote(["a", "b", "c"]) == "wrote a, b and c"
+    assert wrote([]) == "wrote nothing"

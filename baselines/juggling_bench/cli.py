@@ -42,7 +42,7 @@ def main(args: argparse.Namespace) -> int:
         out = options.results_folder(args.out, "juggling-analyse")
         analysis = run_analysis(AnalyseConfig(source=args.analyse, balls=args.n_balls))
         print(report_analysis(analysis))
-        print("wrote " + ", ".join(str(p) for p in write_analysis(analysis, out)))
+        print(options.wrote(write_analysis(analysis, out)))
         return 0
     if args.n_balls is not None:
         return options.fail("motion-bench juggling", "--n-balls: needs --analyse")
@@ -58,7 +58,7 @@ def main(args: argparse.Namespace) -> int:
         doc = run_cascade(cascade)
         print(report_cascade(doc))
         out = options.results_folder(args.out, f"juggling-pattern-{args.pattern}")
-        print("wrote " + ", ".join(str(p) for p in write_cascade(doc, out)))
+        print(options.wrote(write_cascade(doc, out)))
         return 0
     if args.levels is None:
         if args.agent is not None:
@@ -73,7 +73,7 @@ def main(args: argparse.Namespace) -> int:
         doc = run_levels(levels)
         print(report_levels(doc))
         out = options.results_folder(args.out, "juggling-levels")
-        print("wrote " + ", ".join(str(p) for p in write_levels(doc, out)))
+        print(options.wrote(write_levels(doc, out)))
         return 0
     out = options.results_folder(args.out, "juggling")
     config = JugglingConfig(
@@ -96,7 +96,7 @@ def main(args: argparse.Namespace) -> int:
     doc["timing"]["total_s"] = time.perf_counter() - t0
     print(report(doc))
     paths = write(doc, out, video=not args.no_video)
-    print("wrote " + ", ".join(str(p) for p in paths))
+    print(options.wrote(paths))
     print(f"total {doc['timing']['total_s']:.1f} s")
     return 0
 

@@ -38,7 +38,7 @@ def main(args: argparse.Namespace) -> int:
     results = run(config)
     print(report(results))
     written = write(results, out)
-    print(f"wrote {', '.join(map(str, written[:-1]))} and {written[-1]}")
+    print(options.wrote(written))
     return 0
 
 
