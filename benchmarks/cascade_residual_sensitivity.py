@@ -11,14 +11,18 @@ information:
   whose output follows the sensor's noise, or PPO's per-step exploration, adds);
 * ``white x`` / ``white z``: the same on the hands' horizontal / vertical entries only;
 * ``held 16``: a draw held for 16 steps (80 ms; gSDE's ``sde_sample_freq`` 16);
-* ``constant``: one draw per episode (a fixed offset of the hands' targets).
+* ``constant``: one draw per episode (a fixed offset of the hands' targets);
+* ``fixed A``: with ``--fixed``, the same offset ``A`` (four action entries: right
+  ``x, z``, left ``x, z``) in every episode: can a steady offset of the catch, what a
+  Juggling-v1 agent learned, help the cascade juggler?
 
 For each: mean catches before the first drop, drops per catch (the agents' validation
 criterion) and the paired difference of catches from ``zero`` (same seeds) with a 95 %
-normal interval over episodes. The demonstrations the juggler is fitted on are SIMULATED.
+normal interval over episodes. ``--split train`` plays the TRAINING seeds instead. The
+demonstrations the juggler is fitted on are SIMULATED.
 
     python benchmarks/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
-        [--scales 0.02 0.05 0.1]
+        [--scales 0.02 0.05 0.1] [--split val] [--fixed=DX,DZ,DX,DZ ...]
 """
 
 from __future__ import annotations
@@ -41,10 +45,13 @@ KINDS = ("white", "white x", "white z", "held 16", "constant")
 _COLUMNS = {"white x": [0, 2], "white z": [1, 3]}
 
 
-def first_episodes(level: str, episodes: int, kind: str, scale: float) -> tuple[Any, Any]:
-    """Catches and drop flags of each sub-environment's first episode under ``kind``."""
+def first_episodes(
+    level: str, episodes: int, kind: str, scale: float, split: str = "val"
+) -> tuple[Any, Any]:
+    """Catches and drop flags of each sub-environment's first episode under ``kind``
+    (``"fixed A"``: the offset ``A``, comma-separated action entries, in every step)."""
     env = CascadeVectorEnv(episodes, level=level, max_catches=10, residual_scale=0.15, threads=1)
-    env.reset(seed=SPLIT_SEEDS["val"])
+    env.reset(seed=SPLIT_SEEDS[split])
     rng = np.random.default_rng(0)
     catches = np.zeros(episodes)
     dropped = np.zeros(episodes, dtype=bool)
@@ -55,6 +62,8 @@ def first_episodes(level: str, episodes: int, kind: str, scale: float) -> tuple[
     while not done.all():
         if kind == "constant":
             a = bias
+        elif kind.startswith("fixed "):
+            a = np.tile(np.array(kind[6:].split(","), dtype=float), (episodes, 1))
         elif kind == "held 16":
             if step % 16 == 0:
                 a = scale * rng.standard_normal((episodes, 4))
@@ -77,22 +86,36 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--level", default="medium")
     parser.add_argument("--episodes", type=int, default=80)
     parser.add_argument("--scales", type=float, nargs="+", default=[0.02, 0.05, 0.1])
+    parser.add_argument("--split", choices=("val", "train"), default="val")
+    parser.add_argument(
+        "--fixed", action="append", default=[], metavar="DX,DZ,DX,DZ",
+        help="a fixed offset (repeat for more; --fixed=-0.05,0,0,0 for a leading minus)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
+    for text in args.fixed:
+        try:
+            ok = len([float(v) for v in text.split(",")]) == 4
+        except ValueError:
+            ok = False
+        if not ok:
+            parser.error(f"--fixed: {text!r} is not four comma-separated numbers")
     if args.episodes < 2:
         parser.error("--episodes must be >= 2")
     if any(s <= 0 for s in args.scales):
         parser.error("--scales must be > 0")
     c0 = time.process_time()
     jobs = [("zero", 0.0)] + [(k, s) for s in args.scales for k in KINDS]
+    jobs += [(f"fixed {text}", 0.0) for text in args.fixed]
     results: dict[tuple[str, float], tuple[Any, Any]] = {}
     for kind, scale in tqdm(jobs, desc="residuals", file=sys.stderr):
-        results[kind, scale] = first_episodes(args.level, args.episodes, kind, scale)
+        results[kind, scale] = first_episodes(args.level, args.episodes, kind, scale, args.split)
     base = results["zero", 0.0][0]
     rows: list[list[Any]] = []
     out: dict[str, Any] = {
         "machine": machine(),
         "level": args.level,
         "episodes": args.episodes,
+        "split": args.split,
         "data": SIMULATED_LABEL,
         "rows": [],
     }
@@ -123,7 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         )
     out["cpu_seconds"] = round(time.process_time() - c0, 1)
     print_machine(out["machine"])
-    print(f"Cascade-v0 {args.level}, {args.episodes} validation seeds ({SIMULATED_LABEL})")
+    seeds = "validation" if args.split == "val" else "training"
+    print(f"Cascade-v0 {args.level}, {args.episodes} {seeds} seeds ({SIMULATED_LABEL})")
     header = ["residual", "std (action)", "std (mm)", "catches", "drops/catch", "vs zero [95 %]"]
     print_table(header, rows)
     print_json(out)

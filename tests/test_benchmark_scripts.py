@@ -31,3 +31,22 @@ def test_script_help(script):
     )
     assert out.returncode == 0, out.stderr
     assert "usage:" in out.stdout
+
+
+def test_residual_sensitivity_fixed_offsets_on_training_seeds():
+    """The one diagnosis cheap enough to run here: a fixed offset is played on the seeds
+    asked for, and a malformed offset is a one-line usage error."""
+    import json
+
+    script = str(BENCHMARKS / "cascade_residual_sensitivity.py")
+    argv = [sys.executable, script, "--episodes", "2", "--scales", "0.05", "--split", "train"]
+    out = subprocess.run(
+        [*argv, "--fixed=-0.05,0,0.05,0"], capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    doc = json.loads(out.stdout.strip().splitlines()[-1])
+    assert doc["split"] == "train"
+    assert [r["residual"] for r in doc["rows"]][-1] == "fixed -0.05,0,0.05,0"
+    assert "2 training seeds" in out.stdout
+    bad = subprocess.run([*argv, "--fixed=1,2,x"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "--fixed: '1,2,x' is not four" in bad.stderr
