@@ -717,7 +717,6 @@ def _nearest(tree: Any, q: Any, stack: Any) -> float:
     if not math.isfinite(q3):
         return math.inf
     best = math.inf
-    top = 0
     stack[0] = 0
     top = 1
     while top > 0:
