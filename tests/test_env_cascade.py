@@ -454,3 +454,59 @@ def test_cascade_paired_plays_no_test_seeds_and_pairs_by_seed():
     assert row["after"]["at_cap"] == 1 and row["before"]["median"] == 4
     with pytest.raises(ValueError, match="seeds"):
         mod.compare(a, {**b, "split": "val"})
+
+
+def _phase_gated_episode(phases, gate, seed=3):
+    """Catches, end and true hand positions of a medium episode whose action is 0.8 in
+    every entry while ``gate(obs)`` holds (else 0), ``residual_phases=phases``."""
+    env = gym.make(
+        "MotionEnvs/Cascade-v0",
+        level="medium",
+        residual_phases=phases,
+        residual_scale=0.3,
+        max_catches=6,
+    )
+    obs, _ = env.reset(seed=seed)
+    hands, done = [], False
+    while not done:
+        a = np.full(4, 0.8 if gate(obs) else 0.0, np.float32)
+        obs, _, term, trunc, info = env.step(a)
+        hands.append(info["hands"])
+        done = term or trunc
+    return info["catches"], term, np.array(hands)
+
+
+def _in(phase):
+    """Whether the observation shows the phase for BOTH hands' one-hots
+    (``5..8``, ``20..23``; phases in order toss, go_down, catch, return)."""
+    j = ("toss", "go_down", "catch", "return").index(phase)
+    return lambda obs: obs[5 + j] == 1.0 or obs[20 + j] == 1.0
+
+
+def test_residual_phases_mask_the_residual_outside_them():
+    """With ``residual_phases=["catch"]`` an action given only while both hands show toss
+    or return (neither can start its catch at the next period) does nothing: the episode
+    is the zero action's; the same action with all phases changes the episode."""
+    zero = _phase_gated_episode(None, lambda obs: False)
+    going = (_in("go_down"), _in("catch"))
+
+    def toss_only(obs):
+        return not (going[0](obs) or going[1](obs))
+
+    masked = _phase_gated_episode(["catch"], toss_only)
+    assert masked[:2] == zero[:2]
+    assert np.array_equal(masked[2], zero[2])
+    free = _phase_gated_episode(None, toss_only)
+    assert not np.array_equal(free[2][: len(zero[2])], zero[2][: len(free[2])])
+    caught = _phase_gated_episode(["catch"], _in("catch"))
+    assert not np.array_equal(caught[2][: len(zero[2])], zero[2][: len(caught[2])])
+
+
+def test_residual_phases_arguments():
+    env = gym.make("MotionEnvs/Cascade-v0", residual_phases=("catch", "go_down")).unwrapped
+    assert env.residual_phases == ("catch", "go_down")
+    assert env.residual_acts.tolist() == [False, True, True, False]
+    assert gym.make("MotionEnvs/Cascade-v0").unwrapped.residual_phases is None
+    for bad in ("catch", ["catch", "catch"], [], ["throw"], [1]):
+        with pytest.raises(ValueError, match="residual_phases"):
+            gym.make("MotionEnvs/Cascade-v0", residual_phases=bad)

@@ -218,6 +218,16 @@ def test_cascade_frame_skip_zero_action_and_python_backend_equal_sync() -> None:
         CascadeVectorEnv(2, frame_skip=0)
 
 
+@pytest.mark.parametrize("backend", ["auto", "python"])
+def test_cascade_residual_phases_equal_sync(backend: str) -> None:
+    """``residual_phases``: the residual acts in the named phases only, on both backends
+    (random actions with ``frame_skip=2``: phases change within a step)."""
+    kw = {"level": "medium", "residual_phases": ["catch"], "residual_scale": 0.4, "frame_skip": 2}
+    mode = AutoresetMode.NEXT_STEP
+    vec = CascadeVectorEnv(3, autoreset_mode=mode, backend=backend, **kw)
+    assert run_both(CASCADE, vec, 3, mode, 300, "random", **kw) >= 3
+
+
 def test_cascade_contact_sensors_are_the_contact_list() -> None:
     """The batched world reads ``cascade.xml``'s contact sensors (per ball: floor, right
     palm, left palm) where ``CascadeWorld`` reads the contact list: after every physics

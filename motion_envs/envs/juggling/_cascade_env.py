@@ -6,7 +6,7 @@ balls late."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -14,7 +14,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
-from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, check_number
+from motion_envs.envs._common import (
+    SideCameraMixin,
+    as_action,
+    check_choice,
+    check_integer,
+    check_number,
+)
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT
@@ -60,6 +66,21 @@ _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
 
 
+def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:
+    """``residual_phases`` as a tuple of distinct phase names (None stays None); else
+    ``ValueError`` naming the argument."""
+    if phases is None:
+        return None
+    if isinstance(phases, str) or not all(isinstance(p, str) for p in phases):
+        raise ValueError(f"residual_phases must be a list of phase names; got {phases!r}")
+    names = tuple(phases)
+    for p in names:
+        check_choice(p, "residual_phases entry", PHASES)
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"residual_phases must name distinct phases; got {list(names)}")
+    return names
+
+
 class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     r"""Juggle three balls in a cascade with two actuated hands that see the balls late.
 
@@ -101,7 +122,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ## Action Space
     `Box(-1, 1, (4,), float32)`: the residuals added to the controller's hand targets, in
     units of `residual_scale` metres, held over the step's `frame_skip` control periods
-    (5 ms each; one by default).
+    (5 ms each; one by default). With `residual_phases`, a hand's residual acts only while
+    that hand is in one of those phases (the phase whose plan gave the period's target);
+    in the others the hand follows the controller alone.
     Entries outside ``[-1, 1]`` are clipped; NaN counts as 0 (``info["action_invalid"]``).
     A wrong shape raises `ValueError`.
 
@@ -185,6 +208,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `controller`        | **str**   | `"juggler"` | `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
     | `max_catches`       | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
+    | `residual_phases`   | **tuple** | `None`      | phases (`toss`, `go_down`, `catch`, `return`) in which a hand's residual acts; None: all |
     | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
     | `frame_skip`        | **int**   | `1`         | control periods (5 ms, one MuJoCo step each) per environment step; the action is held over them (at most 10,000) |
     | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
@@ -193,7 +217,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     ## Version History
     * v0: the three-ball cascade on Juggling-v1's physics, sensor and levels
-      (``frame_skip`` added later; the default, 1, leaves every rollout unchanged).
+      (``frame_skip`` and ``residual_phases`` added later; their defaults, 1 and None,
+      leave every rollout unchanged).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
@@ -215,6 +240,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         residual_scale: float = 0.05,
         reward_weights: Mapping[str, float] | None = None,
         frame_skip: int = 1,
+        residual_phases: Sequence[str] | None = None,
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
@@ -226,6 +252,12 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         #: Control periods (5 ms each) per step; the action is held over them.
         self.frame_skip = check_integer(frame_skip, "frame_skip", 1, MAX_FRAME_SKIP)
+        #: Phases in which a hand's residual acts (None: all).
+        self.residual_phases = check_phases(residual_phases)
+        #: ``(len(PHASES),)`` bool: whether a hand's residual acts in each phase.
+        self.residual_acts = np.array(
+            [self.residual_phases is None or p in self.residual_phases for p in PHASES]
+        )
         self.dwell_ratio = (
             None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )
@@ -356,6 +388,10 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         (2, 2)`` (m): the measured and the true state after it, its reward, its reward
         terms with ``likeness`` and ``caught``, and ``(terminated, truncated)``."""
         targets, armed = self.controller.command(measured)
+        if self.residual_phases is not None:
+            c = self.controller
+            acts = self.residual_acts[[PHASES.index(c.phase(h)) for h in range(CASCADE_HANDS)]]
+            residual = np.where(acts[:, None], residual, 0.0)
         true = self.world.step(targets + residual, armed)
         state = self.sensor.measure(true)
         self._state = state

@@ -288,6 +288,10 @@ class CascadeVectorEnv(JugglingVectorEnv):
         their time, terminations and truncations, and the period's reward (``"reward"``),
         reward terms, likeness and catches (``"caught"``)."""
         targets, armed = self._commands(envs)
+        first = self.envs[0]
+        if first.residual_phases is not None:  # as CascadeEnv._period: a selection
+            acts = first.residual_acts[self._phase[envs]]
+            residual = np.where(acts[:, :, None], residual, 0.0)
         self._full_target[envs] = targets + residual
         self._full_armed[envs] = armed
         self._in_threads(
