@@ -3,6 +3,7 @@ timing belongs in benchmarks/, not in the test suite)."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -50,3 +51,40 @@ def test_residual_sensitivity_fixed_offsets_on_training_seeds():
     assert "2 training seeds" in out.stdout
     bad = subprocess.run([*argv, "--fixed=1,2,x"], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "--fixed: '1,2,x' is not four" in bad.stderr
+
+
+def test_cascade_oracle_residual_is_the_latency_aware_juggler():
+    """The oracle residual, unclipped, plays the latency-aware juggler's episodes (its
+    targets are the juggler's plus their difference); clipped to almost nothing it plays
+    the juggler's; outside its phases it does nothing. Training seeds only."""
+    import importlib.util
+
+    import gymnasium as gym
+    import numpy as np
+
+    path = BENCHMARKS / "cascade_oracle_residual.py"
+    spec = importlib.util.spec_from_file_location("cascade_oracle_residual", path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        spec.loader.exec_module(mod)
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+    phases = mod.PHASES
+
+    def aware(i: int) -> int:
+        env = gym.make("MotionEnvs/Cascade-v0", controller="juggler_latency_aware", max_catches=6)
+        env.reset(seed=i)
+        while True:
+            _, _, term, trunc, info = env.step(np.zeros(4, np.float32))
+            if term or trunc:
+                return int(info["catches"])
+
+    alone, _, _ = mod.episodes("medium", 3, 6, "train", None, phases)
+    tiny, _, _ = mod.episodes("medium", 3, 6, "train", 1e-12, phases)
+    none, _, _ = mod.episodes("medium", 3, 6, "train", math.inf, ("nothing",))
+    full, _, records = mod.episodes("medium", 3, 6, "train", math.inf, phases)
+    assert tiny.tolist() == alone.tolist() == none.tolist()
+    assert full.tolist() == [aware(i) for i in range(3)]
+    assert full.sum() > alone.sum()
+    assert {p for p, _ in records} == set(phases)
