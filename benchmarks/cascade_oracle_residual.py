@@ -19,7 +19,10 @@ leaves room for:
 
 For each ``residual_scale`` and phase set: mean and median catches before the first drop
 (at most ``--max-catches``), drops, and the paired difference from the juggler alone
-(same seeds) with a 95 % normal interval over episodes. The demonstrations the juggler is
+(same seeds) with a 95 % normal interval over episodes. Then trivial policies in the
+shipped agents' action space (``residual_scale`` 0.4, the catch phase alone): uniform
+random actions and constant vertical actions of 0.4 and 1 up and down: what an agent
+must beat besides the juggler. The demonstrations the juggler is
 fitted on are SIMULATED.
 
     python benchmarks/cascade_oracle_residual.py [--level medium] [--episodes 40]
@@ -47,6 +50,16 @@ from motion_envs.models.juggling import CascadeController, cascade_fit, make_cas
 
 #: The phase sets tried: every phase (the env's default) and the catch alone.
 PHASE_SETS: tuple[tuple[str, ...], ...] = (PHASES, ("catch",))
+#: The shipped agents' action space (``configs/agents/ppo.yaml``).
+SHIPPED = {"residual_scale": 0.4, "residual_phases": ["catch"]}
+#: Trivial policies: a name and the action of a period given a generator.
+TRIVIAL: dict[str, Any] = {
+    "uniform random": lambda rng: rng.uniform(-1.0, 1.0, 4),
+    "constant up 1": lambda rng: np.array([0.0, 1.0, 0.0, 1.0]),
+    "constant up 0.4": lambda rng: np.array([0.0, 0.4, 0.0, 0.4]),
+    "constant down 0.4": lambda rng: np.array([0.0, -0.4, 0.0, -0.4]),
+    "constant down 1": lambda rng: np.array([0.0, -1.0, 0.0, -1.0]),
+}
 
 
 class OracleResidual:
@@ -84,15 +97,26 @@ class OracleResidual:
 
 
 def episodes(
-    level: str, n: int, max_catches: int, split: str, clip: float | None, phases: Any
+    level: str,
+    n: int,
+    max_catches: int,
+    split: str,
+    clip: float | None,
+    phases: Any,
+    trivial: str | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_], list[tuple[str, NDArray[np.float64]]]]:
-    """Catches and drop flags of ``n`` episodes (``clip`` None: the juggler alone), and
-    the oracle's per-period records."""
+    """Catches and drop flags of ``n`` episodes (``clip`` None: the juggler alone, or
+    the ``trivial`` policy in the shipped action space), and the oracle's per-period
+    records."""
     catches = np.zeros(n)
     dropped = np.zeros(n, dtype=bool)
     records: list[tuple[str, NDArray[np.float64]]] = []
+    rng = np.random.default_rng(0)
+    shipped = SHIPPED if trivial is not None else {}
     for i in range(n):
-        env: Any = gym.make("MotionEnvs/Cascade-v0", level=level, max_catches=max_catches)
+        env: Any = gym.make(
+            "MotionEnvs/Cascade-v0", level=level, max_catches=max_catches, **shipped
+        )
         base = env.unwrapped
         if clip is not None:
             aware = make_cascade_controller(
@@ -106,7 +130,8 @@ def episodes(
         done = False
         info: dict[str, Any] = {}
         while not done:
-            _, _, term, trunc, info = env.step(np.zeros(4, np.float32))
+            a = np.zeros(4) if trivial is None else TRIVIAL[trivial](rng)
+            _, _, term, trunc, info = env.step(a.astype(np.float32))
             done = term or trunc
             dropped[i] |= term
         catches[i] = info["catches"]
@@ -114,6 +139,13 @@ def episodes(
             records += base.controller.records
         env.close()
     return catches, dropped, records
+
+
+def _scale(clip: Any) -> float | None:
+    """The row's ``residual_scale`` (None: the juggler alone or the unclipped oracle)."""
+    if isinstance(clip, str):
+        return float(SHIPPED["residual_scale"])
+    return None if clip is None or math.isinf(clip) else float(clip)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -131,10 +163,14 @@ def main(argv: list[str] | None = None) -> int:
     c0 = time.process_time()
     jobs: list[tuple[float | None, tuple[str, ...]]] = [(None, PHASES)]
     jobs += [(s, p) for p in PHASE_SETS for s in args.scales] + [(math.inf, PHASES)]
-    results = {}
+    results: dict[tuple[Any, tuple[str, ...]], Any] = {}
     for clip, phases in tqdm(jobs, desc="oracle", file=sys.stderr):
         results[clip, phases] = episodes(
             args.level, args.episodes, args.max_catches, args.split, clip, phases
+        )
+    for name in tqdm(TRIVIAL, desc="trivial", file=sys.stderr):
+        results[name, ("catch",)] = episodes(
+            args.level, args.episodes, args.max_catches, args.split, None, ("catch",), name
         )
     base = results[None, PHASES][0]
     out: dict[str, Any] = {
@@ -151,12 +187,15 @@ def main(argv: list[str] | None = None) -> int:
         diff = catches - base
         half = 1.96 * float(diff.std(ddof=1)) / math.sqrt(diff.size)
         lo, hi = float(diff.mean()) - half, float(diff.mean()) + half
-        name = "juggler alone" if clip is None else f"oracle, s = {clip:g}"
+        if isinstance(clip, str):
+            name = f"{clip}, s = {SHIPPED['residual_scale']:g}"
+        else:
+            name = "juggler alone" if clip is None else f"oracle, s = {clip:g}"
         where = "all" if phases == PHASES else ",".join(phases)
         out["rows"].append(
             {
                 "residual": name,
-                "residual_scale": None if clip is None or math.isinf(clip) else clip,
+                "residual_scale": _scale(clip),
                 "phases": list(phases),
                 "mean_catches": round(float(catches.mean()), 3),
                 "median_catches": float(np.median(catches)),

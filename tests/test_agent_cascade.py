@@ -23,7 +23,12 @@ from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.juggling_bench.cascade import CascadeConfig, cascade_episodes, run_cascade
 
 ENV_ID = "MotionEnvs/Cascade-v0"
-KWARGS = {"level": "medium", "max_catches": 10, "residual_scale": 0.15}
+KWARGS = {
+    "level": "medium",
+    "max_catches": 10,
+    "residual_scale": 0.4,
+    "residual_phases": ["catch"],
+}
 N = 6
 
 
@@ -33,10 +38,11 @@ def zero_policy(obs):
 
 def lifting_policy(obs):
     """Both hands 0.15 m higher while they hold no ball, 0.15 m lower while they do (an
-    arbitrary deterministic policy that changes the episodes)."""
+    arbitrary deterministic policy that changes the episodes; it acts in the catch phase
+    only)."""
     held = obs[:, [4, 19]]  # the hands' "holds a ball" entries
     out = np.zeros((obs.shape[0], 4), dtype=np.float32)
-    out[:, [1, 3]] = np.where(held > 0.5, -1.0, 1.0)
+    out[:, [1, 3]] = np.where(held > 0.5, -0.375, 0.375)  # of residual_scale 0.4 m
     return out
 
 
@@ -142,10 +148,12 @@ def test_median_difference_interval_is_paired():
 
 def test_shipped_config_block():
     """The shipped PPO block: the medium level, seed-range validation (no val_fraction),
-    state-dependent exploration as Juggling-v1's, the policy starting at the juggler."""
+    the residual in the catch phase only, state-dependent exploration as Juggling-v1's,
+    the policy starting at the juggler."""
     hp = resolve_hyperparams("ppo", ENV_ID)
     assert hp["env_kwargs"] == KWARGS
     assert hp["use_sde"] is True and hp["sde_sample_freq"] == 16
+    assert hp["policy_kwargs"]["log_std_init"] == -3.5
     assert hp["action_head_scale"] == 0.0
 
 
