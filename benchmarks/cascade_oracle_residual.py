@@ -32,6 +32,7 @@ fitted on are SIMULATED.
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import sys
 import time
@@ -78,8 +79,7 @@ class OracleResidual:
 
     def reset(self, state: Any, rng: np.random.Generator | None = None) -> None:
         rng = rng if rng is not None else np.random.default_rng(0)
-        twin = np.random.default_rng()
-        twin.bit_generator.state = rng.bit_generator.state
+        twin = copy.deepcopy(rng)  # its seed sequence too: the hands spawn from it
         self.juggler.reset(state, rng)
         self.aware.reset(state, twin)
 

@@ -12,6 +12,8 @@ information:
 * ``white x`` / ``white z``: the same on the hands' horizontal / vertical entries only;
 * ``held 16``: a draw held for 16 steps (80 ms; gSDE's ``sde_sample_freq`` 16);
 * ``constant``: one draw per episode (a fixed offset of the hands' targets);
+* with ``--residual-phases``, each hand's residual acts in those phases only (the env's
+  ``residual_phases``): which phases the jitter harms;
 * ``fixed A``: with ``--fixed``, the same offset ``A`` (four action entries: right
   ``x, z``, left ``x, z``) in every episode: can a steady offset of the catch, what a
   Juggling-v1 agent learned, help the cascade juggler?
@@ -23,6 +25,7 @@ demonstrations the juggler is fitted on are SIMULATED.
 
     python benchmarks/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
         [--scales 0.02 0.05 0.1] [--split val] [--fixed=DX,DZ,DX,DZ ...]
+        [--residual-phases toss return]
 """
 
 from __future__ import annotations
@@ -46,11 +49,23 @@ _COLUMNS = {"white x": [0, 2], "white z": [1, 3]}
 
 
 def first_episodes(
-    level: str, episodes: int, kind: str, scale: float, split: str = "val"
+    level: str,
+    episodes: int,
+    kind: str,
+    scale: float,
+    split: str = "val",
+    phases: list[str] | None = None,
 ) -> tuple[Any, Any]:
     """Catches and drop flags of each sub-environment's first episode under ``kind``
     (``"fixed A"``: the offset ``A``, comma-separated action entries, in every step)."""
-    env = CascadeVectorEnv(episodes, level=level, max_catches=10, residual_scale=0.15, threads=1)
+    env = CascadeVectorEnv(
+        episodes,
+        level=level,
+        max_catches=10,
+        residual_scale=0.15,
+        residual_phases=phases,
+        threads=1,
+    )
     env.reset(seed=SPLIT_SEEDS[split])
     rng = np.random.default_rng(0)
     catches = np.zeros(episodes)
@@ -91,6 +106,10 @@ def main(argv: list[str] | None = None) -> int:
         "--fixed", action="append", default=[], metavar="DX,DZ,DX,DZ",
         help="a fixed offset (repeat for more; --fixed=-0.05,0,0,0 for a leading minus)",
     )  # fmt: skip
+    parser.add_argument(
+        "--residual-phases", nargs="+", default=None, metavar="PHASE",
+        help="the hand phases in which the residual acts (the env's residual_phases)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     for text in args.fixed:
         try:
@@ -108,7 +127,9 @@ def main(argv: list[str] | None = None) -> int:
     jobs += [(f"fixed {text}", 0.0) for text in args.fixed]
     results: dict[tuple[str, float], tuple[Any, Any]] = {}
     for kind, scale in tqdm(jobs, desc="residuals", file=sys.stderr):
-        results[kind, scale] = first_episodes(args.level, args.episodes, kind, scale, args.split)
+        results[kind, scale] = first_episodes(
+            args.level, args.episodes, kind, scale, args.split, args.residual_phases
+        )
     base = results["zero", 0.0][0]
     rows: list[list[Any]] = []
     out: dict[str, Any] = {
@@ -116,6 +137,7 @@ def main(argv: list[str] | None = None) -> int:
         "level": args.level,
         "episodes": args.episodes,
         "split": args.split,
+        "residual_phases": args.residual_phases,
         "data": SIMULATED_LABEL,
         "rows": [],
     }
@@ -147,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
     out["cpu_seconds"] = round(time.process_time() - c0, 1)
     print_machine(out["machine"])
     seeds = "validation" if args.split == "val" else "training"
-    print(f"Cascade-v0 {args.level}, {args.episodes} {seeds} seeds ({SIMULATED_LABEL})")
+    where = ", residual in " + " + ".join(args.residual_phases) if args.residual_phases else ""
+    print(f"Cascade-v0 {args.level}, {args.episodes} {seeds} seeds{where} ({SIMULATED_LABEL})")
     header = ["residual", "std (action)", "std (mm)", "catches", "drops/catch", "vs zero [95 %]"]
     print_table(header, rows)
     print_json(out)

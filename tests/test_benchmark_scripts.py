@@ -55,8 +55,10 @@ def test_residual_sensitivity_fixed_offsets_on_training_seeds():
 
 def test_cascade_oracle_residual_is_the_latency_aware_juggler():
     """The oracle residual, unclipped, plays the latency-aware juggler's episodes (its
-    targets are the juggler's plus their difference); clipped to almost nothing it plays
-    the juggler's; outside its phases it does nothing. Training seeds only."""
+    targets are the juggler's plus their difference, the same random plan ends): the
+    hands move as the latency-aware juggler's, period by period; clipped to almost nothing
+    it plays the juggler's; outside its phases it does nothing; episodes repeat exactly.
+    Training seeds only."""
     import importlib.util
 
     import gymnasium as gym
@@ -72,19 +74,32 @@ def test_cascade_oracle_residual_is_the_latency_aware_juggler():
         sys.path.remove(str(BENCHMARKS))
     phases = mod.PHASES
 
-    def aware(i: int) -> int:
-        env = gym.make("MotionEnvs/Cascade-v0", controller="juggler_latency_aware", max_catches=6)
-        env.reset(seed=i)
+    def hands(controller: str, oracle: bool, seed: int) -> list:
+        env = gym.make("MotionEnvs/Cascade-v0", controller=controller, max_catches=6)
+        base = env.unwrapped
+        if oracle:
+            aware = mod.make_cascade_controller(
+                "juggler_latency_aware", mod.cascade_fit(9.81), base.latency, None
+            )
+            base.controller = mod.OracleResidual(base.controller, aware, math.inf, phases)
+        env.reset(seed=seed)
+        out = []
         while True:
             _, _, term, trunc, info = env.step(np.zeros(4, np.float32))
+            out.append(info["hands"])
             if term or trunc:
-                return int(info["catches"])
+                return out
 
+    for seed in range(2):
+        got, want = hands("juggler", True, seed), hands("juggler_latency_aware", False, seed)
+        assert len(got) == len(want)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-9)
     alone, _, _ = mod.episodes("medium", 3, 6, "train", None, phases)
     tiny, _, _ = mod.episodes("medium", 3, 6, "train", 1e-12, phases)
     none, _, _ = mod.episodes("medium", 3, 6, "train", math.inf, ("nothing",))
     full, _, records = mod.episodes("medium", 3, 6, "train", math.inf, phases)
+    again, _, _ = mod.episodes("medium", 3, 6, "train", 0.15, phases)
+    assert again.tolist() == mod.episodes("medium", 3, 6, "train", 0.15, phases)[0].tolist()
     assert tiny.tolist() == alone.tolist() == none.tolist()
-    assert full.tolist() == [aware(i) for i in range(3)]
     assert full.sum() > alone.sum()
     assert {p for p, _ in records} == set(phases)
