@@ -53,6 +53,9 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
     if proc.poll() is not None:
         assert proc.returncode == 0, "".join(lines)[-2000:]
         pytest.skip(f"the job finished before {delay} s on this machine")
+    # the results are written last: if they are there, the job is past its work (shutting
+    # down), where no handler can print the message
+    finished = (tmp_path / "out" / "results.json").exists()
     t0 = time.perf_counter()
     proc.send_signal(signal.SIGINT)
     try:
@@ -63,6 +66,8 @@ def test_sigint_exits_130_within_seconds(tmp_path, delay):
         pytest.fail(f"SIGINT at {delay} s not honoured within 30 s")
     exited = time.perf_counter() - t0
     reader.join(5)
+    if finished and "message" not in seen and proc.returncode in (0, -signal.SIGINT):
+        pytest.skip(f"the job had written its results before {delay} s on this machine")
     # 130, or ended by SIGINT's default action during start-up (-2; a shell reports 130)
     assert proc.returncode in (130, -signal.SIGINT), "".join(lines)[-2000:]
     if delay > 5:  # past the imports: the handler in baselines.cli prints one line
