@@ -45,14 +45,18 @@ from numpy.typing import NDArray
 from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the ids)
+from baselines.agents.config import resolve_hyperparams
 from baselines.agents.juggling_score import SPLIT_SEEDS
 from motion_envs.datasets.juggling import PHASES, SIMULATED_LABEL
 from motion_envs.models.juggling import CascadeController, cascade_fit, make_cascade_controller
 
 #: The phase sets tried: every phase (the env's default) and the catch alone.
 PHASE_SETS: tuple[tuple[str, ...], ...] = (PHASES, ("catch",))
-#: The shipped agents' action space (``configs/agents/ppo.yaml``).
-SHIPPED = {"residual_scale": 0.4, "residual_phases": ["catch"]}
+#: The shipped agents' action space (read from ``configs/agents/ppo.yaml``).
+SHIPPED = {
+    key: resolve_hyperparams("ppo", "MotionEnvs/Cascade-v0")["env_kwargs"][key]
+    for key in ("residual_scale", "residual_phases")
+}
 #: Trivial policies: a name and the action of a period given a generator.
 TRIVIAL: dict[str, Any] = {
     "uniform random": lambda rng: rng.uniform(-1.0, 1.0, 4),
