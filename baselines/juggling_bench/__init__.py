@@ -26,7 +26,8 @@ Reported:
 With ``--levels``: Juggling-v1's levels and reference controllers (and a trained agent
 with ``--agent DIR``), :mod:`~baselines.juggling_bench.levels`. With ``--pattern 3``: the
 three-ball cascade (``MotionEnvs/Cascade-v0``) at the same levels,
-:mod:`~baselines.juggling_bench.cascade`.
+:mod:`~baselines.juggling_bench.cascade` (another siteswap is refused with the reasons it
+does not fit the cascade juggler, :func:`pattern_check`).
 
 With ``--analyse FILE``: the ball flights and pattern timing of a recording,
 :mod:`~baselines.juggling_bench.analyse`.
@@ -52,6 +53,7 @@ from baselines.juggling_bench.cascade import (
     cascade_episode,
     cascade_episodes,
     check_cascade_config,
+    pattern_check,
     report_cascade,
     run_cascade,
     write_cascade,
@@ -115,6 +117,7 @@ __all__ = [
     "load_demos",
     "main",
     "noise_levels",
+    "pattern_check",
     "phase_errors",
     "plot_figure6",
     "register",

@@ -40,22 +40,25 @@ from numpy.typing import NDArray
 from baselines import options
 from baselines.agents.juggling_score import SPLIT_SEEDS
 from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
+from motion_envs.envs.juggling import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
     LEVELS,
     CascadeSensor,
+    PatternCheck,
     cascade_fit,
+    check_pattern,
     make_cascade_controller,
 )
 
 __all__ = [
     "CASCADE_ENV_ID",
-    "PATTERNS",
     "CascadeConfig",
     "CascadeEpisodes",
     "cascade_episode",
     "cascade_episodes",
     "check_cascade_config",
+    "pattern_check",
     "report_cascade",
     "run_cascade",
     "write_cascade",
@@ -63,8 +66,6 @@ __all__ = [
 
 #: The environment the pattern is played in.
 CASCADE_ENV_ID = "MotionEnvs/Cascade-v0"
-#: The siteswap patterns offered (``3``: the three-ball cascade).
-PATTERNS: tuple[str, ...] = ("3",)
 #: Catches before the first drop the analytic juggler should sustain on ``easy``.
 TARGET_EASY_CATCHES = 100
 
@@ -82,10 +83,28 @@ class CascadeConfig:
     split: str = "test"
 
 
+def pattern_check(siteswap: str, gravity: float) -> PatternCheck:
+    """``siteswap`` checked at the cascade juggler's tempo (its fit at ``gravity``)
+    against the hand's speed limit (:func:`motion_envs.models.juggling.check_pattern`).
+    Raises ``ValueError`` if ``siteswap`` is not a valid siteswap."""
+    return check_pattern(siteswap, cascade_fit(gravity).pattern, gravity, HAND_SPEED_LIMIT)
+
+
 def check_cascade_config(config: CascadeConfig) -> None:
-    """Raise :class:`baselines.options.ConfigError` naming the first bad field."""
-    if config.pattern not in PATTERNS:
-        raise options.ConfigError("pattern", f"must be one of {list(PATTERNS)}")
+    """Raise :class:`baselines.options.ConfigError` naming the first bad field (a
+    ``pattern`` the cascade juggler cannot play gets its reasons)."""
+    if not (math.isfinite(config.gravity) and config.gravity > 0):
+        raise options.ConfigError("gravity", f"must be > 0; got {config.gravity}")
+    try:
+        check = pattern_check(config.pattern, config.gravity)
+    except ValueError as exc:
+        raise options.ConfigError("pattern", str(exc)) from None
+    if not check.fits:
+        raise options.ConfigError(
+            "pattern",
+            f"{check.siteswap!r} does not fit the cascade juggler at its tempo (beat "
+            f"{check.beat:.3f} s, dwell {check.dwell:.3f} s): " + "; ".join(check.reasons),
+        )
     if not config.levels or any(lv not in LEVELS for lv in config.levels):
         raise options.ConfigError("levels", f"must be among {list(LEVELS)}")
     for m in config.methods:
@@ -95,8 +114,6 @@ def check_cascade_config(config: CascadeConfig) -> None:
         raise options.ConfigError("episodes", f"must be >= 2; got {config.episodes}")
     if config.max_catches < 1:
         raise options.ConfigError("max_catches", f"must be >= 1; got {config.max_catches}")
-    if not (math.isfinite(config.gravity) and config.gravity > 0):
-        raise options.ConfigError("gravity", f"must be > 0; got {config.gravity}")
     if config.split not in SPLIT_SEEDS:
         raise options.ConfigError("split", f"must be one of {sorted(SPLIT_SEEDS)}")
 
@@ -223,6 +240,7 @@ def run_cascade(config: CascadeConfig) -> dict[str, Any]:
             "period_s": p.timing()[0],
             "beat_s": p.timing()[1],
             "demonstrations_period_s": p.demo_period,
+            "throws": [asdict(n) for n in pattern_check(config.pattern, config.gravity).throws],
         },
         "seeds": {
             "split": config.split,

@@ -17,7 +17,6 @@ from baselines.juggling_bench.analyse import (
     write_analysis,
 )
 from baselines.juggling_bench.cascade import (
-    PATTERNS,
     CascadeConfig,
     report_cascade,
     run_cascade,
@@ -28,7 +27,7 @@ from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_lev
 from baselines.juggling_bench.media import write
 from baselines.juggling_bench.runner import run
 from baselines.juggling_bench.text import report
-from motion_envs.datasets.juggling import JugglingTask
+from motion_envs.datasets.juggling import JugglingTask, parse_siteswap, siteswap_balls
 from motion_envs.models.juggling import LEVELS
 
 
@@ -132,11 +131,13 @@ def level_names(text: str) -> tuple[str, ...]:
 
 
 def siteswap_pattern(text: str) -> str:
-    """``--pattern``: one of the offered siteswaps (:data:`.cascade.PATTERNS`)."""
-    value = text.strip()
-    if value not in PATTERNS:
-        raise argparse.ArgumentTypeError(f"expected one of {list(PATTERNS)}; got {text!r}")
-    return value
+    """``--pattern``: a valid vanilla siteswap (lower case; whether the cascade juggler
+    can play it is :func:`.cascade.check_cascade_config`'s)."""
+    try:
+        siteswap_balls(parse_siteswap(text))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text.strip().lower()
 
 
 def gravity_task(text: str) -> JugglingTask:
@@ -240,7 +241,9 @@ Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theor
 level, --episodes (50) test-seed episodes of the analytic cascade juggler, its
 latency-aware variant and the two trivial catches, each ending at the first drop or after
 --max-catches (10) catches. Reported with 95 % bootstrap intervals: catches before the
-first drop (median), catch rate, time to the first drop (SIMULATED demonstrations)."""
+first drop (median), catch rate, time to the first drop (SIMULATED demonstrations).
+Another siteswap (e.g. 5 or 441) is checked at the cascade juggler's tempo and refused
+with the reasons it does not fit (ball count, flight, the hand's speed limit)."""
 
 
 def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
@@ -324,8 +327,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--pattern",
         type=siteswap_pattern,
         default=None,
-        help="a juggling pattern (siteswap; offered: 3, the three-ball cascade on "
-        "MotionEnvs/Cascade-v0): run its levels benchmark (every level unless --levels)",
+        help="a juggling pattern (siteswap): run its levels benchmark on MotionEnvs/Cascade-v0 "
+        "(every level unless --levels); the cascade juggler plays 3, the three-ball "
+        "cascade, and says why another pattern does not fit",
     )
     p.add_argument(
         "--episodes",

@@ -14,6 +14,8 @@ The public names of small private modules, one concern each:
 * ``_person``: the SIMULATED demonstrations (a seeded model of a person);
 * ``_cascade_demos``: SIMULATED three-ball cascade demonstrations (two hands, each in its
   own frame) and the pattern's timing from Shannon's juggling theorem;
+* ``_siteswap``: siteswap notation (validity, ball count) and each throw's flight at a
+  tempo;
 * ``_csv``: the users' juggling CSV, read as raw recordings.
 """
 
@@ -51,6 +53,12 @@ from motion_envs.datasets.juggling._records import (
     PhaseSegment,
     split_cycles,
 )
+from motion_envs.datasets.juggling._siteswap import (
+    SITESWAP_DIGITS,
+    parse_siteswap,
+    siteswap_balls,
+    siteswap_flights,
+)
 from motion_envs.datasets.juggling._task import (
     PHASES,
     JugglingNoise,
@@ -68,6 +76,7 @@ __all__ = [
     "MIN_SPLIT_CYCLES",
     "PHASES",
     "SIMULATED_LABEL",
+    "SITESWAP_DIGITS",
     "CascadeStyle",
     "CascadeTiming",
     "JugglingDemos",
@@ -88,9 +97,12 @@ __all__ = [
     "generate_demonstrations",
     "mirror_x",
     "nominal_toss",
+    "parse_siteswap",
     "read_juggling_csv",
     "resample_path",
     "rules",
+    "siteswap_balls",
+    "siteswap_flights",
     "split_cycles",
     "style_timing",
     "write_juggling_csv",

@@ -24,6 +24,8 @@ The public names of small private modules, one concern each:
 * ``_cascade``: the three-ball cascade juggler (two hands of the one-ball juggler
   scheduled by Shannon's theorem, :class:`CascadeController`), its fit
   (:func:`cascade_fit`) and reference controllers (:func:`make_cascade_controller`);
+* ``_patterns``: which siteswaps the cascade juggler can play at its tempo, and why not
+  the others (:func:`check_pattern`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
@@ -91,6 +93,7 @@ from motion_envs.models.juggling._model import (
     phase_conditions,
     plan_catch,
 )
+from motion_envs.models.juggling._patterns import PatternCheck, ThrowNeed, check_pattern
 from motion_envs.models.juggling._run import (
     CycleResult,
     cycle_rng,
@@ -155,10 +158,13 @@ __all__ = [
     "JugglingController",
     "JugglingLevel",
     "JugglingWorld",
+    "PatternCheck",
     "PatternSummary",
     "PhaseFit",
+    "ThrowNeed",
     "cascade_fit",
     "cascade_likeness",
+    "check_pattern",
     "cycle_rng",
     "cycle_rngs",
     "default_fit",

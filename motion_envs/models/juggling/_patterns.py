@@ -1,0 +1,121 @@
+"""Which siteswaps the analytic cascade juggler can play, and why not the others.
+
+:func:`check_pattern` takes a siteswap at the cascade juggler's own tempo (its fitted
+:class:`~motion_envs.models.juggling.CascadePattern`: the beat ``b`` and the dwell ``D``
+of the three-ball cascade, Shannon's theorem) and gives each throw value what it needs
+(:class:`ThrowNeed`):
+
+* its flight ``F_h = h b - D`` (:func:`~motion_envs.datasets.juggling.siteswap_flights`);
+* the vertical release speed that makes the ball fall from the cascade's release height
+  ``z_r`` to its catch height ``z_c`` in ``F_h``: ``z_c = z_r + v F - g F^2 / 2``, so
+  ``v = (z_c - z_r) / F + g F / 2``, with ``z_c - z_r`` read from the pattern (the
+  juggler's nominal toss and flight, which satisfy the same equation);
+* the apex above the release, ``v^2 / (2 g)``.
+
+The pattern fits when every reason in :attr:`PatternCheck.reasons` is absent: the ball
+count is the world's (:data:`~motion_envs.datasets.juggling.CASCADE_BALLS`); every ball
+flies (``F_h > 0``: a hand cannot throw a ball before it has caught it); every release is
+within the hand's speed limit (a ball leaves the palm at the palm's speed); and every
+pattern is a cascade (every throw the same odd value, the ball count: the juggler's hands
+each catch the other hand's ball in turn; self-throws, passes and empty beats are not
+modelled). At the juggler's tempo only ``"3"`` fits: ``"5"`` needs a release above the
+hand's limit and ``"441"``'s throw of 1 a dwell shorter than a beat.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from motion_envs.datasets.juggling import (
+    CASCADE_BALLS,
+    parse_siteswap,
+    siteswap_balls,
+    siteswap_flights,
+)
+from motion_envs.models.juggling._cascade import CascadePattern
+
+__all__ = ["PatternCheck", "ThrowNeed", "check_pattern"]
+
+
+@dataclass(frozen=True)
+class ThrowNeed:
+    """What a throw value needs at the cascade's tempo (module docstring); ``crossing``:
+    it lands in the other hand (odd value). For a throw of 0 (an empty beat) every
+    figure is 0."""
+
+    value: int
+    crossing: bool
+    flight: float  # s
+    release_speed: float  # m/s, vertical
+    apex: float  # m above the release
+
+
+@dataclass(frozen=True)
+class PatternCheck:
+    """:func:`check_pattern`'s answer: the siteswap, its balls, the tempo it was checked
+    at (``beat``, ``dwell``, s), each distinct throw value's :class:`ThrowNeed` (in
+    descending order) and the reasons it does not fit (empty: it fits)."""
+
+    siteswap: str
+    balls: int
+    beat: float
+    dwell: float
+    throws: tuple[ThrowNeed, ...]
+    reasons: tuple[str, ...]
+
+    @property
+    def fits(self) -> bool:
+        """Whether the cascade juggler can play the pattern."""
+        return not self.reasons
+
+
+def check_pattern(
+    siteswap: str, pattern: CascadePattern, gravity: float, speed_limit: float
+) -> PatternCheck:
+    """Check ``siteswap`` at the tempo of ``pattern`` (fitted at ``gravity``, m/s^2)
+    against the hand's ``speed_limit`` (m/s); see the module docstring. Raises
+    ``ValueError`` for a siteswap that is not one (:func:`parse_siteswap`,
+    :func:`siteswap_balls`) or a non-positive ``gravity`` or ``speed_limit``."""
+    if not (math.isfinite(gravity) and gravity > 0):
+        raise ValueError(f"gravity must be finite and > 0; got {gravity!r}")
+    if not (math.isfinite(speed_limit) and speed_limit > 0):
+        raise ValueError(f"speed_limit must be finite and > 0; got {speed_limit!r}")
+    throws = parse_siteswap(siteswap)
+    balls = siteswap_balls(throws)
+    period, beat = pattern.timing()
+    dwell = pattern.dwell_ratio * period
+    # the catch height below the release, from the juggler's own toss and flight
+    f0, v0 = pattern.flight, float(pattern.release_velocity[1])
+    drop = v0 * f0 - 0.5 * gravity * f0 * f0  # z_c - z_r
+    values = sorted(set(throws), reverse=True)
+    needs = []
+    for h, f in zip(values, siteswap_flights(values, beat, dwell), strict=True):
+        v = drop / f + 0.5 * gravity * f if f > 0 else 0.0
+        apex = v * v / (2 * gravity) if v > 0 else 0.0
+        needs.append(ThrowNeed(h, h % 2 == 1, f, v, apex))
+    reasons = []
+    if balls != CASCADE_BALLS:
+        reasons.append(f"it has {balls} ball{_s(balls)}, the cascade world {CASCADE_BALLS}")
+    for n in needs:
+        if n.value > 0 and n.flight <= 0:
+            reasons.append(
+                f"a throw of {n.value} would fly {n.flight:.3f} s: the dwell ({dwell:.3f} s) "
+                f"is not shorter than {n.value} beat{_s(n.value)} ({n.value * beat:.3f} s)"
+            )
+        elif n.release_speed > speed_limit:
+            reasons.append(
+                f"a throw of {n.value} needs a {n.release_speed:.2f} m/s release, above the "
+                f"hand's {speed_limit:g} m/s limit"
+            )
+    if balls % 2 == 0 or values != [balls]:
+        reasons.append(
+            "it is not a cascade (every throw the same odd value, each hand catching the "
+            "other hand's ball): self-throws, passes and empty beats are not modelled"
+        )
+    text = siteswap.strip().lower()
+    return PatternCheck(text, balls, beat, dwell, tuple(needs), tuple(reasons))
+
+
+def _s(n: int) -> str:
+    return "" if n == 1 else "s"
