@@ -17,7 +17,6 @@ from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, 
 from motion_envs.envs._common import (
     SideCameraMixin,
     as_action,
-    check_choice,
     check_integer,
     check_number,
 )
@@ -64,21 +63,6 @@ _ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name i
 MAX_FRAME_SKIP = 10_000
 _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
-
-
-def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:
-    """``residual_phases`` as a tuple of distinct phase names (None stays None); else
-    ``ValueError`` naming the argument."""
-    if phases is None:
-        return None
-    if isinstance(phases, str) or not all(isinstance(p, str) for p in phases):
-        raise ValueError(f"residual_phases must be a list of phase names; got {phases!r}")
-    names = tuple(phases)
-    for p in names:
-        check_choice(p, "residual_phases entry", PHASES)
-    if not names or len(set(names)) != len(names):
-        raise ValueError(f"residual_phases must name distinct phases; got {list(names)}")
-    return names
 
 
 class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
@@ -247,17 +231,11 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> None:
         self._init_arguments(
             (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
-            (gravity, controller, max_catches, residual_scale, reward_weights),
+            (gravity, controller, max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
         )
         #: Control periods (5 ms each) per step; the action is held over them.
         self.frame_skip = check_integer(frame_skip, "frame_skip", 1, MAX_FRAME_SKIP)
-        #: Phases in which a hand's residual acts (None: all).
-        self.residual_phases = check_phases(residual_phases)
-        #: ``(len(PHASES),)`` bool: whether a hand's residual acts in each phase.
-        self.residual_acts = np.array(
-            [self.residual_phases is None or p in self.residual_phases for p in PHASES]
-        )
         self.dwell_ratio = (
             None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )

@@ -1,14 +1,18 @@
 """What Juggling-v1's and Cascade-v0's environments share: their arguments (a level and
 the values that override it, the world's gravity, the controller, the episode's length,
-the residual's scale, the reward's weights, the rendering) and a step's bookkeeping (the
-weighted reward terms, termination at a drop, truncation after ``max_catches`` catches or
-the time limit)."""
+the residual's scale and the phases it acts in, the reward's weights, the rendering) and a
+step's bookkeeping (the weighted reward terms, termination at a drop, truncation after
+``max_catches`` catches or the time limit)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES
 from motion_envs.envs._common import (
     check_choice,
     check_integer,
@@ -18,7 +22,22 @@ from motion_envs.envs._common import (
 )
 from motion_envs.models.juggling import LEVELS
 
-__all__ = ["LevelsEnvMixin"]
+__all__ = ["LevelsEnvMixin", "check_phases"]
+
+
+def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:
+    """``residual_phases`` as a tuple of distinct phase names (None stays None); else
+    ``ValueError`` naming the argument."""
+    if phases is None:
+        return None
+    if isinstance(phases, str) or not all(isinstance(p, str) for p in phases):
+        raise ValueError(f"residual_phases must be a list of phase names; got {phases!r}")
+    names = tuple(phases)
+    for p in names:
+        check_choice(p, "residual_phases entry", PHASES)
+    if not names or len(set(names)) != len(names):
+        raise ValueError(f"residual_phases must name distinct phases; got {list(names)}")
+    return names
 
 
 class LevelsEnvMixin:
@@ -41,6 +60,8 @@ class LevelsEnvMixin:
     controller_name: str
     max_catches: int
     residual_scale: float
+    residual_phases: tuple[str, ...] | None
+    residual_acts: NDArray[np.bool_]
     reward_weights: dict[str, float]
     render_mode: str | None
     width: int
@@ -52,13 +73,18 @@ class LevelsEnvMixin:
     def _init_arguments(
         self,
         level: tuple[str, float | None, float | None, float | None, float | None, float | None],
-        world: tuple[float, str, int, float, Mapping[str, float] | None],
+        world: tuple[float, str, int, float, Sequence[str] | None, Mapping[str, float] | None],
         rendering: tuple[str | None, int, int],
     ) -> None:
         """Check and set the arguments: ``level`` is ``(level, latency, position_std,
         velocity_std, release_speed_std, release_angle_std)`` (None: the level's value),
-        ``world`` ``(gravity, controller, max_catches, residual_scale, reward_weights)``,
-        ``rendering`` ``(render_mode, width, height)``."""
+        ``world`` ``(gravity, controller, max_catches, residual_scale, residual_phases,
+        reward_weights)``, ``rendering`` ``(render_mode, width, height)``.
+
+        ``residual_phases`` (:func:`check_phases`) also gives ``residual_acts``, the
+        ``(len(PHASES),)`` bool mask of the phases in which a hand's residual acts (all
+        with None): a hand whose controller is in phase ``PHASES[i]`` after its command
+        gets the residual only where ``residual_acts[i]``."""
         render_mode, width, height = rendering
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(
@@ -81,11 +107,17 @@ class LevelsEnvMixin:
         self.release_angle_std = pick(
             release_angle_std, "release_angle_std", base.release_angle_std, 90.0
         )
-        gravity, controller, max_catches, residual_scale, reward_weights = world
+        gravity, controller, max_catches, residual_scale, residual_phases, reward_weights = world
         self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
         self.controller_name = check_choice(controller, "controller", self._CONTROLLERS)
         self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
         self.residual_scale = check_scale(residual_scale, 1.0)
+        #: Phases in which a hand's residual acts (None: all).
+        self.residual_phases = check_phases(residual_phases)
+        #: ``(len(PHASES),)`` bool: whether a hand's residual acts in each phase.
+        self.residual_acts = np.array(
+            [self.residual_phases is None or p in self.residual_phases for p in PHASES]
+        )
         self.reward_weights = check_reward_weights(reward_weights, self._DEFAULT_WEIGHTS)
         for key, value in (("width", width), ("height", height)):
             check_integer(value, key, 16, 8192)

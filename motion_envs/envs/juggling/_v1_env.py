@@ -197,7 +197,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> None:
         self._init_arguments(
             (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
-            (gravity, controller, max_catches, residual_scale, reward_weights),
+            (gravity, controller, max_catches, residual_scale, None, reward_weights),
             (render_mode, width, height),
         )
         self.task = JugglingTask(gravity=self.gravity)
