@@ -1,6 +1,6 @@
 """MotionEnvs/Juggling-v1: checkers, determinism, pickling, the zero-action invariant, the
 physics (actuated hand within its limits, capture rule, drops, no tunnelling), the sensor,
-the level table, first frames and the juggler's toss."""
+the level table, ``residual_phases``, first frames and the juggler's toss."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import motion_envs
-from motion_envs.datasets.juggling import JugglingTask, rules
+from motion_envs.datasets.juggling import PHASES, JugglingTask, rules
 from motion_envs.envs.juggling import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
@@ -73,6 +73,9 @@ def test_gymnasium_and_sb3_check_env_with_warnings_as_errors():
             check_env(gym.make(ENV_ID, level=level).unwrapped, skip_render_check=True)
         sb3_checker.check_env(JugglingV1Env(level="hard"), warn=True)
         sb3_checker.check_env(JugglingV1Env(controller="fixed_point", gravity=1.0), warn=True)
+        phases = {"residual_phases": ["catch"], "residual_scale": 0.2}
+        check_env(gym.make(ENV_ID, **phases).unwrapped, skip_render_check=True)
+        sb3_checker.check_env(JugglingV1Env(**phases), warn=True)
 
 
 def test_seeded_rollouts_are_deterministic_and_pickle():
@@ -316,11 +319,78 @@ def test_level_table_and_overrides():
         ({"residual_scale": 0.0}, "residual_scale"),
         ({"reward_weights": {"deviation": 1.0}}, "reward_weights"),
         ({"render_mode": "human"}, "render_mode"),
+        ({"residual_phases": "catch"}, "residual_phases"),
+        ({"residual_phases": ["catch", "catch"]}, "residual_phases"),
+        ({"residual_phases": []}, "residual_phases"),
+        ({"residual_phases": ["throw"]}, "residual_phases"),
+        ({"residual_phases": [1]}, "residual_phases"),
     ],
 )
 def test_bad_arguments_raise_value_error(kwargs, match):
     with pytest.raises(ValueError, match=match):
         JugglingV1Env(**kwargs)
+
+
+def _phase_gated_episode(phases, gate, seed=0):
+    """Every step's return of a medium episode (3 catches under the zero action) whose
+    action is 0.8 in both entries while ``gate(obs)`` holds (else 0),
+    ``residual_phases=phases``."""
+    env = gym.make(
+        ENV_ID, level="medium", residual_phases=phases, residual_scale=0.3, max_catches=3
+    )
+    obs, _ = env.reset(seed=seed)
+    steps, done = [], False
+    while not done:
+        a = np.full(2, 0.8 if gate(obs) else 0.0, np.float32)
+        obs, reward, term, trunc, info = env.step(a)
+        steps.append((obs, reward, term, trunc, info))
+        done = term or trunc
+    return steps
+
+
+def _in(*phases):
+    """Whether the observation's phase one-hot (``5..8``: toss, go_down, catch, return)
+    shows one of ``phases``."""
+    return lambda obs: any(obs[5 + PHASES.index(p)] == 1.0 for p in phases)
+
+
+def _hands(steps):
+    return np.array([info["hand"] for *_, info in steps])
+
+
+def test_residual_phases_mask_the_residual_outside_them():
+    """With ``residual_phases=["catch"]`` an action given only while the observation shows
+    toss or return (the next command cannot start the catch) plays the zero action's
+    episode: the same observations, ends and infos; the reward differs by the action's
+    penalty alone (charged as in Cascade-v0). The same action with all phases changes the
+    episode, and so does an action given in the catch."""
+    zero = _phase_gated_episode(None, lambda obs: False)
+    outside = _in("toss", "return")
+    masked = _phase_gated_episode(["catch"], outside)
+    assert len(masked) == len(zero)
+    penalised = 0
+    for (o1, r1, *ends1, i1), (o2, r2, *ends2, i2) in zip(zero, masked, strict=True):
+        assert np.array_equal(o1, o2) and ends1 == ends2
+        assert set(i1) == set(i2)
+        for key in i1.keys() - {"reward_action"}:
+            assert np.array_equal(i1[key], i2[key]), key
+        assert r2 == r1 + i2["reward_action"]  # r1's own action term is -0.0
+        penalised += i2["reward_action"] < 0
+    assert penalised > 100
+    free = _phase_gated_episode(None, outside)
+    n = min(len(free), len(zero))
+    assert not np.array_equal(_hands(free)[:n], _hands(zero)[:n])
+    caught = _phase_gated_episode(["catch"], _in("catch"))
+    n = min(len(caught), len(zero))
+    assert not np.array_equal(_hands(caught)[:n], _hands(zero)[:n])
+
+
+def test_residual_phases_arguments():
+    env = JugglingV1Env(residual_phases=("catch", "go_down"))
+    assert env.residual_phases == ("catch", "go_down")
+    assert env.residual_acts.tolist() == [False, True, True, False]
+    default = gym.make(ENV_ID).unwrapped
+    assert default.residual_phases is None and default.residual_acts.all()
 
 
 def test_bad_actions():

@@ -151,6 +151,29 @@ def test_pickled_vector_env_continues_as_the_original(cls: Any) -> None:
             assert np.array_equal(r1[k], r2[k])
 
 
+@pytest.mark.parametrize(
+    ("backend", "controller"),
+    [
+        pytest.param("numba", "juggler", marks=needs_numba),
+        pytest.param("numba", "commanded_intercept", marks=needs_numba),
+        ("python", "juggler"),
+    ],
+)
+def test_v1_residual_phases_equal_sync(backend: str, controller: str) -> None:
+    """``residual_phases``: the residual acts in the catch only, on both backends and with
+    the compiled and the Python controllers (random actions: drops and resets)."""
+    kw = {
+        "level": "medium",
+        "controller": controller,
+        "residual_phases": ["catch"],
+        "residual_scale": 0.2,
+    }
+    mode = AutoresetMode.NEXT_STEP
+    vec = JugglingV1VectorEnv(3, autoreset_mode=mode, backend=backend, **kw)
+    assert vec.backend == backend
+    assert run_both(V1, vec, 3, mode, 400, "random", **kw) >= 3
+
+
 def test_v1_python_backend_equal_sync() -> None:
     vec = JugglingV1VectorEnv(3, backend="python", level="medium")
     assert vec.backend == "python"

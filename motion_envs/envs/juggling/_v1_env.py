@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -88,8 +88,11 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ## Action Space
     `Box(-1, 1, (2,), float32)`: the residual added to the controller's hand target, in
     units of `residual_scale` metres (``target + residual_scale * a``), applied once per
-    step (one 5 ms control period). Entries outside ``[-1, 1]`` are clipped; NaN counts as
-    0 (``info["action_invalid"]``). A wrong shape raises `ValueError`.
+    step (one 5 ms control period). With `residual_phases`, the residual acts only while
+    the hand is in one of those phases (the phase whose plan gave the period's target, as
+    in Cascade-v0); in the others the hand follows the controller alone. Entries outside
+    ``[-1, 1]`` are clipped; NaN counts as 0 (``info["action_invalid"]``). A wrong shape
+    raises `ValueError`.
 
     | Num | Action                              | Control Min | Control Max | Type (Unit)                  |
     |-----|-------------------------------------|-------------|-------------|------------------------------|
@@ -122,7 +125,9 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     learned to drop): ``likeness`` is
     the distance (m) of the hand's state ``(x, z, 0.1 s * v)`` to the nearest state of the
     same phase in the TRAINING demonstrations (:class:`~motion_envs.models.juggling.HumanLikeness`;
-    never the controller's own plan, so the zero action is not its optimum). `info` holds
+    never the controller's own plan, so the zero action is not its optimum); ``|a|^2`` is
+    the action's (clipped) even where `residual_phases` keeps it from acting, as in
+    Cascade-v0. `info` holds
     each weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
     ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``:
     the same, Juggling-v0's name), ``phase``,
@@ -161,6 +166,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `controller`        | **str**   | `"juggler"` | the controller the residual acts on: `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
     | `max_catches`       | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`    | **float** | `0.05`      | m of residual for an action of 1 |
+    | `residual_phases`   | **tuple** | `None`      | phases (`toss`, `go_down`, `catch`, `return`) in which the hand's residual acts; None: all |
     | `reward_weights`    | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
     | `render_mode`       | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`             | **int**   | `480`       | frame width in pixels |
@@ -170,7 +176,8 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     * v1: MuJoCo contacts and an actuated hand with human limits, real gravity, a delayed
       noisy ball sensor shared by agent and juggler, difficulty levels, speed-and-angle
       release noise, a Markov observation, human-likeness against the training
-      demonstrations.
+      demonstrations (``residual_phases`` added later; its default, None, leaves every
+      rollout unchanged).
     * v0: the paper's setting (kinematic hand, exact ball state).
     """
 
@@ -190,6 +197,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         controller: str = "juggler",
         max_catches: int = 10,
         residual_scale: float = 0.05,
+        residual_phases: Sequence[str] | None = None,
         reward_weights: Mapping[str, float] | None = None,
         render_mode: str | None = None,
         width: int = 480,
@@ -197,7 +205,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> None:
         self._init_arguments(
             (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
-            (gravity, controller, max_catches, residual_scale, None, reward_weights),
+            (gravity, controller, max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
         )
         self.task = JugglingTask(gravity=self.gravity)
@@ -307,11 +315,15 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         return self._observation(true), reward, terminated, truncated, info
 
     def _advance(self, ax: float, az: float) -> tuple[JugglingState, bool, bool]:
-        """One control period with the residual ``(ax, az)`` (clipped, finite): the
-        controller's command, the world, the sensor, the history and the episode's counts
-        and end; returns ``(true state, terminated, truncated)``. :meth:`step` and
-        :meth:`nominal_episode` play through it (the reward and observation are step's)."""
+        """One control period with the residual ``(ax, az)`` (clipped, finite; 0 outside
+        ``residual_phases``): the controller's command, the world, the sensor, the history
+        and the episode's counts and end; returns ``(true state, terminated, truncated)``.
+        :meth:`step` and :meth:`nominal_episode` play through it (the reward and
+        observation are step's)."""
         target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
+        if self.residual_phases is not None:  # as CascadeEnv._period: the phase after
+            acts = self.residual_acts[PHASES.index(self.controller.phase)]  # the command
+            ax, az = (ax, az) if acts else (0.0, 0.0)
         s = self.residual_scale
         true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
         bx, bz = true.ball_pos.tolist()

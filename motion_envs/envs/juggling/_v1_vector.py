@@ -11,7 +11,8 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   plan on the control grid (:func:`~motion_envs.envs.juggling._compiled.v1_advance`); at
   an event the sub-environment's own controller runs in Python and its new plan is
   copied back (controllers other than ``juggler`` and ``juggler_latency_aware`` always
-  run in Python);
+  run in Python); with ``residual_phases`` the residual acts where the phase after the
+  command is one of them (as in ``JugglingV1Env._advance``);
 * the eq. 10 corrections (found due by ``v1_events`` with the controller's test) made in
   the arrays with the controller's numbers: the catch's rows and pseudo-inverses are
   shared by the catches of its duration
@@ -263,8 +264,12 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         invalid = np.logical_not(np.isfinite(actions).all(axis=1))
         a = np.clip(np.where(np.isnan(actions), 0.0, actions), -1.0, 1.0)
         target, armed = self._commands(envs)
-        s = self.envs[0].residual_scale
-        target = target + s * a
+        first = self.envs[0]
+        residual = a  # the reward's action penalty is the whole action's (as step's)
+        if first.residual_phases is not None:  # as JugglingV1Env._advance: a selection
+            acts = first.residual_acts[self._phase[envs]]
+            residual = np.where(acts[:, None], a, 0.0)
+        target = target + first.residual_scale * residual
         full_target = np.zeros((self.num_envs, 2))
         full_armed = np.zeros(self.num_envs, dtype=np.bool_)
         full_target[envs], full_armed[envs] = target, armed
