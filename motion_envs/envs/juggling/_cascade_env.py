@@ -143,7 +143,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     0.01``): ``catches`` counts the catches of the period (both hands), ``dropped`` is 1 at
     the period a ball touches the floor, ``likeness`` the mean over the hands of the
     distance (m) of the hand's state ``(x, z, 0.1 s * v)`` (own frame) to the nearest state
-    of the same phase in the TRAINING demonstrations (never the controller's own plan).
+    of the same phase in the TRAINING demonstrations (never the controller's own plan);
+    ``|a|^2`` is the whole (clipped) action's, also where `residual_phases` keeps a hand's
+    residual from acting (as in Juggling-v1).
     A step's reward is the sum over its `frame_skip` periods (the periods played: the
     step stops at the period that ends the episode), so a held action earns the same
     return whatever `frame_skip`. `info` holds each weighted term (``reward_catch``,

@@ -126,8 +126,8 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     the distance (m) of the hand's state ``(x, z, 0.1 s * v)`` to the nearest state of the
     same phase in the TRAINING demonstrations (:class:`~motion_envs.models.juggling.HumanLikeness`;
     never the controller's own plan, so the zero action is not its optimum); ``|a|^2`` is
-    the action's (clipped) even where `residual_phases` keeps it from acting, as in
-    Cascade-v0. `info` holds
+    the whole (clipped) action's, also where `residual_phases` keeps the residual from
+    acting (as in Cascade-v0). `info` holds
     each weighted term (``reward_catch``, ``reward_drop``, ``reward_likeness``,
     ``reward_action``), ``likeness``, ``catches`` and ``tosses`` so far (``cycles``:
     the same, Juggling-v0's name), ``phase``,
