@@ -243,7 +243,11 @@ CASES: dict[str, Case] = {
         _juggling_v1_nominal,
         {"level": "medium", "max_catches": 2},
         action_scale=0.2,
-        checked=({"level": "hard", "max_catches": 1}, {"level": "easy", "gravity": 1.0}),
+        checked=(
+            {"level": "hard", "max_catches": 1},
+            {"level": "easy", "gravity": 1.0},
+            {"level": "medium", "residual_phases": ["go_down", "catch"]},
+        ),
     ),
     "MotionEnvs/Cascade": Case(
         _cascade_nominal,
@@ -253,6 +257,7 @@ CASES: dict[str, Case] = {
             {"level": "hard", "max_catches": 1},
             {"level": "easy", "dwell_ratio": 0.6},
             {"level": "medium", "frame_skip": 3},
+            {"level": "medium", "residual_phases": ["catch"]},
         ),
     ),
 }
