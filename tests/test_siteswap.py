@@ -220,3 +220,20 @@ def test_pattern_results_carry_the_throws_needs(tmp_path):
     (throw,) = json.loads((tmp_path / "results.json").read_text())["pattern"]["throws"]
     assert throw["value"] == 3 and throw["crossing"] is True
     assert 0 < throw["release_speed"] < HAND_SPEED_LIMIT and throw["flight"] > 0
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.text(max_size=12))
+def test_any_text_is_a_siteswap_or_a_value_error(text):
+    """Whatever a user types after ``--pattern``: throws and a ball count, or a
+    ``ValueError`` (never another exception)."""
+    try:
+        throws = parse_siteswap(text)
+    except ValueError:
+        return
+    assert all(0 <= h < 36 for h in throws) and len(throws) == len(text.strip())
+    try:
+        balls = siteswap_balls(throws)
+    except ValueError:
+        return
+    assert balls * len(throws) == sum(throws)
