@@ -237,3 +237,19 @@ def test_any_text_is_a_siteswap_or_a_value_error(text):
     except ValueError:
         return
     assert balls * len(throws) == sum(throws)
+
+
+def test_a_short_flight_may_need_a_throw_down_beyond_the_limit(pattern):
+    """With a dwell ratio near 1/2 a throw of 1 flies a few ms; falling from the release
+    height to the catch height in that time needs a fast downward release, which the
+    speed limit refuses too (the oracle: the ballistic closed form)."""
+    from dataclasses import replace
+
+    c = check_pattern("51", replace(pattern, dwell_ratio=0.48), G, HAND_SPEED_LIMIT)
+    one = c.throws[-1]
+    assert 0 < one.flight < 0.05 and one.release_speed < -HAND_SPEED_LIMIT and one.apex == 0
+    assert any(f"a throw of 1 needs a {-one.release_speed:.2f} m/s" in r for r in c.reasons)
+    p0, f3 = pattern.release_position, pattern.flight
+    z_catch = ballistic_position(p0, pattern.release_velocity, f3, G)[1]
+    z = ballistic_position(p0, np.array([0.0, one.release_speed]), one.flight, G)[1]
+    assert z == pytest.approx(z_catch, abs=1e-9)

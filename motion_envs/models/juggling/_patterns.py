@@ -47,7 +47,7 @@ class ThrowNeed:
     value: int
     crossing: bool
     flight: float  # s
-    release_speed: float  # m/s, vertical
+    release_speed: float  # m/s, vertical (negative: thrown downwards)
     apex: float  # m above the release
 
 
@@ -103,9 +103,9 @@ def check_pattern(
                 f"a throw of {n.value} would fly {n.flight:.3f} s: the dwell ({dwell:.3f} s) "
                 f"is not shorter than {n.value} beat{_s(n.value)} ({n.value * beat:.3f} s)"
             )
-        elif n.release_speed > speed_limit:
+        elif abs(n.release_speed) > speed_limit:  # a short flight may need a throw down
             reasons.append(
-                f"a throw of {n.value} needs a {n.release_speed:.2f} m/s release, above the "
+                f"a throw of {n.value} needs a {abs(n.release_speed):.2f} m/s release, above the "
                 f"hand's {speed_limit:g} m/s limit"
             )
     if balls % 2 == 0 or values != [balls]:
