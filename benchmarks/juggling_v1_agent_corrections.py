@@ -5,7 +5,8 @@ medium``) with the agent (best checkpoint) on the seeds of ``--split`` (default 
 validation seeds: what the agent does is read where nothing is chosen; the test seeds
 give the same picture) and records, at every step, the residual the agent adds to the
 juggler's hand target (metres: ``residual_scale * action``), the phase, the time in the
-phase and the newest (delayed) ball measurement. Writes ``corrections.png``: the
+phase and the newest (delayed) ball measurement (the residual is the one the hand got: none
+outside the run's ``residual_phases``). Writes ``corrections.png``: the
 residual's horizontal and vertical parts over the time in the catch phase (every episode
 a thin line, the median in black), and, in the catch phase, the vertical residual against
 ``v_z * latency``: how far the ball fell during the sensor's delay (what the
@@ -75,13 +76,16 @@ def play(
         done = False
         while not done:
             action = np.clip(predict(obs[None])[0], -1.0, 1.0)
-            rows["res"].append(scale * action)
-            rows["phase"].append(PHASES.index(env.unwrapped.controller.phase))
-            rows["t"].append(env.unwrapped.controller.phase_time)
             rows["v"].append(obs[BALL_VELOCITY].astype(np.float64))
             rows["ep"].append(i)
             obs, _, terminated, truncated, _ = env.step(action)
             done = terminated or truncated
+            # the phase the step's target belonged to (the controller's after its command)
+            # and the residual the hand got in it (none outside the env's residual_phases)
+            phase = PHASES.index(env.unwrapped.controller.phase)
+            rows["res"].append(scale * action * env.unwrapped.residual_acts[phase])
+            rows["phase"].append(phase)
+            rows["t"].append(env.unwrapped.controller.phase_time)
     out = {k: np.asarray(v) for k, v in rows.items()}
     out["latency"] = np.array(env.unwrapped.delay_steps * env.unwrapped.dt)
     return out
@@ -155,7 +159,7 @@ def main() -> None:
     out = Path(args.out or args.run_dir)
     summary = summarise(d)
     title = (
-        f"Juggling-v1 agent {args.run_dir}: residual on the analytic juggler, "
+        f"Juggling-v1 agent {Path(args.run_dir).name}: residual on the analytic juggler, "
         f"{args.episodes} {args.split} episodes (SIMULATED demonstrations)"
     )
     path = plot(d, out / "corrections.png", title)
