@@ -324,6 +324,8 @@ def test_level_table_and_overrides():
         ({"residual_phases": []}, "residual_phases"),
         ({"residual_phases": ["throw"]}, "residual_phases"),
         ({"residual_phases": [1]}, "residual_phases"),
+        ({"residual_phases": 3}, "residual_phases"),
+        ({"residual_phases": {"catch": 1}}, "residual_phases"),
     ],
 )
 def test_bad_arguments_raise_value_error(kwargs, match):

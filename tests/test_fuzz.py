@@ -286,6 +286,15 @@ VALUES = {
     "angle": st.one_of(st.floats(0, 30), NUMBERS),
     "small_int": st.one_of(st.integers(-2, 12), NUMBERS, st.just(2.0)),
     "size": st.one_of(st.integers(8, 64), NUMBERS),
+    "phases": st.one_of(
+        st.lists(st.sampled_from(["toss", "go_down", "catch", "return", "x", ""]), max_size=5),
+        st.tuples(st.sampled_from(["catch", "toss"])),
+        st.dictionaries(st.sampled_from(["catch", "toss"]), st.integers(), max_size=2),
+        st.text(max_size=6),
+        st.lists(NUMBERS, max_size=2),
+        NUMBERS,
+        st.none(),
+    ),
 }
 
 

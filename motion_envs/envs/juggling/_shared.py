@@ -26,11 +26,11 @@ __all__ = ["LevelsEnvMixin", "check_phases"]
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:
-    """``residual_phases`` as a tuple of distinct phase names (None stays None); else
-    ``ValueError`` naming the argument."""
+    """``residual_phases`` (a list or tuple of distinct phase names) as a tuple (None
+    stays None); else ``ValueError`` naming the argument."""
     if phases is None:
         return None
-    if isinstance(phases, str) or not all(isinstance(p, str) for p in phases):
+    if not isinstance(phases, (list, tuple)) or not all(isinstance(p, str) for p in phases):
         raise ValueError(f"residual_phases must be a list of phase names; got {phases!r}")
     names = tuple(phases)
     for p in names:
