@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from motion_envs.datasets.juggling import (
     ballistic_position,
     cascade_timing,
+    format_siteswap,
     parse_siteswap,
     siteswap_balls,
     siteswap_flights,
@@ -52,6 +53,7 @@ def _landings(throws: tuple[int, ...], beats: int) -> tuple[list[int], list[int]
 )
 def test_known_siteswaps(text, throws, balls):
     assert parse_siteswap(text) == throws
+    assert format_siteswap(throws) == text.strip().lower()
     assert siteswap_balls(throws) == balls
     arrive, air = _landings(throws, 12 * len(throws) + 4 * max(throws))
     assert set(arrive) == {1} and set(air) == {balls}

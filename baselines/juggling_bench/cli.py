@@ -27,7 +27,12 @@ from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_lev
 from baselines.juggling_bench.media import write
 from baselines.juggling_bench.runner import run
 from baselines.juggling_bench.text import report
-from motion_envs.datasets.juggling import JugglingTask, parse_siteswap, siteswap_balls
+from motion_envs.datasets.juggling import (
+    JugglingTask,
+    format_siteswap,
+    parse_siteswap,
+    siteswap_balls,
+)
 from motion_envs.models.juggling import LEVELS
 
 
@@ -134,10 +139,11 @@ def siteswap_pattern(text: str) -> str:
     """``--pattern``: a valid vanilla siteswap (lower case; whether the cascade juggler
     can play it is :func:`.cascade.check_cascade_config`'s)."""
     try:
-        siteswap_balls(parse_siteswap(text))
+        throws = parse_siteswap(text)
+        siteswap_balls(throws)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
-    return text.strip().lower()
+    return format_siteswap(throws)
 
 
 def gravity_task(text: str) -> JugglingTask:

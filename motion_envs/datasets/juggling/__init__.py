@@ -55,6 +55,7 @@ from motion_envs.datasets.juggling._records import (
 )
 from motion_envs.datasets.juggling._siteswap import (
     SITESWAP_DIGITS,
+    format_siteswap,
     parse_siteswap,
     siteswap_balls,
     siteswap_flights,
@@ -93,6 +94,7 @@ __all__ = [
     "departure_from_line",
     "draw_cascade_person",
     "draw_person",
+    "format_siteswap",
     "generate_cascade_demonstrations",
     "generate_demonstrations",
     "mirror_x",

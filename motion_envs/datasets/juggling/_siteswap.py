@@ -30,7 +30,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-__all__ = ["SITESWAP_DIGITS", "parse_siteswap", "siteswap_balls", "siteswap_flights"]
+__all__ = [
+    "SITESWAP_DIGITS",
+    "format_siteswap",
+    "parse_siteswap",
+    "siteswap_balls",
+    "siteswap_flights",
+]
 
 #: The characters of throw values 0-35, in order.
 SITESWAP_DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
@@ -97,5 +103,12 @@ def siteswap_flights(throws: Sequence[int], beat: float, dwell: float) -> tuple[
     return tuple(0.0 if h == 0 else h * beat - dwell for h in throws)
 
 
+def format_siteswap(throws: Sequence[int]) -> str:
+    """The notation of ``throws`` (``(4, 4, 1)`` -> ``"441"``; the inverse of
+    :func:`parse_siteswap` on its lower-case output); a value outside 0-35 is written
+    ``[h]``."""
+    return "".join(SITESWAP_DIGITS[h] if 0 <= h < 36 else f"[{h}]" for h in throws)
+
+
 def _text(throws: Sequence[int]) -> str:
-    return repr("".join(SITESWAP_DIGITS[h] if 0 <= h < 36 else f"[{h}]" for h in throws))
+    return repr(format_siteswap(throws))

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 from motion_envs.datasets.juggling import (
     CASCADE_BALLS,
+    format_siteswap,
     parse_siteswap,
     siteswap_balls,
     siteswap_flights,
@@ -113,8 +114,7 @@ def check_pattern(
             "it is not a cascade (every throw the same odd value, each hand catching the "
             "other hand's ball): self-throws, passes and empty beats are not modelled"
         )
-    text = siteswap.strip().lower()
-    return PatternCheck(text, balls, beat, dwell, tuple(needs), tuple(reasons))
+    return PatternCheck(format_siteswap(throws), balls, beat, dwell, tuple(needs), tuple(reasons))
 
 
 def _s(n: int) -> str:
