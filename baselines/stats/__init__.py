@@ -3,8 +3,8 @@
 * :mod:`._intervals`: ratio of two methods' criteria with a 95 % stratified bootstrap
   interval over groups (people, shapes, seeds; :func:`scipy.stats.bootstrap`), the
   per-group win count and the verdict in words (:class:`Comparison`);
-* :mod:`._seeds`: across seeds and sweeps, ``rliable``'s interquartile mean with its
-  interval and the probability of improvement (extra ``stats``).
+* :mod:`._seeds`: across seeds and sweeps, the interquartile mean with its stratified
+  bootstrap interval and the probability of improvement (scipy).
 """
 
 from baselines.stats._intervals import (
@@ -19,7 +19,7 @@ from baselines.stats._intervals import (
     statistic_interval,
     verdict,
 )
-from baselines.stats._seeds import iqm_intervals, probability_of_improvement
+from baselines.stats._seeds import iqm, iqm_intervals, probability_of_improvement
 
 __all__ = [
     "CONFIDENCE",
@@ -30,6 +30,7 @@ __all__ = [
     "group_bootstrap",
     "group_wins",
     "intervals_document",
+    "iqm",
     "iqm_intervals",
     "probability_of_improvement",
     "statistic_interval",

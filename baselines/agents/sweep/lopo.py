@@ -12,7 +12,7 @@ on validation people carved from the training people (``val_fraction``). Each tr
 :func:`lopo_summary` gives, per person (fold), the ratio of every seed and their median;
 across people the interquartile mean of the ``(seeds, people)`` ratios with its 95 %
 interval over people (:func:`baselines.stats.group_bootstrap`: a person's seeds move
-together) and rliable's over seeds within each person
+together) and the stratified one over seeds within each person
 (:func:`baselines.stats.iqm_intervals`), the number of people on which the agent is below
 the nominal, and the verdict in words (:func:`baselines.stats.verdict`: lower is better).
 """
@@ -51,22 +51,20 @@ def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) 
 
     ``iqm_ratio_ci95`` resamples *people* (all seeds of a person together: the question
     is how the agent does on new people; the verdict uses it); ``iqm_ratio_ci95_seeds``
-    is rliable's (seeds resampled within each person, the people fixed: the seed noise
+    is the stratified one (seeds resampled within each person, the people fixed: the seed noise
     only, a point with one seed)."""
-    from rliable import metrics
-
-    from baselines.stats import group_bootstrap, iqm_intervals, verdict
+    from baselines.stats import group_bootstrap, iqm, iqm_intervals, verdict
 
     people = sorted(per_person)
     matrix = np.array([[per_person[p][s] for p in people] for s in seeds])  # (seeds, people)
     agg = iqm_intervals({"ratio": matrix})["ratio"]
     flat = matrix.ravel()  # cell (seed, person) -> seed * n_people + person
 
-    def iqm(rows: NDArray[np.int64]) -> float:
-        return float(metrics.aggregate_iqm(flat[rows]))
+    def of_rows(rows: NDArray[np.int64]) -> float:
+        return iqm(flat[rows])
 
     person_of_cell = np.tile(np.asarray(people), len(seeds))
-    _, lo, hi = group_bootstrap(iqm, person_of_cell)
+    _, lo, hi = group_bootstrap(of_rows, person_of_cell)
     medians = np.median(matrix, axis=0)
     return {
         "ratio_per_person": {str(p): dict(per_person[p]) for p in people},
