@@ -6,7 +6,7 @@ matter (people for the orientation data and the reaching agents, shapes for LASA
 win count per group and the verdict in words (docs/protocol.md). The benchmark modules
 call this one and add its output under new keys of ``results.json`` (``intervals``,
 ``verdicts``); their existing values are unchanged. The learned-vs-analytic readings
-keep the interval they already print (:func:`baselines.learned_rows.bootstrap_ratio`,
+keep the interval they already print (:func:`baselines.learned.reading.bootstrap_ratio`,
 subjects or shapes resampled, seed 0); the new comparisons use
 :func:`baselines.stats.compare_errors`.
 

@@ -28,8 +28,8 @@ from _timing import cpu_model  # benchmarks/ is on sys.path when run as a script
 
 from baselines.peers import DMPPeer, ProMPPeer, peers_missing_reason
 from motion_envs.datasets.lasa import load_lasa
+from motion_envs.datasets.resampling import resample_positions
 from motion_envs.geometry import sine_series as ss
-from motion_envs.models.nominal import resample_positions
 from motion_envs.models.sine_regression import SineSeriesRegression, select_n_sines
 
 

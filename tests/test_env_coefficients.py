@@ -9,7 +9,7 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import motion_envs  # noqa: F401  (registers the ids)
-from motion_envs.envs.coefficients import line_frames
+from motion_envs.envs._coefficients import line_frames
 
 CASES = {
     "MotionEnvs/OrientationCoefficients-v0": {"nominal": "bezier-null"},

@@ -59,7 +59,7 @@ def test_orientation_validation_subjects_are_carved_from_training():
     fit, held = split_by_subject(full_train, 0.2, 0)
     assert set(held.subjects.tolist()) == s_val
     assert set(fit.subjects.tolist()) == s_train
-    from motion_envs.models.nominal import OrientationNominal
+    from motion_envs.models.orientation_nominal import OrientationNominal
 
     expected = OrientationNominal("slerp", 2, 50).fit(fit).criterion(held)
     assert val.criterion == pytest.approx(expected, abs=1e-12)

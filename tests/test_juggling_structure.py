@@ -1,5 +1,5 @@
 """The juggling code's structure: one home for the world's rules (one ball and a batch
-agree bit for bit), the old import paths (deprecated shims), the fitted juggler apart from
+agree bit for bit), the former import paths gone, the fitted juggler apart from
 its per-episode controller."""
 
 from __future__ import annotations
@@ -188,78 +188,33 @@ def test_benchmark_defaults_are_the_default_fit():
     )
 
 
-# -- old import paths ---------------------------------------------------------------------
+# -- no compatibility modules ---------------------------------------------------------------
 
-#: The former modules, where they moved, and the names they had (what users may import).
-SHIMS = {
-    "motion_envs.datasets.juggling_task": (
-        "motion_envs.datasets.juggling",
-        "PHASES JugglingNoise JugglingState JugglingTask ballistic_position ballistic_velocity",
-    ),
-    "motion_envs.datasets.juggling_demos": (
-        "motion_envs.datasets.juggling",
-        "SIMULATED_LABEL JugglingDemos JugglingRecording PersonStyle PhaseSegment "
-        "departure_from_line draw_person generate_demonstrations quintic resample_path "
-        "split_cycles",
-    ),
-    "motion_envs.datasets.juggling_csv": (
-        "motion_envs.datasets.juggling",
-        "JUGGLING_COLUMNS MIN_SAMPLES read_juggling_csv write_juggling_csv",
-    ),
-    "motion_envs.models.juggling_world": (
-        "motion_envs.models.juggling",
-        "TRACKING_ROWS BallisticWorld draw_episode_noise",
-    ),
-    "motion_envs.models.juggling_juggler": (
-        "motion_envs.models.juggling",
-        "AnalyticJuggler PhaseFit minimum_jerk phase_conditions plan_catch",
-    ),
-    "motion_envs.models.juggling_run": (
-        "motion_envs.models.juggling",
-        "CycleResult cycle_rngs fit_juggler run_cycle run_cycles run_cycles_fast",
-    ),
-    "motion_envs.models.juggling_segmentation": (
-        "motion_envs.models.juggling",
-        "load_juggling_csv segment_demos segment_juggling",
-    ),
-    "motion_envs.envs.juggling_scene": (
-        "motion_envs.envs.juggling",
-        "SCENE_XML JugglingScene check_task load_juggling_model",
-    ),
-    "motion_envs.envs.juggling_v1": (
-        "motion_envs.envs.juggling",
-        "DEFAULT_V1_REWARD_WEIGHTS HISTORY PAPER_GRAVITY V1_CYCLE_TIME V1_OBS_DIM JugglingV1Env",
-    ),
-    "motion_envs.envs.juggling_v1_scene": (
-        "motion_envs.envs.juggling",
-        "CAPTURE_SPEED HAND_ACCEL_LIMIT HAND_MASS HAND_SPEED_LIMIT SERVO_OMEGA SUBSTEPS "
-        "V1_SCENE_XML JugglingPhysics JugglingV1World load_juggling_v1_model",
-    ),
-    "motion_envs.models.juggling_sensor": (
-        "motion_envs.models.juggling",
-        "BallMeasurement BallSensor perturb_release predict_forward",
-    ),
-    "motion_envs.models.juggling_levels": (
-        "motion_envs.models.juggling",
-        "CONTROLLERS LEVELS LIKENESS_TAU HumanLikeness JugglerController JugglingLevel "
-        "make_controller",
-    ),
-}
-#: Names the shims re-export from geometry (minimum jerk's one home).
-FROM_GEOMETRY = {"quintic", "minimum_jerk"}
+#: The former modules (the package is unreleased: they were removed, not kept as shims).
+REMOVED = (
+    "motion_envs.datasets.juggling_task",
+    "motion_envs.datasets.juggling_demos",
+    "motion_envs.datasets.juggling_csv",
+    "motion_envs.models.juggling_world",
+    "motion_envs.models.juggling_juggler",
+    "motion_envs.models.juggling_run",
+    "motion_envs.models.juggling_segmentation",
+    "motion_envs.models.juggling_sensor",
+    "motion_envs.models.juggling_levels",
+    "motion_envs.envs.juggling_scene",
+    "motion_envs.envs.juggling_v1",
+    "motion_envs.envs.juggling_v1_scene",
+    "motion_envs.envs.coefficients",
+    "motion_envs.models.nominal",
+    "baselines.learned_rows",
+)
 
 
-@pytest.mark.parametrize("old", sorted(SHIMS))
-def test_old_module_warns_and_reexports_the_same_objects(old):
-    new, names = SHIMS[old]
+@pytest.mark.parametrize("old", REMOVED)
+def test_former_module_is_gone(old):
     sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match=f"{old} is deprecated; import from {new}$"):
-        shim = importlib.import_module(old)
-    target = importlib.import_module(new)
-    geometry = importlib.import_module("motion_envs.geometry.minimum_jerk")
-    for name in names.split():
-        source = geometry if name in FROM_GEOMETRY else target
-        assert getattr(shim, name) is getattr(source, name), name
+    with pytest.raises(ModuleNotFoundError, match=old.rpartition(".")[2]):
+        importlib.import_module(old)
 
 
 def test_registered_entry_point_imports_without_warning():
@@ -281,19 +236,3 @@ def test_registered_entry_point_imports_without_warning():
     assert module.JugglingEnv is JugglingEnv
     for name in ("load_juggler", "juggler_demonstrations", "TRACKING_NOISE", "cycle_rngs"):
         assert getattr(module, name) is getattr(mj, name)
-
-
-def test_project_code_uses_no_shim():
-    """Library, baselines, benchmarks and tests import the new paths only."""
-    from pathlib import Path
-
-    root = Path(__file__).resolve().parents[1]
-    here = Path(__file__).resolve()
-    shim_files = {root / (m.replace(".", "/") + ".py") for m in SHIMS}
-    for folder in ("motion_envs", "baselines", "benchmarks", "tests"):
-        for path in (root / folder).rglob("*.py"):
-            if path in shim_files or path == here:
-                continue
-            text = path.read_text(encoding="utf-8")
-            for old in SHIMS:
-                assert f"{old} import" not in text and f"import {old}" not in text, (path, old)

@@ -252,7 +252,8 @@ def test_orientation_rows_on_a_small_subset():
 def test_position_learned_columns_on_two_shapes():
     from baselines.learned.position import learned_position_predictions
     from motion_envs.datasets import load_position_dataset
-    from motion_envs.models.nominal import position_folds, resample_positions
+    from motion_envs.datasets.resampling import resample_positions
+    from motion_envs.datasets.splits import position_folds
 
     ds = load_position_dataset("lasa", ["Angle", "Sine"])
     y, dur = resample_positions(ds, 50)

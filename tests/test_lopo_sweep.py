@@ -41,7 +41,7 @@ def test_fold_nominal_is_fitted_on_the_training_people_only():
     not move when the test person's own data would change it: it equals a nominal fitted
     on the training split's trajectories."""
     from motion_envs.envs.orientation_reach import orientation_split_parts
-    from motion_envs.models.nominal import OrientationNominal
+    from motion_envs.models.orientation_nominal import OrientationNominal
 
     env = gym.make("MotionEnvs/OrientationCoefficients-v0", split="test", fold=3).unwrapped
     _, fit, part = orientation_split_parts("vr-kitchen", "test", 0.25, 0, 10.0, 0.0, 3)
@@ -127,7 +127,7 @@ def test_tiny_lopo_sweep_reports_people(tmp_path):
 def test_val_folds_cut_the_training_people_into_groups(fold):
     env_id, k = "MotionEnvs/OrientationCoefficients-v0", 3
     from motion_envs.envs.orientation_reach import orientation_split_parts
-    from motion_envs.models.nominal import OrientationNominal
+    from motion_envs.models.orientation_nominal import OrientationNominal
 
     (person,) = set(gym.make(env_id, split="test", fold=fold).unwrapped.task.subjects)
     training = set(gym.make(env_id, split="train", fold=fold).unwrapped.task.subjects)

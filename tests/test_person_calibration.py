@@ -137,7 +137,7 @@ def test_reference_rows_are_the_benchmark_rows(data):
     ds, res = data
     t1 = table1(ds.ragged, ds.subjects, ds.tasks)
     assert np.median(res.errors["null_d2_loso"]) == t1.criteria["null_d2_loso"]
-    # the committed benchmark value of slerp_loso_predicted_timing (baselines.learned_rows)
+    # the committed benchmark value of slerp_loso_predicted_timing (baselines.learned.rows)
     assert np.median(res.errors["slerp_loso_predicted_timing"]) == pytest.approx(
         0.2803844868646229, rel=1e-12
     )

@@ -13,7 +13,8 @@ from baselines.cli import main
 from baselines.learned import torch_available
 from baselines.peers import peers_available
 from motion_envs.datasets.lasa import load_lasa
-from motion_envs.models.nominal import position_folds, resample_positions
+from motion_envs.datasets.resampling import resample_positions
+from motion_envs.datasets.splits import position_folds
 from motion_envs.models.position_criteria import max_error
 
 

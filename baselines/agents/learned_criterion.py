@@ -20,7 +20,7 @@ same criterion: the median over episodes of ``info["max_error"]``.
   :mod:`baselines.learned.position` (Lippi's residual ``y - line`` regressed on the
   conditions, start and end, constant columns dropped), fitted per shape on the
   environment's training demonstrations of that shape (the folds of
-  :func:`~motion_envs.models.nominal.position_folds`, as the nominal).
+  :func:`~motion_envs.datasets.splits.position_folds`, as the nominal).
 
 Scoring is the environments' own:
 :func:`~motion_envs.envs.orientation_reach.orientation_max_errors` and
@@ -86,7 +86,7 @@ def orientation_learned_residuals(
         sine_curves,
         sine_targets,
     )
-    from motion_envs.models.nominal import OrientationNominal
+    from motion_envs.models.orientation_nominal import OrientationNominal
     from motion_envs.models.path_frame import from_path_frame, to_path_frame
     from motion_envs.models.slerp_residual import slerp_residuals
 
@@ -117,16 +117,14 @@ def position_learned_positions(
     """Ridge-predicted positions of the episodes of ``position_grids(dataset, split, ...)``.
 
     Per shape, fitted on the training demonstrations of
-    :func:`~motion_envs.models.nominal.position_folds` (the nominal's). Returns the
+    :func:`~motion_envs.datasets.splits.position_folds` (the nominal's). Returns the
     predictions ``(L, n_points, D)``, the dataset rows they belong to (episode order) and
     the chosen penalties.
     """
     from baselines.learned.position import learned_position_predictions
-    from motion_envs.models.nominal import (
-        POSITION_CONDITIONS,
-        position_folds,
-        resample_positions,
-    )
+    from motion_envs.datasets.resampling import resample_positions
+    from motion_envs.datasets.splits import position_folds
+    from motion_envs.models.position_nominal import POSITION_CONDITIONS
 
     folds = position_folds(dataset, split, fraction, split_seed)
     y_all, durations = resample_positions(dataset, n_points)

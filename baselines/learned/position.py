@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.models.nominal import position_conditions, varying_columns
+from motion_envs.models.position_nominal import position_conditions, varying_columns
 
 __all__ = ["LEARNED_POSITION_METHODS", "POSITION_ALPHAS", "learned_position_predictions"]
 
@@ -54,7 +54,7 @@ def learned_position_predictions(
     """Predictions ``(m, K, D)`` of the scored demonstrations of ``folds`` (fold order).
 
     ``folds`` are ``(task, train, scored)`` index triples of **one** task (as
-    :func:`motion_envs.models.nominal.position_folds`). Returns ``method -> predictions``
+    :func:`motion_envs.datasets.splits.position_folds`). Returns ``method -> predictions``
     and ``method -> what each fold chose``.
     """
     from sklearn.linear_model import RidgeCV

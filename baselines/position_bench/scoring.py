@@ -163,7 +163,7 @@ def run_benchmark(
     ``"test"``/``"train"`` fit on each shape's training demonstrations of
     :func:`~motion_envs.datasets.splits.split_by_replicate` (``test_fraction``,
     ``split_seed``) and score the split's (the folds of
-    :func:`motion_envs.models.nominal.position_folds`, shared with PositionReach-v0).
+    :func:`motion_envs.datasets.splits.position_folds`, shared with PositionReach-v0).
     """
     from tqdm import tqdm
 

@@ -82,7 +82,7 @@ class OrientationTask(ReachTask):
     tasks: NDArray[np.str_]
     task_names: tuple[str, ...]
     criterion: float
-    grids: Any  # motion_envs.models.nominal.OrientationGrids
+    grids: Any  # motion_envs.models.orientation_nominal.OrientationGrids
     max_duration: float = 0.0  # longest movement of the dataset (s): bound of the timing
     up: tuple[float, ...] = (0.0, 0.0, 1.0)  # the dataset's vertical axis (path frames)
 
@@ -169,7 +169,7 @@ def _build_task(
     val_fold: int = 0,
 ) -> OrientationTask:
     from motion_envs.geometry import quaternion as quat
-    from motion_envs.models.nominal import OrientationNominal
+    from motion_envs.models.orientation_nominal import OrientationNominal
 
     dataset, fit, part = orientation_split_parts(
         data, split, test_fraction, split_seed, min_deg, val_fraction, fold, val_folds, val_fold
@@ -235,7 +235,7 @@ def load_orientation_task(
     and ``val_fold = j`` (0 <= j < K): the ``j``-th of ``K`` groups of the training people
     is the validation split (instead of ``val_fraction``)."""
     from motion_envs.datasets import ORIENTATION_DATASETS
-    from motion_envs.models.nominal import ORIENTATION_NOMINALS
+    from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
     check_choice(split, "split", _SPLITS)
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)

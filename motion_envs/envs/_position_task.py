@@ -75,7 +75,7 @@ class PositionTask(ReachTask):
     tasks: NDArray[np.str_]
     task_names: tuple[str, ...]
     criterion: float
-    grids: Any  # motion_envs.models.nominal.PositionGrids
+    grids: Any  # motion_envs.models.position_nominal.PositionGrids
 
 
 def _observation_bounds(
@@ -90,7 +90,7 @@ def _observation_bounds(
     position in ``[lo_d - m_d, hi_d + m_d]`` (the observation clips them there); ``tau``
     and the one-hot task in ``[0, 1]``.
     """
-    from motion_envs.models.nominal import resample_positions
+    from motion_envs.datasets.resampling import resample_positions
 
     y, _ = resample_positions(dataset, N_STEPS)
     lo, hi = y.min(axis=(0, 1)), y.max(axis=(0, 1))
@@ -119,7 +119,7 @@ def position_split_source(
     ``full`` is the whole dataset (observation bounds and task names); ``dataset`` the
     demonstrations the split is drawn from (with ``val_fraction > 0`` and a
     ``"train"``/``"val"`` split, the training demonstrations, split again). The folds of
-    :func:`~motion_envs.models.nominal.position_folds` on these arguments give every
+    :func:`~motion_envs.datasets.splits.position_folds` on these arguments give every
     task's training demonstrations, which anything else fitted "on the environment's
     training data" (the learned regressor of ``motion-bench agent``) uses too.
     """
@@ -145,7 +145,7 @@ def _build_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
 ) -> PositionTask:
-    from motion_envs.models.nominal import position_grids
+    from motion_envs.models.position_nominal import position_grids
 
     full, dataset, inner, fraction = position_split_source(
         data, shapes, split, test_fraction, split_seed, val_fraction
@@ -216,7 +216,8 @@ def load_position_task(
     observe_timing: bool = False,
 ) -> PositionTask:
     """Build (or reuse) the precomputed episodes of a split; LASA is cached."""
-    from motion_envs.models.nominal import POSITION_NOMINALS, POSITION_SPLITS, PositionNominal
+    from motion_envs.datasets.splits import POSITION_SPLITS
+    from motion_envs.models.position_nominal import POSITION_NOMINALS, PositionNominal
 
     splits = (*POSITION_SPLITS, "val")
     if split not in splits:

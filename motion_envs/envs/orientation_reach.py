@@ -180,7 +180,7 @@ class OrientationReachEnv(ReachEnv):
     and goal orientation and its task label) on the 50-point normalised-time grid. At
     every step the agent adds a small rotation to the nominal model's orientation and is
     scored against what the human actually did, with the paper's criterion. The nominal
-    is fitted on the *training* subjects only (:mod:`motion_envs.models.nominal`), so
+    is fitted on the *training* subjects only (:mod:`motion_envs.models.orientation_nominal`), so
     on ``split="test"`` both the nominal and the agent face people they have not seen.
 
     The zero action reproduces the nominal model exactly: over the test split, the

@@ -145,7 +145,7 @@ class PositionReachEnv(ReachEnv):
     normalised-time grid: at every step the agent moves the nominal model's position
     by a small offset and is scored by its distance to the demonstration at that time.
     Nominals are fitted per task on the training demonstrations only
-    (:mod:`motion_envs.models.nominal`).
+    (:mod:`motion_envs.models.position_nominal`).
 
     The zero action reproduces the nominal exactly: on a split (``"test"``, ``"train"``,
     or ``"loo"``: every demonstration, its nominal fitted on the other demonstrations of

@@ -49,17 +49,9 @@ if TYPE_CHECKING:
     )
     from motion_envs.models.frames import segments_frame, trajectories_frame
     from motion_envs.models.minimum_jerk import MinimumJerk
-    from motion_envs.models.nominal import (
-        CONDITION_KINDS,
-        ORIENTATION_NOMINALS,
-        POSITION_CONDITIONS,
-        POSITION_NOMINALS,
-        POSITION_SPLITS,
-        position_folds,
-        resample_positions,
-    )
     from motion_envs.models.orientation_model import ORIENTATION_PREDICTORS, OrientationModel
     from motion_envs.models.orientation_nominal import (
+        ORIENTATION_NOMINALS,
         OrientationGrids,
         OrientationNominal,
         orientation_criterion,
@@ -85,11 +77,17 @@ if TYPE_CHECKING:
         swept_error_area,
     )
     from motion_envs.models.position_nominal import (
+        CONDITION_KINDS,
+        POSITION_CONDITIONS,
+        POSITION_NOMINALS,
+        POSITION_SPLITS,
         PositionGrids,
         PositionNominal,
         median_of_task_medians,
         position_conditions,
+        position_folds,
         position_grids,
+        resample_positions,
         varying_columns,
     )
     from motion_envs.models.segmentation import (
@@ -162,7 +160,7 @@ _EXPORTS: dict[str, str] = {
     "AllOf": "segmentation",
     "AnyOf": "segmentation",
     "BezierResidualModel": "bezier_models",
-    "CONDITION_KINDS": "nominal",
+    "CONDITION_KINDS": "position_nominal",
     "CRITERIA": "position_criteria",
     "CRITERIA_DEGREES": "criteria",
     "Criterion": "segmentation",
@@ -189,14 +187,14 @@ _EXPORTS: dict[str, str] = {
     "MotionState": "segmentation",
     "NotFittedError": "estimator",
     "NullBezierModel": "bezier_models",
-    "ORIENTATION_NOMINALS": "nominal",
+    "ORIENTATION_NOMINALS": "orientation_nominal",
     "ORIENTATION_PREDICTORS": "orientation_model",
     "OrientationGrids": "orientation_nominal",
     "OrientationModel": "orientation_model",
     "OrientationNominal": "orientation_nominal",
-    "POSITION_CONDITIONS": "nominal",
-    "POSITION_NOMINALS": "nominal",
-    "POSITION_SPLITS": "nominal",
+    "POSITION_CONDITIONS": "position_nominal",
+    "POSITION_NOMINALS": "position_nominal",
+    "POSITION_SPLITS": "position_nominal",
     "Phase": "segmentation",
     "PhaseStateMachine": "segmentation",
     "PoseModel": "pose_model",
@@ -248,12 +246,12 @@ _EXPORTS: dict[str, str] = {
     "plot_fit": "plotting",
     "position_conditions": "position_nominal",
     "position_fit_errors": "fit_errors",
-    "position_folds": "nominal",
+    "position_folds": "position_nominal",
     "position_grids": "position_nominal",
     "predict_orientations": "orientation_prediction",
     "regression_matrix": "sine_regression",
     "resample_orientations": "slerp_residual",
-    "resample_positions": "nominal",
+    "resample_positions": "position_nominal",
     "rmse": "position_criteria",
     "save_model": "serialization",
     "score_cohort": "criteria",

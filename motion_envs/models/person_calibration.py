@@ -21,7 +21,7 @@ calibration reaches. A person with fewer than ``K + 1`` trajectories gives all o
     The same blend (``k0`` chosen the same way) on residuals taken against the slerp
     traversed with the training people's mean speed profile, as
     ``slerp_loso_predicted_timing`` and ``null_d2_loso_predicted_timing`` of
-    :mod:`baselines.learned_rows`; the inner choice of ``k0`` uses the same residuals
+    :mod:`baselines.learned.rows`; the inner choice of ``k0`` uses the same residuals
     (the profile of all training people of the fold).
 ``slerp_person_timing_k{K}_predicted_timing``
     The slerp traversed with the mean speed profile of the calibration reaches (residual
@@ -287,7 +287,7 @@ class PersonCalibration:
     errors:
         Row name -> ``(L,)`` draw-averaged per-trajectory max errors; also the reference
         rows ``null_d2_loso`` and ``slerp_loso_predicted_timing`` (same definitions as
-        :mod:`motion_envs.models.criteria` and :mod:`baselines.learned_rows`).
+        :mod:`motion_envs.models.criteria` and :mod:`baselines.learned.rows`).
     chosen_k0:
         Row name -> held-out subject -> the ``k0`` chosen on the training subjects.
     n_draws, seed:
