@@ -135,7 +135,8 @@ _HELP = {
     "wrist,elbow,shoulder as in Faraway & Choe) or a BVH joint (e.g. the forearm)",
     "ball": "C3D/TSV marker of the ball (juggling)",
     "balls": "'unlabelled': assemble the ball from a Qualisys TSV's unlabelled fragments",
-    "unit": "length unit of the file (default: C3D POINT:UNITS, TSV mm; a BVH needs it)",
+    "unit": "length unit of the file: m, cm, mm, in, or the metres per file unit as a "
+    "number (0.056444 for CMU BVH files; default: C3D POINT:UNITS, TSV mm; a BVH needs it)",
     "up": "the file's vertical axis, rotated to the project's Z-up",
     "max_gap": "fill gaps of up to this many frames (slerp for orientations); longer split",
     "speed_threshold": "cut movements where the speed exceeds this (m/s, rad/s for "

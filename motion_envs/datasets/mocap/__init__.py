@@ -32,6 +32,7 @@ from motion_envs.datasets.mocap._options import (
     missing_option,
     parse_option,
     parse_source,
+    unit_scale,
 )
 from motion_envs.datasets.mocap._readers import (
     read_bvh,
@@ -72,4 +73,5 @@ __all__ = [
     "speed",
     "speed_segments",
     "triad_quaternions",
+    "unit_scale",
 ]

@@ -61,12 +61,20 @@ class ImportReport:
     movements: int
     short_dropped: int = 0
     balls: dict[str, int] = field(default_factory=dict)
+    first_frame: int = 0
 
     def lines(self) -> list[str]:
         g = self.gaps
+        start = self.first_frame / self.rate
         out = [
-            f"{self.source}: {self.n_frames} frames at {self.rate:g} Hz "
-            f"({self.n_frames / self.rate:.3f} s)",
+            f"{self.source}: {self.n_frames} frames at {self.rate:.10g} Hz "
+            f"({self.n_frames / self.rate:.3f} s"
+            + (
+                f"; first frame {self.first_frame} counted from 0: t from {start:.6g} s"
+                if self.first_frame
+                else ""
+            )
+            + ")",
             f"samples missing {g.missing}, filled {g.filled}, dropped {g.dropped}; "
             f"{g.pieces} gap-free piece(s)",
             f"{self.movements} movement(s)"
@@ -140,7 +148,9 @@ def _position(
         option = "--joint" if rec.fmt == "bvh" else ("--ball" if role == "ball" else "--marker")
         raise ValueError(f"{rec.path}: give the {role} {what} ({option} NAME)")
     if rec.fmt == "bvh" and rec.scale is None:
-        raise ValueError(f"{rec.path}: BVH lengths carry no unit; give --unit (m, cm, mm, in)")
+        raise ValueError(
+            f"{rec.path}: BVH lengths carry no unit; give --unit (m, cm, mm, in or metres per unit)"
+        )
     j = rec.index(name, what)
     present = ~rec.missing()[:, j]
     if not present.any():
@@ -214,9 +224,11 @@ def _movements(
     spans: list[tuple[Piece, int, int, str | None, str | None, str | None]] = []
     short = 0
     if opts.segments is not None:
+        half = 0.5 / rec.rate  # a row's times are rounded to the nearest frame (C3D
+        # EVENT:TIMES are float32: 3.39 s is stored as 3.3900001)
         for row in read_segments(opts.segments):
             piece = next(
-                (p for p in pieces if p.t[0] <= row.start + 1e-9 and row.end <= p.t[-1] + 1e-9),
+                (p for p in pieces if p.t[0] <= row.start + half and row.end <= p.t[-1] + half),
                 None,
             )
             if piece is None:
@@ -224,7 +236,7 @@ def _movements(
                     f"{opts.segments}: line {row.line}: {row.start:g} to {row.end:g} s is not "
                     f"inside one gap-free piece of {rec.path}"
                 )
-            inside = np.flatnonzero((piece.t >= row.start - 1e-9) & (piece.t <= row.end + 1e-9))
+            inside = np.flatnonzero((piece.t > row.start - half) & (piece.t < row.end + half))
             if inside.size < MIN_SAMPLES:
                 raise ValueError(
                     f"{opts.segments}: line {row.line}: fewer than {MIN_SAMPLES} samples"
@@ -278,7 +290,10 @@ def _trajectories(
         raise ValueError(f"{rec.path}: trajectory names in the segments table are not unique")
     subjects = np.array([m.subject for m in moves], dtype=str)
     tasks = np.array([m.task for m in moves], dtype=str)
-    report = ImportReport(str(rec.path), rec.n_frames, rec.rate, counts, len(moves), short)
+    report = ImportReport(
+        str(rec.path), rec.n_frames, rec.rate, counts, len(moves), short,
+        first_frame=rec.first_frame,
+    )  # fmt: skip
     return moves, (ids, subjects, tasks), report
 
 
@@ -368,6 +383,7 @@ def import_juggling(
         name=rec.path.name, recordings=recordings, simulated=False, task=task or JugglingTask()
     )
     report = ImportReport(
-        str(rec.path), rec.n_frames, rec.rate, counts, len(moves), short, ball_counts
-    )
+        str(rec.path), rec.n_frames, rec.rate, counts, len(moves), short, ball_counts,
+        rec.first_frame,
+    )  # fmt: skip
     return demos, report

@@ -25,13 +25,35 @@ __all__ = [
     "missing_option",
     "parse_option",
     "parse_source",
+    "unit_scale",
 ]
 
 #: File suffixes read as motion capture (case-insensitive).
 MOCAP_SUFFIXES: tuple[str, ...] = (".c3d", ".bvh", ".tsv")
 
-#: Length units accepted by ``--unit``, in metres.
+#: Length units accepted by ``--unit`` by name, in metres (``--unit`` also takes a
+#: number: the metres per file unit, e.g. ``0.056444`` for the CMU database's BVH files).
 UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+
+
+def unit_scale(text: str) -> float:
+    """Metres per file unit: a name of :data:`UNITS` or a finite number > 0.
+
+    Raises ``ValueError`` (naming no option; the caller adds it) for anything else.
+    """
+    key = text.strip().lower()
+    if key in UNITS:
+        return UNITS[key]
+    try:
+        value = float(key)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(
+            f"expected one of {', '.join(UNITS)} or a number > 0 (metres per file unit, "
+            f"e.g. 0.056444); got {text!r}"
+        )
+    return value
 
 
 @dataclass(frozen=True)
@@ -57,8 +79,10 @@ class ImportOptions:
         ``labelled`` (the ``ball`` marker) or ``unlabelled``: the ball flights are
         assembled from a Qualisys TSV's unlabelled fragments.
     unit:
-        Length unit of the file (``m``, ``cm``, ``mm``, ``in``); C3D's ``POINT:UNITS``
-        and TSV's millimetres are used when None; a BVH needs it for positions.
+        Length unit of the file: ``m``, ``cm``, ``mm``, ``in``, or a number, the metres
+        per file unit (``"0.056444"`` for the CMU database's BVH files); C3D's
+        ``POINT:UNITS`` and TSV's millimetres are used when None; a BVH needs it for
+        positions.
     up:
         The file's vertical axis, ``y`` or ``z``; rotated to the project's Z-up.
     max_gap:
@@ -133,6 +157,11 @@ def _one_or_three(text: str) -> tuple[str, ...]:
     return _triad(text)
 
 
+def _unit(text: str) -> str:
+    unit_scale(text)  # the check; the text is kept as given
+    return text
+
+
 def _choice(*allowed: str) -> Callable[[str], str]:
     def check(text: str) -> str:
         if text not in allowed:
@@ -184,7 +213,7 @@ _CHECKS: dict[str, Callable[[str], Any]] = {
     "relative_to": _one_or_three,
     "ball": _name,
     "balls": _choice("labelled", "unlabelled"),
-    "unit": _choice(*UNITS),
+    "unit": _unit,
     "up": _choice("y", "z"),
     "max_gap": _int_at_least(0),
     "speed_threshold": _float(0.0, strict=True),
@@ -265,7 +294,10 @@ def missing_option(path: Path, kind: str, options: ImportOptions) -> tuple[str, 
         if options.joint is None:
             return "joint", f"{path} is a BVH file: give the joint to import"
         if kind != "orientation" and options.unit is None:
-            return "unit", f"{path}: BVH lengths carry no unit; give one of {', '.join(UNITS)}"
+            return "unit", (
+                f"{path}: BVH lengths carry no unit; give one of {', '.join(UNITS)} or the "
+                "metres per file unit (e.g. 0.056444)"
+            )
         return None
     if kind == "orientation" and options.markers is None:
         return "markers", f"{path}: give the three rigid markers ORIGIN,X,PLANE"

@@ -8,6 +8,7 @@ names the file, in one line.
 
 from __future__ import annotations
 
+import io
 import math
 import multiprocessing
 import os
@@ -20,7 +21,7 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from motion_envs.datasets.mocap._options import UNITS
+from motion_envs.datasets.mocap._options import UNITS, unit_scale
 from motion_envs.datasets.mocap._recording import MocapRecording
 from motion_envs.geometry import quaternion as quat
 
@@ -40,10 +41,13 @@ def _check_rate(path: Path, rate: float, where: str) -> float:
 
 
 def _unit_scale(path: Path, unit: str) -> float:
-    key = unit.strip().lower()
-    if key not in UNITS:
-        raise ValueError(f"{path}: unknown length unit {unit!r}; give --unit ({', '.join(UNITS)})")
-    return UNITS[key]
+    try:
+        return unit_scale(unit)
+    except ValueError:
+        raise ValueError(
+            f"{path}: unknown length unit {unit!r}; give --unit ({', '.join(UNITS)}, or the "
+            "metres per file unit as a number)"
+        ) from None
 
 
 def _c3d_fields(path: str, markers: Sequence[str] | None = None) -> dict[str, Any]:
@@ -68,6 +72,7 @@ def _c3d_fields(path: str, markers: Sequence[str] | None = None) -> dict[str, An
     residuals = meta.get("residuals")
     return {
         "rate": float(c3d["header"]["points"]["frame_rate"]),
+        "first_frame": int(c3d["header"]["points"]["first_frame"]),
         "labels": labels,
         "kept": [labels[j] for j in keep],
         "n_frames": int(raw.shape[2]),
@@ -130,7 +135,10 @@ def read_c3d(
 
     ``markers``: keep only these (None: all); a name the file lacks raises
     ``ValueError`` listing the file's labels. Missing samples are NaN (ezc3d sets them
-    for negative residuals; residuals are kept). ezc3d runs in a forked child process: a
+    for negative residuals; residuals are kept). The first frame's time is the header's
+    first frame (ezc3d's ``header.points.first_frame``, counted from 0) over the rate, so
+    that the file's own times (``EVENT:TIMES``, a cropped trial's frames) line up with
+    :attr:`MocapRecording.t`. ezc3d runs in a forked child process: a
     corrupt file can crash it. Raises ``ValueError`` naming the file when it is not a
     C3D file, is truncated (fewer frames than its header announces), has no points, or
     a frame rate that is not > 0.
@@ -161,7 +169,8 @@ def read_c3d(
     residuals = fields["residuals"]
     if residuals is not None:
         points[residuals < 0] = np.nan
-    return MocapRecording(p, "c3d", rate, tuple(labels), points, residuals, None, scale)
+    first = fields["first_frame"]
+    return MocapRecording(p, "c3d", rate, tuple(labels), points, residuals, None, scale, first)
 
 
 def _announced_frames(path: Path) -> int | None:
@@ -212,8 +221,11 @@ def read_bvh(path: str | Path, unit: str | None = None) -> MocapRecording:
     as the BVH format defines them) and computes the joints' world positions by forward
     kinematics; the world orientation of a joint is the product of the local rotations
     from the root down to it. Lengths are in the file's unit, scaled to metres when
-    ``unit`` is given. Raises ``ValueError`` naming the file for an unreadable or
-    truncated file and a frame time that is not > 0.
+    ``unit`` is given (a name of ``UNITS`` or the metres per file unit). The rate is
+    ``1 / Frame Time`` as the file writes it (``.0083333`` gives 120.00048 Hz): pybvh
+    rounds a frame time within 0.01 % of ``1 / N`` to it, so the line is read here.
+    Raises ``ValueError`` naming the file for an unreadable or truncated file and a
+    frame time that is not > 0.
     """
     p = Path(path)
     try:
@@ -224,7 +236,7 @@ def read_bvh(path: str | Path, unit: str | None = None) -> MocapRecording:
         bvh = pybvh.read_bvh_file(p, world_up="+y", warn_on_world_up_disagreement=False)
     except Exception as exc:  # pybvh raises various types for malformed text
         raise ValueError(f"{p}: {_bvh_problem(' '.join(str(exc).split()))}") from None
-    frame_time = float(bvh.frame_time)
+    frame_time = _bvh_frame_time(p, float(bvh.frame_time))
     if not math.isfinite(frame_time) or frame_time <= 0:
         raise ValueError(f"{p}: frame rate is zero (Frame Time: {frame_time:g}); expected > 0")
     if bvh.frame_count == 0:
@@ -236,6 +248,19 @@ def read_bvh(path: str | Path, unit: str | None = None) -> MocapRecording:
     q = quat.from_rotation(Rotation.from_matrix(rot.reshape(-1, 3, 3))).reshape(*shape, 4)
     labels = tuple(str(n) for n in bvh.joint_names)
     return MocapRecording(p, "bvh", 1.0 / frame_time, labels, points, None, q, scale)
+
+
+def _bvh_frame_time(path: Path, parsed: float) -> float:
+    """The ``Frame Time:`` of the BVH file as written (``parsed``, pybvh's, if none)."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            key, colon, value = line.partition(":")
+            if colon and key.strip().lower() == "frame time":
+                try:
+                    return float(value.split()[0])
+                except (IndexError, ValueError):
+                    raise ValueError(f"{path}: bad Frame Time line {line.strip()!r}") from None
+    return parsed
 
 
 def _bvh_problem(message: str) -> str:
@@ -254,11 +279,13 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
     Layout: header lines ``KEY<TAB>value...`` (``NO_OF_FRAMES``, ``FREQUENCY``,
     ``MARKER_NAMES``, ...), then optionally a column header ``Frame, Time, NAME X,
     NAME Y, NAME Z, ...``, then one line per frame. Positions are in mm (``unit``
-    overrides); a sample whose X, Y and Z are all 0 is missing. Columns without a
+    overrides); a sample whose X, Y and Z are all 0, or with a blank field (QTM's export
+    of a marker not seen in that frame), is missing. Columns without a
     name, or named ``Unidentified ...`` / ``Unlabeled ...``, are unlabelled trajectory
     fragments (label ``""``). Raises ``ValueError`` naming the file for a missing or
-    zero ``FREQUENCY``, a truncated file, non-numeric values or a column count that
-    does not match the markers.
+    zero ``FREQUENCY``, a truncated file (fewer lines than ``NO_OF_FRAMES``, or a last
+    line cut short), a line with fewer fields than the markers need, non-numeric values
+    or a column header that does not match the markers.
     """
     p = Path(path)
     meta: dict[str, list[str]] = {}
@@ -273,8 +300,8 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
                     columns = fields
                     n_header += 1
                     break
-                if _is_number(first):
-                    break
+                if _is_number(first) or (not first and any(map(_is_number, fields[1:]))):
+                    break  # a data line (its first field blank: a marker not seen)
                 n_header += 1
                 if first:
                     meta[first.upper()] = fields[1:]
@@ -288,19 +315,14 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
         raise ValueError(f"{p}: bad FREQUENCY header line {meta['FREQUENCY']!r}") from None
     rate = _check_rate(p, rate, "FREQUENCY")
     names, has_frame_time = _tsv_markers(p, meta, columns)
-    try:
-        data = pd.read_csv(
-            p, sep="\t", skiprows=n_header, header=None, dtype=np.float64, engine="c"
-        ).to_numpy()
-    except (ValueError, pd.errors.ParserError) as exc:
-        raise ValueError(f"{p}: bad data line ({' '.join(str(exc).split())})") from None
-    except pd.errors.EmptyDataError:
-        raise ValueError(f"{p}: no data lines") from None
     first_col = 2 if has_frame_time else 0
     width = first_col + 3 * len(names)
-    if data.shape[1] < width:
-        raise ValueError(f"{p}: {data.shape[1]} columns, expected {width} for {len(names)} markers")
-    data = data[:, :width]
+    with open(p, encoding="utf-8-sig") as fh:
+        lines = fh.read().splitlines()[n_header:]
+    rows = [k for k, line in enumerate(lines) if line]  # "\t\t..." is a frame: all blank
+    if not rows:
+        raise ValueError(f"{p}: no data lines")
+    n_fields = np.array([lines[k].count("\t") + 1 for k in rows])
     announced = None
     if meta.get("NO_OF_FRAMES"):
         try:
@@ -309,18 +331,32 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
             raise ValueError(
                 f"{p}: bad NO_OF_FRAMES header line {meta['NO_OF_FRAMES']!r}"
             ) from None
-    incomplete = ~np.isfinite(data).all(axis=1)
-    if (announced is not None and data.shape[0] < announced) or incomplete[-1:].any():
+    short = n_fields < width
+    if (announced is not None and len(rows) < announced) or short[-1]:
         raise ValueError(
-            f"{p}: truncated TSV file: {int((~incomplete).sum())} complete frame(s)"
+            f"{p}: truncated TSV file: {int((~short).sum())} complete frame(s)"
             + (f" of the {announced} announced" if announced is not None else "")
         )
-    if incomplete.any():
-        bad_line = n_header + 1 + int(np.flatnonzero(incomplete)[0])
-        raise ValueError(f"{p}: missing value on line {bad_line}")
+    if short.any():
+        k = int(np.flatnonzero(short)[0])
+        raise ValueError(
+            f"{p}: line {n_header + 1 + rows[k]} has {int(n_fields[k])} fields, expected "
+            f"{width} for {len(names)} markers"
+        )
+    try:
+        data = pd.read_csv(
+            io.StringIO("\n".join(lines[k] for k in rows)),
+            sep="\t",
+            header=None,
+            usecols=range(width),
+            dtype=np.float64,
+            engine="c",
+        ).to_numpy()
+    except (ValueError, pd.errors.ParserError) as exc:
+        raise ValueError(f"{p}: bad data line ({' '.join(str(exc).split())})") from None
     scale = _unit_scale(p, unit or "mm")
     points = data[:, first_col:].reshape(data.shape[0], len(names), 3) * scale
-    points[(points == 0).all(axis=2)] = np.nan
+    points[(points == 0).all(axis=2) | ~np.isfinite(points).all(axis=2)] = np.nan
     return MocapRecording(p, "tsv", rate, tuple(names), points, None, None, scale)
 
 

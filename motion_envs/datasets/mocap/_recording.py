@@ -38,6 +38,11 @@ class MocapRecording:
         kinematics, file axes), else None.
     scale:
         Metres per file unit used (None: unknown, a BVH read without ``unit``).
+    first_frame:
+        Number of the first frame, counted from 0: a C3D file's header value (ezc3d's
+        ``header.points.first_frame``, e.g. 99 for a trial cropped to start at frame
+        100), so that the file's own event times line up with :attr:`t`; 0 for BVH and
+        TSV.
     """
 
     path: Path
@@ -48,6 +53,7 @@ class MocapRecording:
     residuals: FloatArray | None = None
     quaternions: FloatArray | None = None
     scale: float | None = 1.0
+    first_frame: int = 0
 
     @property
     def n_frames(self) -> int:
@@ -55,8 +61,9 @@ class MocapRecording:
 
     @property
     def t(self) -> FloatArray:
-        """``(F,)`` time of each frame from the start of the file, in seconds."""
-        return np.arange(self.n_frames, dtype=np.float64) / self.rate
+        """``(F,)`` time of each frame in seconds: ``(first frame + k) / rate`` (C3D), else
+        from the start of the file."""
+        return (self.first_frame + np.arange(self.n_frames, dtype=np.float64)) / self.rate
 
     def index(self, name: str, what: str = "marker") -> int:
         """Column of the marker or joint ``name``; ``ValueError`` naming the file if absent."""
