@@ -25,7 +25,10 @@ import tempfile
 import textwrap
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
+
+if TYPE_CHECKING:
+    from motion_envs.datasets.registry import Kind
 
 __all__ = [
     "ConfigError",
@@ -284,6 +287,30 @@ def mocap_data(text: str, kind: str) -> str | None:
         field, message = missing
         raise argparse.ArgumentTypeError(f"{message} (add {field.replace('_', '-')}=... after ?)")
     return text
+
+
+def builtin_data(text: str, kind: Kind) -> bool:
+    """``--data``: whether ``text`` names a built-in dataset of ``kind`` (its name, or
+    ``NAME:VALUE`` for an entry with a parameter; :mod:`motion_envs.datasets.registry`).
+
+    A built-in name of another kind is an error naming the kind's names.
+    """
+    from motion_envs.datasets.registry import lookup
+
+    try:
+        return lookup(text, kind) is not None
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def missing_data(text: str, kind: Kind) -> argparse.ArgumentTypeError:
+    """``--data`` that is neither a built-in name of ``kind`` nor an existing file."""
+    from motion_envs.datasets.registry import describe_names
+
+    return argparse.ArgumentTypeError(
+        f"expected a built-in {kind} dataset ({describe_names(kind)}) or a CSV file; "
+        f"{text} does not exist"
+    )
 
 
 def wrote(paths: Sequence[object]) -> str:

@@ -67,7 +67,12 @@ def no_computation(monkeypatch):
 
 # (argv with {tmp} for the fixture folder, expected fragment of the one error line)
 CASES = [
-    (["orientation", "--data", "{tmp}/missing.csv"], "argument --data: expected one of"),
+    (
+        ["orientation", "--data", "{tmp}/missing.csv"],
+        "argument --data: expected a built-in orientation dataset ('vr-kitchen', 'cohort', "
+        "'cohort:CONFIG') or a CSV file",
+    ),
+    (["orientation", "--data", "lasa"], "'lasa' is the built-in position dataset; built-in"),
     (["orientation", "--data", "{tmp}/folder"], "argument --data: {tmp}/folder is a folder"),
     (["orientation", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
     (["orientation", "--out", "{tmp}/file.txt/sub"], "argument --out:"),
@@ -88,7 +93,12 @@ CASES = [
     (["orientation", "--up", "0,1,0,0"], "argument --up: expected three finite numbers"),
     (["orientation", "--up", "0,0,0"], "argument --up: expected a non-zero vector"),
     (["orientation", "--up=-0,-0.0,0"], "argument --up: expected a non-zero vector"),
-    (["position", "--data", "{tmp}/missing.csv"], "argument --data: expected one of ['lasa']"),
+    (
+        ["position", "--data", "{tmp}/missing.csv"],
+        "argument --data: expected a built-in position dataset ('lasa') or a CSV file",
+    ),
+    (["position", "--data", "cohort"], "built-in orientation dataset; built-in position"),
+    (["juggling", "--data", "lasa"], "built-in juggling datasets: 'simulated'"),
     (["position", "--data", "{tmp}/folder"], "argument --data: {tmp}/folder is a folder"),
     (["position", "--out", "{tmp}/file.txt"], "argument --out: {tmp}/file.txt is a file"),
     (["position", "--n-points", "many"], "argument --n-points: expected an integer >= 5"),

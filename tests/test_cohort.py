@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy import special
 from scipy.spatial.transform import Rotation, Slerp
 
-from motion_envs.datasets import ORIENTATION_DATASETS, load_orientation_dataset
+from motion_envs.datasets import dataset_names, load_orientation_dataset
 from motion_envs.datasets.cohort import (
     CohortGenerator,
     draw_trajectory,
@@ -260,7 +260,7 @@ def test_calibrated_cohort_meets_the_paper_within_15_percent():
 
 
 def test_load_by_name_and_path(tmp_path):
-    assert "cohort" in ORIENTATION_DATASETS
+    assert "cohort" in dataset_names("orientation")
     cfg = _small(2)
     path = cfg.save(tmp_path / "tiny.yaml")
     by_path = load_orientation_dataset(f"cohort:{path}", min_deg=0)

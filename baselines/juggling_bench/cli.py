@@ -33,6 +33,7 @@ from motion_envs.datasets.juggling import (
     parse_siteswap,
     siteswap_balls,
 )
+from motion_envs.datasets.registry import describe_names
 from motion_envs.models.juggling import LEVELS
 
 
@@ -157,11 +158,12 @@ def gravity_task(text: str) -> JugglingTask:
 
 
 def juggling_data(text: str) -> str:
-    """``--data``: ``simulated`` or an existing, readable juggling CSV with ``t,x,z``.
+    """``--data``: a built-in juggling dataset (``simulated``), a recording or an existing,
+    readable juggling CSV with ``t,x,z``.
 
     Only the header line is read here (the rows are checked when the run loads them).
     """
-    if text == "simulated":
+    if options.builtin_data(text, "juggling"):
         return text
     if (recording := options.mocap_data(text, "juggling")) is not None:  # FILE.c3d?opt=...
         return recording
@@ -286,7 +288,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--data",
         type=juggling_data,
         default=None,
-        help="a juggling CSV, or 'simulated' (default: SIMULATED demonstrations)",
+        help=(
+            f"a juggling CSV, a recording, or a built-in dataset ({describe_names('juggling')}; "
+            "default: the SIMULATED demonstrations)"
+        ),
     )
     p.add_argument(
         "--demo-cycles",

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 from baselines import options
 from motion_envs.datasets.juggling import MIN_SPLIT_CYCLES, JugglingTask
+from motion_envs.datasets.registry import dataset_names
 from motion_envs.models.juggling import DEMO_CYCLES, FIT_SEED, FIT_TEST_FRACTION, TRACKING_NOISE
 
 #: The benchmark's acceptance targets, checked in ``results["targets"]``.
@@ -26,10 +27,10 @@ MIN_CYCLES = MIN_SPLIT_CYCLES
 class JugglingConfig:
     """Everything ``motion-bench juggling`` needs (the CLI maps its flags onto this).
 
-    ``data``: None (or ``"simulated"``) for the SIMULATED demonstrations, else the path of
-    a juggling CSV. ``noise``: release-velocity noise levels (relative std), each in
-    [0, 1); ``tracking``: hand tracking noise std (m). ``world``: ``"mujoco"`` or
-    ``"model"``.
+    ``data``: None (or the built-in name ``"simulated"``) for the SIMULATED demonstrations,
+    else the path of a juggling CSV. ``noise``: release-velocity noise levels (relative
+    std), each in [0, 1); ``tracking``: hand tracking noise std (m). ``world``:
+    ``"mujoco"`` or ``"model"``.
     """
 
     cycles: int = 1000
@@ -75,7 +76,10 @@ def check_config(config: JugglingConfig) -> None:
     for name in ("mujoco_cycles", "mujoco_noise_cycles"):
         if getattr(config, name) < 0:
             raise options.ConfigError(name, f"must be >= 0; got {getattr(config, name)}")
-    if config.data in (None, "simulated") and config.demo_cycles * config.demo_persons < MIN_CYCLES:
+    if (
+        config.data in (None, *dataset_names("juggling"))
+        and config.demo_cycles * config.demo_persons < MIN_CYCLES
+    ):
         raise options.ConfigError(
             "demo_cycles",
             f"{config.demo_cycles} cycle(s) x {config.demo_persons} person(s) of SIMULATED "

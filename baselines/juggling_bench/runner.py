@@ -30,9 +30,8 @@ from motion_envs.models.juggling import (
 
 def load_demos(config: JugglingConfig) -> JugglingDemos:
     """The SIMULATED demonstrations, or the users' CSV when ``config.data`` is a path."""
-    data = None if config.data == "simulated" else config.data
     return load_demonstrations(
-        data, config.task, config.seed, config.demo_cycles, config.demo_persons
+        config.data, config.task, config.seed, config.demo_cycles, config.demo_persons
     )
 
 

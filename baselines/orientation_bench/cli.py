@@ -14,7 +14,7 @@ from baselines.orientation_bench.media import write
 from baselines.orientation_bench.runner import run
 from baselines.orientation_bench.text import report
 from baselines.verdicts import calibration_option
-from motion_envs.datasets import ORIENTATION_DATASETS
+from motion_envs.datasets.registry import describe_names
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG
 from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
@@ -44,15 +44,12 @@ def main(args: argparse.Namespace) -> int:
 
 def orientation_data(text: str) -> str:
     """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
-    if text in ORIENTATION_DATASETS or text.startswith("cohort:"):
+    if options.builtin_data(text, "orientation"):
         return text
     if (recording := options.mocap_data(text, "orientation")) is not None:  # FILE.c3d?opt=...
         return recording
     if not Path(text).exists():
-        raise argparse.ArgumentTypeError(
-            f"expected one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a CSV file; "
-            f"{text} does not exist"
-        )
+        raise options.missing_data(text, "orientation")
     return str(options.input_file(text))
 
 
@@ -87,7 +84,7 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         default="vr-kitchen",
         type=orientation_data,
         help=(
-            f"built-in dataset ({', '.join(ORIENTATION_DATASETS)}; 'cohort' is the simulated "
+            f"built-in dataset ({describe_names('orientation')}; 'cohort' is the simulated "
             "cohort calibrated to the paper, 'cohort:CONFIG' another one, CONFIG a name under "
             "configs/cohorts/ or a YAML path), a path to a CSV with "
             "columns trajectory,subject,task,t,qw,qx,qy,qz[,numeric predictors], or a "

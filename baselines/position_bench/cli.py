@@ -14,7 +14,7 @@ from baselines.position_bench.config import PositionConfig
 from baselines.position_bench.media import write
 from baselines.position_bench.runner import run
 from baselines.position_bench.text import report
-from motion_envs.datasets import POSITION_DATASETS
+from motion_envs.datasets.registry import describe_names
 from motion_envs.datasets.splits import POSITION_SPLITS
 from motion_envs.models.position_nominal import (
     CONDITION_KINDS,
@@ -58,15 +58,13 @@ def main(args: argparse.Namespace) -> int:
 
 
 def position_data(text: str) -> str:
-    """``--data``: ``lasa`` or an existing position CSV file."""
-    if text in POSITION_DATASETS:
+    """``--data``: a built-in position dataset (``lasa``), a recording or a position CSV."""
+    if options.builtin_data(text, "position"):
         return text
     if (recording := options.mocap_data(text, "position")) is not None:  # FILE.c3d?opt=...
         return recording
     if not Path(text).exists():
-        raise argparse.ArgumentTypeError(
-            f"expected one of {list(POSITION_DATASETS)} or a CSV file; {text} does not exist"
-        )
+        raise options.missing_data(text, "position")
     return str(options.input_file(text))
 
 
@@ -127,7 +125,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--data",
         default="lasa",
         type=position_data,
-        help="'lasa', a position CSV path (format above), or a recording "
+        help=f"a built-in dataset ({describe_names('position')}), a position CSV path "
+        "(format above), or a recording "
         "'FILE.c3d|.bvh|.tsv?option=value&...' with motion-bench import's options "
         "(docs/recordings.md)",
     )

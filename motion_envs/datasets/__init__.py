@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from motion_envs.datasets.lasa import load_lasa
 from motion_envs.datasets.mocap import (
     import_orientation,
     import_position,
@@ -17,13 +16,14 @@ from motion_envs.datasets.mocap import (
 )
 from motion_envs.datasets.orientation import OrientationDataset, read_orientation_csv
 from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
+from motion_envs.datasets.registry import DATASETS, dataset_names, lookup, unknown_data
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG, load_vr_kitchen
 
 __all__ = [
-    "ORIENTATION_DATASETS",
-    "POSITION_DATASETS",
+    "DATASETS",
     "OrientationDataset",
     "PositionDataset",
+    "dataset_names",
     "load_orientation_dataset",
     "load_position_dataset",
     "load_vr_kitchen",
@@ -31,19 +31,14 @@ __all__ = [
     "read_position_csv",
 ]
 
-#: Built-in position datasets by name.
-POSITION_DATASETS: tuple[str, ...] = ("lasa",)
-
-#: Built-in orientation datasets by name.
-ORIENTATION_DATASETS: tuple[str, ...] = ("vr-kitchen", "cohort")
-
 
 def load_orientation_dataset(
     data: str | os.PathLike[str],
     min_deg: float = DEFAULT_MIN_DEG,
     up: tuple[float, float, float] | None = None,
 ) -> OrientationDataset:
-    """Load a built-in orientation dataset by name, the users' CSV at a path, or a recording.
+    """Load a built-in orientation dataset by name (:mod:`motion_envs.datasets.registry`),
+    the users' CSV at a path, or a recording.
 
     A motion capture file (``.c3d``, ``.bvh``, ``.tsv``) is imported with the options
     after its name: ``"rec.c3d?markers=O,X,P&up=y"`` (:mod:`motion_envs.datasets.mocap`,
@@ -63,32 +58,24 @@ def load_orientation_dataset(
 
         x, y, z = (float(v) for v in check_up(up))
         return replace(load_orientation_dataset(data, min_deg), up=(x, y, z))
-    if isinstance(data, str) and (data == "cohort" or data.startswith("cohort:")):
-        from motion_envs.datasets.cohort import DEFAULT_COHORT, load_cohort
-
-        config = data.partition(":")[2]
-        if data.startswith("cohort:") and not config:
-            raise ValueError("data 'cohort:' needs a config name or YAML path after the colon")
-        return load_cohort(config or DEFAULT_COHORT, min_deg=min_deg)
-    if isinstance(data, str) and data == "vr-kitchen":
-        return load_vr_kitchen(min_deg=min_deg)
+    if (builtin := lookup(data, "orientation")) is not None:
+        entry, value = builtin
+        loaded: OrientationDataset = entry.load(value, min_deg=min_deg)
+        return loaded
     if is_mocap_source(data):
         path, options = parse_source(data)
         return import_orientation(path, options)[0].drop_small_rotations(min_deg)
     path = Path(data)
     if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-        raise ValueError(
-            f"data must be one of {list(ORIENTATION_DATASETS)}, 'cohort:CONFIG' or a path "
-            "to a CSV file; "
-            f"got {data!r}"
-        )
+        raise unknown_data(data, "orientation", "a path to an orientation CSV")
     return read_orientation_csv(path).drop_small_rotations(min_deg)
 
 
 def load_position_dataset(
     data: str | os.PathLike[str], shapes: Sequence[str] | None = None
 ) -> PositionDataset:
-    """Load the built-in ``"lasa"`` set, the users' position CSV at a path, or a recording.
+    """Load a built-in position dataset by name (``"lasa"``,
+    :mod:`motion_envs.datasets.registry`), the users' position CSV at a path, or a recording.
 
     A motion capture file is imported with the options after its name:
     ``"rec.c3d?marker=RFIN&speed-threshold=0.05"`` (:mod:`motion_envs.datasets.mocap`).
@@ -96,18 +83,17 @@ def load_position_dataset(
     ``shapes`` keeps only those tasks (LASA shape names, or the CSV's task labels);
     an unknown name raises ``ValueError`` naming it.
     """
-    if isinstance(data, str) and data in POSITION_DATASETS:
-        return load_lasa(list(shapes) if shapes else None)
+    if (builtin := lookup(data, "position")) is not None:
+        entry, value = builtin
+        loaded: PositionDataset = entry.load(value, shapes=shapes)
+        return loaded
     if is_mocap_source(data):
         path, options = parse_source(data)
         ds = import_position(path, options)[0]
     else:
         path = Path(data)
         if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-            raise ValueError(
-                f"data must be one of {list(POSITION_DATASETS)} or a path to a position CSV; "
-                f"got {data!r}"
-            )
+            raise unknown_data(data, "position", "a path to a position CSV")
         ds = read_position_csv(path)
     if shapes:
         unknown = sorted(set(shapes) - set(ds.tasks.tolist()))

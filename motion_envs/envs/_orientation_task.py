@@ -234,7 +234,7 @@ def load_orientation_task(
     (sorted labels) is the test split (:func:`orientation_split_parts`); ``val_folds = K``
     and ``val_fold = j`` (0 <= j < K): the ``j``-th of ``K`` groups of the training people
     is the validation split (instead of ``val_fraction``)."""
-    from motion_envs.datasets import ORIENTATION_DATASETS
+    from motion_envs.datasets.registry import lookup
     from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
     check_choice(split, "split", _SPLITS)
@@ -253,6 +253,7 @@ def load_orientation_task(
         fold = check_integer(fold, "fold", 0, 2**31)
     args += (int(split_seed), min_deg, val_fraction, bool(observe_timing), fold)
     args += (val_folds, val_fold)
-    if isinstance(data, str) and data in ORIENTATION_DATASETS:
+    builtin = lookup(data, "orientation")
+    if builtin is not None and builtin[1] is None:  # a built-in name, not cohort:CONFIG
         return _build_task_cached(*args)
     return _build_task(*args)

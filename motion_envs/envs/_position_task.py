@@ -215,7 +215,8 @@ def load_position_task(
     val_fraction: float = 0.0,
     observe_timing: bool = False,
 ) -> PositionTask:
-    """Build (or reuse) the precomputed episodes of a split; LASA is cached."""
+    """Build (or reuse) the precomputed episodes of a split; built-in data is cached."""
+    from motion_envs.datasets.registry import lookup
     from motion_envs.datasets.splits import POSITION_SPLITS
     from motion_envs.models.position_nominal import POSITION_NOMINALS, PositionNominal
 
@@ -233,6 +234,6 @@ def load_position_task(
         shapes = tuple(shapes)
     args: tuple[Any, ...] = (data, shapes, split, nominal, n_sines, float(test_fraction))
     args += (split_seed, residual_scale, val_fraction, bool(observe_timing))
-    if isinstance(data, str) and data == "lasa":
+    if lookup(data, "position") is not None:  # built-in data: cached
         return _build_task_cached(*args)
     return _build_task(*args)
