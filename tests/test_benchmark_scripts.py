@@ -1,19 +1,24 @@
-"""Every benchmark script still imports and parses its arguments (they are not run here:
-timing belongs in benchmarks/, not in the test suite)."""
+"""Every script of benchmarks/ (timings), experiments/ (outcomes) and tools/ still imports
+and parses its arguments (they are not run here: timing belongs in benchmarks/, not in
+the test suite); each experiment names the BENCHMARKS.md section it feeds."""
 
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+ROOT = Path(__file__).resolve().parents[1]
+BENCHMARKS = ROOT / "benchmarks"
+EXPERIMENTS = ROOT / "experiments"
 SCRIPTS = sorted(
     p
-    for p in BENCHMARKS.glob("*.py")
+    for folder in (BENCHMARKS, EXPERIMENTS, ROOT / "tools")
+    for p in folder.glob("*.py")
     if not p.name.startswith("_") and p.name != "plain_numpy_quaternion.py"
 )
 
@@ -22,7 +27,32 @@ def test_scripts_found():
     names = {p.name for p in SCRIPTS}
     assert {"quaternion_ops.py", "bezier_fit.py", "table1_vr_kitchen.py"} <= names
     assert {"env_throughput.py", "position_timing.py", "cohort_scaling.py"} <= names
-    assert "juggling_throughput.py" in names
+    assert {"juggling_throughput.py", "cascade_drops.py", "output_identity.py"} <= names
+
+
+def test_benchmarks_are_timings_and_experiments_name_their_section():
+    """benchmarks/ holds timings only (no script there says it is not one); every
+    experiment is in experiments/README.md with the BENCHMARKS.md (or docs) section it
+    feeds, and that section exists."""
+    for path in BENCHMARKS.glob("*.py"):
+        assert "Not a timing" not in path.read_text(encoding="utf-8"), path.name
+    readme = (EXPERIMENTS / "README.md").read_text(encoding="utf-8")
+    rows = dict(re.findall(r"^\| `(\w+\.py)` \|[^\n]*?\| ([^|\n]+) \|$", readme, re.M))
+    assert set(rows) == {p.name for p in EXPERIMENTS.glob("*.py")}
+    headings = {
+        (doc, line.lstrip("#").strip())
+        for doc in ("BENCHMARKS.md", *(f"docs/{p.name}" for p in (ROOT / "docs").glob("*.md")))
+        for line in (ROOT / doc).read_text(encoding="utf-8").splitlines()
+        if line.startswith("#")
+    }
+    benchmarks_md = (ROOT / "BENCHMARKS.md").read_text(encoding="utf-8")
+    for script, where in rows.items():
+        sections = re.findall(r"\[([^\]]+)\]\(\.\./([^)#]+)#[^)]*\)", where)
+        assert sections, (script, where)
+        for title, doc in sections:
+            assert (doc, title) in headings, (script, doc, title)
+            if doc == "BENCHMARKS.md":  # which points back to the script where it now is
+                assert f"experiments/{script}" in benchmarks_md, script
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)
@@ -39,7 +69,7 @@ def test_residual_sensitivity_fixed_offsets_on_training_seeds():
     asked for, and a malformed offset is a one-line usage error."""
     import json
 
-    script = str(BENCHMARKS / "cascade_residual_sensitivity.py")
+    script = str(EXPERIMENTS / "cascade_residual_sensitivity.py")
     argv = [sys.executable, script, "--episodes", "2", "--scales", "0.05", "--split", "train"]
     out = subprocess.run(
         [*argv, "--fixed=-0.05,0,0.05,0"], capture_output=True, text=True, timeout=300
@@ -64,14 +94,10 @@ def test_cascade_oracle_residual_is_the_latency_aware_juggler():
     import gymnasium as gym
     import numpy as np
 
-    path = BENCHMARKS / "cascade_oracle_residual.py"
+    path = EXPERIMENTS / "cascade_oracle_residual.py"
     spec = importlib.util.spec_from_file_location("cascade_oracle_residual", path)
     mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(BENCHMARKS))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+    spec.loader.exec_module(mod)  # puts benchmarks/ (its _timing) on sys.path itself
     phases = mod.PHASES
 
     def hands(controller: str, oracle: bool, seed: int) -> list:

@@ -437,11 +437,11 @@ def test_near_vertical_tosses_do_not_end_easy_episodes(seed):
 
 
 def test_cascade_paired_plays_no_test_seeds_and_pairs_by_seed():
-    """``benchmarks/cascade_paired.py`` refuses the test split; ``compare`` pairs by seed."""
+    """``experiments/cascade_paired.py`` refuses the test split; ``compare`` pairs by seed."""
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "cascade_paired.py"
+    path = Path(__file__).resolve().parents[1] / "experiments" / "cascade_paired.py"
     spec = importlib.util.spec_from_file_location("cascade_paired", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

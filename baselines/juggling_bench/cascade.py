@@ -7,9 +7,9 @@ For each level (:data:`motion_envs.models.juggling.LEVELS`) and each controller
 reset with the TEST seeds ``SPLIT_SEEDS["test"] + i`` of
 :mod:`baselines.agents.juggling_score` (the cascade juggler's timing and the levels were
 chosen on other seeds, its three constants on the training seeds by
-``benchmarks/cascade_constants.py``). An episode is Cascade-v0's zero-action episode (the controller
-alone; :func:`cascade_episode` steps the env's world, sensor and controller directly, the
-same loop the env runs, tested equal to it): it ends at the first drop or after
+``experiments/cascade_constants.py``). An episode is Cascade-v0's zero-action episode (the
+controller alone; :func:`cascade_episode` steps the env's world, sensor and controller
+directly, the same loop the env runs, tested equal to it): it ends at the first drop or after
 ``max_catches`` catches. Reported per method, with 95 % bootstrap intervals resampling
 episodes (:func:`baselines.stats.group_bootstrap`):
 

@@ -107,7 +107,7 @@ FloatArray = NDArray[np.float64]
 CASCADE_CONTROLLERS: tuple[str, ...] = CONTROLLERS
 # The three constants below were chosen on TRAINING seeds only (Cascade-v0's zero-action
 # juggler episodes, seeds SPLIT_SEEDS["train"] + i, levels easy and medium; objective: mean
-# catches before the first drop summed over the levels) by benchmarks/cascade_constants.py,
+# catches before the first drop summed over the levels) by experiments/cascade_constants.py,
 # one at a time; a value replaces the current one only if it beats it by two paired
 # standard errors. First with 40 episodes, at most 10 catches, over {0.3, 0.5, 0.7},
 # {0.6, 0.75, 0.9} and {0.2, 0.3, 0.4}; re-chosen after the next-beat fix with
@@ -116,18 +116,18 @@ CASCADE_CONTROLLERS: tuple[str, ...] = CONTROLLERS
 #: The catch window: a hand's catch reach may last from the shortest training catch to
 #: the longest plus this share of a beat (the flights scatter more than one hand's catch
 #: reach did in the demonstrations; a late ball is waited for). Chosen on training seeds
-#: (benchmarks/cascade_constants.py).
+#: (experiments/cascade_constants.py).
 CATCH_WINDOW = 0.5
 #: Share of the nominal toss's release time after which a toss's release is armed.
-#: Chosen on training seeds (benchmarks/cascade_constants.py; 0.6-0.9 play identically).
+#: Chosen on training seeds (experiments/cascade_constants.py; 0.6-0.9 play identically).
 RELEASE_ARMED = 0.75
 #: Beats after the end of its catch plan at which an empty hand re-plans its catch.
-#: Chosen on training seeds (benchmarks/cascade_constants.py).
+#: Chosen on training seeds (experiments/cascade_constants.py).
 REAIM_AFTER = 0.3
 #: m: the horizontal distance a falling ball's centre must keep from a tossing hand's
 #: column (:meth:`CascadeHand.toss_shift`): the palm's half width (4.5 cm) plus the ball's
 #: radius (3.5 cm) plus 2 cm. Hand-set from the geometry, then checked on training seeds
-#: (benchmarks/cascade_constants.py).
+#: (experiments/cascade_constants.py).
 TOSS_CLEARANCE = 0.1
 #: Sign of ``x`` in each hand's own frame (right: the world's; left: mirrored).
 _SIGN = (1.0, -1.0)

@@ -15,7 +15,7 @@ phase and, in the catch phase, the least-squares slope of the residual on
 ``v * latency`` (1 would be the latency-aware juggler's shift of the ball's position)
 and their correlation.
 
-    python benchmarks/juggling_v1_agent_corrections.py RUN_DIR [--episodes 50] [--out DIR]
+    python experiments/juggling_v1_agent_corrections.py RUN_DIR [--episodes 50] [--out DIR]
         [--env-kwargs '{"level": "medium", "max_catches": 3, "residual_scale": 0.15}']
 """
 

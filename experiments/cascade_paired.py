@@ -11,8 +11,8 @@ run, the median, the episodes reaching the cap, the mean and the paired differen
 the means (after minus before) with its standard error (the standard deviation of the
 per-seed differences over ``sqrt(n)``). The demonstrations are SIMULATED.
 
-    python benchmarks/cascade_paired.py play --split train --out before_train.json
-    python benchmarks/cascade_paired.py compare before_train.json after_train.json
+    python experiments/cascade_paired.py play --split train --out before_train.json
+    python experiments/cascade_paired.py compare before_train.json after_train.json
 """
 
 from __future__ import annotations

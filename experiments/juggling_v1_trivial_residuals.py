@@ -15,7 +15,7 @@ Prints, per policy, the catch rate (catches per toss, pooled over the episodes) 
 then, as its last line, one JSON object with the figures. The demonstrations the juggler
 is fitted on are SIMULATED.
 
-    python benchmarks/juggling_v1_trivial_residuals.py [--episodes 80] [--split val]
+    python experiments/juggling_v1_trivial_residuals.py [--episodes 80] [--split val]
 """
 
 from __future__ import annotations
@@ -23,16 +23,19 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from _timing import machine, print_json, print_machine, print_table  # benchmarks/ on sys.path
 from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the environments)
 from baselines.agents.config import resolve_hyperparams
 from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.stats import group_bootstrap
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json, print_machine, print_table
 
 ENV_ID = "MotionEnvs/Juggling-v1"
 #: The shipped agents' environment (read from ``configs/agents/ppo.yaml``).

@@ -25,7 +25,7 @@ random actions and constant vertical actions of 0.4 and 1 up and down: what an a
 must beat besides the juggler. The demonstrations the juggler is
 fitted on are SIMULATED.
 
-    python benchmarks/cascade_oracle_residual.py [--level medium] [--episodes 40]
+    python experiments/cascade_oracle_residual.py [--level medium] [--episodes 40]
         [--max-catches 10] [--scales 0.05 0.15 0.3 0.4 0.5] [--split train]
 """
 
@@ -36,11 +36,11 @@ import copy
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from _timing import machine, print_json, print_machine, print_table  # benchmarks/ on sys.path
 from numpy.typing import NDArray
 from tqdm import tqdm
 
@@ -49,6 +49,9 @@ from baselines.agents.config import resolve_hyperparams
 from baselines.agents.juggling_score import SPLIT_SEEDS
 from motion_envs.datasets.juggling import PHASES, SIMULATED_LABEL
 from motion_envs.models.juggling import CascadeController, cascade_fit, make_cascade_controller
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json, print_machine, print_table
 
 #: The phase sets tried: every phase (the env's default) and the catch alone.
 PHASE_SETS: tuple[tuple[str, ...], ...] = (PHASES, ("catch",))

@@ -25,7 +25,7 @@ A ratio PPO / nominal below 1 means the agent beats the analytic model out of sa
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 Training progress (a tqdm bar per environment) goes to stderr.
 
-    python benchmarks/sb3_agents.py [--timesteps 100000] [--n-envs 4] [--seed 0]
+    python experiments/sb3_agents.py [--timesteps 100000] [--n-envs 4] [--seed 0]
 """
 
 from __future__ import annotations
@@ -42,9 +42,11 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from _timing import machine, print_json, print_table  # benchmarks/ is on sys.path
 
 import motion_envs  # noqa: F401  (registers the environments)
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json, print_table
 
 ORIENTATION_ID = "MotionEnvs/OrientationReach-v0"
 POSITION_ID = "MotionEnvs/PositionReach-v0"

@@ -10,7 +10,7 @@ final policy (``final_*``; not chosen on anything, shown to see what training di
 demonstrations are SIMULATED. Prints one row per run, the medians over seeds, the target
 verdicts and, last, a JSON line.
 
-    python benchmarks/juggling_agents.py [--algos ppo sac] [--seeds 0 1 2 3 4]
+    python experiments/juggling_agents.py [--algos ppo sac] [--seeds 0 1 2 3 4]
         [--timesteps 100000] [--noise 0.05] [--test-episodes 50] [--out DIR]
 """
 
@@ -25,7 +25,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from _timing import machine, print_json, print_table  # benchmarks/ is on sys.path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json, print_table
 
 ENV = "MotionEnvs/Juggling-v0"
 

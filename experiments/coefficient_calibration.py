@@ -11,7 +11,7 @@ The criterion is the median over all people's episodes (the papers'), comparable
 ``*_predicted_timing`` rows of ``motion-bench orientation`` (the env's base slerp uses
 the training people's mean speed profile).
 
-    python benchmarks/coefficient_calibration.py --k 5
+    python experiments/coefficient_calibration.py --k 5
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ criterion) and the paired difference of catches from ``zero`` (same seeds) with 
 normal interval over episodes. ``--split train`` plays the TRAINING seeds instead. The
 demonstrations the juggler is fitted on are SIMULATED.
 
-    python benchmarks/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
+    python experiments/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
         [--scales 0.02 0.05 0.1] [--split val] [--fixed=DX,DZ,DX,DZ ...]
         [--residual-phases toss return]
 """
@@ -34,15 +34,18 @@ import argparse
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-from _timing import machine, print_json, print_machine, print_table  # benchmarks/ on sys.path
 from tqdm import tqdm
 
 from baselines.agents.juggling_score import SPLIT_SEEDS
 from motion_envs.datasets.juggling import SIMULATED_LABEL
 from motion_envs.envs.juggling import CascadeVectorEnv
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json, print_machine, print_table
 
 KINDS = ("white", "white x", "white z", "held 16", "constant")
 _COLUMNS = {"white x": [0, 2], "white z": [1, 3]}

@@ -25,7 +25,7 @@ Prints one line per episode and, as its last line, one JSON object with the clas
 the catches before the first drop and the CPU seconds. The demonstrations the juggler is
 fitted on are SIMULATED.
 
-    python benchmarks/cascade_drops.py [--level easy] [--episodes 40] [--max-catches 100]
+    python experiments/cascade_drops.py [--level easy] [--episodes 40] [--max-catches 100]
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ standard deviation of the per-seed differences (summed over the levels) over
 two standard errors; otherwise the current value is kept (a tie within noise). If more
 than one constant changes, the combination is played too and reported.
 
-    python benchmarks/cascade_constants.py [--episodes 80] [--max-catches 100]
+    python experiments/cascade_constants.py [--episodes 80] [--max-catches 100]
         [--levels easy medium]
 
 Prints a table and, as its last line, one JSON object with every value's figures, the

@@ -12,9 +12,9 @@ manifest of SHA-256 digests of:
 
 Usage, from the repository root with the project installed::
 
-    python benchmarks/output_identity.py snapshot --out /tmp/before   # on the old commit
-    python benchmarks/output_identity.py snapshot --out /tmp/after    # on the new commit
-    python benchmarks/output_identity.py compare /tmp/before /tmp/after
+    python tools/output_identity.py snapshot --out /tmp/before   # on the old commit
+    python tools/output_identity.py snapshot --out /tmp/after    # on the new commit
+    python tools/output_identity.py compare /tmp/before /tmp/after
 
 ``compare`` prints every entry that differs (or is missing) and exits 1 if any does.
 ``snapshot --skip-bench`` records only the rollouts (seconds instead of about a minute).
