@@ -10,10 +10,12 @@ keep the interval they already print (:func:`baselines.learned.reading.bootstrap
 subjects or shapes resampled, seed 0); the new comparisons use
 :func:`baselines.stats.compare_errors`.
 
-Also here: the orientation table's noise floor (``within_subject``: the same person
-repeating the same task, observed timing) with the share of the gap from
-``null_d2_loso`` to it that each out-of-sample row closes, and the labels and option of
-the person-calibration rows (:mod:`motion_envs.models.person_calibration`).
+Also here: the orientation table's predictive floors (``predictive_floor`` in the body
+frame, ``predictive_floor_path`` in the path frame: each reach predicted from the other
+replicates of its person and task, :mod:`motion_envs.models.criteria`) with every
+out-of-sample row's distance to the floor of its frame (:func:`row_frame`), and the
+labels and option of the person-calibration rows
+(:mod:`motion_envs.models.person_calibration`).
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ from baselines.stats import Comparison, compare_errors, from_readings, intervals
 from motion_envs.models.person_calibration import PersonCalibration
 
 __all__ = [
-    "FLOOR_ROW",
-    "GAP_REFERENCE",
+    "FLOOR_ROWS",
+    "IN_SAMPLE_ROW",
     "agent_comparisons",
     "agent_verdicts",
     "calibration_label",
@@ -44,12 +46,18 @@ __all__ = [
     "noise_floor",
     "orientation_verdicts",
     "position_verdicts",
+    "row_frame",
     "verdicts_document",
 ]
 
-#: The orientation table's noise floor and the row the gap is measured from.
-FLOOR_ROW = "within_subject"
-GAP_REFERENCE = "null_d2_loso"
+#: The paper's in-sample noise measure (Table 1), printed beside the floors.
+IN_SAMPLE_ROW = "within_subject"
+#: Per frame: the predictive floor, its uncorrected leave-one-out row and the frame's null
+#: (the row the gap to the floor is measured from).
+FLOOR_ROWS: dict[str, tuple[str, str, str]] = {
+    "body": ("predictive_floor", "within_subject_loo", "null_d2_loso"),
+    "path": ("predictive_floor_path", "within_subject_path_loo", "null_d2_path_loso"),
+}
 
 ORIENTATION_CRITERION = "median over trajectories of the max error over time"
 AGENT_CRITERION = "median over episodes of the max error over time"
@@ -69,6 +77,8 @@ def calibration_label(name: str) -> str | None:
             k, _, rest = name[len(prefix) :].partition("_")
             if rest == "loso_predicted_timing":
                 return f"Person calibration (K={k}), pred. timing, LOSO"
+            if rest == "path_loso":
+                return f"Person calibration (K={k}), d=2, path frame, LOSO"
             return text.format(k=k)
     return None
 
@@ -90,8 +100,10 @@ def calibration_option(text: str) -> tuple[int, ...]:
 
 
 def _calibration_pairs(ks: Sequence[int]) -> list[tuple[str, str]]:
+    """Each calibration row against the null of its own frame and timing."""
     pairs = [(f"person_k{k}_loso", "null_d2_loso") for k in ks]
-    pairs += [(f"person_k{k}_loso_predicted_timing", "slerp_loso_predicted_timing") for k in ks]
+    pairs += [(f"person_k{k}_path_loso", "null_d2_path_loso") for k in ks]
+    pairs += [(f"person_k{k}_loso_predicted_timing", "null_d2_loso_predicted_timing") for k in ks]
     pairs += [
         (f"slerp_person_timing_k{k}_predicted_timing", "slerp_loso_predicted_timing") for k in ks
     ]
@@ -106,13 +118,15 @@ def orientation_verdicts(
     learned: Any | None = None,
     learned_calibration: Any | None = None,
 ) -> list[Comparison]:
-    """Comparisons of the orientation benchmark: the learned-vs-analytic readings (their
-    interval unchanged), each person-calibration row against its reference row
-    (``null_d2_loso``; ``slerp_loso_predicted_timing`` under predicted timing) and each
-    learned row given the calibration summary (``learned_calibration``,
-    :class:`~baselines.learned.person_rows.LearnedPersonRows`) against ``person_k{K}_loso``
-    and against the same learned row without the summary (``learned``'s ``ridge_loso``,
-    ``mlp_loso``), people resampled."""
+    """Comparisons of the orientation benchmark, each within one frame: the
+    learned-vs-analytic readings (learned rows against the best analytic row of their
+    frame), each person-calibration row against the null of its frame and timing
+    (``null_d2_loso``, ``null_d2_path_loso``, ``null_d2_loso_predicted_timing``; the
+    calibration's timing against ``slerp_loso_predicted_timing``) and each learned row
+    given the calibration summary (``learned_calibration``,
+    :class:`~baselines.learned.person_rows.LearnedPersonRows`, path frame) against
+    ``person_k{K}_path_loso`` and against the same learned row without the summary
+    (``learned``'s ``ridge_loso``, ``mlp_loso``); people resampled."""
     out = from_readings(readings, "people", ORIENTATION_CRITERION, "rad")
     if calibration is not None:
         err = dict(calibration.errors)
@@ -124,7 +138,7 @@ def orientation_verdicts(
             for m in ("ridge", "mlp"):
                 for k in ks:
                     a = f"{m}_person_k{k}_loso"
-                    pairs += [(a, b) for b in (f"person_k{k}_loso", f"{m}_loso")]
+                    pairs += [(a, b) for b in (f"person_k{k}_path_loso", f"{m}_loso")]
         for a, b in pairs:
             if a not in err or b not in err:
                 continue
@@ -133,22 +147,72 @@ def orientation_verdicts(
     return out
 
 
+def row_frame(name: str) -> str:
+    """The frame a row's residual is modelled in: ``"path"`` (path-frame rows, the
+    learned rows), ``"none"`` (the slerp rows, residual predicted as 0: the same in every
+    frame) or ``"body"`` (the paper's frame)."""
+    if name.startswith("slerp"):
+        return "none"
+    if "_path" in name or name.startswith(("ridge", "mlp")):
+        return "path"
+    return "body"
+
+
+def _out_of_sample(name: str) -> bool:
+    return ("_loso" in name or "_loro" in name or name.endswith("_predicted_timing")) and not (
+        name.startswith(("within_subject", "predictive_floor"))
+    )
+
+
 def noise_floor(criteria: Mapping[str, float]) -> dict[str, Any] | None:
-    """The floor and, per out-of-sample row (``_loso``/``_loro`` in the name), the share
-    ``(null_d2_loso - row) / (null_d2_loso - floor)`` of the gap it closes (1: at the
-    floor, 0: no better than ``null_d2_loso``, < 0: worse); None without both rows."""
-    floor = criteria.get(FLOOR_ROW)
-    ref = criteria.get(GAP_REFERENCE)
-    if floor is None or ref is None or not np.isfinite(floor) or not np.isfinite(ref):
+    """The predictive floors per frame and every out-of-sample row's distance to the floor
+    of its frame (:func:`row_frame`); None without the body-frame floor.
+
+    ``floors[frame]``: the floor row and value, its uncorrected leave-one-out row and
+    value, and the frame's null (``null_d2_loso``, ``null_d2_path_loso``) with its value.
+    ``rows[name]``: ``frame``, ``floor_row`` and ``floor`` (the value it is held to; a
+    frame-free slerp row to the lower floor; predicted-timing rows to the observed-timing
+    floor), ``distance = value - floor`` (rad) and ``ratio = value / floor``.
+    ``in_sample``: the paper's ``within_subject`` (each reach inside its own mean;
+    below the floors, not one for predictors)."""
+    floors: dict[str, dict[str, Any]] = {}
+    for frame, (row, loo, ref) in FLOOR_ROWS.items():
+        value = criteria.get(row)
+        if value is None or not np.isfinite(value):
+            continue
+        ref_value = criteria.get(ref)
+        if ref_value is not None and not np.isfinite(ref_value):
+            ref_value = None
+        floors[frame] = {
+            "row": row,
+            "value": value,
+            "leave_one_out_row": loo,
+            "leave_one_out": criteria.get(loo),
+            "reference": ref,
+            "reference_value": ref_value
+            if ref_value is not None and np.isfinite(ref_value)
+            else None,
+        }
+    if "body" not in floors:
         return None
-    gap = ref - floor
-    shares = {
-        name: (ref - value) / gap
-        for name, value in criteria.items()
-        if ("_loso" in name or "_loro" in name) and name != GAP_REFERENCE
-        if np.isfinite(value) and gap > 0
-    }
-    return {"row": FLOOR_ROW, "value": floor, "reference": GAP_REFERENCE, "gap_closed": shares}
+    rows: dict[str, dict[str, Any]] = {}
+    for name, value in criteria.items():
+        if not _out_of_sample(name) or not np.isfinite(value):
+            continue
+        frame = row_frame(name)
+        if frame == "none":
+            held = min(floors.values(), key=lambda f: f["value"])
+        else:
+            held = floors.get(frame, floors["body"])
+        rows[name] = {
+            "frame": frame,
+            "floor_row": held["row"],
+            "floor": held["value"],
+            "distance": value - held["value"],
+            "ratio": value / held["value"],
+        }
+    in_sample = criteria.get(IN_SAMPLE_ROW)
+    return {"in_sample": {"row": IN_SAMPLE_ROW, "value": in_sample}, "floors": floors, "rows": rows}
 
 
 def format_floor(floor: Mapping[str, Any] | None) -> str:
@@ -157,14 +221,32 @@ def format_floor(floor: Mapping[str, Any] | None) -> str:
         return ""
     lines = [
         "",
-        f"noise floor: {floor['row']} = {floor['value']:.3f} rad (the same person repeating "
-        "the same task, observed timing; no prediction from a movement's conditions goes "
-        "below it)",
-        f"share of the gap from {floor['reference']} to the floor closed by each out-of-sample "
-        "row (1: at the floor; < 0: worse than the reference; predicted-timing rows are "
-        "held to the observed-timing floor):",
+        "predictive floors (each reach predicted from the other replicates of its person and "
+        "task, leave one out, scaled by sqrt((n - 1) / n): the error of a predictor that knew "
+        "the person's mean for the task; docs/models.md):",
     ]
-    lines += [f"  {name:<44} {share:7.2f}" for name, share in floor["gap_closed"].items()]
+    for frame, f in floor["floors"].items():
+        loo = f["leave_one_out"]
+        loo_s = f"; uncorrected leave one out {loo:.3f}" if loo is not None else ""
+        lines.append(f"  {frame} frame: {f['row']} = {f['value']:.3f} rad{loo_s}")
+    ins = floor["in_sample"]
+    if ins["value"] is not None:
+        lines.append(
+            f"  the paper's {ins['row']} = {ins['value']:.3f} rad is in sample (each reach "
+            "inside the mean it is scored against): not a floor for predictors"
+        )
+    lines.append(
+        "each out-of-sample row against the floor of its frame (distance = row - floor, rad; "
+        "ratio = row / floor; slerp rows, the same in every frame, against the lower floor; "
+        "predicted-timing rows held to the observed-timing floor):"
+    )
+    lines.append(f"  {'row':<44} {'frame':<5} {'value':>6} {'floor':>6} {'dist.':>7} {'ratio':>6}")
+    for name, r in floor["rows"].items():
+        value = r["floor"] + r["distance"]
+        lines.append(
+            f"  {name:<44} {r['frame']:<5} {value:6.3f} {r['floor']:6.3f} "
+            f"{r['distance']:+7.3f} {r['ratio']:6.3f}"
+        )
     return "\n".join(lines)
 
 

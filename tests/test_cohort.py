@@ -322,7 +322,7 @@ def test_streamed_scores_equal_table1():
     cfg = _small(6)
     streamed = score_cohort(cfg, chunk_subjects=2)
     ds = generate_cohort(cfg)
-    full = table1(ds.ragged, ds.subjects, ds.tasks).criteria
+    full = table1(ds.ragged, ds.subjects, ds.tasks, up=ds.up).criteria
     assert streamed["n_trajectories"] == len(ds)
     names = [n for n in full if not n.endswith(("_loso", "_loro"))]
     assert set(names) <= set(streamed)

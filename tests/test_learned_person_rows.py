@@ -139,9 +139,9 @@ def test_cli_learned_calibration_rows_have_intervals(tmp_path, capsys):
     doc = json.loads((tmp_path / "results.json").read_text())
     for name in ("ridge_person_k5_loso", "mlp_person_k5_loso"):
         assert np.isfinite(doc["criteria"][name]) and name in text
-        for ref in ("person_k5_loso", name.split("_person")[0] + "_loso"):
+        for ref in ("person_k5_path_loso", name.split("_person")[0] + "_loso"):
             lo, hi = doc["intervals"][f"{name} / {ref}"]
             assert lo <= hi
             assert any(line.strip().startswith(f"{name} / {ref}") for line in text.splitlines())
     assert doc["calibration"]["learned"]["mlp_train_draws"] == 2
-    assert "ridge_person_k5_loso" in doc["noise_floor"]["gap_closed"]
+    assert doc["noise_floor"]["rows"]["ridge_person_k5_loso"]["frame"] == "path"

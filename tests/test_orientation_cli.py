@@ -35,7 +35,7 @@ def test_cli_prints_table_and_writes_results(tmp_path, capsys):
     assert "95% CI over subjects" in out
     assert (tmp_path / "learned_ratio.png").read_bytes()[:4] == b"\x89PNG"
     ds = load_vr_kitchen()
-    ref = table1(ds.ragged, ds.subjects, ds.tasks).criteria
+    ref = table1(ds.ragged, ds.subjects, ds.tasks, up=ds.up).criteria
     for k, v in ref.items():
         assert doc["criteria"][k] == pytest.approx(v, rel=0, abs=0)
         if k in FARAWAY_CHOE_TABLE1:

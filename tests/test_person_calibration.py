@@ -206,22 +206,30 @@ def test_cli_calibration_rows_and_intervals(tmp_path, capsys):
     )
     text = capsys.readouterr().out
     doc = json.loads((tmp_path / "results.json").read_text())
-    for name in ("person_k2_loso", "person_k2_loso_predicted_timing",
+    for name in ("person_k2_loso", "person_k2_path_loso", "person_k2_loso_predicted_timing",
                  "slerp_person_timing_k2_predicted_timing"):  # fmt: skip
         assert name in doc["criteria"] and name in text
         assert name in (tmp_path / "results.csv").read_text()
     assert doc["calibration"]["seed"] == 0 and doc["calibration"]["n_draws"] == 20
     printed = [line for line in text.splitlines() if " / " in line and "95% CI" in line]
-    assert len(printed) == len(doc["intervals"]) == 3
+    assert len(printed) == len(doc["intervals"]) == 4
+    assert set(doc["intervals"]) == {
+        "person_k2_loso / null_d2_loso",
+        "person_k2_path_loso / null_d2_path_loso",
+        "person_k2_loso_predicted_timing / null_d2_loso_predicted_timing",
+        "slerp_person_timing_k2_predicted_timing / slerp_loso_predicted_timing",
+    }
     for name, (lo, hi) in doc["intervals"].items():
         assert any(line.strip().startswith(name) for line in printed)
         assert lo <= hi
-    assert "noise floor" in text and doc["noise_floor"]["row"] == "within_subject"
-    floor = doc["noise_floor"]
-    ref, value = doc["criteria"]["null_d2_loso"], doc["criteria"]["person_k2_loso"]
-    assert floor["gap_closed"]["person_k2_loso"] == pytest.approx(
-        (ref - value) / (ref - floor["value"])
-    )
+    assert "noise floor" in text and "predictive floors" in text
+    rows = doc["noise_floor"]["rows"]
+    for name, floor in (("person_k2_loso", "predictive_floor"),
+                        ("person_k2_path_loso", "predictive_floor_path")):  # fmt: skip
+        assert rows[name]["floor_row"] == floor
+        assert rows[name]["distance"] == pytest.approx(
+            doc["criteria"][name] - doc["criteria"][floor]
+        )
 
 
 @pytest.mark.parametrize("bad", ["0", "1,1", "x", "-3"])

@@ -12,6 +12,7 @@ from baselines.cli import main
 from baselines.stats import compare_errors
 from baselines.verdicts import (
     format_agent_verdicts,
+    format_floor,
     kept_initial_policy,
     noise_floor,
     position_verdicts,
@@ -83,9 +84,32 @@ def test_agent_verdict_lines_and_initial_policy():
     assert "INITIAL policy" in text
 
 
-def test_noise_floor_shares():
-    floor = noise_floor({"within_subject": 0.1, "null_d2_loso": 0.2, "a_loso": 0.15, "b": 0.0})
-    assert floor is not None and floor["gap_closed"] == {"a_loso": pytest.approx(0.5)}
+def test_noise_floor_rows_against_the_floor_of_their_frame():
+    criteria = {
+        "within_subject": 0.1,
+        "predictive_floor": 0.15,
+        "predictive_floor_path": 0.12,
+        "within_subject_loo": 0.2,
+        "null_d2_loso": 0.2,
+        "null_d2_path_loso": 0.13,
+        "person_k5_loso": 0.18,
+        "ridge_loso": 0.14,
+        "person_k5_path_loso": 0.126,
+        "slerp_loso_predicted_timing": 0.3,
+        "b": 0.0,
+    }
+    floor = noise_floor(criteria)
+    assert floor is not None and floor["in_sample"] == {"row": "within_subject", "value": 0.1}
+    assert floor["floors"]["body"]["leave_one_out"] == 0.2
+    assert floor["floors"]["path"]["leave_one_out"] is None
+    rows = floor["rows"]
+    assert set(rows) == {"null_d2_loso", "null_d2_path_loso", "person_k5_loso", "ridge_loso",
+                         "person_k5_path_loso", "slerp_loso_predicted_timing"}  # fmt: skip
+    assert rows["person_k5_loso"]["floor"] == 0.15 and rows["person_k5_loso"]["frame"] == "body"
+    assert rows["ridge_loso"]["distance"] == pytest.approx(0.02)
+    assert rows["person_k5_path_loso"]["ratio"] == pytest.approx(1.05)
+    assert rows["slerp_loso_predicted_timing"]["floor_row"] == "predictive_floor_path"
+    assert "predictive_floor_path = 0.120" in format_floor(floor)
     assert noise_floor({"within_subject": 0.1}) is None
 
 

@@ -108,7 +108,7 @@ def run(config: OrientationConfig) -> OrientationResults:
             f"task {config.plot_task!r} is not in the data; choose one of "
             f"{sorted(set(dataset.tasks.tolist()))}",
         )
-    table = table1(dataset.ragged, dataset.subjects, dataset.tasks)
+    table = table1(dataset.ragged, dataset.subjects, dataset.tasks, up=dataset.up)
     learned, note = _learned_rows(config, dataset)
     comparisons: list[dict[str, Any]] = []
     if learned is not None:
@@ -150,7 +150,10 @@ def _calibration_rows(
         return None, f"{n_subjects} subjects, at least 3 needed"
     from motion_envs.models.person_calibration import person_calibration_rows
 
-    return person_calibration_rows(dataset.ragged, dataset.subjects, config.calibration), None
+    rows = person_calibration_rows(
+        dataset.ragged, dataset.subjects, config.calibration, up=dataset.up
+    )
+    return rows, None
 
 
 def _learned_calibration_rows(

@@ -12,13 +12,17 @@ import numpy as np
 
 from baselines.learned.rows import ROW_LABELS
 from baselines.orientation_bench.config import OrientationConfig, OrientationResults
-from baselines.verdicts import FLOOR_ROW, calibration_label
+from baselines.verdicts import FLOOR_ROWS, IN_SAMPLE_ROW, calibration_label
 from motion_envs.datasets import OrientationDataset
 from motion_envs.models.criteria import Table1Result
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1, FARAWAY_CHOE_TABLE1_NOTES
 
 _ROW_LABELS = {
     "within_subject": "Within subject",
+    "within_subject_loo": "Within subject, leave one out",
+    "within_subject_path_loo": "Within subject, path frame, leave one out",
+    "predictive_floor": "Predictive floor",
+    "predictive_floor_path": "Predictive floor, path frame",
     "between_subject": "Between subject",
     "slerp_empirical": "Slerp, empirical",
     "slerp_average": "Slerp, average",
@@ -51,13 +55,16 @@ def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
         f"{'criterion':<50} {'name':<40} {'ours':>7} {'paper':>7}",
         "-" * 108,
     ]
+    floors = {row: frame for frame, (row, _, _) in FLOOR_ROWS.items()}
     for name, value in result.criteria.items():
         paper = FARAWAY_CHOE_TABLE1.get(name)
         paper_s = f"{paper:7.3f}" if paper is not None else f"{'-':>7}"
         ours = f"{value:7.3f}" if math.isfinite(value) else f"{'n/a':>7}"
         note = FARAWAY_CHOE_TABLE1_NOTES.get(name, "")
-        if name == FLOOR_ROW:
-            note = f"noise floor{'; ' + note if note else ''}"
+        if name in floors:
+            note = f"noise floor, {floors[name]} frame"
+        elif name == IN_SAMPLE_ROW:
+            note = f"in sample (not a floor for predictors){'; ' + note if note else ''}"
         lines.append(f"{_label(name):<50} {name:<40} {ours} {paper_s}  {note}".rstrip())
     lines.append("")
     lines.append(

@@ -13,6 +13,10 @@ Subject ``i``, task ``j``, replicate ``k``; a bullet is a mean over that index.
 name                              prediction ``rhat``
 ================================  ==================================================================
 ``within_subject``                ``mean_k r_ijk`` over the replicates of (i, j); groups with >= 2
+``within_subject_loo``            ``mean_{k' != k} r_ijk'``: the *other* replicates of (i, j)
+``within_subject_path_loo``       the same mean taken in the path frame, mapped back with ``l``'s
+``predictive_floor``              ``within_subject_loo``'s errors times ``sqrt((n_ij - 1) / n_ij)``
+``predictive_floor_path``         ``within_subject_path_loo``'s errors, the same correction
 ``between_subject``               ``mean_{i,k} r_ijk``; median over (i, k) in a task, then over j
 ``slerp_empirical``               0 (slerp with the trajectory's own speed profile)
 ``slerp_average``                 0, residuals recomputed against the average speed profile
@@ -25,6 +29,22 @@ name                              prediction ``rhat``
 ``task_predictor_d{d}_loso``      task means over the *other* subjects
 ``subject_predictor_d{d}_loro``   subject means without the trajectory itself
 ================================  ==================================================================
+
+The predictive floor. ``within_subject`` is the paper's in-sample measure: the scored
+reach is inside the mean it is scored against, so its deviation is ``(n - 1) / n`` times
+its deviation from the mean of the *other* replicates (half of it for pairs). As a floor
+for predictors it is optimistic. ``within_subject_loo`` predicts each reach from the
+other replicates of its person and task (leave one out; a real predictor, but one whose
+mean of ``n - 1`` replicates carries their noise: with replicates ``r = m + e``,
+``e`` independent with one covariance, ``r_l - mean_{others}`` has ``n / (n - 1)`` times
+the covariance of ``e``). ``predictive_floor`` scales each of those deviations by
+``sqrt((n - 1) / n)``: for Gaussian replicate noise it is then distributed as ``e_l``
+itself, so its median max error is that of a predictor that knew the person's mean for
+the task, the floor no prediction from a movement's conditions goes below. The ``_path``
+rows average the other replicates in the path frame (:mod:`motion_envs.models.path_frame`,
+the frame of the path-frame rows), each reach's prediction mapped back with its own frame
+(the error is ``s_l max_t |p_l - mean p|``, scored in radians in the body frame as every
+row). Reaches whose (i, j) has a single replicate are left out of these four rows.
 
 The paper's predictor rows are in-sample averages; the ``_loso`` (leave one subject
 out) and ``_loro`` (leave one replicate out) rows judge the same models on data they
@@ -52,6 +72,7 @@ from motion_envs.models.bezier_models import (
     TaskBezierModel,
     fit_control_points,
 )
+from motion_envs.models.path_frame import DEFAULT_UP, path_frames, to_path_frame
 from motion_envs.models.slerp_residual import slerp_residuals
 from motion_envs.models.speed_profile import average_speed_profile, speed_fractions_on_grid
 
@@ -64,8 +85,11 @@ __all__ = [
     "Table1Result",
     "between_subject_error",
     "criterion_names",
+    "floor_row_names",
     "max_errors",
     "median_max_error",
+    "predictive_floor_errors",
+    "replicate_loo_errors",
     "score_cohort",
     "table1",
     "within_subject_error",
@@ -79,7 +103,8 @@ CRITERIA_DEGREES: tuple[int, ...] = (2, 3, 4)
 
 def criterion_names(degrees: Sequence[int] = CRITERIA_DEGREES) -> list[str]:
     """Names of every criterion :func:`table1` reports, in table order."""
-    names = ["within_subject", "between_subject", "slerp_empirical", "slerp_average"]
+    names = ["within_subject", *floor_row_names(), "between_subject", "slerp_empirical"]
+    names.append("slerp_average")
     for d in degrees:
         names.append(f"approximation_d{d}")
     for d in degrees:
@@ -90,6 +115,16 @@ def criterion_names(degrees: Sequence[int] = CRITERIA_DEGREES) -> list[str]:
     for d in degrees:
         names += [f"null_d{d}_loso", f"task_predictor_d{d}_loso", f"subject_predictor_d{d}_loro"]
     return names
+
+
+def floor_row_names() -> list[str]:
+    """The leave-one-out and predictive-floor rows, body frame then path frame."""
+    return [
+        "within_subject_loo",
+        "within_subject_path_loo",
+        "predictive_floor",
+        "predictive_floor_path",
+    ]
 
 
 def max_errors(residuals: ArrayLike, predictions: ArrayLike | float = 0.0) -> FloatArray:
@@ -125,6 +160,45 @@ def within_subject_error(residuals: ArrayLike, subjects: ArrayLike, tasks: Array
     if errors.size == 0:
         raise ValueError("within_subject needs at least one (subject, task) pair with 2 replicates")
     return float(np.median(errors))
+
+
+def replicate_loo_errors(
+    curves: ArrayLike, subjects: ArrayLike, tasks: ArrayLike
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """``max_t |c_l - mean_{k != l} c_k|`` over the other curves of ``l``'s (subject, task),
+    ``(L,)`` (NaN where ``l`` is alone), and the size ``n`` of each curve's group."""
+    C = np.asarray(curves, dtype=np.float64)
+    if C.ndim != 3:
+        raise ValueError(f"curves must have shape (L, n, 3); got {C.shape}")
+    keys = np.char.add(
+        np.char.add(np.asarray(subjects).astype(str), "\x1f"), np.asarray(tasks).astype(str)
+    )
+    means, sizes = _group_means(C, keys)
+    n = sizes[:, None, None].astype(np.float64)
+    others = np.divide(n * means - C, n - 1.0, out=np.zeros_like(C), where=n > 1)
+    errors = max_errors(C, others)
+    return np.where(sizes >= 2, errors, np.nan), sizes
+
+
+def predictive_floor_errors(
+    residuals: ArrayLike,
+    subjects: ArrayLike,
+    tasks: ArrayLike,
+    frame: tuple[ArrayLike, ArrayLike, ArrayLike] | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """Per-reach errors of ``within_subject_loo`` and ``predictive_floor`` (NaN for a
+    reach alone in its (subject, task)); with ``frame = (starts, ends, up)`` the path-frame
+    rows (module docstring)."""
+    R = np.asarray(residuals, dtype=np.float64)
+    scale: FloatArray | float = 1.0
+    if frame is not None:
+        starts, ends, up = frame
+        R = to_path_frame(R, starts, ends, up)
+        scale = path_frames(starts, ends, up)[1]
+    loo, sizes = replicate_loo_errors(R, subjects, tasks)
+    loo = loo * scale
+    n = sizes.astype(np.float64)
+    return loo, loo * np.sqrt(np.divide(n - 1.0, n, out=np.zeros_like(n), where=n > 1))
 
 
 def between_subject_error(residuals: ArrayLike, tasks: ArrayLike) -> float:
@@ -210,6 +284,7 @@ def table1(
     tasks: ArrayLike,
     degrees: Sequence[int] = CRITERIA_DEGREES,
     n_points: int = DEFAULT_N_POINTS,
+    up: ArrayLike | None = None,
 ) -> Table1Result:
     """Compute every criterion of Table 1 (and the out-of-sample rows) for a dataset.
 
@@ -223,6 +298,9 @@ def table1(
         Bézier degrees of the approximation/null/predictor rows.
     n_points:
         Size of the normalised-time grid (the paper's 50).
+    up:
+        The data's vertical axis (the path frame of ``*_path_loo`` rows; default
+        :data:`motion_envs.models.path_frame.DEFAULT_UP`).
     """
     L = traj.n_trajectories
     subjects = np.asarray(subjects).astype(str)
@@ -237,6 +315,11 @@ def table1(
     c: dict[str, float] = {}
     fallbacks: dict[str, int] = {}
     c["within_subject"] = within_subject_error(R, subjects, tasks)
+    frame = (traj.starts, traj.ends, DEFAULT_UP if up is None else up)
+    for suffix, f in (("", None), ("_path", frame)):
+        loo, floor = predictive_floor_errors(R, subjects, tasks, f)
+        c[f"within_subject{suffix}_loo"] = float(np.nanmedian(loo))
+        c[f"predictive_floor{suffix}"] = float(np.nanmedian(floor))
     c["between_subject"] = between_subject_error(R, tasks)
     c["slerp_empirical"] = median_max_error(R)
     c["slerp_average"] = median_max_error(R_avg)
@@ -287,7 +370,8 @@ def score_cohort(
     ``config`` is a :class:`~motion_envs.datasets.cohort_config.CohortConfig`, a cohort
     name or a YAML path (:mod:`motion_envs.datasets.cohort`; simulated data). Gives the
     same values as :func:`table1` (rows
-    ``within_subject`` .. ``task_predictor_d{d}``; not the leave-one-out rows) without
+    ``within_subject`` .. ``task_predictor_d{d}`` with the predictive floors; not the
+    leave-one-subject-out rows) without
     holding the cohort in memory: two passes over the chunks (the second regenerates
     them, bit-identical), keeping only running sums (mean control points overall, per
     subject and per task; mean curves overall and per task; the mean speed profile) and
@@ -345,6 +429,10 @@ def score_cohort(
         np.add.at(means, inv, R)
         means /= cnt[:, None, None]
         keep("within_subject", max_errors(R, means[inv])[cnt[inv] >= 2])
+        for suffix, f in (("", None), ("_path", (traj.starts, traj.ends, ds.up))):
+            loo, floor = predictive_floor_errors(R, si, tj, f)
+            keep(f"within_subject{suffix}_loo", loo[np.isfinite(loo)])
+            keep(f"predictive_floor{suffix}", floor[np.isfinite(floor)])
         keep("slerp_empirical", max_errors(R))
         for d in degrees:
             P = fit_control_points(R, d)

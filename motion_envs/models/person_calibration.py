@@ -3,7 +3,7 @@
 Leave one person (subject) out. For every scored trajectory ``l`` of the held-out person
 ``s``, ``K`` *other* trajectories of ``s`` are drawn at random (never ``l`` itself): the
 calibration reaches. A person with fewer than ``K + 1`` trajectories gives all of their
-``K_l = n_s - 1`` others. Three rows per ``K``:
+``K_l = n_s - 1`` others. Four rows per ``K``:
 
 ``person_k{K}_loso`` (body frame, Bézier degree ``d = 2``, observed timing)
     The shrinkage blend of the person's mean Bézier residual with the population's::
@@ -17,12 +17,18 @@ calibration reaches. A person with fewer than ``K + 1`` trajectories gives all o
     training person in turn is predicted from their own calibration draws and the
     population of the other training people; the ``k0`` with the least criterion
     (median over those trajectories of the draw-averaged max error) wins (first on ties).
+``person_k{K}_path_loso`` (the same blend in the path frame)
+    The blend of the path-frame control points (:mod:`motion_envs.models.path_frame`,
+    the frame of ``null_d2_path_loso`` and the learned rows), each reach's prediction
+    mapped back with its own frame; ``k0`` chosen the same way on the path-frame errors.
+    Its reference is ``null_d2_path_loso`` (``k0 -> inf``), so that calibration is
+    compared with the null *of its own frame*.
 ``person_k{K}_loso_predicted_timing``
     The same blend (``k0`` chosen the same way) on residuals taken against the slerp
     traversed with the training people's mean speed profile, as
     ``slerp_loso_predicted_timing`` and ``null_d2_loso_predicted_timing`` of
-    :mod:`baselines.learned.rows`; the inner choice of ``k0`` uses the same residuals
-    (the profile of all training people of the fold).
+    :mod:`baselines.learned.rows` (its reference, ``k0 -> inf``); the inner choice of
+    ``k0`` uses the same residuals (the profile of all training people of the fold).
 ``slerp_person_timing_k{K}_predicted_timing``
     The slerp traversed with the mean speed profile of the calibration reaches (residual
     predicted as 0).
@@ -36,7 +42,7 @@ observation and the ``ridge_person_k{K}_loso``/``mlp_person_k{K}_loso`` rows
 (:mod:`baselines.learned.person_rows`) use these two functions.
 
 Calibration draws are repeated ``n_draws`` times (:func:`calibration_draws`, seeded;
-the same draws serve all three rows and the inner selection). A trajectory's error is
+the same draws serve all four rows and the inner selection). A trajectory's error is
 its max error over time averaged over the draws (the expected error under a random
 calibration set); a row's criterion is the median over trajectories of that, the
 papers' criterion. Nothing of the held-out person other than the ``K`` drawn
@@ -57,6 +63,7 @@ from motion_envs.geometry import bezier
 from motion_envs.geometry.sine_series import basis
 from motion_envs.models.bezier_models import fit_control_points
 from motion_envs.models.criteria import max_errors
+from motion_envs.models.path_frame import DEFAULT_UP, path_frames, to_path_frame
 from motion_envs.models.slerp_residual import (
     resample_orientations,
     residuals_against_profiles,
@@ -136,6 +143,7 @@ def calibration_summaries(features: ArrayLike, draws: IntArray, k: int) -> Float
 def calibration_row_names(ks: Sequence[int]) -> list[str]:
     """Row names of :func:`person_calibration_rows`, in print order."""
     names = [f"person_k{k}_loso" for k in ks]
+    names += [f"person_k{k}_path_loso" for k in ks]
     names += [f"person_k{k}_loso_predicted_timing" for k in ks]
     names += [f"slerp_person_timing_k{k}_predicted_timing" for k in ks]
     return names
@@ -184,8 +192,10 @@ def _blend_errors(
     counts: IntArray,
     k0s: Sequence[float],
     degree: int,
+    scale: FloatArray | None = None,
 ) -> FloatArray:
-    """Draw-averaged max errors ``(len(k0s), rows.size)`` of the blend for ``rows``."""
+    """Draw-averaged max errors ``(len(k0s), rows.size)`` of the blend for ``rows``
+    (times ``scale[rows]``: path-frame curves scored in radians)."""
     grid = normalised_grid(R.shape[1])
     n = counts[rows].astype(np.float64)
     out = np.empty((len(k0s), rows.size))
@@ -194,7 +204,7 @@ def _blend_errors(
         blend = w * P_cal[:, rows] + (1.0 - w) * P_pop  # (R, m, d-1, 3)
         curves = bezier.evaluate(blend, grid, degree)
         out[i] = np.mean([max_errors(R[rows], c) for c in curves], axis=0)
-    return out
+    return out if scale is None else out * scale[rows]
 
 
 def person_blend_loso(
@@ -203,6 +213,7 @@ def person_blend_loso(
     draws: IntArray,
     degree: int = 2,
     k0_grid: Sequence[float] = K0_GRID,
+    scale: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray, dict[str, float]]:
     """The shrinkage blend, leave one subject out (see the module docstring).
 
@@ -217,6 +228,9 @@ def person_blend_loso(
         ``(L,)`` subject of every trajectory.
     draws:
         :func:`calibration_draws` ``(n_draws, L, K)``.
+    scale:
+        ``(L,)`` path-frame scales ``s`` when the curves are path-frame ones (the body
+        error of a path-frame prediction is ``s max_t |p - p_hat|``); None: body frame.
 
     Returns
     -------
@@ -243,12 +257,12 @@ def person_blend_loso(
             rows = np.flatnonzero(labels == t)
             others = train[labels[train] != t]
             pop = P[others].mean(axis=0)
-            inner.append(_blend_errors(R, rows, pop, P_cal, counts, grid_k0, degree))
+            inner.append(_blend_errors(R, rows, pop, P_cal, counts, grid_k0, degree, scale))
         scores = np.median(np.concatenate(inner, axis=1), axis=1)
         k0 = grid_k0[int(np.argmin(scores))]
         chosen[str(s)] = k0
         pop = P[train].mean(axis=0)
-        errors[test] = _blend_errors(R, test, pop, P_cal, counts, [k0], degree)[0]
+        errors[test] = _blend_errors(R, test, pop, P_cal, counts, [k0], degree, scale)[0]
         n = counts[test].astype(np.float64)
         w = np.divide(n, n + k0, out=np.zeros_like(n), where=(n + k0) > 0)[:, None, None]
         blend = w * P_cal[:, test] + (1.0 - w) * pop
@@ -286,7 +300,8 @@ class PersonCalibration:
         Row name (:func:`calibration_row_names`) -> criterion (radians).
     errors:
         Row name -> ``(L,)`` draw-averaged per-trajectory max errors; also the reference
-        rows ``null_d2_loso`` and ``slerp_loso_predicted_timing`` (same definitions as
+        rows ``null_d2_loso``, ``null_d2_path_loso``, ``null_d2_loso_predicted_timing``
+        and ``slerp_loso_predicted_timing`` (same definitions as
         :mod:`motion_envs.models.criteria` and :mod:`baselines.learned.rows`).
     chosen_k0:
         Row name -> held-out subject -> the ``k0`` chosen on the training subjects.
@@ -313,10 +328,12 @@ def person_calibration_rows(
     degree: int = 2,
     n_points: int = DEFAULT_N_POINTS,
     k0_grid: Sequence[float] = K0_GRID,
+    up: ArrayLike = DEFAULT_UP,
 ) -> PersonCalibration:
     """The rows of :func:`calibration_row_names` for every ``K`` of ``ks``.
 
-    Needs at least 3 subjects (2 training subjects for the inner choice of ``k0``).
+    Needs at least 3 subjects (2 training subjects for the inner choice of ``k0``);
+    ``up`` is the data's vertical axis (the path frame).
     """
     labels = np.asarray(subjects).astype(str)
     levels = np.unique(labels)
@@ -335,18 +352,28 @@ def person_calibration_rows(
     def predicted(train: IntArray) -> FloatArray:
         return residuals_against_profiles(q_grid, S, E, A[train].mean(axis=0))
 
+    R_path = to_path_frame(R, S, E, up)
+    scale = path_frames(S, E, up)[1]
+
+    def path(train: IntArray) -> FloatArray:
+        return R_path
+
     errors: dict[str, FloatArray] = {}
     # the reference rows, on the same residuals (k0 -> infinity: the population alone)
-    null = np.empty(labels.size)
-    slerp_pt = np.empty(labels.size)
+    refs = ("null_d2_loso", "null_d2_path_loso", "null_d2_loso_predicted_timing")
+    for name in (*refs, "slerp_loso_predicted_timing"):
+        errors[name] = np.empty(labels.size)
     grid = normalised_grid(n_points)
     for s in levels:
         test, train = labels == s, labels != s
-        pop = fit_control_points(R[train], degree).mean(axis=0)
-        null[test] = max_errors(R[test], bezier.evaluate(pop, grid, degree))
-        slerp_pt[test] = max_errors(predicted(np.flatnonzero(train))[test])
-    errors["null_d2_loso"] = null
-    errors["slerp_loso_predicted_timing"] = slerp_pt
+        R_pt = predicted(np.flatnonzero(train))
+        for name, curves, weight in zip(
+            refs, (R, R_path, R_pt), (1.0, scale[test], 1.0), strict=True
+        ):
+            pop = fit_control_points(curves[train], degree).mean(axis=0)
+            pred = bezier.evaluate(pop, grid, degree)
+            errors[name][test] = max_errors(curves[test], pred) * weight
+        errors["slerp_loso_predicted_timing"][test] = max_errors(R_pt[test])
     chosen: dict[str, dict[str, float]] = {}
     short: dict[int, int] = {}
     for k in ks:
@@ -354,6 +381,10 @@ def person_calibration_rows(
         short[int(k)] = int(np.count_nonzero((draws[0] >= 0).sum(axis=-1) < k))
         name = f"person_k{k}_loso"
         errors[name], _, chosen[name] = person_blend_loso(observed, labels, draws, degree, k0_grid)
+        name = f"person_k{k}_path_loso"
+        errors[name], _, chosen[name] = person_blend_loso(
+            path, labels, draws, degree, k0_grid, scale
+        )
         name = f"person_k{k}_loso_predicted_timing"
         errors[name], _, chosen[name] = person_blend_loso(predicted, labels, draws, degree, k0_grid)
         errors[f"slerp_person_timing_k{k}_predicted_timing"] = person_timing_loso(
