@@ -1,21 +1,22 @@
-"""``MotionEnvs/Juggling-v0`` and ``-v1``: the environments, their MuJoCo scenes and MJCFs.
+"""``MotionEnvs/Juggling-v0``, ``-v1`` and ``Cascade-v0``: the environments and their worlds.
 
 The public names of small private modules: ``_env`` (:class:`JugglingEnv`, the registered
-entry point ``motion_envs.envs.juggling:JugglingEnv``), ``_scene`` (:class:`JugglingScene`,
-the MuJoCo world, compiled from ``juggling.xml`` beside them); ``_v1_env``
-(:class:`JugglingV1Env`, entry point ``motion_envs.envs.juggling:JugglingV1Env``) and
-``_v1_scene`` (:class:`JugglingV1World`: contacts, an actuated hand, compiled from
-``juggling_v1.xml``); ``_cascade_env`` (:class:`CascadeEnv`, ``MotionEnvs/Cascade-v0``,
-entry point ``motion_envs.envs.juggling:CascadeEnv``) and ``_cascade_scene``
-(:class:`CascadeWorld`: two hands, three balls, compiled from ``cascade.xml``); the native
-vector environments ``_vector`` (:class:`JugglingVectorEnv`, the episode bookkeeping),
-``_v1_vector`` (:class:`JugglingV1VectorEnv`) and ``_cascade_vector``
-(:class:`CascadeVectorEnv`), batched, with ``_compiled``: the worlds' control periods
-compiled by numba.
+entry point ``motion_envs.envs.juggling:JugglingEnv``, the paper's kinematic setting) and
+``_scene`` (:class:`JugglingScene`, compiled from ``juggling.xml`` beside them). The one
+world of actuated hands and balls that Juggling-v1 and Cascade-v0 share: ``_world``
+(:class:`WorldSpec`, what a world is: hands, balls, the task's constants, the hands' and
+the catch's limits; :func:`world_mjcf`, its MJCF; :class:`HandsWorld`, the world on
+MuJoCo) and ``_period`` (the one control period: servo, physics, grasp rule, release,
+plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
+(:class:`JugglingV1World`, one hand and one ball) and ``_cascade_scene``
+(:class:`CascadeWorld`, two hands and three balls) are its batches of one with their
+task's state types; ``_v1_env`` (:class:`JugglingV1Env`) and ``_cascade_env``
+(:class:`CascadeEnv`) the environments; the native vector environments ``_vector``
+(:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
+(:class:`JugglingV1VectorEnv`) and ``_cascade_vector`` (:class:`CascadeVectorEnv`).
 The default fit the environment acts on (``load_juggler``, ``juggler_demonstrations``,
 ``TRACKING_NOISE``, ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in
-:mod:`motion_envs.models.juggling` and is re-exported here for code that imported it
-from this module's former place.
+:mod:`motion_envs.models.juggling` and is re-exported here.
 """
 
 from motion_envs.envs.juggling._cascade_env import (
@@ -25,11 +26,7 @@ from motion_envs.envs.juggling._cascade_env import (
     DEFAULT_CASCADE_REWARD_WEIGHTS,
     CascadeEnv,
 )
-from motion_envs.envs.juggling._cascade_scene import (
-    CASCADE_SCENE_XML,
-    CascadeWorld,
-    load_cascade_model,
-)
+from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._cascade_vector import CascadeVectorEnv
 from motion_envs.envs.juggling._env import (
     CYCLE_TIME_LIMIT,
@@ -52,20 +49,22 @@ from motion_envs.envs.juggling._v1_env import (
     V1_OBS_DIM,
     JugglingV1Env,
 )
-from motion_envs.envs.juggling._v1_scene import (
+from motion_envs.envs.juggling._v1_scene import JugglingV1World
+from motion_envs.envs.juggling._v1_vector import JugglingV1VectorEnv
+from motion_envs.envs.juggling._vector import JugglingVectorEnv
+from motion_envs.envs.juggling._world import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
     HAND_MASS,
     HAND_SPEED_LIMIT,
+    MAX_BALLS,
     SERVO_OMEGA,
     SUBSTEPS,
-    V1_SCENE_XML,
-    JugglingPhysics,
-    JugglingV1World,
-    load_juggling_v1_model,
+    HandsWorld,
+    WorldSpec,
+    load_world_model,
+    world_mjcf,
 )
-from motion_envs.envs.juggling._v1_vector import JugglingV1VectorEnv
-from motion_envs.envs.juggling._vector import JugglingVectorEnv
 from motion_envs.models.juggling import (
     FIT_SEED,
     FIT_TEST_FRACTION,
@@ -80,7 +79,6 @@ __all__ = [
     "CAPTURE_SPEED",
     "CASCADE_HISTORY",
     "CASCADE_OBS_DIM",
-    "CASCADE_SCENE_XML",
     "CASCADE_TIME_PER_CATCH",
     "CYCLE_TIME_LIMIT",
     "DEFAULT_CASCADE_REWARD_WEIGHTS",
@@ -93,6 +91,7 @@ __all__ = [
     "HAND_SPEED_LIMIT",
     "HAND_SPEED_MARGIN",
     "HISTORY",
+    "MAX_BALLS",
     "OBS_DIM",
     "PAPER_GRAVITY",
     "POSITION_MARGIN",
@@ -102,22 +101,22 @@ __all__ = [
     "TRACKING_NOISE",
     "V1_CYCLE_TIME",
     "V1_OBS_DIM",
-    "V1_SCENE_XML",
     "CascadeEnv",
     "CascadeVectorEnv",
     "CascadeWorld",
+    "HandsWorld",
     "JugglingEnv",
-    "JugglingPhysics",
     "JugglingScene",
     "JugglingV1Env",
     "JugglingV1VectorEnv",
     "JugglingV1World",
     "JugglingVectorEnv",
+    "WorldSpec",
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",
-    "load_cascade_model",
     "load_juggler",
     "load_juggling_model",
-    "load_juggling_v1_model",
+    "load_world_model",
+    "world_mjcf",
 ]

@@ -17,7 +17,7 @@ from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, 
 from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, check_number
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
-from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT
+from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
     CascadeController,

@@ -44,7 +44,6 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
 from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
-from motion_envs.envs.juggling._cascade_scene import BALL_CONAFFINITY, BALL_CONTYPE
 from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
@@ -105,25 +104,12 @@ class CascadeVectorEnv(JugglingVectorEnv):
     def _setup_arrays(self) -> None:
         self._link()
         n, first = self.num_envs, self.envs[0]
-        task, world = first.task, first.world
-        self._ball_geoms = np.array(world.ball_geoms, dtype=np.int64)
-        self._constants = self._world_constants(world.palm_top, BALL_CONTYPE, BALL_CONAFFINITY)
+        task = first.task
         self._dt, self._gravity = task.dt, task.gravity
-        # the world
-        self._ref = np.zeros((n, 2, 2))
-        self._vref = np.zeros((n, 2, 2))
-        self._z_before = np.zeros((n, 2))
-        self._holder = np.full((n, 3), -1, dtype=np.int64)
-        self._thrower = np.full((n, 3), -1, dtype=np.int64)
-        self._left = np.zeros((n, 3), dtype=np.bool_)
-        self._dropped = np.zeros((n, 3), dtype=np.bool_)
-        self._k = np.zeros(n, dtype=np.int64)
+        # the world (HandsWorld's state, batched; the last step's events)
+        self._setup_world_arrays()
         self._q = np.zeros((n, 10))
         self._v = np.zeros((n, 10))
-        self._caught = np.full((n, 2), -1, dtype=np.int64)  # the last step's events
-        self._released = np.full((n, 2), -1, dtype=np.int64)
-        self._full_target = np.zeros((n, 2, 2))
-        self._full_armed = np.zeros((n, 2), dtype=np.bool_)
         # what the controller was last shown (the measured balls)
         self._m_time = np.zeros(n)
         self._m_ball = np.zeros((n, 3, 2))
@@ -178,11 +164,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             return
         env = self.envs[i]
         w = env.world
-        self._ref[i], self._vref[i] = w._ref, w._vref
-        self._z_before[i] = w._z_before
-        self._holder[i], self._thrower[i] = w._holder, w._thrower
-        self._left[i], self._dropped[i] = w._left, w._dropped
-        self._k[i] = w._k
+        self._load_world(i)
         self._q[i], self._v[i] = w.data.qpos, w.data.qvel
         state = env._state
         self._caught[i], self._released[i] = state.caught, state.released
@@ -292,29 +274,8 @@ class CascadeVectorEnv(JugglingVectorEnv):
         if first.residual_phases is not None:  # as CascadeEnv._period: a selection
             acts = first.residual_acts[self._phase[envs]]
             residual = np.where(acts[:, :, None], residual, 0.0)
-        self._full_target[envs] = targets + residual
-        self._full_armed[envs] = armed
-        self._in_threads(
-            self._compiled.cascade_periods,
-            envs,
-            self._worlds,
-            self._ball_geoms,
-            self._full_target,
-            self._full_armed,
-            self._ref,
-            self._vref,
-            self._z_before,
-            self._holder,
-            self._thrower,
-            self._left,
-            self._dropped,
-            self._k,
-            self._constants,
-            self._q,
-            self._v,
-            self._caught,
-            self._released,
-        )
+        self._world_periods(envs, targets + residual, armed)
+        self._q[envs], self._v[envs] = self._qv(envs)
         released = self._released[envs]
         if (released >= 0).any():
             self._release(envs[(released >= 0).any(axis=1)])

@@ -1,18 +1,12 @@
-r"""The juggling worlds' control period for many episodes at once, compiled by numba.
+r"""The juggling worlds' kernels compiled by numba: the one control period for ``N`` worlds,
+and the rest of the juggling ids' batched steps.
 
-The native vector environments (:mod:`motion_envs.envs.juggling._vector`) step ``N``
-MuJoCo worlds, each its own ``MjModel``/``MjData`` as in ``N`` single environments. Per
-control period a single world runs Python around five ``mj_step`` calls: the servo
-(:func:`~motion_envs.envs.juggling.servo_plan`,
-:func:`~motion_envs.envs.juggling.servo_acceleration`), the physics and the grasp rule
-(:class:`~motion_envs.envs.juggling.JugglingV1World`). Here the same arithmetic runs
-compiled, in one loop over the worlds, and calls MuJoCo's own ``mj_step`` from it (the C
+:func:`world_periods` is :func:`motion_envs.envs.juggling._period.world_periods` compiled:
+the same function body, its global names bound to the compiled equivalents below
+(:func:`py_hypot`, the servo, and :data:`mj_step_c`, MuJoCo's own ``mj_step``: the C
 function of the ``libmujoco`` the ``mujoco`` package loads, declared to numba as an
-external function): the
-physics is MuJoCo's, call for call, so the worlds are bit-identical to the single
-environments' (tested). The contacts the grasp rule asks about come from the scene's
-``contact`` sensors (``ball_palm``, ``ball_floor``: MuJoCo's count of those contacts,
-computed in the same ``mj_step``).
+external function). The physics is MuJoCo's, call for call, so the compiled worlds are
+bit-identical to the plain-Python path (tested).
 
 Every expression is written as the scalar code writes it, in the same order (IEEE
 ``+ - * / sqrt`` are correctly rounded in both), and ``math.hypot`` is
@@ -27,31 +21,23 @@ Importing this module imports numba (the ``fast`` extra).
 from __future__ import annotations
 
 import math
-from importlib import resources
-from pathlib import Path
+import types as pytypes
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import llvmlite.binding as llvm
-import mujoco
 import numpy as np
 from numba import njit, types
 
-from motion_envs.envs.juggling._v1_scene import (
-    CAPTURE_SPEED,
-    HAND_ACCEL_LIMIT,
-    HAND_MASS,
-    HAND_SPEED_LIMIT,
-    SERVO_OMEGA,
-    SUBSTEPS,
-)
+from motion_envs.envs.juggling import _period
 
 __all__ = [
     "cascade_advance",
     "cascade_events",
     "cascade_measure",
     "cascade_observations",
-    "cascade_periods",
     "cascade_record",
+    "entry_point",
     "hypot_rows",
     "likeness_tree",
     "mj_step_c",
@@ -62,29 +48,17 @@ __all__ = [
     "v1_advance",
     "v1_events",
     "v1_finish",
-    "v1_periods",
+    "world_links",
+    "world_periods",
 ]
 
 _DBL_MIN = 2.2250738585072014e-308
 _SPLIT = 134217729.0  # 2^27 + 1, Veltkamp's splitting constant for doubles
-_KP, _KD = SERVO_OMEGA**2, 2.0 * SERVO_OMEGA
-_AMAX2 = HAND_ACCEL_LIMIT**2
-
-
-def _libmujoco_path() -> str:
-    """The ``libmujoco`` shared library of the installed ``mujoco`` package (the one its
-    Python bindings use)."""
-    package = Path(str(resources.files(mujoco)))
-    found = sorted(package.glob("libmujoco.so*")) + sorted(package.glob("libmujoco*.dylib"))
-    found += sorted(package.glob("mujoco*.dll"))
-    if not found:
-        raise ImportError(f"no libmujoco shared library in {package}")
-    return str(found[0])
 
 
 # The symbol is resolved in the library the bindings loaded (loading it again returns the
 # same handle), so compiled code calls the very mj_step that mujoco.mj_step calls.
-llvm.load_library_permanently(_libmujoco_path())
+llvm.load_library_permanently(_period.libmujoco_path())
 #: ``void mj_step(const mjModel*, mjData*)`` for compiled code, called with the two
 #: addresses ``MjModel._address`` and ``MjData._address`` (pointer-sized integers).
 mj_step_c = types.ExternalFunction("mj_step", types.void(types.uint64, types.uint64))
@@ -156,157 +130,63 @@ def hypot_rows(x: Any, y: Any) -> Any:
     return out
 
 
-@njit(cache=True)
-def servo_plan(ref: Any, vref: Any, tx: float, tz: float, dt: float, plan: Any) -> None:
-    """:func:`~motion_envs.envs.juggling.servo_plan` compiled: ``plan (8,)`` receives
-    ``(sx, sz, dx, dz, vrx, vrz, arx, arz)``; the hand's reference point ``ref (2,)`` and
-    velocity ``vref (2,)`` move on to the period's end (as the worlds keep them)."""
-    step_max = HAND_SPEED_LIMIT * dt
-    sx, sz = ref[0], ref[1]
-    dx, dz = tx - sx, tz - sz
-    dist = py_hypot(dx, dz)
-    if dist > step_max:  # the command moves at most at the speed limit
-        dx, dz = dx * step_max / dist, dz * step_max / dist
-    vrx, vrz = dx / dt, dz / dt
-    plan[0], plan[1], plan[2], plan[3] = sx, sz, dx, dz
-    plan[4], plan[5] = vrx, vrz
-    plan[6], plan[7] = (vrx - vref[0]) / dt, (vrz - vref[1]) / dt
-    ref[0], ref[1] = sx + dx, sz + dz
-    vref[0], vref[1] = vrx, vrz
+def _bound(func: Any, **names: Any) -> Any:
+    """``func``'s body with some of its global names bound to other objects (the compiled
+    equivalents), for numba to compile: one source, two paths."""
+    scope = dict(func.__globals__)
+    scope.update(names)
+    out = pytypes.FunctionType(func.__code__, scope, func.__name__, func.__defaults__)
+    out.__qualname__, out.__doc__, out.__module__ = func.__qualname__, func.__doc__, __name__
+    return out
 
 
-@njit(cache=True)
-def servo_acceleration(
-    f: float, plan: Any, hx: float, hz: float, vx: float, vz: float, h: float
-) -> tuple[float, float]:
-    """:func:`~motion_envs.envs.juggling.servo_acceleration` compiled (the same
-    expressions, :func:`py_hypot` for ``math.hypot``)."""
-    sx, sz, dx, dz = plan[0], plan[1], plan[2], plan[3]
-    vrx, vrz, arx, arz = plan[4], plan[5], plan[6], plan[7]
-    ax = arx + _KP * (sx + f * dx - hx) + _KD * (vrx - vx)
-    az = arz + _KP * (sz + f * dz - hz) + _KD * (vrz - vz)
-    n2 = ax * ax + az * az
-    if n2 > _AMAX2:
-        s = math.sqrt(_AMAX2 / n2)
-        ax, az = ax * s, az * s
-    nvx, nvz = vx + ax * h, vz + az * h
-    sp = py_hypot(nvx, nvz)
-    if sp > HAND_SPEED_LIMIT:  # the speed limit: aim at the limit along the new direction
-        nvx, nvz = nvx * HAND_SPEED_LIMIT / sp, nvz * HAND_SPEED_LIMIT / sp
-        ax, az = (nvx - vx) / h, (nvz - vz) / h
-    return ax, az
-
-
-def _v1_periods(
-    envs: Any,
-    worlds: Any,
-    ball_geom: int,
-    target: Any,
-    armed: Any,
-    ref: Any,
-    vref: Any,
-    z_before: Any,
-    flags: Any,
-    k: Any,
-    constants: Any,
-    hand: Any,
-    hand_vel: Any,
-    ball: Any,
-    ball_vel: Any,
-    events: Any,
-    likeness: Any,
-) -> None:
-    """One control period of Juggling-v1's world for each world ``i`` in ``envs``: what
-    :meth:`~motion_envs.envs.juggling.JugglingV1World.advance` does, up to the release's
-    noise (drawn in Python: ``events[i, 1]`` says the release fires), then the hand's
-    human-likeness (:func:`nearest_rows`' number for the world's hand).
-
-    ``worlds``: ``(model_addr, data_addr, qpos, qvel, ctrl, sensors, contype,
-    conaffinity)``, each world's ``MjModel``/``MjData`` address and arrays (numba typed
-    lists of views; ``JugglingVectorEnv._link_worlds``); ``target (N, 2)`` the commanded
-    hand targets (the residual added); ``armed (N,)``; the world's state ``ref, vref (N,
-    2)``, ``z_before (N,)``, ``flags (N, 3)`` (held, left the palm, dropped) and ``k (N,)``
-    (control periods since the reset), updated in place; ``constants`` = ``(dt, h,
-    ball_radius, floor_z, palm_top, toss_threshold)``. Out: the true ``hand``,
-    ``hand_vel``, ``ball``, ``ball_vel`` and ``events[i] = (caught, release fires)``.
-    ``likeness = (phase, trees, tau, out)``: the hand's distance to the demonstrations
-    of its plan's phase ``phase[i]`` (``trees``: per phase :func:`likeness_tree`; the
-    velocity weighted by ``tau``) goes to ``out[i]``.
-    """
-    model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
-    phase, trees, tau, distance = likeness
-    point = np.empty(4)
-    stack = np.empty(256, dtype=np.int64)
-    dt, h, radius, floor_z, palm_top, threshold = (
-        constants[0],
-        constants[1],
-        constants[2],
-        constants[3],
-        constants[4],
-        constants[5],
+#: :func:`~motion_envs.envs.juggling._period.servo_plan` compiled.
+servo_plan = njit(cache=True)(_bound(_period.servo_plan, py_hypot=py_hypot))
+#: :func:`~motion_envs.envs.juggling._period.servo_acceleration` compiled.
+servo_acceleration = njit(cache=True)(_bound(_period.servo_acceleration, py_hypot=py_hypot))
+#: :func:`~motion_envs.envs.juggling._period.world_periods` compiled (releases the GIL).
+world_periods = njit(cache=True, nogil=True)(
+    _bound(
+        _period.world_periods,
+        py_hypot=py_hypot,
+        mj_step_c=mj_step_c,
+        servo_plan=servo_plan,
+        servo_acceleration=servo_acceleration,
     )
-    plan = np.empty(8)
-    for i in envs:
-        servo_plan(ref[i], vref[i], target[i, 0], target[i, 1], dt, plan)
-        qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
-        hx, hz, bx, bz = qp[0], qp[1], qp[2], qp[3]
-        vx, vz, ux, uz = qv[0], qv[1], qv[2], qv[3]
-        z_prev, z_prev2 = hz, z_before[i]
-        held, left, dropped = flags[i, 0], flags[i, 1], flags[i, 2]
-        caught = False
-        for j in range(1, SUBSTEPS + 1):
-            ax, az = servo_acceleration(j / SUBSTEPS, plan, hx, hz, vx, vz, h)
-            u[0] = HAND_MASS * ax
-            u[1] = HAND_MASS * az
-            mj_step_c(model_addr[i], data_addr[i])
-            if held:
-                hx, hz = qp[0], qp[1]
-                vx, vz = qv[0], qv[1]
-                continue
-            hx, hz, bx, bz = qp[0], qp[1], qp[2], qp[3]
-            vx, vz, ux, uz = qv[0], qv[1], qv[2], qv[3]
-            if not left and py_hypot(bx - hx, bz - hz) > 2 * radius:
-                left = True
-            if not dropped and (bz - radius <= floor_z or sens[1] > 0.0):
-                dropped = True
-            if (
-                not dropped
-                and left
-                and bz >= hz + palm_top
-                and uz < 0.0
-                and py_hypot(ux - vx, uz - vz) < CAPTURE_SPEED
-                and sens[0] > 0.0
-            ):
-                held = caught = True
-                contype[i][ball_geom] = 0
-                conaffinity[i][ball_geom] = 0
-                qp[2] = hx
-                qp[3] = hz
-                qv[2] = vx
-                qv[3] = vz
-        if held:
-            bx, bz, ux, uz = hx, hz, vx, vz
-            qp[2] = hx
-            qp[3] = hz
-            qv[2] = vx
-            qv[3] = vz
-        flags[i, 0], flags[i, 1], flags[i, 2] = held, left, dropped
-        k[i] += 1
-        z_before[i] = z_prev
-        fires = False
-        if held and not caught and armed[i]:
-            a_z = (hz - 2.0 * z_prev + z_prev2) / (dt * dt)
-            fires = a_z < -threshold
-        hand[i, 0], hand[i, 1] = hx, hz
-        hand_vel[i, 0], hand_vel[i, 1] = vx, vz
-        ball[i, 0], ball[i, 1] = bx, bz
-        ball_vel[i, 0], ball_vel[i, 1] = ux, uz
-        events[i, 0], events[i, 1] = caught, fires
-        point[0], point[1], point[2], point[3] = hx, hz, tau * vx, tau * vz
-        distance[i] = _nearest(trees[phase[i]], point, stack)
+)
 
 
-v1_periods = njit(cache=True, nogil=True)(_v1_periods)
+def world_links(worlds: Sequence[Any]) -> tuple[Any, ...]:
+    """What :func:`world_periods` takes as ``worlds`` for these worlds (each a
+    :class:`~motion_envs.envs.juggling._world.HandsWorld`): each one's ``MjModel`` and
+    ``MjData`` address, then views of its qpos, qvel, ctrl, sensordata and the model's
+    geom_contype and geom_conaffinity (numba typed lists)."""
+    from numba.typed import List
+
+    return (
+        np.array([w.model._address for w in worlds], dtype=np.uint64),
+        np.array([w.data._address for w in worlds], dtype=np.uint64),
+        List([w.data.qpos for w in worlds]),
+        List([w.data.qvel for w in worlds]),
+        List([w.data.ctrl for w in worlds]),
+        List([w.data.sensordata for w in worlds]),
+        List([w.model.geom_contype for w in worlds]),
+        List([w.model.geom_conaffinity for w in worlds]),
+    )
+
+
+def entry_point(kernel: Any, *args: Any) -> Callable[..., None]:
+    """The compiled function numba's dispatcher ``kernel`` runs for ``args``, to be
+    called directly: the dispatcher types a tuple of typed lists (the worlds' views) in
+    Python on every call (~40 µs, holding the GIL), while the arguments' types of one
+    caller never change (``args[0]`` a 1-d int64 array of worlds, the rest the caller's
+    own arrays). Compiles (or loads) the version for these types with no world stepped."""
+    kernel(args[0][:0], *args[1:])
+    try:
+        signature = tuple(kernel.typeof_pyval(a) for a in args)
+        return kernel.overloads[signature].entry_point  # type: ignore[no-any-return]
+    except (AttributeError, KeyError):  # a numba without them: the dispatcher
+        return kernel  # type: ignore[no-any-return]
 
 
 @njit(cache=True)
@@ -519,130 +399,6 @@ def v1_finish(
                 row[c] = high[c]
             if row[c] < low[c]:
                 row[c] = low[c]
-
-
-@njit(cache=True, nogil=True)
-def cascade_periods(
-    envs: Any,
-    worlds: Any,
-    ball_geoms: Any,
-    target: Any,
-    armed: Any,
-    ref: Any,
-    vref: Any,
-    z_before: Any,
-    holder: Any,
-    thrower: Any,
-    left: Any,
-    dropped: Any,
-    k: Any,
-    constants: Any,
-    q_out: Any,
-    v_out: Any,
-    caught: Any,
-    released: Any,
-) -> None:
-    """One control period of Cascade-v0's world for each world ``i`` in ``envs``: what
-    :meth:`~motion_envs.envs.juggling.CascadeWorld.step` does, up to the release's noise
-    (drawn in Python afterwards: ``released[i, h]`` is the ball hand ``h`` lets go, or
-    -1; its velocity is still the hand's).
-
-    ``worlds``: each world's addresses and arrays, as :func:`v1_periods` takes them;
-    ``sensors`` holds per ball the
-    ``contact`` sensors of ``cascade.xml`` (floor, right palm, left palm);
-    ``ball_geoms (3,)``; ``target (N, 2, 2)`` both hands' targets (the residual added);
-    ``armed (N, 2)``; the world's state ``ref, vref (N, 2, 2)``, ``z_before (N, 2)``,
-    ``holder, thrower (N, 3)`` (a hand or -1), ``left, dropped (N, 3)`` and ``k (N,)``,
-    updated in place (the contacts of a caught or released ball switched as
-    ``CascadeWorld._set_contacts`` switches them); ``constants`` = ``(dt, h,
-    ball_radius, floor_z, palm_top, toss_threshold, ball_contype, ball_conaffinity)``.
-    Out: ``q_out, v_out (N, 10)`` (qpos, qvel after the period), ``caught (N, 2)`` (the
-    ball each hand caught, or -1) and ``released``.
-    """
-    model_addr, data_addr, qpos, qvel, ctrl, sensors, contype, conaffinity = worlds
-    dt, h, radius, floor_z, palm_top, threshold = (
-        constants[0],
-        constants[1],
-        constants[2],
-        constants[3],
-        constants[4],
-        constants[5],
-    )
-    ball_contype, ball_conaffinity = int(constants[6]), int(constants[7])
-    plan = np.empty((2, 8))
-    for i in envs:
-        for hh in range(2):  # servo_plan, hand by hand
-            servo_plan(ref[i, hh], vref[i, hh], target[i, hh, 0], target[i, hh, 1], dt, plan[hh])
-        qp, qv, u, sens = qpos[i], qvel[i], ctrl[i], sensors[i]
-        ct, ca = contype[i], conaffinity[i]
-        z_prev0, z_prev1 = qp[1], qp[3]
-        caught[i, 0] = caught[i, 1] = -1
-        released[i, 0] = released[i, 1] = -1
-        for j in range(1, SUBSTEPS + 1):
-            f = j / SUBSTEPS
-            for hh in range(2):
-                hx, hz, vx, vz = qp[2 * hh], qp[2 * hh + 1], qv[2 * hh], qv[2 * hh + 1]
-                ax, az = servo_acceleration(f, plan[hh], hx, hz, vx, vz, h)
-                u[2 * hh] = HAND_MASS * ax
-                u[2 * hh + 1] = HAND_MASS * az
-            mj_step_c(model_addr[i], data_addr[i])
-            for b in range(3):
-                c = 4 + 2 * b
-                if holder[i, b] >= 0:  # held: follows its hand (written at the period's end)
-                    continue
-                bx, bz = qp[c], qp[c + 1]
-                if not left[i, b]:
-                    t = thrower[i, b]
-                    if py_hypot(bx - qp[2 * t], bz - qp[2 * t + 1]) > 2 * radius:
-                        left[i, b] = True
-                if dropped[i, b] or (not left[i, b] and bz - radius > floor_z):
-                    continue
-                if bz - radius <= floor_z or sens[3 * b] > 0.0:
-                    dropped[i, b] = True
-                    continue
-                if qv[c + 1] >= 0.0 or not left[i, b]:
-                    continue
-                for hh in range(2):
-                    busy = holder[i, 0] == hh or holder[i, 1] == hh or holder[i, 2] == hh
-                    if busy or bz < qp[2 * hh + 1] + palm_top:
-                        continue
-                    rel = py_hypot(qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1])
-                    if rel < CAPTURE_SPEED and sens[3 * b + 1 + hh] > 0.0:
-                        holder[i, b] = hh
-                        caught[i, hh] = b
-                        ct[ball_geoms[b]] = 0
-                        ca[ball_geoms[b]] = 0
-                        break
-        # held balls follow their hands
-        for b in range(3):
-            hh = holder[i, b]
-            if hh >= 0:
-                c = 4 + 2 * b
-                qp[c], qp[c + 1] = qp[2 * hh], qp[2 * hh + 1]
-                qv[c], qv[c + 1] = qv[2 * hh], qv[2 * hh + 1]
-        k[i] += 1
-        z_prev20, z_prev21 = z_before[i, 0], z_before[i, 1]
-        z_before[i, 0], z_before[i, 1] = z_prev0, z_prev1
-        for hh in range(2):
-            b = -1
-            for bb in range(3):
-                if holder[i, bb] == hh:
-                    b = bb
-                    break
-            if b < 0 or caught[i, hh] >= 0 or not armed[i, hh]:
-                continue
-            zp, zp2 = (z_prev0, z_prev20) if hh == 0 else (z_prev1, z_prev21)
-            a_z = (qp[2 * hh + 1] - 2.0 * zp + zp2) / (dt * dt)
-            if a_z < -threshold:
-                holder[i, b] = -1
-                thrower[i, b] = hh
-                left[i, b] = False
-                released[i, hh] = b
-                ct[ball_geoms[b]] = ball_contype
-                ca[ball_geoms[b]] = ball_conaffinity
-        for m in range(10):
-            q_out[i, m] = qp[m]
-            v_out[i, m] = qv[m]
 
 
 def likeness_tree(samples: Any, leaf: int = 64) -> tuple[Any, ...]:

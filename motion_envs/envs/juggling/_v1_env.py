@@ -16,7 +16,8 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
 from motion_envs.envs._common import SideCameraMixin, clipped_pair
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
-from motion_envs.envs.juggling._v1_scene import HAND_SPEED_LIMIT, JugglingV1World
+from motion_envs.envs.juggling._v1_scene import JugglingV1World
+from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CONTROLLERS,
     BallSensor,

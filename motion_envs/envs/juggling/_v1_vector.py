@@ -97,22 +97,16 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
 
     def _setup_arrays(self) -> None:
         n, first = self.num_envs, self.envs[0]
-        task, phys = first.task, first.world.physics
-        self._ball_geom = int(phys.ball_geom)
-        self._constants = self._world_constants(phys.palm_top)
+        task = first.task
         self._dt, self._gravity = task.dt, task.gravity
-        # the world
-        self._ref = np.zeros((n, 2))
-        self._vref = np.zeros((n, 2))
-        self._z_before = np.zeros(n)
+        # the world (HandsWorld's state, batched)
+        self._setup_world_arrays()
         self._flags = np.zeros((n, 3), dtype=np.bool_)  # held, left, dropped
-        self._k = np.zeros(n, dtype=np.int64)
         self._hand = np.zeros((n, 2))
         self._hand_vel = np.zeros((n, 2))
         self._ball = np.zeros((n, 2))
         self._ball_vel = np.zeros((n, 2))
-        self._events = np.zeros((n, 2), dtype=np.bool_)
-        self._likeness = np.zeros(n)  # the hand's distance to the demonstrations
+        self._events = np.zeros((n, 2), dtype=np.bool_)  # caught, released
         # what the controller was last shown (the measured state)
         self._measured = np.zeros((n, 5))  # time, ball x, z, vx, vz
         self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
@@ -187,11 +181,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         if self.backend != "numba":
             return
         env = self.envs[i]
-        w = env.world
-        self._ref[i], self._vref[i] = w._ref, w._vref
-        self._z_before[i] = w._z_before
-        self._flags[i] = (w._held, w._left, w._dropped)
-        self._k[i] = w._k
+        self._load_world(i)
+        self._flags[i] = (self._holder[i, 0] >= 0, self._left[i, 0], self._dropped[i, 0])
         state = env._state
         self._hand[i] = state.hand_pos
         self._hand_vel[i] = state.hand_vel
@@ -270,32 +261,20 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             acts = first.residual_acts[self._phase[envs]]
             residual = np.where(acts[:, None], a, 0.0)
         target = target + first.residual_scale * residual
-        full_target = np.zeros((self.num_envs, 2))
-        full_armed = np.zeros(self.num_envs, dtype=np.bool_)
-        full_target[envs], full_armed[envs] = target, armed
-        self._in_threads(
-            self._compiled.v1_periods,
-            envs,
-            self._worlds,
-            self._ball_geom,
-            full_target,
-            full_armed,
-            self._ref,
-            self._vref,
-            self._z_before,
-            self._flags,
-            self._k,
-            self._constants,
-            self._hand,
-            self._hand_vel,
-            self._ball,
-            self._ball_vel,
-            self._events,
-            (self._phase, self._trees, LIKENESS_TAU, self._likeness),
-        )
-        released = self._events[envs, 1]
+        self._world_periods(envs, target[:, None, :], armed[:, None])
+        q, v = self._qv(envs)
+        self._hand[envs], self._hand_vel[envs] = q[:, 0:2], v[:, 0:2]
+        self._ball[envs], self._ball_vel[envs] = q[:, 2:4], v[:, 2:4]
+        self._flags[envs, 0] = self._holder[envs, 0] >= 0
+        self._flags[envs, 1] = self._left[envs, 0]
+        self._flags[envs, 2] = self._dropped[envs, 0]
+        self._events[envs, 0] = self._caught[envs, 0] >= 0
+        released = self._released[envs, 0] >= 0
+        self._events[envs, 1] = released
         if released.any():
             self._release(envs[released])
+        points = np.concatenate((self._hand[envs], LIKENESS_TAU * self._hand_vel[envs]), axis=1)
+        likeness = self._compiled.nearest_rows(points, self._phase[envs], self._trees)
         if self._noisy:  # every world keeps a row of noise drawn ahead
             for i in envs[self._noise_at[envs] == _NOISE_BLOCK].tolist():
                 # the sensor's own generator read ahead: a block of rows is the sequence
@@ -304,7 +283,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
                 self._noise_at[i] = 0
         self._slot = (self._slot + 1) % self._ring.shape[0]
         n = envs.size
-        likeness = self._likeness[envs]
         obs = np.empty((n, self._obs_dim), dtype=np.float32)
         out = np.empty((n, 7))
         ends = np.empty((n, 2), dtype=np.bool_)
@@ -514,8 +492,6 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             qvel = self._datas[i].qvel
             qvel[2], qvel[3] = ux, uz
             self._ball_vel[i] = ux, uz
-            self._flags[i, 0] = self._flags[i, 1] = False
-            w.physics.set_ball_contacts(True)
 
 
 def _wider(array: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:

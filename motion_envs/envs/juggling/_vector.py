@@ -149,44 +149,75 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
     def _link_worlds(self) -> None:
         """The compiled code and what it reads and writes in place: each world's
         ``MjModel``/``MjData`` address and array views (:data:`WORLD_LINKS`)."""
-        from numba.typed import List
-
         from motion_envs.envs.juggling import _compiled
 
         self._compiled = _compiled
         self._entries: dict[str, Callable[..., None]] = {}
         worlds = [env.world for env in self.envs]
         self._datas = [w.data for w in worlds]
-        #: what the compiled periods take, in their order: each world's ``MjModel`` and
-        #: ``MjData`` address, then views of its qpos, qvel, ctrl, sensordata and the
-        #: model's geom_contype and geom_conaffinity
-        self._worlds = (
-            np.array([w.model._address for w in worlds], dtype=np.uint64),
-            np.array([w.data._address for w in worlds], dtype=np.uint64),
-            List([w.data.qpos for w in worlds]),
-            List([w.data.qvel for w in worlds]),
-            List([w.data.ctrl for w in worlds]),
-            List([w.data.sensordata for w in worlds]),
-            List([w.model.geom_contype for w in worlds]),
-            List([w.model.geom_conaffinity for w in worlds]),
+        self._worlds = _compiled.world_links(worlds)
+
+    # -- the worlds' state, batched (HandsWorld's rows) -------------------------------------
+    def _setup_world_arrays(self) -> None:
+        """The batch of the worlds' state (:class:`~motion_envs.envs.juggling.HandsWorld`'s
+        arrays with ``N`` rows) and its constants."""
+        n, world = self.num_envs, self.envs[0].world
+        hands, balls = world.spec.hands, world.spec.balls
+        self._ball_geoms = world.ball_geoms.copy()
+        self._constants = world.constants.copy()
+        self._ref = np.zeros((n, hands, 2))
+        self._vref = np.zeros((n, hands, 2))
+        self._z_before = np.zeros((n, hands))
+        self._holder = np.full((n, balls), -1, dtype=np.int64)
+        self._thrower = np.full((n, balls), -1, dtype=np.int64)
+        self._left = np.zeros((n, balls), dtype=np.bool_)
+        self._dropped = np.zeros((n, balls), dtype=np.bool_)
+        self._k = np.zeros(n, dtype=np.int64)
+        self._caught = np.full((n, hands), -1, dtype=np.int64)
+        self._released = np.full((n, hands), -1, dtype=np.int64)
+        self._target = np.zeros((n, hands, 2))
+        self._armed = np.zeros((n, hands), dtype=np.bool_)
+
+    def _load_world(self, i: int) -> None:
+        """Copy sub-environment ``i``'s world state (after its reset) into the batch."""
+        w = self.envs[i].world
+        for name in ("ref", "vref", "z_before", "holder", "thrower", "left", "dropped", "k"):
+            getattr(self, "_" + name)[i] = getattr(w, name)[0]
+
+    def _world_periods(
+        self, envs: NDArray[np.int64], target: NDArray[np.float64], armed: NDArray[np.bool_]
+    ) -> None:
+        """One control period of the worlds ``envs`` toward ``target (m, H, 2)`` with
+        ``armed (m, H)`` (:func:`~motion_envs.envs.juggling._period.world_periods`, in
+        threads); what each hand caught and released is in ``_caught`` and ``_released``."""
+        self._target[envs], self._armed[envs] = target, armed
+        self._in_threads(
+            self._compiled.world_periods,
+            envs,
+            self._worlds,
+            self._ball_geoms,
+            self._target,
+            self._armed,
+            self._ref,
+            self._vref,
+            self._z_before,
+            self._holder,
+            self._thrower,
+            self._left,
+            self._dropped,
+            self._k,
+            self._constants,
+            self._caught,
+            self._released,
         )
 
-    def _world_constants(self, palm_top: float, *extra: float) -> NDArray[np.float64]:
-        """The compiled periods' ``constants``: ``(dt, physics step, ball radius, floor
-        height, palm_top, toss threshold, *extra)`` of the first sub-environment (all
-        share them)."""
-        first = self.envs[0]
-        task = first.task
-        return np.array(
-            [
-                task.dt,
-                first.model.opt.timestep,
-                task.ball_radius,
-                task.floor_z,
-                palm_top,
-                task.toss_threshold,
-                *extra,
-            ]
+    def _qv(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The worlds' ``qpos`` and ``qvel`` rows for ``envs``, ``(m, nq)`` each."""
+        datas = self._datas
+        rows = envs.tolist()
+        return (
+            np.array([datas[i].qpos for i in rows]),
+            np.array([datas[i].qvel for i in rows]),
         )
 
     def _in_threads(
@@ -209,22 +240,12 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             future.result()
 
     def _entry(self, kernel: Any, *args: Any) -> Callable[..., None]:
-        """The compiled function numba's dispatcher ``kernel`` runs for ``args``, found
-        once per kernel and then called directly: the dispatcher types a tuple of typed
-        lists (the worlds' views) in Python on every call (~40 µs, holding the GIL, in
-        every thread), while the arguments' types here never change (``envs`` a 1-d
-        int64 array, the rest this environment's own arrays; a block of ``envs`` has the
-        type of ``envs``)."""
+        """:func:`~motion_envs.envs.juggling._compiled.entry_point` of ``kernel`` for
+        ``args``, found once per kernel."""
         name = kernel.py_func.__name__
         entry = self._entries.get(name)
         if entry is None:
-            kernel(args[0][:0], *args[1:])  # compiles or loads the version for these types
-            try:
-                signature = tuple(kernel.typeof_pyval(a) for a in args)
-                entry = kernel.overloads[signature].entry_point
-            except (AttributeError, KeyError):  # a numba without them: the dispatcher
-                entry = kernel
-            self._entries[name] = entry
+            entry = self._entries[name] = self._compiled.entry_point(kernel, *args)
         return entry
 
     def __getstate__(self) -> dict[str, Any]:

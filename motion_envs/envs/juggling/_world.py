@@ -1,0 +1,472 @@
+r"""The juggling world, one for every pattern: a spec, its MJCF, and the world on MuJoCo.
+
+:class:`WorldSpec` says what a world is: how many hands (1 or 2) and balls (1 to 5), the
+task's gravity, control period, ball and floor, and the human limits of the hands (mass,
+speed, acceleration, servo bandwidth) and of the catch (``capture_speed``). Everything
+about the physics comes from it: :func:`world_mjcf` writes the one MJCF of any spec
+(bodies, joints, motors and their force range ``hand_mass x accel_limit``, contacts,
+contact sensors), and :class:`HandsWorld` steps it with the one control period of
+:mod:`~motion_envs.envs.juggling._period` (compiled by numba when it is installed; the
+single world is the batch of one through the same function as the native vector
+environments).
+
+**The hand** is a ``hand_mass`` body on two slide joints (``x``, ``z``), gravity
+compensated (the arm holds its own weight), driven by two motors whose force range is
+``hand_mass x accel_limit`` per axis, and stopped at the floor by a joint limit (its palm
+cannot pass below the floor). Human limits (defaults ``speed_limit = 6 m/s``,
+``accel_limit = 120 m/s^2``): ISO 13855:2010 takes 2.0 m/s as the approach speed of a
+person's hand/arm for safety distances (a typical fast reach, not a maximum); fast
+ballistic arm movements go far beyond (hand speeds in overarm throwing exceed 15 m/s,
+e.g. Atwater, Exerc. Sport Sci. Rev. 7, 1979); the SIMULATED demonstrations at
+9.81 m/s^2 peak at 5.1 m/s and 91 m/s^2: the limits are those peaks with a 20-30 % margin.
+
+**The palm** is a box under the hand origin (a held ball's centre sits at the origin);
+palms collide with balls only. **Balls** are spheres on two slide joints each; they
+collide with the palms and the floor, not with each other (in a real pattern they fly in
+slightly different planes). **The floor** is a plane at ``floor_z``; a ball touching it is
+a drop.
+
+**The capture rule as it behaves** (tested by a sweep of closing speeds and offsets): a
+falling ball that touches an empty hand's palm, its centre above the palm's top face, is
+caught when its speed relative to the hand is below ``capture_speed`` *at a physics step
+at which the contact is active*. The soft contact (``solref`` 4 ms) slows a fast ball
+within a step or two of touching, so a ball hitting a still palm much faster than
+``capture_speed`` is usually caught too, on the step after the contact has slowed it;
+only a ball that the contact throws back up (or off the palm's edge) before it is slow
+enough bounces off. ``capture_speed`` is therefore a limit on the relative speed at which
+the fingers close, not on the speed of the impact.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import JugglingTask
+from motion_envs.envs._kernels import numba_available
+from motion_envs.envs.juggling import _period
+from motion_envs.models.juggling import perturb_release
+
+__all__ = [
+    "CAPTURE_SPEED",
+    "HAND_ACCEL_LIMIT",
+    "HAND_MASS",
+    "HAND_SPEED_LIMIT",
+    "MAX_BALLS",
+    "PALM_HALF_THICKNESS",
+    "SERVO_OMEGA",
+    "SUBSTEPS",
+    "HandsWorld",
+    "WorldSpec",
+    "load_world_model",
+    "world_mjcf",
+]
+
+#: The most balls a world holds.
+MAX_BALLS = 5
+#: The palm box's half-thickness, m.
+PALM_HALF_THICKNESS = 0.008
+#: A flying ball's ``contype`` and ``conaffinity`` (a held ball's are 0: in the fingers):
+#: it collides with palms and the floor (contype 1), not with another ball (2 & 1 = 0).
+BALL_CONTYPE, BALL_CONAFFINITY = 2, 1
+_BALL_COLOURS = (
+    "0.85 0.15 0.15 1",
+    "0.15 0.65 0.2 1",
+    "0.9 0.75 0.1 1",
+    "0.2 0.35 0.85 1",
+    "0.7 0.3 0.75 1",
+)
+_HAND_COLOURS = ("0.9 0.6 0.4", "0.4 0.6 0.9")
+
+
+@dataclass(frozen=True)
+class WorldSpec:
+    """What a juggling world is (module docstring); every field is checked.
+
+    Parameters
+    ----------
+    hands, balls : int
+        1 or 2 hands; 1 to :data:`MAX_BALLS` balls.
+    gravity, dt, ball_radius, ball_mass, floor_z, toss_threshold : float
+        The task's (:class:`~motion_envs.datasets.juggling.JugglingTask`): m/s^2, the
+        control period s, m, kg, m, m/s^2 (the release rule's threshold).
+    hand_mass : float
+        kg.
+    speed_limit, accel_limit : float
+        The hand's peak speed (m/s) and acceleration (m/s^2).
+    capture_speed : float
+        Relative speed (m/s) under which a falling ball touching a palm is caught.
+    servo_omega : float
+        The computed-torque servo's bandwidth, rad/s (critically damped).
+    substeps : int
+        Physics steps per control period.
+    """
+
+    hands: int = 1
+    balls: int = 1
+    gravity: float = 9.81
+    dt: float = 0.005
+    ball_radius: float = 0.035
+    ball_mass: float = 0.13
+    floor_z: float = 0.5
+    toss_threshold: float = 29.43
+    hand_mass: float = 0.5
+    speed_limit: float = 6.0
+    accel_limit: float = 120.0
+    capture_speed: float = 5.0
+    servo_omega: float = 60.0
+    substeps: int = 5
+
+    def __post_init__(self) -> None:
+        for name in ("hands", "balls", "substeps"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                raise ValueError(f"WorldSpec.{name} must be an int; got {value!r}")
+        if self.hands not in (1, 2):
+            raise ValueError(f"WorldSpec.hands must be 1 or 2; got {self.hands}")
+        if not 1 <= self.balls <= MAX_BALLS:
+            raise ValueError(f"WorldSpec.balls must be 1 to {MAX_BALLS}; got {self.balls}")
+        if not 1 <= self.substeps <= 100:
+            raise ValueError(f"WorldSpec.substeps must be 1 to 100; got {self.substeps}")
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in ("hands", "balls", "substeps") or f.name == "floor_z":
+                continue
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"WorldSpec.{f.name} must be a finite number > 0; got {value!r}")
+        if not math.isfinite(self.floor_z):
+            raise ValueError(f"WorldSpec.floor_z must be finite; got {self.floor_z!r}")
+
+    @classmethod
+    def of(cls, task: JugglingTask, hands: int = 1, balls: int = 1, **limits: Any) -> WorldSpec:
+        """The spec of ``task``'s world with ``hands`` and ``balls`` (and any of the hands'
+        limits given by name)."""
+        return cls(
+            hands=hands,
+            balls=balls,
+            gravity=task.gravity,
+            dt=task.dt,
+            ball_radius=task.ball_radius,
+            ball_mass=task.ball_mass,
+            floor_z=task.floor_z,
+            toss_threshold=task.toss_threshold,
+            **limits,
+        )
+
+    @property
+    def physics_step(self) -> float:
+        """MuJoCo's timestep, ``dt / substeps``."""
+        return self.dt / self.substeps
+
+    @property
+    def palm_top(self) -> float:
+        """Height of a palm's top face above its hand origin (``-ball_radius``)."""
+        return -(self.ball_radius + PALM_HALF_THICKNESS) + PALM_HALF_THICKNESS
+
+    @property
+    def hand_names(self) -> tuple[str, ...]:
+        """``("hand",)`` or ``("hand_right", "hand_left")`` (the right hand first)."""
+        return ("hand",) if self.hands == 1 else ("hand_right", "hand_left")
+
+    @property
+    def ball_names(self) -> tuple[str, ...]:
+        """``("ball",)`` or ``("ball0", "ball1", ...)``."""
+        return ("ball",) if self.balls == 1 else tuple(f"ball{i}" for i in range(self.balls))
+
+    def constants(self) -> NDArray[np.float64]:
+        """The period's ``constants``, in ``_period.CONSTANT_NAMES``' order."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values.update(
+            physics_step=self.physics_step,
+            palm_top=self.palm_top,
+            ball_contype=BALL_CONTYPE,
+            ball_conaffinity=BALL_CONAFFINITY,
+        )
+        return np.array([float(values[name]) for name in _period.CONSTANT_NAMES])
+
+
+#: The default spec's hand and catch limits (each a :class:`WorldSpec` field's default).
+HAND_SPEED_LIMIT: float = WorldSpec.speed_limit
+HAND_ACCEL_LIMIT: float = WorldSpec.accel_limit
+HAND_MASS: float = WorldSpec.hand_mass
+CAPTURE_SPEED: float = WorldSpec.capture_speed
+SERVO_OMEGA: float = WorldSpec.servo_omega
+SUBSTEPS: int = WorldSpec.substeps
+
+
+def _palm_name(hand: str) -> str:
+    return hand.replace("hand", "palm")
+
+
+def world_mjcf(spec: WorldSpec) -> str:
+    """The MJCF of ``spec``'s world (module docstring): the vertical plane (``x``
+    horizontal, ``z`` up; ``y`` unused), SI units; qpos/qvel: each hand's ``x, z`` then
+    each ball's. Numbers are written exactly (``repr``)."""
+    r, m = spec.ball_radius, spec.ball_mass
+    force = spec.hand_mass * spec.accel_limit
+    palm_z = -(r + PALM_HALF_THICKNESS)
+    # the hand stops where its palm's underside meets the floor
+    z_min = spec.floor_z + r + 2 * PALM_HALF_THICKNESS
+    hands, balls, motors, sensors = [], [], [], []
+    for h, name in enumerate(spec.hand_names):
+        palm, colour = _palm_name(name), _HAND_COLOURS[h]
+        hands.append(f"""
+    <body name="{name}" pos="0 0 0" gravcomp="1">
+      <joint name="{name}_x" type="slide" axis="1 0 0" damping="0" armature="0"/>
+      <joint name="{name}_z" type="slide" axis="0 0 1" damping="0" armature="0"
+             limited="true" range="{z_min!r} 1000"/>
+      <inertial pos="0 0 0" mass="{spec.hand_mass!r}" diaginertia="0.001 0.001 0.001"/>
+      <geom name="{palm}" type="box" size="0.045 0.03 {PALM_HALF_THICKNESS!r}"
+            pos="0 0 {palm_z!r}" rgba="{colour} 1" contype="1" conaffinity="0" condim="3"
+            mass="0"/>
+      <geom name="{name}_mark" type="sphere" size="0.02" pos="0 0 -0.06"
+            rgba="{colour} 0.35" contype="0" conaffinity="0" mass="0"/>
+    </body>""")
+        motors += [
+            f'    <motor name="{name}_{a}" joint="{name}_{a}" gear="1" '
+            f'forcerange="{-force!r} {force!r}"/>'
+            for a in ("x", "z")
+        ]
+    inertia = 0.4 * m * r**2
+    for b, name in enumerate(spec.ball_names):
+        balls.append(f"""
+    <body name="{name}" pos="0 0 0">
+      <joint name="{name}_x" type="slide" axis="1 0 0" damping="0" armature="0"/>
+      <joint name="{name}_z" type="slide" axis="0 0 1" damping="0" armature="0"/>
+      <inertial pos="0 0 0" mass="{m!r}" diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>
+      <geom name="{name}" type="sphere" size="{r!r}" mass="0"
+            rgba="{_BALL_COLOURS[b]}" contype="{BALL_CONTYPE}"
+            conaffinity="{BALL_CONAFFINITY}" condim="3"/>
+    </body>""")
+        sensors.append(
+            f'    <contact name="{name}_floor" geom1="{name}" geom2="floor" data="found" num="1"/>'
+        )
+        sensors += [
+            f'    <contact name="{name}_{_palm_name(h)}" geom1="{name}" '
+            f'geom2="{_palm_name(h)}" data="found" num="1"/>'
+            for h in spec.hand_names
+        ]
+    camera_x = -0.1 if spec.hands == 1 else 0.0
+    return f"""<!-- a juggling world: {spec.hands} hand(s), {spec.balls} ball(s); written by
+     motion_envs.envs.juggling._world.world_mjcf from {spec!r} -->
+<mujoco model="juggling_{spec.hands}h{spec.balls}b">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{spec.physics_step!r}" gravity="0 0 {-spec.gravity!r}" integrator="Euler"/>
+  <visual>
+    <global offwidth="640" offheight="480"/>
+    <headlight ambient="0.4 0.4 0.4" diffuse="0.6 0.6 0.6"/>
+  </visual>
+  <asset>
+    <texture name="grid" type="2d" builtin="checker" rgb1="0.85 0.85 0.85" rgb2="0.75 0.75 0.75"
+             width="256" height="256"/>
+    <material name="grid" texture="grid" texrepeat="8 8"/>
+    <texture type="skybox" builtin="gradient" rgb1="0.92 0.94 1" rgb2="0.55 0.65 0.8" width="32"
+             height="32"/>
+  </asset>
+  <default>
+    <geom solref="0.004 1" solimp="0.95 0.99 0.001"/>
+  </default>
+  <worldbody>
+    <light pos="0 -2 3" dir="0 0.5 -1"/>
+    <camera name="side" pos="{camera_x!r} -2.2 1.25" xyaxes="1 0 0 0 0 1" fovy="40"/>
+    <geom name="floor" type="plane" size="2 1 0.01" pos="0 0 {spec.floor_z!r}" material="grid"
+          contype="1" conaffinity="0" condim="3"/>{"".join(hands)}{"".join(balls)}
+  </worldbody>
+  <actuator>
+{chr(10).join(motors)}
+  </actuator>
+  <sensor>
+{chr(10).join(sensors)}
+  </sensor>
+</mujoco>
+"""
+
+
+def load_world_model(spec: WorldSpec) -> mujoco.MjModel:
+    """Compile :func:`world_mjcf` of ``spec``."""
+    return mujoco.MjModel.from_xml_string(world_mjcf(spec))
+
+
+class HandsWorld:
+    """A world of ``spec.hands`` actuated hands and ``spec.balls`` balls on MuJoCo.
+
+    Its state is the batch of one that :func:`~motion_envs.envs.juggling._period.world_periods`
+    steps (arrays with a leading axis of 1): ``ref, vref (1, H, 2)``, ``z_before (1, H)``,
+    ``holder, thrower (1, B)``, ``left, dropped (1, B)``, ``k (1,)``; the native vector
+    environments copy these rows into their own batch at a reset.
+
+    Parameters
+    ----------
+    spec:
+        The world.
+    release_speed_std, release_angle_std:
+        Release scatter per toss: relative speed error and direction error (rad).
+    backend:
+        ``"auto"`` (numba when installed), ``"numba"`` or ``"python"``: which path runs
+        the period (bit-identical).
+    """
+
+    def __init__(
+        self,
+        spec: WorldSpec,
+        release_speed_std: float = 0.0,
+        release_angle_std: float = 0.0,
+        backend: str = "auto",
+    ) -> None:
+        if backend not in ("auto", "numba", "python"):
+            raise ValueError(f"backend must be 'auto', 'numba' or 'python'; got {backend!r}")
+        if backend == "numba" and not numba_available():
+            raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
+        self.backend = (
+            ("numba" if numba_available() else "python") if backend == "auto" else backend
+        )
+        self.spec = spec
+        self.release_speed_std = float(release_speed_std)
+        self.release_angle_std = float(release_angle_std)
+        self._rng: np.random.Generator | None = None
+        self.model = load_world_model(spec)
+        self.data = mujoco.MjData(self.model)
+        geom = mujoco.mjtObj.mjOBJ_GEOM
+        self.palm_geoms = [
+            mujoco.mj_name2id(self.model, geom, _palm_name(h)) for h in spec.hand_names
+        ]
+        self.ball_geoms = np.array(
+            [mujoco.mj_name2id(self.model, geom, b) for b in spec.ball_names], dtype=np.int64
+        )
+        self.floor_geom = mujoco.mj_name2id(self.model, geom, "floor")
+        self.palm_top = spec.palm_top
+        self.constants = spec.constants()
+        h, b = spec.hands, spec.balls
+        self.ref = np.zeros((1, h, 2))
+        self.vref = np.zeros((1, h, 2))
+        self.z_before = np.zeros((1, h))
+        self.holder = np.full((1, b), -1, dtype=np.int64)
+        self.thrower = np.full((1, b), -1, dtype=np.int64)
+        self.left = np.ones((1, b), dtype=np.bool_)
+        self.dropped = np.zeros((1, b), dtype=np.bool_)
+        self.k = np.zeros(1, dtype=np.int64)
+        self.caught = np.full((1, h), -1, dtype=np.int64)
+        self.released = np.full((1, h), -1, dtype=np.int64)
+        self._target = np.zeros((1, h, 2))
+        self._armed = np.zeros((1, h), dtype=np.bool_)
+        self._link()
+
+    # -- the period's links to this world (made again after unpickling) ---------------------
+    def _link(self) -> None:
+        if self.backend == "numba":
+            from motion_envs.envs.juggling import _compiled
+
+            self._links = _compiled.world_links([self])
+            self._periods = _compiled.entry_point(
+                _compiled.world_periods, *self._period_args(np.zeros(1, dtype=np.int64))
+            )
+        else:
+            m, d = self.model, self.data
+            self._links = (
+                np.array([m._address], dtype=np.uint64),
+                np.array([d._address], dtype=np.uint64),
+                [d.qpos], [d.qvel], [d.ctrl], [d.sensordata],
+                [m.geom_contype], [m.geom_conaffinity],
+            )  # fmt: skip
+            self._periods = _period.world_periods
+        self._one = np.zeros(1, dtype=np.int64)
+
+    def _period_args(self, envs: NDArray[np.int64]) -> tuple[Any, ...]:
+        return (
+            envs, self._links, self.ball_geoms, self._target, self._armed, self.ref,
+            self.vref, self.z_before, self.holder, self.thrower, self.left, self.dropped,
+            self.k, self.constants, self.caught, self.released,
+        )  # fmt: skip
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for key in ("_links", "_periods"):
+            state.pop(key, None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._link()
+
+    # -- setup ----------------------------------------------------------------------------
+    def set_contacts(self, ball: int, on: bool) -> None:
+        """Switch ``ball``'s contacts on (flying) or off (held in the fingers)."""
+        g = int(self.ball_geoms[ball])
+        self.model.geom_contype[g] = BALL_CONTYPE if on else 0
+        self.model.geom_conaffinity[g] = BALL_CONAFFINITY if on else 0
+
+    def reset_state(
+        self,
+        hand_pos: NDArray[np.float64],
+        hand_vel: NDArray[np.float64],
+        holder: tuple[int, ...],
+        thrower: tuple[int, ...],
+        ball_pos: NDArray[np.float64],
+        ball_vel: NDArray[np.float64],
+    ) -> None:
+        """Time 0: hands at ``hand_pos (H, 2)`` moving at ``hand_vel``; ball ``b`` held by
+        ``holder[b]`` (at its hand, with its velocity) or flying from ``ball_pos[b]`` at
+        ``ball_vel[b]``, thrown by ``thrower[b]`` (-1: long ago, it has left); the scene
+        placed (camera and lights included) before any physics step."""
+        spec = self.spec
+        mujoco.mj_resetData(self.model, self.data)
+        q, v = self.data.qpos, self.data.qvel
+        nh = 2 * spec.hands
+        q[:nh] = hand_pos.ravel()
+        v[:nh] = hand_vel.ravel()
+        for b in range(spec.balls):
+            h, c = holder[b], nh + 2 * b
+            q[c : c + 2] = hand_pos[h] if h >= 0 else ball_pos[b]
+            v[c : c + 2] = hand_vel[h] if h >= 0 else ball_vel[b]
+            self.set_contacts(b, h < 0)
+        self.ref[0] = hand_pos
+        self.vref[0] = hand_vel
+        self.z_before[0] = hand_pos[:, 1] - hand_vel[:, 1] * spec.dt
+        self.holder[0] = holder
+        self.thrower[0] = thrower
+        self.left[0] = [h < 0 for h in holder]  # a ball flying at time 0 has left
+        self.dropped[0] = False
+        self.k[0] = 0
+        mujoco.mj_forward(self.model, self.data)
+
+    def launch(self, ball: int, position: Any, velocity: Any) -> None:
+        """Put ``ball`` in flight at ``position`` with ``velocity`` (as if thrown long ago:
+        it may be captured at once), the hands unchanged; for tests and demonstrations."""
+        c = 2 * self.spec.hands + 2 * int(ball)
+        self.data.qpos[c : c + 2] = np.asarray(position, dtype=np.float64)
+        self.data.qvel[c : c + 2] = np.asarray(velocity, dtype=np.float64)
+        self.holder[0, ball] = -1
+        self.left[0, ball] = True
+        self.set_contacts(ball, True)
+        mujoco.mj_forward(self.model, self.data)
+
+    # -- one control period -----------------------------------------------------------------
+    def period(self, targets: Any, armed: Any) -> None:
+        """One control period toward ``targets (H, 2)`` (finite; unchecked) with the
+        releases ``armed (H,)``; :attr:`caught` and :attr:`released` say what happened
+        (``[0, h]``: a ball or -1). A released ball leaves with its hand's velocity,
+        scattered by the world's generator."""
+        self._target[0] = targets
+        self._armed[0] = armed
+        self._periods(*self._period_args(self._one))
+        self.data.time = int(self.k[0]) * self.spec.dt
+        nh = 2 * self.spec.hands
+        for h, b in enumerate(self.released[0].tolist()):
+            if b >= 0:
+                qvel = self.data.qvel
+                vel = perturb_release(
+                    qvel[2 * h : 2 * h + 2].copy(),
+                    self.release_speed_std,
+                    self.release_angle_std,
+                    self._rng,
+                )
+                qvel[nh + 2 * b], qvel[nh + 2 * b + 1] = float(vel[0]), float(vel[1])
+
+    def sync(self) -> None:
+        """Recompute the poses and the camera/lights (``mj_forward``) for drawing."""
+        mujoco.mj_forward(self.model, self.data)
