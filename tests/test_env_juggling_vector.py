@@ -98,7 +98,7 @@ def test_v1_random_actions_equal_sync(mode: Any, level: str, controller: str) ->
     kw = {"level": level, "controller": controller}
     vec = JugglingV1VectorEnv(4, autoreset_mode=mode, **kw)
     assert vec.backend == "numba"
-    ends = run_both(V1, vec, 4, mode, 300, "random", **kw)
+    ends = run_both(V1, vec, 4, mode, 400, "random", **kw)
     assert ends >= 4  # episodes ended and restarted
 
 
@@ -249,40 +249,6 @@ def test_cascade_residual_phases_equal_sync(backend: str) -> None:
     mode = AutoresetMode.NEXT_STEP
     vec = CascadeVectorEnv(3, autoreset_mode=mode, backend=backend, **kw)
     assert run_both(CASCADE, vec, 3, mode, 300, "random", **kw) >= 3
-
-
-def test_cascade_contact_sensors_are_the_contact_list() -> None:
-    """The batched world reads ``cascade.xml``'s contact sensors (per ball: floor, right
-    palm, left palm) where ``CascadeWorld`` reads the contact list: after every physics
-    step they agree, and they touch at times."""
-    from motion_envs.envs.juggling import CascadeEnv, _cascade_scene
-
-    env = CascadeEnv(level="medium", max_catches=6)
-    world = env.world
-    step = _cascade_scene.mujoco.mj_step
-    seen = np.zeros(9, dtype=bool)
-
-    def checked(model: Any, data: Any) -> None:
-        step(model, data)
-        pairs = world._touching()
-        others = [world.floor_geom, *world.palm_geoms]
-        for i, g in enumerate(world.ball_geoms):
-            for j, o in enumerate(others):
-                touching = bool(data.sensordata[3 * i + j] > 0)
-                assert touching == ((g, o) in pairs), (i, j)
-                seen[3 * i + j] |= touching
-
-    rng = np.random.default_rng(3)
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(_cascade_scene.mujoco, "mj_step", checked)
-        for episode in range(4):
-            env.reset(seed=episode)
-            done = False
-            while not done:
-                a = np.zeros(4) if episode < 2 else 0.3 * rng.standard_normal(4)
-                _, _, terminated, truncated, _ = env.step(a)
-                done = terminated or truncated
-    assert seen[[1, 2, 4, 5, 7, 8]].any() and seen[[0, 3, 6]].any()
 
 
 @needs_numba

@@ -219,7 +219,7 @@ def world_mjcf(spec: WorldSpec) -> str:
     <body name="{name}" pos="0 0 0" gravcomp="1">
       <joint name="{name}_x" type="slide" axis="1 0 0" damping="0" armature="0"/>
       <joint name="{name}_z" type="slide" axis="0 0 1" damping="0" armature="0"
-             limited="true" range="{z_min!r} 1000"/>
+             limited="true" range="{z_min!r} 1000" solreflimit="0.004 1"/>
       <inertial pos="0 0 0" mass="{spec.hand_mass!r}" diaginertia="0.001 0.001 0.001"/>
       <geom name="{palm}" type="box" size="0.045 0.03 {PALM_HALF_THICKNESS!r}"
             pos="0 0 {palm_z!r}" rgba="{colour} 1" contype="1" conaffinity="0" condim="3"
@@ -368,8 +368,8 @@ class HandsWorld:
         else:
             m, d = self.model, self.data
             self._links = (
-                np.array([m._address], dtype=np.uint64),
-                np.array([d._address], dtype=np.uint64),
+                [m._address],  # ints: what ctypes takes
+                [d._address],
                 [d.qpos], [d.qvel], [d.ctrl], [d.sensordata],
                 [m.geom_contype], [m.geom_conaffinity],
             )  # fmt: skip
