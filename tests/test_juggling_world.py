@@ -71,8 +71,8 @@ def _drive(world: HandsWorld, steps: int, seed: int) -> list[np.ndarray]:
         target = home + rng.normal(0.0, 0.15, home.shape)
         world.period(target, rng.random(spec.hands) < 0.5)
         d = world.data
-        out.append(np.concatenate([d.qpos, d.qvel, world.holder[0], world.left[0],
-                                   world.dropped[0], world.caught[0], world.released[0]]))  # fmt: skip
+        flags = (world.holder, world.left, world.dropped, world.caught, world.released)
+        out.append(np.concatenate([d.qpos, d.qvel, *(f[0] for f in flags)]))
     return out
 
 

@@ -67,7 +67,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     The three-ball cascade in Juggling-v1's physical world: two hands, three balls, the
     vertical plane (``x`` horizontal with the body's midline at 0 and the right hand at
     ``x > 0``, ``z`` up, metres), 9.81 m/s^2 by default. MuJoCo does the physics with
-    contacts on (:class:`~motion_envs.envs.juggling.CascadeWorld`, ``cascade.xml``): each
+    contacts on (:class:`~motion_envs.envs.juggling.CascadeWorld`, the one world's MJCF): each
     hand is Juggling-v1's actuated hand (0.5 kg on two slide joints, motors within
     ``hand_speed_limit`` = 6 m/s and 120 m/s^2), a falling ball touching an EMPTY hand's
     palm slower than 5 m/s relative to it is captured (a hand holds one ball), a ball

@@ -19,7 +19,7 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   than ``juggler`` and ``juggler_latency_aware`` always run in Python);
 * the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop
   (:func:`~motion_envs.envs.juggling._compiled.cascade_periods`, the contacts read from
-  ``cascade.xml``'s contact sensors; in ``threads`` threads over blocks of worlds); the
+  the world's contact sensors; in ``threads`` threads over blocks of worlds); the
   releases' noise in Python, from each world's
   generator, hand 0 before hand 1;
 * the sensors' delay line, the step's bookkeeping and the observation rows compiled, the
