@@ -18,7 +18,7 @@ explains why the paper's d = 3 null cannot follow from its procedure).
 
 :func:`run` fits (a pure function of a :class:`CalibrateConfig`), :func:`report` is the
 printed text and :func:`write` saves the calibrated YAML: to ``--out``, or over the
-shipped configuration (and its package copy) only with ``--replace-shipped``.
+shipped configuration only with ``--replace-shipped``.
 """
 
 from __future__ import annotations
@@ -41,10 +41,8 @@ from motion_envs.datasets.cohort import CohortGenerator
 from motion_envs.datasets.cohort_config import (
     CALIBRATED_PARAMETERS,
     DEFAULT_COHORT,
-    REPO_CONFIG_DIR,
     CohortConfig,
     load_cohort_config,
-    package_config_dir,
     resolve_cohort_config,
 )
 from motion_envs.models.criteria import table1
@@ -378,14 +376,10 @@ def report(outcome: CalibrationRun) -> str:
 
 def write(outcome: CalibrationRun, out: Path | None, replace_shipped: bool = False) -> list[Path]:
     """Save the calibrated YAML to ``out``; with ``replace_shipped`` over the starting
-    config instead (a file of the repository's ``configs/cohorts/`` also updates the
-    package copy). Atomic writes."""
+    config instead (the file itself: ``configs/cohorts/`` links to the package's folder,
+    so a shipped config has one file). Atomic writes."""
     if replace_shipped:
-        written = [outcome.final.save(outcome.source)]
-        if outcome.source.resolve().parent == REPO_CONFIG_DIR.resolve():
-            packaged = Path(str(package_config_dir())) / outcome.source.name
-            written.append(outcome.final.save(packaged))
-        return written
+        return [outcome.final.save(outcome.source.resolve())]
     if out is None:
         raise ValueError("write needs an output path or replace_shipped=True")
     return [outcome.final.save(out)]
@@ -473,8 +467,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     where.add_argument(
         "--replace-shipped",
         action="store_true",
-        help="overwrite the starting config instead (a file of the repository's "
-        "configs/cohorts/ also updates the package copy)",
+        help="overwrite the starting config instead (the shipped one: its one file in the "
+        "package, which configs/cohorts/ links to)",
     )
     where.add_argument("--dry-run", action="store_true", help="fit and report, write nothing")
     p.add_argument(

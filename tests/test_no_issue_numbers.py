@@ -15,7 +15,7 @@ def test_no_internal_issue_numbers():
     for folder, globs in (
         ("docs", ("*.md", "*.rst", "*.py")),
         ("baselines", ("*.py", "*.yaml")),
-        ("motion_envs", ("*.py",)),
+        ("motion_envs", ("*.py", "*.yaml")),
         ("configs", ("*.yaml", "*.yml")),
     ):
         for glob in globs:

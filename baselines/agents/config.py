@@ -58,11 +58,11 @@ __all__ = [
 
 #: Algorithms ``motion-bench train`` knows.
 ALGOS: tuple[str, ...] = ("ppo", "sac", "td3")
-#: The agent configs shipped in the package (``baselines/configs/agents``, package data): a
-#: byte-identical copy of the repository's canonical ``configs/agents``
-#: (``tests/test_packaged_configs.py``), so that a wheel install finds them.
+#: The agent configs shipped in the package (``baselines/configs/agents``, package data),
+#: so that a wheel install finds them; the repository's ``configs/agents`` is a link to
+#: this folder, one file on disk (``tests/test_packaged_configs.py``).
 DEFAULT_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "agents"
-#: The sweep files shipped in the package (copy of ``configs/sweeps``, as above).
+#: The sweep files shipped in the package (``configs/sweeps`` links here, as above).
 SWEEP_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "sweeps"
 #: Activation names and their ``torch.nn`` classes.
 ACTIVATIONS: tuple[str, ...] = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
@@ -347,7 +347,7 @@ COMMAND_DEFAULTS: dict[str, Any] = {
 
 
 def default_config_path(algo: str) -> Path:
-    """``configs/agents/ALGO.yaml`` (the packaged copy, :data:`DEFAULT_CONFIG_DIR`)."""
+    """``configs/agents/ALGO.yaml`` (the package's file, :data:`DEFAULT_CONFIG_DIR`)."""
     return DEFAULT_CONFIG_DIR / f"{algo}.yaml"
 
 

@@ -1,13 +1,14 @@
 """Configuration of the virtual (simulated) cohort: YAML schema, validation and look-up.
 
-A cohort configuration is a YAML file; the canonical files live in the repository at
-``configs/cohorts/*.yaml`` and identical copies ship inside the package at
-``motion_envs/datasets/cohorts/*.yaml`` (so an installed package finds them too; a test
-checks the copies are byte-identical). :func:`resolve_cohort_config` accepts
+A cohort configuration is a YAML file; the shipped ones live inside the package at
+``motion_envs/datasets/cohorts/*.yaml`` (so an installed package finds them), and the
+repository's ``configs/cohorts`` is a symbolic link to that folder (one file on disk,
+``tests/test_packaged_configs.py``). :func:`resolve_cohort_config` accepts
 
 * a path to a YAML file (anything ending in ``.yaml``/``.yml`` or an existing file), or
 * a name such as ``"faraway2008"``: ``configs/cohorts/NAME.yaml`` of the source checkout
-  when it exists, otherwise the package copy.
+  when it exists (a user's own file there, or through the link the shipped one),
+  otherwise the package's.
 
 Every key is documented in ``configs/cohorts/faraway2008.yaml``. Unknown keys and
 out-of-range values raise ``ValueError`` naming the key. Angles in the file are in
@@ -57,15 +58,16 @@ CALIBRATED_PARAMETERS: tuple[str, ...] = (
     "speed_profile.spread",
 )
 
-#: ``configs/cohorts`` of the source checkout (may not exist in an installed package).
+#: ``configs/cohorts`` of the source checkout (a link to the package's folder; absent in
+#: an installed package).
 REPO_CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs" / "cohorts"
 
 #: Comment block written at the top of every saved cohort YAML (documents each key).
 YAML_HEADER = """\
 Virtual cohort configuration for motion-envs. SIMULATED DATA, not a recording: a seeded
 generative model of Faraway & Choe's (2008) reaching experiment (their data are not public).
-Model: see motion_envs/datasets/cohort.py. Canonical file: configs/cohorts/NAME.yaml; an
-identical copy ships in motion_envs/datasets/cohorts/ (tests check they match).
+Model: see motion_envs/datasets/cohort.py. The one file: motion_envs/datasets/cohorts/NAME.yaml
+(shipped in the package; the repository's configs/cohorts/ is a link to that folder).
 Written by code (motion-bench calibrate-cohort); comments other than this header are lost.
 
 name, seed: cohort name (dataset name "cohort:NAME") and the root random seed.
