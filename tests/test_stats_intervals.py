@@ -4,11 +4,17 @@ stratified interval, probability of improvement) by hand and against rliable's n
 
 from __future__ import annotations
 
+import itertools
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.stats import binomtest
 
 from baselines.stats import (
+    CONFIDENCE,
+    MIN_GROUPS,
     Comparison,
     compare_errors,
     group_bootstrap,
@@ -16,6 +22,7 @@ from baselines.stats import (
     intervals_document,
     iqm,
     iqm_intervals,
+    min_groups,
     probability_of_improvement,
     statistic_interval,
     verdict,
@@ -112,6 +119,31 @@ def test_verdicts_in_words():
     assert intervals_document([c]) == {"mlp / null": [0.8, 0.95]}
     worse = Comparison("a", "b", 1.2, (1.1, 1.3), 0, 8).sentence()
     assert worse == "a is WORSE than b at 95 %"
+
+
+def test_minimum_groups_for_a_verdict():
+    """MIN_GROUPS against its two reasons, counted independently: the distinct bootstrap
+    replicates of n groups (multisets, enumerated) and the sign test of n wins (scipy)."""
+    alpha = 1 - CONFIDENCE
+    for n in range(2, 9):
+        replicates = len(set(itertools.combinations_with_replacement(range(n), n)))
+        assert replicates == math.comb(2 * n - 1, n)
+        p_all_wins = binomtest(n, n, 0.5).pvalue
+        enough = replicates >= 2 / alpha and p_all_wins < alpha
+        assert enough == (n >= MIN_GROUPS), n
+    assert MIN_GROUPS == min_groups(0.95) == 6 and min_groups(0.99) == 8
+    # below the minimum: the interval is kept, the verdict is not given
+    c = Comparison("promp", "lippi", 0.5, (0.3, 0.7), 2, 2, "shapes")
+    assert c.verdict == "cannot decide" and c.to_dict()["verdict"] == "cannot decide"
+    assert c.sentence() == (
+        "cannot decide with 2 shapes (a verdict at 95 % needs at least 6: docs/protocol.md)"
+    )
+    assert "95% CI 0.300-0.700 over 2 shapes" in c.line()
+    assert verdict(0.3, 0.7, n_groups=5) == "cannot decide"
+    assert verdict(0.3, 0.7, n_groups=6) == "better"
+    a, b, g = _data()
+    two = np.isin(g, ["p0", "p1"])
+    assert compare_errors(a[two], 3 * b[two], g[two], "A", "B").verdict == "cannot decide"
 
 
 def test_strata_rules():

@@ -36,7 +36,23 @@ def test_position_prints_and_stores_every_interval(tmp_path, capsys):
         assert v["ratio"] == np.median(a) / np.median(b)
         assert v["wins"] == sum(x < y for x, y in zip(a, b, strict=True))
     assert "lower is better" in text and "over 3 shapes" in text
-    assert "line is WORSE than lippi at 95 %" in text
+    # 3 shapes: 10 distinct bootstrap replicates, too few for a verdict (MIN_GROUPS = 6)
+    assert "line / lippi" in text and "cannot decide with 3 shapes" in text
+    assert "BETTER" not in text and "WORSE" not in text
+    assert {v["verdict"] for v in doc["verdicts"]} == {"cannot decide"}
+
+
+def test_two_shape_recording_cannot_decide(tmp_path, capsys):
+    """The modeller's call on a two-shape recording: intervals printed, no verdict."""
+    args = ["position", "--shapes", "Angle", "CShape", "--learned", "off", "--no-progress"]
+    assert main([*args, "--out", str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    doc = json.loads((tmp_path / "results.json").read_text())
+    assert "promp / lippi" in doc["intervals"]
+    assert "BETTER" not in text and "WORSE" not in text and "no difference" not in text
+    assert text.count("cannot decide with 2 shapes (a verdict at 95 % needs at least 6") == len(
+        doc["verdicts"]
+    )
 
 
 METHODS = ["null", "lippi", "ridge"]
@@ -64,8 +80,8 @@ def test_position_keeps_the_learned_readings_interval():
 
 def test_agent_verdict_lines_and_initial_policy():
     rng = np.random.default_rng(0)
-    groups = np.repeat(["p1", "p2", "p3", "p4"], 10)
-    nominal = rng.gamma(3, 0.05, 40)
+    groups = np.repeat(["p1", "p2", "p3", "p4", "p5", "p6"], 10)
+    nominal = rng.gamma(3, 0.05, 60)
     agent = nominal * 0.8
     from baselines.verdicts import agent_comparisons
 
@@ -80,8 +96,10 @@ def test_agent_verdict_lines_and_initial_policy():
     assert not kept_initial_policy({"best_timesteps": 0}, "final")
     assert not kept_initial_policy({"best_timesteps": 2000}, "best")
     text = format_agent_verdicts({**entries, "kept_initial_policy": True})
-    assert "agent / nominal = 0.800" in text and "lower on 4/4 people" in text
+    assert "agent / nominal = 0.800" in text and "lower on 6/6 people" in text
     assert "INITIAL policy" in text
+    four = agent_comparisons(agent[:40], nominal[:40], groups[:40], "people", "rad")
+    assert four["verdict"].startswith("cannot decide with 4 people")
 
 
 def test_noise_floor_rows_against_the_floor_of_their_frame():

@@ -9,6 +9,7 @@
 
 from baselines.stats._intervals import (
     CONFIDENCE,
+    MIN_GROUPS,
     N_RESAMPLES,
     Comparison,
     compare_errors,
@@ -16,6 +17,7 @@ from baselines.stats._intervals import (
     group_bootstrap,
     group_wins,
     intervals_document,
+    min_groups,
     statistic_interval,
     verdict,
 )
@@ -23,6 +25,7 @@ from baselines.stats._seeds import iqm, iqm_intervals, probability_of_improvemen
 
 __all__ = [
     "CONFIDENCE",
+    "MIN_GROUPS",
     "N_RESAMPLES",
     "Comparison",
     "compare_errors",
@@ -32,6 +35,7 @@ __all__ = [
     "intervals_document",
     "iqm",
     "iqm_intervals",
+    "min_groups",
     "probability_of_improvement",
     "statistic_interval",
     "verdict",

@@ -15,11 +15,13 @@ independently, ``method="percentile"``, ``n_resamples`` replicates, ``rng`` seed
 
 The win count is the number of groups on which A's per-group statistic is below B's.
 The verdict is in words: *better* when the whole interval is below 1, *worse* when it
-is above 1, *no difference at 95 %* when it contains 1.
+is above 1, *no difference at 95 %* when it contains 1, and *cannot decide* with fewer
+than :data:`MIN_GROUPS` groups, whatever the interval (:func:`min_groups`).
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -30,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "CONFIDENCE",
+    "MIN_GROUPS",
     "N_RESAMPLES",
     "Comparison",
     "compare_errors",
@@ -37,6 +40,7 @@ __all__ = [
     "group_bootstrap",
     "group_wins",
     "intervals_document",
+    "min_groups",
     "statistic_interval",
     "verdict",
 ]
@@ -48,6 +52,34 @@ Statistic = Callable[[FloatArray], float]
 CONFIDENCE = 0.95
 #: Bootstrap replicates of every interval.
 N_RESAMPLES = 2000
+
+
+def min_groups(confidence: float = CONFIDENCE) -> int:
+    """The fewest groups on which a verdict in words can rest at ``confidence``.
+
+    The smallest ``n`` that meets both:
+
+    * the bootstrap over ``n`` groups has at most ``C(2n - 1, n)`` distinct replicates
+      (the multisets of ``n`` groups drawn from ``n``: 3 for 2 groups, 10 for 3, 35 for
+      4, 126 for 5); a percentile interval cuts ``(1 - confidence) / 2`` off each end,
+      which needs at least ``2 / (1 - confidence)`` of them (40 at 95 %), else its ends
+      are single extreme replicates (one group drawn ``n`` times);
+    * A lower than B on all ``n`` groups, the strongest evidence ``n`` groups can give,
+      has the two-sided sign-test p-value ``2^(1 - n)``, which must be below
+      ``1 - confidence`` (at 95 %: ``n >= 6``, ``p = 0.031``; 5 groups give 0.0625).
+
+    At 95 %: 6.
+    """
+    alpha = 1.0 - confidence
+    n = 2
+    while math.comb(2 * n - 1, n) < 2.0 / alpha or 2.0 ** (1 - n) >= alpha:
+        n += 1
+    return n
+
+
+#: Fewest groups for a verdict at :data:`CONFIDENCE` (:func:`min_groups`): below it the
+#: interval is still reported, the verdict is "cannot decide".
+MIN_GROUPS = min_groups()
 
 
 def _members(groups: ArrayLike) -> tuple[NDArray[np.str_], list[NDArray[np.int64]]]:
@@ -162,8 +194,11 @@ def group_wins(
     return wins, len(members)
 
 
-def verdict(low: float, high: float) -> str:
-    """``"better"`` (interval below 1), ``"worse"`` (above 1) or ``"no difference"``."""
+def verdict(low: float, high: float, n_groups: int | None = None) -> str:
+    """``"better"`` (interval below 1), ``"worse"`` (above 1) or ``"no difference"``;
+    ``"cannot decide"`` when ``n_groups`` (None: not checked) is below :data:`MIN_GROUPS`."""
+    if n_groups is not None and n_groups < MIN_GROUPS:
+        return "cannot decide"
     if high < 1.0:
         return "better"
     if low > 1.0:
@@ -208,12 +243,18 @@ class Comparison:
 
     @property
     def verdict(self) -> str:
-        """``"better"``, ``"worse"`` or ``"no difference"`` (for ``a``, at 95 %)."""
-        return verdict(*self.ci95)
+        """``"better"``, ``"worse"`` or ``"no difference"`` (for ``a``, at 95 %);
+        ``"cannot decide"`` with fewer than :data:`MIN_GROUPS` groups."""
+        return verdict(*self.ci95, n_groups=self.n_groups)
 
     def sentence(self) -> str:
         """The verdict in words."""
         v = self.verdict
+        if v == "cannot decide":
+            return (
+                f"cannot decide with {self.n_groups} {self.group} (a verdict at 95 % needs "
+                f"at least {MIN_GROUPS}: docs/protocol.md)"
+            )
         if v == "no difference":
             return "no difference at 95 % (the interval contains 1)"
         return f"{self.a} is {v.upper()} than {self.b} at 95 %"

@@ -73,7 +73,7 @@ def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) 
         "iqm_ratio_ci95": [lo, hi],
         "iqm_ratio_ci95_seeds": list(agg["ci95"]),
         "people_below_one": int(np.sum(medians < 1.0)),
-        "verdict": verdict(lo, hi),
+        "verdict": verdict(lo, hi, n_groups=len(people)),
     }
 
 
