@@ -119,3 +119,31 @@ def test_all_lowers_the_learned_budget_of_every_job(tmp_path):
     assert "--learned off" in jobs["orientation-cohort"].command(tmp_path)
     assert "--learned" not in run_all.JOBS[0].command(tmp_path)
     assert all(job.with_learned("full") is job for job in run_all.JOBS)
+
+
+def test_min_deg_that_leaves_no_replicates_says_what_it_dropped_and_what_to_change(
+    tmp_path, capsys
+):
+    """A recording whose repeats of a task rotate less than the default --min-deg 10: the
+    error says how many were dropped and why, and the --min-deg it suggests works."""
+    ds = load_vr_kitchen(min_deg=0)
+    angles = np.degrees(ds.rotation_angles())
+    chosen = []  # per (subject, task): one reach over 10 degrees and one under
+    for key in sorted(set(zip(ds.subjects.tolist(), ds.tasks.tolist(), strict=True)))[:40]:
+        idx = np.flatnonzero((ds.subjects == key[0]) & (ds.tasks == key[1]))
+        big, small = idx[angles[idx] >= 10], idx[angles[idx] < 10]
+        if big.size and small.size:
+            chosen += [int(big[0]), int(small[0])]
+    assert len(chosen) >= 4
+    path = ds.subset(np.array(chosen)).to_csv(tmp_path / "mine.csv")
+    assert main(["orientation", "--data", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    n = len(chosen)
+    assert len(err) == 1 and err[0].startswith("motion-bench orientation: error: argument --min")
+    assert f"{n // 2} of {n} trajectories rotate less than 10 degrees" in err[0]
+    assert "no (subject, task) pair left has 2 replicates" in err[0]
+    suggested = err[0].split("lower --min-deg to ")[1].split(" ")[0]
+    args = ["orientation", "--data", str(path), "--min-deg", suggested, "--learned", "off"]
+    assert main([*args, "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert f"dropped for rotating less than {suggested} degrees (--min-deg)" in out

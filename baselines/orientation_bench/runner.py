@@ -5,6 +5,7 @@ and the learned leave-one-subject-out rows.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
@@ -72,6 +73,54 @@ def _learned_rows(
     return learned_orientation_rows(dataset, mlp_config=budget, use_torch=use_torch), None
 
 
+def _pairs(dataset: OrientationDataset) -> dict[tuple[str, str], list[int]]:
+    """The trajectories of each (subject, task) with at least 2 of them."""
+    groups: dict[tuple[str, str], list[int]] = {}
+    for i, key in enumerate(zip(dataset.subjects.tolist(), dataset.tasks.tolist(), strict=True)):
+        groups.setdefault((str(key[0]), str(key[1])), []).append(i)
+    return {k: v for k, v in groups.items() if len(v) >= 2}
+
+
+def check_kept(
+    config: OrientationConfig, every: OrientationDataset, kept: OrientationDataset
+) -> None:
+    """Raise a :class:`~baselines.options.ConfigError` saying what to change when the
+    trajectories ``kept`` after ``--min-deg`` cannot make Table 1: fewer than 2, or no
+    (subject, task) pair with 2 replicates (the within-subject row). The message says
+    how many were dropped and why, and the largest ``--min-deg`` that would do."""
+    angles = np.degrees(every.rotation_angles())
+    dropped = len(every) - len(kept)
+    why = (
+        f"{dropped} of {len(every)} trajectories rotate less than {config.min_deg:g} degrees "
+        f"from start to end and were dropped (--min-deg {config.min_deg:g}; the slerp is "
+        "ill-posed for tiny rotations)"
+    )
+    pairs = _pairs(every)
+    # the largest threshold that keeps a pair: the second largest angle of a pair's group
+    keeps_pair = max((np.sort(angles[idx])[-2] for idx in pairs.values()), default=None)
+    if len(kept) < 2 or not _pairs(kept):
+        need = (
+            f"{len(kept)} left, Table 1 needs at least 2"
+            if len(kept) < 2
+            else "no (subject, task) pair left has 2 replicates, which Table 1's "
+            "within-subject row needs"
+        )
+        if keeps_pair is None:
+            raise options.ConfigError(
+                "data",
+                f"{config.data}: no (subject, task) pair has 2 replicates, which Table 1's "
+                "within-subject row needs: give a subject's repeats of a task the same "
+                "subject and task labels (--subject/--task of the import, or the "
+                "subject,task columns of a segments table)",
+            )
+        low = math.floor(keeps_pair * 10) / 10
+        raise options.ConfigError(
+            "min_deg",
+            f"{why}; {need}: lower --min-deg to {low:g} or below (keeps "
+            f"{int(np.sum(angles >= low))} trajectories)",
+        )
+
+
 def run(config: OrientationConfig) -> OrientationResults:
     """Table 1, the learned rows (and the nominal's criterion) for ``config``; no
     printing, no files.
@@ -92,13 +141,9 @@ def run(config: OrientationConfig) -> OrientationResults:
         except ValueError as exc:
             raise options.ConfigError("up", str(exc)) from None
     t0 = time.perf_counter()
-    dataset = load_orientation_dataset(config.data, min_deg=config.min_deg, up=config.up)
-    if len(dataset) < 2:
-        raise options.ConfigError(
-            "min_deg",
-            f"only {len(dataset)} trajectories left after dropping those under "
-            f"{config.min_deg} degrees; lower --min-deg",
-        )
+    every = load_orientation_dataset(config.data, min_deg=0.0, up=config.up)
+    dataset = every.drop_small_rotations(config.min_deg)
+    check_kept(config, every, dataset)
     full = dataset
     if config.split != "all":
         dataset = _split(config, full)[config.split == "test"]

@@ -44,12 +44,17 @@ def _label(name: str) -> str:
     return f"{pretty} (d={degree}){suffix}"
 
 
-def format_table1(result: Table1Result, dataset: OrientationDataset) -> str:
-    """Table 1 as text: one row per criterion, ours beside the paper's value (radians)."""
+def format_table1(
+    result: Table1Result, dataset: OrientationDataset, min_deg: float | None = None
+) -> str:
+    """Table 1 as text: one row per criterion, ours beside the paper's value (radians);
+    ``min_deg``: the ``--min-deg`` the dropped trajectories were under."""
+    why = "" if min_deg is None else f" for rotating less than {min_deg:g} degrees (--min-deg)"
     lines = [
         f"Faraway & Choe Table 1 on {dataset.name!r}: {len(dataset)} trajectories "
-        f"({'simulated' if dataset.simulated else 'real'} data), {dataset.n_dropped} dropped, "
-        f"{np.unique(dataset.subjects).size} subjects, {np.unique(dataset.tasks).size} tasks",
+        f"({'simulated' if dataset.simulated else 'real'} data), {dataset.n_dropped} "
+        f"dropped{why}, {np.unique(dataset.subjects).size} subjects, "
+        f"{np.unique(dataset.tasks).size} tasks",
         "median over trajectories of the max over time of the tangent-space error, radians",
         "",
         f"{'criterion':<50} {'name':<40} {'ours':>7} {'paper':>7}",
@@ -119,7 +124,7 @@ def nominal_text(config: OrientationConfig, nominal: dict[str, Any]) -> str:
 
 def report(results: OrientationResults) -> str:
     """The text ``motion-bench orientation`` prints."""
-    parts = [format_table1(results.table, results.dataset)]
+    parts = [format_table1(results.table, results.dataset, results.config.min_deg)]
     if results.learned is not None:
         from baselines.learned.rows import format_reading
 
