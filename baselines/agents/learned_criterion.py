@@ -189,6 +189,7 @@ def learned_episode_errors(
         _, fit, part = orientation_split_parts(
             a["data"], split, a["test_fraction"], a["split_seed"], a["min_deg"], a["val_fraction"],
             a.get("fold"), a.get("val_folds", 0), a.get("val_fold", 0),
+            a.get("split_by", "subject"),
         )  # fmt: skip
         if not np.array_equal(np.asarray(part.trajectory_ids), task.trajectory_ids):
             raise RuntimeError(f"{env_id}: the learned split does not match the environment's")

@@ -64,7 +64,9 @@ def held_out_subjects(
     unique = np.unique(np.asarray(subjects).astype(str))
     if unique.size < 2:
         raise ValueError(
-            f"a split by subject needs at least 2 subjects; the dataset has {unique.size}"
+            f"a split by subject needs at least 2 subjects; the dataset has {unique.size} "
+            "(split one person's trials with split_by_replicate; the orientation "
+            "environments: split_by='replicate')"
         )
     n_test = min(max(1, round(float(test_fraction) * unique.size)), unique.size - 1)
     order = np.random.default_rng(int(seed)).permutation(unique.size)

@@ -33,6 +33,7 @@ __all__ = [
     "LAYOUT",
     "MAX_DEGREE",
     "ROW",
+    "SPLIT_BY",
     "OrientationTask",
     "load_orientation_task",
     "orientation_split_parts",
@@ -44,6 +45,8 @@ MAX_DEGREE = 12
 
 
 _SPLITS = ("train", "val", "test")
+#: What the splits hold out (``split_by``): people, or trials of one person.
+SPLIT_BY = ("subject", "replicate")
 
 
 #: The observation's parts (a quaternion state): start 0-3, goal 4-7, current 8-11,
@@ -97,6 +100,7 @@ def orientation_split_parts(
     fold: int | None = None,
     val_folds: int = 0,
     val_fold: int = 0,
+    split_by: str = "subject",
 ) -> tuple[Any, Any, Any]:
     """``(dataset, fit, part)``: the whole dataset, the subjects the environment's nominal
     is fitted on, and the trajectories of ``split`` (in episode order).
@@ -114,13 +118,35 @@ def orientation_split_parts(
     with ``split_seed`` and cut into ``K`` groups of near-equal size
     (:func:`validation_groups`); group ``val_fold`` is ``"val"``, the other people
     ``"train"`` (and ``fit``): the inner folds over people of a nested evaluation.
+
+    ``split_by="replicate"`` (a one-person recording): the splits hold out trials instead
+    of people, each task's trajectories permuted with ``split_seed``
+    (:func:`~motion_envs.datasets.splits.split_by_replicate`, ``test_fraction``, then
+    ``val_fraction`` of the training trials); not with ``fold`` or ``val_folds``.
     """
     from motion_envs.datasets import load_orientation_dataset
-    from motion_envs.datasets.splits import split_by_subject
+    from motion_envs.datasets.splits import split_by_replicate, split_by_subject
 
     dataset = load_orientation_dataset(data, min_deg=min_deg)
     if len(dataset) < 2:
         raise ValueError(f"data {data!r} has {len(dataset)} trajectories; at least 2 needed")
+    if split_by == "replicate":
+        if fold is not None or val_folds:
+            raise ValueError(
+                "split_by='replicate' holds out trials; fold and val_folds hold out people "
+                "(use split_by='subject' with them)"
+            )
+        train, test = split_by_replicate(dataset, test_fraction=test_fraction, seed=split_seed)
+        if len(test) == 0:
+            raise ValueError(
+                f"split_by='replicate': no task of {data!r} has the 3 trajectories a test "
+                "trial needs (2 stay in training)"
+            )
+        fit, part = train, (train if split == "train" else test)
+        if val_fraction > 0 and split != "test":
+            fit, val = split_by_replicate(train, test_fraction=val_fraction, seed=split_seed)
+            part = fit if split == "train" else val
+        return dataset, fit, part
     if fold is None:
         train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
     else:
@@ -167,13 +193,15 @@ def _build_task(
     fold: int | None = None,
     val_folds: int = 0,
     val_fold: int = 0,
+    split_by: str = "subject",
 ) -> OrientationTask:
     from motion_envs.geometry import quaternion as quat
     from motion_envs.models.orientation_nominal import OrientationNominal
 
     dataset, fit, part = orientation_split_parts(
-        data, split, test_fraction, split_seed, min_deg, val_fraction, fold, val_folds, val_fold
-    )
+        data, split, test_fraction, split_seed, min_deg, val_fraction, fold, val_folds, val_fold,
+        split_by,
+    )  # fmt: skip
     model = OrientationNominal(nominal, degree, N_STEPS).fit(fit)
     g = model.grids(part)
     parts = {
@@ -227,17 +255,20 @@ def load_orientation_task(
     fold: int | None = None,
     val_folds: int = 0,
     val_fold: int = 0,
+    split_by: str = "subject",
 ) -> OrientationTask:
     """Build (or reuse) the precomputed episodes of a split; built-in data is cached.
 
     ``fold`` (None or an integer >= 0): leave one person out, the ``fold``-th person
     (sorted labels) is the test split (:func:`orientation_split_parts`); ``val_folds = K``
     and ``val_fold = j`` (0 <= j < K): the ``j``-th of ``K`` groups of the training people
-    is the validation split (instead of ``val_fraction``)."""
+    is the validation split (instead of ``val_fraction``); ``split_by="replicate"``: the
+    splits hold out trials, not people (a one-person recording)."""
     from motion_envs.datasets.registry import lookup
     from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
     check_choice(split, "split", _SPLITS)
+    check_choice(split_by, "split_by", SPLIT_BY)
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)
     check_integer(degree, "degree", 1, MAX_DEGREE)
     check_number(min_deg, "min_deg", 0.0, 180.0)
@@ -252,7 +283,7 @@ def load_orientation_task(
     if fold is not None:
         fold = check_integer(fold, "fold", 0, 2**31)
     args += (int(split_seed), min_deg, val_fraction, bool(observe_timing), fold)
-    args += (val_folds, val_fold)
+    args += (val_folds, val_fold, split_by)
     builtin = lookup(data, "orientation")
     if builtin is not None and builtin[1] is None:  # a built-in name, not cohort:CONFIG
         return _build_task_cached(*args)

@@ -282,7 +282,7 @@ class OrientationReachEnv(ReachEnv):
     | Parameter        | Type         | Default        | Description |
     |------------------|--------------|----------------|-------------|
     | `data`           | **str**      | `"vr-kitchen"` | built-in dataset name or a path to the users' orientation CSV |
-    | `split`          | **str**      | `"train"`      | `"train"`, `"val"` or `"test"`: the subjects of a split by subject |
+    | `split`          | **str**      | `"train"`      | `"train"`, `"val"` or `"test"`: the subjects of a split by subject (the trials with `split_by="replicate"`) |
     | `nominal`        | **str**      | `"slerp"`      | `"slerp"`, `"bezier-null"`, `"bezier-task"` or `"bezier-subject"` (unseen subjects fall back to the null model) |
     | `degree`         | **int**      | `2`            | Bézier degree of the `"bezier-*"` nominals, 1 to 12 |
     | `residual_scale` | **float**    | `0.25`         | rotation angle in radians of an action of norm 1, in (0, pi] |
@@ -299,6 +299,7 @@ class OrientationReachEnv(ReachEnv):
     | `calibration`    | **int**      | `0`            | ``K``, 0 to 1000: observe the summary of ``K`` other reaches of the episode's person (0: the observation is unchanged); the native vector environment then runs the numpy backend |
     | `val_folds`      | **int**      | `0`            | `K >= 2`: the training people cut into `K` groups (permuted with `split_seed`); group `val_fold` is `"val"`, the others `"train"` with the nominal fitted on them (inner folds over people; needs `val_fraction=0`) |
     | `val_fold`       | **int**      | `0`            | the validation group of `val_folds`, 0 to `K - 1` |
+    | `split_by`       | **str**      | `"subject"`    | what the splits hold out: `"subject"` (people) or `"replicate"` (trials: each task's trajectories permuted with `split_seed`, `test_fraction` of them held out and at least 2 kept; for a one-person recording; not with `fold` or `val_folds`) |
 
     A bad argument raises `ValueError` naming it (the same in the vector environment);
     reward weights must lie in [0, 1e6]. `step` raises `ValueError` for an action that
@@ -332,13 +333,14 @@ class OrientationReachEnv(ReachEnv):
         calibration: int = 0,
         val_folds: int = 0,
         val_fold: int = 0,
+        split_by: str = "subject",
     ) -> None:
         self._check_arguments(
             render_mode, width, height, residual_scale, reward_weights, test_fraction, split_seed
         )
         self.task = load_orientation_task(
             data, split, nominal, degree, test_fraction, split_seed, min_deg,
-            val_fraction, observe_timing, fold, val_folds, val_fold,
+            val_fraction, observe_timing, fold, val_folds, val_fold, split_by,
         )  # fmt: skip
         self.observation_space = _observation_space(self.task, bool(observe_timing))
         self._setup(self.task.grids.starts)
