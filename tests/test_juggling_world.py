@@ -204,3 +204,27 @@ def test_hand_stops_at_the_floor() -> None:
     palm_bottom = lowest + spec.palm_top - 2 * 0.008
     assert palm_bottom > TASK.floor_z - 0.01  # a soft limit: millimetres of give
     assert palm_bottom < TASK.floor_z + 0.01  # and it did reach the floor
+
+
+@needs_numba
+def test_single_env_likeness_is_the_models_number() -> None:
+    """``LikenessQuery`` (the single env's compiled search) gives
+    ``HumanLikeness.distance``'s number bit for bit, also far away and for non-finite
+    states, and survives pickling."""
+    import pickle
+
+    from motion_envs.datasets.juggling import PHASES
+    from motion_envs.envs.juggling._likeness import LikenessQuery
+    from motion_envs.models.juggling import v1_likeness
+
+    likeness = v1_likeness(9.81, "train")
+    query = pickle.loads(pickle.dumps(LikenessQuery(likeness)))
+    rng = np.random.default_rng(0)
+    pos = rng.normal([0.2, 1.1], 0.3, (400, 2))
+    vel = rng.normal(0.0, 2.0, (400, 2))
+    pos[:5] *= 1e3  # far from every sample
+    pos[5], vel[6], pos[7] = np.nan, np.inf, -np.inf
+    for i in range(400):
+        phase = PHASES[i % len(PHASES)]
+        expected = likeness.distance(phase, pos[i], vel[i])
+        assert query.distance(phase, pos[i], vel[i]) == expected

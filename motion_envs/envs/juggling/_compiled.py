@@ -41,6 +41,7 @@ __all__ = [
     "hypot_rows",
     "likeness_tree",
     "mj_step_c",
+    "nearest_point",
     "nearest_rows",
     "py_hypot",
     "servo_acceleration",
@@ -497,6 +498,16 @@ def _nearest(tree: Any, q: Any, stack: Any) -> float:
         top += 2
     d = math.sqrt(best)
     return d if math.isfinite(d) else math.inf
+
+
+@njit(cache=True)
+def nearest_point(
+    pts: Any, start: Any, stop: Any, left: Any, right: Any, lo: Any, hi: Any, q: Any, stack: Any
+) -> float:
+    """:func:`_nearest` of one point ``q (4,)`` in the tree :func:`likeness_tree` returned
+    (its arrays passed one by one: a tuple costs more to pass from Python than the
+    search)."""
+    return _nearest((pts, start, stop, left, right, lo, hi), q, stack)
 
 
 @njit(cache=True)

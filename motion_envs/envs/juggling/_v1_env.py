@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
 from motion_envs.envs._common import SideCameraMixin, clipped_pair
+from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
@@ -217,6 +218,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.controller_name, juggler, self.delay_steps * self.task.dt
         )
         self.likeness = v1_likeness(self.gravity, "train")
+        self._likeness = LikenessQuery(self.likeness)
         self.world = JugglingV1World(
             self.task, self.release_speed_std, math.radians(self.release_angle_std)
         )
@@ -298,7 +300,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         true, terminated, truncated = self._advance(ax, az)
         caught = int(true.caught)
         phase = self.controller.phase
-        like = self.likeness.distance(phase, true.hand_pos, true.hand_vel)
+        like = self._likeness.distance(phase, true.hand_pos, true.hand_vel)
         reward, terms = self._rewards(caught, true.dropped, like, ax * ax + az * az)
         info = {
             **terms,

@@ -358,15 +358,23 @@ class HandsWorld:
 
     # -- the period's links to this world (made again after unpickling) ---------------------
     def _link(self) -> None:
+        m, d = self.model, self.data
         if self.backend == "numba":
             from motion_envs.envs.juggling import _compiled
 
-            self._links = _compiled.world_links([self])
+            # the batch of one: each array a (1, n) view of the world's own buffer (a
+            # typed list, as the vector environments pass, costs ~50 µs to unbox per call)
+            self._links: tuple[Any, ...] = (
+                np.array([m._address], dtype=np.uint64),
+                np.array([d._address], dtype=np.uint64),
+                d.qpos[None], d.qvel[None], d.ctrl[None], d.sensordata[None],
+                m.geom_contype[None], m.geom_conaffinity[None],
+            )  # fmt: skip
+            self._one = np.zeros(1, dtype=np.int64)
             self._periods = _compiled.entry_point(
-                _compiled.world_periods, *self._period_args(np.zeros(1, dtype=np.int64))
+                _compiled.world_periods, *self._period_args(self._one)
             )
         else:
-            m, d = self.model, self.data
             self._links = (
                 [m._address],  # ints: what ctypes takes
                 [d._address],
@@ -374,7 +382,7 @@ class HandsWorld:
                 [m.geom_contype], [m.geom_conaffinity],
             )  # fmt: skip
             self._periods = _period.world_periods
-        self._one = np.zeros(1, dtype=np.int64)
+            self._one = np.zeros(1, dtype=np.int64)
 
     def _period_args(self, envs: NDArray[np.int64]) -> tuple[Any, ...]:
         return (
