@@ -48,9 +48,8 @@ from typing import Any
 
 import numpy as np
 
-from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.juggling_bench.cascade import cascade_episode
-from motion_envs.datasets.juggling import SIMULATED_LABEL
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
 from motion_envs.models.juggling import _cascade
 
 #: The grid: each constant's candidate values (its current value among them).

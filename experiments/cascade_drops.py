@@ -38,8 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from baselines.agents.juggling_score import SPLIT_SEEDS
-from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, JugglingTask
 from motion_envs.envs.juggling import CASCADE_TIME_PER_CATCH, CascadeWorld
 from motion_envs.models.juggling import (
     LEVELS,

@@ -46,8 +46,7 @@ from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the ids)
 from baselines.agents.config import resolve_hyperparams
-from baselines.agents.juggling_score import SPLIT_SEEDS
-from motion_envs.datasets.juggling import PHASES, SIMULATED_LABEL
+from motion_envs.datasets.juggling import PHASES, SIMULATED_LABEL, SPLIT_SEEDS
 from motion_envs.models.juggling import CascadeController, cascade_fit, make_cascade_controller
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared

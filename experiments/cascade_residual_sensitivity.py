@@ -40,8 +40,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from baselines.agents.juggling_score import SPLIT_SEEDS
-from motion_envs.datasets.juggling import SIMULATED_LABEL
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
 from motion_envs.envs.juggling import CascadeVectorEnv
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared

@@ -30,11 +30,10 @@ import gymnasium as gym
 import numpy as np
 
 import motion_envs  # noqa: F401  (registers the environments)
-from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.agents.rundir import load_run
 from baselines.plots import new_figure
 from motion_envs._io import atomic_write_text, save_figure
-from motion_envs.datasets.juggling import PHASES
+from motion_envs.datasets.juggling import PHASES, SPLIT_SEEDS
 
 ENV_ID = "MotionEnvs/Juggling-v1"
 #: Index of the newest ball measurement's velocity ``vx, vz`` in the observation.

@@ -31,8 +31,8 @@ from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the environments)
 from baselines.agents.config import resolve_hyperparams
-from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.stats import group_bootstrap
+from motion_envs.datasets.juggling import SPLIT_SEEDS
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
 from _timing import machine, print_json, print_machine, print_table

@@ -19,8 +19,8 @@ from baselines.agents.cascade_score import (
     catches_median_difference,
 )
 from baselines.agents.config import resolve_hyperparams
-from baselines.agents.juggling_score import SPLIT_SEEDS
 from baselines.juggling_bench.cascade import CascadeConfig, cascade_episodes, run_cascade
+from motion_envs.datasets.juggling import SPLIT_SEEDS
 
 ENV_ID = "MotionEnvs/Cascade-v0"
 KWARGS = {

@@ -12,12 +12,12 @@ pytest.importorskip("stable_baselines3")
 
 from baselines.agents.juggling_score import (
     DEFAULT_EPISODES,
-    SPLIT_SEEDS,
     demonstration_paths,
     departure_from_line,
     juggling_episodes,
     segment_deviations,
 )
+from motion_envs.datasets.juggling import SPLIT_SEEDS
 
 ENV = "MotionEnvs/Juggling-v0"
 KWARGS = {"noise": 0.05, "max_cycles": 2, "frame_skip": 5}

@@ -19,7 +19,7 @@ from baselines.agents.callbacks import (
 )
 from baselines.agents.cascade_score import cascade_agent_episodes
 from baselines.agents.evaluate import split_criterion
-from baselines.agents.juggling_score import SPLIT_SEEDS, juggling_episodes
+from baselines.agents.juggling_score import juggling_episodes
 from baselines.agents.reaching_score import episode_max_errors
 from baselines.agents.scorers import (
     SCORERS,
@@ -30,6 +30,7 @@ from baselines.agents.scorers import (
     scorer_for,
 )
 from baselines.options import ConfigError
+from motion_envs.datasets.juggling import SPLIT_SEEDS
 
 MOTION_IDS = sorted(i for i in gym.registry if i.startswith("MotionEnvs/"))
 

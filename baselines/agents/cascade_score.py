@@ -2,7 +2,7 @@
 
 An episode of ``MotionEnvs/Cascade-v0`` ends at the first drop (or after ``max_catches``
 catches: censored). Its splits are Juggling's seed ranges
-(:data:`baselines.agents.juggling_score.SPLIT_SEEDS`: training seeds < validation seeds
+(:data:`motion_envs.datasets.juggling.SPLIT_SEEDS`: training seeds < validation seeds
 ``1e9 + i`` < test seeds ``2e9 + i``), so validation and test episodes are never trained
 on. For each episode :func:`cascade_agent_episodes` records the ``catches`` before the
 first drop, the ``tosses`` (releases), whether it ``dropped`` and its simulated ``time``,
@@ -36,11 +36,11 @@ from numpy.typing import NDArray
 
 from baselines.agents.juggling_score import (
     DEFAULT_EPISODES,
-    SPLIT_SEEDS,
     catch_rate_difference,
     catch_rate_interval,
     pooled_catch_rate,
 )
+from motion_envs.datasets.juggling import SPLIT_SEEDS, episode_seeds
 
 __all__ = [
     "CASCADE_ENV_IDS",
@@ -134,7 +134,7 @@ def cascade_agent_episodes(
     if n < 1:
         raise ValueError(f"episodes must be >= 1; got {episodes!r}")
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
-    seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
+    seeds = episode_seeds(split, n)
     envs = [gym.make(env_id, **kwargs) for _ in range(n)]
     max_catches = int(envs[0].unwrapped.max_catches)  # type: ignore[attr-defined]
     try:

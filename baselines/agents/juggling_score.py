@@ -52,13 +52,17 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import departure_from_line, resample_path
+from motion_envs.datasets.juggling import (
+    SPLIT_SEEDS,
+    departure_from_line,
+    episode_seeds,
+    resample_path,
+)
 
 __all__ = [
     "DEFAULT_EPISODES",
     "JUGGLING_ENV_IDS",
     "N_POINTS",
-    "SPLIT_SEEDS",
     "JugglingEpisodes",
     "TossCounts",
     "catch_rate_difference",
@@ -77,12 +81,6 @@ Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 #: Environment ids scored by this module.
 JUGGLING_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Juggling-v0", "MotionEnvs/Juggling-v1")
-#: First reset seed of each split's episodes.
-SPLIT_SEEDS: Mapping[str, int] = {
-    "train": 0,
-    "val": 1_000_000_000,
-    "test": 2_000_000_000,
-}
 #: Episodes per split when not given.
 DEFAULT_EPISODES: Mapping[str, int] = {"train": 20, "val": 20, "test": 50}
 #: Points of normalised time a phase segment is resampled to.
@@ -226,7 +224,7 @@ def juggling_episodes(
     if env_id == "MotionEnvs/Juggling-v1":  # its default gravity, that of its demonstrations
         kwargs.setdefault("gravity", 9.81)
     demos = demonstration_paths(kwargs, split)
-    seeds = SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)
+    seeds = episode_seeds(split, n)
     if policy is None:  # the controller alone: one env plays the episodes one by one
         env = gym.make(env_id, **kwargs)
         play = getattr(env.unwrapped, "nominal_episode", None)

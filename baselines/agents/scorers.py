@@ -37,12 +37,12 @@ from baselines.agents.cascade_score import (
 )
 from baselines.agents.juggling_score import (
     JUGGLING_ENV_IDS,
-    SPLIT_SEEDS,
     catch_rate_difference,
     catch_rate_interval,
     juggling_episodes,
 )
 from baselines.agents.reaching_score import EpisodeErrors, Policy, episode_max_errors
+from motion_envs.datasets.juggling import SPLIT_SEEDS
 
 __all__ = [
     "SCORERS",

@@ -5,7 +5,7 @@ the two trivial policies.
 For each level (:data:`motion_envs.models.juggling.LEVELS`) and each controller
 (:data:`~motion_envs.models.juggling.CASCADE_CONTROLLERS`), plays ``episodes`` episodes
 reset with the TEST seeds ``SPLIT_SEEDS["test"] + i`` of
-:mod:`baselines.agents.juggling_score` (the cascade juggler's timing and the levels were
+:mod:`motion_envs.datasets.juggling` (the cascade juggler's timing and the levels were
 chosen on other seeds, its three constants on the training seeds by
 ``experiments/cascade_constants.py``). An episode is Cascade-v0's zero-action episode (the
 controller alone; :func:`cascade_episode` steps the env's world, sensor and controller
@@ -38,8 +38,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines import options
-from baselines.agents.juggling_score import SPLIT_SEEDS
-from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
+from motion_envs.datasets.juggling import (
+    SIMULATED_LABEL,
+    SPLIT_SEEDS,
+    JugglingTask,
+    episode_seeds,
+)
 from motion_envs.envs.juggling import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
@@ -165,7 +169,7 @@ def cascade_episode(
 
 def cascade_episodes(level: str, method: str, config: CascadeConfig) -> CascadeEpisodes:
     """The episodes of ``method`` on ``level``, seeds of ``config.split``."""
-    seeds = SPLIT_SEEDS[config.split] + np.arange(config.episodes, dtype=np.int64)
+    seeds = episode_seeds(config.split, config.episodes)
     rows = [
         cascade_episode(level, method, int(s), config.max_catches, config.gravity) for s in seeds
     ]

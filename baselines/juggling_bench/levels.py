@@ -5,7 +5,7 @@ and each controller (the analytic juggler, the same made latency-aware, a fixed 
 point, minimum jerk to the intercept predicted from the commanded release velocity;
 :data:`~motion_envs.models.juggling.CONTROLLERS`), plays ``episodes`` zero-action episodes
 of ``MotionEnvs/Juggling-v1`` (the controller alone) reset with the TEST seeds
-``SPLIT_SEEDS["test"] + i`` of :mod:`baselines.agents.juggling_score` (the level values
+``SPLIT_SEEDS["test"] + i`` of :mod:`motion_envs.datasets.juggling` (the level values
 were chosen on training seeds), with :func:`~baselines.agents.juggling_score.juggling_episodes`,
 the function ``motion-bench agent`` scores agents with. With ``agent`` (a run folder of
 ``motion-bench train`` on Juggling-v1) the trained agent is played on the same seeds of
@@ -40,7 +40,6 @@ import numpy as np
 
 from baselines import options
 from baselines.agents.juggling_score import (
-    SPLIT_SEEDS,
     JugglingEpisodes,
     Policy,
     catch_rate_difference,
@@ -48,7 +47,7 @@ from baselines.agents.juggling_score import (
     deviation_interval,
     juggling_episodes,
 )
-from motion_envs.datasets.juggling import SIMULATED_LABEL, JugglingTask
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, JugglingTask
 from motion_envs.models.juggling import CONTROLLERS, LEVELS
 
 __all__ = [

@@ -9,7 +9,8 @@ The public names of small private modules, one concern each:
   ``rules.catch_fires(...)``): the world's rules (release, catch, drop, flight), written
   once for one ball and for a batch, used by the pure-model world, the MuJoCo scene, the
   vectorised runner, the demonstration generator and the segmentation;
-* ``_records``: recordings, phase examples, demonstration sets and their split;
+* ``_records``: recordings, phase examples, demonstration sets and their split; the
+  juggling environments' episode seeds per split (:data:`SPLIT_SEEDS`, :func:`episode_seeds`);
 * ``_paths``: paths on normalised time (resampling, departure from the line);
 * ``_person``: the SIMULATED demonstrations (a seeded model of a person);
 * ``_cascade_demos``: SIMULATED three-ball cascade demonstrations (two hands, each in its
@@ -46,11 +47,14 @@ from motion_envs.datasets.juggling._person import (
     generate_demonstrations,
 )
 from motion_envs.datasets.juggling._records import (
+    MAX_SPLIT_EPISODES,
     MIN_SPLIT_CYCLES,
     SIMULATED_LABEL,
+    SPLIT_SEEDS,
     JugglingDemos,
     JugglingRecording,
     PhaseSegment,
+    episode_seeds,
     split_cycles,
 )
 from motion_envs.datasets.juggling._siteswap import (
@@ -73,11 +77,13 @@ __all__ = [
     "CASCADE_BALLS",
     "CASCADE_HANDS",
     "JUGGLING_COLUMNS",
+    "MAX_SPLIT_EPISODES",
     "MIN_SAMPLES",
     "MIN_SPLIT_CYCLES",
     "PHASES",
     "SIMULATED_LABEL",
     "SITESWAP_DIGITS",
+    "SPLIT_SEEDS",
     "CascadeStyle",
     "CascadeTiming",
     "JugglingDemos",
@@ -94,6 +100,7 @@ __all__ = [
     "departure_from_line",
     "draw_cascade_person",
     "draw_person",
+    "episode_seeds",
     "format_siteswap",
     "generate_cascade_demonstrations",
     "generate_demonstrations",

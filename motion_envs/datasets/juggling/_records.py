@@ -1,7 +1,9 @@
-"""Juggling recordings: phase examples, continuous recordings, demonstration sets, splits."""
+"""Juggling recordings: phase examples, continuous recordings, demonstration sets, splits
+(of the demonstrations by cycle, and of the environments' episodes by reset seed)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -26,6 +28,16 @@ SIMULATED_LABEL = "SIMULATED (seeded model of a person; not human recordings)"
 
 #: Complete cycles :func:`split_cycles` needs.
 MIN_SPLIT_CYCLES = 8
+#: First reset seed of each split's episodes of the juggling environments: episode ``i`` of
+#: ``split`` is reset with seed ``SPLIT_SEEDS[split] + i`` (:func:`episode_seeds`), so
+#: training, validation and test episodes never share a seed (fewer than 10^9 per split).
+SPLIT_SEEDS: Mapping[str, int] = {
+    "train": 0,
+    "val": 1_000_000_000,
+    "test": 2_000_000_000,
+}
+#: Episodes a split holds at most (its seeds stop before the next split's first).
+MAX_SPLIT_EPISODES = 1_000_000_000
 
 
 @dataclass(frozen=True)
@@ -138,3 +150,12 @@ def split_cycles(
     n_test = max(1, round(test_fraction * len(cycles)))
     test = {cycles[i] for i in order[:n_test]}
     return set(cycles) - test, test
+
+
+def episode_seeds(split: str, n: int) -> NDArray[np.int64]:
+    """The reset seeds of the first ``n`` episodes of ``split`` (:data:`SPLIT_SEEDS`)."""
+    if split not in SPLIT_SEEDS:
+        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
+    if not 0 <= n <= MAX_SPLIT_EPISODES:
+        raise ValueError(f"episodes must be in [0, {MAX_SPLIT_EPISODES}]; got {n}")
+    return SPLIT_SEEDS[split] + np.arange(n, dtype=np.int64)

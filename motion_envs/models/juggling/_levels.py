@@ -5,7 +5,7 @@ sensor's latency and noise (:class:`~motion_envs.models.juggling.BallSensor`) an
 the release noise (speed and angle, :func:`~motion_envs.models.juggling.perturb_release`).
 The values were chosen by reasoning (people juggle with a 100-200 ms visuomotor delay) and
 by running the analytic juggler on TRAINING seeds only (``SPLIT_SEEDS["train"]`` of
-``baselines.agents.juggling_score``); the env docstring has the table.
+:mod:`motion_envs.datasets.juggling`); the env docstring has the table.
 
 **Controllers**, all with the juggler's interface (``reset(state, rng)``,
 ``command(state) -> (target, armed)``, ``phase``, ``phase_time``, ``nominal_next()``,
