@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -16,7 +15,7 @@ from motion_envs.datasets.mocap import (
 )
 from motion_envs.datasets.orientation import OrientationDataset, read_orientation_csv
 from motion_envs.datasets.position_csv import PositionDataset, read_position_csv
-from motion_envs.datasets.registry import DATASETS, dataset_names, lookup, unknown_data
+from motion_envs.datasets.registry import DATASETS, data_file, dataset_names, load_builtin
 from motion_envs.datasets.vr_kitchen import DEFAULT_MIN_DEG, load_vr_kitchen
 
 __all__ = [
@@ -58,16 +57,13 @@ def load_orientation_dataset(
 
         x, y, z = (float(v) for v in check_up(up))
         return replace(load_orientation_dataset(data, min_deg), up=(x, y, z))
-    if (builtin := lookup(data, "orientation")) is not None:
-        entry, value = builtin
-        loaded: OrientationDataset = entry.load(value, min_deg=min_deg)
-        return loaded
+    builtin: OrientationDataset | None = load_builtin(data, "orientation", min_deg=min_deg)
+    if builtin is not None:
+        return builtin
     if is_mocap_source(data):
         path, options = parse_source(data)
         return import_orientation(path, options)[0].drop_small_rotations(min_deg)
-    path = Path(data)
-    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-        raise unknown_data(data, "orientation", "a path to an orientation CSV")
+    path = data_file(data, "orientation", "a path to an orientation CSV")
     return read_orientation_csv(path).drop_small_rotations(min_deg)
 
 
@@ -83,17 +79,14 @@ def load_position_dataset(
     ``shapes`` keeps only those tasks (LASA shape names, or the CSV's task labels);
     an unknown name raises ``ValueError`` naming it.
     """
-    if (builtin := lookup(data, "position")) is not None:
-        entry, value = builtin
-        loaded: PositionDataset = entry.load(value, shapes=shapes)
-        return loaded
+    builtin: PositionDataset | None = load_builtin(data, "position", shapes=shapes)
+    if builtin is not None:
+        return builtin
     if is_mocap_source(data):
         path, options = parse_source(data)
         ds = import_position(path, options)[0]
     else:
-        path = Path(data)
-        if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
-            raise unknown_data(data, "position", "a path to a position CSV")
+        path = data_file(data, "position", "a path to a position CSV")
         ds = read_position_csv(path)
     if shapes:
         unknown = sorted(set(shapes) - set(ds.tasks.tolist()))

@@ -19,14 +19,17 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
 __all__ = [
     "DATASETS",
     "KINDS",
     "BuiltinDataset",
+    "data_file",
     "dataset_names",
     "describe_names",
+    "load_builtin",
     "lookup",
     "unknown_data",
 ]
@@ -177,3 +180,19 @@ def unknown_data(data: str | os.PathLike[str], kind: Kind, what: str) -> ValueEr
         f"data {os.fspath(data)!r} is not a built-in {kind} dataset ({describe_names(kind)}) "
         f"nor an existing file; expected one of those or {what}"
     )
+
+
+def load_builtin(data: object, kind: Kind, **options: Any) -> Any:
+    """The built-in dataset of ``kind`` that ``data`` names, loaded with the kind's
+    ``options``; None when ``data`` is not a built-in name (see :func:`lookup`)."""
+    found = lookup(data, kind)
+    return None if found is None else found[0].load(found[1], **options)
+
+
+def data_file(data: str | os.PathLike[str], kind: Kind, what: str) -> Path:
+    """``data`` as the path of a user's file: one ending in ``.csv``/``.gz`` (the reader
+    reports a missing one) or an existing file, else :func:`unknown_data`."""
+    path = Path(data)
+    if path.suffix.lower() not in (".csv", ".gz") and not path.exists():
+        raise unknown_data(data, kind, what)
+    return path

@@ -14,14 +14,13 @@ import functools
 import math
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 from motion_envs.datasets.juggling import (
     JugglingDemos,
     JugglingTask,
     split_cycles,
 )
-from motion_envs.datasets.registry import lookup, unknown_data
+from motion_envs.datasets.registry import data_file, load_builtin
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._segmentation import load_juggling_csv
 
@@ -72,17 +71,12 @@ def load_demonstrations(
     """A built-in juggling dataset by name (:mod:`motion_envs.datasets.registry`; ``data``
     None: ``"simulated"``, the SIMULATED demonstrations, seeded by ``seed``) or the users'
     juggling CSV at ``data`` (:func:`~motion_envs.models.juggling.load_juggling_csv`)."""
-    builtin = lookup("simulated" if data is None else data, "juggling")
+    name = "simulated" if data is None else data
+    options = {"task": task, "seed": seed, "n_cycles": n_cycles, "n_persons": n_persons}
+    builtin: JugglingDemos | None = load_builtin(name, "juggling", **options)
     if builtin is not None:
-        entry, value = builtin
-        demos: JugglingDemos = entry.load(
-            value, task=task, seed=seed, n_cycles=n_cycles, n_persons=n_persons
-        )
-        return demos
-    assert data is not None
-    if Path(data).suffix.lower() not in (".csv", ".gz") and not Path(data).exists():
-        raise unknown_data(data, "juggling", "a path to a juggling CSV")
-    return load_juggling_csv(data, task=task)
+        return builtin
+    return load_juggling_csv(data_file(name, "juggling", "a path to a juggling CSV"), task=task)
 
 
 def fit_juggler(
