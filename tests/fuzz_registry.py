@@ -78,6 +78,12 @@ LOADERS: tuple[Loader, ...] = (
         not_fuzzed="the built-in LASA data by shape names (checked by test_lasa.py)",
     ),
     Loader(
+        "motion_envs.datasets.registry:load_builtin",
+        "name",
+        not_fuzzed="the built-in datasets by registered name (each tested by "
+        "test_dataset_registry.py); any other text is None, read by the kind's loader",
+    ),
+    Loader(
         "motion_envs.datasets.vr_kitchen:load_vr_kitchen",
         "name",
         not_fuzzed="the built-in VR-kitchen data (no user input but min_deg)",
