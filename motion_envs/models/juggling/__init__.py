@@ -19,8 +19,11 @@ The public names of small private modules, one concern each:
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
-  of unlabelled, gappy markers, fitted gravity, apex) and the pattern's timing against
-  Shannon's juggling theorem (:func:`pattern_summary`);
+  of unlabelled, gappy markers, fitted gravity, apex, releases and catches where the
+  ball leaves and joins a hand's carry);
+* ``_pattern``: the pattern of those flights (:func:`pattern_summary`: the across-body
+  axis, hands, beat, dwell, throw values, siteswap, balls by Shannon's juggling theorem
+  and by the concurrent count);
 * ``_cascade``: the three-ball cascade juggler (two hands of the one-ball juggler
   scheduled by Shannon's theorem, :class:`CascadeController`), its fit
   (:func:`cascade_fit`) and reference controllers (:func:`make_cascade_controller`);
@@ -71,12 +74,16 @@ from motion_envs.models.juggling._flights import (
     Flight,
     FlightAnalysis,
     FlightOptions,
-    PatternSummary,
     detect_flights,
     estimate_noise,
-    pattern_summary,
 )
 from motion_envs.models.juggling._juggler import AnalyticJuggler
+from motion_envs.models.juggling._pattern import (
+    PatternSummary,
+    ThrowEvent,
+    across_axis,
+    pattern_summary,
+)
 from motion_envs.models.juggling._levels import (
     CONTROLLERS,
     LEVELS,
@@ -160,6 +167,7 @@ __all__ = [
     "JugglingWorld",
     "PatternCheck",
     "PatternSummary",
+    "ThrowEvent",
     "PhaseFit",
     "ThrowNeed",
     "cascade_fit",
@@ -181,6 +189,7 @@ __all__ = [
     "make_cascade_controller",
     "make_controller",
     "pattern_summary",
+    "across_axis",
     "perturb_release",
     "phase_conditions",
     "plan_catch",

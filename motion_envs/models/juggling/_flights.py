@@ -71,10 +71,8 @@ __all__ = [
     "Flight",
     "FlightAnalysis",
     "FlightOptions",
-    "PatternSummary",
     "detect_flights",
     "estimate_noise",
-    "pattern_summary",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -107,8 +105,30 @@ class FlightOptions:
         ``(low, high)`` downward acceleration (m/s^2) of a flight.
     max_speed:
         A jump between consecutive samples faster than this (m/s) cuts a fragment.
+    max_acceleration:
+        A sample that leaves the line through the two before it (and the two after it)
+        by more than ``max_acceleration dt^2`` plus 5 noise std of a second difference
+        cuts a fragment: a marker swap between two balls (their centres are a ball's
+        diameter apart) or to a spurious marker, which a speed alone does not show.
     max_join_gap:
         Longest time (s) between two pieces of one flight.
+    join_tolerance:
+        Pieces of one flight may sit off one parabola by up to this (m), or the
+        tolerance if larger: a marker's position steps when the cameras that see it
+        change, and a re-identified marker can be offset by a millimetre or two.
+    gravity:
+        The gravity (m/s^2) a ball falls with, for the tests on the ball's vertical
+        acceleration (``pull_margin``, ``carry_rise``); lengths must be in metres.
+    pull_margin:
+        A fragment whose vertical acceleration is below ``-(gravity + pull_margin)``
+        (and 4 standard errors) is not a ball (:func:`_pulled_down`).
+    carry_window:
+        Time (s) after a catch (before a release) in which the ball, in the hand, must
+        leave the flight's parabola upward by ``carry_rise``.
+    carry_rise:
+        How far (m) above the flight's parabola the hand takes the ball within
+        ``carry_window``: the hand holds the ball against gravity, so a ball in the
+        hand is accelerated upward relative to free fall.
     """
 
     noise: float | None = None
@@ -116,9 +136,15 @@ class FlightOptions:
     tolerance: float = 4.5
     window: float = 0.06
     min_duration: float = 0.1
-    gravity_range: tuple[float, float] = (4.0, 20.0)
+    gravity_range: tuple[float, float] = (7.8, 11.8)
     max_speed: float = 20.0
+    max_acceleration: float = 500.0
     max_join_gap: float = 0.25
+    join_tolerance: float = 0.005
+    gravity: float = 9.81
+    pull_margin: float = 5.0
+    carry_window: float = 0.1
+    carry_rise: float = 0.01
 
     def __post_init__(self) -> None:
         positive = {
@@ -126,6 +152,11 @@ class FlightOptions:
             "tolerance": self.tolerance,
             "window": self.window,
             "max_speed": self.max_speed,
+            "max_acceleration": self.max_acceleration,
+            "carry_window": self.carry_window,
+            "carry_rise": self.carry_rise,
+            "gravity": self.gravity,
+            "pull_margin": self.pull_margin,
         }
         if self.noise is not None:
             positive["noise"] = self.noise
@@ -135,6 +166,7 @@ class FlightOptions:
         for name, value in {
             "min_duration": self.min_duration,
             "max_join_gap": self.max_join_gap,
+            "join_tolerance": self.join_tolerance,
         }.items():
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name}: expected a finite number >= 0; got {value!r}")
@@ -220,34 +252,6 @@ class FlightAnalysis:
         return float(np.median([f.gravity for f in self.flights]))
 
 
-@dataclass(frozen=True)
-class PatternSummary:
-    """The pattern's timing (module docstring); NaN where the events do not tell.
-
-    Times in s. ``balls_theorem`` is Shannon's ``H (F + D) / (V + D)``;
-    ``flight_theorem`` is ``N (V + D) / H - D`` with ``balls`` (given, or the theorem's
-    count rounded).
-    """
-
-    throws: int
-    catches: int
-    hands: int
-    midline: float
-    throw_period: float
-    hand_period: float
-    flight: float
-    dwell: float
-    vacant: float
-    dwell_ratio: float
-    alternation: float
-    balls: int | None
-    balls_theorem: float
-    flight_theorem: float
-
-    def as_dict(self) -> dict[str, float | int | None]:
-        return {k: getattr(self, k) for k in self.__dataclass_fields__}
-
-
 # ----------------------------------------------------------------------------- fits
 
 
@@ -299,30 +303,65 @@ def estimate_noise(points: FloatArray) -> float:
 
 
 def _fragments(
-    t: FloatArray, points: FloatArray, max_speed: float, tol: float
+    t: FloatArray, points: FloatArray, max_speed: float, tol: float, jump: float, bridge: int = 3
 ) -> list[tuple[int, IntArray]]:
-    """``(column, frame indices)`` of each fragment (step 2)."""
+    """``(column, frame indices)`` of each fragment (step 2): runs of present samples
+    (across gaps of at most ``bridge`` frames: dropped samples), cut where a step is
+    faster than ``max_speed`` (plus ``tol``) and where a sample leaves the line through
+    the two samples before it AND the line through the two after it by more than
+    ``jump`` (m at one frame's spacing, growing with the square of a gap): a marker
+    swap."""
     out: list[tuple[int, IntArray]] = []
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
     for u in range(points.shape[1]):
         ok = np.isfinite(points[:, u]).all(axis=1)
-        edges = np.diff(np.concatenate([[0], ok.astype(np.int8), [0]]))
-        for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-            idx = np.arange(s, e, dtype=np.int64)
-            if idx.size > 1:
-                step = np.linalg.norm(np.diff(points[idx, u], axis=0), axis=1)
-                cut = np.flatnonzero(step > max_speed * np.diff(t[idx]) + tol) + 1
-                out.extend((u, part) for part in np.split(idx, cut))
-            else:
+        present = np.flatnonzero(ok)
+        if present.size == 0:
+            continue
+        breaks = np.flatnonzero(np.diff(present) > bridge + 1) + 1
+        for idx in np.split(present.astype(np.int64), breaks):
+            if idx.size < 2:
                 out.append((u, idx))
+                continue
+            p = points[idx, u]
+            tt = t[idx]
+            h = np.diff(tt)
+            step = np.linalg.norm(np.diff(p, axis=0), axis=1)
+            cut = set((np.flatnonzero(step > max_speed * h + tol) + 1).tolist())
+            cut.update((np.flatnonzero(np.diff(idx) > 1) + 1).tolist())  # re-tested below
+            if idx.size >= 3:
+                # e[j]: sample j + 2 off the line through samples j, j + 1; a jump
+                # between samples i - 1 and i puts e[i - 2] and, backwards, the
+                # residual of sample i - 1 from i, i + 1 over the limit
+                fwd = p[2:] - p[1:-1] - (p[1:-1] - p[:-2]) * (h[1:] / h[:-1])[:, None]
+                bwd = p[:-2] - p[1:-1] - (p[1:-1] - p[2:]) * (h[:-1] / h[1:])[:, None]
+                scale = np.maximum(h[1:], h[:-1]) / dt
+                limit = jump * scale**2
+                big_f = np.linalg.norm(fwd, axis=1) > limit  # about sample j + 2
+                big_b = np.linalg.norm(bwd, axis=1) > limit  # about sample j
+                # cut before sample i when i is off the line of the two before it and
+                # i - 1 off the line of the two after it
+                i = np.arange(2, idx.size - 1)
+                both = big_f[i - 2] & big_b[i - 1]
+                cut.update(i[both].tolist())
+                gaps = [c for c in cut if idx[c] - idx[c - 1] > 1]
+                for c in gaps:  # a bridged gap stays cut unless both sides agree
+                    if 2 <= c <= idx.size - 2 and not (big_f[c - 2] or big_b[c - 1]):
+                        cut.discard(c)
+            out.extend((u, part) for part in np.split(idx, sorted(cut)) if part.size)
     return out
 
 
 @dataclass
 class _Piece:
+    """Samples of a ballistic piece (or of joined pieces) and, for each of its two
+    ends, where the ball may be seen beyond it: ``(column, first frame, last frame)``
+    of the samples of the same fragment before the first sample (after the last)."""
+
     t: FloatArray
     pts: FloatArray
-    start_seen: bool
-    end_seen: bool
+    before: tuple[int, int, int]
+    after: tuple[int, int, int]
     column: int
     count: int = 1
 
@@ -444,6 +483,34 @@ def _refine(
     return lo, hi
 
 
+def _pulled_down(
+    t: FloatArray,
+    points: FloatArray,
+    frag: tuple[int, IntArray],
+    n_w: int,
+    sigma: float,
+    opts: FlightOptions,
+) -> bool:
+    """True when somewhere in the fragment the marker's vertical acceleration (a
+    quadratic fitted over a window of ``n_w`` samples) is below ``-(g + pull_margin)``
+    by more than 4 of its standard errors: a ball is in free fall or pushed up by a
+    hand, never pulled down faster than gravity; a skin marker is, after each throw."""
+    column, idx = frag
+    tt = t[idx]
+    z = points[idx, column, -1]
+    if idx.size < n_w:
+        return False
+    tw = sliding_window_view(tt, n_w)
+    zw = sliding_window_view(z, n_w)
+    tau = tw - tw[:, n_w // 2 : n_w // 2 + 1]
+    quad = _design(tau, 2)
+    proj = np.linalg.pinv(quad)  # (W, 3, n)
+    accel = 2.0 * np.einsum("wn,wn->w", proj[:, 2, :], zw)
+    se = 2.0 * sigma * np.linalg.norm(proj[:, 2, :], axis=1)
+    limit = -(opts.gravity + opts.pull_margin) - 4.0 * se
+    return bool((accel < limit).any())
+
+
 def _pieces(
     t: FloatArray,
     points: FloatArray,
@@ -482,7 +549,9 @@ def _pieces(
         if not (low - 4 * se <= g <= high + 4 * se):
             counts["pieces not ballistic"] += 1
             continue
-        out.append(_Piece(tt[lo:hi], pts[lo:hi], lo > 0, hi < idx.size, column))
+        before = (column, int(idx[0]), int(idx[lo]))
+        after = (column, int(idx[hi - 1]) + 1, int(idx[-1]) + 1)
+        out.append(_Piece(tt[lo:hi], pts[lo:hi], before, after, column))
     return out
 
 
@@ -523,8 +592,8 @@ def _merge(a: _Piece, b: _Piece, tol: float, rms_max: float, k: int) -> _Piece |
         return _Piece(
             t[lo:hi],
             pts[lo:hi],
-            first.start_seen or lo > 0,
-            last.end_seen or hi < n,
+            first.before,
+            last.after,
             first.column,
             a.count + b.count,
         )
@@ -532,9 +601,19 @@ def _merge(a: _Piece, b: _Piece, tol: float, rms_max: float, k: int) -> _Piece |
 
 
 def _join(
-    pieces: list[_Piece], sigma: float, tol: float, max_gap: float, k: int, counts: dict[str, int]
+    pieces: list[_Piece],
+    sigma: float,
+    tol: float,
+    max_gap: float,
+    k: int,
+    counts: dict[str, int],
+    join_tolerance: float = 0.0,
 ) -> list[_Piece]:
-    """Join the pieces of each flight (step 5)."""
+    """Join the pieces of each flight (step 5): one parabola within
+    ``max(tol, join_tolerance)`` of every sample, rms at most the larger of ``2 sigma``
+    and half that."""
+    tol = max(tol, join_tolerance)
+    rms_max = max(2.0 * sigma, 0.5 * tol)
     groups: list[_Piece] = []
     for piece in sorted(pieces, key=lambda p: float(p.t[0])):
         best: tuple[int, _Piece] | None = None
@@ -542,7 +621,7 @@ def _join(
         for i, group in enumerate(groups):
             if piece.t[0] - group.t[-1] > max_gap or group.t[0] - piece.t[-1] > max_gap:
                 continue
-            merged = _merge(group, piece, tol, 2.0 * sigma, k)
+            merged = _merge(group, piece, tol, rms_max, k)
             if merged is None:
                 continue
             _, resid = _fit(merged.t, merged.pts, float(merged.t[merged.t.size // 2]))
@@ -562,7 +641,7 @@ def _join(
             a, b = groups[i], groups[j]
             if b.t[0] - a.t[-1] > max_gap or a.t[0] - b.t[-1] > max_gap:
                 continue
-            merged = _merge(a, b, tol, 2.0 * sigma, k)
+            merged = _merge(a, b, tol, rms_max, k)
             if merged is not None:
                 groups[i] = merged
                 del groups[j]
@@ -570,6 +649,37 @@ def _join(
                 merged_any = True
                 break
     return groups
+
+
+def _beyond(
+    t: FloatArray,
+    points: FloatArray,
+    coef: FloatArray,
+    t_ref: float,
+    beyond: tuple[int, int, int],
+    n_c: int,
+    opts: FlightOptions,
+    first: bool,
+) -> int:
+    """What the marker does just before the flight's first sample (``first``) or just
+    after its last, within ``n_c`` samples of the same fragment (step 6): +1 the hand
+    carries it (it rises ``carry_rise`` above the flight's parabola and is above it on
+    average), -1 it is pulled down (``carry_rise`` below it, below on average: a hand
+    cannot pull an open-held ball down faster than gravity, so the marker is not a free
+    ball: a skin marker, or a hand's own arc), 0 neither or fewer than 4 samples."""
+    column, a, b = beyond
+    if first:
+        a = max(a, b - n_c)
+    else:
+        b = min(b, a + n_c)
+    if b - a < 4:
+        return 0
+    up = points[a:b, column, -1] - _predict(coef, t[a:b], t_ref)[:, -1]
+    if up.max() >= opts.carry_rise and up.mean() > 0.0:
+        return 1
+    if up.min() <= -opts.carry_rise and up.mean() < 0.0:
+        return -1
+    return 0
 
 
 def detect_flights(
@@ -599,12 +709,14 @@ def detect_flights(
     counts = {
         "fragments": 0,
         "fragments shorter than a window": 0,
+        "fragments pulled down": 0,
         "pieces too short": 0,
         "pieces not ballistic": 0,
         "pieces": 0,
         "pieces joined": 0,
         "flights too short": 0,
         "flights not ballistic": 0,
+        "flights pulled down": 0,
         "flights": 0,
     }
     if opts.noise is not None:
@@ -616,16 +728,22 @@ def detect_flights(
     dt = float(np.median(np.diff(t))) if t.size > 1 else math.inf
     n_w = max(6, round(opts.window / dt) + 1) if math.isfinite(dt) else 6
     pieces: list[_Piece] = []
-    for frag in _fragments(t, points, opts.max_speed, tol):
+    jump = opts.max_acceleration * dt * dt + 5.0 * math.sqrt(6.0) * sigma
+    for frag in _fragments(t, points, opts.max_speed, tol, jump):
         counts["fragments"] += 1
         if frag[1].size < n_w:
             counts["fragments shorter than a window"] += 1
+            continue
+        if _pulled_down(t, points, frag, n_w, sigma, opts):
+            counts["fragments pulled down"] += 1
             continue
         pieces.extend(_pieces(t, points, frag, n_w, sigma, tol, opts, counts))
     counts["pieces"] = len(pieces)
     flights = []
     low, high = opts.gravity_range
-    for group in _join(pieces, sigma, tol, opts.max_join_gap, n_w, counts):
+    n_c = max(4, round(opts.carry_window / dt)) if math.isfinite(dt) else 4
+    groups = _join(pieces, sigma, tol, opts.max_join_gap, n_w, counts, opts.join_tolerance)
+    for group in groups:
         ft = group.t
         t_ref = float(0.5 * (ft[0] + ft[-1]))
         coef, resid = _fit(ft, group.pts, t_ref)
@@ -635,6 +753,11 @@ def detect_flights(
         g = -2.0 * float(coef[2, -1])
         if not low <= g <= high:
             counts["flights not ballistic"] += 1
+            continue
+        before = _beyond(t, points, coef, t_ref, group.before, n_c, opts, first=True)
+        after = _beyond(t, points, coef, t_ref, group.after, n_c, opts, first=False)
+        if before == -1 or after == -1:
+            counts["flights pulled down"] += 1
             continue
         c0, c1, c2 = (float(c) for c in coef[:, -1])
         flights.append(
@@ -650,110 +773,11 @@ def detect_flights(
                 residual_rms=float(np.sqrt(np.mean(resid**2))),
                 n_samples=int(ft.size),
                 pieces=group.count,
-                start_seen=group.start_seen,
-                end_seen=group.end_seen,
+                start_seen=before == 1,
+                end_seen=after == 1,
                 recording=recording,
             )
         )
     flights.sort(key=lambda f: f.start)
     counts["flights"] = len(flights)
     return FlightAnalysis(tuple(flights), sigma, counts)
-
-
-# -------------------------------------------------------------------------- pattern
-
-
-def _two_means(x: FloatArray) -> tuple[float, float, float]:
-    """Centres (low, high) and pooled std of the optimal 1-D two-means split."""
-    xs = np.sort(x)
-    n = xs.size
-    k = np.arange(1, n)
-    left = np.cumsum(xs)[:-1]
-    right = xs.sum() - left
-    # within-cluster sum of squares = total sum of squares - between-cluster terms
-    cost = float((xs**2).sum()) - left**2 / k - right**2 / (n - k)
-    i = int(np.argmin(cost))
-    pooled = math.sqrt(max(float(cost[i]), 0.0) / max(n - 2, 1))
-    return float(left[i] / k[i]), float(right[i] / (n - k[i])), pooled
-
-
-def _median(values: list[float]) -> float:
-    return float(np.median(values)) if values else math.nan
-
-
-def pattern_summary(
-    flights: tuple[Flight, ...] | list[Flight], lateral: int = 0, balls: int | None = None
-) -> PatternSummary:
-    """The pattern's timing from the flights (module docstring); ``lateral`` is the
-    coordinate across the body, ``balls`` the number of balls (None: the theorem's,
-    rounded)."""
-    if balls is not None and balls < 1:
-        raise ValueError(f"balls: expected an integer >= 1; got {balls!r}")
-    throws = [(f.recording, f.start, float(f.position(f.start)[lateral])) for f in flights]
-    throws = [e for e, f in zip(throws, flights, strict=True) if f.start_seen]
-    catches = [
-        (f.recording, f.end, float(f.position(f.end)[lateral])) for f in flights if f.end_seen
-    ]
-    both = [f.duration for f in flights if f.start_seen and f.end_seen]
-    hands, midline = 1, math.nan
-    if len(throws) >= 4:
-        low, high, pooled = _two_means(np.array([x for _, _, x in throws]))
-        if high - low > 6.0 * pooled:
-            hands, midline = 2, 0.5 * (low + high)
-
-    def hand(x: float) -> int:
-        return 0 if hands == 1 or x < midline else 1
-
-    beats: list[float] = []
-    periods: list[float] = []
-    dwells: list[float] = []
-    for rec in dict.fromkeys(r for r, _, _ in throws):
-        th = sorted((tm, hand(x)) for r, tm, x in throws if r == rec)
-        ca = sorted((tm, hand(x)) for r, tm, x in catches if r == rec)
-        beats.extend(b[0] - a[0] for a, b in itertools.pairwise(th))
-        for h in range(hands):
-            mine = [tm for tm, hh in th if hh == h]
-            periods.extend(b - a for a, b in itertools.pairwise(mine))
-        th_by = {h: [tm for tm, hh in th if hh == h] for h in range(hands)}
-        for tm, h in th:
-            before = [c for c, hh in ca if hh == h and c < tm]
-            previous = [x for x in th_by[h] if x < tm]
-            if before and (not previous or before[-1] > previous[-1]):
-                dwells.append(tm - before[-1])
-    beat = _median(beats)
-    if math.isfinite(beat):  # successive throws only (not across a missed one)
-        pairs: list[bool] = []
-        for rec in dict.fromkeys(r for r, _, _ in throws):
-            th = sorted((tm, hand(x)) for r, tm, x in throws if r == rec)
-            pairs.extend(
-                a[1] != b[1] for a, b in itertools.pairwise(th) if b[0] - a[0] < 1.5 * beat
-            )
-        alternation = float(np.mean(pairs)) if pairs else math.nan
-    else:
-        alternation = math.nan
-    hand_period = _median(periods) if hands == 2 else beat
-    dwell = _median(dwells)
-    flight = _median(both)
-    vacant = hand_period - dwell
-    ratio = dwell / hand_period
-    theorem = hands * (flight + dwell) / (vacant + dwell)
-    n = balls
-    if n is None and math.isfinite(theorem):
-        n = max(1, round(theorem))
-    flight_theorem = n * (vacant + dwell) / hands - dwell if n is not None else math.nan
-    return PatternSummary(
-        throws=len(throws),
-        catches=len(catches),
-        hands=hands,
-        midline=midline,
-        throw_period=beat,
-        hand_period=hand_period,
-        flight=flight,
-        dwell=dwell,
-        vacant=vacant,
-        dwell_ratio=ratio,
-        alternation=alternation,
-        balls=n,
-        balls_theorem=theorem,
-        flight_theorem=flight_theorem,
-    )
