@@ -23,6 +23,7 @@ whole capture rotated by any angle about the vertical, Z-up or Y-up.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,18 +109,19 @@ def _carry(ev0: _Event, ev1: _Event, t: np.ndarray, rng: np.random.Generator) ->
     """The ball's path in the hand from a catch ``ev0`` to the throw ``ev1``; a long
     hold comes to rest in between (single throws)."""
     span = ev1.time - ev0.time
-    if span <= 0.7:
+    if span <= 0.9:
         return _quintic(ev0.time, ev1.time, ev0.pos, ev0.vel, ev0.acc, ev1.pos, ev1.vel, ev1.acc, t)
-    rest = 0.5 * (ev0.pos + ev1.pos) + np.array([0.0, 0.0, -0.05])
     t_a, t_b = ev0.time + 0.3, ev1.time - 0.3
+    rest_a = ev0.pos + 0.5 * 0.3 * ev0.vel  # constant deceleration to rest
+    rest_b = ev1.pos - 0.5 * 0.3 * ev1.vel  # constant acceleration from rest
     zero = np.zeros(3)
     out = np.empty((t.size, 3))
     a = t < t_a
     b = t > t_b
     m = ~a & ~b
-    out[a] = _quintic(ev0.time, t_a, ev0.pos, ev0.vel, ev0.acc, rest, zero, zero, t[a])
-    out[b] = _quintic(t_b, ev1.time, rest, zero, zero, ev1.pos, ev1.vel, ev1.acc, t[b])
-    out[m] = rest + 0.0005 * np.sin(2 * np.pi * 3.0 * (t[m] - t_a))[:, None]
+    out[a] = _quintic(ev0.time, t_a, ev0.pos, ev0.vel, ev0.acc, rest_a, zero, zero, t[a])
+    out[b] = _quintic(t_b, ev1.time, rest_b, zero, zero, ev1.pos, ev1.vel, ev1.acc, t[b])
+    out[m] = _quintic(t_a, t_b, rest_a, zero, zero, rest_b, zero, zero, t[m])
     return out
 
 
@@ -146,7 +148,7 @@ def _build(
     offset = np.array([0.0, 0.0, -0.035])  # the hand marker under the ball
     for h in (0, 1):
         evs = sorted(events[h], key=lambda e: e.time)
-        for e0, e1 in zip(evs[:-1], evs[1:], strict=True):
+        for e0, e1 in itertools.pairwise(evs):
             sel = (t > e0.time) & (t < e1.time)
             if not sel.any():
                 continue
@@ -282,11 +284,7 @@ def single_throws(
     balls, hands = _build(throws, t, 1, g, rng)
     held = np.isnan(balls[:, 0, 0]) & (t < throws[0].start)
     balls[held, 0] = throws[0].p0  # held still before the first throw
-    return Juggle(t, balls, hands, throws, "", math_nan(), math_nan())
-
-
-def math_nan() -> float:
-    return float("nan")
+    return Juggle(t, balls, hands, throws, "", float("nan"), float("nan"))
 
 
 @dataclass(frozen=True)
@@ -297,11 +295,6 @@ class Capture:
     columns: np.ndarray
     angle: float
     up: str
-
-    def across(self) -> np.ndarray:
-        """The lab direction (Z-up coordinates) from the left to the right hand... of
-        hand 1 to hand 0."""
-        return np.array([np.cos(self.angle), np.sin(self.angle), 0.0])
 
 
 def rotation(angle: float) -> np.ndarray:

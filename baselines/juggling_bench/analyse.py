@@ -12,6 +12,7 @@ printed text; :func:`write_analysis` writes ``results.json``, ``flights.csv`` an
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -28,8 +29,10 @@ from motion_envs._io import atomic_write_text, save_figure
 from motion_envs.datasets.juggling import read_juggling_csv
 from motion_envs.datasets.mocap import YUP_TO_ZUP, is_mocap_source, parse_source, read_recording
 from motion_envs.models.juggling import (
+    Flight,
     FlightAnalysis,
     FlightOptions,
+    ThrowEvent,
     detect_flights,
     pattern_summary,
 )
@@ -53,11 +56,12 @@ STANDARD_GRAVITY = 9.81
 class BallMarkers:
     """Ball marker trajectories as read: per recording, times ``(F,)`` and positions
     ``(F, U, D)`` (vertical last, NaN missing; D = 2 for a juggling CSV: lateral,
-    vertical), the index of the lateral coordinate, and what was read."""
+    vertical), the index of the lateral coordinate when the file or ``lateral=`` says
+    it (None: the across-body axis is found from the data), and what was read."""
 
     source: str
     recordings: tuple[tuple[str, FloatArray, FloatArray], ...]
-    lateral: int
+    lateral: int | None
     description: str
 
 
@@ -101,7 +105,9 @@ def load_ball_markers(source: str | os.PathLike[str]) -> BallMarkers:
         pts = rec.points[:, cols]
         if opts.up == "y":
             pts = pts @ YUP_TO_ZUP.T
-        lateral = 0 if opts.lateral == "x" else 1
+        query = text.partition("?")[2]
+        given = any(item.partition("=")[0] == "lateral" for item in query.split("&"))
+        lateral = (0 if opts.lateral == "x" else 1) if given else None
         desc = f"{path.name}: {rec.n_frames} frames at {rec.rate:g} Hz, {what}"
         return BallMarkers(str(path), ((path.stem, rec.t, pts),), lateral, desc)
     demos = read_juggling_csv(text)
@@ -142,11 +148,21 @@ def run_analysis(config: AnalyseConfig) -> dict[str, Any]:
         "gravity_error": median / STANDARD_GRAVITY - 1.0,
         "counts": counts,
         "pattern": pattern.as_dict(),
-        "flights": [f.row(markers.lateral) for f in flights],
+        "throws": [dataclasses.asdict(e) for e in pattern.events],
+        "flights": [_row(f, pattern.axis) for f in flights],
         "options": {k: getattr(config.options, k) for k in config.options.__dataclass_fields__},
         "_markers": markers,
         "_flights": flights,
+        "_pattern": pattern,
     }
+
+
+def _row(f: Flight, axis: tuple[float, ...]) -> dict[str, Any]:
+    """The flight's table row, release and catch along the across-body ``axis``."""
+    row: dict[str, Any] = dict(f.row(0))
+    ends = f.position(np.array([f.start, f.end]))[:, :-1] @ np.array(axis)
+    row["release_lateral"], row["catch_lateral"] = float(ends[0]), float(ends[1])
+    return row
 
 
 def _num(value: Any, fmt: str) -> str:
@@ -165,20 +181,31 @@ def report_analysis(doc: dict[str, Any]) -> str:
         f"noise {doc['noise_m'] * 1e3:.2f} mm; {c['fragments']} fragments "
         f"({c['fragments shorter than a window']} shorter than a window), "
         f"{c['pieces']} ballistic pieces ({c['pieces joined']} joined), "
-        f"rejected: {c['pieces not ballistic']} pieces not ballistic, "
+        f"rejected: {c['fragments pulled down']} fragments pulled down faster than gravity "
+        f"(not balls), {c['pieces not ballistic']} pieces not ballistic, "
         f"{c['flights too short']} flights too short, "
         f"{c['flights not ballistic']} flights not ballistic",
         f"{doc['n_flights']} flights; gravity median {_num(doc['gravity_median'], '.3f')} "
         f"m/s^2 (IQR {_num(iqr[0], '.3f')} to {_num(iqr[1], '.3f')}; "
         f"{_num(100 * doc['gravity_error'], '+.2f')} % from {STANDARD_GRAVITY})",
-        f"pattern: {p['throws']} throws, {p['catches']} catches seen, {p['hands']} hand(s); "
+        f"pattern: {p['throws']} throws, {p['catches']} catches seen (the ball seen in a "
+        f"hand before / after the flight); {p['hands']} hand(s) apart along "
+        f"({', '.join(f'{a:+.2f}' for a in p['axis'])}) of the horizontal axes"
+        + ("" if p["regular"] else "; not on a regular beat"),
         f"throw period {_num(p['throw_period'], '.3f')} s, hand period "
-        f"{_num(p['hand_period'], '.3f')} s, alternation {_num(p['alternation'], '.2f')}",
-        f"flight F {_num(p['flight'], '.3f')} s, dwell D {_num(p['dwell'], '.3f')} s, "
+        f"{_num(p['hand_period'], '.3f')} s, alternation {_num(p['alternation'], '.2f')}; "
+        f"apex {_num(p['apex_above_release'], '.3f')} m above the release (median)",
+        f"flight F {_num(p['flight'], '.3f')} s (median; mean over the siteswap "
+        f"{_num(p['flight_mean'], '.3f')}), dwell D {_num(p['dwell'], '.3f')} s, "
         f"vacant V {_num(p['vacant'], '.3f')} s, dwell ratio {_num(p['dwell_ratio'], '.3f')}",
-        f"Shannon (F + D) H = (V + D) N: balls {_num(p['balls_theorem'], '.2f')} "
-        f"(pattern: {p['balls'] if p['balls'] is not None else 'n/a'}); flight time for "
-        f"that N {_num(p['flight_theorem'], '.3f')} s vs measured {_num(p['flight'], '.3f')} s",
+        f"siteswap {p['siteswap'] or 'n/a'} (throw values agree "
+        f"{_num(100 * p['siteswap_agreement'], '.0f')} %); balls: siteswap "
+        f"{p['balls_siteswap'] if p['balls_siteswap'] is not None else 'n/a'}, Shannon "
+        f"(F + D) / (V + D) = N / H {_num(p['balls_theorem'], '.2f')}, concurrent "
+        f"{_num(p['balls_concurrent'], '.1f')}; pattern: "
+        f"{p['balls'] if p['balls'] is not None else 'n/a'} (flight time for that N "
+        f"{_num(p['flight_theorem'], '.3f')} s vs measured {_num(p['flight_mean'], '.3f')} s)",
+        *(f"warning: {w}" for w in p["warnings"]),
     ]
     if doc["n_flights"] == 0:
         low, high = doc["options"]["gravity_range"]
@@ -191,15 +218,18 @@ def report_analysis(doc: dict[str, Any]) -> str:
 
 
 def plot_flights(doc: dict[str, Any], path: Path, span: float = 4.0) -> Path:
-    """Heights over time (the first ``span`` s of the first recording: every marker
-    sample, the fitted parabolas over each flight) and the histogram of fitted g."""
+    """Heights over time (``span`` s of the first recording from its first throw: every
+    marker sample, the fitted parabolas over each flight), the histogram of fitted g,
+    and below the ladder diagram of the same span (:func:`plot_ladder`)."""
     from matplotlib.figure import Figure
 
     markers: BallMarkers = doc["_markers"]
     name, t, pts = markers.recordings[0]
-    fig = Figure(figsize=(11, 4.2))
-    ax, hx = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2.6, 1]})
-    t0 = float(t[0])
+    fig = Figure(figsize=(11, 6.6))
+    grid = fig.add_gridspec(2, 2, width_ratios=[2.6, 1], height_ratios=[1.6, 1])
+    ax, hx = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1])
+    mine = [e for e in doc["_pattern"].events if e.recording == name]
+    t0 = max(float(t[0]), mine[0].time - 0.2) if mine else float(t[0])
     sel = t <= t0 + span
     z = pts[sel, :, -1]
     tt = np.broadcast_to(t[sel, None], z.shape)
@@ -233,8 +263,46 @@ def plot_flights(doc: dict[str, Any], path: Path, span: float = 4.0) -> Path:
     hx.set_ylabel("flights")
     hx.set_title(f"{doc['n_flights']} flights", fontsize=9)
     hx.legend(fontsize=8)
+    hand_period = doc["_pattern"].hand_period
+    plot_ladder(fig.add_subplot(grid[1, :]), mine, t0, t0 + span, hand_period)
     fig.tight_layout()
     return save_figure(fig, path, dpi=150)
+
+
+def plot_ladder(
+    ax: Any, events: list[ThrowEvent], start: float, end: float, hand_period: float = math.nan
+) -> None:
+    """The ladder diagram of the seen throws between ``start`` and ``end`` (s): a rail
+    per hand, each throw a line from its hand at the release to the catching hand at
+    the catch (dashed up to the parabola's end when the catch was not seen), labelled
+    with its value; a thick segment on the rail from a catch to that hand's next
+    throw (the dwell, when that throw comes within 1.1 ``hand_period``)."""
+    longest = 1.1 * hand_period if math.isfinite(hand_period) else 1.0
+    hands = sorted({e.hand for e in events} | {e.catch_hand for e in events if e.catch_hand >= 0})
+    for h in hands:
+        ax.axhline(h, color="0.8", lw=1)
+    shown = [e for e in events if e.time <= end and (e.time >= start or e.catch_time >= start)]
+    for e in shown:
+        colour = f"C{e.value % 10}" if e.value > 0 else "0.4"
+        if e.catch_hand >= 0:
+            ax.plot([e.time, e.catch_time], [e.hand, e.catch_hand], color=colour, lw=1.4)
+            mid = (0.5 * (e.time + e.catch_time), 0.5 * (e.hand + e.catch_hand))
+            later = [o.time for o in events if o.hand == e.catch_hand and o.time > e.catch_time]
+            if later and later[0] - e.catch_time <= longest:
+                ax.plot([e.catch_time, later[0]], [e.catch_hand] * 2, color=colour, lw=4, alpha=0.5)
+        else:
+            mid = (e.time + 0.1, e.hand + (0.25 if e.hand == 0 else -0.25))
+            ax.plot([e.time, mid[0]], [e.hand, mid[1]], color=colour, lw=1.2, ls="--")
+        if e.value > 0:
+            ax.annotate(str(e.value), mid, fontsize=7, ha="center", va="center", color=colour)
+    ax.set_xlim(start, end)
+    ax.set_ylim(-0.3, max(hands, default=0) + 0.3)
+    ax.set_yticks(hands, [f"hand {h}" for h in hands])
+    ax.set_xlabel("time (s)")
+    ax.set_title(
+        "ladder diagram: seen throws (release to catch, value), dwell on the hand's rail",
+        fontsize=9,
+    )
 
 
 def write_analysis(doc: dict[str, Any], out: str | os.PathLike[str]) -> list[Path]:

@@ -78,12 +78,6 @@ from motion_envs.models.juggling._flights import (
     estimate_noise,
 )
 from motion_envs.models.juggling._juggler import AnalyticJuggler
-from motion_envs.models.juggling._pattern import (
-    PatternSummary,
-    ThrowEvent,
-    across_axis,
-    pattern_summary,
-)
 from motion_envs.models.juggling._levels import (
     CONTROLLERS,
     LEVELS,
@@ -99,6 +93,12 @@ from motion_envs.models.juggling._model import (
     PhaseFit,
     phase_conditions,
     plan_catch,
+)
+from motion_envs.models.juggling._pattern import (
+    PatternSummary,
+    ThrowEvent,
+    across_axis,
+    pattern_summary,
 )
 from motion_envs.models.juggling._patterns import PatternCheck, ThrowNeed, check_pattern
 from motion_envs.models.juggling._run import (
@@ -167,9 +167,10 @@ __all__ = [
     "JugglingWorld",
     "PatternCheck",
     "PatternSummary",
-    "ThrowEvent",
     "PhaseFit",
+    "ThrowEvent",
     "ThrowNeed",
+    "across_axis",
     "cascade_fit",
     "cascade_likeness",
     "check_pattern",
@@ -189,7 +190,6 @@ __all__ = [
     "make_cascade_controller",
     "make_controller",
     "pattern_summary",
-    "across_axis",
     "perturb_release",
     "phase_conditions",
     "plan_catch",

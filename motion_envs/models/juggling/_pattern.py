@@ -243,27 +243,27 @@ class _Throw:
 
 
 def _beat(intervals: list[float]) -> float:
-    """The beat: the median interval, refined by least squares on the whole numbers of
-    beats it gives the intervals up to :data:`PAUSE_BEATS` (missed throws make some
-    intervals two or three beats); of the median and its half and third, the longest
-    that puts :data:`REGULAR_SHARE` of the intervals on the beat."""
+    """The beat: starting from the 10th, 25th and 50th percentiles of the intervals
+    (missed throws make some intervals two or more beats), each refined by least
+    squares on the whole numbers of beats it gives the intervals up to
+    :data:`PAUSE_BEATS`; the one that puts most intervals within
+    :data:`BEAT_TOLERANCE` of a whole number of beats (the longest of equals)."""
     x = np.array(intervals)
     if x.size == 0:
         return math.nan
-    first = float(np.median(x))
-    best = math.nan
-    for m in (1, 2, 3):
-        b = first / m
+    best, best_share = math.nan, -1.0
+    for q in (50, 25, 10):
+        b = float(np.percentile(x, q))
+        if b <= 0:
+            continue
         for _ in range(5):
             use = x[x / b <= PAUSE_BEATS]
             n = np.maximum(1, np.round(use / b))
             b = float((use * n).sum() / (n * n).sum())
         use = x[x / b <= PAUSE_BEATS]
-        k = np.maximum(1, np.round(use / b))
-        if use.size and float(np.mean(np.abs(use / b - k) <= BEAT_TOLERANCE)) >= REGULAR_SHARE:
-            return b
-        if m == 1:
-            best = b
+        share = float(np.mean(np.abs(use / b - np.round(use / b)) <= BEAT_TOLERANCE))
+        if share > best_share + 0.02:
+            best, best_share = b, share
     return best
 
 
@@ -284,9 +284,7 @@ def _runs(times: list[float], beat: float) -> tuple[list[int], list[int], list[f
     return runs, beats, off
 
 
-def _siteswap(
-    throws: list[_Throw], warnings: list[str]
-) -> tuple[tuple[int, ...] | None, float]:
+def _siteswap(throws: list[_Throw], warnings: list[str]) -> tuple[tuple[int, ...] | None, float]:
     """The siteswap of the valued on-beat throws (step 6) and its agreement."""
     by_run: dict[tuple[str, int], dict[int, int]] = {}
     for th in throws:
@@ -304,7 +302,9 @@ def _siteswap(
             groups: dict[int, list[int]] = {}
             for k, v in seq.items():
                 groups.setdefault((k - first) % p, []).append(v)
-            mode = [Counter(groups[r]).most_common(1)[0][0] if r in groups else -1 for r in range(p)]
+            mode = [
+                Counter(groups[r]).most_common(1)[0][0] if r in groups else -1 for r in range(p)
+            ]
             agree += sum(v == mode[(k - first) % p] for k, v in seq.items())
             modes[key] = mode
         share = agree / total
@@ -452,9 +452,7 @@ def pattern_summary(
             continue
         c = th.flight.end
         later = [
-            o
-            for o in by_rec[th.flight.recording]
-            if o.hand == th.catch_hand and o.flight.start > c
+            o for o in by_rec[th.flight.recording] if o.hand == th.catch_hand and o.flight.start > c
         ]
         if later and later[0].flight.start - c <= limit:
             if not regular or later[0].run == th.run:
@@ -465,7 +463,9 @@ def pattern_summary(
     ratio = dwell / hand_period
     # throw values (step 5)
     complete = [f.duration for f in flights if f.start_seen and f.end_seen]
-    catch_rise = _median([float(f.position(f.end)[-1]) - _release_height(f) for f in seen if f.end_seen])
+    catch_rise = _median(
+        [float(f.position(f.end)[-1]) - _release_height(f) for f in seen if f.end_seen]
+    )
     if regular:
         for i, th in enumerate(throws):
             f = th.flight
@@ -505,12 +505,22 @@ def pattern_summary(
                 n = max(1, round(candidate))
                 break
     if n is not None:
-        named = {"the siteswap": b_site, "Shannon's theorem": theorem, "the concurrent count": concurrent}
+        named = {
+            "the siteswap": b_site,
+            "Shannon's theorem": theorem,
+            "the concurrent count": concurrent,
+        }
         if balls is not None:
             named["--n-balls"] = balls
-        off_by = {k: v for k, v in named.items() if v is not None and math.isfinite(v) and abs(v - n) >= 0.5}
+        off_by = {
+            k: v
+            for k, v in named.items()
+            if v is not None and math.isfinite(v) and abs(v - n) >= 0.5
+        }
         if off_by:
-            said = ", ".join(f"{k} {v:.2f}" for k, v in named.items() if v is not None and math.isfinite(v))
+            said = ", ".join(
+                f"{k} {v:.2f}" for k, v in named.items() if v is not None and math.isfinite(v)
+            )
             warnings.append(f"the ball counts disagree ({said}); used {n}")
     flight_theorem = n * (vacant + dwell) / hands - dwell if n is not None else math.nan
     apex = [f.apex_height - _release_height(f) for f in seen if f.apex_time > f.start]
@@ -602,7 +612,11 @@ def _concurrent(
             continue
         grid = np.linspace(min(own), max(own), 2000)
         arr = np.array(sp)
-        counts.append(((arr[:, 0][None, :] <= grid[:, None]) & (grid[:, None] <= arr[:, 1][None, :])).sum(axis=1).astype(np.float64))
+        counts.append(
+            ((arr[:, 0][None, :] <= grid[:, None]) & (grid[:, None] <= arr[:, 1][None, :]))
+            .sum(axis=1)
+            .astype(np.float64)
+        )
     if not counts:
         return math.nan
     return float(np.median(np.concatenate(counts)))
