@@ -238,11 +238,16 @@ commanded release velocity, and with --agent DIR a trained agent's residual on t
 seeds. Reported: catch rate with a 95 % bootstrap interval, consecutive catches before
 the first drop (median), the hand's deviation from held-out demonstrations (SIMULATED).
 
-With --analyse FILE: the ball flights of a recording (a juggling CSV with ball_x, ball_z,
-or a motion capture file with its import options after ?, e.g.
-'session.tsv?balls=unlabelled'): per flight the fitted gravity, apex and flight time;
-the pattern's throw period, dwell ratio and hand alternation against Shannon's juggling
-theorem; results.json, flights.csv and flights.png in --out.
+With --analyse FILE: the ball flights and the juggling pattern of a recording (a
+juggling CSV with ball_x, ball_z, or a motion capture file with its import options
+after ?, e.g. 'session.tsv?balls=unlabelled&up=y'; lengths in metres after the unit):
+per flight the fitted gravity, apex and flight time; releases and catches where a ball
+leaves and joins a hand (never at a tracking loss or a marker swap); the across-body
+axis from the data, the hands, the throw period, dwell ratio, each throw's value and the
+siteswap, the balls by the siteswap, Shannon's theorem and the balls in the air and
+hands at once; warnings where the recording does not fit (vanilla asynchronous
+juggling, reflective balls). results.json, flights.csv and flights.png (heights,
+gravity, ladder diagram) in --out; docs/recordings.md.
 
 With --pattern 3: the three-ball cascade (MotionEnvs/Cascade-v0: two hands, three balls,
 Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theorem). Per
@@ -366,14 +371,17 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         type=analyse_source,
         default=None,
         metavar="FILE",
-        help="analyse the ball flights of a recording (juggling CSV, or FILE.c3d|.bvh|.tsv"
-        "?ball=NAME or ?balls=unlabelled) instead of running the juggler",
+        help="analyse the ball flights and pattern (hands, beat, dwell ratio, siteswap, "
+        "balls) of a recording (juggling CSV, or FILE.c3d|.bvh|.tsv?ball=NAME or "
+        "?balls=unlabelled, with up=y, unit=..., lateral=x|y to force the across-body "
+        "axis) instead of running the juggler",
     )
     p.add_argument(
         "--n-balls",
         type=options.positive_int,
         default=None,
-        help="balls in the analysed pattern (--analyse; default: Shannon's theorem's count)",
+        help="balls in the analysed pattern (--analyse; default: the siteswap's, else "
+        "Shannon's theorem's count; a warning when the measured counts disagree)",
     )
     p.add_argument("--no-dmp", action="store_true", help="skip the DMP competitor")
     p.add_argument("--no-video", action="store_true", help="skip the GIF")

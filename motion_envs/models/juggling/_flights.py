@@ -1,9 +1,15 @@
-"""Ball flights in recorded juggling: free-flight detection, gravity, pattern timing.
+"""Ball flights in recorded juggling: free-flight detection, gravity, releases and catches.
 
 Input: ball marker positions ``(F, U, D)`` at times ``(F,)``, NaN where a marker is
-missing, ``D`` = 2 (lateral, vertical) or 3 (two horizontal axes, vertical last). The
-``U`` columns may be labelled balls or unlabelled trajectory fragments (a column can
-hold several balls one after the other, gaps, marker swaps, spurious markers).
+missing, ``D`` = 2 (lateral, vertical) or 3 (two horizontal axes, vertical last; lengths
+in metres). The ``U`` columns may be labelled balls or unlabelled trajectory fragments
+(a column can hold several balls one after the other, gaps, marker swaps, spurious
+markers).
+
+Assumptions: a ball is in free fall (no drag) or in an open hand that pushes it; its
+marker sits at the ball's centre (a reflective ball; a patch on a spinning ball moves
+off the parabola by the ball's radius); two balls' markers are at least a ball's
+diameter apart, so a label handed from one ball to another is a jump.
 
 Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalysis.counts`):
 
@@ -11,9 +17,16 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
    third difference of a polynomial of degree 2 is zero, so over every run of
    consecutive samples ``sigma = 1.4826 MAD(diff3) / sqrt(20)``, floored at
    :attr:`FlightOptions.min_noise`. The tolerance is ``tol = tolerance * sigma``.
-2. **Fragments.** Each column is cut into runs of present samples, and a run again
-   where one sample jumps from the last faster than :attr:`FlightOptions.max_speed`
-   (plus ``tol``): a marker swap or a label handed to another ball.
+2. **Fragments.** Each column is cut into runs of present samples (bridging gaps of up
+   to 3 dropped frames), and a run again where one sample jumps from the last faster
+   than :attr:`FlightOptions.max_speed` (plus ``tol``), and where a sample is off the
+   line through the two samples before it and the sample before it off the line
+   through the two after it, both by more than ``max_acceleration dt^2 + 5 sqrt(6)
+   sigma`` (a bridged gap stays cut when either is): a marker swap, which a speed alone
+   misses when the balls are a few centimetres apart. A fragment whose vertical
+   acceleration (a quadratic over a window) is below ``-(gravity + pull_margin)`` by 4
+   standard errors anywhere is not a ball (a hand's skin marker decelerates faster than
+   gravity after each throw; a ball in an open hand cannot): dropped.
 3. **Seeds.** On every fragment a window of :attr:`FlightOptions.window` seconds slides
    sample by sample; the vertical coordinate is fitted by a quadratic in time, each
    horizontal one by a line (free flight, no drag). A window is a seed when its residual
@@ -21,40 +34,37 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
 4. **Growth.** From the best seed (lowest rms) still free, a piece grows: the samples of
    the fragment on the current fit (residual at most ``tol`` in every coordinate, or an
    isolated outlier between two such samples), in the contiguous run that holds the
-   seed; refit; repeat until the run no longer changes. Release and catch are then
-   placed by a change point: within half a window of each end, the split between the
-   parabola and a free quadratic (the ball in the hand) with the least total squared
-   residual. The piece's samples are taken, and the next best free seed grows. A piece
-   is kept when its fitted downward acceleration is within
-   :attr:`FlightOptions.gravity_range` widened by 4 standard errors of the fit.
+   seed; refit; repeat until the run no longer changes. Its ends are then placed by a
+   change point: within half a window of each end, the split between the parabola and
+   a free quadratic (the ball in the hand) with the least total squared residual. The
+   piece's samples are taken, and the next best free seed grows. A piece is kept when
+   its fitted downward acceleration is within :attr:`FlightOptions.gravity_range`
+   widened by 4 standard errors of the fit.
 5. **Joining.** Pieces in time order join a flight when one parabola fits both (every
-   sample on it as in step 4, rms at most ``2 sigma``; up to a window of samples at the
-   two outer ends may be left out of that fit, each piece keeping at least half its
-   samples), with at most :attr:`FlightOptions.max_join_gap` s between them: a flight
-   split by a tracking gap or a swap, continued in another column, or seen twice (a
-   duplicated marker). Flights that the order of joining left in two are joined after.
-6. **Flights.** A joined flight is kept when it lasts at least
+   sample within ``max(tol, join_tolerance)`` of it, rms at most the larger of
+   ``2 sigma`` and half that: a marker's position steps by a millimetre or two when the
+   cameras that see it change; up to a window of samples at the two outer ends may be
+   left out of that fit, each piece keeping at least half its samples), with at most
+   :attr:`FlightOptions.max_join_gap` s between them: a flight split by a tracking gap,
+   a swap or a camera switch, continued in another column, or seen twice (a duplicated
+   marker). Flights that the order of joining left in two are joined after.
+6. **Flights, releases and catches.** A joined flight is kept when it lasts at least
    :attr:`FlightOptions.min_duration` s and its downward acceleration, fitted on all its
-   samples, is within :attr:`FlightOptions.gravity_range` (no widening): a static or
-   jittering spurious marker has none, a short fragment is too short.
+   samples, is within :attr:`FlightOptions.gravity_range` (no widening). Its first
+   sample is a **release** (``start_seen``) only when the same marker is seen just
+   before it in a hand: within :attr:`FlightOptions.carry_window` s before it (same
+   fragment, at least 4 samples) the marker rises :attr:`FlightOptions.carry_rise`
+   above the flight's parabola and is above it on average (a hand holds the ball
+   against gravity, so in the hand it is accelerated upward relative to free fall);
+   the last sample is a **catch** (``end_seen``) on the same test after it. An end at a
+   tracking loss, a swap, a camera switch the join did not bridge, or a fragment's end
+   is neither. A flight whose marker falls ``carry_rise`` below its parabola just
+   before or after it (pulled down: not a ball) is dropped.
 
 Per flight: gravity ``g = -2 c2`` of ``z = c0 + c1 tau + c2 tau^2``, apex
-``c0 - c1^2 / (4 c2)`` at ``tau = -c1 / (2 c2)``, first and last sample (release and
-catch when the ball is seen just before and after, in the same fragment, off the
-parabola), residual rms.
-
-Pattern (:func:`pattern_summary`), from the flights whose ends were seen: throws at
-releases and catches at catches; the hand of an event is its side of the midline
-between the two clusters of release positions on the lateral axis (two-means; two
-hands when there are at least 4 throws and the centres are more than 6 pooled standard
-deviations apart, else one); throw period = median interval between throws, hand
-period = between throws of the same hand, dwell = from a hand's catch to its next
-throw, vacant = hand period - dwell, dwell ratio = dwell / hand period (medians),
-alternation = the fraction of successive throws (less than 1.5 throw periods apart)
-made by different hands. Shannon's juggling theorem
-``(F + D) H = (V + D) N`` (flight F, dwell D, vacant V, hands H, balls N) then gives
-the balls ``H (F + D) / (V + D)`` and, for N balls, the flight time
-``N (V + D) / H - D``, reported next to the measured ones.
+``c0 - c1^2 / (4 c2)`` at ``tau = -c1 / (2 c2)``, first and last sample, whether they
+are a release and a catch, residual rms. The pattern of the flights is
+:func:`~motion_envs.models.juggling.pattern_summary`'s.
 """
 
 from __future__ import annotations
@@ -102,7 +112,9 @@ class FlightOptions:
     min_duration:
         Shortest flight (s), first to last sample.
     gravity_range:
-        ``(low, high)`` downward acceleration (m/s^2) of a flight.
+        ``(low, high)`` downward acceleration (m/s^2) of a flight: 9.81 +- 20 % (a
+        hand's own arc seldom keeps one acceleration that close; lengths not in metres
+        or a wrong up axis give no flight).
     max_speed:
         A jump between consecutive samples faster than this (m/s) cuts a fragment.
     max_acceleration:
