@@ -90,7 +90,7 @@ def test_missing_columns_and_files(tmp_path):
         read_orientation_csv(tmp_path / "x.csv")
     with pytest.raises(FileNotFoundError):
         read_orientation_csv(tmp_path / "nope.csv")
-    with pytest.raises(ValueError, match="data must be one of"):
+    with pytest.raises(ValueError, match="'vr-kitchn' is not a built-in orientation dataset"):
         load_orientation_dataset("vr-kitchn")
     with pytest.raises(ValueError, match="min_deg"):
         load_vr_kitchen(min_deg=-1)

@@ -95,7 +95,8 @@ def test_cli_on_csv_without_peers(tmp_path, capsys, monkeypatch):
 
 def test_cli_errors(tmp_path, capsys):
     assert main(["position", "--data", "nope", "--no-progress"]) == 2
-    assert "argument --data: expected one of ['lasa']" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "argument --data: expected a built-in position dataset ('lasa')" in err
     assert main(["position", "--shapes", "Circle", "--no-progress"]) == 2
     assert main(["position", "--shapes", "Line", "--conditions", "speed"]) == 2
 
