@@ -15,15 +15,17 @@ hands.
 
 Capture (:func:`capture`): white noise; steps of a marker's position when the cameras
 that see it change (camera switching); the ball hidden in the palm for part of some
-dwells (at the catch or up to the release); gaps in flight; dropped samples; every
-visible run in a random free unlabelled column; marker swaps when two balls pass close
-and at random frames; skin markers on the hands, static markers, ghost fragments; the
-whole capture rotated by any angle about the vertical, Z-up or Y-up.
+dwells (at the catch or up to the release), its centroid moving as fingers cover it;
+gaps in flight; dropped samples; every visible run in a random free unlabelled
+column; marker swaps when two balls pass close and at random frames; skin markers on
+the hands, static markers, ghost fragments; the whole capture rotated by any angle
+about the vertical, Z-up or Y-up.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -310,6 +312,7 @@ def capture(
     noise: float = 0.0005,
     camera_steps: float = 0.0008,
     palm: float = 0.4,
+    palm_shift: float = 0.02,
     flight_gap: float = 0.15,
     dropout: float = 0.01,
     close_swap: float = 0.5,
@@ -321,7 +324,9 @@ def capture(
     """The capture of ``rec`` (module docstring). ``noise``: white noise std (m);
     ``camera_steps``: std (m) of the step a marker's position takes each time its camera
     set changes (about 3 times a second); ``palm``: probability the ball is hidden in
-    the hand for part of a dwell; ``flight_gap``: probability of a 10-40 frame gap in a
+    the hand for part of a dwell, its centroid moving by about ``palm_shift`` (m, any
+    direction) over the 6 frames before it is lost and after it is found again (the
+    fingers cover part of it); ``flight_gap``: probability of a 10-40 frame gap in a
     flight; ``close_swap``: probability that two balls passing within 12 cm swap
     labels; ``swaps`` random swaps; ``skin`` markers on each hand."""
     rng = np.random.default_rng(seed)
@@ -329,6 +334,7 @@ def capture(
     n_f, n_b, _ = rec.balls.shape
     rate = 1.0 / float(np.median(np.diff(t)))
     vis = np.isfinite(rec.balls).all(axis=2)
+    hidden: list[tuple[int, int, int]] = []
     for f in rec.throws:
         if rng.random() < flight_gap:
             i0 = int(np.searchsorted(t, f.start + rng.uniform(0.05, 0.8) * f.duration))
@@ -336,10 +342,12 @@ def capture(
         if rng.random() < palm:  # hidden in the palm: after the catch or up to the release
             if rng.random() < 0.5:
                 i0 = int(np.searchsorted(t, f.end)) + int(rng.integers(0, 10))
-                vis[i0 : i0 + int(rng.uniform(0.02, 0.15) * rate), f.ball] = False
+                i1 = i0 + int(rng.uniform(0.02, 0.15) * rate)
             else:
-                i1 = int(np.searchsorted(t, f.start)) - int(rng.integers(0, 6))
-                vis[max(i1 - int(rng.uniform(0.02, 0.15) * rate), 0) : max(i1, 0), f.ball] = False
+                i1 = max(int(np.searchsorted(t, f.start)) - int(rng.integers(0, 6)), 0)
+                i0 = max(i1 - int(rng.uniform(0.02, 0.15) * rate), 0)
+            vis[i0:i1, f.ball] = False
+            hidden.append((f.ball, min(i0, n_f), min(i1, n_f)))
     vis &= rng.random(vis.shape) >= dropout
 
     def observed(path: np.ndarray) -> np.ndarray:
@@ -348,6 +356,12 @@ def capture(
         return path + jumps[steps] + rng.normal(0, noise, path.shape)
 
     pts = np.stack([observed(rec.balls[:, b]) for b in range(n_b)], axis=1)
+    for b, i0, i1 in hidden:  # fingers cover part of the ball: its centroid moves
+        for k in (np.arange(max(i0 - 6, 0), i0), np.arange(i1, min(i1 + 6, n_f))):
+            if k.size:
+                near = (k - k[0] + 1) if k[-1] < i0 else (k[-1] - k + 1)
+                shift = rng.normal(0, palm_shift / math.sqrt(3), 3)
+                pts[k, b] += (near / k.size)[:, None] * shift
     cols: list[np.ndarray] = []
     busy: list[np.ndarray] = []
     for b in range(n_b):

@@ -2,7 +2,7 @@
 and ``motion-bench juggling --analyse`` on SIMULATED recordings with the defects of real
 capture (``tests/_siteswap_recordings.py``): 3- and 5-ball cascades, 441, 531 and single
 throws at 300 Hz; 0.5 mm white noise and 0.8 mm camera-switch steps, balls hidden in
-the palm at 40 % of the catches or releases, gaps in 15 % of the flights, 1 % dropped
+the palm at 40 % of the catches or releases (the centroid moving ~2 cm as they go), gaps in 15 % of the flights, 1 % dropped
 samples, unlabelled fragments, swaps where balls pass within 12 cm and at random, two
 skin markers on each hand, static markers, ghosts; the lab turned by any angle about
 the vertical, Z-up or Y-up.

@@ -25,7 +25,7 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
    sigma`` (a bridged gap stays cut when either is): a marker swap, which a speed alone
    misses when the balls are a few centimetres apart. A fragment whose vertical
    acceleration (a quadratic over a window) is below ``-(gravity + pull_margin)`` by 4
-   standard errors anywhere is not a ball (a hand's skin marker decelerates faster than
+   standard errors anywhere a window or more from its ends is not a ball (a hand's skin marker decelerates faster than
    gravity after each throw; a ball in an open hand cannot): dropped.
 3. **Seeds.** On every fragment a window of :attr:`FlightOptions.window` seconds slides
    sample by sample; the vertical coordinate is fitted by a quadratic in time, each
@@ -58,8 +58,7 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
    against gravity, so in the hand it is accelerated upward relative to free fall);
    the last sample is a **catch** (``end_seen``) on the same test after it. An end at a
    tracking loss, a swap, a camera switch the join did not bridge, or a fragment's end
-   is neither. A flight whose marker falls ``carry_rise`` below its parabola just
-   before or after it (pulled down: not a ball) is dropped.
+   is neither.
 
 Per flight: gravity ``g = -2 c2`` of ``z = c0 + c1 tau + c2 tau^2``, apex
 ``c0 - c1^2 / (4 c2)`` at ``tau = -c1 / (2 c2)``, first and last sample, whether they
@@ -503,10 +502,12 @@ def _pulled_down(
     sigma: float,
     opts: FlightOptions,
 ) -> bool:
-    """True when somewhere in the fragment the marker's vertical acceleration (a
-    quadratic fitted over a window of ``n_w`` samples) is below ``-(g + pull_margin)``
-    by more than 4 of its standard errors: a ball is in free fall or pushed up by a
-    hand, never pulled down faster than gravity; a skin marker is, after each throw."""
+    """True when somewhere in the fragment, a window or more from its ends, the
+    marker's vertical acceleration (a quadratic fitted over a window of ``n_w``
+    samples) is below ``-(g + pull_margin)`` by more than 4 of its standard errors: a
+    ball is in free fall or pushed up by a hand, never pulled down faster than gravity;
+    a skin marker is, after each throw. (Near a fragment's ends a ball's marker may
+    move as the palm covers it before it is lost: not counted.)"""
     column, idx = frag
     tt = t[idx]
     z = points[idx, column, -1]
@@ -520,7 +521,8 @@ def _pulled_down(
     accel = 2.0 * np.einsum("wn,wn->w", proj[:, 2, :], zw)
     se = 2.0 * sigma * np.linalg.norm(proj[:, 2, :], axis=1)
     limit = -(opts.gravity + opts.pull_margin) - 4.0 * se
-    return bool((accel < limit).any())
+    inner = accel[n_w : accel.size - n_w] < limit[n_w : accel.size - n_w]
+    return bool(inner.any())
 
 
 def _pieces(
@@ -676,9 +678,9 @@ def _beyond(
     """What the marker does just before the flight's first sample (``first``) or just
     after its last, within ``n_c`` samples of the same fragment (step 6): +1 the hand
     carries it (it rises ``carry_rise`` above the flight's parabola and is above it on
-    average), -1 it is pulled down (``carry_rise`` below it, below on average: a hand
-    cannot pull an open-held ball down faster than gravity, so the marker is not a free
-    ball: a skin marker, or a hand's own arc), 0 neither or fewer than 4 samples."""
+    average), -1 it falls ``carry_rise`` below it (below on average: no hand's carry;
+    the marker moved as it was being lost, or is not a ball), 0 neither or fewer than
+    4 samples. Only +1 makes the end a release or a catch."""
     column, a, b = beyond
     if first:
         a = max(a, b - n_c)
@@ -728,7 +730,6 @@ def detect_flights(
         "pieces joined": 0,
         "flights too short": 0,
         "flights not ballistic": 0,
-        "flights pulled down": 0,
         "flights": 0,
     }
     if opts.noise is not None:
@@ -768,9 +769,6 @@ def detect_flights(
             continue
         before = _beyond(t, points, coef, t_ref, group.before, n_c, opts, first=True)
         after = _beyond(t, points, coef, t_ref, group.after, n_c, opts, first=False)
-        if before == -1 or after == -1:
-            counts["flights pulled down"] += 1
-            continue
         c0, c1, c2 = (float(c) for c in coef[:, -1])
         flights.append(
             Flight(
