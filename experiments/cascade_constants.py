@@ -1,11 +1,13 @@
 """Choose the cascade juggler's hand-set constants on TRAINING seeds only.
 
-The analytic cascade juggler (:mod:`motion_envs.models.juggling._cascade`) has four
-hand-set constants: ``CATCH_WINDOW`` (beats a catch may last beyond the longest training
-catch), ``RELEASE_ARMED`` (share of the nominal toss's release time after which a release
-is armed), ``REAIM_AFTER`` (beats after its catch plan's end at which an empty hand
-re-aims) and ``TOSS_CLEARANCE`` (m a hand's own falling ball must keep from its toss's
-column, else the toss moves aside). This script plays the juggler's zero-action Cascade-v0 episodes
+The analytic cascade juggler (:class:`motion_envs.models.juggling.CascadeController`) has
+four hand-set tunables, the fields of
+:class:`~motion_envs.models.juggling.CascadeTunables`: ``catch_window`` (beats a catch may
+last beyond the longest training catch), ``release_armed`` (share of the nominal toss's
+release time after which a release is armed), ``reaim_after`` (beats after its catch
+plan's end at which an empty hand re-aims) and ``toss_clearance`` (m a hand's own falling
+ball must keep from its toss's column, else the toss moves aside). This script plays the
+juggler's zero-action Cascade-v0 episodes of ``--pattern`` (default ``3``)
 (:func:`baselines.juggling_bench.cascade.cascade_episode`, controller ``"juggler"``) on the
 TRAINING seeds ``SPLIT_SEEDS["train"] + i`` (never the test seeds), levels ``easy`` and
 ``medium``, ``--episodes`` episodes per level, at most ``--max-catches`` catches (default
@@ -14,10 +16,8 @@ almost every easy episode reached the cap, so the objective could not see the lo
 drops), for a one-at-a-time grid around each constant (the other two at their current
 values).
 
-A value is passed without editing the module: the script sets the module constant
-(``_cascade.CATCH_WINDOW = v``; the controller reads it when it plans) and, for
-``RELEASE_ARMED`` (read when the juggler is fitted), clears :func:`cascade_fit`'s cache
-so the fit is redone with it; the values are restored afterwards.
+A value is passed as the controller's tunables (``dataclasses.replace`` of the pattern's
+current :class:`~motion_envs.models.juggling.CascadeTunables`; the env's ``tunables=``).
 
 Objective (fixed before the results were read): the mean over episodes of the catches
 before the first drop (each episode censored at ``--max-catches``), summed over the levels
@@ -30,7 +30,7 @@ two standard errors; otherwise the current value is kept (a tie within noise). I
 than one constant changes, the combination is played too and reported.
 
     python experiments/cascade_constants.py [--episodes 80] [--max-catches 100]
-        [--levels easy medium]
+        [--levels easy medium] [--pattern 3]
 
 Prints a table and, as its last line, one JSON object with every value's figures, the
 choices and the CPU seconds. The demonstrations the juggler is fitted on are SIMULATED.
@@ -42,55 +42,41 @@ import argparse
 import json
 import math
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
+from dataclasses import asdict
 from typing import Any
 
 import numpy as np
 
 from baselines.juggling_bench.cascade import cascade_episode
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
-from motion_envs.models.juggling import _cascade
+from motion_envs.models.juggling import CascadeTunables, pattern_spec
 
-#: The grid: each constant's candidate values (its current value among them).
+#: The grid: each tunable's candidate values (the current value is played too).
 GRID: dict[str, tuple[float, ...]] = {
-    "CATCH_WINDOW": (0.3, 0.5, 0.7, 1.0),
-    "RELEASE_ARMED": (0.6, 0.75, 0.9),
-    "REAIM_AFTER": (0.1, 0.2, 0.3, 0.5),
-    "TOSS_CLEARANCE": (0.08, 0.1, 0.12),
+    "catch_window": (0.3, 0.5, 0.7, 1.0),
+    "release_armed": (0.6, 0.75, 0.9),
+    "reaim_after": (0.1, 0.2, 0.3, 0.5),
+    "toss_clearance": (0.08, 0.1, 0.12),
 }
 #: A value must beat the current one by this many paired standard errors to replace it.
 MARGIN_SE = 2.0
 
 
-@contextmanager
-def constants(values: dict[str, float]) -> Iterator[None]:
-    """Set the cascade module's constants to ``values`` (refitting the juggler), restore
-    them on exit."""
-    old = {name: getattr(_cascade, name) for name in values}
-    try:
-        for name, v in values.items():
-            setattr(_cascade, name, float(v))
-        _cascade.cascade_fit.cache_clear()
-        yield
-    finally:
-        for name, v in old.items():
-            setattr(_cascade, name, v)
-        _cascade.cascade_fit.cache_clear()
-
-
 def play(
-    values: dict[str, float], levels: list[str], episodes: int, max_catches: int
+    values: dict[str, float], levels: list[str], episodes: int, max_catches: int, pattern: str
 ) -> dict[str, np.ndarray]:
     """Catches before the first drop per training seed and level, at ``values``."""
     seeds = SPLIT_SEEDS["train"] + np.arange(episodes, dtype=np.int64)
+    tunables = CascadeTunables(**values)
     out: dict[str, np.ndarray] = {}
-    with constants(values):
-        for level in levels:
-            out[level] = np.array(
-                [cascade_episode(level, "juggler", int(s), max_catches)[0] for s in seeds],
-                dtype=np.float64,
-            )
+    for level in levels:
+        out[level] = np.array(
+            [
+                cascade_episode(level, "juggler", int(s), max_catches, 9.81, pattern, tunables)[0]
+                for s in seeds
+            ],
+            dtype=np.float64,
+        )
     return out
 
 
@@ -112,16 +98,22 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--episodes", type=int, default=80, help="training episodes per level")
     ap.add_argument("--max-catches", type=int, default=100, help="episode ends after this")
     ap.add_argument("--levels", nargs="+", default=["easy", "medium"], help="levels played")
+    ap.add_argument("--pattern", default="3", help="a registered pattern's name")
     args = ap.parse_args(argv)
+    try:
+        spec = pattern_spec(args.pattern)
+    except ValueError as exc:
+        ap.error(f"--pattern: {exc}")
     if args.episodes < 2:
         ap.error(f"--episodes must be >= 2; got {args.episodes}")
     if args.max_catches < 1:
         ap.error(f"--max-catches must be >= 1; got {args.max_catches}")
 
     t0 = time.process_time()
-    current = {name: float(getattr(_cascade, name)) for name in GRID}
+    current = {name: float(v) for name, v in asdict(spec.tunables).items()}
     runs: dict[tuple[str, float], dict[str, np.ndarray]] = {}
-    base = play(current, args.levels, args.episodes, args.max_catches)
+    pat = args.pattern
+    base = play(current, args.levels, args.episodes, args.max_catches, pat)
     rows: list[dict[str, Any]] = []
     chosen = dict(current)
     for name, grid in GRID.items():
@@ -130,7 +122,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
             c = (
                 base
                 if v == current[name]
-                else play({**current, name: v}, args.levels, args.episodes, args.max_catches)
+                else play({**current, name: v}, args.levels, args.episodes, args.max_catches, pat)
             )
             runs[(name, v)] = c
             diff, se = paired(c, base)
@@ -151,14 +143,14 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         chosen[name] = best
     combined = None
     if sum(chosen[n] != current[n] for n in GRID) > 1:
-        c = play(chosen, args.levels, args.episodes, args.max_catches)
+        c = play(chosen, args.levels, args.episodes, args.max_catches, pat)
         diff, se = paired(c, base)
         combined = {"values": chosen, "objective": objective(c), "diff_vs_current": diff,
                     "diff_se": se}  # fmt: skip
     cpu = time.process_time() - t0
 
     print(
-        f"Cascade juggler constants on TRAINING seeds {SPLIT_SEEDS['train']}.."
+        f"Cascade juggler tunables, pattern {pat}, on TRAINING seeds {SPLIT_SEEDS['train']}.."
         f"{SPLIT_SEEDS['train'] + args.episodes - 1}, levels {' + '.join(args.levels)}, "
         f"at most {args.max_catches} catches ({SIMULATED_LABEL} demonstrations)"
     )
@@ -184,7 +176,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         )
     print(f"CPU {cpu:.1f} s")
     doc = {
-        "benchmark": "cascade juggler constants (training seeds)",
+        "benchmark": f"cascade juggler tunables, pattern {pat} (training seeds)",
         "demonstrations": SIMULATED_LABEL,
         "seeds": {"split": "train", "first": SPLIT_SEEDS["train"], "count": args.episodes},
         "levels": args.levels,

@@ -1,9 +1,10 @@
 """Why the analytic cascade juggler drops: each drop of its zero-action Cascade-v0 episodes
 on TRAINING seeds, put in one of four classes.
 
-The episodes are :func:`baselines.juggling_bench.cascade.cascade_episode`'s (the same
-world, sensor and controller, seeded ``SeedSequence(seed).spawn(3)``), played here step by
-step to record the releases and catches; seeds ``SPLIT_SEEDS["train"] + i`` (never the
+The episodes are Cascade-v0's own zero-action episodes
+(:meth:`~motion_envs.envs.juggling.CascadeEnv.play`, as
+:func:`baselines.juggling_bench.cascade.cascade_episode`), each period's releases and
+catches recorded; seeds ``SPLIT_SEEDS["train"] + i`` (never the
 test seeds), at most ``--max-catches`` catches. For the dropped ball's last release, with
 ``thrower`` the hand that released it and ``catcher`` the other hand:
 
@@ -38,14 +39,9 @@ from typing import Any
 
 import numpy as np
 
-from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, JugglingTask
-from motion_envs.envs.juggling import CASCADE_TIME_PER_CATCH, CascadeWorld
-from motion_envs.models.juggling import (
-    LEVELS,
-    CascadeSensor,
-    cascade_fit,
-    make_cascade_controller,
-)
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
+from motion_envs.envs.juggling import CascadeEnv
+from motion_envs.models.juggling import LEVELS, cascade_fit
 
 #: A release slower than this share of the nominal toss's release speed is "weak".
 WEAK = 0.85
@@ -57,36 +53,22 @@ OWN_WINDOW = 1.0
 
 def play(level: str, seed: int, max_catches: int) -> dict[str, Any]:
     """One zero-action episode (juggler) with its release and catch events."""
-    lv = LEVELS[level]
-    task = JugglingTask(gravity=9.81)
-    delay = round(lv.latency / task.dt)
-    fit = cascade_fit(9.81)
-    ctrl = make_cascade_controller("juggler", fit, delay * task.dt)
-    world = CascadeWorld(task, lv.release_speed_std, math.radians(lv.release_angle_std))
-    sensor = CascadeSensor(delay, lv.position_std, lv.velocity_std, task.dt)
-    w_ss, s_ss, c_ss = np.random.SeedSequence(seed).spawn(3)
-    p, v, _ = ctrl.initial_flight()
-    true = world.reset(ctrl.home, flying=(p, v), rng=np.random.default_rng(w_ss))
-    state = sensor.reset(true, np.random.default_rng(s_ss), 9.81)
-    ctrl.reset(state, np.random.default_rng(c_ss))
-    limit = max_catches * CASCADE_TIME_PER_CATCH
-    catches = 0
+    env = CascadeEnv(level=level, max_catches=max_catches)
     releases: list[tuple[float, int, int, np.ndarray, np.ndarray]] = []
     caught: list[tuple[float, int, int]] = []
-    while True:
-        targets, armed = ctrl.command(state)
-        true = world.step(targets, armed)
-        state = sensor.measure(true)
+    last: list[Any] = []
+
+    def record(true: Any) -> None:
         for h in range(2):
             if true.released[h] >= 0:
                 b = true.released[h]
                 releases.append((true.time, h, b, true.ball_vel[b].copy(), true.hand_vel[h]))
             if true.caught[h] >= 0:
                 caught.append((true.time, h, true.caught[h]))
-        catches += sum(int(c >= 0) for c in true.caught)
-        if true.any_dropped or catches >= max_catches or true.time >= limit:
-            break
-    dropped = [i for i in range(3) if true.dropped[i]]
+        last[:] = [true]
+
+    catches, _, _, _ = env.play(seed, record)
+    dropped = [i for i, d in enumerate(last[0].dropped) if d]
     return {
         "catches": catches,
         "dropped": dropped[0] if dropped else None,

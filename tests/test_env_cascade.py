@@ -30,6 +30,7 @@ from motion_envs.datasets.juggling import (
     style_timing,
 )
 from motion_envs.envs.juggling import CAPTURE_SPEED, HAND_SPEED_LIMIT, CascadeWorld
+from motion_envs.models.juggling import DEFAULT_TUNABLES, CascadeStart
 
 TASK = JugglingTask(gravity=9.81)
 TEST_SEED = 2_000_000_000
@@ -88,7 +89,9 @@ def test_demonstrations_are_simulated_alternate_on_the_beat_and_mirror_the_left_
 def _world_with_empty_right_hand() -> CascadeWorld:
     world = CascadeWorld(TASK)
     home = np.array([[0.1, 1.0], [-0.1, 1.0]])
-    world.reset(home, flying=((0.8, 2.0), (0.0, 0.0)))
+    pos = np.zeros((3, 2))
+    pos[2] = (0.8, 2.0)
+    world.reset(home, start=CascadeStart((0, 1, -1), (-1, -1, 1), pos, np.zeros((3, 2))))
     world.launch(0, (1.2, 0.8), (0.0, 0.0))  # ball 0 out of the right hand (drops far away)
     return world
 
@@ -261,9 +264,8 @@ def test_next_beat_is_the_other_hands_beat_nearest_to_the_own(lag, after):
     from motion_envs.models.juggling import cascade_fit, make_cascade_controller
 
     ctrl = make_cascade_controller("juggler", cascade_fit(9.81))
-    p, v, _ = ctrl.initial_flight()
     world = CascadeWorld(TASK)
-    ctrl.reset(world.reset(ctrl.home, flying=(p, v)))
+    ctrl.reset(world.reset(ctrl.home, start=ctrl.start()))
     hand, b = ctrl.hands[0], ctrl.beat
     hand.last_release = 3.0
     # the other hand's last release, a beat after this hand's (or before it), give or take
@@ -364,9 +366,8 @@ def _toss_hand():
     from motion_envs.models.juggling import cascade_fit, make_cascade_controller
 
     ctrl = make_cascade_controller("juggler", cascade_fit(9.81))
-    p, v, _ = ctrl.initial_flight()
     world = CascadeWorld(TASK)
-    ctrl.reset(world.reset(ctrl.home, flying=(p, v)))
+    ctrl.reset(world.reset(ctrl.home, start=ctrl.start()))
     return ctrl, ctrl.hands[0]
 
 
@@ -377,12 +378,12 @@ def test_a_toss_moves_aside_from_the_hands_own_falling_ball(vx):
     the flight): the ball fell onto the rising palm, which then released its own ball
     early and slow (a weak toss) or caught the falling one out of turn. The hand's
     return and toss now move aside along ``x`` until the falling ball's predicted centre
-    keeps ``TOSS_CLEARANCE`` from the toss's column; a ball thrown as nominal (to the
+    keeps the tunables' ``toss_clearance`` from the toss's column; a ball thrown as nominal (to the
     other hand) moves nothing. Fails on the juggler without the move."""
     import copy
 
     from motion_envs.datasets.juggling import ballistic_position
-    from motion_envs.models.juggling._cascade import TOSS_CLEARANCE
+    clearance = DEFAULT_TUNABLES.toss_clearance
 
     ctrl, hand = _toss_hand()
     pat, g = ctrl.pattern, TASK.gravity
@@ -395,10 +396,10 @@ def test_a_toss_moves_aside_from_the_hands_own_falling_ball(vx):
     lo, hi = min(home[0], rel[0]) + shift, max(home[0], rel[0]) + shift
     ts = np.linspace(0.0, 2 * pat.flight, 2001)
     pts = ballistic_position(*hand.own_flight, ts, g)
-    fall = (3.1 - g * ts < 0) & (pts[:, 1] <= max(home[1], rel[1]) + TOSS_CLEARANCE)
-    fall &= pts[:, 1] >= min(home[1], rel[1]) - TOSS_CLEARANCE
+    fall = (3.1 - g * ts < 0) & (pts[:, 1] <= max(home[1], rel[1]) + clearance)
+    fall &= pts[:, 1] >= min(home[1], rel[1]) - clearance
     x = pts[fall, 0]
-    assert np.all((x <= lo - TOSS_CLEARANCE + 1e-3) | (x >= hi + TOSS_CLEARANCE - 1e-3))
+    assert np.all((x <= lo - clearance + 1e-3) | (x >= hi + clearance - 1e-3))
     # the return's end moves by the shift; the draw (the generator's stream) is unchanged
     blind = copy.deepcopy(hand)
     blind.own_flight = None

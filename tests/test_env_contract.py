@@ -186,8 +186,7 @@ def _cascade_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     world = CascadeWorld(c.task, c.release_speed_std, math.radians(c.release_angle_std))
     sensor = CascadeSensor(c.delay_steps, c.position_std, c.velocity_std, c.task.dt)
     w_ss, s_ss, c_ss = np.random.SeedSequence(21).spawn(3)
-    p, v, _ = ctrl.initial_flight()
-    true = world.reset(ctrl.home, flying=(p, v), rng=np.random.default_rng(w_ss))
+    true = world.reset(ctrl.home, start=ctrl.start(), rng=np.random.default_rng(w_ss))
     state = sensor.reset(true, np.random.default_rng(s_ss), c.task.gravity)
     ctrl.reset(state, np.random.default_rng(c_ss))
     expected = []

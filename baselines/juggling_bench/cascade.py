@@ -48,11 +48,10 @@ from motion_envs.envs.juggling import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
     LEVELS,
-    CascadeSensor,
+    CascadeTunables,
     PatternCheck,
     cascade_fit,
     check_pattern,
-    make_cascade_controller,
 )
 
 __all__ = [
@@ -135,36 +134,28 @@ class CascadeEpisodes:
 
 
 def cascade_episode(
-    level: str, method: str, seed: int, max_catches: int, gravity: float = 9.81
+    level: str,
+    method: str,
+    seed: int,
+    max_catches: int,
+    gravity: float = 9.81,
+    pattern: str = "3",
+    tunables: CascadeTunables | None = None,
 ) -> tuple[int, int, bool, float]:
-    """One zero-action episode of Cascade-v0 (``level``, ``controller=method``, reset with
-    ``seed``): ``(catches, tosses, dropped, time)``. The env's own loop: world, sensor
-    and controller seeded by ``SeedSequence(seed).spawn(3)``."""
-    from motion_envs.envs.juggling import CASCADE_TIME_PER_CATCH, CascadeWorld
+    """One zero-action episode of Cascade-v0 (``level``, ``controller=method``,
+    ``pattern``, ``tunables``, reset with ``seed``): ``(catches, tosses, dropped, time)``,
+    played by the env itself (:meth:`~motion_envs.envs.juggling.CascadeEnv.play`)."""
+    from motion_envs.envs.juggling import CascadeEnv
 
-    lv = LEVELS[level]
-    task = JugglingTask(gravity=gravity)
-    delay = round(lv.latency / task.dt)
-    ctrl = make_cascade_controller(method, cascade_fit(gravity), delay * task.dt)
-    world = CascadeWorld(task, lv.release_speed_std, math.radians(lv.release_angle_std))
-    sensor = CascadeSensor(delay, lv.position_std, lv.velocity_std, task.dt)
-    w_ss, s_ss, c_ss = np.random.SeedSequence(seed).spawn(3)
-    p, v, _ = ctrl.initial_flight()
-    true = world.reset(ctrl.home, flying=(p, v), rng=np.random.default_rng(w_ss))
-    state = sensor.reset(true, np.random.default_rng(s_ss), gravity)
-    ctrl.reset(state, np.random.default_rng(c_ss))
-    limit = max_catches * CASCADE_TIME_PER_CATCH * math.sqrt(9.81 / gravity)
-    catches = tosses = 0
-    while True:
-        targets, armed = ctrl.command(state)
-        true = world.step(targets, armed)
-        state = sensor.measure(true)
-        catches += sum(int(c >= 0) for c in true.caught)
-        tosses += sum(int(r >= 0) for r in true.released)
-        if true.any_dropped:
-            return catches, tosses, True, true.time
-        if catches >= max_catches or true.time >= limit:
-            return catches, tosses, False, true.time
+    env = CascadeEnv(
+        level=level,
+        controller=method,
+        max_catches=max_catches,
+        gravity=gravity,
+        pattern=pattern,
+        tunables=tunables,
+    )
+    return env.play(seed)
 
 
 def cascade_episodes(level: str, method: str, config: CascadeConfig) -> CascadeEpisodes:

@@ -24,6 +24,7 @@ from motion_envs.datasets.juggling import rules
 from motion_envs.datasets.juggling._cascade_demos import (
     CASCADE_BALLS,
     CASCADE_HANDS,
+    CASCADE_STYLES,
     CascadeStyle,
     CascadeTiming,
     NominalToss,
@@ -76,6 +77,7 @@ from motion_envs.datasets.juggling._task import (
 __all__ = [
     "CASCADE_BALLS",
     "CASCADE_HANDS",
+    "CASCADE_STYLES",
     "JUGGLING_COLUMNS",
     "MAX_SPLIT_EPISODES",
     "MIN_SAMPLES",

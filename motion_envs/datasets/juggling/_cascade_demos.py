@@ -47,6 +47,7 @@ Every generated set has ``simulated = True``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,6 +61,7 @@ from motion_envs.geometry.minimum_jerk import quintic, quintic_evaluate
 __all__ = [
     "CASCADE_BALLS",
     "CASCADE_HANDS",
+    "CASCADE_STYLES",
     "CascadeStyle",
     "CascadeTiming",
     "NominalToss",
@@ -137,8 +139,16 @@ class CascadeStyle:
     spread: float  # m, per-cycle std of the points
 
 
-def draw_cascade_person(rng: np.random.Generator) -> CascadeStyle:
-    """A cascade juggler's style drawn from the generator's population (seeded by ``rng``)."""
+def draw_cascade_person(rng: np.random.Generator, balls: int = CASCADE_BALLS) -> CascadeStyle:
+    """A juggler's style for the cascade of ``balls`` balls drawn from that cascade's
+    population (:data:`CASCADE_STYLES`; seeded by ``rng``)."""
+    if balls not in CASCADE_STYLES:
+        raise ValueError(f"balls must be one of {sorted(CASCADE_STYLES)}; got {balls!r}")
+    return CASCADE_STYLES[balls](rng)
+
+
+def _three_ball_person(rng: np.random.Generator) -> CascadeStyle:
+    """The three-ball cascade's population."""
     u = rng.uniform
     return CascadeStyle(
         home=(0.06 + u(-0.02, 0.02), 1.0 + u(-0.03, 0.03)),
@@ -155,6 +165,12 @@ def draw_cascade_person(rng: np.random.Generator) -> CascadeStyle:
         variation=u(0.01, 0.02),
         spread=u(0.004, 0.008),
     )
+
+
+#: Per cascade (ball count), its population of simulated jugglers' styles.
+CASCADE_STYLES: dict[int, Callable[[np.random.Generator], CascadeStyle]] = {
+    3: _three_ball_person,
+}
 
 
 @dataclass(frozen=True)
@@ -205,13 +221,16 @@ def _descend_time(p: FloatArray, v: FloatArray, z: float, g: float) -> float:
     return float((v[1] + math.sqrt(max(disc, 0.0))) / g)
 
 
-def style_timing(style: CascadeStyle, task: JugglingTask) -> tuple[NominalToss, CascadeTiming]:
-    """The style's nominal toss and the pattern's timing it implies (module docstring)."""
+def style_timing(
+    style: CascadeStyle, task: JugglingTask, balls: int = CASCADE_BALLS
+) -> tuple[NominalToss, CascadeTiming]:
+    """The style's nominal toss and the timing it implies for the cascade of ``balls``
+    balls (module docstring)."""
     toss = nominal_toss(style, task)
     flight = _descend_time(
         toss.position, toss.velocity, float(toss.position[1]) - style.catch_drop, task.gravity
     )
-    return toss, cascade_timing(flight, style.dwell_ratio)
+    return toss, cascade_timing(flight, style.dwell_ratio, CASCADE_HANDS, balls)
 
 
 class _Hand:
@@ -234,9 +253,12 @@ def generate_cascade_demonstrations(
     task: JugglingTask | None = None,
     sensor_noise: float = 5e-5,
     styles: list[CascadeStyle] | None = None,
+    balls: int = CASCADE_BALLS,
 ) -> JugglingDemos:
-    """SIMULATED cascade demonstrations: per person, ``n_cycles`` cycles of each hand,
-    two recordings (the right hand, then the left hand mirrored into its own frame).
+    """SIMULATED cascade demonstrations of ``balls`` balls (odd: 3 or 5): per person,
+    ``n_cycles`` cycles of each hand, two recordings (the right hand, then the left hand
+    mirrored into its own frame). Without ``styles`` each person is drawn from the
+    population of the ``balls``-ball cascade (:func:`draw_cascade_person`).
 
     ``task`` holds gravity, the control period, the catch radius and the toss threshold
     (default ``JugglingTask(gravity=9.81)``). Seeded: the same arguments give the same
@@ -246,27 +268,30 @@ def generate_cascade_demonstrations(
         raise ValueError(f"n_cycles must be >= 2 and n_persons >= 1; got {n_cycles}, {n_persons}")
     if sensor_noise < 0:
         raise ValueError(f"sensor_noise must be >= 0; got {sensor_noise}")
+    if balls not in CASCADE_STYLES:
+        raise ValueError(f"balls must be one of {sorted(CASCADE_STYLES)}; got {balls!r}")
     task = task or JugglingTask(gravity=_STYLE_GRAVITY)
     root = np.random.SeedSequence(seed)
     recordings = []
+    tag = "cascade-" if balls == CASCADE_BALLS else f"cascade{balls}-"
     for p, ss in enumerate(root.spawn(n_persons)):
         rng = np.random.default_rng(ss)
-        style = styles[p] if styles is not None else draw_cascade_person(rng)
-        hands = _simulate(style, task, n_cycles, rng)
+        style = styles[p] if styles is not None else draw_cascade_person(rng, balls)
+        hands = _simulate(style, task, n_cycles, rng, balls)
         t = np.arange(len(hands[0].y), dtype=np.float64) * task.dt
         for h, name in enumerate(("right", "left")):
             recorded = hands[h].y + sensor_noise * rng.standard_normal(hands[h].y.shape)
             recordings.append(
                 JugglingRecording(
-                    name=f"simulated-cascade-person-{p}-{name}",
+                    name=f"simulated-{tag}person-{p}-{name}",
                     t=t,
                     hand=recorded,
                     phase=hands[h].label.astype(str),
-                    person=f"simulated-cascade-person-{p}",
+                    person=f"simulated-{tag}person-{p}",
                 )
             )
     return JugglingDemos(
-        name=f"simulated-cascade(seed={seed})",
+        name=f"simulated-{tag[:-1]}(seed={seed})",
         recordings=tuple(recordings),
         simulated=True,
         task=task,
@@ -274,11 +299,11 @@ def generate_cascade_demonstrations(
 
 
 def _simulate(
-    style: CascadeStyle, task: JugglingTask, n_cycles: int, rng: np.random.Generator
+    style: CascadeStyle, task: JugglingTask, n_cycles: int, rng: np.random.Generator, balls: int
 ) -> tuple[_Hand, _Hand]:
     dt, g = task.dt, task.gravity
     scale = math.sqrt(_STYLE_GRAVITY / g)
-    toss0, timing = style_timing(style, task)
+    toss0, timing = style_timing(style, task, balls)
     b = timing.beat
     home = np.asarray(style.home, dtype=np.float64)
     catch_z = float(toss0.position[1]) - style.catch_drop
@@ -296,10 +321,13 @@ def _simulate(
     def vary(x: float) -> float:
         return x * (1.0 + style.variation * float(rng.standard_normal()))
 
-    # balls as (release time, position, velocity) in the WORLD frame, by slot
-    releases: dict[int, tuple[float, FloatArray, FloatArray]] = {
-        -1: (t_first - b, mirror_x(toss0.position), mirror_x(toss0.velocity))
-    }
+    # balls as (release time, position, velocity) in the WORLD frame, by slot: before the
+    # first beat, the balls landing on beats 2 .. N - 1 were thrown on beats 2 - N .. -1
+    # by the hand of their beat (the left hand on the odd ones)
+    releases: dict[int, tuple[float, FloatArray, FloatArray]] = {}
+    for slot in range(2 - balls, 0):
+        own0 = (lambda a: a) if slot % 2 == 0 else mirror_x
+        releases[slot] = (t_first + slot * b, own0(toss0.position), own0(toss0.velocity))
     start_k = [round((t_first + h * b - toss0.lead) / dt) for h in (0, 1)]
     for slot in range(n_slots):
         h = slot % 2
@@ -322,8 +350,9 @@ def _simulate(
         hand.put(c_toss, t0, k0, k_rel, "toss", dt)
         p_rel, v_rel = y[j], rules.hand_velocity(y[j], y[j - 1], dt)
         releases[slot] = (k_rel * dt, own(p_rel), own(v_rel))
-        # 2.-3. go down, catch the ball of slot - 1 (thrown by the other hand)
-        t_r_in, p_in, v_in = releases[slot - 1]
+        # 2.-3. go down, catch the ball of slot + 2 - N (thrown by the other hand, it is
+        # thrown again on this hand's next beat)
+        t_r_in, p_in, v_in = releases[slot + 2 - balls]
         p_in, v_in = own(p_in), own(v_in)
         s_c = _descend_time(p_in, v_in, catch_z + style.spread * rng.standard_normal(), g)
         t_c = t_r_in + s_c

@@ -9,7 +9,7 @@ the catch's limits; :func:`world_mjcf`, its MJCF; :class:`HandsWorld`, the world
 MuJoCo) and ``_period`` (the one control period: servo, physics, grasp rule, release,
 plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
 (:class:`JugglingV1World`, one hand and one ball) and ``_cascade_scene``
-(:class:`CascadeWorld`, two hands and three balls) are its batches of one with their
+(:class:`CascadeWorld`, two hands and a pattern's balls) are its batches of one with their
 task's state types; ``_v1_env`` (:class:`JugglingV1Env`) and ``_cascade_env``
 (:class:`CascadeEnv`) the environments; the native vector environments ``_vector``
 (:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
@@ -25,6 +25,7 @@ from motion_envs.envs.juggling._cascade_env import (
     CASCADE_TIME_PER_CATCH,
     DEFAULT_CASCADE_REWARD_WEIGHTS,
     CascadeEnv,
+    cascade_obs_dim,
 )
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._cascade_vector import CascadeVectorEnv
@@ -112,6 +113,7 @@ __all__ = [
     "JugglingV1World",
     "JugglingVectorEnv",
     "WorldSpec",
+    "cascade_obs_dim",
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",

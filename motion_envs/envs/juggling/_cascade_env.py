@@ -1,12 +1,12 @@
-"""``MotionEnvs/Cascade-v0``: the three-ball cascade with two actuated hands, seeing the
-balls late."""
+"""``MotionEnvs/Cascade-v0``: a juggling pattern (the three-ball cascade by default,
+``pattern=``) with two actuated hands, seeing the balls late."""
 
 # ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -23,9 +23,11 @@ from motion_envs.models.juggling import (
     CascadeController,
     CascadeSensor,
     CascadeState,
+    CascadeTunables,
     cascade_fit,
     cascade_likeness,
     make_cascade_controller,
+    pattern_spec,
 )
 
 __all__ = [
@@ -34,6 +36,7 @@ __all__ = [
     "CASCADE_TIME_PER_CATCH",
     "DEFAULT_CASCADE_REWARD_WEIGHTS",
     "CascadeEnv",
+    "cascade_obs_dim",
 ]
 
 #: Default reward weights (see the class docstring, section Rewards).
@@ -46,10 +49,15 @@ DEFAULT_CASCADE_REWARD_WEIGHTS: Mapping[str, float] = {
 #: Delayed measurements of each ball in the observation (newest first).
 CASCADE_HISTORY = 4
 _PER_HAND = 15
-#: Observation size (see the class docstring).
-CASCADE_OBS_DIM = (
-    CASCADE_HANDS * _PER_HAND + 2 * CASCADE_BALLS + 4 * CASCADE_BALLS * CASCADE_HISTORY
-)
+
+
+def cascade_obs_dim(balls: int) -> int:
+    """The observation's size with ``balls`` balls (see the class docstring)."""
+    return CASCADE_HANDS * _PER_HAND + 2 * balls + 4 * balls * CASCADE_HISTORY
+
+
+#: Observation size of the three-ball cascade (see the class docstring).
+CASCADE_OBS_DIM = cascade_obs_dim(CASCADE_BALLS)
 #: s of simulated time per catch (at 9.81 m/s^2; times ``sqrt(9.81 / g)``) after which an
 #: episode is truncated anyway; the pattern catches a ball every ~0.4 s.
 CASCADE_TIME_PER_CATCH = 2.0
@@ -61,7 +69,8 @@ _SPEED_BOUND = 30.0
 
 
 class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
-    r"""Juggle three balls in a cascade with two actuated hands that see the balls late.
+    r"""Juggle a pattern (the three-ball cascade by default) with two actuated hands that
+    see the balls late.
 
     ## Description
     The three-ball cascade in Juggling-v1's physical world: two hands, three balls, the
@@ -81,11 +90,18 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     sine-series models (eq. 9 toss, catch on the predicted flight with the eq. 10
     correction; the left hand mirrored), fitted on the training cycles of the built-in
     **SIMULATED** two-hand demonstrations; the hands throw in turn on the beat of
-    Shannon's theorem ``(F + D) H = (V + D) N`` (``H = 2``, ``N = 3``, dwell ratio
-    ``D / (V + D)`` = `dwell_ratio`); a hand catches the other hand's ball, planned on the
-    thrower's efference copy and corrected from the delayed measurement. The agent adds
-    a residual to each hand's command. The pattern starts with ball 0 in the right hand,
-    ball 1 in the left and ball 2 in flight towards the right hand.
+    Shannon's theorem ``(F + D) H = (V + D) N`` (``H = 2``, ``N`` the pattern's balls,
+    dwell ratio ``D / (V + D)`` = `dwell_ratio` or the pattern's); a hand catches the other
+    hand's ball, planned on the thrower's efference copy and corrected from the delayed
+    measurement. The agent adds a residual to each hand's command. The pattern starts
+    with ball 0 in the right hand, ball 1 in the left and balls 2 .. N - 1 in flight
+    (ball ``L`` landing on beat ``L``, beat 0 the right hand's first release; for the
+    three-ball cascade ball 2 flies towards the right hand).
+
+    `pattern` names a registered pattern
+    (:data:`~motion_envs.models.juggling.PATTERNS`: a vanilla siteswap and its dwell
+    ratio; :func:`~motion_envs.models.juggling.register_pattern` adds one); every size
+    below that counts balls is for ``N`` balls (the table: ``N = 3``, the default).
 
     Levels: Juggling-v1's (every value can also be passed on its own):
 
@@ -115,7 +131,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | 3   | left hand: vertical residual             | -1          | 1           | position (residual_scale m) |
 
     ## Observation Space
-    `Box(low, high, (84,), float32)`; positions within 10 m of the right hand's home,
+    `Box(low, high, (30 + 18 N,), float32)` (84 for three balls); positions within 10 m of the right hand's home,
     speeds within 30 m/s (values beyond are clipped); world frame.
 
     | Num     | Observation                                                                  | Type (Unit)    |
@@ -129,7 +145,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | 11, 12  | the controller's next target for the right hand (no residual)                | position (m)   |
     | 13, 14  | the right hand's plan end point (in the catch phase: the planned catch)      | position (m)   |
     | 15..29  | the same for the left hand                                                   |                |
-    | 30..35  | per ball 0, 1, 2: 1 if held by the right hand, 1 if held by the left hand    | unitless       |
+    | 30..35  | per ball 0 .. N - 1: 1 if held by the right hand, 1 if held by the left hand | unitless       |
     | 36..83  | per ball, its measurements ``x, z, vx, vz`` of the last 4 periods, newest first | m, m/s       |
 
     ## Rewards
@@ -148,7 +164,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     step's catches ``caught`` (all summed over the step's periods), ``catches`` and
     ``tosses`` so far (``cycles``: the same as ``tosses``), and at the end of the step's
     last period ``phase`` (the right hand's) and ``phases`` (both), ``held`` (per hand),
-    ``time``, the true ``hands`` ``(2, 2)`` and ``balls`` ``(3, 2)`` positions, ``hand``
+    ``time``, the true ``hands`` ``(2, 2)`` and ``balls`` ``(N, 2)`` positions, ``hand``
     (the right hand's position); ``action_invalid``.
 
     ## Starting State
@@ -184,7 +200,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `velocity_std`      | **float** | `None`      | m/s, measurement noise of the ball velocities; None: the level's |
     | `release_speed_std` | **float** | `None`      | relative std of the release speed; None: the level's |
     | `release_angle_std` | **float** | `None`      | degrees, std of the release direction; None: the level's |
-    | `dwell_ratio`       | **float** | `None`      | ``D / (V + D)`` in (0.2, 0.8); None: the demonstrations' median (~0.56) |
+    | `pattern`           | **str**   | `"3"`       | a registered pattern's name (`PATTERNS`); anything else is refused with the reason |
+    | `dwell_ratio`       | **float** | `None`      | ``D / (V + D)`` in (0.2, 0.8); None: the pattern's (for `"3"` the demonstrations' median, ~0.56) |
+    | `tunables`          | **CascadeTunables** | `None` | the controller's tunables; None: the pattern's |
     | `gravity`           | **float** | `9.81`      | m/s^2 (the demonstrations are generated at this gravity) |
     | `controller`        | **str**   | `"juggler"` | `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
     | `max_catches`       | **int**   | `30`        | catches after which the episode is truncated |
@@ -225,6 +243,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        pattern: str = "3",
+        tunables: CascadeTunables | None = None,
     ) -> None:
         self._init_arguments(
             (level, latency, position_std, velocity_std, release_speed_std, release_angle_std),
@@ -233,24 +253,34 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         #: Control periods (5 ms each) per step; the action is held over them.
         self.frame_skip = check_integer(frame_skip, "frame_skip", 1, MAX_FRAME_SKIP)
+        #: The registered pattern played (:class:`~motion_envs.models.juggling.PatternSpec`).
+        self.pattern = pattern_spec(pattern)
+        #: Balls of the pattern.
+        self.balls = self.pattern.balls
         self.dwell_ratio = (
-            None if dwell_ratio is None else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
+            self.pattern.dwell_ratio
+            if dwell_ratio is None
+            else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )
+        if tunables is not None and not isinstance(tunables, CascadeTunables):
+            raise ValueError(f"tunables must be a CascadeTunables; got {tunables!r}")
+        self.tunables = self.pattern.tunables if tunables is None else tunables
         self.task = JugglingTask(gravity=self.gravity)
         self.delay_steps = round(self.latency / self.task.dt)
         self.controller: CascadeController = make_cascade_controller(
             self.controller_name,
-            cascade_fit(self.gravity),
+            cascade_fit(self.gravity, self.balls),
             self.delay_steps * self.task.dt,
             self.dwell_ratio,
+            self.tunables,
         )
         self.home = self.controller.home
-        self.likeness = cascade_likeness(self.gravity, "train")
+        self.likeness = cascade_likeness(self.gravity, "train", self.balls)
         self.world = CascadeWorld(
-            self.task, self.release_speed_std, math.radians(self.release_angle_std)
+            self.task, self.release_speed_std, math.radians(self.release_angle_std), self.balls
         )
         self.sensor = CascadeSensor(
-            self.delay_steps, self.position_std, self.velocity_std, self.task.dt
+            self.delay_steps, self.position_std, self.velocity_std, self.task.dt, self.balls
         )
         self.model, self.data = self.world.model, self.world.data
         #: m/s, each hand's speed limit.
@@ -279,10 +309,10 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         for _ in range(CASCADE_HANDS):
             low += [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m]
             high += [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, t, t, hx + m, hz + m, hx + m, hz + m]
-        low += [0.0] * (2 * CASCADE_BALLS)
-        high += [1.0] * (2 * CASCADE_BALLS)
-        low += [hx - m, fz - m, -v, -v] * (CASCADE_BALLS * CASCADE_HISTORY)
-        high += [hx + m, hz + m, v, v] * (CASCADE_BALLS * CASCADE_HISTORY)
+        low += [0.0] * (2 * self.balls)
+        high += [1.0] * (2 * self.balls)
+        low += [hx - m, fz - m, -v, -v] * (self.balls * CASCADE_HISTORY)
+        high += [hx + m, hz + m, v, v] * (self.balls * CASCADE_HISTORY)
         return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
 
     @property
@@ -297,12 +327,12 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         super().reset(seed=seed)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
         world_ss, sensor_ss, controller_ss = np.random.SeedSequence(base).spawn(3)
-        p, v, _ = self.controller.initial_flight()
-        true = self.world.reset(self.home, flying=(p, v), rng=np.random.default_rng(world_ss))
+        start = self.controller.start()
+        true = self.world.reset(self.home, start=start, rng=np.random.default_rng(world_ss))
         state = self.sensor.reset(true, np.random.default_rng(sensor_ss), self.task.gravity)
         self.controller.reset(state, np.random.default_rng(controller_ss))
         self._state = state
-        rows = [self._ball_row(state, i) for i in range(CASCADE_BALLS)]
+        rows = [self._ball_row(state, i) for i in range(self.balls)]
         self._history = [row * CASCADE_HISTORY for row in rows]
         self._done = False
         self._catches = self._tosses = 0
@@ -356,12 +386,13 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         return self._observation(true), reward, terminated, truncated, info
 
-    def _period(
-        self, measured: CascadeState, residual: NDArray[np.float64], action_sq: float
-    ) -> tuple[CascadeState, CascadeState, float, dict[str, Any], bool, bool]:
-        """One control period from the ``measured`` state with the residual ``residual
-        (2, 2)`` (m): the measured and the true state after it, its reward, its reward
-        terms with ``likeness`` and ``caught``, and ``(terminated, truncated)``."""
+    def _advance(
+        self, measured: CascadeState, residual: NDArray[np.float64]
+    ) -> tuple[CascadeState, CascadeState]:
+        """The episode's one period (the env's step and :meth:`play` both run it): the
+        controller's command on the ``measured`` state plus ``residual`` (masked by
+        `residual_phases`), the world's period, the sensor; counts the catches and
+        tosses. Returns the measured and the true state after it."""
         targets, armed = self.controller.command(measured)
         if self.residual_phases is not None:
             c = self.controller
@@ -370,12 +401,39 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         true = self.world.step(targets + residual, armed)
         state = self.sensor.measure(true)
         self._state = state
-        for i in range(CASCADE_BALLS):
+        self._catches += sum(int(c >= 0) for c in true.caught)
+        self._tosses += sum(int(r >= 0) for r in true.released)
+        return state, true
+
+    def play(
+        self, seed: int, on_period: Callable[[CascadeState], None] | None = None
+    ) -> tuple[int, int, bool, float]:
+        """The zero-action episode reset with ``seed`` (the controller alone; the same
+        periods as ``reset(seed=seed)`` then ``step(0)`` until the episode ends, without
+        the observations and rewards): ``(catches, tosses, dropped, time)``.
+        ``on_period(true_state)`` is called after every period."""
+        self.reset(seed=seed)
+        state, zero = self._state, np.zeros((CASCADE_HANDS, 2))
+        while True:
+            assert state is not None
+            state, true = self._advance(state, zero)
+            if on_period is not None:
+                on_period(true)
+            terminated, truncated = self._episode_end(true.any_dropped, true.time)
+            if terminated or truncated:
+                return self._catches, self._tosses, terminated, true.time
+
+    def _period(
+        self, measured: CascadeState, residual: NDArray[np.float64], action_sq: float
+    ) -> tuple[CascadeState, CascadeState, float, dict[str, Any], bool, bool]:
+        """One control period from the ``measured`` state with the residual ``residual
+        (2, 2)`` (m): the measured and the true state after it, its reward, its reward
+        terms with ``likeness`` and ``caught``, and ``(terminated, truncated)``."""
+        state, true = self._advance(measured, residual)
+        for i in range(self.balls):
             self._history[i] = self._ball_row(state, i) + self._history[i][:-4]
         caught = sum(int(c >= 0) for c in true.caught)
         dropped = true.any_dropped
-        self._catches += caught
-        self._tosses += sum(int(r >= 0) for r in true.released)
         like = 0.0
         for h in range(CASCADE_HANDS):
             sign = 1.0 if h == 0 else -1.0
@@ -395,9 +453,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             row += _ONE_HOT[c.phase(h)]
             row += [c.phase_time(h), c.duration(h)]
             row += [*c.nominal_next(h).tolist(), *c.plan_end(h).tolist()]
-        for i in range(CASCADE_BALLS):
+        for i in range(self.balls):
             row += [float(true.holder[i] == 0), float(true.holder[i] == 1)]
-        for i in range(CASCADE_BALLS):
+        for i in range(self.balls):
             row += self._history[i]
         obs = np.array(row, dtype=np.float32)
         np.minimum(obs, self._high, out=obs)

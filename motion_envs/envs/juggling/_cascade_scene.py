@@ -1,6 +1,6 @@
-r"""The Cascade-v0 world: two actuated hands and three balls, the one juggling world's
-(:class:`~motion_envs.envs.juggling._world.HandsWorld`) batch of one with
-``WorldSpec.of(task, hands=2, balls=3)``.
+r"""The Cascade-v0 world: two actuated hands and the pattern's balls (3 by default), the
+one juggling world's (:class:`~motion_envs.envs.juggling._world.HandsWorld`) batch of one
+with ``WorldSpec.of(task, hands=2, balls=balls)``.
 
 Each hand is servoed and each ball caught, held and released under the rules of
 :mod:`~motion_envs.envs.juggling._period`, per hand:
@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, JugglingTask
 from motion_envs.envs.juggling._world import HandsWorld, WorldSpec
-from motion_envs.models.juggling import CascadeState
+from motion_envs.models.juggling import CascadeStart, CascadeState
 
 __all__ = ["CascadeWorld"]
 
@@ -39,17 +39,21 @@ __all__ = ["CascadeWorld"]
 class CascadeWorld(HandsWorld):
     """The cascade task on MuJoCo (see the module docstring).
 
-    ``reset(hand_pos, flying=..., rng=...)`` and ``step(targets, armed)`` return the TRUE
+    ``reset(hand_pos, start=..., rng=...)`` and ``step(targets, armed)`` return the TRUE
     :class:`~motion_envs.models.juggling.CascadeState`. qpos/qvel layout: right hand
-    ``x, z``, left hand ``x, z``, then ``x, z`` of balls 0, 1, 2. The parameters are
-    :class:`~motion_envs.envs.juggling.JugglingV1World`'s (the task constants, the release
-    noise per toss).
+    ``x, z``, left hand ``x, z``, then ``x, z`` of balls 0, 1, ..., ``balls - 1``. The
+    parameters are :class:`~motion_envs.envs.juggling.JugglingV1World`'s (the task
+    constants, the release noise per toss) and the number of balls.
     """
 
     def __init__(
-        self, task: JugglingTask, release_speed_std: float = 0.0, release_angle_std: float = 0.0
+        self,
+        task: JugglingTask,
+        release_speed_std: float = 0.0,
+        release_angle_std: float = 0.0,
+        balls: int = CASCADE_BALLS,
     ) -> None:
-        spec = WorldSpec.of(task, hands=CASCADE_HANDS, balls=CASCADE_BALLS)
+        spec = WorldSpec.of(task, hands=CASCADE_HANDS, balls=balls)
         super().__init__(spec, release_speed_std, release_angle_std)
         self.task = task
         self.state: CascadeState | None = None
@@ -58,31 +62,31 @@ class CascadeWorld(HandsWorld):
         self,
         hand_pos: ArrayLike,
         *,
-        flying: tuple[ArrayLike, ArrayLike] | None = None,
+        start: CascadeStart | None = None,
         rng: np.random.Generator | None = None,
     ) -> CascadeState:
-        """Hands at rest at ``hand_pos`` ``(2, 2)``, ball 0 in the right hand, ball 1 in
-        the left, ball 2 in flight at ``flying = (position, velocity)`` (required; thrown
-        by the left hand). Time 0; the scene placed (camera and lights included) before
-        any physics step."""
+        """Hands at rest at ``hand_pos`` ``(2, 2)``, the balls as ``start`` says (required:
+        :meth:`~motion_envs.models.juggling.CascadeController.start`; a held ball in its
+        hand, a flying one at its position and velocity). Time 0; the scene placed
+        (camera and lights included) before any physics step."""
         hands = np.asarray(hand_pos, dtype=np.float64)
         if hands.shape != (CASCADE_HANDS, 2) or not np.isfinite(hands).all():
             raise ValueError(f"hand_pos must be a finite (2, 2) array; got {hand_pos!r}")
-        if flying is None:
-            raise ValueError("flying (position, velocity of ball 2) is required")
-        bp = np.asarray(flying[0], dtype=np.float64)
-        bv = np.asarray(flying[1], dtype=np.float64)
+        if start is None:
+            raise ValueError("start (the balls at t = 0) is required")
+        n = self.spec.balls
+        bp = np.asarray(start.ball_pos, dtype=np.float64)
+        bv = np.asarray(start.ball_vel, dtype=np.float64)
         if (
-            bp.shape != (2,)
-            or bv.shape != (2,)
+            bp.shape != (n, 2)
+            or bv.shape != (n, 2)
+            or len(start.holder) != n
+            or len(start.thrower) != n
             or not (np.isfinite(bp).all() and np.isfinite(bv).all())
         ):
-            raise ValueError(f"flying must be two finite (x, z) pairs; got {flying!r}")
+            raise ValueError(f"start must hold {n} balls' finite (x, z) rows; got {start!r}")
         self._rng = rng
-        balls = np.zeros((CASCADE_BALLS, 2))
-        velocities = np.zeros((CASCADE_BALLS, 2))
-        balls[2], velocities[2] = bp, bv
-        self.reset_state(hands, np.zeros((2, 2)), (0, 1, -1), (-1, -1, 1), balls, velocities)
+        self.reset_state(hands, np.zeros((2, 2)), start.holder, start.thrower, bp, bv)
         self.state = self._make_state((-1, -1), (-1, -1))
         return self.state
 
@@ -108,12 +112,13 @@ class CascadeWorld(HandsWorld):
 
     def _make_state(self, released: tuple[int, int], caught: tuple[int, int]) -> CascadeState:
         q, v = self.data.qpos, self.data.qvel
+        end = 4 + 2 * self.spec.balls
         return CascadeState(
             time=float(self.data.time),
             hand_pos=np.array(q[0:4]).reshape(2, 2),
             hand_vel=np.array(v[0:4]).reshape(2, 2),
-            ball_pos=np.array(q[4:10]).reshape(3, 2),
-            ball_vel=np.array(v[4:10]).reshape(3, 2),
+            ball_pos=np.array(q[4:end]).reshape(-1, 2),
+            ball_vel=np.array(v[4:end]).reshape(-1, 2),
             holder=tuple(self.holder[0].tolist()),
             released=released,
             caught=caught,

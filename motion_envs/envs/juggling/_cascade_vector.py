@@ -47,7 +47,6 @@ from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
 from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
-    REAIM_AFTER,
     CascadeHand,
     CascadeState,
     perturb_release,
@@ -108,18 +107,19 @@ class CascadeVectorEnv(JugglingVectorEnv):
         self._dt, self._gravity = task.dt, task.gravity
         # the world (HandsWorld's state, batched; the last step's events)
         self._setup_world_arrays()
-        self._q = np.zeros((n, 10))
-        self._v = np.zeros((n, 10))
+        nb = self._nb = first.balls
+        self._q = np.zeros((n, 4 + 2 * nb))
+        self._v = np.zeros((n, 4 + 2 * nb))
         # what the controller was last shown (the measured balls)
         self._m_time = np.zeros(n)
-        self._m_ball = np.zeros((n, 3, 2))
-        self._m_ball_vel = np.zeros((n, 3, 2))
+        self._m_ball = np.zeros((n, nb, 2))
+        self._m_ball_vel = np.zeros((n, nb, 2))
         # the sensor's delay line (a ring shared by all sub-environments: a reset fills
         # every slot of its own) and the observation's measurement history
         d = first.delay_steps
-        self._ring = np.zeros((d + 1, n, 3, 5))
+        self._ring = np.zeros((d + 1, n, nb, 5))
         self._slot = 0
-        self._history = np.zeros((n, 3, _HIST))
+        self._history = np.zeros((n, nb, _HIST))
         self._noisy = first.position_std > 0 or first.velocity_std > 0
         self._std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
         self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
@@ -148,7 +148,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             [
                 ctask.dt,
                 ctask.gravity,
-                REAIM_AFTER * first.controller.beat,
+                first.controller.tunables.reaim_after * first.controller.beat,
                 self._latency,
                 options.correction_tolerance,
             ]
@@ -254,7 +254,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             "time": time,
             "hand": q[:, 0:2].copy(),
             "hands": q[:, 0:4].reshape(m, 2, 2).copy(),
-            "balls": q[:, 4:10].reshape(m, 3, 2).copy(),
+            "balls": q[:, 4:].reshape(m, self._nb, 2).copy(),
             **sums,
             "catches": counts[envs, 0].copy(),
             "tosses": counts[envs, 1].copy(),
@@ -434,7 +434,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
                 self._v[i, c], self._v[i, c + 1] = qvel[c], qvel[c + 1]
 
     def _measure(self, envs: NDArray[np.int64]) -> Any:
-        """The sensor (:meth:`CascadeSensor.measure`) for ``envs``: ``(m, 3, 4)`` rows
+        """The sensor (:meth:`CascadeSensor.measure`) for ``envs``: ``(m, B, 4)`` rows
         ``(x, z, vx, vz)`` per ball, the true state while held, the delayed (noisy) one
         else."""
         self._slot = slot = (self._slot + 1) % self._ring.shape[0]

@@ -526,19 +526,28 @@ def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
 
 
 @njit(cache=True)
+def _holds(holder: Any, i: int, h: int) -> bool:
+    """Whether hand ``h`` of world ``i`` holds a ball (``holder (N, B)``)."""
+    for b in range(holder.shape[1]):
+        if holder[i, b] == h:
+            return True
+    return False
+
+
+@njit(cache=True)
 def cascade_measure(envs: Any, q: Any, v: Any, holder: Any, ring: Any, slot: int) -> Any:
     """The cascade's sensors (:meth:`CascadeSensor.measure`) for ``envs`` before their
-    noise: the true balls of ``q, v (N, 10)`` go into the delay line ``ring (S, N, 3,
-    5)`` at ``slot``; returns ``rows (m, 3, 4)`` (the true state of a held ball, the
-    delayed one of a flying ball) and ``noisy (m, 3)`` (flying now and then: the noise
+    noise: the true balls of ``q, v (N, 4 + 2 B)`` go into the delay line ``ring (S, N,
+    B, 5)`` at ``slot``; returns ``rows (m, B, 4)`` (the true state of a held ball, the
+    delayed one of a flying ball) and ``noisy (m, B)`` (flying now and then: the noise
     applies)."""
-    m, size = envs.shape[0], ring.shape[0]
-    rows = np.empty((m, 3, 4))
-    noisy = np.zeros((m, 3), dtype=np.bool_)
+    m, size, nb = envs.shape[0], ring.shape[0], holder.shape[1]
+    rows = np.empty((m, nb, 4))
+    noisy = np.zeros((m, nb), dtype=np.bool_)
     old = (slot + 1) % size
     for j in range(m):
         i = envs[j]
-        for b in range(3):
+        for b in range(nb):
             held = holder[i, b] >= 0
             x, z = q[i, 4 + 2 * b], q[i, 5 + 2 * b]
             vx, vz = v[i, 4 + 2 * b], v[i, 5 + 2 * b]
@@ -571,23 +580,22 @@ def cascade_observations(
     """``CascadeEnv._observation``'s rows for ``envs`` (float64, before the float32 cast
     and the bounds): per hand its true state, whether it holds a ball, its phase one-hot,
     the time in the phase, the plan's duration, the next target and the plan's end
-    (world frame); per ball its holder; the measurement ``history (N, 3, 16)``.
+    (world frame); per ball its holder; the measurement ``history (N, B, 16)``.
 
     ``plan = (k, grid, glen, end)``: the hands' plans in their own frames, read when
     ``fast``; else ``shown = (phase_time, next, end)`` as the controller reported them."""
     k, grid, glen, end = plan
     phase_time, nxt, end_shown = shown
-    m = envs.shape[0]
+    m, nb = envs.shape[0], holder.shape[1]
     n_hist = history.shape[2]
-    rows = np.zeros((m, 2 * 15 + 6 + 3 * n_hist))
+    rows = np.zeros((m, 2 * 15 + 2 * nb + nb * n_hist))
     for j in range(m):
         i = envs[j]
         for h in range(2):
             o = 15 * h
             rows[j, o], rows[j, o + 1] = q[i, 2 * h], q[i, 2 * h + 1]
             rows[j, o + 2], rows[j, o + 3] = v[i, 2 * h], v[i, 2 * h + 1]
-            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
-            rows[j, o + 4] = 1.0 if held else 0.0
+            rows[j, o + 4] = 1.0 if _holds(holder, i, h) else 0.0
             rows[j, o + 5 + phase[i, h]] = 1.0
             rows[j, o + 10] = duration[i, h]
             if fast:
@@ -602,12 +610,12 @@ def cascade_observations(
                 rows[j, o + 9] = phase_time[i, h]
                 rows[j, o + 11], rows[j, o + 12] = nxt[i, h, 0], nxt[i, h, 1]
                 rows[j, o + 13], rows[j, o + 14] = end_shown[i, h, 0], end_shown[i, h, 1]
-        for b in range(3):
+        for b in range(nb):
             rows[j, 30 + 2 * b] = 1.0 if holder[i, b] == 0 else 0.0
             rows[j, 31 + 2 * b] = 1.0 if holder[i, b] == 1 else 0.0
-        for b in range(3):
+        for b in range(nb):
             for c in range(n_hist):
-                rows[j, 36 + n_hist * b + c] = history[i, b, c]
+                rows[j, 30 + 2 * nb + n_hist * b + c] = history[i, b, c]
     return rows
 
 
@@ -653,7 +661,7 @@ def cascade_events(
         i = envs[j]
         event = caught[i, 0] >= 0 or caught[i, 1] >= 0
         for h in range(2):
-            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
+            held = _holds(holder, i, h)
             ph, k, inc = phase[i, h], pk[i, h], incoming[i, h]
             was_caught, was_released = caught[i, h] >= 0, released[i, h] >= 0
             if (
@@ -674,8 +682,7 @@ def cascade_events(
         if event or not correction:
             continue
         for h in range(2):
-            held = holder[i, 0] == h or holder[i, 1] == h or holder[i, 2] == h
-            if phase[i, h] != catch or held:
+            if phase[i, h] != catch or _holds(holder, i, h):
                 continue
             inc = incoming[i, h]
             if inc >= 0:
@@ -733,7 +740,7 @@ def cascade_record(
     envs: Any, rows: Any, world: Any, measured: Any, counts: Any, constants: Any
 ) -> Any:
     """The bookkeeping of ``CascadeEnv.step`` after the world and the sensor for
-    ``envs``: the measured balls ``rows (m, 3, 4)`` become what the controller sees next
+    ``envs``: the measured balls ``rows (m, B, 4)`` become what the controller sees next
     (``measured = (time, ball, ball_vel, history)``, the history shifted by one
     measurement, newest first), the step's catches and releases are counted
     (``counts (N, 2)``: catches, tosses) from ``world = (k, caught, released,
@@ -755,7 +762,7 @@ def cascade_record(
         t = k[i] * dt
         time[j] = t
         m_time[i] = t
-        for b in range(3):
+        for b in range(rows.shape[1]):
             m_ball[i, b, 0], m_ball[i, b, 1] = rows[j, b, 0], rows[j, b, 1]
             m_ball_vel[i, b, 0], m_ball_vel[i, b, 1] = rows[j, b, 2], rows[j, b, 3]
             for c in range(n_hist - 1, 3, -1):

@@ -24,9 +24,12 @@ The public names of small private modules, one concern each:
 * ``_pattern``: the pattern of those flights (:func:`pattern_summary`: the across-body
   axis, hands, beat, dwell, throw values, siteswap, balls by Shannon's juggling theorem
   and by the concurrent count);
-* ``_cascade``: the three-ball cascade juggler (two hands of the one-ball juggler
-  scheduled by Shannon's theorem, :class:`CascadeController`), its fit
-  (:func:`cascade_fit`) and reference controllers (:func:`make_cascade_controller`);
+* ``_cascade``: the odd-cascade juggler's fit (:func:`cascade_fit`, 3 or 5 balls), its
+  state and sensor; ``_cascade_hand``: one hand (:class:`CascadeHand`) and the
+  controller's tunables (:class:`CascadeTunables`); ``_cascade_control``: the juggler (two
+  hands of the one-ball juggler scheduled by Shannon's theorem,
+  :class:`CascadeController`), its start and reference controllers
+  (:func:`make_cascade_controller`);
 * ``_patterns``: which siteswaps the cascade juggler can play at its tempo, and why not
   the others (:func:`check_pattern`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
@@ -34,17 +37,23 @@ The public names of small private modules, one concern each:
 """
 
 from motion_envs.models.juggling._cascade import (
-    CASCADE_CONTROLLERS,
-    REAIM_AFTER,
-    CascadeController,
     CascadeFit,
-    CascadeHand,
     CascadePattern,
     CascadeSensor,
     CascadeState,
     cascade_fit,
     cascade_likeness,
+)
+from motion_envs.models.juggling._cascade_control import (
+    CASCADE_CONTROLLERS,
+    CascadeController,
+    CascadeStart,
     make_cascade_controller,
+)
+from motion_envs.models.juggling._cascade_hand import (
+    DEFAULT_TUNABLES,
+    CascadeHand,
+    CascadeTunables,
 )
 from motion_envs.models.juggling._controller import (
     ControlOptions,
@@ -100,7 +109,16 @@ from motion_envs.models.juggling._pattern import (
     across_axis,
     pattern_summary,
 )
-from motion_envs.models.juggling._patterns import PatternCheck, ThrowNeed, check_pattern
+from motion_envs.models.juggling._patterns import (
+    PATTERNS,
+    PatternCheck,
+    PatternSpec,
+    ThrowNeed,
+    check_pattern,
+    pattern_reasons,
+    pattern_spec,
+    register_pattern,
+)
 from motion_envs.models.juggling._run import (
     CycleResult,
     cycle_rng,
@@ -132,13 +150,14 @@ from motion_envs.models.juggling._world import (
 __all__ = [
     "CASCADE_CONTROLLERS",
     "CONTROLLERS",
+    "DEFAULT_TUNABLES",
     "DEMO_CYCLES",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
     "LEVELS",
     "LIKENESS_TAU",
     "PAPER_GRAVITY",
-    "REAIM_AFTER",
+    "PATTERNS",
     "TRACKING_NOISE",
     "TRACKING_ROWS",
     "V1_N_SINES",
@@ -151,7 +170,9 @@ __all__ = [
     "CascadeHand",
     "CascadePattern",
     "CascadeSensor",
+    "CascadeStart",
     "CascadeState",
+    "CascadeTunables",
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
@@ -166,6 +187,7 @@ __all__ = [
     "JugglingLevel",
     "JugglingWorld",
     "PatternCheck",
+    "PatternSpec",
     "PatternSummary",
     "PhaseFit",
     "ThrowEvent",
@@ -189,11 +211,14 @@ __all__ = [
     "load_juggling_csv",
     "make_cascade_controller",
     "make_controller",
+    "pattern_reasons",
+    "pattern_spec",
     "pattern_summary",
     "perturb_release",
     "phase_conditions",
     "plan_catch",
     "predict_forward",
+    "register_pattern",
     "replan_many",
     "run_cycle",
     "run_cycles",

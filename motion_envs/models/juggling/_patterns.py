@@ -29,14 +29,25 @@ from dataclasses import dataclass
 
 from motion_envs.datasets.juggling import (
     CASCADE_BALLS,
+    CASCADE_STYLES,
     format_siteswap,
     parse_siteswap,
     siteswap_balls,
     siteswap_flights,
 )
 from motion_envs.models.juggling._cascade import CascadePattern
+from motion_envs.models.juggling._cascade_hand import DEFAULT_TUNABLES, CascadeTunables
 
-__all__ = ["PatternCheck", "ThrowNeed", "check_pattern"]
+__all__ = [
+    "PATTERNS",
+    "PatternCheck",
+    "PatternSpec",
+    "ThrowNeed",
+    "check_pattern",
+    "pattern_reasons",
+    "pattern_spec",
+    "register_pattern",
+]
 
 
 @dataclass(frozen=True)
@@ -119,3 +130,99 @@ def check_pattern(
 
 def _s(n: int) -> str:
     return "" if n == 1 else "s"
+
+
+@dataclass(frozen=True)
+class PatternSpec:
+    """A pattern the cascade juggler plays (:data:`PATTERNS`): its ``name`` (what
+    ``pattern=`` takes), its vanilla ``siteswap``, its ``dwell_ratio`` ``D / (V + D)``
+    (None: the pattern's training demonstrations' median) with the source of that value
+    in ``note``, and the controller's ``tunables`` for it (chosen on training seeds). The
+    flight is the juggler's own toss's (fitted on the pattern's SIMULATED
+    demonstrations), the tempo Shannon's theorem's."""
+
+    name: str
+    siteswap: str
+    dwell_ratio: float | None = None
+    note: str = ""
+    tunables: CascadeTunables = DEFAULT_TUNABLES
+
+    @property
+    def throws(self) -> tuple[int, ...]:
+        """The siteswap's throw values."""
+        return parse_siteswap(self.siteswap)
+
+    @property
+    def balls(self) -> int:
+        """The number of balls (the average throw)."""
+        return siteswap_balls(self.throws)
+
+
+#: The registered patterns by name (:func:`register_pattern`).
+PATTERNS: dict[str, PatternSpec] = {}
+
+
+def pattern_reasons(siteswap: str) -> tuple[str, ...]:
+    """Why the cascade juggler cannot play ``siteswap`` whatever its tempo (empty: it
+    can): it plays odd cascades (every throw the same odd value, each hand catching the
+    other hand's ball) of the ball counts it has demonstrations for
+    (:data:`~motion_envs.datasets.juggling.CASCADE_STYLES`). Raises ``ValueError`` for a
+    siteswap that is not one."""
+    throws = parse_siteswap(siteswap)
+    balls = siteswap_balls(throws)
+    reasons = []
+    if balls % 2 == 0 or set(throws) != {balls}:
+        reasons.append(
+            "it is not a cascade (every throw the same odd value, each hand catching the "
+            "other hand's ball): self-throws, holds, passes and empty beats are not modelled"
+        )
+    if balls not in CASCADE_STYLES:
+        reasons.append(
+            f"it has {balls} ball{_s(balls)}; demonstrations exist for "
+            f"{', '.join(str(b) for b in sorted(CASCADE_STYLES))}"
+        )
+    return tuple(reasons)
+
+
+def register_pattern(spec: PatternSpec) -> PatternSpec:
+    """Add ``spec`` to :data:`PATTERNS` (a name is registered once); ``ValueError`` with
+    the reasons if the juggler cannot play its siteswap or its dwell ratio is not in
+    (0.2, 0.9) or leaves no flight (``N / 2 - r <= 0``)."""
+    if not isinstance(spec, PatternSpec):
+        raise ValueError(f"register_pattern takes a PatternSpec; got {type(spec).__name__}")
+    if spec.name in PATTERNS:
+        raise ValueError(f"pattern {spec.name!r} is already registered")
+    reasons = pattern_reasons(spec.siteswap)
+    if reasons:
+        raise ValueError(f"pattern {spec.siteswap!r} cannot be played: " + "; ".join(reasons))
+    r = spec.dwell_ratio
+    if r is not None and not (isinstance(r, float) and 0.2 < r < 0.9):
+        raise ValueError(f"PatternSpec.dwell_ratio must be a float in (0.2, 0.9); got {r!r}")
+    if not isinstance(spec.tunables, CascadeTunables):
+        raise ValueError(f"PatternSpec.tunables must be a CascadeTunables; got {spec.tunables!r}")
+    PATTERNS[spec.name] = spec
+    return spec
+
+
+def pattern_spec(name: str) -> PatternSpec:
+    """The registered pattern ``name``; ``ValueError`` naming the registered ones and,
+    for a siteswap the juggler cannot play, why."""
+    if name in PATTERNS:
+        return PATTERNS[name]
+    known = ", ".join(repr(p) for p in PATTERNS)
+    try:
+        reasons = pattern_reasons(name)
+    except ValueError as exc:
+        raise ValueError(f"pattern must be one of {known}; {exc}") from None
+    why = "; ".join(reasons) if reasons else "it is not registered (register_pattern)"
+    raise ValueError(f"pattern must be one of {known}; {name!r}: {why}")
+
+
+register_pattern(
+    PatternSpec(
+        "3",
+        "3",
+        None,
+        "the three-ball cascade; dwell ratio: the SIMULATED training cycles' median",
+    )
+)
