@@ -2,8 +2,9 @@
 
 Each sub-command lives in its own module exposing ``register(subparsers)`` and a pure
 ``run(config) -> results``; this file only assembles them and turns errors into one
-line on stderr: usage errors (checked before any computation) and bad data exit with
-status 2, other I/O errors with 1, Ctrl-C with 130. Run ``motion-bench --help`` or
+line on stderr: usage errors (checked before any computation), bad data and a missing
+optional dependency (the line names the extra to install, :data:`EXTRA_OF_MODULE`) exit
+with status 2, other I/O errors with 1, Ctrl-C with 130. Run ``motion-bench --help`` or
 ``motion-bench CMD --help``.
 """
 
@@ -48,6 +49,40 @@ def build_parser() -> options.Parser:
     for name in SUBCOMMAND_MODULES:
         importlib.import_module(name).register(sub)
     return parser
+
+
+#: The optional modules sub-commands import, by top-level name: ``(extra of
+#: pyproject.toml, distribution)`` (a sub-command that lacks one says which extra to
+#: install; tests/test_cli_extras.py checks the table against pyproject.toml).
+EXTRA_OF_MODULE: dict[str, tuple[str, str]] = {
+    "stable_baselines3": ("rl", "stable-baselines3"),
+    "torch": ("rl", "torch"),
+    "rich": ("rl", "rich"),
+    "tensorboard": ("rl", "tensorboard"),
+    "sklearn": ("learned", "scikit-learn"),
+    "safetensors": ("learned", "safetensors"),
+    "movement_primitives": ("peers", "movement-primitives"),
+    "pytransform3d": ("peers", "pytransform3d"),
+    "rliable": ("stats", "rliable"),
+    "ray": ("sweep", "ray"),
+    "optuna": ("sweep", "optuna"),
+    "numba": ("fast", "numba"),
+    "ezc3d": ("mocap", "ezc3d"),
+    "pybvh": ("mocap", "pybvh"),
+}
+
+
+def missing_extra(exc: ModuleNotFoundError) -> str | None:
+    """The one-line message for an optional module that is not installed (``None`` for
+    any other missing module: a bug, left to its traceback)."""
+    top = (exc.name or "").split(".")[0]
+    if top not in EXTRA_OF_MODULE:
+        return None
+    extra, dist = EXTRA_OF_MODULE[top]
+    return (
+        f"needs {dist} (the {extra!r} extra), which is not installed; from the project's "
+        f'folder: pip install -e ".[{extra}]"'
+    )
 
 
 #: s between re-deliveries of a Ctrl-C that the running code has not yet let through.
@@ -120,6 +155,11 @@ def run_command(prog: str, func: Callable[[Any], Any], args: Any) -> int:
             return 130
         except options.ConfigError as exc:
             return options.fail(prog, f"argument {options.option_name(exc.field)}: {exc.message}")
+        except ModuleNotFoundError as exc:
+            message = missing_extra(exc)
+            if message is None:
+                raise
+            return options.fail(prog, message)
         except (ValueError, FileNotFoundError) as exc:
             return options.fail(prog, str(exc))
         except OSError as exc:

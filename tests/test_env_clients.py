@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
 
-import motion_envs  # noqa: F401  (registers the ids)
+import motion_envs
 from motion_envs.envs.orientation_reach import OrientationReachEnv
 from motion_envs.envs.position_reach import PositionReachEnv
 
@@ -176,3 +176,54 @@ def test_cleanrl_style_ppo_loop_with_same_step_autoreset_logs_episode_returns():
     assert all(np.isfinite(r) and r < 0 for r in logged)
     # the same loop over SyncVectorEnv of single environments logs the same returns
     assert _cleanrl_ppo(sync(), iterations=3, n_steps=64) == logged
+
+
+#: A smaller instance where building the default one takes long.
+_SMALL = {
+    "MotionEnvs/PositionReach-v0": {"shapes": SHAPES},
+    "MotionEnvs/PositionReach-v1": {"shapes": SHAPES},
+}
+
+
+@pytest.mark.parametrize("env_id", motion_envs.ENV_IDS)
+def test_numpy_to_torch_converts_every_info_of_every_id(env_id):
+    """Gymnasium's ``NumpyToTorch`` vector wrapper (DLPack: numbers only) on
+    ``gym.make_vec(id, 2, max_episode_steps=3)``: a reset and steps through an autoreset
+    (the episodes truncated at 3 steps, so the 4th step resets them). Every value of
+    every info converts to a tensor; the text of the single environments' infos is the
+    envs' lookups (``trajectory_labels``, ``phase_names``)."""
+    torch = pytest.importorskip("torch")
+    pytest.importorskip("array_api_compat")
+    from gymnasium.wrappers.vector import NumpyToTorch
+
+    venv = NumpyToTorch(
+        gym.make_vec(env_id, num_envs=2, max_episode_steps=3, **_SMALL.get(env_id, {}))
+    )
+
+    def tensors(info, where):
+        for key, value in info.items():
+            if isinstance(value, dict):
+                tensors(value, f"{where}[{key!r}]")
+            else:
+                assert isinstance(value, torch.Tensor), f"{where}[{key!r}]: {type(value)}"
+
+    obs, info = venv.reset(seed=0)
+    assert isinstance(obs, torch.Tensor)
+    tensors(info, "reset")
+    resets = 0
+    action = torch.zeros(venv.action_space.shape)
+    for t in range(5):
+        obs, _, _, truncated, info = venv.step(action)
+        tensors(info, f"step {t}")
+        if t == 2 and "Coefficients" not in env_id and env_id != "MotionEnvs/Juggling-v0":
+            assert bool(truncated.all()), "max_episode_steps=3 did not truncate"
+        resets += int(any(k in info for k in ("trajectory_index", "seed")))
+    assert resets >= 1, "no autoreset seen"
+    base = venv.unwrapped
+    if "phase" in info:
+        names = getattr(base, "phase_names", None) or base.get_attr("phase_names")[0]
+        assert names[int(info["phase"][0])] in names
+    if "trajectory_index" in info:
+        labels = base.trajectory_labels
+        assert len(labels["trajectory_id"]) > int(info["trajectory_index"].max())
+    venv.close()

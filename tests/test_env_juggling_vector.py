@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 import motion_envs  # noqa: F401  (registers the ids)
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling import CascadeVectorEnv, JugglingV1VectorEnv
+from motion_envs.envs.juggling._vector import PHASE_NAMES, numeric_info
 
 V1 = "MotionEnvs/Juggling-v1"
 CASCADE = "MotionEnvs/Cascade-v0"
@@ -35,7 +36,26 @@ def _equal(x: Any, y: Any) -> bool:
     return bool(np.array_equal(x, y))
 
 
+def _as_codes(column: Any) -> Any:
+    """A SyncVectorEnv's batched text info column as the native env's numbers: names of
+    ``PHASE_NAMES`` -> their indices; tuples (a value per hand) -> rows."""
+    if not (isinstance(column, np.ndarray) and column.dtype == object):
+        return column
+    first = next((v for v in column if v is not None), None)
+    if isinstance(first, str):
+        return np.array([PHASE_NAMES.index(v) if v else 0 for v in column], dtype=np.int64)
+    if isinstance(first, tuple):
+        width = len(first)
+        rows = [v if v is not None else (first[0],) * width for v in column]
+        if isinstance(first[0], str):
+            return np.array([[PHASE_NAMES.index(p) for p in r] for r in rows], dtype=np.int64)
+        return np.array(rows, dtype=bool)
+    return column
+
+
 def _same_infos(a: dict[str, Any], b: dict[str, Any], where: str) -> None:
+    """``a`` (SyncVectorEnv's, text as the single env's) equal to ``b`` (native: the same
+    text as numbers)."""
     assert set(a) == set(b), f"{where}: keys {set(a) ^ set(b)}"
     for key in a:
         if key.startswith("_"):
@@ -46,8 +66,17 @@ def _same_infos(a: dict[str, Any], b: dict[str, Any], where: str) -> None:
         mask = a["_" + key]
         if isinstance(value, dict):
             _same_infos(value, b[key], f"{where} {key}")
+        elif key == "final_info":  # an object array of the single envs' dicts
+            for j in np.flatnonzero(mask):
+                got = numeric_info(value[j])
+                assert set(got) == set(b[key][j]), f"{where}: {key}[{j}]"
+                for k, v in got.items():
+                    assert np.array_equal(v, b[key][j][k]), f"{where}: {key}[{j}][{k}]"
         else:
-            assert _equal(value[mask], b[key][mask]), f"{where}: {key}"
+            want = _as_codes(value)
+            if key != "final_obs":  # Gymnasium's SAME_STEP convention: an object array
+                assert b[key].dtype != object, f"{where}: {key} is not numeric"
+            assert _equal(want[mask], b[key][mask]), f"{where}: {key}"
 
 
 def run_both(
@@ -513,3 +542,16 @@ def test_sb3_sees_the_episodes_of_dummy_vec_env(env_id: str, dim: int) -> None:
             assert np.array_equal(r1[3][i]["terminal_observation"], final)
         ends += int(r1[2].sum())
     assert ends >= 3
+
+
+@pytest.mark.parametrize("mode", MODES[:2], ids=lambda m: m.value)
+@pytest.mark.parametrize("env_id", [V1, CASCADE])
+def test_make_vec_max_episode_steps_truncates_as_time_limit(env_id: str, mode: Any) -> None:
+    """``gym.make_vec(id, N, max_episode_steps=K)`` (as for the other ids) = SyncVectorEnv
+    of ``gym.make(id, max_episode_steps=K)`` (``TimeLimit``): truncated at the K-th step,
+    then reset, with random actions (drops end some episodes earlier)."""
+    vec = gym.make_vec(env_id, num_envs=3, max_episode_steps=7, autoreset_mode=mode)
+    ends = run_both(env_id, vec, 3, mode, 30, "random", max_episode_steps=7)
+    assert ends >= 9  # every sub-environment at least 3 episodes in 30 steps
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        gym.make_vec(env_id, num_envs=2, max_episode_steps=0)

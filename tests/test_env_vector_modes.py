@@ -17,6 +17,7 @@ CASES = [
     (ORIENTATION, {"nominal": "bezier-task", "reward_weights": {"geodesic": 0.5, "action": 0.1}}),
     (POSITION, {"shapes": SHAPES, "reward_weights": {"action": 0.3}}),
 ]
+TEXT_KEYS = ("trajectory_id", "task", "subject")
 BACKENDS = [b for b in K.VECTOR_BACKENDS if b != "numba" or K.numba_available()]
 
 
@@ -27,10 +28,16 @@ def _actions(env: gym.vector.VectorEnv, steps: int, seed: int = 0) -> np.ndarray
 
 
 def assert_same_infos(native: dict, reference: dict, where: str = "infos") -> None:
-    """Every key of the reference (the reset infos' strings too) with the same mask and
-    the same values under the mask; ``final_obs`` entry by entry; ``final_info`` recursively."""
+    """Every key of the reference with the same mask and the same values under the mask;
+    ``final_obs`` entry by entry; ``final_info`` recursively. The reset infos' text
+    (``trajectory_id``, ``task``, ``subject``) is not in the native infos: it is the
+    env's ``trajectory_labels`` at ``trajectory_index`` (compared; tested in
+    test_env_inputs)."""
     for key, value in reference.items():
         if key.startswith("_"):
+            continue
+        if key in TEXT_KEYS:
+            assert key not in native and "trajectory_index" in reference, f"{where}: {key}"
             continue
         assert key in native, f"{where}: {key!r} missing"
         mask = reference["_" + key]

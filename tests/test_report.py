@@ -216,3 +216,64 @@ def test_juggling_animation_embedded_as_gif(tmp_path):
     gifs = [i for i in page.images if i["src"].startswith("data:image/gif;base64,")]
     assert len(gifs) == 1 and "SIMULATED" in gifs[0]["alt"]
     assert base64.b64decode(gifs[0]["src"].split(",", 1)[1])[:6] in (b"GIF87a", b"GIF89a")
+
+
+class _Paragraphs(HTMLParser):
+    """The text of every ``<p>`` (tags inside it would end up outside: a raw ``<`` in a
+    sentence starts a tag and cuts the sentence)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.paragraphs: list[str] = []
+        self._open = False
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "p":
+            self._open = True
+            self.paragraphs.append("")
+        elif self._open:
+            self._open = False  # a tag inside the sentence: the browser cuts it here
+
+    def handle_endtag(self, tag):
+        if tag == "p":
+            self._open = False
+
+    def handle_data(self, data):
+        if self._open:
+            self.paragraphs[-1] += data
+
+
+def test_every_reading_survives_an_html_parser(results, tmp_path):
+    """Once, Juggling-v1's "Targets met: fixed_point<juggler_easy" wrote a raw ``<``:
+    a browser's parser cut the sentence and swallowed the rest. Each section's reading is
+    plain text that the page escapes: a parser gets every sentence back whole."""
+    from baselines.report._html import BUILDERS
+
+    levels = tmp_path / "juggling_v1-levels"
+    levels.mkdir()
+    method = {"catch_rate": 0.5, "catch_rate_ci": [0.4, 0.6]}
+    method |= {"consecutive_catches_median": 2.0, "deviation_m": 0.01}
+    doc = {
+        "seeds": {"count": 10, "split": "test"},
+        "demonstrations": "SIMULATED",
+        "levels": [{"level": "easy", "methods": {"juggler": method}}],
+        "targets": {
+            "fixed_point<juggler_easy": {"met": True},
+            "juggler>fixed & <b>": {"met": False},
+        },
+    }
+    (levels / "results.json").write_text(json.dumps(doc))
+    jobs = json.loads((results / "index.json").read_text())["jobs"]
+    for job in jobs:
+        (tmp_path / job["folder"]).symlink_to(results / job["folder"])
+    jobs = [*jobs, {"folder": levels.name, "title": "Juggling-v1 levels", "exit_code": 0}]
+    (tmp_path / "index.json").write_text(json.dumps({"jobs": jobs}))
+    page = _Paragraphs()
+    page.feed(build_report(tmp_path))
+    readings = [
+        BUILDERS[job["folder"].split("-", 1)[0]](tmp_path / job["folder"], job).reading
+        for job in jobs
+    ]
+    assert "fixed_point<juggler_easy" in readings[-1]
+    for reading in readings:
+        assert reading in page.paragraphs

@@ -31,7 +31,8 @@ MODELS_DOC = "docs/models.md"
 
 @dataclass
 class Section:
-    """One benchmark's part of the report: HTML fragments, already escaped."""
+    """One benchmark's part of the report: ``title``, ``command`` and ``reading`` are
+    plain text (the page escapes them); ``tables`` are HTML fragments, already escaped."""
 
     title: str
     command: str

@@ -130,7 +130,7 @@ def juggling_section(folder: Path, job: dict[str, Any]) -> Section:
     return Section(
         title=job.get("title", folder.name),
         command=job.get("command", ""),
-        reading=html.escape(reading),
+        reading=reading,
         tables=[
             catch_table,
             phase_table,

@@ -98,7 +98,7 @@ def build_report(out: str | os.PathLike[str]) -> str:
         body.append(
             f'<p class="command">{html.escape(sec.command)} ({job.get("seconds", "?")} s)</p>'
         )
-        body.append(f"<p>{sec.reading}</p>")
+        body.append(f"<p>{html.escape(sec.reading)}</p>")
         body.extend(sec.tables)
         for caption, data in sec.images:
             b64 = base64.b64encode(data).decode("ascii")

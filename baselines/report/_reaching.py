@@ -95,7 +95,7 @@ def orientation_section(folder: Path, job: dict[str, Any]) -> Section:
     return Section(
         title=job.get("title", folder.name),
         command=job.get("command", ""),
-        reading=html.escape(reading),
+        reading=reading,
         tables=[table, *learned_table(doc, "subjects")],
         images=images(
             folder,
@@ -195,7 +195,7 @@ def position_section(folder: Path, job: dict[str, Any]) -> Section:
     return Section(
         title=job.get("title", folder.name),
         command=job.get("command", ""),
-        reading=html.escape(reading),
+        reading=reading,
         tables=[
             *tables,
             *learned_table(doc, "shapes"),

@@ -52,7 +52,7 @@ from motion_envs.envs._common import (
     check_seed,
     has_render_mode,
 )
-from motion_envs.envs._reach import reset_labels
+from motion_envs.envs._reach import TrajectoryLabelsMixin, reset_labels
 from motion_envs.models.person_calibration import SUMMARY_BOUND, SUMMARY_SINES
 
 __all__ = [
@@ -301,7 +301,7 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         raise NotImplementedError
 
 
-class CoefficientVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
+class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv):
     """``num_envs`` copies of a coefficient environment, scored in one batch.
 
     Sub-environment ``i`` is bit-identical to a single environment made with the same
@@ -347,6 +347,7 @@ class CoefficientVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
         self.envs = [first] + [first.twin() for _ in range(self.num_envs - 1)]
         self.single = first
+        self._labels = first._labels
         self.single_action_space = first.action_space
         self.single_observation_space = first.observation_space
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -393,7 +394,7 @@ class CoefficientVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
                 t = traj[i]
                 sub["trajectory"] = int(t) if np.asarray(t).dtype.kind in "iu" else t
             obs[i], info = self.envs[i].reset(seed=seeds[i], options=sub or None)
-            infos = self._add_info(infos, info, i)
+            infos = self._add_info(infos, self._numeric(info), i)
             self._autoreset[i] = False
         self._started = True
         self._obs = obs.copy()
@@ -447,10 +448,14 @@ class CoefficientVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
                     final = {"final_obs": obs[i].copy(), "final_info": info}
                     infos = self._add_info(infos, final, i)
                     obs[i], info = env.reset()
-            infos = self._add_info(infos, info, i)
+            infos = self._add_info(infos, self._numeric(info), i)
         self._autoreset = terminated | truncated
         self._obs = obs.copy()
         return obs, rewards, terminated, truncated, infos
+
+    def _numeric(self, info: dict[str, Any]) -> dict[str, Any]:
+        """A single environment's info without its text (:attr:`trajectory_labels`)."""
+        return {k: v for k, v in info.items() if k not in self._labels}
 
     def close_extras(self, **kwargs: Any) -> None:
         for env in self.envs:

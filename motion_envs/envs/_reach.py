@@ -60,6 +60,7 @@ __all__ = [
     "ReachEnv",
     "ReachKind",
     "ReachTask",
+    "TrajectoryLabelsMixin",
     "checked_prediction",
     "observation_table",
     "reset_labels",
@@ -152,6 +153,21 @@ def reset_labels(task: Any) -> dict[str, NDArray[np.object_]]:
         for key, attr in fields.items()
         if hasattr(task, attr)
     }
+
+
+class TrajectoryLabelsMixin:
+    """A vector environment whose infos carry only ``trajectory_index``: the text of the
+    single environment's reset info is looked up here."""
+
+    _labels: dict[str, NDArray[np.object_]]
+
+    @property
+    def trajectory_labels(self) -> dict[str, NDArray[np.object_]]:
+        """The text of the single environment's reset info by trajectory:
+        ``trajectory_labels["trajectory_id"][infos["trajectory_index"][i]]`` (also
+        ``"task"``, and ``"subject"`` for orientation). Every value in the vector infos is
+        numeric, so array converters such as Gymnasium's ``NumpyToTorch`` take them."""
+        return dict(self._labels)
 
 
 class ReachTask:

@@ -28,7 +28,7 @@ from motion_envs.envs._common import (
     check_max_episode_steps,
     check_num_envs,
 )
-from motion_envs.envs._reach import ReachEnv, ReachKind, reset_labels
+from motion_envs.envs._reach import ReachEnv, ReachKind, TrajectoryLabelsMixin, reset_labels
 
 __all__ = ["ReachVectorEnv"]
 
@@ -47,7 +47,7 @@ _POOL = 64  # trajectory draws per sub-environment taken from its generator at o
 _SCALAR_BELOW = 8
 
 
-class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
+class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv):
     """``num_envs`` copies of a single reaching environment, stepped together.
 
     A kind module subclasses it and sets ``single_class`` (its
@@ -133,7 +133,8 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
         N = self.num_envs
         self._action_shape: tuple[int, ...] = (N, *self.single_action_space.shape)  # type: ignore[misc]
         self._rngs: list[np.random.Generator | None] = [None] * N
-        # text entries of the single environments' reset infos, per trajectory
+        # text entries of the single environments' reset infos, per trajectory (not in
+        # the vector infos: trajectory_labels)
         self._labels = reset_labels(task)
         self._started = False
         self._arange = np.arange(N)
@@ -302,8 +303,9 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
 
     def _add_reset_infos(self, info: dict[str, Any], reset: NDArray[np.bool_]) -> None:
         """Add the reset infos of the sub-environments under ``reset`` to ``info``,
-        batched as ``SyncVectorEnv`` batches the single environments' reset infos
-        (called only when some sub-environment was reset: no per-step work)."""
+        batched as ``SyncVectorEnv`` batches the single environments' numeric reset
+        infos (the text: :attr:`trajectory_labels`; called only when some
+        sub-environment was reset: no per-step work)."""
         idx = self._si[:, _IDX]
         info["trajectory_index"] = np.where(reset, idx, 0)
         info["_trajectory_index"] = reset
@@ -313,11 +315,6 @@ class ReachVectorEnv(JsonSpecMixin, gym.vector.VectorEnv):
             drawn[envs] = self._drawn[envs]
             info["calibration_trajectories"] = drawn
             info["_calibration_trajectories"] = reset
-        for key, labels in self._labels.items():
-            column = np.full(self.num_envs, None, dtype=object)
-            column[envs] = labels[idx[envs]]
-            info[key] = column
-            info["_" + key] = reset
 
     def _observe(self) -> NDArray[np.float32]:
         si = self._si

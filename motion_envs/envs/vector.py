@@ -45,11 +45,17 @@ the same ``ValueError`` as the single environment's (the checks of
 :mod:`motion_envs.envs._common`); a non-numeric ``actions`` (dict, string, complex)
 raises ``ValueError``.
 
-The juggling ids have no native vector environment: their ``vector_entry_point``,
+The text of the single environments' reset infos is not in the vector infos, so that
+every value there is numeric (array converters such as Gymnasium's ``NumpyToTorch``
+take them): ``venv.trajectory_labels[key][infos["trajectory_index"][i]]`` gives it back.
+
+Juggling-v0 has no native vector environment: its ``vector_entry_point``,
 :func:`juggling_vector_env`, builds a :class:`gymnasium.vector.SyncVectorEnv` of
 ``gym.make(id, **kwargs)`` copies, so ``gym.make_vec(id, N, autoreset_mode=...)`` takes
 the same keyword as the reaching ids (it would otherwise reach the single
-environment's constructor and be refused).
+environment's constructor and be refused); each copy reports its ``phase`` as an index
+of :data:`~motion_envs.envs.juggling.PHASE_NAMES`, as the native juggling vector envs
+do (:class:`~motion_envs.envs.juggling.NumericInfo`).
 """
 
 from __future__ import annotations
@@ -80,9 +86,11 @@ def juggling_vector_env(
 ) -> gym.vector.SyncVectorEnv:
     """``SyncVectorEnv`` of ``num_envs`` copies of ``gym.make(env_id, **kwargs)`` with
     ``autoreset_mode`` (an ``AutoresetMode`` or its value)."""
+    from motion_envs.envs.juggling import NumericInfo  # MuJoCo: only when asked for
+
     n = check_num_envs(num_envs)
     mode = check_autoreset_mode(autoreset_mode)
-    env_fns = [lambda: gym.make(env_id, **kwargs) for _ in range(n)]
+    env_fns = [lambda: NumericInfo(gym.make(env_id, **kwargs)) for _ in range(n)]
     return gym.vector.SyncVectorEnv(env_fns, autoreset_mode=mode)
 
 

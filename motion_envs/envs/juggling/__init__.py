@@ -52,7 +52,12 @@ from motion_envs.envs.juggling._v1_env import (
 )
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._v1_vector import JugglingV1VectorEnv
-from motion_envs.envs.juggling._vector import JugglingVectorEnv
+from motion_envs.envs.juggling._vector import (
+    PHASE_NAMES,
+    JugglingVectorEnv,
+    NumericInfo,
+    numeric_info,
+)
 from motion_envs.envs.juggling._world import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
@@ -95,6 +100,7 @@ __all__ = [
     "MAX_BALLS",
     "OBS_DIM",
     "PAPER_GRAVITY",
+    "PHASE_NAMES",
     "POSITION_MARGIN",
     "SCENE_XML",
     "SERVO_OMEGA",
@@ -112,6 +118,7 @@ __all__ = [
     "JugglingV1VectorEnv",
     "JugglingV1World",
     "JugglingVectorEnv",
+    "NumericInfo",
     "WorldSpec",
     "cascade_obs_dim",
     "check_task",
@@ -120,5 +127,6 @@ __all__ = [
     "load_juggler",
     "load_juggling_model",
     "load_world_model",
+    "numeric_info",
     "world_mjcf",
 ]

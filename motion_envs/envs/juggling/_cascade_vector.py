@@ -56,13 +56,7 @@ from motion_envs.models.juggling import (
 __all__ = ["CascadeVectorEnv"]
 
 _TOSS, _GO_DOWN, _CATCH = PHASES.index("toss"), PHASES.index("go_down"), PHASES.index("catch")
-_NP = len(PHASES)
 _PHASE_CODES = np.array([_TOSS, _GO_DOWN, _CATCH], dtype=np.int64)
-_PHASE_NAMES = np.array(PHASES, dtype=object)
-_PHASE_PAIRS = np.empty(_NP * _NP, dtype=object)
-_PHASE_PAIRS[:] = [(a, b) for a in PHASES for b in PHASES]
-_HELD_PAIRS = np.empty(4, dtype=object)
-_HELD_PAIRS[:] = [(a, b) for a in (False, True) for b in (False, True)]
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 _SIGN = np.array([1.0, -1.0])  # x in each hand's own frame (the left hand's mirrored)
 _HIST = 4 * CASCADE_HISTORY
@@ -248,9 +242,9 @@ class CascadeVectorEnv(JugglingVectorEnv):
         obs = self._observations(envs)
         reward = sums.pop("reward")
         columns: Columns = {
-            "phase": _PHASE_NAMES[phase[:, 0]],
-            "phases": _PHASE_PAIRS[phase[:, 0] * _NP + phase[:, 1]],
-            "held": _HELD_PAIRS[held[:, 0] * 2 + held[:, 1]],
+            "phase": phase[:, 0].copy(),  # codes: _vector.numeric_info
+            "phases": phase.copy(),
+            "held": held,
             "time": time,
             "hand": q[:, 0:2].copy(),
             "hands": q[:, 0:4].reshape(m, 2, 2).copy(),

@@ -52,7 +52,6 @@ from motion_envs.models.juggling import (
 __all__ = ["JugglingV1VectorEnv"]
 
 _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
-_PHASE_NAMES = np.array(PHASES, dtype=object)
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 #: Attributes made from the worlds by ``_link`` (not pickled: made again).
 _LINKED = (*WORLD_LINKS, "_trees", "_m_time", "_m_ball", "_m_ball_vel")
@@ -334,7 +333,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             "catches": counts[:, 0],
             "tosses": counts[:, 1],
             "cycles": counts[:, 1].copy(),
-            "phase": _PHASE_NAMES[self._phase[envs]],
+            "phase": self._phase[envs],  # codes: _vector.numeric_info
             "held": self._flags[envs, 0],
             "time": time,
             "hand": self._hand[envs],

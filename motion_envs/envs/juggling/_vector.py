@@ -21,7 +21,16 @@ Autoreset (``autoreset_mode=``, as ``SyncVectorEnv``):
   one raises ``RuntimeError``).
 
 Infos: ``infos[key]`` is an ``(N, ...)`` array and ``infos["_" + key]`` marks the
-sub-environments it applies to; entries outside the mask are unspecified.
+sub-environments it applies to; entries outside the mask are unspecified. Every value is
+numeric (array converters such as Gymnasium's ``NumpyToTorch`` take them): the single
+environment's text ``phase`` is its index in :data:`PHASE_NAMES` (int64), Cascade-v0's
+``phases`` an ``(N, 2)`` int64 array of such indices and its ``held`` an ``(N, 2)`` bool
+array (:func:`numeric_info`); ``venv.phase_names`` is the lookup.
+
+Episode length (``max_episode_steps=K``, as ``gym.make_vec(id, N, max_episode_steps=K)``
+passes it): a sub-environment's episode is also truncated at its ``K``-th step, as
+``TimeLimit`` truncates a single environment made with ``max_episode_steps=K``; ``None``
+(the registration's) keeps only the environment's own end (``max_catches``, time limit).
 
 Threads (``threads=``, numba backend): the worlds' control periods (MuJoCo's ``mj_step``
 and the servo, the bulk of a step) run in up to ``threads`` threads, each on its own
@@ -36,7 +45,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, ClassVar
+from typing import Any, ClassVar, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -44,10 +53,27 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from motion_envs.envs._common import as_action, check_autoreset_mode, check_num_envs
+from motion_envs.datasets.juggling import PHASES
+from motion_envs.envs._common import (
+    as_action,
+    check_autoreset_mode,
+    check_max_episode_steps,
+    check_num_envs,
+)
 from motion_envs.envs._kernels import numba_available
 
-__all__ = ["WORLD_LINKS", "Columns", "JugglingVectorEnv"]
+__all__ = [
+    "PHASE_NAMES",
+    "WORLD_LINKS",
+    "Columns",
+    "JugglingVectorEnv",
+    "NumericInfo",
+    "numeric_info",
+]
+
+#: The lookup of the vector infos' phase codes: ``infos["phase"] == PHASE_NAMES.index(name)``.
+PHASE_NAMES: tuple[str, ...] = PHASES
+_PHASE_CODE = {name: code for code, name in enumerate(PHASE_NAMES)}
 
 _BACKENDS = ("auto", "numba", "python")
 #: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
@@ -79,6 +105,9 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
     threads : int or None
         Threads stepping the worlds' control periods (numba backend): ``None`` (default)
         uses the CPUs this process may run on, ``1`` none but the caller's.
+    max_episode_steps : int or None
+        Steps after which an episode is also truncated, as ``TimeLimit`` (``None``, the
+        default: the environment's own end only).
     **kwargs
         The single environment's keyword arguments (``level``, ``controller``, ...),
         checked by ``single_class``.
@@ -96,6 +125,8 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
     #: Whether the subclass batches the episodes with numba (``_setup_arrays``,
     #: ``_link``, ``_after_reset``, ``_step_batch``).
     _batched: ClassVar[bool] = False
+    #: The lookup of the infos' ``phase`` (and ``phases``) codes.
+    phase_names: ClassVar[tuple[str, ...]] = PHASE_NAMES
 
     def __init__(
         self,
@@ -103,6 +134,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         backend: str = "auto",
         threads: int | None = None,
+        max_episode_steps: int | None = None,
         **kwargs: Any,
     ) -> None:
         if backend not in _BACKENDS:
@@ -115,6 +147,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
         n = check_num_envs(num_envs)
         mode = check_autoreset_mode(autoreset_mode)
+        self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
         first = self.single_class(**kwargs)  # checks the arguments once
         self.envs: list[Any] = [first] + [self.single_class(**kwargs) for _ in range(n - 1)]
         self.num_envs = n
@@ -131,6 +164,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         self._obs = np.zeros((n, *obs_shape), dtype=np.float32)
         self._ended = np.zeros(n, dtype=bool)
         self._started = np.zeros(n, dtype=bool)
+        self._elapsed = np.zeros(n, dtype=np.int64)  # steps since the reset (TimeLimit's)
         self._arange = np.arange(n)
         self.threads = threads
         self._pool: ThreadPoolExecutor | None = None
@@ -304,8 +338,9 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         self._obs[i] = obs
         self._ended[i] = False
         self._started[i] = True
+        self._elapsed[i] = 0
         self._after_reset(i)
-        return info
+        return numeric_info(info)
 
     def _after_reset(self, i: int) -> None:
         """Hook: sub-environment ``i`` was reset (a batched step loads its state here)."""
@@ -330,6 +365,8 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         infos: dict[str, Any] = {}
         if stepped.size:
             obs, rew, term, trunc, columns = self._step_batch(stepped, a[stepped])
+            self._elapsed[stepped] += 1
+            trunc = trunc | (self._elapsed[stepped] >= self._max_steps)  # TimeLimit's
             self._obs[stepped] = obs
             rewards[stepped], terminated[stepped], truncated[stepped] = rew, term, trunc
             ended = term | trunc
@@ -401,10 +438,26 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             env.close()
 
 
+def numeric_info(info: dict[str, Any]) -> dict[str, Any]:
+    """A single juggling environment's ``info`` with its text as numbers: ``phase`` (a
+    name of :data:`PHASE_NAMES`) -> its index; ``phases`` (a name per hand) -> an int64
+    array of indices; ``held`` (a flag per hand) -> a bool array. Other values as they
+    are."""
+    out = dict(info)
+    if isinstance(out.get("phase"), str):
+        out["phase"] = _PHASE_CODE[out["phase"]]
+    if isinstance(out.get("phases"), (tuple, list)):
+        out["phases"] = np.array([_PHASE_CODE[p] for p in out["phases"]], dtype=np.int64)
+    if isinstance(out.get("held"), (tuple, list)):
+        out["held"] = np.array(out["held"], dtype=bool)
+    return out
+
+
 def _columns(infos: list[dict[str, Any]]) -> Columns:
-    """Info dicts of single steps (same keys) as columns, typed as ``_add_info`` types
-    them (``float`` to float64, ``int`` to int64, ``bool`` to bool, arrays stacked,
-    anything else an object array)."""
+    """Info dicts of single steps (same keys) as columns (their text as numbers,
+    :func:`numeric_info`), typed as ``_add_info`` types them (``float`` to float64,
+    ``int`` to int64, ``bool`` to bool, arrays stacked, anything else an object array)."""
+    infos = [numeric_info(info) for info in infos]
     out: Columns = {}
     for key, first in infos[0].items():
         values = [info[key] for info in infos]
@@ -429,3 +482,18 @@ def _row(columns: Columns, j: int) -> dict[str, Any]:
             value.item() if isinstance(value, np.generic) else value
         )  # fmt: skip
     return row
+
+
+class NumericInfo(gym.Wrapper[Any, Any, Any, Any]):
+    """A juggling environment whose infos hold numbers only: ``phase`` as its index in
+    :data:`PHASE_NAMES` (``phase_names``, the lookup)."""
+
+    phase_names: ClassVar[tuple[str, ...]] = PHASE_NAMES
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        obs, info = self.env.reset(**kwargs)
+        return obs, numeric_info(info)
+
+    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        return obs, reward, terminated, truncated, numeric_info(info)
