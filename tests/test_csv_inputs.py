@@ -212,3 +212,40 @@ def test_gzip_csv_still_reads(tmp_path):
     Path(tmp_path / "bad.csv.gz").write_bytes(gzip.compress(_text(P_HEADER, _set(_PA, 1, 4, "x"))))
     with pytest.raises(ValueError, match=r"line\(s\) 3 "):
         read_position_csv(tmp_path / "bad.csv.gz")
+
+
+def test_a_semicolon_or_tab_separated_file_is_named_as_such(tmp_path):
+    """A spreadsheet set to a decimal comma saves "CSV" with ';' (and '1,5'): the header
+    is then one column and every column is "missing"; the message says why."""
+    semi = _text(O_HEADER.replace(",", ";"), [r.replace(",", ";") for r in _A]).replace(b".", b",")
+    tab = _text(P_HEADER.replace(",", "\t"), [r.replace(",", "\t") for r in _PA])
+    for name, content, loader, said in [
+        ("semi.csv", semi, read_orientation_csv, "';'-separated"),
+        ("tab.csv", tab, read_position_csv, "tab-separated"),
+    ]:
+        path = tmp_path / name
+        path.write_bytes(content)
+        with pytest.raises(ValueError, match="missing column") as err:
+            loader(path)
+        assert said in str(err.value) and "comma-separated" in str(err.value)
+    # a comma-separated file missing a column gets no such hint
+    path = tmp_path / "short.csv"
+    path.write_bytes(_text(P_HEADER.replace(",y", ""), [r.rsplit(",", 1)[0] for r in _PA]))
+    with pytest.raises(ValueError, match=r"missing column\(s\) \['y'\]") as err:
+        read_position_csv(path)
+    assert "separated" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("magic", "what"),
+    [
+        (b"PK\x03\x04\x14\x00\x06\x00", "Excel workbook"),
+        (b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1", ".xls"),
+    ],
+)
+def test_an_excel_workbook_is_named_as_such(tmp_path, magic, what):
+    path = tmp_path / "data.csv"
+    path.write_bytes(magic + b"\x00" * 64)
+    with pytest.raises(ValueError, match=what) as err:
+        read_orientation_csv(path)
+    assert "CSV (comma delimited)" in str(err.value)

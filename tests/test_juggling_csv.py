@@ -203,3 +203,23 @@ def test_bench_with_absurd_data_fails_with_one_line(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert "plausible range" in err and len(err.strip().splitlines()) == 1, err
     assert "nan" not in out and "inf" not in out
+
+
+def test_too_few_cycles_says_why_eight():
+    """The split's minimum is explained, and it is the right one: of 8 complete cycles
+    the default split keeps 6 to fit, as many as the juggler's fit needs per phase."""
+    from motion_envs.datasets.juggling import MIN_SPLIT_CYCLES, split_cycles
+    from motion_envs.models.juggling import FIT_TEST_FRACTION, AnalyticJuggler
+
+    few = generate_demonstrations(n_cycles=MIN_SPLIT_CYCLES - 1, seed=5)
+    assert len(few.cycles()) < MIN_SPLIT_CYCLES
+    with pytest.raises(ValueError, match="at least 8 are needed: ") as err:
+        split_cycles(few, FIT_TEST_FRACTION, 0)
+    assert "6 training cycles" in str(err.value) and "a quarter" in str(err.value)
+    enough = generate_demonstrations(n_cycles=MIN_SPLIT_CYCLES, seed=5)
+    assert len(enough.cycles()) == MIN_SPLIT_CYCLES
+    train, test = split_cycles(enough, FIT_TEST_FRACTION, 0)
+    assert (len(train), len(test)) == (6, 2)
+    AnalyticJuggler(n_sines=4).fit(enough, train)  # 6 training cycles: enough
+    with pytest.raises(ValueError, match="at least 6 are needed"):
+        AnalyticJuggler(n_sines=4).fit(enough, set(sorted(train)[:5]))

@@ -7,6 +7,7 @@ import argparse
 import csv
 import math
 import time
+from pathlib import Path
 
 from baselines import options
 from baselines.agents.checks import run_folder
@@ -34,6 +35,7 @@ from motion_envs.datasets.juggling import (
     siteswap_balls,
 )
 from motion_envs.datasets.registry import describe_names
+from motion_envs.datasets.sample_table import missing_columns_message, not_text_message
 from motion_envs.models.juggling import LEVELS
 
 
@@ -172,14 +174,22 @@ def juggling_data(text: str) -> str:
         with path.open(encoding="utf-8", newline="") as fh:
             header = next(csv.reader([fh.readline()]), [])
     except UnicodeDecodeError:
-        raise argparse.ArgumentTypeError(f"{text} is not a UTF-8 text CSV") from None
+        raise argparse.ArgumentTypeError(_not_text(text, path)) from None
     missing = [c for c in ("t", "x", "z") if c not in [h.strip() for h in header]]
     if missing:
+        expected = "t,x,z[,ball_x,ball_z][,phase][,recording]"
         raise argparse.ArgumentTypeError(
-            f"{text}: line 1: missing column(s) {missing}; expected header "
-            "t,x,z[,ball_x,ball_z][,phase][,recording]"
+            missing_columns_message(f"{text}: line 1", header, missing, expected)
         )
     return str(path)
+
+
+def _not_text(text: str, path: Path) -> str:
+    """Why ``path`` is not a UTF-8 CSV (a spreadsheet workbook is named as one)."""
+    with path.open("rb") as fh:
+        head = fh.read(8)
+    message = not_text_message(text, head)
+    return message if "workbook" in message else f"{text} is not a UTF-8 text CSV"
 
 
 def analyse_source(text: str) -> str:
@@ -205,12 +215,12 @@ def analyse_source(text: str) -> str:
         with path.open(encoding="utf-8", newline="") as fh:
             header = next(csv.reader([fh.readline()]), [])
     except UnicodeDecodeError:
-        raise argparse.ArgumentTypeError(f"{text} is not a UTF-8 text CSV") from None
+        raise argparse.ArgumentTypeError(_not_text(text, path)) from None
     missing = [c for c in ("t", "ball_x", "ball_z") if c not in [h.strip() for h in header]]
     if missing:
+        expected = "t,x,z,ball_x,ball_z[,recording] (or give a .c3d/.bvh/.tsv recording)"
         raise argparse.ArgumentTypeError(
-            f"{text}: line 1: missing column(s) {missing}; a juggling CSV with the ball "
-            "(t,x,z,ball_x,ball_z[,recording]) or a .c3d/.bvh/.tsv recording"
+            missing_columns_message(f"{text}: line 1", header, missing, expected)
         )
     return str(path)
 

@@ -83,5 +83,6 @@ def check_config(config: JugglingConfig) -> None:
         raise options.ConfigError(
             "demo_cycles",
             f"{config.demo_cycles} cycle(s) x {config.demo_persons} person(s) of SIMULATED "
-            f"demonstrations; at least {MIN_CYCLES} complete cycles are needed",
+            f"demonstrations; at least {MIN_CYCLES} complete cycles are needed (2 to test, "
+            "6 to fit each phase's regression on 4 boundary conditions and an intercept)",
         )

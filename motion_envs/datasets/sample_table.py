@@ -49,6 +49,8 @@ __all__ = [
     "NA_STRINGS",
     "SampleTable",
     "fail_rows",
+    "missing_columns_message",
+    "not_text_message",
     "numeric_columns",
     "read_csv_exact",
     "read_csv_text",
@@ -152,6 +154,47 @@ def _fail(path: Path, mask: NDArray[np.bool_], what: str) -> NoReturn:
     raise ValueError(f"{path}: {what} on line(s) {shown} ({bad.size} row(s))")
 
 
+#: Other separators a spreadsheet's "CSV" may use, by the name said in messages.
+_SEPARATORS = {";": "';'", "\t": "tab", "|": "'|'"}
+#: The first bytes of spreadsheet workbooks, which are not CSV text.
+_WORKBOOKS = {
+    b"PK\x03\x04": "an Excel workbook (.xlsx, .xlsm) or another zip file",
+    b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1": "an Excel 97-2003 workbook (.xls)",
+}
+
+
+def missing_columns_message(
+    where: str, columns: Sequence[str], missing: Sequence[str], expected: str
+) -> str:
+    """``"{where}: missing column(s) [...]; expected header {expected}"``, and when the
+    header was read as one column holding ``;``, a tab or ``|``, why: the file is
+    separated by that character (a spreadsheet in a locale whose decimal mark is a comma
+    writes ``;``)."""
+    message = f"{where}: missing column(s) {list(missing)}; expected header {expected}"
+    names = [str(c) for c in columns]
+    if len(names) == 1:
+        for sep, said in _SEPARATORS.items():
+            if sep in names[0]:
+                return (
+                    f"{message}. The header is one column ({names[0]!r}): the file is "
+                    f"{said}-separated, not comma-separated (a spreadsheet set to a "
+                    "decimal comma writes ';'); save it as comma-separated CSV with '.' as "
+                    "the decimal mark"
+                )
+    return message
+
+
+def not_text_message(where: str, head: bytes) -> str:
+    """Why ``head`` (a file's first bytes, binary) is not a CSV: a spreadsheet workbook
+    (save the sheet as CSV) or any other binary file."""
+    for magic, what in _WORKBOOKS.items():
+        if head.startswith(magic):
+            return (
+                f"{where}: {what}, not a CSV text file; save the sheet as 'CSV (comma delimited)'"
+            )
+    return f"{where}: binary file (NUL bytes), not a CSV text file"
+
+
 def read_csv_text(
     path: str | os.PathLike[str], kind: str, label_columns: Sequence[str] = LABEL_COLUMNS
 ) -> pd.DataFrame:
@@ -180,8 +223,8 @@ def read_csv_text(
             head = fh.read(65536)
         if not head.strip():
             raise ValueError(f"{path}: empty file; expected a header line and data rows")
-        if b"\0" in head:
-            raise ValueError(f"{path}: binary file (NUL bytes), not a CSV text file")
+        if b"\0" in head or any(head.startswith(m) for m in _WORKBOOKS):
+            raise ValueError(not_text_message(str(path), head))
         try:
             head.decode("utf-8")
         except UnicodeDecodeError as exc:
@@ -362,7 +405,8 @@ def read_sample_table(
     frame = read_csv_text(p, kind)
     missing = [c for c in required if c not in frame.columns]
     if missing:
-        raise ValueError(f"{p}: missing column(s) {missing}; expected header {','.join(required)}")
+        expected = ",".join(required)
+        raise ValueError(missing_columns_message(str(p), frame.columns, missing, expected))
     if len(frame) == 0:
         raise ValueError(f"{p}: no data rows")
     for col in LABEL_COLUMNS:

@@ -36,7 +36,13 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling._records import JugglingDemos, JugglingRecording
 from motion_envs.datasets.juggling._task import PHASES, JugglingTask
-from motion_envs.datasets.sample_table import fail_rows, numeric_columns, read_csv_text, write_csv
+from motion_envs.datasets.sample_table import (
+    fail_rows,
+    missing_columns_message,
+    numeric_columns,
+    read_csv_text,
+    write_csv,
+)
 
 __all__ = [
     "JUGGLING_COLUMNS",
@@ -81,9 +87,8 @@ def read_juggling_csv(
     frame = read_csv_text(p, "juggling", _LABELS)
     missing = [c for c in JUGGLING_COLUMNS if c not in frame.columns]
     if missing:
-        raise ValueError(
-            f"{p}: missing column(s) {missing}; expected header t,x,z[,ball_x,ball_z][,phase]"
-        )
+        expected = "t,x,z[,ball_x,ball_z][,phase]"
+        raise ValueError(missing_columns_message(str(p), frame.columns, missing, expected))
     if len(frame) == 0:
         raise ValueError(f"{p}: no data rows")
     has_ball = [c in frame.columns for c in ("ball_x", "ball_z")]

@@ -26,7 +26,10 @@ FloatArray = NDArray[np.float64]
 #: The label every generated set carries in code, CLI output, results and plots.
 SIMULATED_LABEL = "SIMULATED (seeded model of a person; not human recordings)"
 
-#: Complete cycles :func:`split_cycles` needs.
+#: Complete cycles :func:`split_cycles` needs: the juggler's fit regresses each phase's
+#: coefficients on 4 boundary conditions and an intercept (5 unknowns) and needs 6
+#: training cycles, one to spare; the default split holds a quarter out for testing, so
+#: 8 cycles leave 6 to fit and 2 to test.
 MIN_SPLIT_CYCLES = 8
 #: First reset seed of each split's episodes of the juggling environments: episode ``i`` of
 #: ``split`` is reset with seed ``SPLIT_SEEDS[split] + i`` (:func:`episode_seeds`), so
@@ -144,7 +147,10 @@ def split_cycles(
     cycles = demos.cycles()
     if len(cycles) < MIN_SPLIT_CYCLES:
         raise ValueError(
-            f"{demos.name}: {len(cycles)} complete cycles; at least {MIN_SPLIT_CYCLES} are needed"
+            f"{demos.name}: {len(cycles)} complete cycle(s); at least {MIN_SPLIT_CYCLES} are "
+            "needed: the default split holds a quarter out for testing and the juggler's "
+            "fit needs 6 training cycles (each phase regressed on 4 boundary conditions "
+            "and an intercept, with one cycle to spare)"
         )
     order = np.random.default_rng(seed).permutation(len(cycles))
     n_test = max(1, round(test_fraction * len(cycles)))

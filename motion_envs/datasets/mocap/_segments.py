@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from motion_envs.datasets.sample_table import read_csv_exact
+from motion_envs.datasets.sample_table import missing_columns_message, read_csv_exact
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["SegmentRow", "read_segments", "speed", "speed_segments"]
@@ -97,7 +97,8 @@ def read_segments(path: str | os.PathLike[str]) -> list[SegmentRow]:
         raise ValueError(f"{p}: not a segments CSV ({' '.join(str(exc).split())})") from None
     missing = [c for c in ("start", "end") if c not in frame.columns]
     if missing:
-        raise ValueError(f"{p}: missing column(s) {missing}; expected start,end[,subject,task]")
+        expected = "start,end[,subject,task]"
+        raise ValueError(missing_columns_message(str(p), frame.columns, missing, expected))
     times = frame[["start", "end"]].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
     rows = []
     for i, (start, end) in enumerate(times):
