@@ -63,7 +63,6 @@ EXTRA_OF_MODULE: dict[str, tuple[str, str]] = {
     "safetensors": ("learned", "safetensors"),
     "movement_primitives": ("peers", "movement-primitives"),
     "pytransform3d": ("peers", "pytransform3d"),
-    "rliable": ("stats", "rliable"),
     "ray": ("sweep", "ray"),
     "optuna": ("sweep", "optuna"),
     "numba": ("fast", "numba"),

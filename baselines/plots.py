@@ -189,14 +189,16 @@ def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None, demo
     rows = math.ceil(len(shapes) / cols)
     fig = new_figure(2.35 * cols + 0.4, 2.3 * rows + 1.0)
     axes = np.atleast_2d(fig.subplots(rows, cols, squeeze=False))
+    dims = int(next(iter(doc["_truth"].values())).shape[-1]) if shapes else 2
     for ax, shape in zip(axes.ravel(), shapes, strict=False):
         truth = doc["_truth"][shape]
         k = min(demo, truth.shape[0] - 1)
-        y = truth[k]
+        view = _plane(truth[k])  # x-y in 2-D; the demonstration's own plane in 3-D
+        y = truth[k] @ view
         ax.plot(y[:, 0], y[:, 1], color="black", lw=2.2, label="held-out demonstration")
         for method in methods:
             style = METHOD_STYLE.get(method, {"color": "C4", "ls": "-", "label": method})
-            pred = doc["_predictions"][shape][method][k]
+            pred = doc["_predictions"][shape][method][k] @ view
             ax.plot(
                 pred[:, 0],
                 pred[:, 1],
@@ -218,17 +220,39 @@ def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None, demo
         ax.grid(alpha=0.25)
     for ax in axes.ravel()[len(shapes) :]:
         ax.axis("off")
+    names = ("x", "y") if dims == 2 else ("1st direction", "2nd direction")
     for ax in axes[:, 0]:
-        ax.set_ylabel(f"y ({unit})", fontsize=8)
+        ax.set_ylabel(f"{names[1]} ({unit})", fontsize=8)
     for ax in axes[-1, :]:
-        ax.set_xlabel(f"x ({unit})", fontsize=8)
+        ax.set_xlabel(f"{names[0]} ({unit})", fontsize=8)
     handles, labels = axes.ravel()[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
     split = doc.get("split", {}).get("split", "loo")
     scored = "leave one demonstration out" if split == "loo" else f"{split} split"
+    view = (
+        ""
+        if dims == 2
+        else f"\n{dims}-D data, each panel in its demonstration's plane of largest spread "
+        "(its two principal directions)"
+    )
     fig.suptitle(
         f"{doc.get('dataset', '')}: one held-out demonstration per shape and each method's "
-        f"prediction of it from its start, end and duration ({scored})",
+        f"prediction of it from its start, end and duration ({scored}){view}",
         fontsize=10,
     )
     return fig
+
+
+def _plane(path: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(D, 2)``: the axes a panel draws ``path`` ``(n, D)`` in: x and y for 2-D data;
+    for 3-D or more, the path's two principal directions (the plane it spreads most in),
+    signed so that the first points from its start towards its end."""
+    d = path.shape[1]
+    if d <= 2:
+        return np.eye(d, 2)
+    centred = path - path.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    basis = vt[:2].T.copy()
+    if (path[-1] - path[0]) @ basis[:, 0] < 0:
+        basis[:, 0] *= -1
+    return basis

@@ -69,6 +69,38 @@ def test_shapes_figure_one_demonstration_and_every_method_per_panel():
     assert [METHOD_STYLE[m]["label"] for m in methods] == labels[1 : 1 + len(methods)]
 
 
+def test_shapes_figure_draws_3d_data_in_their_own_plane():
+    """Once, 3-D recordings were drawn in x-y only: a reach in the x-z plane became a line.
+    Now each panel is the demonstration's plane of largest spread: a planar path keeps its
+    shape (every distance between its points), and the predictions share the view."""
+    from scipy.spatial.distance import pdist
+
+    t = np.linspace(0, np.pi, 30)
+    demo = np.stack([np.cos(t), 0.01 * t, 0.5 * np.sin(t)], axis=1)  # nearly the x-z plane
+    planar = demo.copy()
+    planar[:, 1] = 0.0
+    truth = {"reach": np.stack([planar, demo])}
+    preds = {"reach": {"line": truth["reach"] + 0.1}}
+    doc = {
+        "dataset": "rec.c3d",
+        "unit": "m",
+        "methods": ["line"],
+        "split": {"split": "loo"},
+        "_truth": truth,
+        "_predictions": preds,
+    }
+    fig = shapes_figure(doc)
+    (panel,) = [ax for ax in fig.axes if ax.get_title()]
+    drawn = [ln for ln in panel.get_lines() if ln.get_label() not in ("start", "end")]
+    xy = np.stack([drawn[0].get_xdata(), drawn[0].get_ydata()], axis=1)
+    np.testing.assert_allclose(pdist(xy), pdist(planar), atol=1e-12)
+    shifted = np.stack([drawn[1].get_xdata(), drawn[1].get_ydata()], axis=1)
+    np.testing.assert_allclose(pdist(shifted), pdist(planar + 0.1), atol=1e-12)
+    assert xy[-1, 0] > xy[0, 0]  # the first direction points from start to end
+    assert "principal directions" in fig._suptitle.get_text()
+    assert panel.get_xlabel() == "1st direction (m)"
+
+
 def test_learned_ratio_figure_is_readable():
     """Once: 5 pt labels rotated 90 degrees, subjects sorted as text (10 before 9), no
     colour legend, row ids as titles."""

@@ -224,6 +224,9 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
         "deviation_ratio": agent.deviation / nominal.deviation,
         "phase_deviation": {p: agent.phase_deviation(p) for p in phases},
         "nominal_phase_deviation": {p: nominal.phase_deviation(p) for p in phases},
+        # segments per phase: the pooled deviation weighs the phases by these counts
+        "phase_segments": {p: int(np.sum(agent.segment_phase == p)) for p in phases},
+        "nominal_phase_segments": {p: int(np.sum(nominal.segment_phase == p)) for p in phases},
         "deviation_reference": (
             "held-out demonstrations" if split == "test" else "training demonstrations"
         ),
