@@ -69,9 +69,9 @@ def main(argv: list[str] | None = None) -> int:
         y = y_all[ds.tasks == shape]
         q = y[:, 0]  # conditions: start (LASA ends are all at the origin)
         start, goal = y[0, 0], y[0, -1]
-        model = SineSeriesRegression(args.n_sines).fit(list(y), q, times="normalised")
+        model = SineSeriesRegression(args.n_sines).fit(q, list(y), times="normalised")
         record("lippi", "fit", _median_time(lambda y=y, q=q: SineSeriesRegression(
-            args.n_sines).fit(list(y), q, times="normalised"), args.repeats))  # fmt: skip
+            args.n_sines).fit(q, list(y), times="normalised"), args.repeats))  # fmt: skip
         record("lippi", "generate", _median_time(
             lambda m=model, s=start, g=goal: ss.evaluate(m.predict_coefficients(s, s, g), tau),
             args.repeats))  # fmt: skip

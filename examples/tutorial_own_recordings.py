@@ -74,7 +74,7 @@ print(len(dataset.positions), "movements of", [len(p) for p in dataset.positions
 # movements and predict those from their conditions alone.
 reaches = [np.asarray(p) for p in dataset.positions]
 conditions = np.array([p[-1] - p[0] for p in reaches])
-model = SineSeriesRegression(n_sines=4).fit(reaches[:-2], conditions[:-2], rate=rate)
+model = SineSeriesRegression(n_sines=4).fit(conditions[:-2], reaches[:-2], rate=rate)
 for p, q in zip(reaches[-2:], conditions[-2:], strict=True):
     tau = np.linspace(0, 1, len(p))
     duration = (len(p) - 1) / rate

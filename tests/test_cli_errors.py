@@ -84,7 +84,7 @@ CASES = [
     (["orientation", "--test-fraction", "1.5"], "argument --test-fraction: expected a number"),
     (["orientation", "--split", "middle"], "argument --split: invalid choice"),
     (["orientation", "--dat", "vr-kitchen"], "unrecognized arguments: --dat"),
-    (["orientation", "--min-deg", "179"], "argument --min-deg: 400 of 400 trajectories rotate less"),
+    (["orientation", "--min-deg", "179"], "argument --min-deg: 400 of 400 trajectories"),
     (["orientation", "--learned", "fast"], "argument --learned: invalid choice: 'fast'"),
     (["orientation", "--learned"], "argument --learned: expected one argument"),
     (["orientation", "--up", "0,1"], "argument --up: expected three finite numbers 'x,y,z'"),

@@ -54,8 +54,8 @@ def fitted_models() -> list[SerializableModel]:
         TaskBezierModel(3).fit(R, tasks=labels),
         SubjectBezierModel(2, unseen="global").fit(R, subjects=labels),
         LinearBezierModel(2).fit(R, predictors={"age": rng.normal(size=12)}),
-        SineSeriesRegression(n_sines=3).fit(y, q, times="normalised"),
-        OrientationModel(degree=3, by="task").fit(_turns(), rate=50.0, tasks=labels),
+        SineSeriesRegression(n_sines=3).fit(q, y, times="normalised"),
+        OrientationModel(degree=3, by="task").fit(labels, _turns(), rate=50.0),
     ]
 
 

@@ -65,7 +65,7 @@ def _turns(seed: int = 6):
 @pytest.fixture(scope="module")
 def position_case():
     ys, q, subjects, tasks = _reaches()
-    model = SineSeriesRegression(n_sines=3).fit(ys, q, rate=RATE)
+    model = SineSeriesRegression(n_sines=3).fit(q, ys, rate=RATE)
     return model, ys, q, subjects, tasks
 
 
@@ -124,7 +124,7 @@ def test_fit_summary_per_subject_and_task_against_a_hand_computed_groupby(positi
 
 def test_orientation_fit_errors_are_scipy_rotation_angles():
     qs, subjects = _turns()
-    model = OrientationModel(degree=3, by="subject").fit(qs, rate=RATE, subjects=subjects)
+    model = OrientationModel(degree=3, by="subject").fit(subjects, qs, rate=RATE)
     errors = orientation_fit_errors(model, qs, rate=RATE, subjects=subjects)
     assert errors.kind == "orientation" and errors.unit == "rad"
     for i, q in enumerate(qs):
@@ -136,7 +136,7 @@ def test_orientation_fit_errors_are_scipy_rotation_angles():
     summary = fit_summary(errors, subjects)
     assert summary["n_trajectories"].tolist() == [3, 3, 3]
     # the wobble differs by subject: the subject model beats the null model
-    null = OrientationModel(degree=3).fit(qs, rate=RATE)
+    null = OrientationModel(degree=3).fit(None, qs, rate=RATE)
     assert errors.criterion < 0.5 * orientation_fit_errors(null, qs, rate=RATE).criterion
 
 
@@ -187,7 +187,7 @@ def test_plot_position_fit_shows_data_fit_and_the_marked_criterion(position_case
 
 def test_plot_orientation_fit_has_four_quaternion_panels():
     qs, subjects = _turns()
-    model = OrientationModel(degree=3, by="subject").fit(qs, rate=RATE, subjects=subjects)
+    model = OrientationModel(degree=3, by="subject").fit(subjects, qs, rate=RATE)
     errors = orientation_fit_errors(model, qs, rate=RATE, subjects=subjects)
     fig = plot_fit(errors)
     assert [ax.get_ylabel() for ax in fig.axes] == ["w", "x", "y", "z", "error (rad)"]

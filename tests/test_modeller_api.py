@@ -53,7 +53,7 @@ def reaches():
 @pytest.fixture(scope="module")
 def sine_model(reaches):
     ys, ts, q, _ = reaches
-    return SineSeriesRegression(n_sines=6).fit(ys, q, times=ts)
+    return SineSeriesRegression(n_sines=6).fit(q, ys, times=ts)
 
 
 # -- 1. eq. 9: safe by default ---------------------------------------------------------
@@ -189,15 +189,15 @@ def test_segmentation_smooths_noise_before_differentiating():
 def test_fit_requires_times_or_rate(reaches):
     ys, ts, q, _ = reaches
     with pytest.raises(ValueError, match=r"times=.*rate="):
-        SineSeriesRegression(n_sines=6).fit(ys, q)
+        SineSeriesRegression(n_sines=6).fit(q, ys)
     with pytest.raises(ValueError, match="sample indices are not seconds"):
-        SineSeriesRegression(n_sines=6).fit(ys, q, times=[np.arange(len(y)) for y in ys])
-    by_rate = SineSeriesRegression(n_sines=6).fit(ys, q, rate=RATE)
-    by_times = SineSeriesRegression(n_sines=6).fit(ys, q, times=ts)
+        SineSeriesRegression(n_sines=6).fit(q, ys, times=[np.arange(len(y)) for y in ys])
+    by_rate = SineSeriesRegression(n_sines=6).fit(q, ys, rate=RATE)
+    by_times = SineSeriesRegression(n_sines=6).fit(q, ys, times=ts)
     np.testing.assert_allclose(by_rate.durations_, [t[-1] for t in ts], rtol=1e-12)
     np.testing.assert_allclose(by_rate.F_, by_times.F_, atol=1e-12)
     assert 0.8 <= by_rate.durations_.min() and by_rate.durations_.max() < 1.15  # seconds
-    unit = SineSeriesRegression(n_sines=6).fit(ys, q, times="normalised")
+    unit = SineSeriesRegression(n_sines=6).fit(q, ys, times="normalised")
     np.testing.assert_array_equal(unit.durations_, 1.0)
 
 
@@ -268,7 +268,7 @@ def test_sklearn_clone_and_not_fitted_error(model):
 def test_sine_model_fit_returns_self_and_predicts_at_times(reaches, sine_model):
     ys, ts, q, _ = reaches
     model = SineSeriesRegression(n_sines=6)
-    assert model.fit(ys, q, times=ts) is model
+    assert model.fit(q, ys, times=ts) is model
     i = 5
     y_hat = sine_model.predict(q[i], ts[i][-1], ts[i], start=ys[i][0], end=ys[i][-1])
     assert y_hat.shape == ys[i].shape
@@ -310,7 +310,7 @@ def test_orientation_model_predicts_quaternions_at_given_times():
 
     qs, ts, subjects = simulated_turns()
     model = OrientationModel(degree=3, by="subject")
-    assert model.fit(qs, rate=RATE, subjects=subjects) is model
+    assert model.fit(subjects, qs, rate=RATE) is model
     i = 7
     q_hat = model.predict(qs[i][0], qs[i][-1], ts[i], subjects=[subjects[i]])
     assert q_hat.shape == (len(ts[i]), 4)
@@ -456,10 +456,16 @@ def test_minimum_jerk_model_fitted_and_predicted_like_the_others(reaches, tmp_pa
 
     ys, ts, _, _ = reaches
     model = MinimumJerk()
-    assert model.fit(ys, times=ts) is model
+    X = np.stack([np.concatenate([y[0], y[-1]]) for y in ys])  # starts and ends
+    assert model.fit(X, ys, times=ts) is model
     assert model.rmse_.shape == (len(ys),) and np.all(model.rmse_ < 0.05)
     y = model.predict(ys[0][0], ys[0][-1], ts[0], duration=ts[0][-1])
     np.testing.assert_allclose(y, minimum_jerk(ys[0][0], ys[0][-1], ts[0] / ts[0][-1]))
+    # a batch, like the other models: each movement over its own duration
+    batch = model.predict(X[:3, :3], X[:3, 3:], ts[0], duration=[t[-1] for t in ts[:3]])
+    for i in range(3):
+        u = np.minimum(ts[0] / ts[i][-1], 1.0)
+        np.testing.assert_allclose(batch[i], minimum_jerk(ys[i][0], ys[i][-1], u))
     durations = np.array([t[-1] for t in ts])
     distances = np.array([np.linalg.norm(y[-1] - y[0]) for y in ys])
     a, b = np.polyfit(distances, durations, 1)[::-1]
@@ -570,7 +576,9 @@ def test_orientation_model_save_load_round_trip(tmp_path, by):
     qs, ts, subjects = simulated_turns(n_reps=1)
     labels = {"subjects": subjects, "tasks": np.arange(len(qs)) % 4,
               "predictors": {"speed": 1 / np.array([t[-1] for t in ts])}}  # fmt: skip
-    model = OrientationModel(degree=3, by=by).fit(qs, ts, **labels)
+    X = {"null": None, "subject": subjects, "task": labels["tasks"],
+         "linear": labels["predictors"]}[by]  # fmt: skip
+    model = OrientationModel(degree=3, by=by).fit(X, qs, ts)
     again = load_model(model.save(tmp_path / "orientation.json"))
     ask = {"subjects": subjects[:2], "tasks": [0, 3], "predictors": {"speed": [1.2, 1.4]}}
     starts, ends = np.stack([q[0] for q in qs[:2]]), np.stack([q[-1] for q in qs[:2]])

@@ -44,15 +44,16 @@ def _recordings(seed: int = 8):
 @pytest.fixture(scope="module")
 def fitted():
     ys, qs, subjects = _recordings()
-    model = PoseModel(n_sines=4, degree=3, by="subject").fit(ys, qs, rate=RATE, subjects=subjects)
+    poses = [np.hstack([y, q]) for y, q in zip(ys, qs, strict=True)]  # positions, quaternion
+    model = PoseModel(n_sines=4, degree=3, by="subject").fit(subjects, poses, rate=RATE)
     return model, ys, qs, subjects
 
 
 def test_pose_model_equals_its_two_parts_fitted_alone(fitted):
     model, ys, qs, subjects = fitted
     q_cond = np.array([np.r_[y[0], y[-1]] for y in ys])
-    position = SineSeriesRegression(n_sines=4).fit(ys, q_cond, rate=RATE)
-    orientation = OrientationModel(degree=3, by="subject").fit(qs, rate=RATE, subjects=subjects)
+    position = SineSeriesRegression(n_sines=4).fit(q_cond, ys, rate=RATE)
+    orientation = OrientationModel(degree=3, by="subject").fit(subjects, qs, rate=RATE)
     t = np.linspace(0.0, 0.9, 37)
     y_s, y_e, q_s, q_e = ys[0][0], ys[0][-1], qs[0][0], qs[0][-1]
     pos, ori = model.predict(y_s, y_e, q_s, q_e, t, subjects=["b"])
@@ -101,11 +102,12 @@ def test_pose_model_follows_scikit_learn_and_saves(fitted, tmp_path):
     assert fresh.set_params(n_sines=2).n_sines == 2
     with pytest.raises(ValueError, match="by"):
         fresh.set_params(by="weekday")
-    assert fresh.fit(ys, qs, rate=RATE, subjects=subjects) is fresh
+    poses = [np.hstack([y, q]) for y, q in zip(ys, qs, strict=True)]
+    assert fresh.fit(subjects, poses, rate=RATE) is fresh
     with pytest.raises(ValueError, match=r"times=.*rate="):
-        PoseModel().fit(ys, qs)
-    with pytest.raises(ValueError, match="same samples"):
-        PoseModel().fit(ys, [q[:-1] for q in qs], rate=RATE, subjects=subjects)
+        PoseModel().fit(None, poses)
+    with pytest.raises(ValueError, match=r"y\[0\] must be \(n, D \+ 4\)"):
+        PoseModel().fit(subjects, qs, rate=RATE)
     path = model.save(tmp_path / "pose.json")
     again = load_model(path)
     assert isinstance(again, PoseModel) and again.get_params() == model.get_params()

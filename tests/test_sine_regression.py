@@ -35,7 +35,7 @@ def _synthetic(n=30, noise=0.0, seed=0, n_samples=60, n_sines=N_SINES):
 @pytest.fixture(scope="module")
 def fitted():
     ys, q, p, w = _synthetic()
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(q, ys, times="normalised")
     return model, q, p, w
 
 
@@ -52,7 +52,7 @@ def test_fit_recovers_affine_map(fitted):
 
 def test_fit_matches_lstsq_oracle_with_noise():
     ys, q, _, _ = _synthetic(n=25, noise=0.1, seed=3)
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(q, ys, times="normalised")
     design = np.column_stack([q, np.ones(len(q))])
     oracle = np.linalg.lstsq(design, model.coefficients_.reshape(len(q), -1), rcond=None)[0].T
     np.testing.assert_allclose(model.F_, oracle, atol=1e-10)
@@ -62,7 +62,7 @@ def test_rank_deficient_design_warns():
     ys, q, _, _ = _synthetic(n=10)
     q = np.column_stack([q, np.full(len(q), 3.0)])
     with pytest.warns(sr.RankDeficientDesignWarning, match=r"constant"):
-        sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
+        sr.SineSeriesRegression(n_sines=N_SINES).fit(q, ys, times="normalised")
 
 
 def test_generation_hits_requested_ends(fitted):
@@ -84,7 +84,7 @@ def test_non_uniform_times_fit(fitted):
     rng = np.random.default_rng(5)
     times = [np.concatenate([[0.0], np.sort(rng.uniform(0, 3, 40)), [3.0]]) for _ in range(len(q))]
     ys = [ss.evaluate(p[i], times[i] / 3.0) for i in range(len(q))]
-    m2 = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times=times)
+    m2 = sr.SineSeriesRegression(n_sines=N_SINES).fit(q, ys, times=times)
     np.testing.assert_allclose(m2.F_, model.F_, atol=1e-8)
     np.testing.assert_allclose(m2.durations_, 3.0)
 
@@ -222,7 +222,7 @@ def test_select_n_sines_by_cross_validation():
 
 def test_validation_statistics_against_oracles():
     ys, q, _, _ = _synthetic(n=40, noise=0.05, seed=7)
-    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(ys, q, times="normalised")
+    model = sr.SineSeriesRegression(n_sines=N_SINES).fit(q, ys, times="normalised")
     rep = model.validate()
     n, k = len(q), model.F_.shape[0]
     assert rep.F.shape == (k, 2 * DIMS + 1)
@@ -261,12 +261,14 @@ def test_bad_input():
     ys, q, _, _ = _synthetic(n=6)
     with pytest.raises(ValueError, match="NaN"):
         sr.SineSeriesRegression(2).fit(
-            ys, np.where(np.eye(6, 4, dtype=bool), np.nan, q), times="normalised"
+            np.where(np.eye(6, 4, dtype=bool), np.nan, q), ys, times="normalised"
         )
     with pytest.raises(ValueError, match="positions\\[1\\] has 3 samples"):
-        sr.SineSeriesRegression(2).fit([ys[0], ys[1][:3]], q[:2], times="normalised")
-    with pytest.raises(ValueError, match="one row per example"):
-        sr.SineSeriesRegression(2).fit(ys, q[:4], times="normalised")
+        sr.SineSeriesRegression(2).fit(q[:2], [ys[0], ys[1][:3]], times="normalised")
+    with pytest.raises(ValueError, match="X has 4 rows and y 6 movements"):
+        sr.SineSeriesRegression(2).fit(q[:4], ys, times="normalised")
+    with pytest.raises(ValueError, match="scikit-learn's order: X the conditions"):
+        sr.SineSeriesRegression(2).fit(ys, q, times="normalised")  # the order before 1.0
     with pytest.raises(ValueError, match="not fitted"):
         sr.SineSeriesRegression(2).predict_coefficients([0.0])
     with pytest.raises(ValueError, match="tau1"):

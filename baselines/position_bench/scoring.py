@@ -106,7 +106,7 @@ def _validation_rows(
     q = q[:, varying_columns(q)]
     if y.shape[0] <= q.shape[1] + 2:
         return []
-    model = SineSeriesRegression(n_sines=n_sines).fit(list(y), q, times="normalised")
+    model = SineSeriesRegression(n_sines=n_sines).fit(q, list(y), times="normalised")
     return model.validate().summary()
 
 

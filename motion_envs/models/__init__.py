@@ -123,6 +123,7 @@ if TYPE_CHECKING:
     from motion_envs.models.sine_regression import (
         DEFAULT_MAX_END_SHIFT,
         MIN_SAMPLES,
+        ExtrapolationWarning,
         LinearHypothesisReport,
         RankDeficientDesignWarning,
         SineSeriesRegression,
@@ -198,6 +199,7 @@ _EXPORTS: dict[str, str] = {
     "Phase": "segmentation",
     "PhaseStateMachine": "segmentation",
     "PoseModel": "pose_model",
+    "ExtrapolationWarning": "sine_regression",
     "PositionGrids": "position_nominal",
     "PositionNominal": "position_nominal",
     "PositionReached": "segmentation",
@@ -305,6 +307,7 @@ __all__ = [
     "Criterion",
     "Estimator",
     "EventOccurred",
+    "ExtrapolationWarning",
     "FitErrors",
     "GroupBezierModel",
     "LinearBezierModel",

@@ -5,15 +5,24 @@ Every model class of :mod:`motion_envs.models` follows scikit-learn's estimator 
 * its ``__init__`` only stores its keyword parameters, unchanged, as attributes of the
   same name (validated, never converted), so :meth:`Estimator.get_params`,
   :meth:`Estimator.set_params` and :func:`sklearn.base.clone` work;
-* ``fit`` returns ``self`` and sets fitted attributes whose names end in ``_``;
+* ``fit(X, y)`` takes scikit-learn's order, ``X`` the inputs of a movement (its
+  conditions, start and end, labels or predictors, one row per movement) and ``y`` the
+  movements (one recording per row of ``X``); it returns ``self`` and sets fitted
+  attributes whose names end in ``_``;
 * using a model before ``fit`` raises :class:`NotFittedError`;
-* ``predict`` answers with the model's output.
+* ``predict`` answers with the model's output;
+* ``score(X, y)`` is the negative of the papers' criterion (median over the movements
+  of the largest error over time), so that greater is better as scikit-learn's model
+  selection expects;
+* :meth:`Estimator.__sklearn_tags__` gives scikit-learn (>= 1.6) the tags it asks every
+  estimator for, so that ``clone``, ``check_is_fitted``, ``Pipeline``, ``GridSearchCV``
+  and ``cross_val_score`` take the models (``docs/models.md``).
 
-scikit-learn is an optional extra (``motion-envs[learned]``) and is never imported here.
-:class:`NotFittedError` subclasses ``ValueError`` and ``AttributeError``, as
-``sklearn.exceptions.NotFittedError`` does; when scikit-learn has been imported, the
-error raised is also an instance of scikit-learn's ``NotFittedError``, so either
-``except`` clause catches it.
+scikit-learn is an optional extra (``motion-envs[learned]``) and is imported only inside
+``__sklearn_tags__``, which only scikit-learn calls. :class:`NotFittedError` subclasses
+``ValueError`` and ``AttributeError``, as ``sklearn.exceptions.NotFittedError`` does;
+when scikit-learn has been imported, the error raised is also an instance of
+scikit-learn's ``NotFittedError``, so either ``except`` clause catches it.
 """
 
 from __future__ import annotations
@@ -105,6 +114,18 @@ class Estimator:
         for name, sub_params in nested.items():
             valid[name].set_params(**sub_params)
         return self
+
+    def __sklearn_tags__(self) -> Any:
+        """The tags scikit-learn asks every estimator for (``sklearn.utils.get_tags``).
+
+        scikit-learn's defaults for an estimator that needs ``fit`` and a target: ``y``
+        (the movements) is required; no estimator type (the models are neither
+        classifiers nor regressors of a scalar target), so model selection uses
+        :meth:`score`. Imported here, on call: only scikit-learn calls it.
+        """
+        from sklearn.utils import Tags, TargetTags
+
+        return Tags(estimator_type=None, target_tags=TargetTags(required=True))
 
     def __repr__(self) -> str:
         init = inspect.signature(type(self).__init__).parameters

@@ -27,13 +27,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
+from motion_envs.models._sklearn import batch_row
 from motion_envs.models.orientation_model import OrientationModel
 from motion_envs.models.sine_regression import SineSeriesRegression
 
@@ -160,18 +161,6 @@ def position_fit_errors(
     return FitErrors("position", rel, ys, fits, errors, "m")
 
 
-def _row(values: ArrayLike | None, i: int) -> NDArray[Any] | None:
-    return None if values is None else np.asarray(values)[i : i + 1]
-
-
-def _predictor_row(
-    values: Mapping[str, ArrayLike] | ArrayLike | None, i: int
-) -> Mapping[str, ArrayLike] | ArrayLike | None:
-    if isinstance(values, Mapping):
-        return {k: np.asarray(v)[i : i + 1] for k, v in values.items()}
-    return _row(values, i)
-
-
 def orientation_fit_errors(
     model: OrientationModel,
     quaternions: Sequence[ArrayLike],
@@ -196,8 +185,8 @@ def orientation_fit_errors(
         t0 = t - t[0]
         fit = model.predict(
             q[0], q[-1], t0, duration=float(t0[-1]),
-            subjects=_row(subjects, i), tasks=_row(tasks, i),
-            predictors=_predictor_row(predictors, i),
+            subjects=batch_row(subjects, i), tasks=batch_row(tasks, i),
+            predictors=batch_row(predictors, i),
         )  # fmt: skip
         fit = fit * np.where(np.sum(fit * q, axis=1) < 0.0, -1.0, 1.0)[:, None]
         rel.append(t0)

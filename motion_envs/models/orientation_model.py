@@ -6,12 +6,15 @@
 subject, task or numeric predictors) and
 :mod:`~motion_envs.models.orientation_prediction` (back to quaternions):
 
-* ``fit``: every recorded trajectory ``q_l(t)`` (unit quaternions ``(w, x, y, z)`` at
-  times in seconds) gives the average speed profile ``alpha_bar(tau)`` on the
-  ``n_points`` grid (:func:`~motion_envs.models.speed_profile.average_speed_profile`)
+* ``fit(X, y)`` (scikit-learn's order: ``X`` what the residual is predicted from, one
+  row per trajectory, as ``by`` says; ``y`` the trajectories): every recorded
+  trajectory ``q_l(t)`` (unit quaternions ``(w, x, y, z)`` at times in seconds) gives
+  the average speed profile ``alpha_bar(tau)`` on the ``n_points`` grid
+  (:func:`~motion_envs.models.speed_profile.average_speed_profile`)
   and its slerp residual ``r_l(tau) = logmap(conj(slerp(q_0, q_n, alpha_bar(tau))) q_l(tau))``
   (section 3.3, "Slerp, average"); a Bézier model of degree ``d`` is fitted to the
   residuals (section 3.4);
+* ``score(X, y)``: the negative of the papers' criterion (radians);
 * ``predict``: at any times ``t`` in ``[0, T]`` (``tau = t / T``)::
 
       q(t) = slerp(q_s, q_e, alpha_bar(tau)) * expmap(C(tau; P))
@@ -33,6 +36,12 @@ from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, no
 from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
+from motion_envs.models._sklearn import (
+    batch_row,
+    check_order,
+    negative_criterion,
+    score_times,
+)
 from motion_envs.models.bezier_models import (
     BezierResidualModel,
     GroupBezierModel,
@@ -110,31 +119,52 @@ class OrientationModel(SerializableModel):
     def _unit(self, q: ArrayLike, name: str) -> FloatArray:
         return quat.as_unit(q, name, normalize=self.normalize)
 
+    def labels(self, X: Any) -> dict[str, Any]:
+        """``X`` as the keyword :meth:`predict` takes for ``by``: ``{}`` for ``"null"``
+        (``X`` unused; None allowed), ``{"subjects": ..}``/``{"tasks": ..}`` ``(L,)`` labels
+        (a column vector or one-column table also), ``{"predictors": ..}`` for
+        ``"linear"`` (``(L, p)`` numbers, a mapping of named ``(L,)`` columns or a pandas
+        DataFrame)."""
+        if self.by == "null" or X is None:
+            if self.by != "null":
+                raise ValueError(f"X must hold the {self.by} of each trajectory (by={self.by!r})")
+            return {}
+        if self.by == "linear":
+            if hasattr(X, "columns"):  # a pandas DataFrame: its named columns
+                return {"predictors": {str(c): np.asarray(X[c]) for c in X.columns}}
+            return {"predictors": X}
+        values = np.asarray(X)
+        if values.ndim == 2 and values.shape[1] == 1:
+            values = values[:, 0]
+        if values.ndim != 1:
+            raise ValueError(
+                f"X must be the {self.by} label of each trajectory, (L,); got {values.shape}"
+            )
+        return {"subjects" if self.by == "subject" else "tasks": values}
+
     def fit(
         self,
-        quaternions: Sequence[ArrayLike],
+        X: Any,
+        y: Sequence[ArrayLike],
         times: Sequence[ArrayLike] | None = None,
         *,
         rate: float | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
     ) -> OrientationModel:
-        """Fit to trajectories ``quaternions[l]`` ``(n_l, 4)``; returns ``self``.
+        """Fit to trajectories ``y[l]`` ``(n_l, 4)``; returns ``self``.
 
-        The time base is required: ``times`` (seconds, one array per trajectory) or
-        ``rate`` (Hz). ``subjects``/``tasks`` ``(L,)`` or ``predictors`` (``(L, p)`` or a
-        mapping of named ``(L,)`` columns) as ``by`` needs.
+        scikit-learn's order: ``X`` what ``by`` predicts from (:meth:`labels`: None for
+        ``"null"``, the subject or task labels ``(L,)``, or predictors ``(L, p)``), ``y``
+        the trajectories. The time base is required: ``times`` (seconds, one array per
+        trajectory) or ``rate`` (Hz).
         """
-        if len(quaternions) == 0:
-            raise ValueError("quaternions must contain at least one trajectory")
-        ts = recording_times(quaternions, times, rate)
-        qs = [self._unit(q, f"quaternions[{i}]") for i, q in enumerate(quaternions)]
+        check_order(X, y, type(self).__name__, f"what by={self.by!r} predicts from")
+        ts = recording_times(y, times, rate)
+        qs = [self._unit(q, f"y[{i}]") for i, q in enumerate(y)]
         traj = RaggedTrajectories.from_sequences(qs, ts)
         alpha = average_speed_profile(traj, int(self.n_points))
         residuals = slerp_residuals(traj, int(self.n_points), average_alpha=alpha)
         model = self._residual_model()
-        model.fit(residuals, subjects=subjects, tasks=tasks, predictors=predictors)
+        model.fit(residuals, **self.labels(X))
         self.average_alpha_ = alpha
         self.residual_model_ = model
         self.durations_ = traj.durations
@@ -192,6 +222,33 @@ class OrientationModel(SerializableModel):
             curve = bezier.evaluate(points[i], taus[i], int(self.degree))
             out[i] = quat.multiply(path, quat.expmap(curve))
         return out[0] if single else out
+
+    def score(
+        self,
+        X: Any,
+        y: Sequence[ArrayLike],
+        times: Sequence[ArrayLike] | None = None,
+        *,
+        rate: float | None = None,
+    ) -> float:
+        """``-median_l max_t angle(q_l(t), qhat_l(t))``: the negative of the papers'
+        criterion (radians; the rotation angle ``|logmap(conj(qhat) q)|``).
+
+        ``qhat_l = predict(q_l(t_0), q_l(t_end), t - t_0, duration=T_l, <row l of X>)``,
+        as :func:`~motion_envs.models.fit_errors.orientation_fit_errors`; greater is
+        better. Without ``times`` and ``rate`` the samples are taken as uniform (the
+        criterion is the same for any rate).
+        """
+        check_order(X, y, type(self).__name__, f"what by={self.by!r} predicts from")
+        labels = self.labels(X)
+        errors = []
+        for i, t in enumerate(score_times(y, times, rate)):
+            q = self._unit(y[i], f"y[{i}]")
+            t0 = t - t[0]
+            row = {k: batch_row(v, i) for k, v in labels.items()}
+            fit = self.predict(q[0], q[-1], t0, duration=float(t0[-1]), **row)
+            errors.append(float(np.max(quat.angle(fit, q))))
+        return negative_criterion(errors)
 
     # -- serialization --------------------------------------------------------------
     state_schema = StateSchema(

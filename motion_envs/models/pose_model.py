@@ -11,7 +11,11 @@ quaternions ``(n_l, 4)`` sampled at the same times):
   (:class:`~motion_envs.models.orientation_model.OrientationModel`):
   ``q(t) = slerp(q_s, q_e, alpha_bar(t / T)) expmap(C(t / T; P))``.
 
-Both answer at the same times (seconds since the movement start).
+Both answer at the same times (seconds since the movement start). ``fit(X, y)`` takes
+scikit-learn's order: ``X`` what the orientation residual is predicted from (as
+:class:`~motion_envs.models.orientation_model.OrientationModel`), ``y`` the poses, one
+``(n_l, D + 4)`` array per recording: the position columns, then the quaternion
+``(w, x, y, z)``.
 """
 
 from __future__ import annotations
@@ -24,7 +28,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS
+from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
+from motion_envs.models._sklearn import (
+    batch_row,
+    check_order,
+    negative_criterion,
+    score_times,
+)
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.orientation_model import OrientationModel
 from motion_envs.models.serialization import SerializableModel, StateSchema
@@ -107,40 +118,45 @@ class PoseModel(SerializableModel):
         self.n_points = n_points
         self.normalize = normalize
 
+    def _orientation(self) -> OrientationModel:
+        return OrientationModel(self.degree, self.by, self.unseen, self.n_points, self.normalize)
+
+    @staticmethod
+    def split_poses(y: Sequence[ArrayLike]) -> tuple[list[FloatArray], list[FloatArray]]:
+        """Poses ``y[l]`` ``(n_l, D + 4)`` as positions ``(n_l, D)`` and quaternions
+        ``(n_l, 4)`` (the last four columns, ``(w, x, y, z)``)."""
+        positions, quaternions = [], []
+        for i, pose in enumerate(y):
+            v = np.asarray(pose, dtype=np.float64)
+            if v.ndim != 2 or v.shape[1] < 5:
+                raise ValueError(
+                    f"y[{i}] must be (n, D + 4): positions, then the quaternion (w, x, y, z); "
+                    f"got shape {v.shape}"
+                )
+            positions.append(v[:, :-4])
+            quaternions.append(v[:, -4:])
+        return positions, quaternions
+
     def fit(
         self,
-        positions: Sequence[ArrayLike],
-        quaternions: Sequence[ArrayLike],
+        X: Any,
+        y: Sequence[ArrayLike],
         times: Sequence[ArrayLike] | None = None,
         *,
         rate: float | None = None,
-        subjects: ArrayLike | None = None,
-        tasks: ArrayLike | None = None,
-        predictors: Mapping[str, ArrayLike] | ArrayLike | None = None,
     ) -> PoseModel:
-        """Fit to recordings ``positions[l]`` ``(n_l, 3)`` and ``quaternions[l]``
-        ``(n_l, 4)`` sampled at the same ``times`` (s) or ``rate`` (Hz); returns ``self``.
+        """Fit to poses ``y[l]`` ``(n_l, D + 4)`` (positions, then the quaternion) sampled
+        at ``times`` (s) or ``rate`` (Hz); returns ``self``.
 
-        ``subjects``/``tasks``/``predictors`` as the orientation model's ``by`` needs.
+        ``X``: what the orientation model's ``by`` predicts from (None for ``"null"``,
+        labels ``(L,)``, predictors ``(L, p)``; :meth:`OrientationModel.labels`).
         """
-        if len(positions) != len(quaternions):
-            raise ValueError(
-                f"positions and quaternions must hold the same recordings; got "
-                f"{len(positions)} and {len(quaternions)}"
-            )
-        ts = recording_times(positions, times, rate)
-        ys = [np.asarray(y, dtype=np.float64) for y in positions]
-        for i, (y, q) in enumerate(zip(ys, quaternions, strict=True)):
-            if y.ndim != 2 or np.shape(q)[:1] != y.shape[:1]:
-                raise ValueError(
-                    f"positions[{i}] (n, D) and quaternions[{i}] (n, 4) must have the same "
-                    f"samples; got {y.shape} and {np.shape(q)}"
-                )
-        conditions = np.stack([np.concatenate([y[0], y[-1]]) for y in ys])
-        position = SineSeriesRegression(self.n_sines).fit(ys, conditions, ts)
-        orientation = OrientationModel(
-            self.degree, self.by, self.unseen, self.n_points, self.normalize
-        ).fit(quaternions, ts, subjects=subjects, tasks=tasks, predictors=predictors)
+        check_order(X, y, type(self).__name__, f"what by={self.by!r} predicts from")
+        ys, quaternions = self.split_poses(y)
+        ts = recording_times(ys, times, rate)
+        conditions = np.stack([np.concatenate([v[0], v[-1]]) for v in ys])
+        position = SineSeriesRegression(self.n_sines).fit(conditions, ys, ts)
+        orientation = self._orientation().fit(X, quaternions, ts)
         self.position_model_ = position
         self.orientation_model_ = orientation
         self.durations_ = np.array([t[-1] - t[0] for t in ts])
@@ -189,6 +205,40 @@ class PoseModel(SerializableModel):
                 f"movements; got {s.shape} and {np.shape(start_orientation)}"
             )
         return positions, quaternions
+
+    def score(
+        self,
+        X: Any,
+        y: Sequence[ArrayLike],
+        times: Sequence[ArrayLike] | None = None,
+        *,
+        rate: float | None = None,
+        lever: float = 0.1,
+    ) -> float:
+        """``-median_l max_t (|p_l(t) - phat_l(t)| + lever angle(q_l(t), qhat_l(t)))``.
+
+        The papers' criterion of the hand's pose: the term is a bound on how far a point
+        ``lever`` (the positions' unit; 0.1 m: a point of the hand 10 cm from the tracked
+        one) from the tracked point lies from its prediction (rotating it by ``theta``
+        moves it by ``2 lever sin(theta / 2) <= lever theta``). Each recording is
+        predicted from its own first and last pose over its own duration; greater is
+        better. Without ``times`` and ``rate`` the samples are taken as uniform.
+        """
+        check_order(X, y, type(self).__name__, f"what by={self.by!r} predicts from")
+        if not (np.isfinite(lever) and lever >= 0):
+            raise ValueError(f"lever must be a finite length >= 0; got {lever!r}")
+        check_is_fitted(self, "orientation_model_")
+        ys, quaternions = self.split_poses(y)
+        labels = self.orientation_model_.labels(X)
+        errors = []
+        for i, t in enumerate(score_times(ys, times, rate)):
+            p, q = ys[i], quaternions[i]
+            t0 = t - t[0]
+            row = {k: batch_row(v, i) for k, v in labels.items()}
+            p_hat, q_hat = self.predict(p[0], p[-1], q[0], q[-1], t0, duration=float(t0[-1]), **row)
+            e = np.linalg.norm(p_hat - p, axis=1) + lever * quat.angle(q_hat, q)
+            errors.append(float(np.max(e)))
+        return negative_criterion(errors)
 
     # -- serialization: the two parts' states, prefixed ------------------------------
     state_schema = StateSchema(

@@ -144,7 +144,7 @@ class PositionNominal:
                     self.selection_seconds_ = time.perf_counter() - t0
                 self.n_sines_ = int(n_use)
                 self.model_ = SineSeriesRegression(n_sines=self.n_sines_).fit(
-                    list(y), q_train, times="normalised"
+                    q_train, list(y), times="normalised"
                 )
         return self
 

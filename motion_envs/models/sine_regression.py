@@ -65,12 +65,14 @@ from numpy.typing import ArrayLike, NDArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.resampling import recording_times
+from motion_envs.models._sklearn import check_order, negative_criterion, score_times
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
 __all__ = [
     "DEFAULT_MAX_END_SHIFT",
     "MIN_SAMPLES",
+    "ExtrapolationWarning",
     "LinearHypothesisReport",
     "RankDeficientDesignWarning",
     "SineSeriesRegression",
@@ -97,6 +99,10 @@ DEFAULT_MAX_END_SHIFT = 1e-3
 
 class RankDeficientDesignWarning(UserWarning):
     """The condition design ``[Q; 1]`` has lower rank than its number of rows."""
+
+
+class ExtrapolationWarning(UserWarning):
+    """A prediction from conditions outside the range of the training conditions."""
 
 
 def _as_conditions(conditions: ArrayLike, name: str = "conditions") -> FloatArray:
@@ -392,25 +398,58 @@ class SineSeriesRegression(SerializableModel):
 
     def fit(
         self,
-        positions: Sequence[ArrayLike],
-        conditions: ArrayLike,
+        X: ArrayLike,
+        y: Sequence[ArrayLike],
         times: Sequence[ArrayLike] | Literal["normalised"] | None = None,
         *,
         rate: float | None = None,
     ) -> SineSeriesRegression:
-        """Fit eq. 6 to trajectories ``positions[i]`` ``(n_i, D)`` and conditions ``(n, q)``.
+        """Fit eq. 6: conditions ``X`` ``(n, q)`` and trajectories ``y[i]`` ``(n_i, D)``.
 
-        The time base is required: ``times`` (seconds, one ``(n_i,)`` float array per
-        trajectory) or ``rate`` (Hz, ``t_k = k / rate``); ``durations_`` are then in
-        seconds and :meth:`plan` velocities per second. ``times="normalised"`` fits on
-        normalised time ``tau_k = k / (n_i - 1)`` with unit durations (for data already
-        time-normalised). Integer ``times`` (sample indices) are refused. Returns ``self``.
+        scikit-learn's order: ``X`` the conditions ``Q`` (one row per trajectory), ``y``
+        the trajectories. The time base is required: ``times`` (seconds, one ``(n_i,)``
+        float array per trajectory) or ``rate`` (Hz, ``t_k = k / rate``); ``durations_``
+        are then in seconds and :meth:`plan` velocities per second.
+        ``times="normalised"`` fits on normalised time ``tau_k = k / (n_i - 1)`` with
+        unit durations (for data already time-normalised). Integer ``times`` (sample
+        indices) are refused. Returns ``self``.
         """
-        ts = _time_base(positions, times, rate, "fit")
+        check_order(X, y, type(self).__name__, "the conditions (n, q)")
+        ts = _time_base(y, times, rate, "fit")
         coefs, durations = trajectory_coefficients(
-            positions, self.n_sines, "normalised" if ts is None else ts
+            y, self.n_sines, "normalised" if ts is None else ts
         )
-        return self.fit_coefficients(coefs, conditions, durations)
+        return self.fit_coefficients(coefs, X, durations)
+
+    def score(
+        self,
+        X: ArrayLike,
+        y: Sequence[ArrayLike],
+        times: Sequence[ArrayLike] | None = None,
+        *,
+        rate: float | None = None,
+    ) -> float:
+        """``-median_l max_t |y_l(t) - yhat_l(t)|``: the negative of the papers' criterion.
+
+        ``yhat_l = predict(X[l], duration=T_l, times=t - t_0, start=y_l(t_0),
+        end=y_l(t_end))`` (eqs. 7-8 with the trajectory's own end points and duration,
+        as :func:`~motion_envs.models.fit_errors.position_fit_errors`); greater is
+        better (scikit-learn's model selection). Without ``times`` and ``rate`` the
+        samples are taken as uniform (the criterion is the same for any rate).
+        """
+        check_order(X, y, type(self).__name__, "the conditions (n, q)")
+        q = _as_conditions(X)
+        ts = score_times(y, times, rate)
+        self._warn_extrapolation(q)  # one warning for all the movements scored
+        errors = []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ExtrapolationWarning)
+            for q_l, t, y_l in zip(q, ts, y, strict=True):
+                v = np.asarray(y_l, dtype=np.float64)
+                t0 = t - t[0]
+                fit = self.predict(q_l, duration=float(t0[-1]), times=t0, start=v[0], end=v[-1])
+                errors.append(float(np.max(np.linalg.norm(fit - v, axis=1))))
+        return negative_criterion(errors)
 
     def fit_coefficients(
         self, coefficients: ArrayLike, conditions: ArrayLike, durations: ArrayLike | None = None
@@ -505,10 +544,17 @@ class SineSeriesRegression(SerializableModel):
         ``duration`` is a scalar or ``(m,)``, ``start``/``end`` ``(m, D)``). ``times``
         ``(K,)`` lie in ``[0, T]``; default 100 uniform samples. Each phase is planned by
         :meth:`plan` (eqs. 7-9, same keywords) and evaluated at ``tau = t / T`` (eq. 8).
+
+        A condition outside the range ``[min, max]`` of the training conditions (a column
+        of ``conditions_``) raises an :class:`ExtrapolationWarning` naming the column,
+        its value, the range and how many training SD it lies from their mean: eq. 7 is
+        linear, so such a prediction extrapolates (:meth:`plan` and
+        :meth:`predict_coefficients`, the controllers' calls, do not warn).
         """
         q = np.asarray(conditions, dtype=np.float64)
         single = q.ndim == 1
         q2 = q[None] if single else q
+        self._warn_extrapolation(q2)
         m = q2.shape[0]
         durations = np.broadcast_to(np.asarray(duration, dtype=np.float64), (m,))
         starts = None if start is None else np.broadcast_to(start, (m, self.n_dims_))
@@ -532,6 +578,35 @@ class SineSeriesRegression(SerializableModel):
             out.append(ss.evaluate(p, tau))
         return out[0] if single else np.stack(out)
 
+    def _warn_extrapolation(self, q: FloatArray) -> None:
+        """:class:`ExtrapolationWarning` when a row of ``q`` lies outside the range of the
+        training conditions: the worst column, how many SD from the training mean."""
+        self._fitted()
+        train = self.conditions_
+        if q.ndim != 2 or q.shape[1] != train.shape[1] or not np.all(np.isfinite(q)):
+            return  # predict_coefficients reports the bad shape or value
+        lo, hi = train.min(axis=0), train.max(axis=0)
+        tol = 1e-9 * np.maximum(np.maximum(np.abs(lo), np.abs(hi)), 1.0)
+        outside = (q < lo - tol) | (q > hi + tol)
+        if not outside.any():
+            return
+        mean = train.mean(axis=0)
+        sd = train.std(axis=0, ddof=1) if train.shape[0] > 1 else np.zeros_like(mean)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(sd > 0, np.abs(q - mean) / np.where(sd > 0, sd, 1.0), np.inf)
+        i, j = np.unravel_index(np.argmax(np.where(outside, z, -1.0)), q.shape)
+        rows = int(outside.any(axis=1).sum())
+        how = f"{z[i, j]:.1f} SD from their mean {mean[j]:.4g}" if sd[j] > 0 else "constant"
+        warnings.warn(
+            f"{type(self).__name__}: condition {j} (column {j} of the conditions) = "
+            f"{q[i, j]:.4g} is outside the range of the training conditions "
+            f"[{lo[j]:.4g}, {hi[j]:.4g}], {how} (training SD {sd[j]:.4g}); "
+            f"{rows} of {q.shape[0]} movement(s) outside the range: eq. 7 is linear in the "
+            "conditions, so the prediction extrapolates",
+            ExtrapolationWarning,
+            stacklevel=3,
+        )
+
     def generate(
         self,
         conditions: ArrayLike,
@@ -550,7 +625,10 @@ class SineSeriesRegression(SerializableModel):
 
         ``Y(t) = Phi(t / T) . P`` (eq. 8) with ``P`` from :meth:`plan` (same
         ``final_velocity``/``mode``/``axes``/``fix_end``/``max_end_shift``, eq. 9).
+        Like :meth:`predict`, warns (:class:`ExtrapolationWarning`) for conditions
+        outside the range of the training conditions.
         """
+        self._warn_extrapolation(np.atleast_2d(np.asarray(conditions, dtype=np.float64)))
         p = self.plan(
             conditions,
             duration,

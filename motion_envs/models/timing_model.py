@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs.models._sklearn import negative_criterion
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State
 
@@ -107,6 +108,11 @@ class SpeedProfileModel(SerializableModel):
 
     def fit(self, features: ArrayLike, alpha: ArrayLike) -> SpeedProfileModel:
         """Fit to conditions ``(L, p)`` and observed ``alpha`` curves ``(L, n)``; returns self."""
+        if alpha is None:
+            raise ValueError(
+                "SpeedProfileModel requires y to be passed, but the target y is None "
+                "(y: the alpha curves)"
+            )
         X, A = self._check(features, alpha)
         inc = np.maximum(np.diff(A, axis=1), _INCREMENT_FLOOR)
         inc = inc / inc.sum(axis=1, keepdims=True)
@@ -148,6 +154,15 @@ class SpeedProfileModel(SerializableModel):
             raise ValueError(f"features must have {self.mean_.size} columns; got {X.shape[1]}")
         Xs = (X - self.mean_) / self.scale_
         return _softmax_cumsum(self.intercept_ + Xs @ self.coef_)
+
+    def score(self, X: ArrayLike, y: ArrayLike) -> float:
+        """``-median_l max_tau |alpha_l(tau) - alphahat_l(tau)|``: the papers' criterion
+        (median over movements of the largest error over time) of the predicted speed
+        profiles, negated so that greater is better. ``X`` the conditions ``(L, p)``,
+        ``y`` the observed ``alpha`` curves ``(L, n_points)``."""
+        _, A = self._check(X, y)
+        errors = np.max(np.abs(self.predict(X) - A), axis=1)
+        return negative_criterion(errors)
 
     def _get_state(self) -> State:
         return (

@@ -154,7 +154,7 @@ class JugglerModel:
                 n = int(cands[int(np.argmax(ok))])
             else:
                 n, scores = int(self.n_sines), np.full(1, np.nan)
-            model = SineSeriesRegression(n_sines=n).fit(ys, q, ts)
+            model = SineSeriesRegression(n_sines=n).fit(q, ys, ts)
             ends = q[:, 2:]
             self.phases_[phase] = PhaseFit(
                 model=model,
