@@ -7,8 +7,8 @@ extra, ``backend="numba"``, the default when installed) a step runs:
 
 * the controller's plan in arrays: between the plan's events (a release, a catch, a
   reached end point, all decided as the controller decides them:
-  :func:`~motion_envs.envs.juggling._compiled.v1_events`) a command is an index into the
-  plan on the control grid (:func:`~motion_envs.envs.juggling._compiled.v1_advance`); at
+  :func:`~motion_envs.envs.juggling._compiled_v1.v1_events`) a command is an index into the
+  plan on the control grid (:func:`~motion_envs.envs.juggling._compiled_v1.v1_advance`); at
   an event the sub-environment's own controller runs in Python and its new plan is
   copied back (controllers other than ``juggler`` and ``juggler_latency_aware`` always
   run in Python); with ``residual_phases`` the residual acts where the phase after the
@@ -19,13 +19,13 @@ extra, ``backend="numba"``, the default when installed) a step runs:
   (:func:`~motion_envs.models.juggling.eq10_rows`), the products stacked
   (:func:`~motion_envs.models.juggling.eq10_many`); the controller gets them at its
   next event or reset, as it gets its step count there;
-* the worlds' control period compiled, MuJoCo's ``mj_step`` called from the loop, then
-  the hand's human-likeness search
-  (:func:`~motion_envs.envs.juggling._compiled.v1_periods`, in ``threads`` threads over
-  blocks of worlds); the release's noise in Python, from the world's generator;
-* the rest of the step compiled too (:func:`~motion_envs.envs.juggling._compiled.v1_finish`):
-  the sensor's delay line (its noise drawn ahead in blocks from the sensor's own
-  generator), the reward and the observation.
+* the world's one control period, compiled (``_compiled.world_periods``, MuJoCo's
+  ``mj_step`` called from the loop, in ``threads`` threads over blocks of worlds); the
+  release's noise in Python, from the world's generator; the hand's human-likeness by the
+  compiled k-d tree search (``_compiled.nearest_rows``);
+* the rest of the step compiled too (``_compiled_v1.v1_finish``): the sensor's delay
+  line (its noise drawn ahead in blocks from the sensor's own generator), the reward and
+  the observation.
 
 ``backend="python"`` runs each single environment's ``step`` (no numba needed).
 """
@@ -54,7 +54,7 @@ __all__ = ["JugglingV1VectorEnv"]
 _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 #: Attributes made from the worlds by ``_link`` (not pickled: made again).
-_LINKED = (*WORLD_LINKS, "_trees", "_m_time", "_m_ball", "_m_ball_vel")
+_LINKED = (*WORLD_LINKS, "_kernels", "_trees", "_m_time", "_m_ball", "_m_ball_vel")
 #: Measurement-noise rows drawn from a sensor's generator at a time.
 _NOISE_BLOCK = 64
 
@@ -86,7 +86,10 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
     def _link(self) -> None:
         """The worlds' links, the likeness's compiled k-d trees and the views of the
         measured state (made again after unpickling, which copies the worlds)."""
+        from motion_envs.envs.juggling import _compiled_v1
+
         self._link_worlds()
+        self._kernels = _compiled_v1
         likeness = self.envs[0].likeness
         compiled = self._compiled
         self._trees = tuple(compiled.likeness_tree(likeness.trees[p].data) for p in PHASES)
@@ -150,16 +153,8 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
             self._use_options(first.controller.juggler.options)
         self._obs_dim = first._low.shape[0]
         self._link()
-        self._scalars = np.array(
-            [
-                task.dt,
-                LIKENESS_TAU,
-                *self._w,
-                first.max_catches,
-                first._time_limit,
-                float(self._noisy),
-            ]
-        )
+        scalars = (task.dt, LIKENESS_TAU, *self._w, first.max_catches, first._time_limit)
+        self._scalars = np.array([*scalars, float(self._noisy)])
 
     def _use_options(self, options: ControlOptions) -> None:
         """The juggler's options as the compiled events and advance read them."""
@@ -264,12 +259,11 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         q, v = self._qv(envs)
         self._hand[envs], self._hand_vel[envs] = q[:, 0:2], v[:, 0:2]
         self._ball[envs], self._ball_vel[envs] = q[:, 2:4], v[:, 2:4]
-        self._flags[envs, 0] = self._holder[envs, 0] >= 0
-        self._flags[envs, 1] = self._left[envs, 0]
-        self._flags[envs, 2] = self._dropped[envs, 0]
-        self._events[envs, 0] = self._caught[envs, 0] >= 0
+        self._flags[envs] = np.stack(
+            (self._holder[envs, 0] >= 0, self._left[envs, 0], self._dropped[envs, 0]), axis=1
+        )
         released = self._released[envs, 0] >= 0
-        self._events[envs, 1] = released
+        self._events[envs] = np.stack((self._caught[envs, 0] >= 0, released), axis=1)
         if released.any():
             self._release(envs[released])
         points = np.concatenate((self._hand[envs], LIKENESS_TAU * self._hand_vel[envs]), axis=1)
@@ -285,7 +279,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         obs = np.empty((n, self._obs_dim), dtype=np.float32)
         out = np.empty((n, 7))
         ends = np.empty((n, 2), dtype=np.bool_)
-        self._compiled.v1_finish(
+        self._kernels.v1_finish(
             envs,
             self._hand,
             self._hand_vel,
@@ -350,7 +344,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         options = self._episode(int(envs[0])).options
         if options is not self._options:  # the juggler's options were replaced
             self._use_options(options)
-        python, due, predicted = self._compiled.v1_events(
+        python, due, predicted = self._kernels.v1_events(
             envs,
             (self._phase, self._pk, self._end_k, self._t_start, self._duration, self._end),
             self._measured,
@@ -361,14 +355,14 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
         if due.any():
             self._correct(envs[due], predicted[due])
         if not python.any():
-            return self._compiled.v1_advance(  # type: ignore[no-any-return]
+            return self._kernels.v1_advance(  # type: ignore[no-any-return]
                 envs, self._pk, self._grid, self._glen, self._last, self._phase, self._advance
             )
         target = np.empty((envs.size, 2))
         armed = np.empty(envs.size, dtype=np.bool_)
         fast = ~python
         if fast.any():
-            target[fast], armed[fast] = self._compiled.v1_advance(
+            target[fast], armed[fast] = self._kernels.v1_advance(
                 envs[fast], self._pk, self._grid, self._glen, self._last, self._phase, self._advance
             )
         target[python], armed[python] = self._python_commands(envs[python])
@@ -377,7 +371,7 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
     def _correct(self, rows: NDArray[np.int64], target: NDArray[np.float64]) -> None:
         """The eq. 10 corrections of the catches ``rows`` toward the predicted intercepts
         ``target (r, 2)`` (where :meth:`JugglingController.correct` would re-plan:
-        :func:`~motion_envs.envs.juggling._compiled.v1_events`): on the catch's rows
+        :func:`~motion_envs.envs.juggling._compiled_v1.v1_events`): on the catch's rows
         (:meth:`JugglingController.replan`'s numbers: the same stacked products,
         :func:`~motion_envs.models.juggling.eq10_many`, and the same product of the basis
         and the new coefficients for the rest of the grid), or, where the controller has
