@@ -106,7 +106,7 @@ class CascadeWorld(HandsWorld):
     def launch(self, ball: int, position: ArrayLike, velocity: ArrayLike) -> CascadeState:
         """Put ``ball`` in flight at ``position`` with ``velocity`` (as if thrown long ago:
         it may be captured at once), the hands unchanged; for tests."""
-        super().launch(ball, position, velocity)
+        self.launch_ball(ball, position, velocity)
         self.state = self._make_state((-1, -1), (-1, -1))
         return self.state
 

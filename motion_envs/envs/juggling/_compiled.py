@@ -173,13 +173,17 @@ def world_links(worlds: Sequence[Any]) -> tuple[Any, ...]:
     )
 
 
-def entry_point(kernel: Any, *args: Any) -> Callable[..., None]:
+def entry_point(kernel: Any, *args: Any, probe: bool = True) -> Callable[..., Any]:
     """The compiled function numba's dispatcher ``kernel`` runs for ``args``, to be
-    called directly: the dispatcher types a tuple of typed lists (the worlds' views) in
-    Python on every call (~40 µs, holding the GIL), while the arguments' types of one
-    caller never change (``args[0]`` a 1-d int64 array of worlds, the rest the caller's
-    own arrays). Compiles (or loads) the version for these types with no world stepped."""
-    kernel(args[0][:0], *args[1:])
+    called directly: the dispatcher types its arguments in Python on every call (~40 µs
+    for a tuple of typed lists, holding the GIL), while the arguments' types of one
+    caller never change. ``probe``: compile (or load) the version for these types by a
+    call with no world stepped (``args[0]`` a 1-d int64 array of worlds, called with
+    ``args[0][:0]``); else by calling ``kernel(*args)`` once (a pure function)."""
+    if probe:
+        kernel(args[0][:0], *args[1:])
+    else:
+        kernel(*args)
     try:
         signature = tuple(kernel.typeof_pyval(a) for a in args)
         return kernel.overloads[signature].entry_point  # type: ignore[no-any-return]

@@ -50,11 +50,7 @@ class LikenessQuery:
         calls = {}
         for phase in PHASES:
             args = (*trees[phase], self._q, stack)
-            kernel(*args)  # compiles (or loads) the version for these types
-            try:
-                entry = kernel.overloads[tuple(kernel.typeof_pyval(a) for a in args)].entry_point
-            except (AttributeError, KeyError):  # a numba without them: the dispatcher
-                entry = kernel
+            entry = _compiled.entry_point(kernel, *args, probe=False)
             calls[phase] = (entry, args)
         self._calls = calls
 

@@ -98,10 +98,10 @@ class JugglingV1World(HandsWorld):
         self.state = self._make_state(bool(self.released[0, 0] >= 0), bool(self.caught[0, 0] >= 0))
         return self.state
 
-    def launch(self, ball_pos: ArrayLike, ball_vel: ArrayLike) -> JugglingState:  # type: ignore[override]
+    def launch(self, ball_pos: ArrayLike, ball_vel: ArrayLike) -> JugglingState:
         """Put the ball in flight at ``ball_pos`` with ``ball_vel`` (as if tossed long ago:
         it may be captured at once), the hand unchanged; for tests and demonstrations."""
-        super().launch(0, xz_pair(ball_pos, "ball_pos"), xz_pair(ball_vel, "ball_vel"))
+        self.launch_ball(0, xz_pair(ball_pos, "ball_pos"), xz_pair(ball_vel, "ball_vel"))
         self.state = self._make_state(False, False)
         return self.state
 

@@ -442,7 +442,7 @@ class HandsWorld:
         self.k[0] = 0
         mujoco.mj_forward(self.model, self.data)
 
-    def launch(self, ball: int, position: Any, velocity: Any) -> None:
+    def launch_ball(self, ball: int, position: Any, velocity: Any) -> None:
         """Put ``ball`` in flight at ``position`` with ``velocity`` (as if thrown long ago:
         it may be captured at once), the hands unchanged; for tests and demonstrations."""
         c = 2 * self.spec.hands + 2 * int(ball)
