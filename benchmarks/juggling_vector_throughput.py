@@ -1,7 +1,8 @@
 """Native vector environments of the juggling ids against ``SyncVectorEnv``, same run.
 
-For ``MotionEnvs/Juggling-v1`` and ``MotionEnvs/Cascade-v0`` at ``--level`` and each
-``N`` in ``--num-envs``: ``gym.make_vec(id, N)`` (the native vector environment) against
+For ``MotionEnvs/Juggling-v1`` and ``MotionEnvs/Cascade-v0`` (each of ``--patterns``,
+default the three- and the five-ball cascade) at ``--level`` and each ``N`` in
+``--num-envs``: ``gym.make_vec(id, N)`` (the native vector environment) against
 ``gymnasium.vector.SyncVectorEnv`` of ``N`` ``gym.make(id)`` copies (the anchor), both
 stepping the same pre-sampled actions (the zero action, and ``0.3 N(0, 1)`` residuals),
 autoresetting (NEXT_STEP). The native env runs with each ``--threads`` count (default:
@@ -14,7 +15,7 @@ its wall figure what a user waits); the ratio is native / sync.
 Prints a table, then, as its last line, one JSON object with the figures and ratios.
 
     python benchmarks/juggling_vector_throughput.py [--num-envs 64 256] [--steps 16384]
-        [--threads 1 2]
+        [--threads 1 2] [--patterns 3 5]
 """
 
 from __future__ import annotations
@@ -64,6 +65,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3, help="timed runs per figure")
     parser.add_argument("--level", default="medium", help="the envs' level")
     parser.add_argument("--ids", nargs="+", default=list(IDS), help="env ids")
+    parser.add_argument(
+        "--patterns", nargs="+", default=["3", "5"], help="Cascade-v0's patterns played"
+    )
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
     parser.add_argument(
         "--threads",
@@ -82,14 +86,21 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--num-envs must be >= 1")
     rows: list[list[Any]] = []
     out: dict[str, Any] = {"machine": machine(), "level": args.level, "figures": []}
+    settings: list[tuple[str, dict[str, Any]]] = []
+    for env_id in args.ids:
+        if "Cascade" in env_id:
+            settings += [(env_id, {"pattern": p}) for p in args.patterns]
+        else:
+            settings.append((env_id, {}))
     jobs = [
-        (env_id, n, policy)
-        for env_id in args.ids
+        (env_id, extra, n, policy)
+        for env_id, extra in settings
         for n in args.num_envs
         for policy in ("zero", "residual 0.3 N(0,1)")
     ]
-    for env_id, n, policy in tqdm(jobs, desc="settings", file=sys.stderr):
-        kw = {"level": args.level}
+    for env_id, extra, n, policy in tqdm(jobs, desc="settings", file=sys.stderr):
+        kw = {"level": args.level, **extra}
+        label = env_id + "".join(f" {k}={v}" for k, v in extra.items())
         sync = gym.vector.SyncVectorEnv(
             [lambda env_id=env_id, kw=kw: gym.make(env_id, **kw) for _ in range(n)]
         )
@@ -111,11 +122,12 @@ def main(argv: list[str] | None = None) -> int:
         for name, (wall, cpu) in figures.items():
             ratio, ratio_cpu = wall / figures["sync"][0], cpu / figures["sync"][1]
             rows.append(
-                [env_id, n, policy, name, f"{wall:,.0f}", f"{ratio:.2f}", f"{ratio_cpu:.2f}"]
+                [label, n, policy, name, f"{wall:,.0f}", f"{ratio:.2f}", f"{ratio_cpu:.2f}"]
             )
             out["figures"].append(
                 {
                     "id": env_id,
+                    **extra,
                     "num_envs": n,
                     "policy": policy,
                     "variant": name,

@@ -7,6 +7,7 @@ tunables are a frozen dataclass (no module globals); the zero-action episode has
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import gymnasium as gym
 import numpy as np
@@ -117,3 +118,70 @@ def test_play_is_the_zero_action_episode_of_step():
             _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
         assert got == (info["catches"], info["tosses"], terminated, info["time"])
         assert cascade_episode(level, method, 7, 4) == got
+
+
+def test_five_ball_demonstrations_are_simulated_and_keep_the_five_ball_beat():
+    """The five-ball population (Kalvan's dwell ratio ~2/3): SIMULATED, the hands in
+    turn on the beat of Shannon's theorem with N = 5; each hand catches the ball thrown
+    three beats before its own next beat (tested by the hands' release times); the
+    ball count is refused where no population exists."""
+    from motion_envs.datasets.juggling import (
+        CASCADE_STYLES,
+        JugglingTask,
+        draw_cascade_person,
+        generate_cascade_demonstrations,
+        style_timing,
+    )
+
+    task = JugglingTask(gravity=9.81)
+    demos = generate_cascade_demonstrations(n_cycles=8, seed=3, task=task, balls=5)
+    assert demos.simulated and "cascade5" in demos.name
+    assert all("cascade5" in r.name for r in demos.recordings)
+    style = draw_cascade_person(np.random.default_rng(np.random.SeedSequence(3).spawn(1)[0]), 5)
+    assert 0.64 <= style.dwell_ratio <= 0.69
+    _, timing = style_timing(style, task, 5)
+    assert 0.18 < timing.beat < 0.23 and 0.65 < timing.flight < 0.8
+    # releases: where a toss run ends (toss -> go_down); the two hands alternate a beat apart
+    ends = sorted(
+        (float(r.t[k + 1]), i)
+        for i, r in enumerate(demos.recordings)
+        for k in np.flatnonzero((r.phase[:-1] == "toss") & (r.phase[1:] == "go_down"))
+    )
+    gaps = np.diff([t for t, _ in ends])
+    assert np.median(gaps) == pytest.approx(timing.beat, abs=0.02)
+    assert all(a != b for (_, a), (_, b) in itertools.pairwise(ends))
+    assert sorted(CASCADE_STYLES) == [3, 5]
+    with pytest.raises(ValueError, match="balls must be one of"):
+        generate_cascade_demonstrations(n_cycles=2, balls=4)
+
+
+def test_five_ball_cascade_plays_single_and_vector():
+    """Five balls in the world, two held and three flying at the start (ball L lands on
+    beat L), the observation sized for five; the native vector env is SyncVectorEnv's."""
+    env = CascadeEnv(level="easy", pattern="5")
+    obs, info = env.reset(seed=0)
+    assert env.balls == 5 and obs.shape == (cascade_obs_dim(5),) == (120,)
+    assert env.world.spec.balls == 5 and info["balls"].shape == (5, 2)
+    start = env.controller.start()
+    assert start.holder == (0, 1, -1, -1, -1) and start.thrower == (-1, -1, 1, 0, 1)
+    # each flying ball is queued for the hand of its landing beat, oldest first
+    assert [[b for b, *_ in h.incoming] for h in env.controller.hands] == [[2, 4], [3]]
+    if numba_available():
+        kw = {"level": "medium", "pattern": "5", "max_catches": 2}
+        vec = gym.make_vec(CASCADE, 2, autoreset_mode=AutoresetMode.NEXT_STEP, **kw)
+        run_both(CASCADE, vec, 2, AutoresetMode.NEXT_STEP, 60, "random", **kw)
+
+
+def test_pattern_cli_runs_every_registered_pattern(tmp_path):
+    import json
+
+    from baselines.cli import main
+
+    for name in ("3", "5"):
+        out = tmp_path / name
+        argv = ["juggling", "--pattern", name, "--levels", "easy", "--episodes", "2",
+                "--max-catches", "1", "--out", str(out)]  # fmt: skip
+        assert main(argv) == 0
+        doc = json.loads((out / "results.json").read_text())
+        assert doc["pattern"]["balls"] == int(name) and "SIMULATED" in doc["demonstrations"]
+        assert doc["pattern"]["dwell_ratio"] == PATTERNS[name].dwell_ratio or name == "3"

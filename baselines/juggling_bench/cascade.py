@@ -52,6 +52,7 @@ from motion_envs.models.juggling import (
     PatternCheck,
     cascade_fit,
     check_pattern,
+    pattern_spec,
 )
 
 __all__ = [
@@ -86,11 +87,15 @@ class CascadeConfig:
     split: str = "test"
 
 
-def pattern_check(siteswap: str, gravity: float) -> PatternCheck:
-    """``siteswap`` checked at the cascade juggler's tempo (its fit at ``gravity``)
-    against the hand's speed limit (:func:`motion_envs.models.juggling.check_pattern`).
-    Raises ``ValueError`` if ``siteswap`` is not a valid siteswap."""
-    return check_pattern(siteswap, cascade_fit(gravity).pattern, gravity, HAND_SPEED_LIMIT)
+def pattern_check(pattern: str, gravity: float) -> PatternCheck:
+    """The registered ``pattern`` (its name; :func:`~motion_envs.models.juggling.pattern_spec`)
+    checked at its own juggler's tempo (the fit of its ball count at ``gravity``, its dwell
+    ratio) against the hand's speed limit
+    (:func:`motion_envs.models.juggling.check_pattern`). Raises ``ValueError`` with the
+    reason for a pattern that is not registered."""
+    spec = pattern_spec(pattern)
+    fit = cascade_fit(gravity, spec.balls)
+    return check_pattern(spec.siteswap, fit.pattern, gravity, HAND_SPEED_LIMIT, spec.dwell_ratio)
 
 
 def check_cascade_config(config: CascadeConfig) -> None:
@@ -162,7 +167,8 @@ def cascade_episodes(level: str, method: str, config: CascadeConfig) -> CascadeE
     """The episodes of ``method`` on ``level``, seeds of ``config.split``."""
     seeds = episode_seeds(config.split, config.episodes)
     rows = [
-        cascade_episode(level, method, int(s), config.max_catches, config.gravity) for s in seeds
+        cascade_episode(level, method, int(s), config.max_catches, config.gravity, config.pattern)
+        for s in seeds
     ]
     return CascadeEpisodes(
         seeds=seeds,
@@ -220,20 +226,25 @@ def run_cascade(config: CascadeConfig) -> dict[str, Any]:
             played[method] = cascade_episodes(level, method, config)
             methods[method] = summary(played[method])
         levels.append({"level": level, "values": asdict(LEVELS[level]), "methods": methods})
-    fit = cascade_fit(config.gravity)
-    p = fit.pattern
+    spec = pattern_spec(config.pattern)
+    p = cascade_fit(config.gravity, spec.balls).pattern
+    r = p.dwell_ratio if spec.dwell_ratio is None else spec.dwell_ratio
+    period, beat = p.timing(r)
     return {
         "benchmark": f"juggling pattern {config.pattern} ({CASCADE_ENV_ID})",
         "config": asdict(config),
         "demonstrations": SIMULATED_LABEL,
         "pattern": {
-            "siteswap": config.pattern,
+            "name": spec.name,
+            "siteswap": spec.siteswap,
             "hands": 2,
-            "balls": 3,
-            "dwell_ratio": p.dwell_ratio,
+            "balls": spec.balls,
+            "dwell_ratio": r,
+            "dwell_ratio_source": spec.note,
             "flight_s": p.flight,
-            "period_s": p.timing()[0],
-            "beat_s": p.timing()[1],
+            "period_s": period,
+            "beat_s": beat,
+            "demonstrations_dwell_ratio": p.dwell_ratio,
             "demonstrations_period_s": p.demo_period,
             "throws": [asdict(n) for n in pattern_check(config.pattern, config.gravity).throws],
         },

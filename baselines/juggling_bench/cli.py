@@ -36,7 +36,7 @@ from motion_envs.datasets.juggling import (
 )
 from motion_envs.datasets.registry import describe_names
 from motion_envs.datasets.sample_table import missing_columns_message, not_text_message
-from motion_envs.models.juggling import LEVELS
+from motion_envs.models.juggling import LEVELS, PATTERNS
 
 
 def main(args: argparse.Namespace) -> int:
@@ -139,8 +139,12 @@ def level_names(text: str) -> tuple[str, ...]:
 
 
 def siteswap_pattern(text: str) -> str:
-    """``--pattern``: a valid vanilla siteswap (lower case; whether the cascade juggler
-    can play it is :func:`.cascade.check_cascade_config`'s)."""
+    """``--pattern``: a registered pattern's name
+    (:data:`motion_envs.models.juggling.PATTERNS`) or a valid vanilla siteswap (lower
+    case; whether the cascade juggler can play it is
+    :func:`.cascade.check_cascade_config`'s)."""
+    if text in PATTERNS:
+        return text
     try:
         throws = parse_siteswap(text)
         siteswap_balls(throws)
@@ -259,7 +263,8 @@ hands at once; warnings where the recording does not fit (vanilla asynchronous
 juggling, reflective balls). results.json, flights.csv and flights.png (heights,
 gravity, ladder diagram) in --out; docs/recordings.md.
 
-With --pattern 3: the three-ball cascade (MotionEnvs/Cascade-v0: two hands, three balls,
+With --pattern P (a registered pattern: 3, the three-ball cascade, or 5, the five-ball
+cascade at its own tempo): MotionEnvs/Cascade-v0 (two hands, the pattern's balls,
 Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theorem). Per
 level, --episodes (50) test-seed episodes of the analytic cascade juggler, its
 latency-aware variant and the two trivial catches, each ending at the first drop or after
@@ -353,9 +358,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--pattern",
         type=siteswap_pattern,
         default=None,
-        help="a juggling pattern (siteswap): run its levels benchmark on MotionEnvs/Cascade-v0 "
-        "(every level unless --levels); the cascade juggler plays 3, the three-ball "
-        "cascade, and says why another pattern does not fit",
+        help="a juggling pattern (a registered name or siteswap): run its levels benchmark "
+        "on MotionEnvs/Cascade-v0 (every level unless --levels); the cascade juggler plays "
+        "the registered patterns (3, 5) and says why another pattern does not fit",
     )
     p.add_argument(
         "--episodes",

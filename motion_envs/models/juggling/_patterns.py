@@ -1,9 +1,10 @@
-"""Which siteswaps the analytic cascade juggler can play, and why not the others.
+"""Which siteswaps the analytic cascade juggler can play, and why not the others; the
+registered patterns.
 
-:func:`check_pattern` takes a siteswap at the cascade juggler's own tempo (its fitted
+:func:`check_pattern` takes a siteswap at a cascade juggler's own tempo (its fitted
 :class:`~motion_envs.models.juggling.CascadePattern`: the beat ``b`` and the dwell ``D``
-of the three-ball cascade, Shannon's theorem) and gives each throw value what it needs
-(:class:`ThrowNeed`):
+of its cascade, Shannon's theorem, at the fit's or a given dwell ratio) and gives each
+throw value what it needs (:class:`ThrowNeed`):
 
 * its flight ``F_h = h b - D`` (:func:`~motion_envs.datasets.juggling.siteswap_flights`);
 * the vertical release speed that makes the ball fall from the cascade's release height
@@ -13,13 +14,18 @@ of the three-ball cascade, Shannon's theorem) and gives each throw value what it
 * the apex above the release, ``v^2 / (2 g)``.
 
 The pattern fits when every reason in :attr:`PatternCheck.reasons` is absent: the ball
-count is the world's (:data:`~motion_envs.datasets.juggling.CASCADE_BALLS`); every ball
-flies (``F_h > 0``: a hand cannot throw a ball before it has caught it); every release is
-within the hand's speed limit (a ball leaves the palm at the palm's speed); and every
-pattern is a cascade (every throw the same odd value, the ball count: the juggler's hands
-each catch the other hand's ball in turn; self-throws, passes and empty beats are not
-modelled). At the juggler's tempo only ``"3"`` fits: ``"5"`` needs a release above the
-hand's limit and ``"441"``'s throw of 1 a dwell shorter than a beat.
+count is the fit's (``CascadePattern.balls``); every ball flies (``F_h > 0``: a hand
+cannot throw a ball before it has caught it); every release is within the hand's speed
+limit (a ball leaves the palm at the palm's speed); and every pattern is a cascade (every
+throw the same odd value, the ball count: the juggler's hands each catch the other hand's
+ball in turn; self-throws, holds, passes and empty beats are not modelled). At the
+three-ball juggler's tempo only ``"3"`` fits: ``"5"`` needs a release above the hand's
+limit and ``"441"``'s throw of 1 a dwell shorter than a beat; ``"5"`` is played at its
+own juggler's tempo (fitted on five-ball demonstrations).
+
+:class:`PatternSpec` and :func:`register_pattern`: a pattern Cascade-v0 plays is a spec
+(name, siteswap, dwell ratio, the controller's tunables) plus a registration
+(:data:`PATTERNS`); :func:`pattern_spec` finds it or refuses with the reason.
 """
 
 from __future__ import annotations
@@ -28,7 +34,6 @@ import math
 from dataclasses import dataclass
 
 from motion_envs.datasets.juggling import (
-    CASCADE_BALLS,
     CASCADE_STYLES,
     format_siteswap,
     parse_siteswap,
@@ -83,20 +88,26 @@ class PatternCheck:
 
 
 def check_pattern(
-    siteswap: str, pattern: CascadePattern, gravity: float, speed_limit: float
+    siteswap: str,
+    pattern: CascadePattern,
+    gravity: float,
+    speed_limit: float,
+    dwell_ratio: float | None = None,
 ) -> PatternCheck:
-    """Check ``siteswap`` at the tempo of ``pattern`` (fitted at ``gravity``, m/s^2)
-    against the hand's ``speed_limit`` (m/s); see the module docstring. Raises
-    ``ValueError`` for a siteswap that is not one (:func:`parse_siteswap`,
-    :func:`siteswap_balls`) or a non-positive ``gravity`` or ``speed_limit``."""
+    """Check ``siteswap`` at the tempo of ``pattern`` (fitted at ``gravity``, m/s^2; at
+    ``dwell_ratio``, None: the fit's) against the hand's ``speed_limit`` (m/s); see the
+    module docstring. Raises ``ValueError`` for a siteswap that is not one
+    (:func:`parse_siteswap`, :func:`siteswap_balls`) or a non-positive ``gravity`` or
+    ``speed_limit``."""
     if not (math.isfinite(gravity) and gravity > 0):
         raise ValueError(f"gravity must be finite and > 0; got {gravity!r}")
     if not (math.isfinite(speed_limit) and speed_limit > 0):
         raise ValueError(f"speed_limit must be finite and > 0; got {speed_limit!r}")
     throws = parse_siteswap(siteswap)
     balls = siteswap_balls(throws)
-    period, beat = pattern.timing()
-    dwell = pattern.dwell_ratio * period
+    r = pattern.dwell_ratio if dwell_ratio is None else float(dwell_ratio)
+    period, beat = pattern.timing(r)
+    dwell = r * period
     # the catch height below the release, from the juggler's own toss and flight
     f0, v0 = pattern.flight, float(pattern.release_velocity[1])
     drop = v0 * f0 - 0.5 * gravity * f0 * f0  # z_c - z_r
@@ -107,8 +118,8 @@ def check_pattern(
         apex = v * v / (2 * gravity) if v > 0 else 0.0
         needs.append(ThrowNeed(h, h % 2 == 1, f, v, apex))
     reasons = []
-    if balls != CASCADE_BALLS:
-        reasons.append(f"it has {balls} ball{_s(balls)}, the cascade world {CASCADE_BALLS}")
+    if balls != pattern.balls:
+        reasons.append(f"it has {balls} ball{_s(balls)}, the juggler's fit {pattern.balls}")
     for n in needs:
         if n.value > 0 and n.flight <= 0:
             reasons.append(
@@ -224,5 +235,16 @@ register_pattern(
         "3",
         None,
         "the three-ball cascade; dwell ratio: the SIMULATED training cycles' median",
+    )
+)
+register_pattern(
+    PatternSpec(
+        "5",
+        "5",
+        2.0 / 3.0,
+        "the five-ball cascade at a human dwell ratio of 2/3 (J. Kalvan, 'How many objects "
+        "can be juggled', 1997: 'My tests show r is usually about 2/3'; his 'Optimal "
+        "Juggling', 1996: near 2/3 for cascades of 3, 5, 7 and 9 balls); flight: the "
+        "juggler's own toss fitted on the SIMULATED five-ball demonstrations",
     )
 )
