@@ -200,7 +200,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `velocity_std`      | **float** | `None`      | m/s, measurement noise of the ball velocities; None: the level's |
     | `release_speed_std` | **float** | `None`      | relative std of the release speed; None: the level's |
     | `release_angle_std` | **float** | `None`      | degrees, std of the release direction; None: the level's |
-    | `pattern`           | **str**   | `"3"`       | a registered pattern's name (`PATTERNS`); anything else is refused with the reason |
+    | `pattern`           | **str**   | `"3"`       | a registered pattern's name (`PATTERNS`: `"3"`, `"3-human"` at dwell ratio 2/3, `"5"` the five-ball cascade); anything else is refused with the reason |
     | `dwell_ratio`       | **float** | `None`      | ``D / (V + D)`` in (0.2, 0.8); None: the pattern's (for `"3"` the demonstrations' median, ~0.56) |
     | `tunables`          | **CascadeTunables** | `None` | the controller's tunables; None: the pattern's |
     | `gravity`           | **float** | `9.81`      | m/s^2 (the demonstrations are generated at this gravity) |

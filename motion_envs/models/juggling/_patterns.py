@@ -239,6 +239,16 @@ register_pattern(
 )
 register_pattern(
     PatternSpec(
+        "3-human",
+        "3",
+        2.0 / 3.0,
+        "the three-ball cascade at a human dwell ratio of 2/3 (J. Kalvan, 'How many objects "
+        "can be juggled', 1997: 'My tests show r is usually about 2/3'); the same flight as "
+        "'3', a slower beat",
+    )
+)
+register_pattern(
+    PatternSpec(
         "5",
         "5",
         2.0 / 3.0,
