@@ -2,10 +2,10 @@
 and ``motion-bench juggling --analyse`` on SIMULATED recordings with the defects of real
 capture (``tests/_siteswap_recordings.py``): 3- and 5-ball cascades, 441, 531 and single
 throws at 300 Hz; 0.5 mm white noise and 0.8 mm camera-switch steps, balls hidden in
-the palm at 40 % of the catches or releases (the centroid moving ~2 cm as they go), gaps in 15 % of the flights, 1 % dropped
-samples, unlabelled fragments, swaps where balls pass within 12 cm and at random, two
-skin markers on each hand, static markers, ghosts; the lab turned by any angle about
-the vertical, Z-up or Y-up.
+the palm at 40 % of the catches or releases (the centroid moving ~2 cm as they go),
+gaps in 15 % of the flights, 1 % dropped samples, unlabelled fragments, swaps where
+balls pass within 12 cm and at random, two skin markers on each hand, static markers,
+ghosts; the lab turned by any angle about the vertical, Z-up or Y-up.
 
 Tolerances (what is asserted, for any seed and angle hypothesis draws): hands 2 and
 the across-body axis within 10 degrees; the beat within 2 %; the median flight of the
@@ -26,6 +26,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from baselines.cli import main
+from baselines.juggling_bench.analyse import recording_warnings
 from motion_envs.datasets.juggling import siteswap_balls
 from motion_envs.models.juggling import Flight, detect_flights, pattern_summary
 from tests.test_mocap import write_tsv
@@ -237,3 +238,28 @@ def test_tsv_command_y_up_turned(tmp_path, capsys):
         == 0
     )
     assert "warning: the ball counts disagree" in capsys.readouterr().out
+
+
+def test_recordings_that_do_not_fit_are_warned_about():
+    rec = juggle("3", duration=8.0, seed=9)
+    rng = np.random.default_rng(10)
+    noisy = rec.balls + rng.normal(0, 0.0005, rec.balls.shape)
+    res = detect_flights(rec.t, noisy)
+    assert recording_warnings(res.flights, res.noise, res.gravity_median) == []
+    # lengths 5 % too long (a wrong calibration): gravity 5 % high
+    big = detect_flights(rec.t, 1.05 * noisy)
+    said = recording_warnings(big.flights, big.noise, big.gravity_median)
+    assert any("gravity 10.3" in w for w in said)
+    # a marker 3 cm off the ball's centre, the ball spinning at 1 rev/s
+    phase = 2 * np.pi * 1.0 * rec.t[:, None]
+    off = 0.03 * np.stack([np.cos(phase), np.zeros_like(phase), np.sin(phase)], axis=-1)
+    spun = detect_flights(rec.t, noisy + off)
+    said = recording_warnings(spun.flights, spun.noise, spun.gravity_median)
+    assert any("gravity spreads" in w for w in said)
+    # the balls never seen in the hands: no release seen
+    in_air = np.zeros(noisy.shape[:2], dtype=bool)
+    for f in rec.throws:
+        in_air[(rec.t >= f.start + 0.03) & (rec.t <= f.end - 0.03), f.ball] = True
+    hidden = detect_flights(rec.t, np.where(in_air[..., None], noisy, np.nan))
+    said = recording_warnings(hidden.flights, hidden.noise, hidden.gravity_median)
+    assert any("releases seen on only 0%" in w for w in said)

@@ -41,6 +41,7 @@ __all__ = [
     "AnalyseConfig",
     "BallMarkers",
     "load_ball_markers",
+    "recording_warnings",
     "report_analysis",
     "run_analysis",
     "write_analysis",
@@ -136,10 +137,11 @@ def run_analysis(config: AnalyseConfig) -> dict[str, Any]:
     gravity = [f.gravity for f in flights]
     median = float(np.median(gravity)) if gravity else math.nan
     pattern = pattern_summary(flights, markers.lateral, config.balls)
+    noise = float(np.median([a.noise for a in analyses]))
     return {
         "source": markers.source,
         "read": markers.description,
-        "noise_m": float(np.median([a.noise for a in analyses])),
+        "noise_m": noise,
         "n_flights": len(flights),
         "gravity_median": median,
         "gravity_iqr": [float(q) for q in np.quantile(gravity, [0.25, 0.75])]
@@ -148,6 +150,7 @@ def run_analysis(config: AnalyseConfig) -> dict[str, Any]:
         "gravity_error": median / STANDARD_GRAVITY - 1.0,
         "counts": counts,
         "pattern": pattern.as_dict(),
+        "warnings": [*recording_warnings(flights, noise, median), *pattern.warnings],
         "throws": [dataclasses.asdict(e) for e in pattern.events],
         "flights": [_row(f, pattern.axis) for f in flights],
         "options": {k: getattr(config.options, k) for k in config.options.__dataclass_fields__},
@@ -155,6 +158,57 @@ def run_analysis(config: AnalyseConfig) -> dict[str, Any]:
         "_flights": flights,
         "_pattern": pattern,
     }
+
+
+#: A warning when the median fitted gravity is further than this from 9.81 m/s^2.
+GRAVITY_WARNING = 0.03
+#: ... when the flights' median residual rms exceeds this many times the noise.
+RESIDUAL_WARNING = 3.0
+#: ... when the interquartile range of the flights' fitted gravity is wider than this
+#: fraction of 9.81 m/s^2.
+SPREAD_WARNING = 0.1
+#: ... when fewer than this share of the flights have their release seen.
+SEEN_WARNING = 0.25
+
+
+def recording_warnings(flights: tuple[Flight, ...], noise: float, gravity: float) -> list[str]:
+    """What in the flights says the recording does not fit the analysis' assumptions:
+    gravity off 9.81 by more than :data:`GRAVITY_WARNING` (units, up axis, drag, a
+    camera calibration), flights off their parabolas by more than
+    :data:`RESIDUAL_WARNING` times the noise or their fitted gravity spread over an
+    interquartile range wider than :data:`SPREAD_WARNING` of 9.81 (a marker off the
+    ball's centre on a spinning ball: the flights are cut into pieces, each fitted
+    with a different gravity),
+    releases seen on fewer than :data:`SEEN_WARNING` of the flights (balls hidden in
+    the hands: the pattern rests on few events)."""
+    out: list[str] = []
+    if not flights:
+        return out
+    if abs(gravity / STANDARD_GRAVITY - 1.0) > GRAVITY_WARNING:
+        out.append(
+            f"median gravity {gravity:.2f} m/s^2 is more than {GRAVITY_WARNING:.0%} from "
+            f"{STANDARD_GRAVITY}: check the unit, the up axis and the camera calibration"
+        )
+    rms = float(np.median([f.residual_rms for f in flights]))
+    if rms > RESIDUAL_WARNING * noise:
+        out.append(
+            f"the flights sit {rms * 1e3:.1f} mm (rms) off their parabolas, "
+            f"{rms / noise:.1f} x the noise: markers off the balls' centres or spinning "
+            "balls; flights may be cut and events missed"
+        )
+    q1, q3 = (float(q) for q in np.quantile([f.gravity for f in flights], [0.25, 0.75]))
+    if q3 - q1 > SPREAD_WARNING * STANDARD_GRAVITY:
+        out.append(
+            f"the flights' fitted gravity spreads from {q1:.2f} to {q3:.2f} m/s^2 (IQR): "
+            "markers off the balls' centres (spinning balls) cut the flights into pieces"
+        )
+    seen = sum(f.start_seen for f in flights) / len(flights)
+    if seen < SEEN_WARNING:
+        out.append(
+            f"releases seen on only {seen:.0%} of the flights (the ball not seen in the "
+            "hand before them): the pattern rests on few events"
+        )
+    return out
 
 
 def _row(f: Flight, axis: tuple[float, ...]) -> dict[str, Any]:
@@ -205,7 +259,7 @@ def report_analysis(doc: dict[str, Any]) -> str:
         f"{_num(p['balls_concurrent'], '.1f')}; pattern: "
         f"{p['balls'] if p['balls'] is not None else 'n/a'} (flight time for that N "
         f"{_num(p['flight_theorem'], '.3f')} s vs measured {_num(p['flight_mean'], '.3f')} s)",
-        *(f"warning: {w}" for w in p["warnings"]),
+        *(f"warning: {w}" for w in doc["warnings"]),
     ]
     if doc["n_flights"] == 0:
         low, high = doc["options"]["gravity_range"]

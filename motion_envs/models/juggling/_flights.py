@@ -25,8 +25,9 @@ Steps (:func:`detect_flights`; every rejection is counted in :attr:`FlightAnalys
    sigma`` (a bridged gap stays cut when either is): a marker swap, which a speed alone
    misses when the balls are a few centimetres apart. A fragment whose vertical
    acceleration (a quadratic over a window) is below ``-(gravity + pull_margin)`` by 4
-   standard errors anywhere a window or more from its ends is not a ball (a hand's skin marker decelerates faster than
-   gravity after each throw; a ball in an open hand cannot): dropped.
+   standard errors anywhere a window or more from its ends is not a ball (a hand's skin
+   marker decelerates faster than gravity after each throw; a ball in an open hand
+   cannot; near its ends a ball's marker may move as the palm covers it): dropped.
 3. **Seeds.** On every fragment a window of :attr:`FlightOptions.window` seconds slides
    sample by sample; the vertical coordinate is fitted by a quadratic in time, each
    horizontal one by a line (free flight, no drag). A window is a seed when its residual
