@@ -10,7 +10,8 @@ ghosts; the lab turned by any angle about the vertical, Z-up or Y-up.
 Tolerances (what is asserted, for any seed and angle hypothesis draws): hands 2 and
 the across-body axis within 10 degrees; the beat within 2 %; the median flight of the
 complete flights within 30 ms of the truth (a release is placed to about +-20 ms: the
-ball leaves the hand's path smoothly); the dwell ratio within 0.06; the siteswap and
+ball leaves the hand's path smoothly); the dwell ratio within 0.08 (a median over ~10
+pairs of a catch and its hand's next throw, each placed to 10-20 ms); the siteswap and
 the ball count exact.
 """
 
@@ -71,7 +72,7 @@ def test_siteswaps_from_defective_capture(pattern, beat, ratio):
     assert p.flight_mean == pytest.approx(truth["mean"], abs=0.04)
     if len(pattern) == 1:
         assert p.flight == pytest.approx(truth["flight"], abs=0.03)
-    assert p.dwell_ratio == pytest.approx(truth["ratio"], abs=0.06)
+    assert p.dwell_ratio == pytest.approx(truth["ratio"], abs=0.08)
     assert res.gravity_median == pytest.approx(G, rel=0.005)
     # every throw found is a true release (to 60 ms: a hand that lets go while
     # decelerating at nearly g leaves the ball on its path) with its true hand
@@ -104,7 +105,7 @@ def test_any_angle_any_seed(angle, seed, five):
     assert p.siteswap == pattern and p.balls == int(pattern)
     assert p.throw_period == pytest.approx(beat, rel=0.02)
     assert p.flight == pytest.approx(_truth(rec)["flight"], abs=0.03)
-    assert p.dwell_ratio == pytest.approx(_truth(rec)["ratio"], abs=0.06)
+    assert p.dwell_ratio == pytest.approx(_truth(rec)["ratio"], abs=0.08)
 
 
 def test_skin_markers_alone_make_no_throw():
@@ -216,7 +217,7 @@ def test_tsv_command_y_up_turned(tmp_path, capsys):
     p = doc["pattern"]
     assert p["hands"] == 2 and p["siteswap"] == "5" and p["balls"] == 5
     assert p["throw_period"] == pytest.approx(0.22, rel=0.02)
-    assert p["dwell_ratio"] == pytest.approx(0.75, abs=0.06)
+    assert p["dwell_ratio"] == pytest.approx(0.75, abs=0.08)
     assert p["apex_above_release"] == pytest.approx(
         float(np.median([f.v0[2] ** 2 / (2 * G) for f in rec.inside()])), abs=0.03
     )

@@ -41,11 +41,15 @@ Steps (:func:`pattern_summary`):
    time ``F`` (``F_h = h b - D``, :func:`~motion_envs.datasets.juggling.siteswap_flights`),
    and when the catch was not seen either, ``F`` is where the flight's parabola comes
    down to the median catch height above the release.
-6. **Siteswap.** For periods ``p`` = 1 .. :data:`MAX_PERIOD`, the throws of a run are
+6. **Siteswap.** For periods ``p`` = 1 .. :data:`MAX_PERIOD` (multiples of the
+   shortest period at which some beat never has a seen throw), the throws of a run are
    grouped by beat modulo ``p`` and each group's most common value taken; the siteswap is
-   the shortest period whose values agree with at least :data:`SITESWAP_AGREEMENT` of
-   the throws, written from its largest rotation (``441``, ``531``) and checked by the
-   permutation test (:func:`~motion_envs.datasets.juggling.siteswap_balls`).
+   the shortest period whose values agree with as many throws as any period's, give or
+   take :data:`SITESWAP_SLACK` of them (or one), and with at least
+   :data:`SITESWAP_AGREEMENT` of the throws (one beat never seen takes the value that
+   completes the permutation of landing beats; more: no siteswap), written from its
+   largest rotation (``441``, ``531``) and checked by the permutation test
+   (:func:`~motion_envs.datasets.juggling.siteswap_balls`).
 7. **Balls**, three ways: the siteswap's average throw; Shannon's theorem
    ``(F + D) / (V + D) = N / H`` with ``F`` the mean flight over the siteswap's throws
    (the median flight of each value; the median of all flights without a siteswap); and
@@ -81,6 +85,7 @@ __all__ = [
     "PAUSE_BEATS",
     "REGULAR_SHARE",
     "SITESWAP_AGREEMENT",
+    "SITESWAP_SLACK",
     "PatternSummary",
     "ThrowEvent",
     "across_axis",
@@ -108,6 +113,9 @@ DWELL_LIMIT = 1.1
 MAX_PERIOD = 8
 #: Share of the valued throws a siteswap's values must agree with.
 SITESWAP_AGREEMENT = 0.85
+#: A longer period is taken when its values agree with more throws than a shorter
+#: one's by more than this share of them (or one throw).
+SITESWAP_SLACK = 0.05
 
 
 @dataclass(frozen=True)
@@ -284,6 +292,34 @@ def _runs(times: list[float], beat: float) -> tuple[list[int], list[int], list[f
     return runs, beats, off
 
 
+def _empty_beats(throws: list[_Throw]) -> int:
+    """The shortest period ``q`` (2 .. :data:`MAX_PERIOD`) at which a beat of the
+    longest run never has a seen throw though it spans at least 3 periods, the other
+    beats have 2 or more each, and missed throws spread evenly would leave a beat empty
+    with probability under 1 %: a value never seen (an empty hand, or a throw
+    the capture always misses, such as the short 1 of 441); the siteswap's period is a
+    multiple of it. 1 when there is none."""
+    runs: dict[tuple[str, int], list[int]] = {}
+    for th in throws:
+        if th.beat >= 0:
+            runs.setdefault((th.flight.recording, th.run), []).append(th.beat)
+    if not runs:
+        return 1
+    beats = np.array(max(runs.values(), key=len))
+    beats = beats - beats.min()
+    span = int(beats.max()) + 1
+    seen = beats.size / span
+    for q in range(2, MAX_PERIOD + 1):
+        if span < 3 * q:
+            break
+        count = np.bincount(beats % q, minlength=q)
+        # a beat left empty by chance: q (1 - seen)^(span / q) under even misses
+        chance = q * (1.0 - seen) ** (span / q) if seen < 1 else 0.0
+        if count.min() == 0 and count[count > 0].min() >= 2 and chance < 0.01:
+            return q
+    return 1
+
+
 def _siteswap(throws: list[_Throw], warnings: list[str]) -> tuple[tuple[int, ...] | None, float]:
     """The siteswap of the valued on-beat throws (step 6) and its agreement."""
     by_run: dict[tuple[str, int], dict[int, int]] = {}
@@ -293,8 +329,9 @@ def _siteswap(throws: list[_Throw], warnings: list[str]) -> tuple[tuple[int, ...
     total = sum(len(v) for v in by_run.values())
     if total < MIN_PATTERN_THROWS:
         return None, math.nan
-    best: tuple[float, int, dict[tuple[str, int], list[int]]] | None = None
-    for p in range(1, MAX_PERIOD + 1):
+    step = _empty_beats(throws)
+    fits: list[tuple[int, int, dict[tuple[str, int], list[int]]]] = []
+    for p in range(step, MAX_PERIOD + 1, step):
         agree = 0
         modes: dict[tuple[str, int], list[int]] = {}
         for key, seq in by_run.items():
@@ -307,13 +344,11 @@ def _siteswap(throws: list[_Throw], warnings: list[str]) -> tuple[tuple[int, ...
             ]
             agree += sum(v == mode[(k - first) % p] for k, v in seq.items())
             modes[key] = mode
-        share = agree / total
-        if best is None or share > best[0] + 1e-12:
-            best = (share, p, modes)
-        if share >= SITESWAP_AGREEMENT:
-            break
-    assert best is not None
-    share, p, modes = best
+        fits.append((p, agree, modes))
+    most = max(a for _, a, _ in fits)
+    slack = max(1.0, SITESWAP_SLACK * total)
+    p, agree, modes = next(f for f in fits if most - f[1] <= slack)
+    share = agree / total
     key = max(by_run, key=lambda r: len(by_run[r]))
     seq = by_run[key]
     if (max(seq) - min(seq) + 1) < 2 * p:
@@ -459,6 +494,10 @@ def pattern_summary(
                 nxt[i] = later[0]
                 th.dwell = later[0].flight.start - c
     dwell = _median([th.dwell for th in throws if math.isfinite(th.dwell)])
+    if regular and not math.isfinite(dwell):
+        warnings.append(
+            "no seen catch is followed by its hand's next throw: no dwell, throw values or siteswap"
+        )
     vacant = hand_period - dwell
     ratio = dwell / hand_period
     # throw values (step 5)
@@ -504,6 +543,11 @@ def pattern_summary(
             if candidate is not None and math.isfinite(candidate):
                 n = max(1, round(candidate))
                 break
+        if n is not None and b_site is None and not math.isfinite(theorem):
+            warnings.append(
+                f"{n} balls from the concurrent count alone (fewer when flights or catches "
+                "are missed)"
+            )
     if n is not None:
         named = {
             "the siteswap": b_site,
