@@ -20,7 +20,9 @@ The orientation and position jobs include the learned rows and columns
 (docs/learned.md) at the full budget; ``--learned quick`` or ``off`` lowers the budget of
 every job.
 
-Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
+Before each long job a line gives its cost measured beforehand (:data:`MEASURED`: CPU
+time of the job at the default settings; the wall time depends on the machine and its
+load). Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
 what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
 false`` until the last one is done), so an interrupted run leaves an index that lists
 exactly the jobs whose files are new. Every file is written atomically: a previous
@@ -50,9 +52,19 @@ from motion_envs.models.person_calibration import DEFAULT_CALIBRATION
 __all__ = ["JOBS", "AllConfig", "Job", "register", "run"]
 
 
+#: How the jobs' ``cpu_seconds`` were measured: the command, the machine, the date.
+MEASURED = (
+    "user + sys of `motion-bench all --no-progress` per job, 2026-12-06, a 2-core AMD EPYC "
+    "VM shared with other jobs (138 s in all)"
+)
+#: A job whose measured cost is at least this many CPU seconds gets an estimate line.
+LONG_JOB_CPU_SECONDS = 10.0
+
+
 @dataclass(frozen=True)
 class Job:
-    """One benchmark of ``motion-bench all``: its folder, title and sub-command config."""
+    """One benchmark of ``motion-bench all``: its folder, title and sub-command config;
+    ``cpu_seconds`` its CPU time at the default settings (:data:`MEASURED`)."""
 
     folder: str
     title: str
@@ -62,6 +74,18 @@ class Job:
         | juggling_bench.JugglingConfig
         | juggling_bench.LevelsConfig
     )
+    cpu_seconds: float = 0.0
+
+    def estimate(self, learned: str) -> str | None:
+        """The line printed before a long job: its measured CPU time (``None`` for a
+        short job)."""
+        if self.cpu_seconds < LONG_JOB_CPU_SECONDS:
+            return None
+        budget = "" if learned == "full" else f" at --learned full (less at {learned})"
+        return (
+            f"estimate: about {self.cpu_seconds:.0f} s of CPU time{budget}, measured as "
+            f"{MEASURED}; the wall time depends on the machine's load"
+        )
 
     def command(self, out: Path) -> str:
         """The equivalent ``motion-bench`` command line (recorded in the index)."""
@@ -99,27 +123,32 @@ JOBS: tuple[Job, ...] = (
         "orientation-vr-kitchen",
         "Orientation trajectories on vr-kitchen (real data)",
         orientation_bench.OrientationConfig(data="vr-kitchen", calibration=DEFAULT_CALIBRATION),
+        cpu_seconds=31.0,
     ),
     Job(
         "orientation-cohort",
         "Orientation trajectories on the virtual cohort (SIMULATED data, calibrated to the paper)",
         orientation_bench.OrientationConfig(data="cohort", learned="off"),
+        cpu_seconds=0.6,
     ),
     Job(
         "position-lasa",
         "Position trajectories on LASA handwriting (real data)",
         position_bench.PositionConfig(data="lasa"),
+        cpu_seconds=53.0,
     ),
     Job(
         "juggling",
         "Juggling: the analytic juggler (SIMULATED demonstrations, MuJoCo scene)",
         juggling_bench.JugglingConfig(),
+        cpu_seconds=11.0,
     ),
     Job(
         "juggling_v1-levels",
         "Juggling-v1 levels: the analytic juggler with a delayed view of the ball, "
         "its latency-aware variant and two trivial policies (SIMULATED demonstrations)",
         juggling_bench.LevelsConfig(),
+        cpu_seconds=40.0,
     ),
 )
 
@@ -178,7 +207,9 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
         if config.only and job.folder not in config.only:
             continue
         echo(f"\n{'=' * 100}\n{job.title}\n{'=' * 100}")
-        t0 = time.perf_counter()
+        if (line := job.estimate(config.learned)) is not None:
+            echo(line)
+        t0, cpu0 = time.perf_counter(), time.process_time()
         entry: dict[str, Any] = {
             "folder": job.folder,
             "title": job.title,
@@ -192,6 +223,7 @@ def run(config: AllConfig, echo: Callable[[str], Any] = lambda text: None) -> di
             entry["exit_code"] = 2
             entry["error"] = str(exc)
         entry["seconds"] = round(time.perf_counter() - t0, 2)
+        entry["cpu_seconds"] = round(time.process_time() - cpu0, 2)
         index["jobs"].append(entry)
         atomic_write_text(out / "index.json", json.dumps(index, indent=2) + "\n")
     index["complete"] = True

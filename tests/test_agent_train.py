@@ -66,6 +66,7 @@ def ppo_run(tmp_path_factory):
     return out, result
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("env_id", list(ENVS))
 @pytest.mark.parametrize("algo", ["ppo", "sac", "td3"])
 def test_2000_steps_train_save_reload_same_actions(tmp_path, algo, env_id):
@@ -95,6 +96,7 @@ def test_2000_steps_train_save_reload_same_actions(tmp_path, algo, env_id):
     assert crit == result.best_val_criterion
 
 
+@pytest.mark.slow
 def test_callback_criterion_equals_motion_bench_agent(ppo_run, tmp_path):
     out, result = ppo_run
     assert main(["agent", str(out), "--split", "val", "--out", str(tmp_path)]) == 0
@@ -108,6 +110,7 @@ def test_callback_criterion_equals_motion_bench_agent(ppo_run, tmp_path):
     assert any((out / "tb").rglob("events.out.tfevents.*"))
 
 
+@pytest.mark.slow
 def test_agent_on_test_split_scores_the_nominal_like_the_env(ppo_run):
     import gymnasium as gym
 

@@ -84,6 +84,7 @@ def test_shipped_lopo_sweep_is_leave_one_person_out():
     assert all("val_fraction" not in c["overrides"]["env_kwargs"] for c in sweep.configurations)
 
 
+@pytest.mark.slow
 @pytest.mark.ray
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
 @pytest.mark.filterwarnings("ignore::FutureWarning")

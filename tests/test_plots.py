@@ -122,7 +122,7 @@ def test_learned_ratio_figure_is_readable():
     assert labels == sorted(per_group, key=natural_key)
     for t in [*ax.get_yticklabels(), *ax.get_xticklabels()]:
         assert t.get_fontsize() >= 8 and t.get_rotation() == 0
-    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
     assert legend == ["learned better (< 1)", "analytic better (>= 1)", "target"]
     title = ax.get_title()
     assert "_" not in title and "MLP (leave one subject out)" in title
@@ -130,6 +130,82 @@ def test_learned_ratio_figure_is_readable():
     assert row_words("null_d2_path_loso") == (
         "null model, d = 2, in the path frame (leave one subject out)"
     )
+    _assert_legends_clear(fig)
+
+
+def _assert_legends_clear(fig):
+    """Every legend of ``fig`` covers no bar, line or title, and every text lies inside the
+    figure (once: legends over the last bars, clipped titles)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.patches import Rectangle
+
+    if not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    whole = fig.bbox
+    for ax in fig.axes:
+        texts = [ax.title, ax.xaxis.label, ax.yaxis.label]
+        for text in texts:
+            if text.get_text():
+                box = text.get_window_extent(renderer)
+                assert whole.x0 - 1 <= box.x0 and box.x1 <= whole.x1 + 1, text.get_text()
+                assert whole.y0 - 1 <= box.y0 and box.y1 <= whole.y1 + 1, text.get_text()
+        bars = [p for p in ax.patches if isinstance(p, Rectangle) and p.get_height() != 0]
+        for legend in [ax.get_legend(), *fig.legends]:
+            if legend is None:
+                continue
+            lbox = legend.get_window_extent(renderer)
+            for bar in bars:
+                assert not lbox.overlaps(bar.get_window_extent(renderer)), "legend over a bar"
+            for text in texts:
+                if text.get_text():
+                    assert not lbox.overlaps(text.get_window_extent(renderer)), text.get_text()
+
+
+def test_juggling_agent_figure_shows_the_pooled_deviation_beside_the_phases(tmp_path):
+    """Once the figure's per-phase bars said the agent was closer to the demonstrations
+    while the console's deviation (the median over all segments) said it was farther:
+    the figure now also draws that pooled median, with each group's segment counts."""
+    from baselines.agents.evaluate import plot_juggling_agent_vs_nominal
+
+    phases = ["toss", "go_down", "catch", "return"]
+    rng = np.random.default_rng(0)
+    results = {
+        "episodes": {
+            "agent_deviation": list(rng.uniform(0.01, 0.03, 20)),
+            "nominal_deviation": list(rng.uniform(0.01, 0.03, 20)),
+        },
+        "algo": "ppo",
+        "env_id": "MotionEnvs/Juggling-v1",
+        "split": "test",
+        "phase_deviation": dict(zip(phases, [0.011, 0.012, 0.02, 0.013], strict=True)),
+        "nominal_phase_deviation": dict(zip(phases, [0.012, 0.013, 0.021, 0.014], strict=True)),
+        "deviation": 0.016,
+        "nominal_deviation": 0.014,
+        "phase_segments": dict(zip(phases, [40, 40, 80, 40], strict=True)),
+        "nominal_phase_segments": dict(zip(phases, [60, 60, 50, 60], strict=True)),
+        "nominal_catch_rate": 0.647,
+        "catch_rate": 0.93,
+        "deviation_reference": "held-out demonstrations",
+    }
+    import baselines.agents.evaluate as evaluate
+
+    figures = []
+    saved = evaluate.save_figure
+    evaluate.save_figure = lambda fig, path, dpi: figures.append(fig)
+    try:
+        plot_juggling_agent_vs_nominal(results, tmp_path / "agent.png")
+    finally:
+        evaluate.save_figure = saved
+    (fig,) = figures
+    bars_ax = fig.axes[1]
+    heights = [p.get_height() for p in bars_ax.patches]
+    assert heights[:5] == [12.0, 13.0, 21.0, 14.0, 14.0]  # nominal: phases, then all
+    assert heights[5:] == [11.0, 12.0, 20.0, 13.0, 16.0]  # agent: closer per phase, not pooled
+    ticks = [t.get_text() for t in bars_ax.get_xticklabels()]
+    assert ticks[-1] == "all\n(console)\nn=230/200" and ticks[2] == "catch\nn=50/80"
+    _assert_legends_clear(fig)
 
 
 def test_residual_figure_magnifies_models_hidden_at_the_origin():

@@ -213,8 +213,8 @@ def plot_juggling_agent_vs_nominal(results: Mapping[str, Any], path: Path) -> No
     ax2.set_xticks(x, labels, fontsize=8)
     ax2.set_ylabel(f"median deviation from {results['deviation_reference']} (mm)", fontsize=9)
     ax2.set_title(
-        "hand path vs nearest demonstration: median per phase, and over all segments\n"
-        "(n = segments, nominal/agent: the phases' shares can differ)",
+        "hand vs nearest demonstration: median per phase and over all\n"
+        "segments (n = segments, nominal/agent; the phases' shares differ)",
         fontsize=8,
     )
     ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22), ncol=2, fontsize=8)

@@ -110,6 +110,7 @@ def ratio_figure(comparisons: list[dict[str, Any]], title: str, group: str = "su
     axes = fig.subplots(rows, cols, squeeze=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
+    legend: list[Any] = []
     for ax, c in zip(axes.ravel(), comparisons, strict=False):
         names = sorted(c["per_group_ratio"], key=natural_key)
         vals = np.array([c["per_group_ratio"][k] for k in names])
@@ -123,7 +124,7 @@ def ratio_figure(comparisons: list[dict[str, Any]], title: str, group: str = "su
             handles.append(
                 ax.axvline(c["target_ratio"], color="C0", lw=1.0, ls="--", label="target")
             )
-        ax.legend(handles=handles, fontsize=8, loc="lower right")
+        legend = max(legend, handles, key=len)
         ax.set_yticks(range(len(names)))
         ax.set_yticklabels(names, fontsize=8)
         ax.invert_yaxis()  # first group at the top
@@ -132,10 +133,12 @@ def ratio_figure(comparisons: list[dict[str, Any]], title: str, group: str = "su
         ax.set_xlabel("ratio of median max errors, learned / analytic", fontsize=9)
         lo, hi = (c.get("ratio_ci95") or [float("nan")] * 2)[:2]
         ax.set_title(
-            f"{row_words(c['learned'])}\nvs {row_words(c['best_analytic'])}: "
+            f"{row_words(c['learned'])}\nvs {row_words(c['best_analytic'])}:\n"
             f"ratio {c['ratio']:.3f} (95 % CI {lo:.3f} to {hi:.3f})",
             fontsize=9,
         )
+    # one legend below the panels: inside one, it covered the bars of the last groups
+    fig.legend(handles=legend, loc="outside lower center", ncols=3, fontsize=8, frameon=False)
     fig.suptitle(title, fontsize=10)
     return fig
 
