@@ -229,7 +229,7 @@ def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None, demo
     fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8, frameon=False)
     split = doc.get("split", {}).get("split", "loo")
     scored = "leave one demonstration out" if split == "loo" else f"{split} split"
-    view = (
+    plane = (
         ""
         if dims == 2
         else f"\n{dims}-D data, each panel in its demonstration's plane of largest spread "
@@ -237,7 +237,7 @@ def shapes_figure(doc: dict[str, Any], shapes: Sequence[str] | None = None, demo
     )
     fig.suptitle(
         f"{doc.get('dataset', '')}: one held-out demonstration per shape and each method's "
-        f"prediction of it from its start, end and duration ({scored}){view}",
+        f"prediction of it from its start, end and duration ({scored}){plane}",
         fontsize=10,
     )
     return fig
@@ -252,7 +252,7 @@ def _plane(path: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.eye(d, 2)
     centred = path - path.mean(axis=0)
     _, _, vt = np.linalg.svd(centred, full_matrices=False)
-    basis = vt[:2].T.copy()
+    basis: NDArray[np.float64] = vt[:2].T.copy()
     if (path[-1] - path[0]) @ basis[:, 0] < 0:
         basis[:, 0] *= -1
     return basis

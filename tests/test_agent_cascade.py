@@ -157,6 +157,7 @@ def test_shipped_config_block():
     assert hp["action_head_scale"] == 0.0
 
 
+@pytest.mark.slow
 def test_motion_bench_train_and_agent_smoke(tmp_path):
     """``motion-bench train --env MotionEnvs/Cascade-v0`` with the shipped PPO config, then
     ``motion-bench agent``: the juggler's numbers on the same test seeds are reported."""

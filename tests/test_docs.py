@@ -83,11 +83,13 @@ def built_site(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_site_builds_with_warnings_as_errors(built_site):
     assert (built_site / "index.html").exists()
     assert (built_site / "api.html").exists()
 
 
+@pytest.mark.slow
 def test_every_environment_has_a_page(built_site):
     import motion_envs
 
@@ -99,6 +101,7 @@ def test_every_environment_has_a_page(built_site):
         assert "Version History" in text, env_id
 
 
+@pytest.mark.slow
 def test_tutorials_are_in_the_site(built_site):
     index = (built_site / "tutorials" / "index.html").read_text(encoding="utf-8")
     for name in ("tutorial_train_and_compare", "tutorial_own_recordings", "tutorial_sweep"):
@@ -151,6 +154,7 @@ def test_animation_is_a_seeded_nominal_rollout_and_cached(tmp_path, monkeypatch)
         env_pages.animation(env_id, tmp_path, 4)
 
 
+@pytest.mark.slow
 def test_every_public_name_is_in_the_api_reference(built_site):
     from sphinx.util.inventory import InventoryFile
 

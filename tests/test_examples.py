@@ -37,7 +37,11 @@ def test_every_example_has_an_expectation():
 @pytest.mark.parametrize(
     "script",
     [
-        pytest.param(p, id=p.stem, marks=[pytest.mark.ray, pytest.mark.slow] if p.stem == "tutorial_sweep" else [])
+        pytest.param(
+            p,
+            id=p.stem,
+            marks=[pytest.mark.ray, pytest.mark.slow] if p.stem == "tutorial_sweep" else [],
+        )
         for p in EXAMPLES
     ],
 )

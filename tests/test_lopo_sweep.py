@@ -182,6 +182,7 @@ def _tiny(**env_kwargs):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_nested_trial_never_sees_the_held_out_person(tmp_path, monkeypatch):
     """Every split built while the inner agents train, validate and the checkpoint is

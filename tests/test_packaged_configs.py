@@ -114,6 +114,7 @@ print(json.dumps({
 """
 
 
+@pytest.mark.slow
 def test_installed_wheel_finds_the_configs(tmp_path):
     """``pip install`` (not editable) of a copy of the sources into a fresh folder: the
     installed package finds the default agent configs, ``sweep --config tiny`` and the

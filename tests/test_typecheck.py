@@ -10,6 +10,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow
 def test_mypy_passes():
     out = subprocess.run(
         # no cache: a stale .mypy_cache in a work tree must not hide what a fresh clone sees
