@@ -90,8 +90,8 @@ def test_names_of_different_data_differ():
         (
             load_orientation_dataset,
             "kitchen",
-            r"'kitchen' is not a built-in orientation dataset \('vr-kitchen', 'cohort', "
-            r"'cohort:CONFIG'\)",
+            r"'kitchen' is not a built-in orientation dataset \('vr-kitchen', 'vr-kitchen:MODE', "
+            r"'cohort', 'cohort:CONFIG'\)",
         ),
         (
             load_position_dataset,
@@ -102,6 +102,7 @@ def test_names_of_different_data_differ():
         (load_demonstrations, "lasa", "built-in juggling datasets: 'simulated'"),
         (load_demonstrations, "juggle", r"not a built-in juggling dataset \('simulated'\)"),
         (load_orientation_dataset, "cohort:", "needs a config name"),
+        (load_orientation_dataset, "vr-kitchen:pen", r"must be one of \['laser', 'stick'\]"),
     ],
 )
 def test_unknown_or_wrong_kind_name_is_one_line_listing_the_names(load, data, match):

@@ -109,7 +109,7 @@ def test_train_and_test_splits_hold_different_subjects():
     train = OrientationReachEnv(split="train").task
     test = OrientationReachEnv(split="test").task
     assert not set(train.subjects) & set(test.subjects)
-    assert train.n_trajectories + test.n_trajectories == 252
+    assert train.n_trajectories + test.n_trajectories == 648
     other = OrientationReachEnv(split="test", split_seed=1).task
     assert set(other.subjects) != set(test.subjects)
 

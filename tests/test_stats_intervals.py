@@ -17,6 +17,7 @@ from baselines.stats import (
     MIN_GROUPS,
     Comparison,
     compare_errors,
+    detectable_ratios,
     group_bootstrap,
     group_wins,
     intervals_document,
@@ -244,3 +245,62 @@ def test_against_rliable_on_the_same_inputs():
     assert ours == pytest.approx(
         [float(theirs["a"][0, 0]), float(theirs["a"][1, 0])], abs=0.03 * spread
     )
+
+
+def test_detectable_ratios_closed_form_for_normal_replicates():
+    """Normal log replicates with standard error se and the interval +-1.96 se: the
+    effect detected 80 % of the time is (1.96 + 0.84) se on either side."""
+    from scipy.stats import norm
+
+    se = 0.05
+    d = norm.ppf((np.arange(200_000) + 0.5) / 200_000) * se
+    z = norm.ppf(0.975)
+    point = 0.97
+    below, above = detectable_ratios(
+        point, point * np.exp(-z * se), point * np.exp(z * se), point * np.exp(d)
+    )
+    k = (z + norm.ppf(0.8)) * se
+    assert below == pytest.approx(np.exp(-k), rel=1e-4)
+    assert above == pytest.approx(np.exp(k), rel=1e-4)
+    # degenerate inputs: a point interval detects everything; a zero ratio is unknown
+    assert detectable_ratios(1.0, 1.0, 1.0, [1.0, 1.0]) == (1.0, 1.0)
+    assert all(np.isnan(detectable_ratios(0.0, 0.0, 1.0, [0.0, 1.0])))
+
+
+def test_comparison_power_line_and_cannot_decide():
+    c = Comparison("a", "b", 0.98, (0.9, 1.05), 5, 8, detectable=(0.92, 1.08))
+    assert c.decidable is False
+    assert "cannot decide at this size" in c.sentence()
+    assert "80% power at 8 people for ratios <= 0.920 or >= 1.080" in c.line()
+    assert "the claimed 2.0% is below the detectable 8.0%" in c.line()
+    small = Comparison("a", "b", 0.95, (0.9, 0.99), 7, 8, detectable=(0.92, 1.08))
+    assert small.sentence() == (
+        "a is BETTER than b at 95 % (an effect below the one this size detects 80 % of the time)"
+    )
+    big = Comparison("a", "b", 0.85, (0.8, 0.9), 8, 8, detectable=(0.92, 1.08))
+    assert big.decidable and "cannot decide" not in big.sentence()
+    assert big.to_dict()["detectable_ratios"] == [0.92, 1.08]
+    assert Comparison("a", "b", 1.0, (0.9, 1.1), 4, 8).decidable is None
+
+
+def test_detectable_effect_is_detected_80_percent_of_the_time():
+    """Studies of 20 groups drawn from a population whose true ratio is the detectable
+    one (estimated on pilot studies of the same size at no effect) say BETTER in about
+    80 % of them (77 % and 76 % over 300 studies with two seeds: the bootstrap's standard
+    error is slightly small at 20 groups)."""
+    rng = np.random.default_rng(11)
+    n, reps = 20, 400
+
+    def study(theta: float) -> Comparison:
+        b = rng.lognormal(0.0, 0.3, n)
+        a = b * np.exp(theta + rng.normal(0.0, 0.15, n) - 0.15**2 / 2)  # E[a] = e^theta E[b]
+        return compare_errors(a, b, np.arange(n), "a", "b", statistic=np.mean, n_resamples=reps)
+
+    pilot = [study(0.0).detectable for _ in range(30)]
+    theta = float(np.log(np.mean([p[0] for p in pilot])))
+    assert -0.2 < theta < -0.02
+    hits = [study(theta).verdict == "better" for _ in range(150)]
+    assert 0.68 <= np.mean(hits) <= 0.92
+    # half the effect is detected far less often
+    half = [study(theta / 2).verdict == "better" for _ in range(60)]
+    assert np.mean(half) < 0.5

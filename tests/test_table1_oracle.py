@@ -16,6 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
 from motion_envs.datasets import load_vr_kitchen
+from motion_envs.datasets.vr_kitchen import MODES
 from motion_envs.models.criteria import table1
 
 GRID = np.linspace(0.0, 1.0, 50)
@@ -159,14 +160,29 @@ def test_table1_matches_independent_scipy_computation(vr_kitchen):
 
 
 def test_vr_kitchen_design(vr_kitchen):
-    assert len(vr_kitchen) + vr_kitchen.n_dropped == 400
-    assert vr_kitchen.n_dropped == 148  # start-to-end rotation below 10 degrees
+    """Both response modes by default: 800 trials, 152 dropped (148 laser, 4 stick),
+    the mode part of the task (20 tasks) and a 0/1 predictor."""
+    assert len(vr_kitchen) + vr_kitchen.n_dropped == 800
+    assert vr_kitchen.n_dropped == 152  # start-to-end rotation below 10 degrees
     assert np.unique(vr_kitchen.subjects).size == 8
-    assert np.unique(vr_kitchen.tasks).size == 10
+    assert np.unique(vr_kitchen.tasks).size == 20
     assert not vr_kitchen.simulated
+    stick = vr_kitchen.predictors["stick"]
+    assert set(stick) == {0.0, 1.0}
+    assert np.all(np.char.startswith(vr_kitchen.tasks, "stick/") == (stick == 1.0))
     everything = load_vr_kitchen(min_deg=0)
-    assert len(everything) == 400 and everything.n_dropped == 0
+    assert len(everything) == 800 and everything.n_dropped == 0
     assert everything.replicates.max() == 4
+    for mode, dropped in (("laser", 148), ("stick", 4)):
+        one = load_vr_kitchen(modes=mode)
+        assert one.name == f"vr-kitchen:{mode}" and len(one) + one.n_dropped == 400
+        assert one.n_dropped == dropped and np.unique(one.tasks).size == 10
+        assert "stick" not in one.predictors
+        assert set(one.trajectory_ids) == {
+            i.removeprefix(f"{mode}-") for i in vr_kitchen.trajectory_ids if i.startswith(mode)
+        }
+    with pytest.raises(ValueError, match="modes must be distinct response modes"):
+        load_vr_kitchen(modes=("laser", "pen"))
 
 
 def test_vr_kitchen_angles_match_trial_table(vr_kitchen):
@@ -174,9 +190,10 @@ def test_vr_kitchen_angles_match_trial_table(vr_kitchen):
     from importlib import resources
 
     folder = resources.files("motion_envs.datasets") / "data" / "vr-pointing"
-    trials = pd.read_csv(folder / "kitchen_laser_trials.csv")
+    trials = pd.concat([pd.read_csv(folder / f"kitchen_{m}_trials.csv") for m in MODES])
     trials["id"] = (
-        "p"
+        trials["mode"]
+        + "-p"
         + trials.participant.astype(str)
         + "-s"
         + trials.session.astype(str)

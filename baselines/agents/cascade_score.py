@@ -193,18 +193,18 @@ def catches_median_difference(
 def _hazard_comparison(agent: CascadeAgentEpisodes, nominal: CascadeAgentEpisodes) -> Any:
     """The agent's drop hazard over the juggler's (lower is better), episodes resampled;
     wins: episodes where the agent's drops per catch are below the juggler's."""
-    from baselines.stats import Comparison, group_bootstrap
+    from baselines.stats import Comparison, detectable_ratios, group_bootstrap_replicates
 
     def ratio(rows: NDArray[np.int64]) -> float:
         b = _hazard(nominal, rows)
         return _hazard(agent, rows) / b if b > 0 else float("nan")
 
-    point, lo, hi = group_bootstrap(ratio, np.arange(agent.seeds.size))
+    point, lo, hi, reps = group_bootstrap_replicates(ratio, np.arange(agent.seeds.size))
     wins = int(np.sum(agent.episode_hazard() < nominal.episode_hazard()))
     return Comparison(
         "agent drop hazard", "nominal drop hazard", point, (lo, hi), wins,
         int(agent.seeds.size), "episodes", "drops per catch (episodes end at the first drop)",
-        "1",
+        "1", detectable_ratios(point, lo, hi, reps),
     )  # fmt: skip
 
 

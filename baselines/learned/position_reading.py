@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from baselines.learned.reading import bootstrap_ratio, format_comparison
+from baselines.learned.reading import bootstrap_ratio_power, format_comparison
 
 __all__ = ["TARGETS", "format_position_reading", "position_comparisons"]
 
@@ -43,13 +43,14 @@ def position_comparisons(doc: dict[str, Any], n_boot: int = 2000) -> list[dict[s
     out = []
     for m, a, target in pairs:
         va, vb = values(m), values(a)
-        ratio, lo, hi = bootstrap_ratio(va, vb, np.array(shapes), n_boot)
+        ratio, lo, hi, detectable = bootstrap_ratio_power(va, vb, np.array(shapes), n_boot)
         out.append(
             {
                 "learned": m,
                 "best_analytic": a,
                 "ratio": ratio,
                 "ratio_ci95": [lo, hi],
+                "detectable_ratios": list(detectable),
                 "target_ratio": target,
                 "met": bool(ratio <= target) if target is not None else None,
                 "subjects_better": int(np.sum(va < vb)),

@@ -15,6 +15,7 @@ from motion_envs._io import save_figure
 
 __all__ = [
     "bootstrap_ratio",
+    "bootstrap_ratio_power",
     "format_comparison",
     "natural_key",
     "plot_ratios",
@@ -32,11 +33,26 @@ def bootstrap_ratio(
     n_boot: int = 2000,
     seed: int = 0,
 ) -> tuple[float, float, float]:
-    """Ratio ``median(a) / median(b)`` and its 95% percentile interval over groups.
+    """``(ratio, low, high)`` of :func:`bootstrap_ratio_power`."""
+    return bootstrap_ratio_power(errors_a, errors_b, groups, n_boot, seed)[:3]
+
+
+def bootstrap_ratio_power(
+    errors_a: FloatArray,
+    errors_b: FloatArray,
+    groups: NDArray[Any],
+    n_boot: int = 2000,
+    seed: int = 0,
+) -> tuple[float, float, float, tuple[float, float]]:
+    """Ratio ``median(a) / median(b)``, its 95% percentile interval over groups and the
+    ratios below and above 1 it detects 80 % of the time
+    (:func:`baselines.stats.detectable_ratios`, from the same replicates).
 
     Groups (subjects, shapes) are resampled with replacement (``numpy`` generator
     seeded with ``seed``); each replicate pools the trajectories of the drawn groups.
     """
+    from baselines.stats import detectable_ratios
+
     groups = np.asarray(groups).astype(str)
     levels = np.unique(groups)
     members = [np.flatnonzero(groups == g) for g in levels]
@@ -47,7 +63,7 @@ def bootstrap_ratio(
         ratios[i] = np.median(errors_a[idx]) / np.median(errors_b[idx])
     point = float(np.median(errors_a) / np.median(errors_b))
     lo, hi = np.percentile(ratios, [2.5, 97.5])
-    return point, float(lo), float(hi)
+    return point, float(lo), float(hi), detectable_ratios(point, float(lo), float(hi), ratios)
 
 
 def format_comparison(c: dict[str, Any], group: str, widths: tuple[int, int]) -> str:
@@ -59,10 +75,14 @@ def format_comparison(c: dict[str, Any], group: str, widths: tuple[int, int]) ->
         if c["target_ratio"] is not None
         else ""
     )
+    power = ""
+    if c.get("detectable_ratios") is not None:
+        below, above = c["detectable_ratios"]
+        power = f"; 80 % power for ratios <= {below:.3f} or >= {above:.3f}"
     return (
         f"  {c['learned']:<{widths[0]}} / {c['best_analytic']:<{widths[1]}} = {c['ratio']:.3f} "
         f"(95% CI over {group} {c['ratio_ci95'][0]:.3f}-{c['ratio_ci95'][1]:.3f}); "
-        f"better on {c['subjects_better']}/{c['n_subjects']} {group}{target}"
+        f"better on {c['subjects_better']}/{c['n_subjects']} {group}{target}{power}"
     )
 
 

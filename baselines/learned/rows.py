@@ -40,7 +40,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from baselines.learned.reading import bootstrap_ratio, format_comparison, plot_ratios
+from baselines.learned.reading import (
+    bootstrap_ratio,
+    bootstrap_ratio_power,
+    format_comparison,
+    plot_ratios,
+)
 from motion_envs.datasets import OrientationDataset
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import NullBezierModel, TaskBezierModel
@@ -350,7 +355,9 @@ def compare(rows: LearnedRows, subjects: NDArray[Any], n_boot: int = 2000) -> li
             best = min(analytic, key=lambda k: float(np.median(rows.errors[k])))
             if any(c["learned"] == name and c["best_analytic"] == best for c in out):
                 continue  # the best analytic row is already the target's
-            ratio, lo, hi = bootstrap_ratio(rows.errors[name], rows.errors[best], subjects, n_boot)
+            ratio, lo, hi, detectable = bootstrap_ratio_power(
+                rows.errors[name], rows.errors[best], subjects, n_boot
+            )
             a = _per_group_medians(rows.errors[name], subjects)
             b = _per_group_medians(rows.errors[best], subjects)
             out.append(
@@ -360,6 +367,7 @@ def compare(rows: LearnedRows, subjects: NDArray[Any], n_boot: int = 2000) -> li
                     "analytic_rows": list(analytic),
                     "ratio": ratio,
                     "ratio_ci95": [lo, hi],
+                    "detectable_ratios": list(detectable),
                     "target_ratio": target if name == learned else None,
                     "met": bool(ratio <= target) if name == learned and target else None,
                     "subjects_better": int(np.sum(a < b)),

@@ -2,7 +2,8 @@
 
 * :mod:`._intervals`: ratio of two methods' criteria with a 95 % stratified bootstrap
   interval over groups (people, shapes, seeds; :func:`scipy.stats.bootstrap`), the
-  per-group win count and the verdict in words (:class:`Comparison`);
+  per-group win count, the verdict in words and the power: the effect the interval
+  detects 80 % of the time at this many groups (:class:`Comparison`);
 * :mod:`._seeds`: across seeds and sweeps, the interquartile mean with its stratified
   bootstrap interval and the probability of improvement (scipy).
 """
@@ -11,10 +12,13 @@ from baselines.stats._intervals import (
     CONFIDENCE,
     MIN_GROUPS,
     N_RESAMPLES,
+    POWER,
     Comparison,
     compare_errors,
+    detectable_ratios,
     from_readings,
     group_bootstrap,
+    group_bootstrap_replicates,
     group_wins,
     intervals_document,
     min_groups,
@@ -27,10 +31,13 @@ __all__ = [
     "CONFIDENCE",
     "MIN_GROUPS",
     "N_RESAMPLES",
+    "POWER",
     "Comparison",
     "compare_errors",
+    "detectable_ratios",
     "from_readings",
     "group_bootstrap",
+    "group_bootstrap_replicates",
     "group_wins",
     "intervals_document",
     "iqm",

@@ -17,6 +17,19 @@ The win count is the number of groups on which A's per-group statistic is below 
 The verdict is in words: *better* when the whole interval is below 1, *worse* when it
 is above 1, *no difference at 95 %* when it contains 1, and *cannot decide* with fewer
 than :data:`MIN_GROUPS` groups, whatever the interval (:func:`min_groups`).
+
+Power (:func:`detectable_ratios`): the smallest effect the interval detects 80 % of the
+time with this many groups, by the same resampling over groups. A study of the same
+size drawn by resampling the groups has its estimate spread as the bootstrap replicates
+are around the point, ``d = log(ratio*) - log(ratio)``, and its interval the same shape
+(``l = log(low / ratio)``, ``u = log(high / ratio)``). With a true log-ratio ``t`` the
+study says *better* when ``t + d + u < 0`` and *worse* when ``t + d + l > 0``; the
+smallest ``|t|`` for which either happens with probability 0.8 is, below 1,
+``t = -(u + q_0.8(d))`` and, above 1, ``t = -l - q_0.2(d)`` (for normal replicates with
+a symmetric interval: ``(1.96 + 0.84)`` standard errors). A comparison whose interval
+contains 1 and whose claimed effect ``|1 - ratio|`` is smaller than that in its
+direction *cannot decide at this size*; a verdict of better or worse on such an effect
+says so (a study of this size would often miss it).
 """
 
 from __future__ import annotations
@@ -34,10 +47,13 @@ __all__ = [
     "CONFIDENCE",
     "MIN_GROUPS",
     "N_RESAMPLES",
+    "POWER",
     "Comparison",
     "compare_errors",
+    "detectable_ratios",
     "from_readings",
     "group_bootstrap",
+    "group_bootstrap_replicates",
     "group_wins",
     "intervals_document",
     "min_groups",
@@ -52,6 +68,8 @@ Statistic = Callable[[FloatArray], float]
 CONFIDENCE = 0.95
 #: Bootstrap replicates of every interval.
 N_RESAMPLES = 2000
+#: The power at which the detectable effect is stated.
+POWER = 0.8
 
 
 def min_groups(confidence: float = CONFIDENCE) -> int:
@@ -114,7 +132,20 @@ def group_bootstrap(
     n_resamples: int = N_RESAMPLES,
     seed: int = 0,
 ) -> tuple[float, float, float]:
-    """``statistic(rows)`` on all rows and its 95 % stratified bootstrap interval.
+    """``(point, low, high)`` of :func:`group_bootstrap_replicates`."""
+    point, lo, hi, _ = group_bootstrap_replicates(statistic, groups, strata, n_resamples, seed)
+    return point, lo, hi
+
+
+def group_bootstrap_replicates(
+    statistic: Callable[[NDArray[np.int64]], float],
+    groups: ArrayLike,
+    strata: ArrayLike | None = None,
+    n_resamples: int = N_RESAMPLES,
+    seed: int = 0,
+) -> tuple[float, float, float, FloatArray]:
+    """``statistic(rows)`` on all rows, its 95 % stratified bootstrap interval and the
+    replicates.
 
     Parameters
     ----------
@@ -129,8 +160,9 @@ def group_bootstrap(
 
     Returns
     -------
-    (point, low, high)
-        The statistic on all rows and the percentile interval.
+    (point, low, high, replicates)
+        The statistic on all rows, the percentile interval and the ``(n_resamples,)``
+        replicates (``(1,)`` holding the point when no stratum has two groups).
     """
     from scipy.stats import bootstrap
 
@@ -144,7 +176,7 @@ def group_bootstrap(
     fixed_groups = np.concatenate([*fixed, np.empty(0, np.int64)]).astype(np.int64)
     point = float(statistic(np.arange(order.size)))
     if not drawn:
-        return point, point, point
+        return point, point, point, np.array([point])
 
     def replicate(*samples: NDArray[Any]) -> float:
         picked = np.concatenate([fixed_groups, *samples]).astype(np.int64)
@@ -164,7 +196,27 @@ def group_bootstrap(
             method="percentile",
             rng=np.random.default_rng(seed),
         )
-    return point, float(res.confidence_interval.low), float(res.confidence_interval.high)
+    low, high = float(res.confidence_interval.low), float(res.confidence_interval.high)
+    return point, low, high, np.asarray(res.bootstrap_distribution, dtype=np.float64)
+
+
+def detectable_ratios(
+    point: float, low: float, high: float, replicates: ArrayLike, power: float = POWER
+) -> tuple[float, float]:
+    """The true ratios, below and above 1, that the interval ``(low, high)`` around
+    ``point`` detects with probability ``power`` at this many groups (module docstring);
+    ``(nan, nan)`` for a ratio or replicate that is not positive and finite."""
+    r = np.asarray(replicates, dtype=np.float64)
+    values = np.array([point, low, high])
+    if r.size == 0 or not (np.all(np.isfinite(r)) and np.all(r > 0)):
+        return float("nan"), float("nan")
+    if not (np.all(np.isfinite(values)) and np.all(values > 0)):
+        return float("nan"), float("nan")
+    d = np.log(r) - np.log(point)
+    u, lo = np.log(high / point), np.log(low / point)
+    below = float(np.exp(-(u + np.quantile(d, power))))
+    above = float(np.exp(-lo - np.quantile(d, 1.0 - power)))
+    return min(below, 1.0), max(above, 1.0)
 
 
 def statistic_interval(
@@ -224,6 +276,9 @@ class Comparison:
         What was resampled, plural (``"people"``, ``"shapes"``, ``"seeds"``).
     criterion, unit:
         What the criterion is and its unit (the ratio itself has none).
+    detectable:
+        The true ratios below and above 1 that the interval detects with probability
+        :data:`POWER` at ``n_groups`` groups (:func:`detectable_ratios`); None: unknown.
     """
 
     a: str
@@ -235,6 +290,7 @@ class Comparison:
     group: str = "people"
     criterion: str = "median over trajectories of the max error over time"
     unit: str = "rad"
+    detectable: tuple[float, float] | None = None
 
     @property
     def name(self) -> str:
@@ -247,6 +303,15 @@ class Comparison:
         ``"cannot decide"`` with fewer than :data:`MIN_GROUPS` groups."""
         return verdict(*self.ci95, n_groups=self.n_groups)
 
+    @property
+    def decidable(self) -> bool | None:
+        """Whether the claimed effect is at least the one detected with probability
+        :data:`POWER` in its direction (None: power unknown)."""
+        if self.detectable is None or not all(np.isfinite(self.detectable)):
+            return None
+        below, above = self.detectable
+        return bool(self.ratio <= below) if self.ratio <= 1.0 else bool(self.ratio >= above)
+
     def sentence(self) -> str:
         """The verdict in words."""
         v = self.verdict
@@ -256,16 +321,35 @@ class Comparison:
                 f"at least {MIN_GROUPS}: docs/protocol.md)"
             )
         if v == "no difference":
-            return "no difference at 95 % (the interval contains 1)"
-        return f"{self.a} is {v.upper()} than {self.b} at 95 %"
+            text = "no difference at 95 % (the interval contains 1)"
+            return text + ("; cannot decide at this size" if self.decidable is False else "")
+        text = f"{self.a} is {v.upper()} than {self.b} at 95 %"
+        if self.decidable is False:
+            text += " (an effect below the one this size detects 80 % of the time)"
+        return text
+
+    def power_text(self) -> str:
+        """The power line: the effect detected 80 % of the time at this many groups and
+        whether the claimed one reaches it."""
+        if self.detectable is None or self.decidable is None:
+            return f"power at {self.n_groups} {self.group}: unknown"
+        below, above = self.detectable
+        claimed = abs(1.0 - self.ratio)
+        side = 1.0 - below if self.ratio <= 1.0 else above - 1.0
+        return (
+            f"{POWER:.0%} power at {self.n_groups} {self.group} for ratios <= {below:.3f} or "
+            f">= {above:.3f}; the claimed {claimed:.1%} "
+            + ("reaches" if self.decidable else "is below")
+            + f" the detectable {side:.1%}"
+        )
 
     def line(self, width: int = 0) -> str:
-        """One printed line: ratio, interval, wins, unit and direction, verdict."""
+        """One printed line: ratio, interval, wins, unit and direction, verdict, power."""
         lo, hi = self.ci95
         return (
             f"  {self.name:<{width}} = {self.ratio:.3f} (95% CI {lo:.3f}-{hi:.3f} over "
             f"{self.n_groups} {self.group}); lower on {self.wins}/{self.n_groups} {self.group}; "
-            f"{self.sentence()}"
+            f"{self.sentence()}; {self.power_text()}"
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -282,6 +366,9 @@ class Comparison:
             "unit": self.unit,
             "lower_is_better": True,
             "verdict": self.verdict,
+            "power": POWER,
+            "detectable_ratios": None if self.detectable is None else list(self.detectable),
+            "decidable": self.decidable,
         }
 
 
@@ -309,7 +396,7 @@ def compare_errors(
     eb = np.asarray(errors_b, dtype=np.float64)
     if ea.shape != eb.shape or ea.ndim != 1:
         raise ValueError(f"errors_a and errors_b must be (n,) each; got {ea.shape}, {eb.shape}")
-    point, lo, hi = group_bootstrap(
+    point, lo, hi, reps = group_bootstrap_replicates(
         lambda rows: float(statistic(ea[rows]) / statistic(eb[rows])),
         groups,
         strata,
@@ -317,7 +404,8 @@ def compare_errors(
         seed,
     )
     wins, n = group_wins(ea, eb, groups, statistic)
-    return Comparison(a, b, point, (lo, hi), wins, n, group, criterion, unit)
+    detectable = detectable_ratios(point, lo, hi, reps)
+    return Comparison(a, b, point, (lo, hi), wins, n, group, criterion, unit, detectable)
 
 
 def intervals_document(comparisons: Sequence[Comparison]) -> dict[str, list[float]]:
@@ -330,6 +418,7 @@ def _from_reading(
 ) -> Comparison:
     """A :class:`Comparison` from an existing reading (``ratio``, ``ratio_ci95``, wins)."""
     lo, hi = entry["ratio_ci95"]
+    detectable = entry.get("detectable_ratios")
     return Comparison(
         entry[a_key],
         entry[b_key],
@@ -340,6 +429,7 @@ def _from_reading(
         group,
         criterion,
         unit,
+        None if detectable is None else (float(detectable[0]), float(detectable[1])),
     )
 
 
@@ -350,6 +440,6 @@ def from_readings(
     unit: str = "rad",
 ) -> list[Comparison]:
     """The learned-vs-analytic readings (``learned``, ``best_analytic``, ``ratio``,
-    ``ratio_ci95``, ``subjects_better``, ``n_subjects``) as comparisons, their interval
-    unchanged."""
+    ``ratio_ci95``, ``subjects_better``, ``n_subjects``, ``detectable_ratios``) as
+    comparisons, their interval unchanged."""
     return [_from_reading(r, "learned", "best_analytic", group, criterion, unit) for r in readings]

@@ -11,7 +11,8 @@ loader that reads it. The kind's loading function
 ``ValueError`` listing the known ones (:func:`unknown_data`).
 
 An entry with a ``parameter`` also takes ``NAME:VALUE`` (``cohort:CONFIG``: another
-cohort configuration); the loader then receives ``VALUE`` as its first argument.
+cohort configuration; ``vr-kitchen:MODE``: one response mode); the loader then receives
+``VALUE`` as its first argument.
 """
 
 from __future__ import annotations
@@ -59,10 +60,15 @@ class BuiltinDataset:
     parameter: str | None = None
 
 
-def _vr_kitchen(value: None, min_deg: float) -> Any:
-    from motion_envs.datasets.vr_kitchen import load_vr_kitchen
+def _vr_kitchen(value: str | None, min_deg: float) -> Any:
+    from motion_envs.datasets.vr_kitchen import MODES, load_vr_kitchen
 
-    return load_vr_kitchen(min_deg=min_deg)
+    if value is not None and value not in MODES:
+        raise ValueError(
+            f"data 'vr-kitchen:{value}': the response mode after the colon must be one of "
+            f"{list(MODES)}"
+        )
+    return load_vr_kitchen(min_deg=min_deg, modes=value)
 
 
 def _cohort(value: str | None, min_deg: float) -> Any:
@@ -98,9 +104,12 @@ DATASETS: dict[str, BuiltinDataset] = {
             licence="MIT, copyright (c) 2023 Immo Schuetz",
             source=(
                 "hand-held VR controller orientations of 8 people pointing at remembered "
-                "objects (Schuetz, Baltaretu & Fiehler 2024, Journal of Vision 24(7):10)"
+                "objects with a laser and with a short stick, both response modes; "
+                "'vr-kitchen:laser' or 'vr-kitchen:stick' one of them (Schuetz, "
+                "Baltaretu & Fiehler 2024, Journal of Vision 24(7):10)"
             ),
             load=_vr_kitchen,
+            parameter="MODE",
         ),
         BuiltinDataset(
             "cohort",

@@ -62,8 +62,9 @@ class OrientationCoefficientsEnv(CoefficientEnv):
     | 3(k-1)+j  | coefficient of ``sin(k pi tau)`` on path axis ``j``  | -1          | 1           | residual_scale (rad per rad of rotation) |
 
     ## Observation Space
-    `Box(low, high, (9 + T,), float32)`, ``T`` the number of tasks (10 for
-    ``"vr-kitchen"``: 19 values; 29 with ``calibration > 0``):
+    `Box(low, high, (9 + T,), float32)`, ``T`` the number of tasks (20 for
+    ``"vr-kitchen"``, 10 targets in 2 response modes: 29 values; 39 with
+    ``calibration > 0``; 19 and 29 for ``"vr-kitchen:laser"``):
 
     | Num    | Observation                                           | Min | Max       | Type (Unit)     |
     |--------|-------------------------------------------------------|-----|-----------|-----------------|

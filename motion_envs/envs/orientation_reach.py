@@ -203,7 +203,8 @@ class OrientationReachEnv(ReachEnv):
 
     ## Observation Space
     The observation space is a `Box(low, high, (17 + T,), float32)`, ``T`` the number of
-    tasks in the dataset (10 for ``"vr-kitchen"``: 27 values). Quaternions are scalar
+    tasks in the dataset (20 for ``"vr-kitchen"``, 10 targets in 2 response modes: 37
+    values; 27 for ``"vr-kitchen:laser"``). Quaternions are scalar
     first and sign-continuous with the start.
 
     | Num     | Observation                                                   | Min | Max | Type (Unit)      |
@@ -217,14 +218,14 @@ class OrientationReachEnv(ReachEnv):
     | -2 (v1) | the movement's duration ``T`` (a pre-movement condition)      | 0   | ``T_max`` | time (s)   |
     | -1 (v1) | elapsed time ``tau T`` at that grid point                      | 0   | ``T_max`` | time (s)   |
 
-    ``-v1`` (``observe_timing=True``) appends the last two entries (29 values for
+    ``-v1`` (``observe_timing=True``) appends the last two entries (39 values for
     ``"vr-kitchen"``); ``T_max`` is the longest movement of the whole dataset (padded by
     0.1 %), so the bounds do not depend on the split. Everything else is as in ``-v0``.
 
     The subject is not observed: a split by subject holds whole people out, so a
     subject encoding would be meaningless on the test split. With ``calibration=K > 0``
     the person is described instead by ``K`` of their other reaches: every observation
-    of the episode ends with 10 more entries (39 for ``-v1`` on ``"vr-kitchen"``),
+    of the episode ends with 10 more entries (49 for ``-v1`` on ``"vr-kitchen"``),
     the same for all its steps:
 
     | Num      | Observation (``calibration=K > 0``)                              | Min | Max | Type (Unit) |

@@ -50,10 +50,18 @@ def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) 
     person, the people below 1 and the verdict.
 
     ``iqm_ratio_ci95`` resamples *people* (all seeds of a person together: the question
-    is how the agent does on new people; the verdict uses it); ``iqm_ratio_ci95_seeds``
+    is how the agent does on new people; the verdict uses it; ``detectable_ratios``: the
+    ratios it detects 80 % of the time at this many people, :func:`detectable_ratios`,
+    and ``decidable``: whether the IQM reaches it); ``iqm_ratio_ci95_seeds``
     is the stratified one (seeds resampled within each person, the people fixed: the seed noise
     only, a point with one seed)."""
-    from baselines.stats import group_bootstrap, iqm, iqm_intervals, verdict
+    from baselines.stats import (
+        detectable_ratios,
+        group_bootstrap_replicates,
+        iqm,
+        iqm_intervals,
+        verdict,
+    )
 
     people = sorted(per_person)
     matrix = np.array([[per_person[p][s] for p in people] for s in seeds])  # (seeds, people)
@@ -64,7 +72,10 @@ def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) 
         return iqm(flat[rows])
 
     person_of_cell = np.tile(np.asarray(people), len(seeds))
-    _, lo, hi = group_bootstrap(of_rows, person_of_cell)
+    point, lo, hi, reps = group_bootstrap_replicates(of_rows, person_of_cell)
+    below, above = detectable_ratios(point, lo, hi, reps)
+    claimed = agg["iqm"]
+    decidable = bool(claimed <= below) if claimed <= 1.0 else bool(claimed >= above)
     medians = np.median(matrix, axis=0)
     return {
         "ratio_per_person": {str(p): dict(per_person[p]) for p in people},
@@ -74,6 +85,8 @@ def _iqm_block(per_person: Mapping[int, Mapping[int, float]], seeds: list[int]) 
         "iqm_ratio_ci95_seeds": list(agg["ci95"]),
         "people_below_one": int(np.sum(medians < 1.0)),
         "verdict": verdict(lo, hi, n_groups=len(people)),
+        "detectable_ratios": [below, above],
+        "decidable": decidable if np.isfinite(below) else None,
     }
 
 
@@ -139,6 +152,20 @@ def lopo_summary(
     return out
 
 
+def _power(block: Mapping[str, Any]) -> str:
+    """The power clause of a summary line (blocks written before it was added: none)."""
+    det = block.get("detectable_ratios")
+    if det is None or block.get("decidable") is None:
+        return ""
+    below, above = det
+    tail = ""
+    if not block["decidable"] and block["verdict"] == "no difference":
+        tail = "; cannot decide at this size"
+    elif not block["decidable"] and block["verdict"] in ("better", "worse"):
+        tail = "; an effect below the one this size detects 80 % of the time"
+    return f"; 80 % power at this many people for ratios <= {below:.3f} or >= {above:.3f}{tail}"
+
+
 def format_lopo(lopo: Mapping[str, Any]) -> str:
     """The LOPO summary in words (unit, direction, interval, verdict)."""
     lo, hi = lopo["iqm_ratio_ci95"]
@@ -148,7 +175,8 @@ def format_lopo(lopo: Mapping[str, Any]) -> str:
         f"checkpoints chosen by {lopo['selection']}): {per}",
         f"IQM of agent / nominal over people and seeds = {lopo['iqm_ratio']:.3f} "
         f"(95% CI {lo:.3f}-{hi:.3f} people resampled, lower is better); lower on "
-        f"{lopo['people_below_nominal']}/{lopo['n_people']} people; {lopo['verdict']} at 95 %",
+        f"{lopo['people_below_nominal']}/{lopo['n_people']} people; {lopo['verdict']} at 95 %"
+        + _power(lopo),
     ]
     over = lopo.get("agent_over_ridge")
     if over:
@@ -158,6 +186,6 @@ def format_lopo(lopo: Mapping[str, Any]) -> str:
             f"agent / ridge regressor (fitted on the same training people) per person: {per}",
             f"IQM of agent / ridge = {over['iqm_ratio']:.3f} (95% CI {lo:.3f}-{hi:.3f} people "
             f"resampled, lower is better); lower on {over['people_below_one']}/"
-            f"{lopo['n_people']} people; {over['verdict']} at 95 %",
+            f"{lopo['n_people']} people; {over['verdict']} at 95 %" + _power(over),
         ]
     return "\n".join(lines)
