@@ -27,7 +27,7 @@ def test_cli_prints_table_and_writes_results(tmp_path, capsys):
     assert "0.242 in the text, 0.265 in the table" in out
     doc = json.loads((tmp_path / "results.json").read_text())
     assert doc["dataset"] == "vr-kitchen"
-    assert doc["n_trajectories"] == 252 and doc["n_dropped"] == 148
+    assert doc["n_trajectories"] == 648 and doc["n_dropped"] == 152  # laser and stick
     assert doc["simulated"] is False
     assert list(doc["criteria"]) == criterion_names() + list(LEARNED_ROWS)
     for name in LEARNED_ROWS:
