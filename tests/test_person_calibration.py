@@ -35,7 +35,8 @@ K, DRAWS = 3, 3
 @pytest.fixture(scope="module")
 def data():
     ds = load_orientation_dataset("vr-kitchen")
-    return ds, person_calibration_rows(ds.ragged, ds.subjects, ks=(K,), n_draws=DRAWS, seed=0)
+    rows = person_calibration_rows(ds.ragged, ds.subjects, ks=(K,), n_draws=DRAWS, seed=0, up=ds.up)
+    return ds, rows
 
 
 def test_draws_are_other_reaches_of_the_same_person():
