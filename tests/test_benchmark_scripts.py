@@ -64,6 +64,7 @@ def test_script_help(script):
     assert "usage:" in out.stdout
 
 
+@pytest.mark.slow
 def test_residual_sensitivity_fixed_offsets_on_training_seeds():
     """The one diagnosis cheap enough to run here: a fixed offset is played on the seeds
     asked for, and a malformed offset is a one-line usage error."""
@@ -83,6 +84,7 @@ def test_residual_sensitivity_fixed_offsets_on_training_seeds():
     assert bad.returncode == 2 and "--fixed: '1,2,x' is not four" in bad.stderr
 
 
+@pytest.mark.slow
 def test_cascade_oracle_residual_is_the_latency_aware_juggler():
     """The oracle residual, unclipped, plays the latency-aware juggler's episodes (its
     targets are the juggler's plus their difference, the same random plan ends): the

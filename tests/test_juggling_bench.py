@@ -13,6 +13,7 @@ from baselines.cli import main
 from motion_envs.datasets.juggling import generate_demonstrations, write_juggling_csv
 
 
+@pytest.mark.slow
 def test_small_run_writes_the_documented_results(tmp_path, capsys):
     out = tmp_path / "res"
     argv = ["juggling", "--cycles", "30", "--seed", "2", "--mujoco-cycles", "8"]

@@ -137,6 +137,7 @@ def v1_run(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_motion_bench_agent_reports_catch_rates_with_intervals(v1_run, tmp_path):
     assert main(["agent", str(v1_run), "--episodes", "4", "--out", str(tmp_path)]) == 0
     doc = json.loads((tmp_path / "results.json").read_text())
@@ -148,6 +149,7 @@ def test_motion_bench_agent_reports_catch_rates_with_intervals(v1_run, tmp_path)
     assert lo <= doc["catch_rate_difference"] <= hi
 
 
+@pytest.mark.slow
 def test_levels_play_the_agent_on_the_same_seeds(v1_run, tmp_path):
     from baselines.agents.rundir import load_run
 
