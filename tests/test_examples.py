@@ -34,13 +34,20 @@ def test_every_example_has_an_expectation():
     assert sorted(EXPECTED) == sorted(p.name for p in EXAMPLES)
 
 
+#: Examples that train agents (measured with --durations: the longest of the set).
+SLOW_EXAMPLES = {
+    "tutorial_sweep": [pytest.mark.ray, pytest.mark.slow],
+    "tutorial_train_and_compare": [pytest.mark.slow],
+}
+
+
 @pytest.mark.parametrize(
     "script",
     [
         pytest.param(
             p,
             id=p.stem,
-            marks=[pytest.mark.ray, pytest.mark.slow] if p.stem == "tutorial_sweep" else [],
+            marks=SLOW_EXAMPLES.get(p.stem, []),
         )
         for p in EXAMPLES
     ],
