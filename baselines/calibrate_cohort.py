@@ -413,6 +413,7 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
+@options.reads_files
 def target_option(text: str) -> str:
     """``--target``: ``paper`` or a readable JSON file of targets (checked now)."""
     try:
@@ -422,6 +423,7 @@ def target_option(text: str) -> str:
     return text
 
 
+@options.reads_files
 def config_option(text: str) -> str:
     """``--config``: a cohort name or a YAML path that resolves (checked now)."""
     try:

@@ -10,6 +10,7 @@ with status 2, other I/O errors with 1, Ctrl-C with 130. Run ``motion-bench --he
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import importlib
 import signal
@@ -168,13 +169,21 @@ def run_command(prog: str, func: Callable[[Any], Any], args: Any) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``motion-bench`` console script; returns the exit code."""
     try:  # the imports of every sub-command and the checks of the options
-        args = build_parser().parse_args(argv)
+        parser = build_parser()
+        args = parser.parse_args(argv)
     except SystemExit as exc:  # --help, --version, usage errors (already printed)
         return exc.code if isinstance(exc.code, int) else 0 if exc.code is None else 2
     except KeyboardInterrupt:
         print("motion-bench: interrupted while starting; nothing was written", file=sys.stderr)
         return 130
-    return run_command(f"motion-bench {args.command}", args.func, args)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    command = sub.choices[args.command]
+
+    def guarded(args: Any) -> Any:
+        with options.guarded_outputs(command, args):
+            return args.func(args)
+
+    return run_command(f"motion-bench {args.command}", guarded, args)
 
 
 if __name__ == "__main__":  # pragma: no cover

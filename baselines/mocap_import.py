@@ -107,6 +107,7 @@ def write(results: ImportResults, out: Path) -> list[Path]:
     return [data.to_csv(path=out)]  # atomic: sample_table.write_csv
 
 
+@options.reads_files
 def _source(text: str) -> Path:
     path = options.input_file(text)
     if path.suffix.lower() not in MOCAP_SUFFIXES:
@@ -124,6 +125,8 @@ def _checker(name: str) -> Callable[[str], Any]:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     check_value.__name__ = name
+    if name == "segments":  # a file the import reads
+        options.reads_files(check_value)
     return check_value
 
 

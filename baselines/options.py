@@ -11,6 +11,12 @@ This module holds what they share on the argparse side:
 * ``type=`` checkers (:func:`positive_int`, :func:`input_file`, :func:`output_folder`,
   ...) so that every user error is reported, naming its option, *before* any
   computation starts;
+* THE input and output rules of the command line: every option that names a file the
+  command reads has a checker marked :func:`reads_files` that goes through
+  :func:`input_file` (regular files only, opened non-blocking, bounded); every output
+  (``--out``, :func:`output_file`, :func:`output_folder`) follows
+  :func:`motion_envs._io.check_output`, and :func:`guarded_outputs` runs the sub-command
+  with its inputs protected from being replaced and its output folders locked;
 * :class:`ConfigError`: raised by a ``run`` that finds an inconsistent config after
   loading its data (e.g. a ``--plot-task`` the data does not have), naming the field.
 """
@@ -18,14 +24,19 @@ This module holds what they share on the argparse side:
 from __future__ import annotations
 
 import argparse
+import contextlib
+import csv
 import math
+import os
 import re
 import sys
 import tempfile
 import textwrap
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar
+
+from motion_envs import _io
 
 if TYPE_CHECKING:
     from motion_envs.datasets.registry import Kind
@@ -38,7 +49,11 @@ __all__ = [
     "fail",
     "float_in",
     "fraction",
+    "guarded_outputs",
+    "header_line",
+    "hold_folder",
     "input_file",
+    "input_paths",
     "int_at_least",
     "mocap_data",
     "non_negative_float",
@@ -47,6 +62,7 @@ __all__ = [
     "output_file",
     "output_folder",
     "positive_int",
+    "reads_files",
     "results_folder",
     "wrote",
 ]
@@ -199,19 +215,79 @@ def fraction(text: str) -> float:
     return value
 
 
+#: Largest file a command-line option reads (bytes); the readers' own bounds are lower.
+MAX_INPUT_BYTES = 2**32
+#: Bytes of a CSV read to check its header line before the run.
+MAX_HEADER_BYTES = 1 << 16
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def reads_files(check: _F) -> _F:
+    """Mark a ``type=`` checker whose option names a file (or a folder of files) that the
+    command reads: :func:`input_paths` then counts its value among the run's inputs (an
+    output may not replace one), and ``tests/fuzz_registry.py`` must list the option."""
+    check.reads_files = True  # type: ignore[attr-defined]
+    return check
+
+
+@reads_files
 def input_file(text: str) -> Path:
-    """An existing, readable file (not a folder)."""
-    path = Path(text)
-    if not path.exists():
-        raise argparse.ArgumentTypeError(f"{text} does not exist")
-    if path.is_dir():
+    """An existing, readable regular file (THE input rule of the command line).
+
+    Opened non-blocking and checked on the descriptor (:func:`motion_envs._io.check_regular_file`):
+    a folder, a FIFO, a device (``/dev/zero``) or a symbolic link to one is refused in one
+    line before anything reads it, as is a file over :data:`MAX_INPUT_BYTES` bytes."""
+    if Path(text).is_dir():
         raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
     try:
-        with path.open("rb") as fh:
-            fh.read(1)
-    except OSError as exc:
-        raise argparse.ArgumentTypeError(f"cannot read {text}: {exc.strerror}") from None
+        path = _io.check_regular_file(text, max_bytes=MAX_INPUT_BYTES)
+        _io.read_regular_file(path, max_bytes=1, head=True)  # readable (not /proc/self/mem)
+    except _io.UserFileError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return path
+
+
+def header_line(text: str) -> list[str]:
+    """The header line of the CSV ``text`` (a file :func:`input_file` accepts), read within
+    :data:`MAX_HEADER_BYTES`: ``ArgumentTypeError`` for a file that is not UTF-8 text or
+    whose first line is longer."""
+    path = input_file(text)
+    try:
+        head = _io.read_regular_file(path, max_bytes=MAX_HEADER_BYTES, head=True)
+    except _io.UserFileError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    line, newline, _ = head.partition(b"\n")
+    if not newline and len(head) >= MAX_HEADER_BYTES:
+        raise argparse.ArgumentTypeError(
+            f"{text}: line 1 is longer than {MAX_HEADER_BYTES} bytes; not a CSV header"
+        )
+    try:
+        decoded = line.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        from motion_envs.datasets.sample_table import not_text_message
+
+        message = not_text_message(text, head[:8])  # a spreadsheet workbook is named as one
+        raise argparse.ArgumentTypeError(
+            message if "workbook" in message else f"{text} is not a UTF-8 text CSV"
+        ) from None
+    return [h.strip() for h in next(csv.reader([decoded]), [])]
+
+
+def input_paths(values: Iterable[object]) -> list[Path]:
+    """The existing files and folders named by option values (``FILE?query`` is FILE,
+    ``cohort:CONFIG`` is CONFIG; names of built-in data that are no paths are skipped)."""
+    out: list[Path] = []
+    for value in values:
+        if value is None or isinstance(value, (bool, int, float)):
+            continue
+        items = value if isinstance(value, (list, tuple)) else [value]
+        for item in items:
+            text = str(item).partition("?")[0]
+            text = text.removeprefix("cohort:")
+            if text and os.path.lexists(text):
+                out.append(Path(text))
+    return out
 
 
 def _probe_folder(folder: Path, text: str) -> None:
@@ -231,10 +307,15 @@ def _probe_folder(folder: Path, text: str) -> None:
 
 
 def output_folder(text: str) -> Path:
-    """A folder that exists and is writable, or can be created."""
+    """A folder that exists and is writable, or can be created (THE output rule,
+    :func:`motion_envs._io.check_output`: not a symbolic link, not a file)."""
     path = Path(text)
-    if path.exists() and not path.is_dir():
+    if path.is_file() and not path.is_symlink():
         raise argparse.ArgumentTypeError(f"{text} is a file, not a folder")
+    try:
+        _io.check_output(path, folder=True)
+    except _io.UserFileError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     _probe_folder(path, text)
     return path
 
@@ -251,18 +332,79 @@ def results_folder(out: Path | None, job: str) -> Path:
         return out
     default = RESULTS_ROOT / job
     try:
-        return output_folder(str(default))
+        folder = output_folder(str(default))
     except argparse.ArgumentTypeError as exc:
         raise ConfigError("out", f"the default {exc}") from None
+    hold_folder(folder)
+    return folder
 
 
 def output_file(text: str) -> Path:
-    """A file path whose folder is writable (or can be created); not an existing folder."""
+    """A file path whose folder is writable (or can be created): not an existing folder,
+    and by THE output rule (:func:`motion_envs._io.check_output`) not a symbolic link, a
+    FIFO or a device (it would be replaced by a regular file); the check that it is no
+    input is :func:`guarded_outputs`'s."""
     path = Path(text)
-    if path.is_dir():
+    if path.is_dir() and not path.is_symlink():
         raise argparse.ArgumentTypeError(f"{text} is a folder, not a file")
+    try:
+        _io.check_output(path)
+    except _io.UserFileError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     _probe_folder(path.parent, text)
     return path
+
+
+#: The output folders being written (their locks), innermost run last.
+_RUNS: list[contextlib.ExitStack] = []
+
+
+@contextlib.contextmanager
+def guarded_outputs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Iterator[None]:
+    """Run a sub-command's ``main`` under THE output rule.
+
+    The values of ``parser``'s options marked :func:`reads_files` are the inputs: an
+    ``--out`` (file or folder) that is the same file as one of them is refused now
+    (``ConfigError``), and while the block runs :func:`motion_envs._io.atomic_write`
+    refuses to replace any of them (an output folder that holds an input). Every output
+    folder (``--out``, and the default ones :func:`results_folder` picks) is locked
+    (:func:`motion_envs._io.folder_lock`): a second process writing it gets one line.
+    """
+    inputs: list[Path] = []
+    outputs: list[tuple[str, Path, bool]] = []
+    for action in parser._actions:
+        value = getattr(args, action.dest, None)
+        kind = getattr(action.type, "__name__", "")
+        if getattr(action.type, "reads_files", False):
+            inputs += input_paths([value])
+        elif kind in ("output_file", "output_folder") and value is not None:
+            outputs.append((action.dest, Path(value), kind == "output_folder"))
+    for dest, path, folder in outputs:
+        try:
+            _io.check_output(path, inputs=inputs, folder=folder)
+        except _io.UserFileError as exc:
+            raise ConfigError(dest, str(exc)) from None
+    with _io.protected_inputs(inputs), contextlib.ExitStack() as stack:
+        _RUNS.append(stack)
+        try:
+            for dest, path, folder in outputs:
+                if folder:
+                    hold_folder(path, dest)
+            yield
+        finally:
+            _RUNS.pop()
+
+
+def hold_folder(folder: Path, field: str = "out") -> None:
+    """Lock the output ``folder`` until the running sub-command ends (nothing outside
+    :func:`guarded_outputs`); ``ConfigError`` naming ``field`` when another process holds
+    it."""
+    if not _RUNS:
+        return
+    try:
+        _RUNS[-1].enter_context(_io.folder_lock(folder))
+    except _io.UserFileError as exc:
+        raise ConfigError(field, str(exc)) from None
 
 
 def mocap_data(text: str, kind: str) -> str | None:

@@ -155,7 +155,10 @@ def test_every_file_is_written_through_io():
     assert not offenders, "\n".join(offenders)
 
 
-def test_two_motion_bench_runs_on_the_same_out_both_finish(tmp_path):
+def test_two_motion_bench_runs_on_the_same_out_one_line_for_the_second(tmp_path):
+    """The output folder is locked for the run: of two runs started into it together, the
+    one that gets the lock finishes and the other stops at once with one line (or finishes
+    too when it starts after the first ended); the folder holds one complete result."""
     out = tmp_path / "same"
     cmd = [sys.executable, "-m", "baselines.cli", "orientation", "--out", str(out)]
     cmd += ["--learned", "off"]
@@ -163,12 +166,38 @@ def test_two_motion_bench_runs_on_the_same_out_both_finish(tmp_path):
         subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=ENV, cwd=ROOT)
         for _ in range(2)
     ]
+    codes = []
     for proc in procs:
         _, err = proc.communicate(timeout=300)
-        assert proc.returncode == 0, err
+        codes.append(proc.returncode)
+        if proc.returncode != 0:
+            line = err.decode().strip()
+            assert proc.returncode == 2 and line.count("\n") == 0, line
+            assert "being written by another process" in line, line
+    assert 0 in codes
     assert json.loads((out / "results.json").read_text())["criteria"]
     assert (out / "residuals.png").read_bytes()[:4] == b"\x89PNG"
     assert sorted(p.name for p in out.iterdir()) == ["residuals.png", "results.csv", "results.json"]
+
+
+def test_a_locked_out_folder_gives_one_line_and_nothing_written(tmp_path):
+    from motion_envs._io import folder_lock
+
+    out = tmp_path / "busy"
+    with folder_lock(out):  # another writer of the folder, here this test's process
+        proc = subprocess.run(
+            [sys.executable, "-m", "baselines.cli", "position", "--out", str(out)],
+            capture_output=True,
+            text=True,
+            env=ENV,
+            cwd=ROOT,
+            timeout=300,
+        )
+    assert proc.returncode == 2
+    line = proc.stderr.strip()
+    assert line.count("\n") == 0 and "argument --out:" in line, line
+    assert "being written by another process" in line, line
+    assert not out.exists()  # created for the lock, removed again: nothing was written
 
 
 def test_motion_bench_all_interrupted_exits_130_and_keeps_results(tmp_path):

@@ -42,6 +42,7 @@ def env_kwarg(text: str) -> str:
     return text
 
 
+@options.reads_files
 def yaml_file(text: str) -> Path:
     """An existing, readable YAML file whose top level is a mapping (read within the
     bounds of :func:`baselines.agents.yaml_files.read_yaml`: size, nesting, aliases)."""
@@ -55,6 +56,7 @@ def yaml_file(text: str) -> Path:
     return path
 
 
+@options.reads_files
 def run_folder(text: str) -> Path:
     """An existing run folder written by ``motion-bench train`` (holds ``run.json``);
     its contents (hashes, version) are checked when it is loaded."""

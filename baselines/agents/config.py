@@ -30,6 +30,7 @@ steps, so that exploration survives a hand that low-passes per-step white noise)
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -92,11 +93,30 @@ MAX_INT = 2**31 - 1
 MAX_N_ENVS = 256
 #: Most environment steps of a run (``n_timesteps``).
 MAX_TIMESTEPS = 10**10
+#: Most hidden layers of a network and units of one layer (``net_arch``).
+MAX_LAYERS = 64
+MAX_LAYER_SIZE = 2**16
+#: Most weights between a network's hidden layers: float32 weights, their gradients and
+#: Adam's two moments take 16 bytes each, 1.6 GB at this bound.
+MAX_HIDDEN_WEIGHTS = 10**8
+#: Most transitions of an off-policy replay buffer (``buffer_size``; SB3's default is
+#: 10^6) and samples of a rollout or a batch (``n_steps``, ``batch_size``): bounds of the
+#: memory they allocate up front.
+MAX_BUFFER_SIZE = 10**7
+MAX_BATCH = 2**20
+
+
+def _integral(v: Any) -> Any:
+    """``v`` as an int when it is a float holding an integer (YAML's ``1e3``, ``64.0``)."""
+    if isinstance(v, float) and math.isfinite(v) and v.is_integer():
+        return int(v)
+    return v
 
 
 def _int(lo: int = 0, hi: int = MAX_INT) -> Checker:
     def check(v: Any, where: str) -> int:
         _no_python(v, where)
+        v = _integral(v)
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
             shown = (
                 v if not isinstance(v, int) or abs(v) < 10**30 else f"a {len(str(v))}-digit integer"
@@ -177,10 +197,25 @@ def _schedule_or(check_value: Checker, check_end: Checker | None = None) -> Chec
 
 def _net_arch(v: Any, where: str) -> Any:
     def layers(x: Any, w: str) -> list[int]:
+        if isinstance(x, list):
+            x = [_integral(n) for n in x]
         if not isinstance(x, list) or not all(
             isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in x
         ):
             raise _fail(w, f"must be a list of positive layer sizes; got {x!r}")
+        if len(x) > MAX_LAYERS or any(n > MAX_LAYER_SIZE for n in x):
+            raise _fail(
+                w,
+                f"at most {MAX_LAYERS} layers of at most {MAX_LAYER_SIZE} units each; got "
+                f"{len(x)} layer(s), the largest {max(x)}",
+            )
+        weights = sum(a * b for a, b in itertools.pairwise(x))
+        if weights > MAX_HIDDEN_WEIGHTS:
+            raise _fail(
+                w,
+                f"{weights} weights between hidden layers, more than {MAX_HIDDEN_WEIGHTS} "
+                f"({MAX_HIDDEN_WEIGHTS * 16 / 1e9:g} GB with gradients and Adam's moments)",
+            )
         return [int(n) for n in x]
 
     _no_python(v, where)
@@ -260,11 +295,11 @@ COMMON_KEYS: dict[str, Checker] = {
     "vec_env": _choice("dummy", "subproc"),
     "learning_rate": _LR,
     "gamma": _float(0.0, 1.0),  # 0: a one-step (episodic) environment
-    "batch_size": _int(1),
+    "batch_size": _int(1, MAX_BATCH),
 }
 
 _OFF_POLICY: dict[str, Checker] = {
-    "buffer_size": _int(1),
+    "buffer_size": _int(1, MAX_BUFFER_SIZE),
     "learning_starts": _int(0),
     "tau": _float(0.0, 1.0),
     "train_freq": _int(1),
@@ -274,7 +309,7 @@ _OFF_POLICY: dict[str, Checker] = {
 #: Keys of each algorithm (beyond :data:`COMMON_KEYS`).
 ALGO_KEYS: dict[str, dict[str, Checker]] = {
     "ppo": {
-        "n_steps": _int(2),
+        "n_steps": _int(2, MAX_BATCH),
         "n_epochs": _int(1),
         "gae_lambda": _float(0.0, 1.0),
         "clip_range": _schedule_or(_float(0.0)),

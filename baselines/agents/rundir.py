@@ -9,24 +9,33 @@ A run folder holds
   ``allow_pickle=False``), absent without normalisation;
 * ``config.json``: the resolved hyper-parameters, algorithm, environment id and kwargs;
 * ``run.json``: the manifest: format, motion-envs and SB3 versions, the command, the seed,
-  the validation results and the SHA-256 of every file above;
+  the validation results, the SHA-256 of every file above and its own
+  (``manifest_sha256``: of the manifest's canonical JSON without that key);
 * ``evaluations.csv`` and ``tb/`` (TensorBoard).
 
 :func:`load_run` rebuilds the model from ``config.json`` and loads only the network
 weights from the zip (:meth:`~stable_baselines3.common.base_class.BaseAlgorithm.set_parameters`,
 ``torch.load(weights_only=True)``), so nothing is unpickled; a modified file, a missing
-file or a run written by another motion-envs version raises ``ValueError`` naming the
-folder and the file.
+file, a file that is not what it should be (JSON read strictly by
+:func:`motion_envs._io.strict_json_loads`, every file a regular file read within
+:data:`MAX_FILE_BYTES`) or a run written by another motion-envs version raises a one-line
+``ValueError`` naming the folder and the file, whatever the reader underneath raised.
+The folder is written under :func:`motion_envs._io.folder_lock`: a second ``train`` into
+the same ``--out`` gets one line at once.
 """
 
 from __future__ import annotations
 
 import contextlib
 import hashlib
+import io
 import json
+import math
 import os
+import pickle
 import shutil
 import tempfile
+import zipfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,14 +44,26 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs._io import atomic_write, atomic_write_text, current_umask
+from motion_envs._io import (
+    UserFileError,
+    atomic_write,
+    atomic_write_text,
+    check_output,
+    current_umask,
+    folder_lock,
+    read_regular_file,
+    strict_json_loads,
+)
 
 __all__ = [
     "FORMAT",
+    "MAX_FILE_BYTES",
     "LoadedRun",
     "ObsNormalizer",
     "file_sha256",
     "load_run",
+    "manifest_sha256",
+    "read_run_json",
     "save_model",
     "staged_run_folder",
     "write_json",
@@ -51,6 +72,27 @@ __all__ = [
 
 #: ``run.json["format"]`` of the folders this module writes.
 FORMAT = "motion-envs-agent/1"
+#: Largest file of a run folder read back (bytes): agents of the bounded networks of
+#: ``baselines.agents.config`` are far smaller.
+MAX_FILE_BYTES = 2**31
+#: Largest JSON file of a run folder (bytes).
+MAX_JSON_BYTES = 64 * 2**20
+#: What reading a tampered file can raise underneath (SB3, torch, numpy, zipfile), each
+#: turned into one ``ValueError`` line naming the file.
+_READ_ERRORS: tuple[type[BaseException], ...] = (
+    ArithmeticError,
+    AttributeError,
+    EOFError,
+    ImportError,
+    LookupError,
+    OSError,
+    RecursionError,
+    RuntimeError,
+    TypeError,
+    ValueError,
+    pickle.UnpicklingError,
+    zipfile.BadZipFile,
+)
 
 
 @contextlib.contextmanager
@@ -64,11 +106,21 @@ def staged_run_folder(out: Path) -> Iterator[Path]:
     first's folder is untouched.
     """
     out = Path(out)
+    try:
+        check_output(out, folder=True)
+    except UserFileError as exc:
+        raise ValueError(f"--out {exc}") from None
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ValueError(
             f"--out {out} is not an empty folder (it may hold a run); choose another folder"
         )
-    out.parent.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out):  # a second writer of out gets one line now, not after training
+        with _staged(out) as staging:
+            yield staging
+
+
+@contextlib.contextmanager
+def _staged(out: Path) -> Iterator[Path]:
     staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
         os.chmod(staging, 0o777 & ~current_umask())  # mkdtemp's 0o700 is for temporaries
@@ -101,12 +153,16 @@ def save_model(model: Any, path: Path) -> None:
 
 
 def file_sha256(path: Path) -> str:
-    """Hex SHA-256 of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+    """Hex SHA-256 of a regular file's bytes (at most :data:`MAX_FILE_BYTES`;
+    ``UserFileError``, a ``ValueError``, otherwise)."""
+    return hashlib.sha256(read_regular_file(path, max_bytes=MAX_FILE_BYTES)).hexdigest()
+
+
+def manifest_sha256(doc: Mapping[str, Any]) -> str:
+    """SHA-256 of a manifest's canonical JSON (sorted keys, no ``manifest_sha256``)."""
+    body = {k: v for k, v in doc.items() if k != "manifest_sha256"}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 @dataclass(frozen=True)
@@ -162,19 +218,35 @@ class ObsNormalizer:
     def load(cls, path: Path) -> ObsNormalizer:
         """The observation transform stored by :meth:`save_vec_normalize`."""
         try:
-            with np.load(path, allow_pickle=False) as z:
+            raw = io.BytesIO(read_regular_file(path, max_bytes=MAX_FILE_BYTES))
+            with np.load(raw, allow_pickle=False) as z:
                 if not bool(z["norm_obs"]):
                     return cls()
-                return cls(
-                    z["obs_mean"].astype(np.float64),
-                    z["obs_var"].astype(np.float64),
+                out = cls(
+                    np.asarray(z["obs_mean"], dtype=np.float64),
+                    np.asarray(z["obs_var"], dtype=np.float64),
                     float(z["epsilon"]),
                     float(z["clip_obs"]),
                 )
-        except (OSError, KeyError, ValueError) as exc:
+        except _READ_ERRORS as exc:
             raise ValueError(
-                f"{path}: not a normalisation file of motion-bench train ({exc})"
+                f"{path}: not a normalisation file of motion-bench train "
+                f"({type(exc).__name__}: {' '.join(str(exc).split())[:200]})"
             ) from None
+        assert out.mean is not None and out.var is not None
+        if (
+            out.mean.ndim != 1
+            or out.mean.shape != out.var.shape
+            or not (np.isfinite(out.mean).all() and np.isfinite(out.var).all())
+            or (out.var < 0).any()
+            or not (math.isfinite(out.epsilon) and out.epsilon > 0)
+            or not (math.isfinite(out.clip_obs) and out.clip_obs > 0)
+        ):
+            raise ValueError(
+                f"{path}: not a normalisation file of motion-bench train (statistics of "
+                "mismatched shapes or not finite, a negative variance or epsilon/clip <= 0)"
+            )
+        return out
 
 
 def write_manifest(run_dir: Path, manifest: Mapping[str, Any], files: list[str]) -> None:
@@ -190,6 +262,7 @@ def write_manifest(run_dir: Path, manifest: Mapping[str, Any], files: list[str])
         **manifest,
         "files": {name: file_sha256(run_dir / name) for name in files if (run_dir / name).exists()},
     }
+    doc["manifest_sha256"] = manifest_sha256(doc)
     write_json(run_dir / "run.json", doc)
 
 
@@ -217,15 +290,20 @@ class LoadedRun:
         return np.asarray(actions, dtype=np.float32)
 
 
-def _read_json(path: Path, run_dir: Path) -> dict[str, Any]:
-    if not path.is_file():
+def read_run_json(path: Path, run_dir: Path) -> dict[str, Any]:
+    """A JSON object file of a run folder, read strictly (one-line ``ValueError``)."""
+    if not os.path.lexists(path):
         raise ValueError(
             f"run folder {run_dir}: {path.name} is missing (not a motion-bench train run?)"
         )
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"run folder {run_dir}: {path.name} is not valid JSON ({exc})") from None
+        doc = strict_json_loads(
+            read_regular_file(path, max_bytes=MAX_JSON_BYTES), f"run folder {run_dir}: {path.name}"
+        )
+    except UserFileError as exc:
+        raise ValueError(
+            str(exc) if str(exc).startswith("run folder") else f"run folder {run_dir}: {exc}"
+        ) from None
     if not isinstance(doc, dict):
         raise ValueError(f"run folder {run_dir}: {path.name} must hold a JSON object")
     return doc
@@ -243,8 +321,9 @@ def _inside(name: Any) -> bool:
 def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     """Load a run folder (``which="best"``: ``agent.zip``, ``"final"``: ``final_agent.zip``).
 
-    Checks the manifest's format and motion-envs version and every file's SHA-256 before
-    reading anything else.
+    Checks the manifest's format, motion-envs version and own SHA-256 and every file's
+    SHA-256 before reading anything else; every error is one ``ValueError`` line naming
+    the folder and the file.
     """
     import motion_envs
     from baselines.agents.config import validate_hyperparams
@@ -254,7 +333,7 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     run_dir = Path(run_dir)
     if not run_dir.is_dir():
         raise FileNotFoundError(f"run folder {run_dir} does not exist")
-    manifest = _read_json(run_dir / "run.json", run_dir)
+    manifest = read_run_json(run_dir / "run.json", run_dir)
     if manifest.get("format") != FORMAT:
         raise ValueError(
             f"run folder {run_dir}: run.json format {manifest.get('format')!r} is not {FORMAT!r}"
@@ -264,6 +343,15 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
         raise ValueError(
             f"run folder {run_dir} was written by motion-envs {version}; this is "
             f"{motion_envs.__version__} (environments may differ): retrain, or install {version}"
+        )
+    try:
+        own = manifest_sha256(manifest)
+    except (TypeError, ValueError):  # not serialisable the way it was written
+        own = None
+    if manifest.get("manifest_sha256") != own:
+        raise ValueError(
+            f"run folder {run_dir}: run.json does not match its own SHA-256 "
+            "(manifest_sha256; modified after training)"
         )
     files = manifest.get("files")
     if not isinstance(files, dict):
@@ -280,30 +368,54 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
                 "inside the run folder"
             )
         path = run_dir / name
-        if not path.is_file():
+        if not os.path.lexists(path):
             raise ValueError(f"run folder {run_dir}: {name} is missing")
-        if file_sha256(path) != digest:
+        try:
+            actual = file_sha256(path)
+        except UserFileError as exc:
+            raise ValueError(f"run folder {run_dir}: {exc}") from None
+        if actual != digest:
             raise ValueError(
                 f"run folder {run_dir}: {name} does not match its SHA-256 in run.json "
                 "(modified after training)"
             )
-    config = _read_json(run_dir / "config.json", run_dir)
+    config = read_run_json(run_dir / "config.json", run_dir)
     for key in ("algo", "env_id", "seed"):
         if config.get(key) != manifest.get(key):
             raise ValueError(f"run folder {run_dir}: config.json and run.json disagree on {key!r}")
-    hp = validate_hyperparams(config["algo"], config.get("hyperparams"), f"{run_dir}/config.json")
+    algo, env_id, seed = config.get("algo"), config.get("env_id"), config.get("seed")
+    if not isinstance(algo, str) or not isinstance(env_id, str):
+        raise ValueError(f"run folder {run_dir}: config.json: algo and env_id must be names")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise ValueError(f"run folder {run_dir}: config.json: seed must be an integer >= 0")
+    hp = validate_hyperparams(algo, config.get("hyperparams"), f"{run_dir}/config.json")
     stats = run_dir / f"{prefix}normalization.npz"
     if hp.get("normalize", {}).get("obs") and f"{prefix}normalization.npz" not in files:
         raise ValueError(f"run folder {run_dir}: {stats.name} is missing (normalize.obs is true)")
     normalizer = ObsNormalizer.load(stats) if stats.name in files else ObsNormalizer()
     split = "val" if hp["env_kwargs"].get("val_fraction", 0) > 0 else "train"
-    env = make_sb3_vec_env(config["env_id"], 1, hp["env_kwargs"], split)
-    model = build_model(config["algo"], hp, env, int(config["seed"]))
+    stage = "config.json"
     try:
-        model.set_parameters(str(run_dir / f"{prefix}agent.zip"), exact_match=True, device="cpu")
-    except (RuntimeError, ValueError, KeyError) as exc:
+        env = make_sb3_vec_env(env_id, 1, hp["env_kwargs"], split)
+        model = build_model(algo, hp, env, seed)
+        stage = f"{prefix}agent.zip"
+        try:
+            model.set_parameters(str(run_dir / stage), exact_match=True, device="cpu")
+        finally:
+            env.close()
+    except _READ_ERRORS as exc:
+        detail = " ".join(str(exc).split())[:300]
+        what = (
+            "does not fit config.json's network"
+            if stage.endswith("agent.zip")
+            else "does not build an agent"
+        )
         raise ValueError(
-            f"run folder {run_dir}: {prefix}agent.zip does not fit config.json's network ({exc})"
+            f"run folder {run_dir}: {stage} {what} ({type(exc).__name__}: {detail})"
         ) from None
-    env.close()
+    if normalizer.mean is not None and normalizer.mean.shape != env.observation_space.shape:
+        raise ValueError(
+            f"run folder {run_dir}: {stats.name} holds statistics of shape "
+            f"{normalizer.mean.shape}, the environment observes {env.observation_space.shape}"
+        )
     return LoadedRun(run_dir, model, normalizer, config, manifest)

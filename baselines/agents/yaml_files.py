@@ -6,6 +6,7 @@ composes the document with :class:`BoundedLoader`, which refuses
 
 * nesting deeper than :data:`MAX_DEPTH` levels (checked while composing, so 5,000 nested
   lists give one line, not a ``RecursionError``),
+* a key repeated in one mapping (YAML says keys are unique; PyYAML would keep the last),
 * more than :data:`MAX_ALIASES` aliases, an alias to the node that contains it, and a
   document whose aliases expand to more than :data:`MAX_NODES` nodes or deeper than
   :data:`MAX_DEPTH` levels (an alias bomb is refused before anything walks it).
@@ -95,9 +96,11 @@ class BoundedLoader(YamlLoader):
             self._depth -= 1
 
 
-def _check_expanded(root: yaml.Node) -> None:
-    """Refuse a composed document whose aliases expand too far or refer to themselves
-    (iterative post-order walk of the node graph, each node once)."""
+def _check_expanded(root: yaml.Node, aliased: bool) -> None:
+    """Refuse a composed document whose aliases expand too far or refer to themselves,
+    or with a key repeated in a mapping (iterative post-order walk of the node graph,
+    each node once). Without aliases (``aliased`` False) the node count is bounded by
+    :data:`MAX_BYTES` already and is not checked, so a long list gets its own message."""
     size: dict[int, int] = {}
     depth: dict[int, int] = {}
     on_path: set[int] = set()
@@ -117,13 +120,15 @@ def _check_expanded(root: yaml.Node) -> None:
             on_path.discard(key)
             size[key] = 1 + sum(size[id(c)] for c in children)
             depth[key] = 1 + max((depth[id(c)] for c in children), default=0)
-            if size[key] > MAX_NODES:
+            if aliased and size[key] > MAX_NODES:
                 raise _Limit(f"aliases expand to more than {MAX_NODES} nodes", node.start_mark)
             if depth[key] > MAX_DEPTH:
                 raise _Limit(f"aliases nest deeper than {MAX_DEPTH} levels", node.start_mark)
             continue
         if key in size:
             continue
+        if isinstance(node, yaml.MappingNode):
+            _refuse_duplicate_keys(node)
         on_path.add(key)
         stack.append((node, True))
         for child in children:
@@ -131,6 +136,17 @@ def _check_expanded(root: yaml.Node) -> None:
                 raise _Limit("an alias refers to the node that contains it", child.start_mark)
             if id(child) not in size:
                 stack.append((child, False))
+
+
+def _refuse_duplicate_keys(node: yaml.MappingNode) -> None:
+    seen: set[tuple[str, str]] = set()
+    for key, _ in node.value:
+        if not isinstance(key, yaml.ScalarNode) or key.value == "<<":
+            continue
+        ident = (key.tag, key.value)
+        if ident in seen:
+            raise _Limit(f"duplicate key {key.value!r} in one mapping", key.start_mark)
+        seen.add(ident)
 
 
 def _where(path: str, mark: Any) -> str:
@@ -159,7 +175,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, yaml.Node | None]:
         loader = BoundedLoader(text)  # its reader refuses control characters here
         node = loader.get_single_node()
         if node is not None:
-            _check_expanded(node)
+            _check_expanded(node, aliased=loader._aliases > 0)
         doc = loader.construct_document(node) if node is not None else None
     except _Limit as exc:
         raise ValueError(f"{_where(p, exc.mark)}: {exc.message}") from None

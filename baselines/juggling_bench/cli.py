@@ -4,10 +4,8 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import time
-from pathlib import Path
 
 from baselines import options
 from baselines.agents.checks import run_folder
@@ -35,7 +33,7 @@ from motion_envs.datasets.juggling import (
     siteswap_balls,
 )
 from motion_envs.datasets.registry import describe_names
-from motion_envs.datasets.sample_table import missing_columns_message, not_text_message
+from motion_envs.datasets.sample_table import missing_columns_message
 from motion_envs.models.juggling import LEVELS, PATTERNS
 
 
@@ -163,6 +161,7 @@ def gravity_task(text: str) -> JugglingTask:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+@options.reads_files
 def juggling_data(text: str) -> str:
     """``--data``: a built-in juggling dataset (``simulated``), a recording or an existing,
     readable juggling CSV with ``t,x,z``.
@@ -174,12 +173,8 @@ def juggling_data(text: str) -> str:
     if (recording := options.mocap_data(text, "juggling")) is not None:  # FILE.c3d?opt=...
         return recording
     path = options.input_file(text)
-    try:
-        with path.open(encoding="utf-8", newline="") as fh:
-            header = next(csv.reader([fh.readline()]), [])
-    except UnicodeDecodeError:
-        raise argparse.ArgumentTypeError(_not_text(text, path)) from None
-    missing = [c for c in ("t", "x", "z") if c not in [h.strip() for h in header]]
+    header = options.header_line(text)
+    missing = [c for c in ("t", "x", "z") if c not in header]
     if missing:
         expected = "t,x,z[,ball_x,ball_z][,phase][,recording]"
         raise argparse.ArgumentTypeError(
@@ -188,14 +183,7 @@ def juggling_data(text: str) -> str:
     return str(path)
 
 
-def _not_text(text: str, path: Path) -> str:
-    """Why ``path`` is not a UTF-8 CSV (a spreadsheet workbook is named as one)."""
-    with path.open("rb") as fh:
-        head = fh.read(8)
-    message = not_text_message(text, head)
-    return message if "workbook" in message else f"{text} is not a UTF-8 text CSV"
-
-
+@options.reads_files
 def analyse_source(text: str) -> str:
     """``--analyse``: a juggling CSV with ``ball_x, ball_z``, or a C3D/BVH/TSV file with
     ``?ball=NAME[,NAME...]`` or ``?balls=unlabelled`` (and the import's other options).
@@ -215,12 +203,8 @@ def analyse_source(text: str) -> str:
             )
         return text
     path = options.input_file(text)
-    try:
-        with path.open(encoding="utf-8", newline="") as fh:
-            header = next(csv.reader([fh.readline()]), [])
-    except UnicodeDecodeError:
-        raise argparse.ArgumentTypeError(_not_text(text, path)) from None
-    missing = [c for c in ("t", "ball_x", "ball_z") if c not in [h.strip() for h in header]]
+    header = options.header_line(text)
+    missing = [c for c in ("t", "ball_x", "ball_z") if c not in header]
     if missing:
         expected = "t,x,z,ball_x,ball_z[,recording] (or give a .c3d/.bvh/.tsv recording)"
         raise argparse.ArgumentTypeError(

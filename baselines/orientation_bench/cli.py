@@ -42,6 +42,7 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
+@options.reads_files
 def orientation_data(text: str) -> str:
     """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
     if options.builtin_data(text, "orientation"):

@@ -57,6 +57,7 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
+@options.reads_files
 def position_data(text: str) -> str:
     """``--data``: a built-in position dataset (``lasa``), a recording or a position CSV."""
     if options.builtin_data(text, "position"):

@@ -50,6 +50,7 @@ from motion_envs.envs._common import (
     check_num_envs,
     check_scale,
     check_seed,
+    env_footprint,
     has_render_mode,
 )
 from motion_envs.envs._reach import TrajectoryLabelsMixin, reset_labels
@@ -341,7 +342,7 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         from motion_envs.envs._common import check_autoreset_mode
 
         first = self.single_class(**kwargs)
-        self.num_envs = check_num_envs(num_envs)
+        self.num_envs = check_num_envs(num_envs, env_footprint(first))
         self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
         self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}

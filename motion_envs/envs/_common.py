@@ -36,7 +36,9 @@ __all__ = [
     "check_seed",
     "check_val_fraction",
     "clipped_pair",
+    "env_footprint",
     "has_render_mode",
+    "physical_memory",
     "timing_bounds",
 ]
 
@@ -105,9 +107,40 @@ def check_seed(value: Any, name: str = "split_seed") -> int:
     return check_integer(value, name, 0, 2**63 - 1)
 
 
-def check_num_envs(num_envs: Any) -> int:
-    """``num_envs`` of a native vector environment: an integer in ``[1, MAX_NUM_ENVS]``."""
-    return check_integer(num_envs, "num_envs", 1, MAX_NUM_ENVS)
+def physical_memory() -> int:
+    """This machine's physical memory in bytes (``2**40`` where the OS does not say)."""
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return 2**40
+
+
+def env_footprint(env: Any) -> int:
+    """A lower bound of the bytes one sub-environment like ``env`` holds: MuJoCo's model
+    and data buffers (``nbuffer``; the arena is not counted, it is touched lazily) when
+    it has them, plus its observation and action as float64 (the vector env's batches)."""
+    size = 0
+    for name in ("model", "data"):
+        size += int(getattr(getattr(env, name, None), "nbuffer", 0) or 0)
+    for space in (getattr(env, "observation_space", None), getattr(env, "action_space", None)):
+        shape = getattr(space, "shape", None) or ()
+        size += 8 * math.prod(shape)
+    return max(size, 1)
+
+
+def check_num_envs(num_envs: Any, footprint: int = 0) -> int:
+    """``num_envs`` of a vector environment: an integer in ``[1, MAX_NUM_ENVS]`` whose
+    sub-environments, ``footprint`` bytes each (:func:`env_footprint`; 0: not checked),
+    fit in this machine's physical memory (a one-line ``ValueError`` otherwise)."""
+    n = check_integer(num_envs, "num_envs", 1, MAX_NUM_ENVS)
+    memory = physical_memory()
+    if footprint > 0 and n * footprint > memory:
+        raise ValueError(
+            f"num_envs={n} needs at least {n * footprint / 1e9:.3g} GB ({footprint / 1e3:.3g} kB "
+            f"per sub-environment), more than this machine's {memory / 1e9:.3g} GB of memory; "
+            f"use at most {memory // footprint}"
+        )
+    return n
 
 
 def check_max_episode_steps(max_episode_steps: Any, default: int) -> int:

@@ -27,6 +27,7 @@ from motion_envs.envs._common import (
     check_autoreset_mode,
     check_max_episode_steps,
     check_num_envs,
+    env_footprint,
 )
 from motion_envs.envs._reach import ReachEnv, ReachKind, TrajectoryLabelsMixin, reset_labels
 
@@ -104,7 +105,7 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         self.task = task
         self._n_steps = N_STEPS
         self._n_traj = task.n_trajectories
-        self.num_envs = check_num_envs(num_envs)
+        self.num_envs = check_num_envs(num_envs, env_footprint(single))
         self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
         self.autoreset_mode = check_autoreset_mode(autoreset_mode)
         self._mode = _MODES[self.autoreset_mode]

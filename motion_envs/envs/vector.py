@@ -64,7 +64,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from motion_envs.envs._common import check_autoreset_mode, check_num_envs
+from motion_envs.envs._common import check_autoreset_mode, check_num_envs, env_footprint
 from motion_envs.envs._reach_vector import ReachVectorEnv
 from motion_envs.envs.orientation_reach import OrientationReachVectorEnv
 from motion_envs.envs.position_reach import PositionReachVectorEnv
@@ -88,8 +88,11 @@ def juggling_vector_env(
     ``autoreset_mode`` (an ``AutoresetMode`` or its value)."""
     from motion_envs.envs.juggling import NumericInfo  # MuJoCo: only when asked for
 
-    n = check_num_envs(num_envs)
+    check_num_envs(num_envs)
     mode = check_autoreset_mode(autoreset_mode)
+    probe = gym.make(env_id, **kwargs)  # checks the arguments; its footprint bounds num_envs
+    n = check_num_envs(num_envs, env_footprint(probe.unwrapped))
+    probe.close()
     env_fns = [lambda: NumericInfo(gym.make(env_id, **kwargs)) for _ in range(n)]
     return gym.vector.SyncVectorEnv(env_fns, autoreset_mode=mode)
 

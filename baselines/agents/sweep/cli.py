@@ -18,6 +18,7 @@ from baselines.agents.sweep.summary import format_table, write_results
 DESCRIPTION = "motion-bench sweep: many configurations x seeds of motion-bench train on Ray Tune."
 
 
+@options.reads_files
 def sweep_file(text: str) -> Path:
     """``--config``: a sweep YAML file, or the name of a shipped one (``NAME`` for
     ``configs/sweeps/NAME.yaml``, packaged with ``baselines``) where no such file exists."""

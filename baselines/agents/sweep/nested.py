@@ -24,13 +24,14 @@ inner score (:func:`baselines.agents.sweep.lopo.lopo_summary`). Inner run folder
 
 from __future__ import annotations
 
-import json
 import shutil
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from baselines.agents.rundir import read_run_json
 
 __all__ = ["choose_step", "inner_overrides", "nested_train", "refit_overrides"]
 
@@ -88,7 +89,7 @@ def _evaluations(run_dir: Path) -> tuple[list[int], list[float], float]:
     """A finished run's evaluation points, criteria and validation nominal criterion."""
     rows = (run_dir / "evaluations.csv").read_text().split("\n")[1:]
     pairs = [r.split(",") for r in rows if r]
-    manifest = json.loads((run_dir / "run.json").read_text())
+    manifest = read_run_json(run_dir / "run.json", run_dir)
     steps = [int(p[0]) for p in pairs]
     return steps, [float(p[1]) for p in pairs], float(manifest["val_nominal_criterion"])
 

@@ -7,13 +7,14 @@ from __future__ import annotations
 import itertools
 import math
 import os
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from baselines import options
 from baselines.agents.config import ALGOS, MAX_N_ENVS, validate_hyperparams
@@ -64,6 +65,16 @@ class SweepFile(BaseModel):
     space: dict[str, Any]
     description: str | None = Field(None, max_length=10_000)
     inner_folds: int | None = Field(None, ge=2, le=MAX_INNER_FOLDS)
+
+    @field_validator("seeds")
+    @classmethod
+    def _distinct_seeds(cls, seeds: list[int]) -> list[int]:
+        repeated = sorted(s for s, k in Counter(seeds).items() if k > 1)
+        if repeated:
+            raise ValueError(
+                f"seeds must be distinct (a repeated seed runs the same trial twice): {repeated}"
+            )
+        return seeds
 
 
 def _schema_error(exc: ValidationError, path: str, lines: Mapping[tuple[str, ...], int]) -> str:

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from baselines.agents.rundir import read_run_json
 from baselines.agents.sweep.space import configuration
 
 
@@ -114,7 +115,7 @@ def train_and_score(
             on_evaluation=report if intermediate else None,
         )
     test = evaluate(AgentConfig(str(run_dir), settings.test_split))
-    manifest = json.loads((run_dir / "run.json").read_text())
+    manifest = read_run_json(run_dir / "run.json", run_dir)
     selection = manifest.get("selection") or {}
     return {
         "seed": seed,

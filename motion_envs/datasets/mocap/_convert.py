@@ -236,7 +236,10 @@ def _movements(
                     f"{opts.segments}: line {row.line}: {row.start:g} to {row.end:g} s is not "
                     f"inside one gap-free piece of {rec.path}"
                 )
-            inside = np.flatnonzero((piece.t > row.start - half) & (piece.t < row.end + half))
+            # the samples with row.start - half < t < row.end + half (piece.t increases)
+            first = int(np.searchsorted(piece.t, row.start - half, side="right"))
+            stop = int(np.searchsorted(piece.t, row.end + half, side="left"))
+            inside = np.arange(first, stop)
             if inside.size < MIN_SAMPLES:
                 raise ValueError(
                     f"{opts.segments}: line {row.line}: fewer than {MIN_SAMPLES} samples"

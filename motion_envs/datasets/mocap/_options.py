@@ -15,9 +15,14 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
+from motion_envs._io import check_regular_file
+
 __all__ = [
     "IMPORT_OPTIONS",
     "KINDS",
+    "MAX_RECORDING_BYTES",
+    "MAX_SEGMENTS_BYTES",
+    "MAX_SEGMENT_ROWS",
     "MOCAP_SUFFIXES",
     "UNITS",
     "ImportOptions",
@@ -30,6 +35,12 @@ __all__ = [
 
 #: File suffixes read as motion capture (case-insensitive).
 MOCAP_SUFFIXES: tuple[str, ...] = (".c3d", ".bvh", ".tsv")
+
+#: Largest motion capture file read (bytes); larger is refused before reading.
+MAX_RECORDING_BYTES = 2**32
+#: Largest segments table (bytes) and most rows (a movement each).
+MAX_SEGMENTS_BYTES = 16 * 2**20
+MAX_SEGMENT_ROWS = 10_000
 
 #: Length units accepted by ``--unit`` by name, in metres (``--unit`` also takes a
 #: number: the metres per file unit, e.g. ``0.056444`` for the CMU database's BVH files).
@@ -200,10 +211,9 @@ def _float(low: float, strict: bool) -> Callable[[str], float]:
 
 
 def _file(text: str) -> Path:
-    path = Path(text)
-    if not path.is_file():
+    if not os.path.lexists(text):
         raise ValueError(f"{text} does not exist or is not a file")
-    return path
+    return check_regular_file(text, max_bytes=MAX_SEGMENTS_BYTES)  # no FIFO, device, folder
 
 
 _CHECKS: dict[str, Callable[[str], Any]] = {
@@ -267,8 +277,9 @@ def parse_source(data: str | os.PathLike[str]) -> tuple[Path, ImportOptions]:
             values[name.replace("-", "_")] = parse_option(name, text)
         except ValueError as exc:
             raise ValueError(f"{path}: option {name}: {exc}") from None
-    if not path.is_file():
+    if not os.path.lexists(path):
         raise FileNotFoundError(f"motion capture file {path} does not exist")
+    check_regular_file(path, max_bytes=MAX_RECORDING_BYTES)  # no FIFO, device or folder
     return path, replace(ImportOptions(), **values)
 
 

@@ -21,7 +21,9 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from motion_envs.datasets.mocap._options import UNITS, unit_scale
+from motion_envs._io import check_regular_file
+from motion_envs.datasets.mocap._bounds import check_rate, check_unique_names
+from motion_envs.datasets.mocap._options import MAX_RECORDING_BYTES, UNITS, unit_scale
 from motion_envs.datasets.mocap._recording import MocapRecording
 from motion_envs.geometry import quaternion as quat
 
@@ -32,12 +34,6 @@ FloatArray = NDArray[np.float64]
 _EXTRA = 'install the readers with  pip install "motion-envs[mocap]"'
 #: Qualisys labels of trajectories that were not identified (unlabelled fragments).
 _UNLABELLED_PREFIXES = ("unidentified", "unlabeled", "unlabelled", "unnamed")
-
-
-def _check_rate(path: Path, rate: float, where: str) -> float:
-    if not math.isfinite(rate) or rate <= 0:
-        raise ValueError(f"{path}: frame rate {rate:g} Hz ({where}); expected > 0")
-    return float(rate)
 
 
 def _unit_scale(path: Path, unit: str) -> float:
@@ -149,7 +145,7 @@ def read_c3d(
     except ImportError:  # pragma: no cover - the extra is installed in the tests
         raise ValueError(f"{p}: reading C3D needs ezc3d; {_EXTRA}") from None
     fields = _read_c3d_guarded(p, markers)
-    rate = _check_rate(p, fields["rate"], "C3D header")
+    rate = check_rate(p, fields["rate"], "C3D header")
     points = fields["points"]
     expected = _announced_frames(p)
     if expected is not None and fields["n_frames"] < expected:
@@ -239,8 +235,10 @@ def read_bvh(path: str | Path, unit: str | None = None) -> MocapRecording:
     frame_time = _bvh_frame_time(p, float(bvh.frame_time))
     if not math.isfinite(frame_time) or frame_time <= 0:
         raise ValueError(f"{p}: frame rate is zero (Frame Time: {frame_time:g}); expected > 0")
+    check_rate(p, 1.0 / frame_time, f"Frame Time: {frame_time:g}")
     if bvh.frame_count == 0:
         raise ValueError(f"{p}: the BVH file holds no frames")
+    check_unique_names(p, [str(n) for n in bvh.joint_names], "joint")
     scale = None if unit is None else _unit_scale(p, unit)
     points = np.asarray(bvh.joint_positions(), dtype=np.float64) * (scale or 1.0)
     rot = _global_rotations(bvh)
@@ -313,7 +311,7 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
         rate = float(meta["FREQUENCY"][0])
     except (IndexError, ValueError):
         raise ValueError(f"{p}: bad FREQUENCY header line {meta['FREQUENCY']!r}") from None
-    rate = _check_rate(p, rate, "FREQUENCY")
+    rate = check_rate(p, rate, "FREQUENCY")
     names, has_frame_time = _tsv_markers(p, meta, columns)
     first_col = 2 if has_frame_time else 0
     width = first_col + 3 * len(names)
@@ -327,6 +325,8 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
     if meta.get("NO_OF_FRAMES"):
         try:
             announced = int(meta["NO_OF_FRAMES"][0])
+            if announced < 0:
+                raise ValueError
         except ValueError:
             raise ValueError(
                 f"{p}: bad NO_OF_FRAMES header line {meta['NO_OF_FRAMES']!r}"
@@ -404,8 +404,9 @@ def read_recording(
     only these are read into memory; None: all)."""
     p = Path(path)
     suffix = p.suffix.lower()
-    if not p.is_file():
+    if not os.path.lexists(p):
         raise FileNotFoundError(f"motion capture file {p} does not exist")
+    check_regular_file(p, max_bytes=MAX_RECORDING_BYTES)  # no FIFO, device or folder
     if suffix == ".c3d":
         return read_c3d(p, unit, markers)
     readers = {".bvh": read_bvh, ".tsv": read_qualisys_tsv}

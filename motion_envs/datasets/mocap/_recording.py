@@ -24,7 +24,9 @@ class MocapRecording:
     fmt:
         ``"c3d"``, ``"bvh"`` or ``"tsv"``.
     rate:
-        Frame rate in Hz (from the file; > 0).
+        Frame rate in Hz (from the file; within the physical bounds of
+        :mod:`motion_envs.datasets.mocap._bounds`, checked on construction with the
+        names and the positions' magnitude).
     labels:
         ``(M,)`` marker (C3D, TSV) or joint (BVH) names; ``""`` for an unlabelled
         Qualisys trajectory fragment.
@@ -54,6 +56,11 @@ class MocapRecording:
     quaternions: FloatArray | None = None
     scale: float | None = 1.0
     first_frame: int = 0
+
+    def __post_init__(self) -> None:
+        from motion_envs.datasets.mocap._bounds import check_recording
+
+        check_recording(self)  # THE physical bounds, whichever reader built the recording
 
     @property
     def n_frames(self) -> int:

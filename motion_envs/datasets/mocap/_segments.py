@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from motion_envs._io import check_regular_file
+from motion_envs.datasets.mocap._options import MAX_SEGMENT_ROWS, MAX_SEGMENTS_BYTES
 from motion_envs.datasets.sample_table import missing_columns_message, read_csv_exact
 from motion_envs.geometry import quaternion as quat
 
@@ -89,12 +91,22 @@ class SegmentRow:
 
 
 def read_segments(path: str | os.PathLike[str]) -> list[SegmentRow]:
-    """Read a segments CSV (module docstring); ``ValueError`` naming the file and line."""
+    """Read a segments CSV (module docstring); ``ValueError`` naming the file and line.
+
+    A regular file of at most ``MAX_SEGMENTS_BYTES`` bytes and ``MAX_SEGMENT_ROWS`` rows."""
     p = Path(path)
+    if not os.path.lexists(p):
+        raise FileNotFoundError(f"segments table {p} does not exist")
+    check_regular_file(p, max_bytes=MAX_SEGMENTS_BYTES)  # no FIFO, device or folder
     try:
         frame = read_csv_exact(p, dtype={"subject": str, "task": str, "trajectory": str})
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise ValueError(f"{p}: not a segments CSV ({' '.join(str(exc).split())})") from None
+    if len(frame) > MAX_SEGMENT_ROWS:
+        raise ValueError(
+            f"{p}: {len(frame)} segments, more than the {MAX_SEGMENT_ROWS} movements a "
+            "recording is cut into"
+        )
     missing = [c for c in ("start", "end") if c not in frame.columns]
     if missing:
         expected = "start,end[,subject,task]"

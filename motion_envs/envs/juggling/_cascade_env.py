@@ -222,6 +222,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
     _CONTROLLERS = CASCADE_CONTROLLERS
+    _WORLD = "Cascade-v0"
     _DEFAULT_WEIGHTS = DEFAULT_CASCADE_REWARD_WEIGHTS
 
     def __init__(

@@ -20,7 +20,7 @@ from motion_envs.envs._common import (
     check_reward_weights,
     check_scale,
 )
-from motion_envs.models.juggling import LEVELS
+from motion_envs.models.juggling import LEVELS, check_gravity
 
 __all__ = ["LevelsEnvMixin", "check_phases"]
 
@@ -58,6 +58,8 @@ class LevelsEnvMixin:
     release_angle_std: float
     gravity: float
     controller_name: str
+    #: The world's name for :func:`~motion_envs.models.juggling.check_gravity`.
+    _WORLD = "Juggling-v1"
     max_catches: int
     residual_scale: float
     residual_phases: tuple[str, ...] | None
@@ -109,6 +111,7 @@ class LevelsEnvMixin:
         )
         gravity, controller, max_catches, residual_scale, residual_phases, reward_weights = world
         self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
+        check_gravity(self.gravity, self._WORLD)  # what the demonstrations' timing allows
         self.controller_name = check_choice(controller, "controller", self._CONTROLLERS)
         self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
         self.residual_scale = check_scale(residual_scale, 1.0)

@@ -59,6 +59,7 @@ from motion_envs.envs._common import (
     check_autoreset_mode,
     check_max_episode_steps,
     check_num_envs,
+    env_footprint,
 )
 from motion_envs.envs._kernels import numba_available
 
@@ -145,10 +146,11 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             raise ValueError(f"threads must be a positive int or None; got {threads!r}")
         if backend == "numba" and not numba_available():
             raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
-        n = check_num_envs(num_envs)
+        check_num_envs(num_envs)
         mode = check_autoreset_mode(autoreset_mode)
         self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
         first = self.single_class(**kwargs)  # checks the arguments once
+        n = check_num_envs(num_envs, env_footprint(first))
         self.envs: list[Any] = [first] + [self.single_class(**kwargs) for _ in range(n - 1)]
         self.num_envs = n
         self.autoreset_mode = mode

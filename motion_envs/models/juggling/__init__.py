@@ -32,6 +32,8 @@ The public names of small private modules, one concern each:
   (:func:`make_cascade_controller`);
 * ``_patterns``: which siteswaps the cascade juggler can play at its tempo, and why not
   the others (:func:`check_pattern`);
+* ``_gravity``: the gravities Juggling-v1 and Cascade-v0 can be built at, from the
+  task's timing (:func:`check_gravity`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
@@ -85,6 +87,13 @@ from motion_envs.models.juggling._flights import (
     FlightOptions,
     detect_flights,
     estimate_noise,
+)
+from motion_envs.models.juggling._gravity import (
+    MAX_DEMO_SAMPLES,
+    MIN_PHASE_SAMPLES,
+    TIMING_AT_PAPER_GRAVITY,
+    check_gravity,
+    gravity_range,
 )
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._levels import (
@@ -156,8 +165,11 @@ __all__ = [
     "FIT_TEST_FRACTION",
     "LEVELS",
     "LIKENESS_TAU",
+    "MAX_DEMO_SAMPLES",
+    "MIN_PHASE_SAMPLES",
     "PAPER_GRAVITY",
     "PATTERNS",
+    "TIMING_AT_PAPER_GRAVITY",
     "TRACKING_NOISE",
     "TRACKING_ROWS",
     "V1_N_SINES",
@@ -195,6 +207,7 @@ __all__ = [
     "across_axis",
     "cascade_fit",
     "cascade_likeness",
+    "check_gravity",
     "check_pattern",
     "cycle_rng",
     "cycle_rngs",
@@ -205,6 +218,7 @@ __all__ = [
     "eq10_rows",
     "estimate_noise",
     "fit_juggler",
+    "gravity_range",
     "juggler_demonstrations",
     "load_demonstrations",
     "load_juggler",
