@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import argparse
 import datetime as _dt
-import json
 import math
+import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -37,6 +37,7 @@ from scipy import optimize
 from tqdm.auto import tqdm
 
 from baselines import options
+from motion_envs._io import UserFileError, read_regular_file, strict_json_loads
 from motion_envs.datasets.cohort import CohortGenerator
 from motion_envs.datasets.cohort_config import (
     CALIBRATED_PARAMETERS,
@@ -282,12 +283,12 @@ def load_targets(spec: str) -> dict[str, tuple[float, float]]:
     if spec == "paper":
         return dict(PAPER_TARGETS)
     path = Path(spec)
-    if not path.is_file():
+    if not os.path.lexists(path):
         raise ValueError(f"--target must be 'paper' or a JSON file of targets; got {spec!r}")
-    try:
-        raw = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path}: not a readable JSON file ({exc})") from None
+    try:  # a regular file (no FIFO or device), bounded, strict JSON
+        raw = strict_json_loads(read_regular_file(path, max_bytes=1 << 20), str(path))
+    except UserFileError as exc:
+        raise ValueError(str(exc)) from None
     if not isinstance(raw, dict) or not raw:
         raise ValueError(f"{path}: expected a JSON object criterion -> value or [lo, hi]")
     out = {}

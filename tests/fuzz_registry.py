@@ -1,11 +1,13 @@
 """THE registry of the project's input surfaces, fuzzed by ``tests/test_fuzz.py``.
 
 Every public loader (a ``load_*``/``read_*`` name in the ``__all__`` of a module of
-``motion_envs.datasets`` or ``motion_envs.models``), every model-file and config loader
-of ``baselines``, every environment id of ``motion_envs.ENV_IDS`` and every numeric
-option of the ``motion-bench`` CLI is listed here with the errors it documents and the
-kind of input it takes. ``tests/test_fuzz.py`` fails when a public loader or an env id
-exists that is not listed, so the next module is covered by construction.
+``motion_envs.datasets``, ``motion_envs.models`` or ``baselines``), every environment id
+of ``motion_envs.ENV_IDS`` with every argument of its constructor (:data:`ENVS`) and of
+its vector entry point (:data:`VECTOR_ARGS`), and every option of the ``motion-bench``
+CLI (numeric, a file it reads, an output, or a name) is listed here with the kind of
+input it takes. ``tests/test_fuzz.py`` fails when a public loader, an env id, an env or
+vector argument or a CLI option exists that is not listed, so the next one is covered by
+construction.
 
 Sizes a user controls are bounded in the strategies: file bytes (``MAX_FILE_BYTES``),
 YAML text and nesting, sample counts, cycle indices.
@@ -98,31 +100,53 @@ LOADERS: tuple[Loader, ...] = (
         "juggling_csv",
         not_fuzzed="reads its CSV with load_juggling_csv (fuzzed), then fits",
     ),
+    Loader("baselines.agents.yaml_files:read_yaml", "yaml"),
+    Loader("baselines.agents.rundir:load_run", "run_folder"),
+    Loader("baselines.agents.rundir:read_run_json", "run_folder"),
+    Loader("baselines.agents.rundir:ObsNormalizer.load", "run_folder"),
+    Loader(
+        "baselines.juggling_bench.runner:load_demos",
+        "juggling_csv",
+        not_fuzzed="reads its CSV with read_juggling_csv or a recording (both fuzzed)",
+    ),
+    Loader("baselines.calibrate_cohort:load_targets", "json_targets"),
 )
 
-#: Environment ids: constructor arguments fuzzed (name -> kind of value), action shape.
+#: Environment ids: every constructor argument (name -> kind of value fuzzed, see
+#: ``VALUES`` in ``tests/test_fuzz.py``); ``same_as`` shares another id's arguments.
+_REACH_COMMON = {
+    "data": "data",
+    "split": "name",
+    "nominal": "name",
+    "residual_scale": "positive",
+    "test_fraction": "fraction",
+    "split_seed": "seed",
+    "render_mode": "render_mode",
+    "width": "size",
+    "height": "size",
+    "val_fraction": "fraction",
+    "calibration": "small_int",
+}
 ENVS: dict[str, dict[str, object]] = {
     "MotionEnvs/OrientationReach-v0": {
         "kwargs": {
-            "residual_scale": "positive",
-            "test_fraction": "fraction",
-            "val_fraction": "fraction",
-            "val_folds": "small_int",
-            "split_seed": "seed",
-            "min_deg": "angle",
+            **_REACH_COMMON,
             "degree": "small_int",
-            "calibration": "small_int",
-            "width": "size",
+            "reward_weights": "weights",
+            "min_deg": "angle",
+            "observe_timing": "flag",
+            "fold": "optional_int",
+            "val_folds": "small_int",
+            "val_fold": "small_int",
         },
     },
     "MotionEnvs/PositionReach-v0": {
         "kwargs": {
-            "residual_scale": "positive",
-            "test_fraction": "fraction",
-            "split_seed": "seed",
+            **_REACH_COMMON,
+            "shapes": "names",
             "n_sines": "small_int",
-            "calibration": "small_int",
-            "height": "size",
+            "reward_weights": "weights",
+            "observe_timing": "flag",
         },
     },
     "MotionEnvs/OrientationReach-v1": {"same_as": "MotionEnvs/OrientationReach-v0"},
@@ -134,54 +158,83 @@ ENVS: dict[str, dict[str, object]] = {
             "noise": "fraction",
             "max_cycles": "small_int",
             "frame_skip": "small_int",
+            "reward_weights": "weights",
+            "data": "data",
+            "render_mode": "render_mode",
             "width": "size",
+            "height": "size",
         },
         "reset_options": {"cycle": "seed"},
     },
     "MotionEnvs/Juggling-v1": {
         "kwargs": {
+            "level": "name",
             "latency": "fraction",
             "position_std": "fraction",
+            "velocity_std": "fraction",
             "release_speed_std": "fraction",
-            "gravity": "positive",
+            "release_angle_std": "angle",
+            "gravity": "gravity",
+            "controller": "name",
             "max_catches": "small_int",
             "residual_scale": "positive",
             "residual_phases": "phases",
+            "reward_weights": "weights",
+            "render_mode": "render_mode",
             "width": "size",
+            "height": "size",
         },
     },
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
+            "level": "name",
             "latency": "fraction",
             "position_std": "fraction",
+            "velocity_std": "fraction",
             "release_speed_std": "fraction",
+            "release_angle_std": "angle",
             "dwell_ratio": "fraction",
+            "gravity": "gravity",
+            "controller": "name",
             "max_catches": "small_int",
-            "frame_skip": "small_int",
             "residual_scale": "positive",
+            "reward_weights": "weights",
+            "frame_skip": "small_int",
             "residual_phases": "phases",
+            "render_mode": "render_mode",
             "width": "size",
+            "height": "size",
         },
     },
     "MotionEnvs/OrientationCoefficients-v0": {
         "kwargs": {
-            "residual_scale": "positive",
+            **_REACH_COMMON,
+            "degree": "small_int",
             "n_sines": "small_int",
-            "calibration": "small_int",
-            "val_folds": "small_int",
-            "test_fraction": "fraction",
-            "split_seed": "seed",
             "min_deg": "angle",
+            "fold": "optional_int",
+            "val_folds": "small_int",
+            "val_fold": "small_int",
         },
     },
     "MotionEnvs/PositionCoefficients-v0": {
         "kwargs": {
-            "residual_scale": "positive",
+            **{k: v for k, v in _REACH_COMMON.items() if k != "calibration"},
+            "shapes": "names",
+            "nominal_sines": "small_int",
             "n_sines": "small_int",
-            "test_fraction": "fraction",
-            "split_seed": "seed",
         },
     },
+}
+
+#: Arguments of the vector entry points (``gym.make_vec``) beyond the single env's
+#: (name -> kind of value fuzzed).
+VECTOR_ARGS: dict[str, str] = {
+    "num_envs": "count",
+    "max_episode_steps": "optional_count",
+    "autoreset_mode": "name",
+    "backend": "name",
+    "threads": "optional_count",
 }
 
 #: ``motion-bench`` options whose values are numbers or lists of numbers (sub-command,
@@ -223,28 +276,50 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("import", "--min-pause"),
 )
 
-#: Checkers (``type=`` names) of options that take paths, ids or names, not numbers.
-CLI_NON_NUMERIC_TYPES = frozenset(
+#: Options that name a file (or a run folder) the command reads: their checkers are
+#: marked ``baselines.options.reads_files`` (THE input rule: regular files only, opened
+#: non-blocking, bounded) and fuzzed with FIFOs, devices and symbolic links to them.
+CLI_FILE_OPTIONS: tuple[tuple[str, str], ...] = (
+    ("orientation", "--data"),
+    ("position", "--data"),
+    ("juggling", "--data"),
+    ("juggling", "--agent"),
+    ("juggling", "--analyse"),
+    ("import", "file"),
+    ("import", "--segments"),
+    ("calibrate-cohort", "--target"),
+    ("calibrate-cohort", "--config"),
+    ("train", "--config"),
+    ("agent", "run_dir"),
+    ("sweep", "--config"),
+)
+
+#: Options naming what the command writes (THE output rule, ``motion_envs._io.check_output``).
+CLI_OUTPUT_OPTIONS: tuple[tuple[str, str], ...] = tuple(
+    (command, "--out")
+    for command in (
+        "all",
+        "orientation",
+        "position",
+        "juggling",
+        "import",
+        "calibrate-cohort",
+        "train",
+        "agent",
+        "sweep",
+    )
+)
+
+#: Checkers (``type=`` names) of options that take ids or names: neither numbers nor files.
+CLI_NAME_TYPES = frozenset(
     {
-        "output_folder",
-        "output_file",
-        "orientation_data",
-        "position_data",
-        "juggling_data",
-        "analyse_source",
         "calibration_option",
         "conditions_option",
         "_levels",
-        "target_option",
-        "config_option",
         "env_id",
-        "yaml_file",
         "env_kwarg",
-        "sweep_file",
         "level_names",
-        "run_folder",
-        # motion-bench import: marker, joint and label names, axis letters, files
-        "_source",
+        # motion-bench import: marker, joint and label names, axis letters, units
         "marker",
         "markers",
         "joint",
@@ -252,9 +327,28 @@ CLI_NON_NUMERIC_TYPES = frozenset(
         "ball",
         "balls",
         "up",
-        "segments",
         "subject",
         "task",
         "lateral",
     }
 )
+
+#: Checkers of file options and outputs (see above), by ``type=`` name.
+CLI_FILE_TYPES = frozenset(
+    {
+        "orientation_data",
+        "position_data",
+        "juggling_data",
+        "analyse_source",
+        "run_folder",
+        "_source",
+        "segments",
+        "target_option",
+        "config_option",
+        "yaml_file",
+        "sweep_file",
+    }
+)
+CLI_OUTPUT_TYPES = frozenset({"output_folder", "output_file"})
+#: Every non-numeric checker (what the numeric-option completeness test skips).
+CLI_NON_NUMERIC_TYPES = CLI_NAME_TYPES | CLI_FILE_TYPES | CLI_OUTPUT_TYPES

@@ -16,7 +16,7 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-from baselines.agents.rundir import file_sha256, load_run, staged_run_folder
+from baselines.agents.rundir import file_sha256, load_run, manifest_sha256, staged_run_folder
 from baselines.agents.train import run as train_run
 from motion_envs._io import current_umask
 from tests.test_agent_train import tiny_config
@@ -67,8 +67,10 @@ def test_second_run_to_finish_into_one_folder_is_refused(tmp_path):
     out = tmp_path / "run"
 
     def other_run_finishes(ev):  # another train renames its run into --out meanwhile
-        if not out.exists():
-            out.mkdir()
+        # (out exists already: this run created it, empty, to lock it; a writer that
+        # ignores the lock can still fill it)
+        if not (out / "run.json").exists():
+            out.mkdir(exist_ok=True)
             (out / "run.json").write_text("{}\n")
 
     with pytest.raises(ValueError, match="filled by another run"):
@@ -92,6 +94,7 @@ def test_run_json_paths_stay_inside_the_run_folder(tmp_path, name):
     manifest = json.loads((out / "run.json").read_text())
     target = (out / name) if name else out
     manifest["files"][name] = file_sha256(target) if target.is_file() else "0"
+    manifest["manifest_sha256"] = manifest_sha256(manifest)  # as a careful tamperer would
     (out / "run.json").write_text(json.dumps(manifest))
     with pytest.raises(ValueError, match="not a file name inside the run folder"):
         load_run(out)

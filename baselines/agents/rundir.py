@@ -35,6 +35,7 @@ import os
 import pickle
 import shutil
 import tempfile
+import warnings
 import zipfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -400,7 +401,9 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
         model = build_model(algo, hp, env, seed)
         stage = f"{prefix}agent.zip"
         try:
-            model.set_parameters(str(run_dir / stage), exact_match=True, device="cpu")
+            with warnings.catch_warnings():  # torch's note on a tampered pickle: the error says it
+                warnings.simplefilter("ignore", UserWarning)
+                model.set_parameters(str(run_dir / stage), exact_match=True, device="cpu")
         finally:
             env.close()
     except _READ_ERRORS as exc:

@@ -29,7 +29,10 @@ import yaml
 if TYPE_CHECKING:
     from importlib.resources.abc import Traversable
 
-from motion_envs._io import atomic_write_text
+from motion_envs._io import atomic_write_text, check_regular_file, read_regular_text
+
+#: Largest cohort config file read (bytes; the shipped ones are a few KiB).
+MAX_CONFIG_BYTES = 1 << 20
 
 __all__ = [
     "CALIBRATED_PARAMETERS",
@@ -353,10 +356,10 @@ def resolve_cohort_config(config: str | os.PathLike[str]) -> Path:
     """Path of a cohort YAML given a name (``"faraway2008"``) or a path (see module doc)."""
     text = os.fspath(config)
     path = Path(text)
-    if path.suffix.lower() in (".yaml", ".yml") or path.exists():
-        if not path.is_file():
+    if path.suffix.lower() in (".yaml", ".yml") or os.path.lexists(path):
+        if not os.path.lexists(path):
             raise FileNotFoundError(f"cohort config file {path} does not exist")
-        return path
+        return check_regular_file(path, max_bytes=MAX_CONFIG_BYTES)  # no FIFO or device
     if not text or "/" in text or "\\" in text:
         raise ValueError(f"config must be a cohort name or a path to a YAML file; got {text!r}")
     repo = REPO_CONFIG_DIR / f"{text}.yaml"
@@ -374,7 +377,7 @@ def load_cohort_config(config: str | os.PathLike[str] = DEFAULT_COHORT) -> Cohor
     """Read and validate a cohort configuration by name or path."""
     path = resolve_cohort_config(config)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.safe_load(read_regular_text(path, max_bytes=MAX_CONFIG_BYTES))
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {exc}") from exc
     try:

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from motion_envs.envs._common import (
     N_STEPS,
     check_choice,
+    check_data,
     check_integer,
     check_number,
     check_val_fraction,
@@ -267,6 +268,7 @@ def load_orientation_task(
     from motion_envs.datasets.registry import lookup
     from motion_envs.models.orientation_nominal import ORIENTATION_NOMINALS
 
+    data = check_data(data)
     check_choice(split, "split", _SPLITS)
     check_choice(split_by, "split_by", SPLIT_BY)
     check_choice(nominal, "nominal", ORIENTATION_NOMINALS)

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from motion_envs.envs._common import (
     N_STEPS,
+    check_data,
     check_integer,
     check_val_fraction,
     timing_bounds,
@@ -220,6 +221,7 @@ def load_position_task(
     from motion_envs.datasets.splits import POSITION_SPLITS
     from motion_envs.models.position_nominal import POSITION_NOMINALS, PositionNominal
 
+    data = check_data(data)
     splits = (*POSITION_SPLITS, "val")
     if split not in splits:
         raise ValueError(f"split must be one of {list(splits)}; got {split!r}")
@@ -229,7 +231,7 @@ def load_position_task(
     PositionNominal(nominal, n_sines)  # validates nominal and n_sines
     assert nominal in POSITION_NOMINALS
     if shapes is not None:
-        if isinstance(shapes, str) or not all(isinstance(s, str) for s in shapes):
+        if not isinstance(shapes, (list, tuple)) or not all(isinstance(s, str) for s in shapes):
             raise ValueError(f"shapes must be a list of shape names or None; got {shapes!r}")
         shapes = tuple(shapes)
     args: tuple[Any, ...] = (data, shapes, split, nominal, n_sines, float(test_fraction))

@@ -59,6 +59,7 @@ from motion_envs.datasets.juggling._records import (
     split_cycles,
 )
 from motion_envs.datasets.juggling._siteswap import (
+    MAX_SITESWAP_PERIOD,
     SITESWAP_DIGITS,
     format_siteswap,
     parse_siteswap,
@@ -79,6 +80,7 @@ __all__ = [
     "CASCADE_HANDS",
     "CASCADE_STYLES",
     "JUGGLING_COLUMNS",
+    "MAX_SITESWAP_PERIOD",
     "MAX_SPLIT_EPISODES",
     "MIN_SAMPLES",
     "MIN_SPLIT_CYCLES",

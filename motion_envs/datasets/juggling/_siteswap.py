@@ -31,6 +31,7 @@ import math
 from collections.abc import Sequence
 
 __all__ = [
+    "MAX_SITESWAP_PERIOD",
     "SITESWAP_DIGITS",
     "format_siteswap",
     "parse_siteswap",
@@ -40,18 +41,27 @@ __all__ = [
 
 #: The characters of throw values 0-35, in order.
 SITESWAP_DIGITS = "0123456789abcdefghijklmnopqrstuvwxyz"
+#: Most throws of a siteswap (its period); a longer text is refused before it is read
+#: further (the patterns people juggle have periods of a few throws; a result folder is
+#: named after the pattern and a file name holds at most 255 bytes).
+MAX_SITESWAP_PERIOD = 64
 
 
 def parse_siteswap(text: str) -> tuple[int, ...]:
     """The throw values of a vanilla siteswap written as ``text`` (``"441"`` ->
-    ``(4, 4, 1)``; letters ``a-z`` are 10-35, case-insensitive; surrounding spaces
-    ignored). Raises ``ValueError`` naming the first character that is not a throw.
-    Validity is :func:`siteswap_balls`'s."""
+        ``(4, 4, 1)``; letters ``a-z`` are 10-35, case-insensitive; surrounding spaces
+        ignored). Raises ``ValueError`` naming the first character that is not a throw, or for
+    more than :data:`MAX_SITESWAP_PERIOD` throws.
+        Validity is :func:`siteswap_balls`'s."""
     if not isinstance(text, str):
         raise ValueError(f"siteswap must be a string; got {type(text).__name__}")
     value = text.strip().lower()
     if not value:
         raise ValueError("siteswap must not be empty")
+    if len(value) > MAX_SITESWAP_PERIOD:
+        raise ValueError(
+            f"siteswap of {len(value)} throws; at most {MAX_SITESWAP_PERIOD} (its period)"
+        )
     throws = []
     for i, ch in enumerate(value):
         h = SITESWAP_DIGITS.find(ch)
