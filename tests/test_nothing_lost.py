@@ -117,6 +117,7 @@ def test_import_out_that_is_not_a_regular_file_is_refused(tsv, tmp_path, kind):
         assert out.is_char_device()
 
 
+@pytest.mark.slow  # a whole position benchmark before the refused write
 def test_an_output_folder_holding_the_input_does_not_replace_it(tmp_path):
     """``position --data out/results.csv --out out``: the run would write out/results.csv;
     the input is protected and the write refused in one line."""
@@ -231,6 +232,7 @@ def _odd_inputs(tmp_path: Path) -> dict[str, Path]:
     ],
     ids=lambda a: " ".join(a[:2]),
 )
+@pytest.mark.slow  # three subprocess jobs per option
 def test_fifos_devices_and_links_to_them_are_one_line_never_a_hang(tmp_path, args):
     for name, path in _odd_inputs(tmp_path).items():
         argv = [a.replace("{}", str(path)).replace("OUT", str(tmp_path / "o.csv")) for a in args]
