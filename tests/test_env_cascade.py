@@ -383,6 +383,7 @@ def test_a_toss_moves_aside_from_the_hands_own_falling_ball(vx):
     import copy
 
     from motion_envs.datasets.juggling import ballistic_position
+
     clearance = DEFAULT_TUNABLES.toss_clearance
 
     ctrl, hand = _toss_hand()

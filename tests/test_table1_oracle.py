@@ -179,8 +179,10 @@ def test_vr_kitchen_design(vr_kitchen):
         assert one.n_dropped == dropped and np.unique(one.tasks).size == 10
         assert "stick" not in one.predictors
         assert set(one.trajectory_ids) == {
-            i.removeprefix(f"{mode}-") for i in vr_kitchen.trajectory_ids if i.startswith(mode)
+            i.replace(f"-{mode}-", "-") for i in vr_kitchen.trajectory_ids if f"-{mode}-" in i
         }
+    people = np.char.partition(vr_kitchen.trajectory_ids, "-")[:, 0]
+    assert np.array_equal(people, np.char.add("p", vr_kitchen.subjects))  # ids start with it
     with pytest.raises(ValueError, match="modes must be distinct response modes"):
         load_vr_kitchen(modes=("laser", "pen"))
 
@@ -192,9 +194,10 @@ def test_vr_kitchen_angles_match_trial_table(vr_kitchen):
     folder = resources.files("motion_envs.datasets") / "data" / "vr-pointing"
     trials = pd.concat([pd.read_csv(folder / f"kitchen_{m}_trials.csv") for m in MODES])
     trials["id"] = (
-        trials["mode"]
-        + "-p"
+        "p"
         + trials.participant.astype(str)
+        + "-"
+        + trials["mode"]
         + "-s"
         + trials.session.astype(str)
         + "-t"

@@ -73,19 +73,22 @@ def images(folder: Path, names: Sequence[tuple[str, str]]) -> list[tuple[str, by
 
 def learned_table(doc: dict[str, Any], groups: str) -> list[str]:
     """The learned rows against the best analytic one: ratio, its 95 % bootstrap interval,
-    the target and how many ``groups`` (subjects, shapes) the learned row is better on."""
+    the ratios it detects 80 % of the time at this many groups, the target and how many
+    ``groups`` (subjects, shapes) the learned row is better on."""
     comparisons = (doc.get("learned") or {}).get("comparisons") or []
     if not comparisons:
         return []
     rows = []
     for c in comparisons:
         lo, hi = (c.get("ratio_ci95") or [None, None])[:2]
+        below, above = (c.get("detectable_ratios") or [None, None])[:2]
         rows.append(
             [
                 f"<code>{html.escape(str(c.get('learned')))}</code>",
                 f"<code>{html.escape(str(c.get('best_analytic')))}</code>",
                 fmt(c.get("ratio")),
                 f"[{fmt(lo)}, {fmt(hi)}]",
+                f"<= {fmt(below)} or >= {fmt(above)}" if below is not None else "-",
                 fmt(c.get("target_ratio")),
                 "yes" if c.get("met") else "no",
                 f"{c.get('subjects_better')} of {c.get('n_subjects')}",
@@ -93,8 +96,8 @@ def learned_table(doc: dict[str, Any], groups: str) -> list[str]:
         )
     return [
         html_table(
-            ["learned", "best analytic", "ratio", "95 % interval", "target", "met",
-             f"{groups} better"],
+            ["learned", "best analytic", "ratio", "95 % interval", "80 % power for",
+             "target", "met", f"{groups} better"],
             rows,
             "Learned vs analytic, out of sample: ratio of the criteria (below 1: the learned "
             "row is better), bootstrap interval over " + groups,

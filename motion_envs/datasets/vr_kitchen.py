@@ -15,9 +15,11 @@ Faraway & Choe's design: participant = subject, target = task, repetition = repl
 Both modes by default (800 trials): the response mode is then part of the task
 (``"laser/picture"``, ``"stick/picture"``: Table 1's task rows, the learned rows'
 one-hot and the environments' task observation see 20 tasks) and a factor among the
-predictors (``stick``: 1.0 for the stick, 0.0 for the laser); trajectory ids start with
-the mode. ``modes=("laser",)`` (``data="vr-kitchen:laser"``) or ``("stick",)`` loads
-one: tasks are then the target alone, as the laser-only data set was.
+predictors (``stick``: 1.0 for the stick, 0.0 for the laser); trajectory ids name the
+mode after the person (``p13-stick-s4-t1``; a single mode: ``p13-s1-t1``), so that an id
+still starts with its person. ``modes=("laser",)`` (``data="vr-kitchen:laser"``) or
+``("stick",)`` loads one: tasks are then the target alone, as the laser-only data set
+was.
 
 The logged quaternions are in Unity's left-handed, y-up frame. They are converted to a
 right-handed frame with ``(w, x, y, z) -> (w, -x, -y, z)`` (the data README's rule), so
@@ -124,12 +126,13 @@ def load_vr_kitchen(
         trial_ids = (
             "p"
             + trials["participant"].astype(str)
+            + ("-" + mode if both else "")
             + "-s"
             + trials["session"].astype(str)
             + "-t"
             + trials["trial"].astype(str)
         )
-        ids += ((f"{mode}-" if both else "") + trial_ids).tolist()
+        ids += trial_ids.tolist()
         stick += [float(mode == "stick")] * len(trials)
     subject_arr = np.asarray(subjects, dtype=str)
     task_arr = np.asarray(tasks, dtype=str)
