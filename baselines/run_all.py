@@ -20,15 +20,15 @@ The orientation and position jobs include the learned rows and columns
 (docs/learned.md) at the full budget; ``--learned quick`` or ``off`` lowers the budget of
 every job.
 
-Before each long job a line gives its cost measured beforehand (:data:`MEASURED`: CPU
-time of the job at the default settings; the wall time depends on the machine and its
-load). Each writes its tables, CSV/JSON and plot into a sub-folder of ``--out``; an index of
-what was written goes to ``OUT/index.json``, rewritten after every job (``"complete":
-false`` until the last one is done), so an interrupted run leaves an index that lists
-exactly the jobs whose files are new. Every file is written atomically: a previous
-result is never left half-written. After the last job, one self-contained page with
-every table, the papers' values, the plots and a reading of each benchmark goes to
-``OUT/report.html``.
+Before each long job a line gives its cost measured beforehand (the CPU time of the
+job at the default settings, with how and where it was measured; the wall time depends
+on the machine and its load). Each writes its tables, CSV/JSON and plot into a
+sub-folder of ``--out``; an index of what was written goes to ``OUT/index.json``,
+rewritten after every job (``"complete": false`` until the last one is done), so an
+interrupted run leaves an index that lists exactly the jobs whose files are new. Every
+file is written atomically: a previous result is never left half-written. After the
+last job, one self-contained page with every table, the papers' values, the plots and a
+reading of each benchmark goes to ``OUT/report.html``.
 """
 
 from __future__ import annotations

@@ -201,7 +201,15 @@ def test_reset_to_a_huge_cycle_is_fast_and_bounded():
 
 
 # -- item 8: native vector infos on the autoreset step equal SyncVectorEnv's ------------
+#: The single environments' reset text: not in the native infos (numbers only, issue 38;
+#: the env's ``trajectory_labels`` at ``trajectory_index`` give it, tested in
+#: test_env_inputs).
+_TEXT = ("trajectory_id", "task", "subject")
+
+
 def _same_infos(a, b, where=""):
+    """``a`` (native) equal to ``b`` (SyncVectorEnv's) but for the reset text."""
+    b = {k: v for k, v in b.items() if k.lstrip("_") not in _TEXT}
     assert set(a) == set(b), (where, sorted(set(a) ^ set(b)))
     for key in a:
         if isinstance(a[key], dict):
