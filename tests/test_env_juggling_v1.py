@@ -474,6 +474,7 @@ def test_closed_loop_toss_like_the_training_demonstrations():
     assert abs(np.median(jc) / np.median(catch) - 1) <= 0.10  # catch height
 
 
+@pytest.mark.slow
 def test_motion_bench_train_and_agent_smoke(tmp_path):
     """``motion-bench train --env MotionEnvs/Juggling-v1`` with the shipped PPO config, then
     ``motion-bench agent``: the juggler's catch rate on the same test seeds is reported."""
