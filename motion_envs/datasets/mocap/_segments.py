@@ -20,6 +20,7 @@ samples with ``start <= t <= end``.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -90,6 +91,14 @@ class SegmentRow:
     line: int
 
 
+def _seconds(value: object) -> float:
+    """A table cell as seconds (NaN when it is not a number; inf when too large)."""
+    try:
+        return float(str(value))
+    except ValueError:
+        return math.nan
+
+
 def read_segments(path: str | os.PathLike[str]) -> list[SegmentRow]:
     """Read a segments CSV (module docstring); ``ValueError`` naming the file and line.
 
@@ -111,7 +120,9 @@ def read_segments(path: str | os.PathLike[str]) -> list[SegmentRow]:
     if missing:
         expected = "start,end[,subject,task]"
         raise ValueError(missing_columns_message(str(p), frame.columns, missing, expected))
-    times = frame[["start", "end"]].apply(pd.to_numeric, errors="coerce").to_numpy(np.float64)
+    times = np.array(
+        [[_seconds(v) for v in frame[col]] for col in ("start", "end")], dtype=np.float64
+    ).T.reshape(-1, 2)  # cell by cell: an integer too large for a float is inf, not an error
     rows = []
     for i, (start, end) in enumerate(times):
         if not (np.isfinite(start) and np.isfinite(end) and end > start):
