@@ -19,6 +19,7 @@ from motion_envs.models.criteria import criterion_names, table1
 from motion_envs.models.paper_values import FARAWAY_CHOE_TABLE1
 
 
+@pytest.mark.slow
 def test_cli_prints_table_and_writes_results(tmp_path, capsys):
     assert main(["orientation", "--out", str(tmp_path), "--learned", "quick"]) == 0
     out = capsys.readouterr().out
@@ -86,6 +87,7 @@ def test_cli_writes_results_csv(tmp_path, capsys):
         assert row["paper"] == ("" if paper is None else str(paper))
 
 
+@pytest.mark.slow
 def test_all_runs_the_selected_jobs(tmp_path, capsys):
     out = tmp_path / "res"
     argv = ["all", "--out", str(out), "--only", "orientation-vr-kitchen", "--learned", "off"]
