@@ -24,6 +24,7 @@ def _in_tmp_path(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
 
 
+@pytest.mark.slow
 def test_cli_lasa_writes_results(tmp_path, capsys):
     out = tmp_path / "res"
     args = ["position", "--shapes", "Line", "Angle", "--n-points", "40", "--n-sines", "4"]
