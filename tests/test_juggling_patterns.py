@@ -185,3 +185,40 @@ def test_pattern_cli_runs_every_registered_pattern(tmp_path):
         doc = json.loads((out / "results.json").read_text())
         assert doc["pattern"]["balls"] == int(name) and "SIMULATED" in doc["demonstrations"]
         assert doc["pattern"]["dwell_ratio"] == PATTERNS[name].dwell_ratio or name == "3"
+
+
+def test_cascade_style_catch_follow_and_toss_to_top():
+    """``CascadeStyle.catch_follow``: the hand meets the ball moving down with a share of
+    its velocity (the catch -> return boundary); ``toss_to_top``: the toss phase lasts
+    past the release to the plan's top, where the hand is vertically at rest (the
+    toss -> go_down boundary, within one period of its braking); off (both
+    populations), the go-down starts at the release speed and the five-ball hand still
+    rises into the falling ball when it meets it."""
+    from motion_envs.datasets.juggling import (
+        JugglingTask,
+        draw_cascade_person,
+        generate_cascade_demonstrations,
+    )
+
+    task = JugglingTask(gravity=9.81)
+    base = draw_cascade_person(np.random.default_rng(5), 5)
+    moving = dataclasses.replace(
+        base, catch_follow=0.2, toss_to_top=True, catch_drop=-0.06, wait=(-0.02, 0.04)
+    )
+
+    def boundary_vz(style, before, after):
+        demos = generate_cascade_demonstrations(
+            n_cycles=6, seed=1, task=task, balls=5, sensor_noise=0.0, styles=[style]
+        )
+        out = []
+        for r in demos.recordings:
+            vz = np.diff(r.hand[:, 1]) / task.dt
+            ks = np.flatnonzero((r.phase[:-1] == before) & (r.phase[1:] == after))
+            out.extend(vz[ks])
+        return np.asarray(out)
+
+    assert np.all(np.abs(boundary_vz(moving, "toss", "go_down")) < 1.0)
+    assert np.all(boundary_vz(base, "toss", "go_down") > 2.5)
+    met = boundary_vz(moving, "catch", "return")
+    assert np.all((met < -0.3) & (met > -2.0)), met
+    assert np.all(boundary_vz(base, "catch", "return") > 0.5)

@@ -38,6 +38,11 @@ The person's tempo follows their throw: the nominal toss fixes the release veloc
 catch height (``catch_drop`` below the release) the flight time ``F``, and the dwell ratio
 the period ``C = F / (1.5 - r)``. The pattern starts with a ball in each hand and one in
 flight towards the right hand (thrown by the left hand one beat before the first beat).
+Two options of the style change the cycle (both off in the three- and five-ball
+populations; ``experiments/five_ball_demos.py`` explores them): ``catch_follow`` (the
+go-down ends at the waiting point, and the catch at the ball, moving with that share of
+the ball's velocity at the catch, so the carry starts with it) and ``toss_to_top`` (the
+toss phase goes on past the release to the toss plan's top, the go-down starting there).
 Per person (seeded): home, toss, brake, speed, catch height, dwell ratio, waiting point,
 reaction delay. Per cycle: small variations of each, physiological tremor and sensor noise
 on the recorded hand (as :func:`~motion_envs.datasets.juggling.generate_demonstrations`).
@@ -137,6 +142,15 @@ class CascadeStyle:
     aim_error: float  # m, std of the first aim of the catch
     variation: float  # relative per-cycle variation
     spread: float  # m, per-cycle std of the points
+    #: share of the ball's velocity the hand has when it meets the ball (0: the waiting
+    #: point and the catch at rest, both populations; > 0: the hand goes down through the
+    #: waiting point and meets the falling ball moving with it, the carry keeping that
+    #: momentum; explored by ``experiments/five_ball_demos.py``)
+    catch_follow: float = 0.0
+    #: whether the hand goes on to its toss plan's top (vertically at rest) after the
+    #: release before it goes down, the toss phase lasting until then, as the juggler's
+    #: toss plan does (False: the go-down starts at the release, both populations)
+    toss_to_top: bool = False
 
 
 def draw_cascade_person(rng: np.random.Generator, balls: int = CASCADE_BALLS) -> CascadeStyle:
@@ -365,7 +379,8 @@ def _simulate(
         t0 = k0 * dt
         start = hand.y[k0 - 1].copy() if k0 > 0 else home.copy()
         top = start + np.asarray(style.toss) * (1 + style.variation * rng.standard_normal(2))
-        c_toss = _toss_plan(start, top, style, scale, vary(style.toss_time) * scale)
+        toss_time = vary(style.toss_time) * scale
+        c_toss = _toss_plan(start, top, style, scale, toss_time)
         kk = np.arange(k0, k0 + round(style.toss_time * scale * 1.2 / dt))
         y = quintic_evaluate(c_toss, kk * dt - t0)
         j = _release_index(y, hand.y[k0 - 2 : k0] if k0 >= 2 else np.repeat(y[:1], 2, 0), task)
@@ -374,7 +389,9 @@ def _simulate(
         k_rel = k0 + j
         if k_rel >= n - 1:
             break
-        hand.put(c_toss, t0, k0, k_rel, "toss", dt)
+        # the toss phase ends at the release, or at the toss plan's top (``toss_to_top``)
+        k_off = max(k0 + math.floor(toss_time / dt), k_rel) if style.toss_to_top else k_rel
+        hand.put(c_toss, t0, k0, k_off, "toss", dt)
         p_rel, v_rel = y[j], rules.hand_velocity(y[j], y[j - 1], dt)
         releases[slot] = (k_rel * dt, own(p_rel), own(v_rel))
         # 2.-3. go down, catch the ball of slot + 2 - N (thrown by the other hand, it is
@@ -386,19 +403,22 @@ def _simulate(
         target = ballistic_position(p_in, v_in, s_c, g)
         k_c = math.floor(t_c / dt)
         t_reach = vary(style.catch_share * timing.vacant)
-        k_b = min(max(round((t_c - t_reach) / dt), k_rel + 8), k_c - 6)
-        s_rel = k_rel * dt - t0
+        k_b = min(max(round((t_c - t_reach) / dt), k_off + 8), k_c - 6)
+        s_rel = k_off * dt - t0
         q_rel = [quintic_evaluate(c_toss, np.array(s_rel), o) for o in range(3)]
         wait = np.array([catch_x, catch_z]) + np.asarray(style.wait)
         wait = wait + style.spread * rng.standard_normal(2)
-        c_down = quintic(q_rel[0], q_rel[1], q_rel[2], wait, z2, z2, (k_b - k_rel) * dt)
-        hand.put(c_down, k_rel * dt, k_rel, k_b, "go_down", dt)
+        v_meet = z2
+        if style.catch_follow > 0:  # the ball's velocity at the catch, followed in part
+            v_meet = style.catch_follow * (v_in + np.array([0.0, -g * s_c]))
+        c_down = quintic(q_rel[0], q_rel[1], q_rel[2], wait, v_meet, z2, (k_b - k_off) * dt)
+        hand.put(c_down, k_off * dt, k_off, k_b, "go_down", dt)
         t_b = k_b * dt
         aim = target + style.aim_error * rng.standard_normal(2)
-        c_aim = quintic(wait, z2, z2, aim, z2, z2, t_c - t_b)
+        c_aim = quintic(wait, v_meet, z2, aim, v_meet, z2, t_c - t_b)
         t_fix = t_b + min(vary(style.reaction), 0.6 * (t_c - t_b))
         q = [quintic_evaluate(c_aim, np.array(t_fix - t_b), o) for o in range(3)]
-        c_fix = quintic(q[0], q[1], q[2], target, z2, z2, t_c - t_fix)
+        c_fix = quintic(q[0], q[1], q[2], target, v_meet, z2, t_c - t_fix)
         k_fix = math.ceil(t_fix / dt)
         hand.put(c_aim, t_b, k_b, k_fix, "catch", dt)
         k_end = min(math.ceil(t_c / dt) + 1, n)
