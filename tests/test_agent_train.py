@@ -19,7 +19,7 @@ pytest.importorskip("stable_baselines3")
 
 from baselines.agents.evaluate import AgentConfig, split_criterion
 from baselines.agents.evaluate import run as evaluate_run
-from baselines.agents.rundir import file_sha256, load_run
+from baselines.agents.rundir import file_sha256, load_run, manifest_sha256
 from baselines.agents.train import TrainConfig
 from baselines.agents.train import run as train_run
 from baselines.cli import main
@@ -156,6 +156,7 @@ def _edit_json(path, edit, fix_hash_in=None):
     if fix_hash_in is not None:
         manifest = json.loads(fix_hash_in.read_text())
         manifest["files"][path.name] = file_sha256(path)
+        manifest["manifest_sha256"] = manifest_sha256(manifest)  # run.json's own, too
         fix_hash_in.write_text(json.dumps(manifest))
 
 
