@@ -249,12 +249,8 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
 
     def _qv(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The worlds' ``qpos`` and ``qvel`` rows for ``envs``, ``(m, nq)`` each."""
-        datas = self._datas
-        rows = envs.tolist()
-        return (
-            np.array([datas[i].qpos for i in rows]),
-            np.array([datas[i].qvel for i in rows]),
-        )
+        datas = [self._datas[i] for i in envs.tolist()]
+        return np.array([d.qpos for d in datas]), np.array([d.qvel for d in datas])
 
     def _in_threads(
         self, periods: Callable[..., None], envs: NDArray[np.int64], *args: Any
