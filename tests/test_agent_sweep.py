@@ -326,7 +326,11 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     def ctrl_c_when_the_second_trial_starts() -> None:
         deadline = time.monotonic() + 300
         while not done.is_set() and time.monotonic() < deadline:
-            if runs.is_dir() and len(list(runs.iterdir())) == 2:
+            entries = list(runs.iterdir()) if runs.is_dir() else []
+            finished = [d for d in entries if (d / "run.json").is_file()]
+            # the second trial has started: its locked run folder or its staging folder
+            # beside the first trial's finished one
+            if finished and len(entries) >= 2:
                 os.kill(os.getpid(), signal.SIGINT)  # Ray Tune's handler: save and stop
                 return
             time.sleep(0.02)
