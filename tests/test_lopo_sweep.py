@@ -351,3 +351,18 @@ def test_lopo_sweep_joins_a_cluster_unchanged(tmp_path, monkeypatch, how):
     with pytest.raises(_Stop):
         sweep_run(sweep)
     assert seen["address"] == address and "num_cpus" not in seen
+
+
+def test_refit_keep_step_is_within_the_refits_timesteps(tmp_path, monkeypatch):
+    """An on-policy agent ends on a whole rollout, so the inner agents' chosen step can lie
+    past ``timesteps`` (30,208 of 30,000 in the shipped sweep, which the refit's preflight
+    refused): the refit is asked to keep the first evaluation at or after ``timesteps``."""
+    from baselines.agents.sweep import nested
+
+    configs = []
+    monkeypatch.setattr(nested, "_evaluations", lambda d: ([30000, 30208], [1.0, 0.9], 0))
+    monkeypatch.setattr(nested, "choose_step", lambda *a: {"timesteps": 30208, "val_ratio": 0.9})
+    cfg = {"algo": "ppo", "env_id": "MotionEnvs/OrientationCoefficients-v0", "overrides": {}}
+    nested.nested_train(cfg, 0, tmp_path / "runs" / "c-s0", 3, 30000, 2, configs.append)
+    assert configs[-1].keep_timesteps == 30000
+    assert all(c.keep_timesteps is None for c in configs[:-1])  # the inner agents

@@ -153,7 +153,12 @@ def nested_train(
         config(
             run_dir,
             refit_overrides(cfg["overrides"]),
-            keep_timesteps=int(selection["timesteps"]),
+            # an on-policy agent ends on a whole rollout, so the inner agents' last
+            # evaluation may come after `timesteps` (30,208 of 30,000); the refit keeps the
+            # first evaluation at or after keep_timesteps: that same one
+            keep_timesteps=int(selection["timesteps"])
+            if timesteps is None
+            else min(int(selection["timesteps"]), int(timesteps)),
             selection=selection,
         )
     )
