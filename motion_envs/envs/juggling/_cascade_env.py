@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
 from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, check_number
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
+from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
@@ -277,6 +278,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         self.home = self.controller.home
         self.likeness = cascade_likeness(self.gravity, "train", self.balls)
+        self._likeness = LikenessQuery(self.likeness)
         self.world = CascadeWorld(
             self.task, self.release_speed_std, math.radians(self.release_angle_std), self.balls
         )
@@ -440,7 +442,7 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             sign = 1.0 if h == 0 else -1.0
             pos = true.hand_pos[h] * (sign, 1.0)
             vel = true.hand_vel[h] * (sign, 1.0)
-            like += self.likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
+            like += self._likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
         reward, terms = self._rewards(caught, dropped, like, action_sq)
         terminated, truncated = self._episode_end(dropped, true.time)
         return state, true, reward, {**terms, "caught": caught}, terminated, truncated
