@@ -124,32 +124,32 @@ JOBS: tuple[Job, ...] = (
         "orientation-vr-kitchen",
         "Orientation trajectories on vr-kitchen (real data)",
         orientation_bench.OrientationConfig(data="vr-kitchen", calibration=DEFAULT_CALIBRATION),
-        cpu_seconds=63.0,  # both response modes (648 reaches); 31 on the laser's 252
+        cpu_seconds=43.0,  # both response modes (648 reaches); measured idle on 2026-12-06
     ),
     Job(
         "orientation-cohort",
         "Orientation trajectories on the virtual cohort (SIMULATED data, calibrated to the paper)",
         orientation_bench.OrientationConfig(data="cohort", learned="off"),
-        cpu_seconds=0.6,
+        cpu_seconds=0.5,
     ),
     Job(
         "position-lasa",
         "Position trajectories on LASA handwriting (real data)",
         position_bench.PositionConfig(data="lasa"),
-        cpu_seconds=53.0,
+        cpu_seconds=37.0,
     ),
     Job(
         "juggling",
         "Juggling: the analytic juggler (SIMULATED demonstrations, MuJoCo scene)",
         juggling_bench.JugglingConfig(),
-        cpu_seconds=11.0,
+        cpu_seconds=10.0,
     ),
     Job(
         "juggling_v1-levels",
         "Juggling-v1 levels: the analytic juggler with a delayed view of the ball, "
         "its latency-aware variant and two trivial policies (SIMULATED demonstrations)",
         juggling_bench.LevelsConfig(),
-        cpu_seconds=40.0,
+        cpu_seconds=34.0,
     ),
 )
 
