@@ -113,6 +113,29 @@ def cascade(
     return Cascade(t, balls, keep, beat, dwell, flight)
 
 
+def unlabelled_columns(vis: np.ndarray, pts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Unlabelled marker columns ``(n_f, n_columns, 3)`` as a tracker writes them: each
+    visible stretch of ball ``b`` (``vis (n_f, n_b)``, positions ``pts (n_f, n_b, 3)``)
+    goes into a column free over it and the frame before (drawn with ``rng``), NaN
+    elsewhere."""
+    n_f, n_b = vis.shape
+    cols: list[np.ndarray] = []
+    busy: list[np.ndarray] = []
+    for b in range(n_b):
+        edges = np.diff(np.concatenate([[0], vis[:, b].astype(np.int8), [0]]))
+        for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+            free = [c for c in range(len(cols)) if not busy[c][max(s - 1, 0) : e + 1].any()]
+            if free:
+                c = free[int(rng.integers(len(free)))]
+            else:
+                cols.append(np.full((n_f, 3), np.nan))
+                busy.append(np.zeros(n_f, dtype=bool))
+                c = len(cols) - 1
+            cols[c][s:e] = pts[s:e, b]
+            busy[c][s:e] = True
+    return np.stack(cols, axis=1)
+
+
 def with_defects(
     rec: Cascade,
     seed: int = 0,
@@ -150,21 +173,7 @@ def with_defects(
             vis[i0 : i0 + int(rng.uniform(0.3, 0.9) * rec.dwell * dt), f.ball] = False
     vis &= rng.random(vis.shape) >= dropout
     pts = rec.balls + rng.normal(0, noise, rec.balls.shape)
-    cols: list[np.ndarray] = []
-    busy: list[np.ndarray] = []
-    for b in range(n_b):
-        edges = np.diff(np.concatenate([[0], vis[:, b].astype(np.int8), [0]]))
-        for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-            free = [c for c in range(len(cols)) if not busy[c][max(s - 1, 0) : e + 1].any()]
-            if free:
-                c = free[int(rng.integers(len(free)))]
-            else:
-                cols.append(np.full((n_f, 3), np.nan))
-                busy.append(np.zeros(n_f, dtype=bool))
-                c = len(cols) - 1
-            cols[c][s:e] = pts[s:e, b]
-            busy[c][s:e] = True
-    out = np.stack(cols, axis=1)
+    out = unlabelled_columns(vis, pts, rng)
     for _ in range(swaps):
         a, b = rng.choice(out.shape[1], 2, replace=False)
         i = int(rng.integers(n_f))

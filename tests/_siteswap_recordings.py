@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from _juggling_recordings import unlabelled_columns
 
 from motion_envs.datasets.mocap import YUP_TO_ZUP
 
@@ -362,21 +363,7 @@ def capture(
                 near = (k - k[0] + 1) if k[-1] < i0 else (k[-1] - k + 1)
                 shift = rng.normal(0, palm_shift / math.sqrt(3), 3)
                 pts[k, b] += (near / k.size)[:, None] * shift
-    cols: list[np.ndarray] = []
-    busy: list[np.ndarray] = []
-    for b in range(n_b):
-        edges = np.diff(np.concatenate([[0], vis[:, b].astype(np.int8), [0]]))
-        for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
-            free = [c for c in range(len(cols)) if not busy[c][max(s - 1, 0) : e + 1].any()]
-            if free:
-                c = free[int(rng.integers(len(free)))]
-            else:
-                cols.append(np.full((n_f, 3), np.nan))
-                busy.append(np.zeros(n_f, dtype=bool))
-                c = len(cols) - 1
-            cols[c][s:e] = pts[s:e, b]
-            busy[c][s:e] = True
-    out = np.stack(cols, axis=1)
+    out = unlabelled_columns(vis, pts, rng)
     if close_swap > 0:  # the tracker hands a label to the other ball where two pass close
         i = 0
         while i < n_f:

@@ -359,6 +359,7 @@ class HandsWorld:
     # -- the period's links to this world (made again after unpickling) ---------------------
     def _link(self) -> None:
         m, d = self.model, self.data
+        self._one = np.zeros(1, dtype=np.int64)
         if self.backend == "numba":
             from motion_envs.envs.juggling import _compiled
 
@@ -370,7 +371,6 @@ class HandsWorld:
                 d.qpos[None], d.qvel[None], d.ctrl[None], d.sensordata[None],
                 m.geom_contype[None], m.geom_conaffinity[None],
             )  # fmt: skip
-            self._one = np.zeros(1, dtype=np.int64)
             self._periods = _compiled.entry_point(
                 _compiled.world_periods, *self._period_args(self._one)
             )
@@ -382,7 +382,6 @@ class HandsWorld:
                 [m.geom_contype], [m.geom_conaffinity],
             )  # fmt: skip
             self._periods = _period.world_periods
-            self._one = np.zeros(1, dtype=np.int64)
 
     def _period_args(self, envs: NDArray[np.int64]) -> tuple[Any, ...]:
         return (
