@@ -61,8 +61,9 @@ def test_sigint_exits_130_within_seconds(tmp_path, shapes_done):
                 if "interrupted" in state["text"]:
                     seen.setdefault("message", time.perf_counter())
                 counts = [int(m.group(1)) for m in _DONE.finditer(text)]
-                if counts:
+                if counts:  # the shapes bar is up: the job is past Python's start-up
                     state["shapes"] = max(state["shapes"], *counts)
+                    state["bar"] = True
                 done.notify_all()
         with done:
             state["eof"] = True
@@ -72,7 +73,8 @@ def test_sigint_exits_130_within_seconds(tmp_path, shapes_done):
     reader.start()
     with done:  # the moment: shapes_done shapes done (the job is mid-loop: 30 shapes)
         reached = done.wait_for(
-            lambda: state["shapes"] >= shapes_done or "eof" in state, MOMENT_TIMEOUT
+            lambda: ("bar" in state and state["shapes"] >= shapes_done) or "eof" in state,
+            MOMENT_TIMEOUT,
         )
     assert reached and "eof" not in state, f"no {shapes_done} shapes: {state['text'][-2000:]}"
     t0 = time.perf_counter()
