@@ -30,8 +30,6 @@ steps, so that exploration survives a hand that low-passes per-step white noise)
 from __future__ import annotations
 
 import copy
-import itertools
-import math
 import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -39,6 +37,14 @@ from typing import Any
 
 import yaml
 
+from baselines.agents import config_values as V
+from baselines.agents.config_values import (
+    MAX_BATCH,
+    MAX_BUFFER_SIZE,
+    MAX_N_ENVS,
+    MAX_TIMESTEPS,
+    Checker,
+)
 from baselines.agents.yaml_files import YamlLoader, key_lines, read_yaml
 
 __all__ = [
@@ -47,6 +53,7 @@ __all__ = [
     "ALGO_KEYS",
     "COMMON_KEYS",
     "DEFAULT_CONFIG_DIR",
+    "MAX_N_ENVS",
     "SWEEP_CONFIG_DIR",
     "YamlLoader",
     "default_config_path",
@@ -68,286 +75,83 @@ SWEEP_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "sweeps"
 #: Activation names and their ``torch.nn`` classes.
 ACTIVATIONS: tuple[str, ...] = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
 
-# A checker takes (value, where) and returns the cleaned value or raises ValueError.
-Checker = Callable[[Any, str], Any]
-
-_PYTHON = re.compile(r"(\(|\)|lambda|\bnn\.|\bth\.|torch\.|__|import|dict\(|\blin_)")
-
-
-def _fail(where: str, message: str) -> ValueError:
-    return ValueError(f"{where}: {message}")
-
-
-def _no_python(value: Any, where: str) -> None:
-    if isinstance(value, str) and _PYTHON.search(value):
-        raise _fail(
-            where,
-            f"{value!r} looks like Python code; write plain YAML values "
-            "(e.g. learning_rate: {kind: linear, start: 3.0e-4}, activation: relu)",
-        )
-
-
-#: Largest integer any count of a config may take (steps, buffer and batch sizes, seeds).
-MAX_INT = 2**31 - 1
-#: Most environment copies of a run (``n_envs``).
-MAX_N_ENVS = 256
-#: Most environment steps of a run (``n_timesteps``).
-MAX_TIMESTEPS = 10**10
-#: Most hidden layers of a network and units of one layer (``net_arch``).
-MAX_LAYERS = 64
-MAX_LAYER_SIZE = 2**16
-#: Most weights between a network's hidden layers: float32 weights, their gradients and
-#: Adam's two moments take 16 bytes each, 1.6 GB at this bound.
-MAX_HIDDEN_WEIGHTS = 10**8
-#: Most transitions of an off-policy replay buffer (``buffer_size``; SB3's default is
-#: 10^6) and samples of a rollout or a batch (``n_steps``, ``batch_size``): bounds of the
-#: memory they allocate up front.
-MAX_BUFFER_SIZE = 10**7
-MAX_BATCH = 2**20
-
-
-def _integral(v: Any) -> Any:
-    """``v`` as an int when it is a float holding an integer (YAML's ``1e3``, ``64.0``)."""
-    if isinstance(v, float) and math.isfinite(v) and v.is_integer():
-        return int(v)
-    return v
-
-
-def _int(lo: int = 0, hi: int = MAX_INT) -> Checker:
-    def check(v: Any, where: str) -> int:
-        _no_python(v, where)
-        v = _integral(v)
-        if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
-            shown = (
-                v if not isinstance(v, int) or abs(v) < 10**30 else f"a {len(str(v))}-digit integer"
-            )
-            raise _fail(where, f"must be an integer in [{lo}, {hi}]; got {shown!r}")
-        return int(v)
-
-    return check
-
-
-def _float(lo: float = -math.inf, hi: float = math.inf, *, open_lo: bool = False) -> Checker:
-    """A finite number in ``[lo, hi]`` (``(lo, hi]`` with ``open_lo``); an integer too
-    large for a float is refused like ``inf``, not with an ``OverflowError``."""
-    interval = f"{'(' if open_lo else '['}{lo}, {hi}]"
-
-    def check(v: Any, where: str) -> float:
-        _no_python(v, where)
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise _fail(where, f"must be a finite number; got {v!r}")
-        if isinstance(v, int) and abs(v) >= 10**300:
-            raise _fail(
-                where, f"must be a finite number in {interval}; got a {len(str(v))}-digit integer"
-            )
-        x = float(v)
-        if not math.isfinite(x):
-            raise _fail(where, f"must be a finite number; got {v!r}")
-        if not (lo < x <= hi if open_lo else lo <= x <= hi):
-            raise _fail(where, f"must be in {interval}; got {v!r}")
-        return x
-
-    return check
-
-
-def _bool(v: Any, where: str) -> bool:
-    _no_python(v, where)
-    if not isinstance(v, bool):
-        raise _fail(where, f"must be true or false; got {v!r}")
-    return v
-
-
-def _optional(check: Checker) -> Checker:
-    return lambda v, where: None if v is None else check(v, where)
-
-
-def _choice(*choices: str) -> Checker:
-    def check(v: Any, where: str) -> str:
-        _no_python(v, where)
-        if v not in choices:
-            raise _fail(where, f"must be one of {list(choices)}; got {v!r}")
-        return str(v)
-
-    return check
-
-
-def _schedule_or(check_value: Checker, check_end: Checker | None = None) -> Checker:
-    """A number, or ``{kind: linear|constant, start: x, end: y}`` (``end`` checked by
-    ``check_end``, default ``check_value``)."""
-    check_end = check_value if check_end is None else check_end
-
-    def check(v: Any, where: str) -> Any:
-        if not isinstance(v, Mapping):
-            return check_value(v, where)
-        extra = set(v) - {"kind", "start", "end"}
-        if extra:
-            raise _fail(where, f"unknown schedule keys {sorted(extra)}; expected kind, start, end")
-        kind = _choice("linear", "constant")(v.get("kind"), f"{where}.kind")
-        if "start" not in v:
-            raise _fail(where, "a schedule needs 'start'")
-        out: dict[str, Any] = {"kind": kind, "start": check_value(v["start"], f"{where}.start")}
-        if kind == "linear":
-            out["end"] = check_end(v.get("end", 0.0), f"{where}.end")
-        elif "end" in v:
-            raise _fail(where, "a constant schedule has no 'end'")
-        return out
-
-    return check
-
-
-def _net_arch(v: Any, where: str) -> Any:
-    def layers(x: Any, w: str) -> list[int]:
-        if isinstance(x, list):
-            x = [_integral(n) for n in x]
-        if not isinstance(x, list) or not all(
-            isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in x
-        ):
-            raise _fail(w, f"must be a list of positive layer sizes; got {x!r}")
-        if len(x) > MAX_LAYERS or any(n > MAX_LAYER_SIZE for n in x):
-            raise _fail(
-                w,
-                f"at most {MAX_LAYERS} layers of at most {MAX_LAYER_SIZE} units each; got "
-                f"{len(x)} layer(s), the largest {max(x)}",
-            )
-        weights = sum(a * b for a, b in itertools.pairwise(x))
-        if weights > MAX_HIDDEN_WEIGHTS:
-            raise _fail(
-                w,
-                f"{weights} weights between hidden layers, more than {MAX_HIDDEN_WEIGHTS} "
-                f"({MAX_HIDDEN_WEIGHTS * 16 / 1e9:g} GB with gradients and Adam's moments)",
-            )
-        return [int(n) for n in x]
-
-    _no_python(v, where)
-    if isinstance(v, Mapping):
-        extra = set(v) - {"pi", "vf", "qf"}
-        if extra:
-            raise _fail(where, f"unknown keys {sorted(extra)}; expected pi, vf (PPO) or pi, qf")
-        return {k: layers(x, f"{where}.{k}") for k, x in v.items()}
-    return layers(v, where)
-
-
-def _plain_mapping(v: Any, where: str) -> dict[str, Any]:
-    """A mapping of plain YAML values (numbers, strings, booleans, lists, mappings)."""
-    if not isinstance(v, Mapping):
-        raise _fail(where, f"must be a mapping; got {v!r}")
-
-    def walk(x: Any, w: str) -> Any:
-        if isinstance(x, Mapping):
-            return {str(k): walk(y, f"{w}.{k}") for k, y in x.items()}
-        if isinstance(x, list):
-            return [walk(y, f"{w}[{i}]") for i, y in enumerate(x)]
-        if x is None or isinstance(x, (bool, int, float)):
-            return x
-        if isinstance(x, str):
-            _no_python(x, w)
-            return x
-        raise _fail(w, f"must be a plain YAML value; got {type(x).__name__}")
-
-    out: dict[str, Any] = walk(v, where)
-    return out
-
-
-def _env_kwargs(v: Any, where: str) -> dict[str, Any]:
-    out = _plain_mapping(v, where)
-    for key in ("split", "render_mode"):
-        if key in out:
-            raise _fail(
-                f"{where}.{key}", "is set by the command (train: 'train', validation: 'val')"
-            )
-    return out
-
-
-def _sub(schema: Mapping[str, Checker]) -> Checker:
-    def check(v: Any, where: str) -> dict[str, Any]:
-        _no_python(v, where)
-        if not isinstance(v, Mapping):
-            raise _fail(where, f"must be a mapping; got {v!r}")
-        extra = [k for k in v if k not in schema]
-        if extra:
-            raise _fail(f"{where}.{extra[0]}", f"unknown key; expected one of {sorted(schema)}")
-        return {k: schema[k](x, f"{where}.{k}") for k, x in v.items()}
-
-    return check
-
-
 #: A learning rate: in (0, 1]; a linear schedule may end at 0.
-_LR = _schedule_or(_float(0.0, 1.0, open_lo=True), _float(0.0, 1.0))
+_LR = V.schedule_or(V.float_in(0.0, 1.0, open_lo=True), V.float_in(0.0, 1.0))
 
 #: Keys every algorithm takes.
 COMMON_KEYS: dict[str, Checker] = {
-    "n_timesteps": _int(1, MAX_TIMESTEPS),
-    "n_envs": _int(1, MAX_N_ENVS),
-    "policy": _choice("MlpPolicy"),
-    "env_kwargs": _env_kwargs,
-    "normalize": _sub(
+    "n_timesteps": V.int_in(1, MAX_TIMESTEPS),
+    "n_envs": V.int_in(1, MAX_N_ENVS),
+    "policy": V.choice("MlpPolicy"),
+    "env_kwargs": V.env_kwargs,
+    "normalize": V.sub(
         {
-            "obs": _bool,
-            "reward": _bool,
-            "clip_obs": _float(0.0, open_lo=True),
-            "gamma": _float(0.0, 1.0),  # 0: a one-step (episodic) environment
+            "obs": V.bool_value,
+            "reward": V.bool_value,
+            "clip_obs": V.float_in(0.0, open_lo=True),
+            "gamma": V.float_in(0.0, 1.0),  # 0: a one-step (episodic) environment
         }
     ),
-    "action_head_scale": _float(0.0, 1.0),
-    "eval_freq": _int(1),
-    "eval_episodes": _optional(_int(1)),
-    "torch_threads": _int(1, 1024),
-    "vec_env": _choice("dummy", "subproc"),
+    "action_head_scale": V.float_in(0.0, 1.0),
+    "eval_freq": V.int_in(1),
+    "eval_episodes": V.optional(V.int_in(1)),
+    "torch_threads": V.int_in(1, 1024),
+    "vec_env": V.choice("dummy", "subproc"),
     "learning_rate": _LR,
-    "gamma": _float(0.0, 1.0),  # 0: a one-step (episodic) environment
-    "batch_size": _int(1, MAX_BATCH),
+    "gamma": V.float_in(0.0, 1.0),  # 0: a one-step (episodic) environment
+    "batch_size": V.int_in(1, MAX_BATCH),
 }
 
 _OFF_POLICY: dict[str, Checker] = {
-    "buffer_size": _int(1, MAX_BUFFER_SIZE),
-    "learning_starts": _int(0),
-    "tau": _float(0.0, 1.0),
-    "train_freq": _int(1),
-    "gradient_steps": _int(-1),
+    "buffer_size": V.int_in(1, MAX_BUFFER_SIZE),
+    "learning_starts": V.int_in(0),
+    "tau": V.float_in(0.0, 1.0),
+    "train_freq": V.int_in(1),
+    "gradient_steps": V.int_in(-1),
 }
 
 #: Keys of each algorithm (beyond :data:`COMMON_KEYS`).
 ALGO_KEYS: dict[str, dict[str, Checker]] = {
     "ppo": {
-        "n_steps": _int(2, MAX_BATCH),
-        "n_epochs": _int(1),
-        "gae_lambda": _float(0.0, 1.0),
-        "clip_range": _schedule_or(_float(0.0)),
-        "ent_coef": _float(0.0),
-        "vf_coef": _float(0.0),
-        "max_grad_norm": _float(0.0),
-        "target_kl": _optional(_float(0.0)),
-        "normalize_advantage": _bool,
-        "use_sde": _bool,
-        "sde_sample_freq": _int(-1),
-        "policy_kwargs": _sub(
+        "n_steps": V.int_in(2, MAX_BATCH),
+        "n_epochs": V.int_in(1),
+        "gae_lambda": V.float_in(0.0, 1.0),
+        "clip_range": V.schedule_or(V.float_in(0.0)),
+        "ent_coef": V.float_in(0.0),
+        "vf_coef": V.float_in(0.0),
+        "max_grad_norm": V.float_in(0.0),
+        "target_kl": V.optional(V.float_in(0.0)),
+        "normalize_advantage": V.bool_value,
+        "use_sde": V.bool_value,
+        "sde_sample_freq": V.int_in(-1),
+        "policy_kwargs": V.sub(
             {
-                "net_arch": _net_arch,
-                "activation": _choice(*ACTIVATIONS),
-                "log_std_init": _float(-20.0, 2.0),
-                "ortho_init": _bool,
+                "net_arch": V.net_arch,
+                "activation": V.choice(*ACTIVATIONS),
+                "log_std_init": V.float_in(-20.0, 2.0),
+                "ortho_init": V.bool_value,
             }
         ),
     },
     "sac": {
         **_OFF_POLICY,
-        "ent_coef": lambda v, w: v if v == "auto" else _float(0.0)(v, w),
-        "target_entropy": lambda v, w: v if v == "auto" else _float()(v, w),
-        "policy_kwargs": _sub(
+        "ent_coef": lambda v, w: v if v == "auto" else V.float_in(0.0)(v, w),
+        "target_entropy": lambda v, w: v if v == "auto" else V.float_in()(v, w),
+        "policy_kwargs": V.sub(
             {
-                "net_arch": _net_arch,
-                "activation": _choice(*ACTIVATIONS),
-                "log_std_init": _float(-20.0, 2.0),
+                "net_arch": V.net_arch,
+                "activation": V.choice(*ACTIVATIONS),
+                "log_std_init": V.float_in(-20.0, 2.0),
             }
         ),
     },
     "td3": {
         **_OFF_POLICY,
-        "policy_delay": _int(1),
-        "target_policy_noise": _float(0.0),
-        "target_noise_clip": _float(0.0),
-        "action_noise_sigma": _float(0.0),
-        "policy_kwargs": _sub({"net_arch": _net_arch, "activation": _choice(*ACTIVATIONS)}),
+        "policy_delay": V.int_in(1),
+        "target_policy_noise": V.float_in(0.0),
+        "target_noise_clip": V.float_in(0.0),
+        "action_noise_sigma": V.float_in(0.0),
+        "policy_kwargs": V.sub({"net_arch": V.net_arch, "activation": V.choice(*ACTIVATIONS)}),
     },
 }
 
@@ -417,12 +221,12 @@ def validate_hyperparams(algo: str, block: Any, where: str = "config") -> dict[s
     if block is None:
         return {}
     if not isinstance(block, Mapping):
-        raise _fail(where, f"must be a mapping of hyper-parameters; got {block!r}")
+        raise V.fail(where, f"must be a mapping of hyper-parameters; got {block!r}")
     schema = {**COMMON_KEYS, **ALGO_KEYS[algo]}
     out: dict[str, Any] = {}
     for key, value in block.items():
         if key not in schema:
-            raise _fail(
+            raise V.fail(
                 f"{where}: {key}", f"unknown key for {algo}; expected one of {sorted(schema)}"
             )
         out[str(key)] = schema[key](value, f"{where}: {key}")
@@ -493,7 +297,7 @@ def parse_env_kwargs(items: list[str] | None) -> dict[str, Any]:
         except yaml.YAMLError:
             raise ValueError(f"--env-kwargs: cannot read the value of {item!r}") from None
         out[key] = raw if value is None and raw else value  # nominal=null is the null model
-    return _env_kwargs(out, "--env-kwargs")
+    return V.env_kwargs(out, "--env-kwargs")
 
 
 def resolve_hyperparams(

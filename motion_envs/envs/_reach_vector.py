@@ -12,34 +12,17 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
-from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode
-from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.envs import _kernels as K
-from motion_envs.envs._common import (
-    N_STEPS,
-    JsonSpecMixin,
-    as_action,
-    check_autoreset_mode,
-    check_max_episode_steps,
-    check_num_envs,
-    env_footprint,
-)
+from motion_envs.envs._common import N_STEPS, JsonSpecMixin
+from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResult
 from motion_envs.envs._reach import ReachEnv, ReachKind, TrajectoryLabelsMixin, reset_labels
 
 __all__ = ["ReachVectorEnv"]
 
-# observations, rewards, terminations, truncations, infos
-_StepResult = tuple[
-    NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
-]
-
-_MODES = {AutoresetMode.NEXT_STEP: 0, AutoresetMode.SAME_STEP: 1, AutoresetMode.DISABLED: 2}
-_NEXT, _SAME, _DISABLED = 0, 1, 2
 _IDX, _K, _ELAPSED, _AUTORESET, _PTR = 0, 1, 2, 3, 4  # columns of the integer state
 _POOL_AT = 5  # first column of the trajectory pool in the integer state
 _POOL = 64  # trajectory draws per sub-environment taken from its generator at once
@@ -48,7 +31,7 @@ _POOL = 64  # trajectory draws per sub-environment taken from its generator at o
 _SCALAR_BELOW = 8
 
 
-class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv):
+class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, NativeVectorEnv):
     """``num_envs`` copies of a single reaching environment, stepped together.
 
     A kind module subclasses it and sets ``single_class`` (its
@@ -105,11 +88,9 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         self.task = task
         self._n_steps = N_STEPS
         self._n_traj = task.n_trajectories
-        self.num_envs = check_num_envs(num_envs, env_footprint(single))
-        self._max_steps = check_max_episode_steps(max_episode_steps, self._n_steps)
-        self.autoreset_mode = check_autoreset_mode(autoreset_mode)
-        self._mode = _MODES[self.autoreset_mode]
-        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        self._setup_batch(
+            single, num_envs, autoreset_mode, max_episode_steps, N_STEPS, type(self).metadata
+        )
         self.backend = K.resolve_vector_backend(backend)
         # calibration = K: every reset draws the trajectory, then the calibration reaches,
         # from the sub-environment's generator (the single environment's order); the
@@ -126,19 +107,10 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         self.residual_scale = single.residual_scale
         self.reward_weights = single.reward_weights
         self._weights = weights
-        self.single_action_space = single.action_space
-        self.single_observation_space = single.observation_space
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.render_mode = single.render_mode
         N = self.num_envs
-        self._action_shape: tuple[int, ...] = (N, *self.single_action_space.shape)  # type: ignore[misc]
-        self._rngs: list[np.random.Generator | None] = [None] * N
         # text entries of the single environments' reset infos, per trajectory (not in
         # the vector infos: trajectory_labels)
         self._labels = reset_labels(task)
-        self._started = False
-        self._arange = np.arange(N)
         L, n, width = task.steps.shape
         self._table = np.ascontiguousarray(task.steps.reshape(L * n, width).T)  # numpy path
         self._obs_table = np.ascontiguousarray(task.obs)  # (L, n + 1, obs_dim)
@@ -208,22 +180,6 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         self._link_backend()
 
     # -- seeding and resets -------------------------------------------------------------
-    def _seed_rngs(self, seed: int | Sequence[int | None] | None) -> None:
-        N = self.num_envs
-        if seed is None:
-            seeds: list[int | None] = [None] * N
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(N)]
-        else:
-            seeds = list(seed)  # type: ignore[arg-type]
-            if len(seeds) != N:
-                raise ValueError(f"seed must be an int or a list of {N} seeds; got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None or self._rngs[i] is None:
-                self._rngs[i], _ = seeding.np_random(s)
-                if self._cal is None:
-                    self._refill(i)
-
     def _refill(self, i: int) -> None:
         """Draw the next :data:`_POOL` trajectories of sub-environment ``i``: the same
         sequence as one ``integers(L)`` per reset (numpy's bounded integers take 32-bit
@@ -275,18 +231,11 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         seed: int | Sequence[int | None] | None = None,
         options: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        self._seed_rngs(seed)
         options = options or {}
-        mask = options.get("reset_mask")
-        if mask is None:
-            envs = self._arange
-        else:
-            mask = np.asarray(mask)
-            if mask.shape != (self.num_envs,) or mask.dtype != bool:
-                raise ValueError(f"options['reset_mask'] must be a bool array ({self.num_envs},)")
-            if not self._started and not mask.all():
-                raise ValueError("the first reset must reset every sub-environment")
-            envs = np.flatnonzero(mask)
+        envs = self._reset_targets(options)
+        for i in self._seed_rngs(seed):
+            if self._cal is None:
+                self._refill(i)
         traj = options.get("trajectory")
         if traj is not None:
             traj = np.broadcast_to(np.asarray(traj), (self.num_envs,))[envs]
@@ -332,15 +281,8 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
             self._history[self._arange, self._si[:, _K]] = self._sf[:, : self._dim]
 
     # -- stepping -----------------------------------------------------------------------
-    def step(self, actions: Any) -> _StepResult:
-        if type(actions) is np.ndarray and actions.dtype.kind == "f":
-            a = np.ascontiguousarray(actions, dtype=np.float64)  # one compiled layout
-        else:  # lists, integers; a dict, string or complex raise ValueError
-            a = np.ascontiguousarray(as_action(actions, self._action_shape, "actions"))
-        if a.shape != self._action_shape:
-            raise ValueError(f"actions must have shape {self._action_shape}; got {a.shape}")
-        if not self._started:
-            raise RuntimeError("call reset() before step()")
+    def step(self, actions: Any) -> StepResult:
+        a = self._check_actions(actions)
         N = self.num_envs
         obs = np.empty((N, self._obs_dim), dtype=np.float32)
         out_f = np.empty((self._n_out, N))
@@ -361,10 +303,7 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
     def _raise_step_error(self, status: int, i: int, a: NDArray[np.float64]) -> None:
         if status == 1:
             raise ValueError(f"actions must be finite; got {a[i].tolist()} at index {i}")
-        raise RuntimeError(
-            f"sub-environment {i} has ended and autoreset_mode is DISABLED; call "
-            "reset(options={'reset_mask': mask}) for the ended sub-environments first"
-        )
+        self._raise_ended(i)
 
     def _infos(
         self, out_f: NDArray[np.float64], out_b: NDArray[np.bool_], n_term: int, n_reset: int
@@ -380,20 +319,14 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         info = self._step_infos(out_f, out_b[2]) if out_b[2].any() else {}
         terminated, reset = out_b[0], out_b[3]
         t = self._n_info + 1  # the row of tau
-        if self._mode == _SAME:
+        if self._mode == SAME_STEP:
             if n_reset:
                 final = self._step_infos(out_f, reset)
                 if n_term:
                     for r, key in enumerate(self._end_names, start=t + 1):
                         final[key] = out_f[r]
                         final["_" + key] = terminated
-                final_obs = np.full(self.num_envs, None, dtype=object)
-                for i in np.flatnonzero(reset).tolist():
-                    final_obs[i] = self._final_obs[i].copy()
-                info["final_obs"] = final_obs
-                info["_final_obs"] = reset
-                info["final_info"] = final
-                info["_final_info"] = reset
+                self._add_final(info, self._final_obs, final, reset)
         elif n_term:
             for r, key in enumerate(self._end_names, start=t + 1):
                 info[key] = out_f[r]
@@ -411,14 +344,11 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
     ) -> tuple[int, int, int]:
         """:func:`motion_envs.envs._fused.batch_step` in batched numpy (same results)."""
         si, sf, dim, n = self._si, self._sf, self._dim, self._n_steps
-        autoreset = si[:, _AUTORESET] != 0
-        if self._mode == _DISABLED and autoreset.any():
-            return 2, int(np.flatnonzero(autoreset)[0]), 0
+        resetting = self._resetting(si[:, _AUTORESET])
         finite = np.isfinite(a).all(axis=1)
         if not finite.all():
             return 1, int(np.flatnonzero(~finite)[0]), 0
         a = np.clip(a, -1.0, 1.0)
-        resetting = autoreset if self._mode == _NEXT else np.zeros(self.num_envs, dtype=bool)
         active = ~resetting
         k = si[:, _K].copy()
         rows = self._table[:, si[:, _IDX] * n + np.minimum(k, n - 1)]
@@ -442,7 +372,7 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
         out_b[0] = terminated
         out_b[1] = truncated
         ended = terminated | truncated
-        if self._mode == _SAME:
+        if self._mode == SAME_STEP:
             obs[:] = self._observe()
             self._final_obs[ended] = obs[ended]
             reset = ended
@@ -470,12 +400,6 @@ class ReachVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv)
 
     def close_extras(self, **kwargs: Any) -> None:
         self.single.close()
-
-    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode")
-            return None
-        return tuple(self._render_env(i) for i in range(self.num_envs))
 
     def _render_env(self, i: int) -> NDArray[np.uint8]:
         single = self.single

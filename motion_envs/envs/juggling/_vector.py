@@ -50,18 +50,12 @@ from typing import Any, ClassVar, SupportsFloat
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES
-from motion_envs.envs._common import (
-    as_action,
-    check_autoreset_mode,
-    check_max_episode_steps,
-    check_num_envs,
-    env_footprint,
-)
+from motion_envs.envs._common import check_autoreset_mode, check_num_envs
 from motion_envs.envs._kernels import numba_available
+from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResult
 
 __all__ = [
     "PHASE_NAMES",
@@ -86,12 +80,9 @@ MIN_ENVS_PER_THREAD = 8
 #: A step's per-sub-environment values by info key: arrays with the stepped
 #: sub-environments along the first axis.
 Columns = dict[str, NDArray[Any]]
-_StepResult = tuple[
-    NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
-]
 
 
-class JugglingVectorEnv(gym.vector.VectorEnv):
+class JugglingVectorEnv(NativeVectorEnv):
     """``num_envs`` copies of ``single_class(**kwargs)`` (see the module docstring).
 
     Parameters
@@ -146,28 +137,16 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             raise ValueError(f"threads must be a positive int or None; got {threads!r}")
         if backend == "numba" and not numba_available():
             raise ValueError("backend='numba' needs numba (pip install 'motion-envs[fast]')")
-        check_num_envs(num_envs)
-        mode = check_autoreset_mode(autoreset_mode)
-        self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
+        check_num_envs(num_envs)  # before making the first environment
+        check_autoreset_mode(autoreset_mode)
         first = self.single_class(**kwargs)  # checks the arguments once
-        n = check_num_envs(num_envs, env_footprint(first))
+        self._setup_batch(first, num_envs, autoreset_mode, max_episode_steps, 2**62, first.metadata)
+        n = self.num_envs
         self.envs: list[Any] = [first] + [self.single_class(**kwargs) for _ in range(n - 1)]
-        self.num_envs = n
-        self.autoreset_mode = mode
-        self.single_observation_space = first.observation_space
-        self.single_action_space = first.action_space
-        self.observation_space = batch_space(first.observation_space, n)
-        self.action_space = batch_space(first.action_space, n)
-        self.metadata = {**first.metadata, "autoreset_mode": mode}
-        self.render_mode = first.render_mode
-        action_shape = tuple(first.action_space.shape or ())
         obs_shape = tuple(first.observation_space.shape or ())
-        self._action_shape = (n, *action_shape)
         self._obs = np.zeros((n, *obs_shape), dtype=np.float32)
         self._ended = np.zeros(n, dtype=bool)
-        self._started = np.zeros(n, dtype=bool)
         self._elapsed = np.zeros(n, dtype=np.int64)  # steps since the reset (TimeLimit's)
-        self._arange = np.arange(n)
         self.threads = threads
         self._pool: ThreadPoolExecutor | None = None
         batched = backend != "python" and numba_available() and self._batched
@@ -293,19 +272,6 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             self._link()
 
     # -- resets -------------------------------------------------------------------------
-    def _seeds(self, seed: int | Sequence[int | None] | None) -> list[int | None]:
-        n = self.num_envs
-        if seed is None:
-            return [None] * n
-        if isinstance(seed, bool):
-            raise ValueError(f"seed must be an int or a list of {n} seeds; got {seed!r}")
-        if isinstance(seed, (int, np.integer)):
-            return [int(seed) + i for i in range(n)]
-        seeds = list(seed)
-        if len(seeds) != n:
-            raise ValueError(f"seed must be an int or a list of {n} seeds; got {len(seeds)}")
-        return seeds
-
     def reset(
         self,
         *,
@@ -314,19 +280,13 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         seeds = self._seeds(seed)
         options = dict(options) if options else {}
-        mask = options.pop("reset_mask", None)
-        if mask is None:
-            envs = self._arange
-        else:
-            if not isinstance(mask, np.ndarray) or mask.shape != (self.num_envs,):
-                raise ValueError(f"options['reset_mask'] must be a bool array ({self.num_envs},)")
-            if mask.dtype != np.bool_ or not mask.any():
-                raise ValueError("options['reset_mask'] must be a bool array with a True entry")
-            envs = np.flatnonzero(mask)
+        envs = self._reset_targets(options)
+        options.pop("reset_mask", None)
         infos: dict[str, Any] = {}
         for i in envs.tolist():
             info = self._reset_env(i, seeds[i], options or None)
             infos = self._add_info(infos, info, i)
+        self._started = True
         return self._obs.copy(), infos
 
     def _reset_env(self, i: int, seed: int | None, options: dict[str, Any] | None = None) -> Any:
@@ -335,7 +295,6 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         obs, info = self.envs[i].reset(seed=seed, options=options)
         self._obs[i] = obs
         self._ended[i] = False
-        self._started[i] = True
         self._elapsed[i] = 0
         self._after_reset(i)
         return numeric_info(info)
@@ -344,21 +303,13 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         """Hook: sub-environment ``i`` was reset (a batched step loads its state here)."""
 
     # -- steps --------------------------------------------------------------------------
-    def step(self, actions: Any) -> _StepResult:
-        a = as_action(actions, self._action_shape, "actions")
-        if not self._started.all():
-            raise RuntimeError("call reset() before step()")
-        n, mode = self.num_envs, self.autoreset_mode
+    def step(self, actions: Any) -> StepResult:
+        a = self._check_actions(actions)
+        n = self.num_envs
         rewards = np.zeros(n, dtype=np.float64)
         terminated = np.zeros(n, dtype=bool)
         truncated = np.zeros(n, dtype=bool)
-        resetting = self._ended.copy() if mode == AutoresetMode.NEXT_STEP else np.zeros(n, bool)
-        if mode == AutoresetMode.DISABLED and self._ended.any():
-            i = int(np.flatnonzero(self._ended)[0])
-            raise RuntimeError(
-                f"sub-environment {i} has ended and autoreset_mode is DISABLED; call "
-                "reset(options={'reset_mask': mask}) for the ended sub-environments first"
-            )
+        resetting = self._resetting(self._ended)
         stepped = np.flatnonzero(~resetting)
         infos: dict[str, Any] = {}
         if stepped.size:
@@ -369,7 +320,7 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
             rewards[stepped], terminated[stepped], truncated[stepped] = rew, term, trunc
             ended = term | trunc
             self._ended[stepped] = ended
-            if mode == AutoresetMode.SAME_STEP and ended.any():
+            if self._mode == SAME_STEP and ended.any():
                 keep = ~ended
                 infos = self._scatter(columns, stepped, keep) if keep.any() else {}
                 for j in np.flatnonzero(ended).tolist():
@@ -422,11 +373,8 @@ class JugglingVectorEnv(gym.vector.VectorEnv):
         return obs, rew, term, trunc, _columns([r[4] for r in results])
 
     # -- the rest -----------------------------------------------------------------------
-    def render(self) -> tuple[Any, ...] | None:
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode")
-            return None
-        return tuple(env.render() for env in self.envs)
+    def _render_env(self, i: int) -> Any:
+        return self.envs[i].render()
 
     def close_extras(self, **kwargs: Any) -> None:
         if self._pool is not None:
