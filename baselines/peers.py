@@ -22,11 +22,11 @@ from __future__ import annotations
 import importlib
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from motion_envs._typing import FloatArray
 
 __all__ = ["DMPPeer", "ProMPPeer", "peers_available", "peers_missing_reason"]
-
-FloatArray = NDArray[np.float64]
 
 
 def peers_missing_reason() -> str | None:

@@ -9,9 +9,8 @@ assumed valid (shapes, unit norms): nothing here validates.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from motion_envs._typing import FloatArray
 
 #: Same small-angle threshold as motion_envs.geometry.quaternion.
 SMALL_ANGLE = 1e-4

@@ -1,11 +1,11 @@
 """The layer order of docs/architecture.md, as import-linter contracts (pyproject.toml's
 ``[tool.importlinter]``), kept by ``lint-imports``.
 
-``motion_envs._io``, ``_lazy`` < ``geometry`` < ``datasets`` < ``models`` < ``envs`` (and
+``motion_envs._io``, ``_lazy``, ``_typing`` < ``geometry`` < ``datasets`` < ``models`` < ``envs`` (and
 the ``motion_envs`` package itself) < ``baselines``: a module imports only from its own
 layer or those below; ``geometry``, ``datasets`` and ``models`` import no Gymnasium,
 MuJoCo, torch or SB3; a private module (``_x``) is imported from inside its own package
-only (``_io`` and ``_lazy`` from everywhere); no import cycle among the sub-packages and
+only (``_io``, ``_lazy`` and ``_typing`` from everywhere); no import cycle among the sub-packages and
 modules of a package, nor among all the modules. grimp reads every import statement
 (module level, inside functions, under ``TYPE_CHECKING``). A private *name* of another
 module (``from m import _x``, ``m._x``) is not a contract import-linter has:
@@ -65,6 +65,7 @@ _TREE = (
     "motion_envs/__init__.py",
     "motion_envs/_io.py",
     "motion_envs/_lazy.py",
+    "motion_envs/_typing.py",
     "motion_envs/geometry/__init__.py",
     "motion_envs/geometry/bezier.py",
     "motion_envs/datasets/__init__.py",

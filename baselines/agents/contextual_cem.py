@@ -36,11 +36,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+
+from motion_envs._typing import FloatArray
 
 __all__ = ["CEMConfig", "CEMResult", "LinearPolicy", "train_cem"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.agents.reaching_score import EpisodeErrors
+from motion_envs._typing import FloatArray
 from motion_envs.envs.orientation_reach import N_STEPS, orientation_max_errors
 from motion_envs.envs.position_reach import position_max_errors
 
@@ -54,8 +55,6 @@ __all__ = [
     "position_learned_positions",
     "position_max_errors",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

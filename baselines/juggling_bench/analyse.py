@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
 
 from baselines.juggling_bench.text import clean_json
 from motion_envs._io import atomic_write_text, save_figure
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import read_juggling_csv
 from motion_envs.datasets.mocap import YUP_TO_ZUP, is_mocap_source, parse_source, read_recording
 from motion_envs.models.juggling import (
@@ -46,8 +46,6 @@ __all__ = [
     "run_analysis",
     "write_analysis",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Gravity the fitted one is compared with (m/s^2).
 STANDARD_GRAVITY = 9.81

@@ -9,9 +9,9 @@ import time
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from baselines.juggling_bench.config import JugglingConfig
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import (
     PHASES,
     JugglingDemos,
@@ -21,8 +21,6 @@ from motion_envs.datasets.juggling import (
 )
 from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.models.juggling import AnalyticJuggler, run_cycles, run_cycles_fast
-
-FloatArray = NDArray[np.float64]
 
 
 def _criteria(truth: FloatArray, pred: FloatArray) -> tuple[FloatArray, FloatArray]:

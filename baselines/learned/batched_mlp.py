@@ -34,6 +34,8 @@ import numpy as np
 import torch
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
+
 __all__ = [
     "CurveCriterion",
     "MLPConfig",
@@ -42,8 +44,6 @@ __all__ = [
     "forward",
     "train_networks",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -23,12 +23,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
+
 if TYPE_CHECKING:  # torch is imported only when the MLP runs
     from baselines.learned.batched_mlp import CurveCriterion, MLPConfig
 
 __all__ = ["Fold", "NestedResult", "inner_folds", "nested_mlp"]
 
-FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: One outer fold: (training row indices, scored row indices).

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry import quaternion as quat
 
 __all__ = [
@@ -37,8 +38,6 @@ __all__ = [
     "sine_curves",
     "sine_targets",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Sine terms per coordinate of the residual targets.
 DEFAULT_N_SINES = 8

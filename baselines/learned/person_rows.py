@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets import OrientationDataset
 from motion_envs.models.criteria import max_errors
 from motion_envs.models.path_frame import from_path_frame, to_path_frame
@@ -62,7 +63,6 @@ __all__ = [
     "summary_predictions",
 ]
 
-FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: The ``K`` of the MLP rows in ``motion-bench orientation`` (the issue's target K).

@@ -25,11 +25,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.models.position_nominal import position_conditions, varying_columns
 
 __all__ = ["LEARNED_POSITION_METHODS", "POSITION_ALPHAS", "learned_position_predictions"]
-
-FloatArray = NDArray[np.float64]
 
 #: Columns this module adds to ``motion-bench position``.
 LEARNED_POSITION_METHODS: tuple[str, ...] = ("ridge", "mlp")

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs._io import save_figure
+from motion_envs._typing import FloatArray
 
 __all__ = [
     "bootstrap_ratio",
@@ -22,8 +23,6 @@ __all__ = [
     "ratio_figure",
     "row_words",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 def bootstrap_ratio(

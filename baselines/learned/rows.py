@@ -46,6 +46,7 @@ from baselines.learned.reading import (
     format_comparison,
     plot_ratios,
 )
+from motion_envs._typing import FloatArray
 from motion_envs.datasets import OrientationDataset
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import NullBezierModel, TaskBezierModel
@@ -75,8 +76,6 @@ __all__ = [
     "learned_orientation_rows",
     "plot_ratios",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Rows with observed timing (existing analytic ones first, then the new ones).
 ANALYTIC_OBSERVED = (

@@ -14,7 +14,8 @@ from numpy.typing import NDArray
 
 from baselines.learned import LEARNED_MODES
 from baselines.peers import DMPPeer, ProMPPeer, peers_available
-from baselines.position_bench.config import CRITERION_TEXT, METHODS, PEER_METHODS, FloatArray
+from baselines.position_bench.config import CRITERION_TEXT, METHODS, PEER_METHODS
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.lasa import LASA_CITATION
 from motion_envs.datasets.position_csv import PositionDataset
 from motion_envs.datasets.resampling import resample_positions

@@ -43,6 +43,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
+
 __all__ = [
     "CONFIDENCE",
     "MIN_GROUPS",
@@ -61,7 +63,6 @@ __all__ = [
     "verdict",
 ]
 
-FloatArray = NDArray[np.float64]
 Statistic = Callable[[FloatArray], float]
 
 #: Confidence level of every interval.

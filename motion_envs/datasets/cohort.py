@@ -77,6 +77,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.cohort_config import (
     DEFAULT_COHORT,
     CohortConfig,
@@ -100,8 +101,6 @@ __all__ = [
     "sine_basis",
     "split_labels",
 ]
-
-FloatArray = NDArray[np.float64]
 
 _TASK_KEY = 1
 _SUBJECT_KEY = 2

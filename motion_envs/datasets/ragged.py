@@ -15,14 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry import quaternion as quat
 
 if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["DEFAULT_N_POINTS", "MIN_SAMPLES", "RaggedTrajectories", "normalised_grid"]
-
-FloatArray = NDArray[np.float64]
 
 #: Number of points on the common normalised-time grid (the paper's 50).
 DEFAULT_N_POINTS = 50

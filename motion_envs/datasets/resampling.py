@@ -11,15 +11,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry import sine_series as ss
 
 __all__ = ["interpolate_on_grid", "resample_orientations", "resample_positions"]
-
-FloatArray = NDArray[np.float64]
 
 
 def interpolate_on_grid(traj: RaggedTrajectories, values: ArrayLike, grid: ArrayLike) -> FloatArray:

@@ -21,6 +21,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.envs._common import check_integer
 from motion_envs.models.person_calibration import (
     SUMMARY_BOUND,
@@ -34,8 +35,6 @@ __all__ = [
     "check_calibration",
     "orientation_calibration_features",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Largest ``calibration`` (reaches of the person in the summary).
 MAX_CALIBRATION = 1000

@@ -37,6 +37,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.envs._calibration import MAX_CALIBRATION, CalibrationDraws
 from motion_envs.envs._common import (
     MAX_FRAME_SIZE,
@@ -73,8 +74,6 @@ MAX_COEFFICIENT_SINES = N_STEPS - 2
 CALIBRATION_SINES = SUMMARY_SINES
 #: The calibration summary is clipped to ``[-CALIBRATION_BOUND, CALIBRATION_BOUND]``.
 CALIBRATION_BOUND = SUMMARY_BOUND
-
-FloatArray = NDArray[np.float64]
 
 
 def line_frames(starts: Any, goals: Any, min_scale: float = 1e-9) -> tuple[FloatArray, FloatArray]:

@@ -13,12 +13,12 @@ Both functions broadcast over ``tau``, ``a`` and ``b``.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy import special
 
-__all__ = ["beta_alpha", "beta_speed"]
+from motion_envs._typing import FloatArray
 
-FloatArray = NDArray[np.float64]
+__all__ = ["beta_alpha", "beta_speed"]
 
 
 def _check_shapes(a: ArrayLike, b: ArrayLike) -> tuple[FloatArray, FloatArray]:

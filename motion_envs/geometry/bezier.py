@@ -17,8 +17,10 @@ shape ``(..., d - 1, dim)`` (interior points only).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy.special import comb
+
+from motion_envs._typing import FloatArray
 
 __all__ = [
     "bernstein_interior",
@@ -26,8 +28,6 @@ __all__ = [
     "fit",
     "fit_operator",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 def _check_degree(degree: int) -> int:

@@ -19,8 +19,9 @@ from __future__ import annotations
 from typing import Any, Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry.resampling import check_rate, times_in_seconds
 
 __all__ = [
@@ -35,8 +36,6 @@ __all__ = [
     "speed",
     "window_samples",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Default Savitzky-Golay window in seconds (13 samples at 120 Hz, 11 at 100 Hz).
 DEFAULT_WINDOW = 0.1

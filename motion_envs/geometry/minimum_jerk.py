@@ -16,11 +16,11 @@ velocities and accelerations it is :func:`minimum_jerk` (to round-off).
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from motion_envs._typing import FloatArray
 
 __all__ = ["minimum_jerk", "minimum_jerk_profile", "quintic", "quintic_evaluate"]
-
-FloatArray = NDArray[np.float64]
 
 
 def minimum_jerk_profile(tau: ArrayLike) -> FloatArray:

@@ -31,6 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from motion_envs._typing import FloatArray
+
 __all__ = [
     "IDENTITY",
     "UNIT_TOLERANCE",
@@ -46,8 +48,6 @@ __all__ = [
     "slerp",
     "to_rotation",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: The identity rotation ``(w, x, y, z) = (1, 0, 0, 0)``.
 IDENTITY: FloatArray = np.array([1.0, 0.0, 0.0, 0.0])

@@ -21,8 +21,9 @@ from typing import Literal
 
 import numpy as np
 import scipy.interpolate
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry.sine_series import normalised_time
 
 __all__ = [
@@ -34,7 +35,6 @@ __all__ = [
     "times_in_seconds",
 ]
 
-FloatArray = NDArray[np.float64]
 Kind = Literal["cubic", "linear"]
 
 

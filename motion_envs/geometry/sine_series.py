@@ -34,7 +34,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.fft
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from motion_envs._typing import FloatArray
 
 __all__ = [
     "acceleration",
@@ -50,8 +52,6 @@ __all__ = [
     "residual",
     "velocity",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 def _check_n_sines(n_sines: int) -> int:

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.fft
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from motion_envs.geometry.kinematics import (
     DEFAULT_WINDOW,
@@ -38,8 +38,6 @@ from motion_envs.geometry.kinematics import (
 )
 
 __all__ = ["log_dimensionless_jerk", "spectral_arc_length"]
-
-FloatArray = NDArray[np.float64]
 
 
 def log_dimensionless_jerk(

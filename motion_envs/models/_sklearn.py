@@ -11,13 +11,12 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry.resampling import recording_times
 
 __all__ = ["batch_row", "check_order", "negative_criterion", "score_times"]
-
-FloatArray = NDArray[np.float64]
 
 
 def _looks_like_movements(X: Any) -> bool:

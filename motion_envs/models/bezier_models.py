@@ -37,6 +37,7 @@ from typing import Any, ClassVar, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.models.estimator import not_fitted_error
@@ -62,7 +63,6 @@ __all__ = [
     "fit_control_points",
 ]
 
-FloatArray = NDArray[np.float64]
 #: Curve labels (subjects or tasks) as passed, ``(L,)``, or None.
 Labels = ArrayLike | None
 #: Numeric predictors: a mapping name -> ``(L,)`` values, an ``(L, p)`` array, or None.

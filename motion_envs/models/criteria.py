@@ -63,6 +63,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.cohort_config import DEFAULT_COHORT
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
 from motion_envs.geometry import bezier
@@ -94,8 +95,6 @@ __all__ = [
     "table1",
     "within_subject_error",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Bézier degrees reported in Table 1.
 CRITERIA_DEGREES: tuple[int, ...] = (2, 3, 4)

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
 from motion_envs.models._sklearn import batch_row
@@ -42,8 +43,6 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["FitErrors", "fit_summary", "orientation_fit_errors", "position_fit_errors"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

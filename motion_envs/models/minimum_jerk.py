@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry.minimum_jerk import minimum_jerk, minimum_jerk_profile
 from motion_envs.geometry.resampling import recording_times
 from motion_envs.models._sklearn import check_order, negative_criterion, score_times
@@ -26,8 +27,6 @@ from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
 __all__ = ["MinimumJerk"]
-
-FloatArray = NDArray[np.float64]
 
 
 class MinimumJerk(SerializableModel):

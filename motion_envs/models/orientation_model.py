@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
@@ -54,8 +55,6 @@ from motion_envs.models.slerp_residual import slerp_residuals
 from motion_envs.models.speed_profile import average_speed_profile
 
 __all__ = ["ORIENTATION_PREDICTORS", "OrientationModel"]
-
-FloatArray = NDArray[np.float64]
 
 #: What the residual's control points are predicted from (``by=``).
 ORIENTATION_PREDICTORS = ("null", "subject", "task", "linear")

@@ -42,8 +42,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, normalised_grid
 from motion_envs.datasets.resampling import resample_orientations
 from motion_envs.geometry import quaternion as quat
@@ -68,8 +68,6 @@ __all__ = [
     "OrientationNominal",
     "orientation_criterion",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Nominal models of the orientation environment and ``motion-bench orientation --nominal``.
 ORIENTATION_NOMINALS: tuple[str, ...] = ("slerp", "bezier-null", "bezier-task", "bezier-subject")

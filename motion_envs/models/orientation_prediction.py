@@ -13,16 +13,15 @@ values on the grid or as Beta shape parameters ``(a, b)`` (``alpha = I_tau(a, b)
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.beta_profile import beta_alpha
 
 __all__ = ["predict_orientations"]
-
-FloatArray = NDArray[np.float64]
 
 
 def predict_orientations(

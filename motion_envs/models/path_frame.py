@@ -34,8 +34,9 @@ Degenerate cases (each one keeps ``F`` orthonormal, so the inverse stays exact):
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.orientation import DEFAULT_UP, check_up
 from motion_envs.geometry import quaternion as quat
 
@@ -48,8 +49,6 @@ __all__ = [
     "path_frames",
     "to_path_frame",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: The frames a residual model can work in.
 FRAMES: tuple[str, ...] = ("body", "path")

@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
 from motion_envs.geometry import bezier
 from motion_envs.geometry.sine_series import basis
@@ -88,7 +89,6 @@ __all__ = [
     "person_timing_loso",
 ]
 
-FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: The K of ``motion-bench orientation --calibration`` in ``motion-bench all``.

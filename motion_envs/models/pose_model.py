@@ -27,6 +27,7 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
@@ -43,7 +44,6 @@ from motion_envs.models.sine_regression import SineSeriesRegression
 
 __all__ = ["PoseModel"]
 
-FloatArray = NDArray[np.float64]
 M = TypeVar("M", bound=SerializableModel)
 
 _PARTS: tuple[tuple[str, type[SerializableModel]], ...] = (

@@ -22,11 +22,11 @@ All functions take ``truth`` and ``pred`` of shape ``(..., K, D)`` sampled on th
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from motion_envs._typing import FloatArray
 
 __all__ = ["CRITERIA", "dtw_distance", "max_error", "rmse", "swept_error_area"]
-
-FloatArray = NDArray[np.float64]
 
 
 def _pair(truth: ArrayLike, pred: ArrayLike) -> tuple[FloatArray, FloatArray]:

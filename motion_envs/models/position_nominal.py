@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS
 from motion_envs.datasets.resampling import resample_positions
 from motion_envs.datasets.splits import POSITION_SPLITS, position_folds
@@ -48,8 +49,6 @@ __all__ = [
     "resample_positions",
     "varying_columns",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Nominal models of the position environment.
 POSITION_NOMINALS: tuple[str, ...] = ("line", "null", "sine")

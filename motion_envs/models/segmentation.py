@@ -42,8 +42,9 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.kinematics import (
     DEFAULT_POLYORDER,
@@ -69,8 +70,6 @@ __all__ = [
     "causal_derivatives",
     "segment",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

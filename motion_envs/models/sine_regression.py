@@ -62,6 +62,7 @@ from typing import TYPE_CHECKING, Any, Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.resampling import recording_times
@@ -88,7 +89,6 @@ __all__ = [
 if TYPE_CHECKING:
     import pandas as pd
 
-FloatArray = NDArray[np.float64]
 Mode = Literal["hyperplane", "free"]
 
 #: Largest end-point shift (Euclidean, in the data's units: 1 mm for positions in metres)

@@ -24,8 +24,9 @@ over trajectories). Interpolation uses the offset trick ``tau + 2 l`` for trajec
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import (
     DEFAULT_N_POINTS,
     MIN_SAMPLES,
@@ -48,8 +49,6 @@ __all__ = [
     "slerp_residuals",
     "speed_fractions",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 def speed_fractions(traj: RaggedTrajectories) -> FloatArray:

@@ -23,9 +23,10 @@ and are re-exported here. The "average speed profile" of Table 1 is the mean of 
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy import optimize, special
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
 from motion_envs.datasets.resampling import interpolate_on_grid
 from motion_envs.geometry.beta_profile import beta_alpha, beta_speed
@@ -38,8 +39,6 @@ __all__ = [
     "fit_beta_speed_profile",
     "speed_fractions_on_grid",
 ]
-
-FloatArray = NDArray[np.float64]
 
 _MIN_SHAPE = 1e-3
 _MAX_SHAPE = 1e3

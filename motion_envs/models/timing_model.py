@@ -34,13 +34,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.models._sklearn import negative_criterion
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State
 
 __all__ = ["DEFAULT_LAMBDAS", "SpeedProfileModel", "timing_features"]
-
-FloatArray = NDArray[np.float64]
 
 #: Ridge penalties tried by leave-one-out cross-validation (standardised features).
 DEFAULT_LAMBDAS: tuple[float, ...] = (0.1, 1.0, 10.0, 100.0, 1000.0, 1e4)

@@ -52,8 +52,6 @@ __all__ = [
     "write_juggling_csv",
 ]
 
-FloatArray = NDArray[np.float64]
-
 #: Required columns of the juggling CSV.
 JUGGLING_COLUMNS: tuple[str, ...] = ("t", "x", "z")
 

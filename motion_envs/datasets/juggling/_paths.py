@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
+
+from motion_envs._typing import FloatArray
 
 __all__ = ["departure_from_line", "resample_path"]
-
-FloatArray = NDArray[np.float64]
 
 
 def resample_path(times: FloatArray, positions: FloatArray, n_points: int) -> FloatArray:

@@ -34,16 +34,14 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import rules
 from motion_envs.datasets.juggling._records import JugglingDemos, JugglingRecording
 from motion_envs.datasets.juggling._task import JugglingTask, ballistic_position
 from motion_envs.geometry.minimum_jerk import quintic, quintic_evaluate
 
 __all__ = ["PersonStyle", "draw_person", "generate_demonstrations"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

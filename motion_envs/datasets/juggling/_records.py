@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling._paths import resample_path
 from motion_envs.datasets.juggling._task import PHASES, JugglingTask
 
@@ -20,8 +21,6 @@ __all__ = [
     "PhaseSegment",
     "split_cycles",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: The label every generated set carries in code, CLI output, results and plots.
 SIMULATED_LABEL = "SIMULATED (seeded model of a person; not human recordings)"

@@ -25,7 +25,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+
+from motion_envs._typing import FloatArray
 
 __all__ = [
     "PHASES",
@@ -35,8 +37,6 @@ __all__ = [
     "ballistic_position",
     "ballistic_velocity",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: The four phases of one juggling cycle, in order.
 PHASES: tuple[str, ...] = ("toss", "go_down", "catch", "return")

@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["JOIN_TOLERANCE", "MAX_PREDICTION", "MIN_FRAGMENT", "assemble_balls"]
+from motion_envs._typing import FloatArray
 
-FloatArray = NDArray[np.float64]
+__all__ = ["JOIN_TOLERANCE", "MAX_PREDICTION", "MIN_FRAGMENT", "assemble_balls"]
 
 #: Fragments with fewer frames are spurious.
 MIN_FRAGMENT = 5

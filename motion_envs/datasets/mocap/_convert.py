@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingDemos, JugglingRecording, JugglingTask
 from motion_envs.datasets.mocap._balls import assemble_balls
 from motion_envs.datasets.mocap._gaps import GapCounts, Piece, fill_gaps
@@ -42,8 +43,6 @@ __all__ = [
     "import_position",
     "triad_quaternions",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Rotation taking a Y-up world to the project's Z-up one: ``(x, y, z) -> (x, -z, y)``
 #: (+90 degrees about x; the file's forward ``+z`` becomes ``-y``).

@@ -8,12 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["GapCounts", "Piece", "fill_gaps"]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

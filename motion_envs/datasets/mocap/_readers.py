@@ -18,18 +18,16 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from motion_envs._io import check_regular_file
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.mocap._bounds import check_rate, check_unique_names
 from motion_envs.datasets.mocap._options import MAX_RECORDING_BYTES, UNITS, unit_scale
 from motion_envs.datasets.mocap._recording import MocapRecording
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["read_bvh", "read_c3d", "read_qualisys_tsv", "read_recording"]
-
-FloatArray = NDArray[np.float64]
 
 _EXTRA = 'install the readers with  pip install "motion-envs[mocap]"'
 #: Qualisys labels of trajectories that were not identified (unlabelled fragments).

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MocapRecording"]
+from motion_envs._typing import FloatArray
 
-FloatArray = NDArray[np.float64]
+__all__ = ["MocapRecording"]
 
 
 @dataclass(frozen=True)

@@ -27,16 +27,14 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from numpy.typing import NDArray
 
 from motion_envs._io import check_regular_file
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.mocap._options import MAX_SEGMENT_ROWS, MAX_SEGMENTS_BYTES
 from motion_envs.datasets.sample_table import missing_columns_message, read_csv_exact
 from motion_envs.geometry import quaternion as quat
 
 __all__ = ["SegmentRow", "read_segments", "speed", "speed_segments"]
-
-FloatArray = NDArray[np.float64]
 
 
 def speed(t: FloatArray, values: FloatArray, rotation: bool) -> FloatArray:
