@@ -35,12 +35,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.agents.juggling_score import (
-    DEFAULT_EPISODES,
     catch_rate_difference,
     catch_rate_interval,
+    play_until_ended,
     pooled_catch_rate,
+    split_episode_count,
 )
-from motion_envs.datasets.juggling import SPLIT_SEEDS, episode_seeds
+from motion_envs.datasets.juggling import episode_seeds
 
 __all__ = [
     "CASCADE_ENV_IDS",
@@ -128,43 +129,24 @@ def cascade_agent_episodes(
 
     if not is_cascade(env_id):
         raise ValueError(f"{env_id} is not a cascade environment")
-    if split not in SPLIT_SEEDS:
-        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
-    n = DEFAULT_EPISODES[split] if episodes is None else int(episodes)
-    if n < 1:
-        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
+    n = split_episode_count(split, episodes)
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
     seeds = episode_seeds(split, n)
+    catches = np.zeros(n, dtype=np.int64)
+    tosses = np.zeros(n, dtype=np.int64)
+    dropped = np.zeros(n, dtype=bool)
+    times = np.zeros(n, dtype=np.float64)
+
+    def record(i: int, info: dict[str, Any], ended: bool, terminated: bool) -> None:
+        if ended:
+            catches[i] = int(info["catches"])
+            tosses[i] = int(info["tosses"])
+            dropped[i] = terminated
+            times[i] = float(info["time"])
+
     envs = [gym.make(env_id, **kwargs) for _ in range(n)]
     max_catches = int(envs[0].unwrapped.max_catches)  # type: ignore[attr-defined]
-    try:
-        obs = np.stack(
-            [env.reset(seed=int(s))[0] for env, s in zip(envs, seeds.tolist(), strict=True)]
-        )
-        catches = np.zeros(n, dtype=np.int64)
-        tosses = np.zeros(n, dtype=np.int64)
-        dropped = np.zeros(n, dtype=bool)
-        times = np.zeros(n, dtype=np.float64)
-        active = list(range(n))
-        shape = (n, *(envs[0].action_space.shape or ()))
-        while active:
-            actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
-            actions = np.asarray(actions, dtype=np.float32)
-            still = []
-            for i in active:
-                o, _, terminated, truncated, info = envs[i].step(actions[i])
-                obs[i] = o
-                if terminated or truncated:
-                    catches[i] = int(info["catches"])
-                    tosses[i] = int(info["tosses"])
-                    dropped[i] = bool(terminated)
-                    times[i] = float(info["time"])
-                else:
-                    still.append(i)
-            active = still
-    finally:
-        for env in envs:
-            env.close()
+    play_until_ended(envs, seeds, policy, record)
     return CascadeAgentEpisodes(seeds, catches, tosses, dropped, times, max_catches)
 
 

@@ -52,6 +52,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import (
     SPLIT_SEEDS,
     departure_from_line,
@@ -72,11 +73,12 @@ __all__ = [
     "deviation_interval",
     "is_juggling",
     "juggling_episodes",
+    "play_until_ended",
     "pooled_catch_rate",
     "segment_deviations",
+    "split_episode_count",
 ]
 
-FloatArray = NDArray[np.float64]
 Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 #: Environment ids scored by this module.
@@ -215,11 +217,7 @@ def juggling_episodes(
 
     if not is_juggling(env_id):
         raise ValueError(f"{env_id} is not a juggling environment")
-    if split not in SPLIT_SEEDS:
-        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
-    n = DEFAULT_EPISODES[split] if episodes is None else int(episodes)
-    if n < 1:
-        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
+    n = split_episode_count(split, episodes)
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
     if env_id == "MotionEnvs/Juggling-v1":  # its default gravity, that of its demonstrations
         kwargs.setdefault("gravity", 9.81)
@@ -244,38 +242,27 @@ def juggling_episodes(
                 demos,
             )
         env.close()
+    times: list[list[float]] = [[] for _ in range(n)]
+    hands: list[list[FloatArray]] = [[] for _ in range(n)]
+    phases: list[list[str]] = [[] for _ in range(n)]
+    tosses = np.zeros(n, dtype=np.int64)
+    catches = np.zeros(n, dtype=np.int64)
+    dropped = np.zeros(n, dtype=bool)
+
+    def record(i: int, info: dict[str, Any], ended: bool, terminated: bool) -> None:
+        times[i].append(float(info["time"]))
+        hands[i].append(np.asarray(info["hand"], dtype=np.float64))
+        phases[i].append(str(info["phase"]))
+        if ended:
+            tosses[i] = int(info["cycles"])
+            catches[i] = int(info["catches"])
+            dropped[i] = terminated
+
     envs = [gym.make(env_id, **kwargs) for _ in range(n)]
-    try:
-        first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist(), strict=True)]
-        obs = np.stack([o for o, _ in first])
-        times = [[float(info["time"])] for _, info in first]
-        hands = [[np.asarray(info["hand"], dtype=np.float64)] for _, info in first]
-        phases = [[str(info["phase"])] for _, info in first]
-        tosses = np.zeros(n, dtype=np.int64)
-        catches = np.zeros(n, dtype=np.int64)
-        dropped = np.zeros(n, dtype=bool)
-        active = list(range(n))
-        shape = (n, *(envs[0].action_space.shape or ()))
-        while active:
-            actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
-            actions = np.asarray(actions, dtype=np.float32)
-            still = []
-            for i in active:
-                o, _, terminated, truncated, info = envs[i].step(actions[i])
-                obs[i] = o
-                times[i].append(float(info["time"]))
-                hands[i].append(np.asarray(info["hand"], dtype=np.float64))
-                phases[i].append(str(info["phase"]))
-                if terminated or truncated:
-                    tosses[i] = int(info["cycles"])
-                    catches[i] = int(info["catches"])
-                    dropped[i] = bool(terminated)
-                else:
-                    still.append(i)
-            active = still
-    finally:
-        for env in envs:
-            env.close()
+    for i, info in enumerate(play_until_ended(envs, seeds, policy, record)):
+        times[i].insert(0, float(info["time"]))
+        hands[i].insert(0, np.asarray(info["hand"], dtype=np.float64))
+        phases[i].insert(0, str(info["phase"]))
     return _episodes(
         seeds,
         [np.asarray(t) for t in times],
@@ -286,6 +273,52 @@ def juggling_episodes(
         dropped,
         demos,
     )
+
+
+def split_episode_count(split: str, episodes: int | None) -> int:
+    """How many episodes of ``split`` to play: ``episodes``, or the split's
+    :data:`DEFAULT_EPISODES` when None (a one-line ``ValueError`` for an unknown split or
+    fewer than one episode)."""
+    if split not in SPLIT_SEEDS:
+        raise ValueError(f"split must be one of {sorted(SPLIT_SEEDS)}; got {split!r}")
+    n = DEFAULT_EPISODES[split] if episodes is None else int(episodes)
+    if n < 1:
+        raise ValueError(f"episodes must be >= 1; got {episodes!r}")
+    return n
+
+
+def play_until_ended(
+    envs: list[Any],
+    seeds: NDArray[np.int64],
+    policy: Policy | None,
+    record: Callable[[int, dict[str, Any], bool, bool], None],
+) -> list[dict[str, Any]]:
+    """Reset ``envs[i]`` with ``seeds[i]`` and step the episodes together, each until it
+    ends and no further (a finished episode's row of the batch keeps its last observation;
+    the policy's action for it is unused), then close the environments. ``policy`` maps
+    the observations ``(N, obs_dim)`` to actions, None is the zero action; after each
+    step of episode ``i``, ``record(i, info, ended, terminated)``. Returns the reset
+    infos."""
+    try:
+        first = [env.reset(seed=int(seed)) for env, seed in zip(envs, seeds.tolist(), strict=True)]
+        obs = np.stack([o for o, _ in first])
+        active = list(range(len(envs)))
+        shape = (len(envs), *(envs[0].action_space.shape or ()))
+        while active:
+            actions = np.zeros(shape, dtype=np.float32) if policy is None else policy(obs)
+            actions = np.asarray(actions, dtype=np.float32)
+            still = []
+            for i in active:
+                o, _, terminated, truncated, info = envs[i].step(actions[i])
+                obs[i] = o
+                record(i, info, bool(terminated or truncated), bool(terminated))
+                if not (terminated or truncated):
+                    still.append(i)
+            active = still
+    finally:
+        for env in envs:
+            env.close()
+    return [info for _, info in first]
 
 
 def _episodes(
