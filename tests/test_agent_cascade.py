@@ -16,6 +16,7 @@ from baselines.agents.cascade_score import (
     CascadeAgentEpisodes,
     cascade_agent_episodes,
     cascade_agent_results,
+    catches_median_comparison,
     catches_median_difference,
 )
 from baselines.agents.config import resolve_hyperparams
@@ -124,6 +125,26 @@ def test_differences_are_agent_minus_nominal_on_the_same_seeds():
     (verdict,) = res["verdicts"]
     assert verdict["ratio"] == pytest.approx(hazard / nominal_hazard)
     assert verdict["n_groups"] == N and verdict["group"] == "episodes"
+    # every paired difference carries its power line, and the printed summary shows it
+    median, rate = res["differences"]
+    assert (median["difference"], median["ci95"]) == (
+        res["catches_median_difference"], res["catches_median_difference_ci"]
+    )  # fmt: skip
+    assert (rate["difference"], rate["ci95"]) == (
+        res["catch_rate_difference"], res["catch_rate_difference_ci"]
+    )  # fmt: skip
+    for d in (median, rate):
+        assert d["n_groups"] == N and d["group"] == "episodes" and d["power"] == 0.8
+        below, above = d["detectable_differences"]
+        assert below <= 0 <= above
+        assert d["power_line"].startswith(f"80% power at {N} episodes for differences <=")
+        if d["decidable"] is False and d["verdict"] == "no difference":
+            assert d["sentence"].endswith("cannot decide at this size")
+    from baselines.agents.evaluate import _cascade_lines
+
+    text = _cascade_lines(res | {"env_id": ENV_ID, "algo": "ppo", "split": "test"})
+    assert text.count(f"80% power at {N} episodes for differences") == 2
+    assert median["sentence"] in text and rate["power_line"] in text
 
 
 def test_median_difference_interval_is_paired():
@@ -139,6 +160,10 @@ def test_median_difference_interval_is_paired():
         )
 
     assert catches_median_difference(eps(base + 1), eps(base)) == (1.0, 1.0, 1.0)
+    # the power line: a constant one-catch gain has a point interval, detected at any size
+    sure = catches_median_comparison(eps(base + 1), eps(base))
+    assert sure.detectable == (0.0, 0.0) and sure.decidable
+    assert sure.sentence() == "agent is BETTER than nominal at 95 %"
     other = CascadeAgentEpisodes(
         np.arange(1, 41), base, base + 2, np.ones(40, bool), np.ones(40), 30
     )
@@ -175,3 +200,38 @@ def test_motion_bench_train_and_agent_smoke(tmp_path):
     assert 0 <= doc["catch_rate"] <= 1 and 0 <= doc["nominal_catch_rate"] <= 1
     assert (out / "eval-test" / "agent_vs_nominal.png").stat().st_size > 0
     assert (out / "eval-test" / "results.csv").read_text().startswith("seed,agent_catches")
+
+
+def test_median_difference_power_says_when_it_cannot_decide():
+    """A gain of one catch in a few of 40 noisy episodes: the interval contains 0 and the
+    claimed difference is below the detectable one, "cannot decide at this size"; the
+    same gain on every one of 400 episodes is decided, and its detectable difference
+    shrinks about as 1 / sqrt(n)."""
+    from baselines.stats import detectable_differences, group_bootstrap_replicates
+
+    rng = np.random.default_rng(8)
+
+    def eps(catches):
+        n = catches.size
+        return CascadeAgentEpisodes(
+            np.arange(n), catches, catches + 2, np.ones(n, bool), np.ones(n), 30
+        )
+
+    base = rng.integers(0, 30, 40)
+    gain = base + (rng.random(40) < 0.1)
+    small = catches_median_comparison(eps(gain), eps(base), names=("policy", "juggler"))
+    lo, hi = small.ci95
+    assert lo <= 0 <= hi and small.decidable is False
+    assert small.sentence().endswith("cannot decide at this size")
+    assert "is below the detectable" in small.power_text()
+    if small.difference in small.ci95:  # integer medians: an interval end at the point
+        assert "discrete replicates" in small.power_text()
+    # the same numbers as the interval helper's replicates through the power helper
+    ca, cb = gain.astype(float), base.astype(float)
+    point, plo, phi, reps = group_bootstrap_replicates(
+        lambda rows: float(np.median(ca[rows]) - np.median(cb[rows])), np.arange(40)
+    )
+    assert small.detectable == detectable_differences(point, plo, phi, reps)
+    wide = rng.integers(0, 30, 400)
+    large = catches_median_comparison(eps(wide + 3), eps(wide))
+    assert large.verdict == "better" and large.decidable

@@ -15,7 +15,10 @@ episodes ARE the juggler's (tested).
   juggling --pattern 3`` computes it (tested equal);
   agent and juggler are compared by the difference of their medians on the SAME seeds,
   with a paired bootstrap interval (an episode of both resampled together;
-  :func:`catches_median_difference`); the catch rate (catches per toss, pooled) likewise;
+  :func:`catches_median_comparison`); the catch rate (catches per toss, pooled) likewise;
+  each difference carries its power line (:class:`baselines.stats.Difference`: the
+  differences its interval detects 80 % of the time at this many episodes, and "cannot
+  decide at this size" where the claimed one is below);
 * the **criterion** checkpoints are chosen by (lower is better) is the drop hazard per
   catch, ``drops / catches`` pooled over the episodes: under a constant chance of a drop
   per catch it is the maximum-likelihood estimate of that chance with censored episodes
@@ -29,12 +32,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from baselines.agents.juggling_score import (
+    catch_rate_comparison,
     catch_rate_difference,
     catch_rate_interval,
     play_until_ended,
@@ -43,12 +47,17 @@ from baselines.agents.juggling_score import (
 )
 from motion_envs.datasets.juggling import episode_seeds
 
+if TYPE_CHECKING:
+    from baselines.stats import Difference
+
 __all__ = [
     "CASCADE_ENV_IDS",
     "CascadeAgentEpisodes",
     "cascade_agent_episodes",
     "cascade_agent_results",
+    "catch_rate_comparison",
     "catch_rate_difference",
+    "catches_median_comparison",
     "catches_median_difference",
     "is_cascade",
 ]
@@ -160,16 +169,28 @@ def catches_median_difference(
 ) -> tuple[float, float, float]:
     """``(difference, low, high)``: ``a``'s median catches before the first drop minus
     ``b``'s on the same seeds and its 95 % paired bootstrap interval (an episode of both
-    is resampled together; :func:`baselines.stats.group_bootstrap`)."""
-    from baselines.stats import group_bootstrap
+    is resampled together; :func:`catches_median_comparison`)."""
+    c = catches_median_comparison(a, b, seed)
+    return c.difference, *c.ci95
+
+
+def catches_median_comparison(
+    a: CascadeAgentEpisodes,
+    b: CascadeAgentEpisodes,
+    seed: int = 0,
+    names: tuple[str, str] = ("agent", "nominal"),
+) -> Difference:
+    """:func:`catches_median_difference` as a :class:`baselines.stats.Difference`: with
+    the power line (the differences its interval detects 80 % of the time at this many
+    episodes) and the verdict in words; ``names``: what ``a`` and ``b`` are called."""
+    from baselines.stats import compare_difference
 
     _check_same_seeds(a, b)
     ca, cb = a.catches.astype(np.float64), b.catches.astype(np.float64)
-    return group_bootstrap(
+    return compare_difference(
         lambda rows: float(np.median(ca[rows]) - np.median(cb[rows])),
-        np.arange(a.seeds.size),
-        seed=seed,
-    )
+        np.arange(a.seeds.size), *names, "median catches before the first drop", seed=seed,
+    )  # fmt: skip
 
 
 def _hazard_comparison(agent: CascadeAgentEpisodes, nominal: CascadeAgentEpisodes) -> Any:
@@ -219,8 +240,10 @@ def cascade_agent_results(loaded: Any, split: str, episodes: int | None) -> dict
     agent = cascade_agent_episodes(loaded.predict, loaded.env_id, kwargs, split, episodes)
     nominal = cascade_agent_episodes(None, loaded.env_id, kwargs, split, episodes)
     a, b = _summary(agent), _summary(nominal)
-    diff, dlo, dhi = catches_median_difference(agent, nominal)
-    rdiff, rlo, rhi = catch_rate_difference(agent, nominal)
+    median_diff = catches_median_comparison(agent, nominal)
+    rate_diff = catch_rate_comparison(agent, nominal)
+    diff, (dlo, dhi) = median_diff.difference, median_diff.ci95
+    rdiff, (rlo, rhi) = rate_diff.difference, rate_diff.ci95
     comparisons = []
     if nominal.drop_hazard > 0:
         comparisons.append(_hazard_comparison(agent, nominal))
@@ -252,6 +275,7 @@ def cascade_agent_results(loaded: Any, split: str, episodes: int | None) -> dict
         "nominal_catch_rate_ci": b["catch_rate_ci"],
         "catch_rate_difference": rdiff,
         "catch_rate_difference_ci": [rlo, rhi],
+        "differences": [median_diff.to_dict(), rate_diff.to_dict()],
         "tosses": int(agent.tosses.sum()),
         "nominal_tosses": int(nominal.tosses.sum()),
         "best_val_criterion": loaded.manifest.get("best_val_criterion"),

@@ -260,6 +260,7 @@ def _cascade_lines(results: Mapping[str, Any]) -> str:
     nlo, nhi = r["nominal_catches_median_ci"]
     dlo, dhi = r["catches_median_difference_ci"]
     rlo, rhi = r["catch_rate_difference_ci"]
+    median, rate = r["differences"]  # baselines.stats.Difference.to_dict: words and power
     return "\n".join(
         [
             f"{r['env_id']} {r['algo']} ({r['split']}, {r['n_episodes']} episodes, at most "
@@ -269,11 +270,11 @@ def _cascade_lines(results: Mapping[str, Any]) -> str:
             f"{r['censored']}, nominal {r['nominal_censored']}",
             f"median catches agent - nominal = {r['catches_median_difference']:+g} (95% CI "
             f"{dlo:+g} to {dhi:+g}, paired over the same seeds; higher is better): "
-            + ("the agent BEATS the juggler" if r["beats_nominal_median"] else "not better"),
+            f"{median['sentence']}; {median['power_line']}",
             f"catch rate agent {r['catch_rate']:.4f}, nominal {r['nominal_catch_rate']:.4f}; "
             f"agent - nominal = {r['catch_rate_difference']:+.3f} (95% CI {rlo:+.3f} to "
-            f"{rhi:+.3f}); drops per catch agent {r['criterion']:.4f}, nominal "
-            f"{r['nominal_criterion']:.4f}",
+            f"{rhi:+.3f}): {rate['sentence']}; {rate['power_line']}; drops per catch agent "
+            f"{r['criterion']:.4f}, nominal {r['nominal_criterion']:.4f}",
         ]
     )
 

@@ -47,7 +47,7 @@ import functools
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -60,12 +60,16 @@ from motion_envs.datasets.juggling import (
     resample_path,
 )
 
+if TYPE_CHECKING:
+    from baselines.stats import Difference
+
 __all__ = [
     "DEFAULT_EPISODES",
     "JUGGLING_ENV_IDS",
     "N_POINTS",
     "JugglingEpisodes",
     "TossCounts",
+    "catch_rate_comparison",
     "catch_rate_difference",
     "catch_rate_interval",
     "demonstration_paths",
@@ -384,15 +388,23 @@ def catch_rate_difference(
 ) -> tuple[float, float, float]:
     """``(difference, low, high)``: ``a``'s catch rate minus ``b``'s on the same seeds and
     its 95 % paired bootstrap interval (an episode of both is resampled together)."""
-    from baselines.stats import group_bootstrap
+    c = catch_rate_comparison(a, b, seed)
+    return c.difference, *c.ci95
+
+
+def catch_rate_comparison(
+    a: TossCounts, b: TossCounts, seed: int = 0, names: tuple[str, str] = ("agent", "nominal")
+) -> Difference:
+    """:func:`catch_rate_difference` as a :class:`baselines.stats.Difference` (with its
+    power line); ``names``: what ``a`` and ``b`` are called in its words."""
+    from baselines.stats import compare_difference
 
     if not np.array_equal(a.seeds, b.seeds):
         raise ValueError("the two policies were played on different seeds")
-    return group_bootstrap(
+    return compare_difference(
         lambda rows: pooled_catch_rate(a, rows) - pooled_catch_rate(b, rows),
-        np.arange(a.seeds.size),
-        seed=seed,
-    )
+        np.arange(a.seeds.size), *names, "catch rate (catches per toss)", seed=seed,
+    )  # fmt: skip
 
 
 def deviation_interval(eps: JugglingEpisodes, seed: int = 0) -> tuple[float, float, float]:

@@ -4,10 +4,13 @@
   interval over groups (people, shapes, seeds; :func:`scipy.stats.bootstrap`), the
   per-group win count, the verdict in words and the power: the effect the interval
   detects 80 % of the time at this many groups (:class:`Comparison`);
+* :mod:`._differences`: paired differences ``a - b`` (the cascade's catches) with their
+  interval over groups and the same power line, on the additive scale (:class:`Difference`);
 * :mod:`._seeds`: across seeds and sweeps, the interquartile mean with its stratified
   bootstrap interval and the probability of improvement (scipy).
 """
 
+from baselines.stats._differences import Difference, compare_difference, detectable_differences
 from baselines.stats._intervals import (
     CONFIDENCE,
     MIN_GROUPS,
@@ -33,7 +36,10 @@ __all__ = [
     "N_RESAMPLES",
     "POWER",
     "Comparison",
+    "Difference",
+    "compare_difference",
     "compare_errors",
+    "detectable_differences",
     "detectable_ratios",
     "from_readings",
     "group_bootstrap",

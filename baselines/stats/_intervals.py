@@ -61,6 +61,7 @@ __all__ = [
     "min_groups",
     "statistic_interval",
     "verdict",
+    "verdict_sentence",
 ]
 
 Statistic = Callable[[FloatArray], float]
@@ -259,6 +260,32 @@ def verdict(low: float, high: float, n_groups: int | None = None) -> str:
     return "no difference"
 
 
+def verdict_sentence(
+    verdict: str,
+    a: str,
+    b: str,
+    n_groups: int,
+    group: str,
+    decidable: bool | None,
+    no_effect: str = "1",
+) -> str:
+    """A verdict in words (``no_effect``: the value an interval containing it cannot tell
+    from no effect, 1 for a ratio, 0 for a difference), with "cannot decide at this size"
+    where ``decidable`` is False (the claimed effect below the detectable one)."""
+    if verdict == "cannot decide":
+        return (
+            f"cannot decide with {n_groups} {group} (a verdict at 95 % needs "
+            f"at least {MIN_GROUPS}: docs/protocol.md)"
+        )
+    if verdict == "no difference":
+        text = f"no difference at 95 % (the interval contains {no_effect})"
+        return text + ("; cannot decide at this size" if decidable is False else "")
+    text = f"{a} is {verdict.upper()} than {b} at 95 %"
+    if decidable is False:
+        text += " (an effect below the one this size detects 80 % of the time)"
+    return text
+
+
 @dataclass(frozen=True)
 class Comparison:
     """One comparison ``a / b`` of two methods' criteria (lower is better).
@@ -315,19 +342,9 @@ class Comparison:
 
     def sentence(self) -> str:
         """The verdict in words."""
-        v = self.verdict
-        if v == "cannot decide":
-            return (
-                f"cannot decide with {self.n_groups} {self.group} (a verdict at 95 % needs "
-                f"at least {MIN_GROUPS}: docs/protocol.md)"
-            )
-        if v == "no difference":
-            text = "no difference at 95 % (the interval contains 1)"
-            return text + ("; cannot decide at this size" if self.decidable is False else "")
-        text = f"{self.a} is {v.upper()} than {self.b} at 95 %"
-        if self.decidable is False:
-            text += " (an effect below the one this size detects 80 % of the time)"
-        return text
+        return verdict_sentence(
+            self.verdict, self.a, self.b, self.n_groups, self.group, self.decidable, "1"
+        )
 
     def power_text(self) -> str:
         """The power line: the effect detected 80 % of the time at this many groups and
