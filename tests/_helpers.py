@@ -41,3 +41,20 @@ def run_juggler_alone(
         if state.dropped or (state.caught and not continuous):
             break
     return np.array(hands), events
+
+
+def train_tiny_run(out: Any) -> Any:
+    """A tiny PPO run of OrientationReach-v1 with observation normalisation, trained into
+    the folder ``out`` (the run folder that the tampering and fuzz tests change)."""
+    import dataclasses
+    import warnings
+
+    from baselines.agents.train import run as train_run
+    from tests.test_agent_train import tiny_config
+
+    cfg = tiny_config("ppo", "MotionEnvs/OrientationReach-v1", out)
+    overrides = {**cfg.overrides, "normalize": {"obs": True, "reward": False}}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        train_run(dataclasses.replace(cfg, overrides=overrides))
+    return out

@@ -43,10 +43,10 @@ class Cascade:
         return [f for f in self.flights if f.start >= self.t[0] and f.end <= self.t[-1]]
 
 
-def _quintic(t0, t1, p0, v0, a0, p1, v1, a1, t):
+def quintic(t0, t1, p0, v0, a0, p1, v1, a1, t):
     """Quintic Hermite through position, velocity, acceleration at both ends."""
     h = t1 - t0
-    s = ((t - t0) / h)[:, None]
+    s = ((np.asarray(t) - t0) / h)[:, None]
     h00 = 1 - 10 * s**3 + 15 * s**4 - 6 * s**5
     h10 = s - 6 * s**3 + 8 * s**4 - 3 * s**5
     h20 = 0.5 * s**2 - 1.5 * s**3 + 1.5 * s**4 - 0.5 * s**5
@@ -97,7 +97,7 @@ def cascade(
             held = (t > f.end) & (t < nxt.start)
             v_in = f.v0 - np.array([0, 0, g * (f.end - f.start)])
             p_in = f.position(np.array([f.end]), g)[0]
-            balls[held, f.ball] = _quintic(
+            balls[held, f.ball] = quintic(
                 f.end,
                 nxt.start,
                 p_in,

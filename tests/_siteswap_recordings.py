@@ -29,7 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from _juggling_recordings import unlabelled_columns
+from _juggling_recordings import quintic, unlabelled_columns
 
 from motion_envs.datasets.mocap import YUP_TO_ZUP
 
@@ -82,18 +82,6 @@ class Juggle:
         return [f for f in self.throws if f.start >= self.t[0] and f.end <= self.t[-1]]
 
 
-def _quintic(t0, t1, p0, v0, a0, p1, v1, a1, t):
-    h = t1 - t0
-    s = ((np.asarray(t) - t0) / h)[:, None]
-    h00 = 1 - 10 * s**3 + 15 * s**4 - 6 * s**5
-    h10 = s - 6 * s**3 + 8 * s**4 - 3 * s**5
-    h20 = 0.5 * s**2 - 1.5 * s**3 + 1.5 * s**4 - 0.5 * s**5
-    h01 = 10 * s**3 - 15 * s**4 + 6 * s**5
-    h11 = -4 * s**3 + 7 * s**4 - 3 * s**5
-    h21 = 0.5 * s**3 - s**4 + 0.5 * s**5
-    return h00 * p0 + h10 * h * v0 + h20 * h * h * a0 + h01 * p1 + h11 * h * v1 + h21 * h * h * a1
-
-
 def _side(hand: int) -> float:
     return 1.0 if hand == 0 else -1.0
 
@@ -113,7 +101,7 @@ def _carry(ev0: _Event, ev1: _Event, t: np.ndarray, rng: np.random.Generator) ->
     hold comes to rest in between (single throws)."""
     span = ev1.time - ev0.time
     if span <= 0.9:
-        return _quintic(ev0.time, ev1.time, ev0.pos, ev0.vel, ev0.acc, ev1.pos, ev1.vel, ev1.acc, t)
+        return quintic(ev0.time, ev1.time, ev0.pos, ev0.vel, ev0.acc, ev1.pos, ev1.vel, ev1.acc, t)
     t_a, t_b = ev0.time + 0.3, ev1.time - 0.3
     rest_a = ev0.pos + 0.5 * 0.3 * ev0.vel  # constant deceleration to rest
     rest_b = ev1.pos - 0.5 * 0.3 * ev1.vel  # constant acceleration from rest
@@ -122,9 +110,9 @@ def _carry(ev0: _Event, ev1: _Event, t: np.ndarray, rng: np.random.Generator) ->
     a = t < t_a
     b = t > t_b
     m = ~a & ~b
-    out[a] = _quintic(ev0.time, t_a, ev0.pos, ev0.vel, ev0.acc, rest_a, zero, zero, t[a])
-    out[b] = _quintic(t_b, ev1.time, rest_b, zero, zero, ev1.pos, ev1.vel, ev1.acc, t[b])
-    out[m] = _quintic(t_a, t_b, rest_a, zero, zero, rest_b, zero, zero, t[m])
+    out[a] = quintic(ev0.time, t_a, ev0.pos, ev0.vel, ev0.acc, rest_a, zero, zero, t[a])
+    out[b] = quintic(t_b, ev1.time, rest_b, zero, zero, ev1.pos, ev1.vel, ev1.acc, t[b])
+    out[m] = quintic(t_a, t_b, rest_a, zero, zero, rest_b, zero, zero, t[m])
     return out
 
 
@@ -160,7 +148,7 @@ def _build(
                 balls[sel, e0.ball] = path
                 hands[sel, h] = path + offset
             else:  # an empty hand (or an event the recording cut): to the next event
-                hands[sel, h] = _quintic(
+                hands[sel, h] = quintic(
                     e0.time,
                     e1.time,
                     e0.pos + offset,

@@ -297,21 +297,20 @@ CLI_FILE_OPTIONS: tuple[tuple[str, str], ...] = (
     ("sweep", "--config"),
 )
 
-#: Options naming what the command writes (THE output rule, ``motion_envs._io.check_output``).
-CLI_OUTPUT_OPTIONS: tuple[tuple[str, str], ...] = tuple(
-    (command, "--out")
-    for command in (
-        "all",
-        "orientation",
-        "position",
-        "juggling",
-        "import",
-        "calibrate-cohort",
-        "train",
-        "agent",
-        "sweep",
-    )
+#: Every ``motion-bench`` sub-command.
+CLI_COMMANDS: tuple[str, ...] = (
+    "all",
+    "orientation",
+    "position",
+    "juggling",
+    "import",
+    "calibrate-cohort",
+    "train",
+    "agent",
+    "sweep",
 )
+#: Options naming what the command writes (THE output rule, ``motion_envs._io.check_output``).
+CLI_OUTPUT_OPTIONS: tuple[tuple[str, str], ...] = tuple((c, "--out") for c in CLI_COMMANDS)
 
 #: Checkers (``type=`` names) of options that take ids or names: neither numbers nor files.
 CLI_NAME_TYPES = frozenset(

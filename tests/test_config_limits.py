@@ -54,17 +54,25 @@ AGENT_CASES = {
 }
 
 
-@pytest.mark.parametrize("name", sorted(AGENT_CASES))
-def test_bad_agent_config_one_line_naming_file(tmp_path, name):
-    text, expected = AGENT_CASES[name]
-    path = tmp_path / f"{name}.yaml"
+def assert_refused_in_one_line(path, text, expected, load, seconds):
+    """``load(path)`` of a file holding ``text`` raises, within ``seconds``, one
+    ``ValueError`` line that starts with the path and holds ``expected``."""
     path.write_text(text)
     t0 = time.perf_counter()
     with pytest.raises(ValueError) as info:
-        load_hyperparams(path, "ppo", "MotionEnvs/PositionReach-v1")
-    assert time.perf_counter() - t0 < 5
+        load(path)
+    assert time.perf_counter() - t0 < seconds
     message = str(info.value)
-    assert "\n" not in message and message.startswith(str(path)) and expected in message
+    assert "\n" not in message and message.startswith(str(path)), message
+    assert expected in message, message
+
+
+@pytest.mark.parametrize("name", sorted(AGENT_CASES))
+def test_bad_agent_config_one_line_naming_file(tmp_path, name):
+    def load(path):
+        return load_hyperparams(path, "ppo", "MotionEnvs/PositionReach-v1")
+
+    assert_refused_in_one_line(tmp_path / f"{name}.yaml", *AGENT_CASES[name], load, 5)
 
 
 def test_agent_config_size_and_device_bounded(tmp_path):
@@ -116,16 +124,10 @@ SWEEP_CASES = {
 
 @pytest.mark.parametrize("name", sorted(SWEEP_CASES))
 def test_bad_sweep_one_line_naming_file(tmp_path, name):
-    text, expected = SWEEP_CASES[name]
-    path = tmp_path / f"{name}.yaml"
-    path.write_text(text)
-    t0 = time.perf_counter()
-    with pytest.raises(ValueError) as info:
-        load_sweep(path, out=str(tmp_path / "out"))
-    assert time.perf_counter() - t0 < 10
-    message = str(info.value)
-    assert "\n" not in message and message.startswith(str(path)), message
-    assert expected in message, message
+    def load(path):
+        return load_sweep(path, out=str(tmp_path / "out"))
+
+    assert_refused_in_one_line(tmp_path / f"{name}.yaml", *SWEEP_CASES[name], load, 10)
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "configs" / "sweeps").glob("*.yaml")))

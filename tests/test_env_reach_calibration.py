@@ -93,38 +93,20 @@ def test_position_has_no_persons(env_id):
 
 
 def _pair(num_envs, mode, backend="auto", steps=17):
-    kwargs = {"calibration": 4, "nominal": "bezier-null", "max_episode_steps": steps}
-    native = gym.make_vec(
-        ORIENTATION, num_envs=num_envs, autoreset_mode=mode, backend=backend, **kwargs
-    )
-    sync = gym.make_vec(
-        ORIENTATION,
-        num_envs=num_envs,
-        vectorization_mode="sync",
-        vector_kwargs={"autoreset_mode": mode},
-        **kwargs,
-    )
-    return native, sync
+    from test_env_vector_modes import make_pair
+
+    kwargs = {"calibration": 4, "nominal": "bezier-null"}
+    return make_pair(ORIENTATION, kwargs, num_envs, mode, backend, max_episode_steps=steps)
 
 
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
 @pytest.mark.parametrize("num_envs", [3, 9])
 def test_vector_env_bit_identical_to_sync(mode, num_envs):
-    from test_env_vector_modes import assert_same_infos, assert_same_step
+    from test_env_vector_modes import assert_same_infos, step_against_sync
 
     native, sync = _pair(num_envs, mode)
     assert native.unwrapped.backend == "numpy"
-    obs_n, info_n = native.reset(seed=42)
-    obs_s, info_s = sync.reset(seed=42)
-    np.testing.assert_array_equal(obs_n, obs_s)
-    assert_same_infos(info_n, info_s)
-    acts = np.random.default_rng(0).uniform(-1.5, 1.5, (80, num_envs, 3)).astype(np.float32)
-    ended = 0
-    for a in acts:
-        out_n, out_s = native.step(a), sync.step(a)
-        assert_same_step(out_n, out_s)
-        ended += int(np.count_nonzero(out_s[2] | out_s[3]))
-    assert ended >= 2 * num_envs
+    step_against_sync(native, sync, 80)
     obs_n, info_n = native.reset(options={"trajectory": 5})
     obs_s, info_s = sync.reset(options={"trajectory": 5})
     np.testing.assert_array_equal(obs_n, obs_s)

@@ -7,6 +7,7 @@ import pickle
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.vector import AutoresetMode
 
 import motion_envs  # noqa: F401  (registers the ids)
 
@@ -44,22 +45,12 @@ def _assert_same_step(native, reference) -> None:
 @pytest.mark.parametrize(("num_envs", "max_episode_steps"), [(3, None), (9, None), (9, 17)])
 def test_native_vector_env_is_bit_identical_to_sync(env_id, kwargs, num_envs, max_episode_steps):
     """3 environments take the scalar-kernel path of the orientation env, 9 the batch one."""
-    extra = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
-    native = gym.make_vec(
-        env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs, **extra
-    )
-    sync = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="sync", **kwargs, **extra)
+    from test_env_vector_modes import make_pair, step_against_sync
+
+    mode = AutoresetMode.NEXT_STEP
+    native, sync = make_pair(env_id, kwargs, num_envs, mode, max_episode_steps=max_episode_steps)
     assert type(native).__name__.endswith("VectorEnv")
-    obs_n, info_n = native.reset(seed=42)
-    obs_s, info_s = sync.reset(seed=42)
-    np.testing.assert_array_equal(obs_n, obs_s)
-    np.testing.assert_array_equal(info_n["trajectory_index"], info_s["trajectory_index"])
-    ended = 0
-    for a in _actions(native, 160):
-        out_n, out_s = native.step(a), sync.step(a)
-        _assert_same_step(out_n, out_s)
-        ended += int(np.count_nonzero(out_s[2] | out_s[3]))
-    assert ended >= 2 * num_envs  # several autoresets happened
+    step_against_sync(native, sync, 160)
     native.close()
     sync.close()
 

@@ -65,10 +65,17 @@ def assert_same_step(native, reference) -> None:
     assert_same_infos(native[4], reference[4])
 
 
-def _pair(env_id, kwargs, num_envs, mode, backend, max_episode_steps=None):
+def make_pair(env_id, kwargs, num_envs, mode, backend="auto", max_episode_steps=None):
+    """The native vector env of ``env_id`` and a ``SyncVectorEnv`` of its single envs."""
     extra = {} if max_episode_steps is None else {"max_episode_steps": max_episode_steps}
     native = gym.make_vec(
-        env_id, num_envs=num_envs, autoreset_mode=mode, backend=backend, **kwargs, **extra
+        env_id,
+        num_envs=num_envs,
+        vectorization_mode="vector_entry_point",
+        autoreset_mode=mode,
+        backend=backend,
+        **kwargs,
+        **extra,
     )
     sync = gym.make_vec(
         env_id,
@@ -81,6 +88,22 @@ def _pair(env_id, kwargs, num_envs, mode, backend, max_episode_steps=None):
     return native, sync
 
 
+def step_against_sync(native, sync, steps: int) -> None:
+    """Reset both with seed 42 and step them with the same random actions (a quarter out
+    of bounds): the same observations, rewards, ends and infos at every step, and several
+    autoresets."""
+    obs_n, info_n = native.reset(seed=42)
+    obs_s, info_s = sync.reset(seed=42)
+    np.testing.assert_array_equal(obs_n, obs_s)
+    assert_same_infos(info_n, info_s)
+    ended = 0
+    for a in _actions(native, steps):
+        out_n, out_s = native.step(a), sync.step(a)
+        assert_same_step(out_n, out_s)
+        ended += int(np.count_nonzero(out_s[2] | out_s[3]))
+    assert ended >= 2 * native.num_envs  # several autoresets happened
+
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("mode", [AutoresetMode.NEXT_STEP, AutoresetMode.SAME_STEP])
 @pytest.mark.parametrize(("num_envs", "max_episode_steps"), [(3, None), (9, 17)])
@@ -88,19 +111,10 @@ def _pair(env_id, kwargs, num_envs, mode, backend, max_episode_steps=None):
 def test_autoreset_modes_bit_identical_to_sync(
     env_id, kwargs, num_envs, max_episode_steps, mode, backend
 ):
-    native, sync = _pair(env_id, kwargs, num_envs, mode, backend, max_episode_steps)
+    native, sync = make_pair(env_id, kwargs, num_envs, mode, backend, max_episode_steps)
     assert native.metadata["autoreset_mode"] == mode == sync.metadata["autoreset_mode"]
     assert native.unwrapped.backend == backend
-    obs_n, info_n = native.reset(seed=42)
-    obs_s, info_s = sync.reset(seed=42)
-    np.testing.assert_array_equal(obs_n, obs_s)
-    np.testing.assert_array_equal(info_n["trajectory_index"], info_s["trajectory_index"])
-    ended = 0
-    for a in _actions(native, 140):
-        out_n, out_s = native.step(a), sync.step(a)
-        assert_same_step(out_n, out_s)
-        ended += int(np.count_nonzero(out_s[2] | out_s[3]))
-    assert ended >= 2 * num_envs  # several autoresets happened
+    step_against_sync(native, sync, 140)
     native.close()
     sync.close()
 
@@ -109,7 +123,7 @@ def test_autoreset_modes_bit_identical_to_sync(
 @pytest.mark.parametrize(("env_id", "kwargs"), CASES)
 def test_disabled_mode_matches_sync_with_manual_resets(env_id, kwargs, backend):
     mode = AutoresetMode.DISABLED
-    native, sync = _pair(env_id, kwargs, 4, mode, backend, max_episode_steps=13)
+    native, sync = make_pair(env_id, kwargs, 4, mode, backend, max_episode_steps=13)
     assert native.metadata["autoreset_mode"] == mode
     np.testing.assert_array_equal(native.reset(seed=7)[0], sync.reset(seed=7)[0])
     acts = _actions(native, 120, seed=3)

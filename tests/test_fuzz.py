@@ -807,18 +807,9 @@ def test_segments_tables_raise_one_line(tmp_path, rows, many):
 @pytest.fixture(scope="module")
 def run_folder(tmp_path_factory):
     pytest.importorskip("stable_baselines3")
-    import dataclasses
+    from _helpers import train_tiny_run
 
-    from baselines.agents.train import run as train_run
-    from tests.test_agent_train import tiny_config
-
-    out = tmp_path_factory.mktemp("fuzz-run") / "run"
-    cfg = tiny_config("ppo", "MotionEnvs/OrientationReach-v1", out)
-    overrides = {**cfg.overrides, "normalize": {"obs": True, "reward": False}}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        train_run(dataclasses.replace(cfg, overrides=overrides))
-    return out
+    return train_tiny_run(tmp_path_factory.mktemp("fuzz-run") / "run")
 
 
 def _rehash(folder: Path) -> None:

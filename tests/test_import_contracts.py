@@ -1,15 +1,15 @@
 """The layer order of docs/architecture.md, as import-linter contracts (pyproject.toml's
 ``[tool.importlinter]``), kept by ``lint-imports``.
 
-``motion_envs._io``, ``_lazy``, ``_typing`` < ``geometry`` < ``datasets`` < ``models`` < ``envs`` (and
-the ``motion_envs`` package itself) < ``baselines``: a module imports only from its own
-layer or those below; ``geometry``, ``datasets`` and ``models`` import no Gymnasium,
-MuJoCo, torch or SB3; a private module (``_x``) is imported from inside its own package
-only (``_io``, ``_lazy`` and ``_typing`` from everywhere); no import cycle among the sub-packages and
-modules of a package, nor among all the modules. grimp reads every import statement
-(module level, inside functions, under ``TYPE_CHECKING``). A private *name* of another
-module (``from m import _x``, ``m._x``) is not a contract import-linter has:
-tests/test_layers.py checks it with ``ast``. Each contract is shown to break on an
+``motion_envs._io``, ``_lazy``, ``_typing`` < ``geometry`` < ``datasets`` < ``models`` <
+``envs`` (and the ``motion_envs`` package itself) < ``baselines``: a module imports only
+from its own layer or those below; ``geometry``, ``datasets`` and ``models`` import no
+Gymnasium, MuJoCo, torch or SB3; a private module (``_x``) is imported from inside its own
+package only (``_io``, ``_lazy`` and ``_typing`` from everywhere); no import cycle among
+the sub-packages and modules of a package, nor among all the modules. grimp reads every
+import statement (module level, inside functions, under ``TYPE_CHECKING``). A private
+*name* of another module (``from m import _x``, ``m._x``) is not a contract import-linter
+has: tests/test_layers.py checks it with ``ast``. Each contract is shown to break on an
 injected import, in a small tree of the same packages.
 """
 

@@ -51,6 +51,11 @@ def one_line(proc: subprocess.CompletedProcess[str], status: int = 2) -> str:
     return line
 
 
+def import_line(path: Path, out: Path, *options: str) -> str:
+    """The one error line of ``motion-bench import PATH --kind position OPTIONS --out OUT``."""
+    return one_line(cli("import", str(path), "--kind", "position", *options, "--out", str(out)))
+
+
 @pytest.fixture(scope="module")
 def tsv(tmp_path_factory) -> Path:
     """A Qualisys TSV of the synthetic reaches (three markers, mm)."""
@@ -72,25 +77,12 @@ def test_import_out_same_as_the_input_is_refused_and_the_recording_kept(tsv, tmp
     rec = tmp_path / "rec.tsv"
     shutil.copy(tsv, rec)
     before = rec.read_bytes()
-    line = one_line(
-        cli("import", str(rec), "--kind", "position", "--marker", "O", "--out", str(rec))
-    )
+    line = import_line(rec, rec, "--marker", "O")
     assert "argument --out" in line and "is the input" in line
     assert rec.read_bytes() == before
     # the same file under another name (a hard link) is the same input
     os.link(rec, tmp_path / "alias.csv")
-    line = one_line(
-        cli(
-            "import",
-            str(rec),
-            "--kind",
-            "position",
-            "--marker",
-            "O",
-            "--out",
-            str(tmp_path / "alias.csv"),
-        )
-    )
+    line = import_line(rec, tmp_path / "alias.csv", "--marker", "O")
     assert "is the input" in line and rec.read_bytes() == before
 
 
@@ -105,9 +97,7 @@ def test_import_out_that_is_not_a_regular_file_is_refused(tsv, tmp_path, kind):
         out.symlink_to(target)
     else:
         out = Path("/dev/null")
-    line = one_line(
-        cli("import", str(tsv), "--kind", "position", "--marker", "O", "--out", str(out))
-    )
+    line = import_line(tsv, out, "--marker", "O")
     assert "argument --out" in line
     if kind == "fifo":
         assert out.is_fifo()
@@ -243,20 +233,7 @@ def test_fifos_devices_and_links_to_them_are_one_line_never_a_hang(tmp_path, arg
 
 def test_import_segments_fifo_and_query_string_fifo(tmp_path, tsv):
     pipe = fifo(tmp_path / "segments.csv")
-    line = one_line(
-        cli(
-            "import",
-            str(tsv),
-            "--kind",
-            "position",
-            "--marker",
-            "O",
-            "--segments",
-            str(pipe),
-            "--out",
-            str(tmp_path / "o.csv"),
-        )
-    )
+    line = import_line(tsv, tmp_path / "o.csv", "--marker", "O", "--segments", str(pipe))
     assert "FIFO" in line
     tsv_pipe = fifo(tmp_path / "rec.tsv")
     line = one_line(cli("position", "--data", f"{tsv_pipe}?marker=O"))
@@ -310,9 +287,7 @@ def test_import_refuses_unphysical_tsv_in_one_line(tmp_path, text, match):
     rec = tmp_path / "rec.tsv"
     rec.write_text(text)
     out = tmp_path / "o.csv"
-    line = one_line(
-        cli("import", str(rec), "--kind", "position", "--marker", "O", "--out", str(out))
-    )
+    line = import_line(rec, out, "--marker", "O")
     assert match in line and str(rec) in line
     assert not out.exists()
 
@@ -328,20 +303,7 @@ def test_bvh_frame_time_1e308_and_duplicate_joint_are_refused(tmp_path):
     dup = tmp_path / "dup.bvh"
     dup.write_text(text.replace("JOINT Hand", "JOINT Chest"))
     for path, match in ((slow, "frame rate"), (dup, "appear more than once")):
-        line = one_line(
-            cli(
-                "import",
-                str(path),
-                "--kind",
-                "position",
-                "--joint",
-                "Chest",
-                "--unit",
-                "cm",
-                "--out",
-                str(tmp_path / "o.csv"),
-            )
-        )
+        line = import_line(path, tmp_path / "o.csv", "--joint", "Chest", "--unit", "cm")
         assert match in line and str(path) in line
 
 
@@ -359,20 +321,7 @@ def c3d_in_metres(tmp_path_factory) -> Path:
 
 def test_c3d_declaring_metres_for_millimetres_is_refused_on_every_path(c3d_in_metres, tmp_path):
     rec = c3d_in_metres
-    line = one_line(
-        cli(
-            "import",
-            str(rec),
-            "--kind",
-            "position",
-            "--marker",
-            "O",
-            "--up",
-            "y",
-            "--out",
-            str(tmp_path / "o.csv"),
-        )
-    )
+    line = import_line(rec, tmp_path / "o.csv", "--marker", "O", "--up", "y")
     assert "does not fit a human body" in line and "give unit mm" in line
     line = one_line(cli("position", "--data", f"{rec}?marker=O&up=y"))
     assert "does not fit a human body" in line
@@ -414,20 +363,7 @@ def test_a_large_segments_table_is_refused_fast(tmp_path, tsv):
         "start,end\n" + "".join(f"{k * 0.01},{k * 0.01 + 0.5}\n" for k in range(200_000))
     )
     t0 = time.monotonic()
-    line = one_line(
-        cli(
-            "import",
-            str(tsv),
-            "--kind",
-            "position",
-            "--marker",
-            "O",
-            "--segments",
-            str(table),
-            "--out",
-            str(tmp_path / "o.csv"),
-        )
-    )
+    line = import_line(tsv, tmp_path / "o.csv", "--marker", "O", "--segments", str(table))
     assert "10000 movements" in line and time.monotonic() - t0 < HANG
 
 
@@ -579,18 +515,9 @@ def test_sweep_seeds_repeated_or_too_many(tmp_path, seeds, match):
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
     pytest.importorskip("stable_baselines3")
-    import dataclasses
+    from _helpers import train_tiny_run
 
-    from baselines.agents.train import run as train_run
-    from tests.test_agent_train import tiny_config
-
-    out = tmp_path_factory.mktemp("runs") / "run"
-    cfg = tiny_config("ppo", "MotionEnvs/OrientationReach-v1", out)
-    overrides = {**cfg.overrides, "normalize": {"obs": True, "reward": False}}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        train_run(dataclasses.replace(cfg, overrides=overrides))
-    return out
+    return train_tiny_run(tmp_path_factory.mktemp("runs") / "run")
 
 
 def _rehashed(src: Path, dst: Path, change) -> Path:

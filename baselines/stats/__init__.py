@@ -10,46 +10,9 @@
   bootstrap interval and the probability of improvement (scipy).
 """
 
-from baselines.stats._differences import Difference, compare_difference, detectable_differences
-from baselines.stats._intervals import (
-    CONFIDENCE,
-    MIN_GROUPS,
-    N_RESAMPLES,
-    POWER,
-    Comparison,
-    compare_errors,
-    detectable_ratios,
-    from_readings,
-    group_bootstrap,
-    group_bootstrap_replicates,
-    group_wins,
-    intervals_document,
-    min_groups,
-    statistic_interval,
-    verdict,
-)
-from baselines.stats._seeds import iqm, iqm_intervals, probability_of_improvement
+from baselines.stats import _differences, _intervals, _seeds
+from baselines.stats._differences import *  # noqa: F403  (its __all__)
+from baselines.stats._intervals import *  # noqa: F403  (its __all__)
+from baselines.stats._seeds import *  # noqa: F403  (its __all__)
 
-__all__ = [
-    "CONFIDENCE",
-    "MIN_GROUPS",
-    "N_RESAMPLES",
-    "POWER",
-    "Comparison",
-    "Difference",
-    "compare_difference",
-    "compare_errors",
-    "detectable_differences",
-    "detectable_ratios",
-    "from_readings",
-    "group_bootstrap",
-    "group_bootstrap_replicates",
-    "group_wins",
-    "intervals_document",
-    "iqm",
-    "iqm_intervals",
-    "min_groups",
-    "probability_of_improvement",
-    "statistic_interval",
-    "verdict",
-]
+__all__ = [*_intervals.__all__, *_differences.__all__, *_seeds.__all__]
