@@ -58,3 +58,14 @@ def train_tiny_run(out: Any) -> Any:
         warnings.simplefilter("ignore")
         train_run(dataclasses.replace(cfg, overrides=overrides))
     return out
+
+
+def reset_poisoned(env: Any, clean: np.ndarray, subjects: np.ndarray, l: int) -> Any:
+    """Reset a calibrated reaching env (unwrapped) on trajectory ``l`` with the features of
+    that trajectory and of every other person's NaN (only the person's other reaches
+    clean): the reset's ``(obs, info)``."""
+    poisoned = clean.copy()
+    poisoned[l] = np.nan
+    poisoned[subjects != subjects[l]] = np.nan
+    env._calibration.features = poisoned
+    return env.reset(options={"trajectory": l})

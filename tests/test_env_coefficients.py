@@ -6,6 +6,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import reset_poisoned
 from gymnasium.vector import AutoresetMode
 
 import motion_envs  # noqa: F401  (registers the ids)
@@ -181,11 +182,7 @@ def test_calibration_summary_never_holds_the_current_trajectory():
     env.reset(seed=0)
     for _ in range(300):
         l = int(env.np_random.integers(env.task.n_trajectories))
-        poisoned = clean.copy()
-        poisoned[l] = np.nan
-        poisoned[subjects != subjects[l]] = np.nan
-        env._calibration.features = poisoned
-        obs, info = env.reset(options={"trajectory": l})
+        obs, info = reset_poisoned(env, clean, subjects, l)
         padded = info["calibration_trajectories"]
         assert padded.shape == (5,)
         drawn = padded[padded >= 0]

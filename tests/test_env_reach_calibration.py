@@ -8,6 +8,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import reset_poisoned
 from gymnasium.vector import AutoresetMode
 
 import motion_envs  # noqa: F401  (registers the ids)
@@ -71,11 +72,7 @@ def test_poisoned_rows_never_reach_the_observation():
     subjects = np.asarray(env.task.subjects).astype(str)
     env.reset(seed=0)
     for l in np.random.default_rng(0).integers(env.task.n_trajectories, size=40).tolist():
-        poisoned = clean.copy()
-        poisoned[l] = np.nan
-        poisoned[subjects != subjects[l]] = np.nan
-        env._calibration.features = poisoned
-        obs, info = env.reset(options={"trajectory": l})
+        obs, info = reset_poisoned(env, clean, subjects, l)
         drawn = info["calibration_trajectories"]
         assert np.all(np.isfinite(obs)) and l not in drawn
         np.testing.assert_allclose(obs[-10:-1], np.clip(clean[drawn].mean(0), -3, 3), rtol=1e-6)

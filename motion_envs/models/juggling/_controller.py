@@ -33,8 +33,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import PHASES, JugglingState, ballistic_position, rules
 from motion_envs.geometry import sine_series as ss
 from motion_envs.models.juggling._model import JugglerModel, plan_catch
@@ -47,8 +47,6 @@ __all__ = [
     "eq10_rows",
     "replan_many",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

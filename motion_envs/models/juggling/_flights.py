@@ -77,6 +77,8 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
+
 __all__ = [
     "Flight",
     "FlightAnalysis",
@@ -85,7 +87,6 @@ __all__ = [
     "estimate_noise",
 ]
 
-FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: MAD to standard deviation for normal noise.

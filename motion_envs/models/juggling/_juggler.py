@@ -14,15 +14,13 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingDemos, JugglingState, JugglingTask
 from motion_envs.models.juggling._controller import ControlOptions, JugglingController
 from motion_envs.models.juggling._model import JugglerModel, PhaseFit
 
 __all__ = ["AnalyticJuggler"]
-
-FloatArray = NDArray[np.float64]
 
 
 class AnalyticJuggler:

@@ -35,9 +35,9 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import PHASES, JugglingDemos, JugglingState
 from motion_envs.geometry.minimum_jerk import minimum_jerk
 from motion_envs.models.juggling._controller import JugglingController
@@ -55,8 +55,6 @@ __all__ = [
     "make_controller",
     "v1_likeness",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -14,8 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import (
     PHASES,
     JugglingDemos,
@@ -25,8 +26,6 @@ from motion_envs.datasets.juggling import (
 from motion_envs.models.sine_regression import SineSeriesRegression, select_n_sines
 
 __all__ = ["JugglerModel", "PhaseFit", "phase_conditions", "plan_catch"]
-
-FloatArray = NDArray[np.float64]
 
 
 def phase_conditions(positions: list[FloatArray]) -> FloatArray:

@@ -70,8 +70,8 @@ from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import format_siteswap, siteswap_balls
 from motion_envs.models.juggling._flights import Flight
 
@@ -91,8 +91,6 @@ __all__ = [
     "across_axis",
     "pattern_summary",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Two hands when the two-means centres of the throws are this many pooled std apart.
 HANDS_SEPARATION = 4.0

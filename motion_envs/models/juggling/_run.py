@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import PHASES as PHASES_ORDER
 from motion_envs.datasets.juggling import JugglingNoise, rules
 from motion_envs.models.juggling._juggler import AnalyticJuggler
@@ -28,8 +29,6 @@ __all__ = [
     "run_cycles",
     "run_cycles_fast",
 ]
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -19,13 +19,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingDemos, JugglingTask, read_juggling_csv, rules
 from motion_envs.datasets.mocap import import_juggling, is_mocap_source, parse_source
 from motion_envs.models.segmentation import EventOccurred, SpeedBelow, segment
 
 __all__ = ["load_juggling_csv", "segment_demos", "segment_juggling"]
-
-FloatArray = NDArray[np.float64]
 
 
 def _smooth(y: FloatArray, width: int) -> FloatArray:

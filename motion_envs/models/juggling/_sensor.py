@@ -22,13 +22,11 @@ from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import rules
 
 __all__ = ["BallMeasurement", "BallSensor", "perturb_release", "predict_forward"]
-
-FloatArray = NDArray[np.float64]
 
 
 def perturb_release(

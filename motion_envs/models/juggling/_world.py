@@ -21,8 +21,9 @@ import math
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingNoise, JugglingState, JugglingTask, rules
 
 __all__ = [
@@ -33,8 +34,6 @@ __all__ = [
     "tracked_hand",
     "xz_pair",
 ]
-
-FloatArray = NDArray[np.float64]
 
 #: Rows of tracking noise drawn at reset (used cyclically beyond: 10 s at 200 Hz).
 TRACKING_ROWS = 2000
