@@ -44,15 +44,14 @@ from motion_envs.datasets.juggling import (
     JugglingTask,
     episode_seeds,
 )
-from motion_envs.envs.juggling import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
     LEVELS,
     CascadeTunables,
     PatternCheck,
     cascade_fit,
-    check_pattern,
     pattern_spec,
+    pattern_tempo,
 )
 
 __all__ = [
@@ -89,13 +88,11 @@ class CascadeConfig:
 
 def pattern_check(pattern: str, gravity: float) -> PatternCheck:
     """The registered ``pattern`` (its name; :func:`~motion_envs.models.juggling.pattern_spec`)
-    checked at its own juggler's tempo (the fit of its ball count at ``gravity``, its dwell
-    ratio) against the hand's speed limit
-    (:func:`motion_envs.models.juggling.check_pattern`). Raises ``ValueError`` with the
+    at its own juggler's tempo (:func:`~motion_envs.models.juggling.pattern_tempo`: the
+    fitted cascade juggler's fit of its ball count at ``gravity`` checked against the
+    hand's speed limit, or the siteswap juggler's plan). Raises ``ValueError`` with the
     reason for a pattern that is not registered."""
-    spec = pattern_spec(pattern)
-    fit = cascade_fit(gravity, spec.balls)
-    return check_pattern(spec.siteswap, fit.pattern, gravity, HAND_SPEED_LIMIT, spec.dwell_ratio)
+    return pattern_tempo(pattern_spec(pattern), gravity)
 
 
 def check_cascade_config(config: CascadeConfig) -> None:
@@ -227,9 +224,14 @@ def run_cascade(config: CascadeConfig) -> dict[str, Any]:
             methods[method] = summary(played[method])
         levels.append({"level": level, "values": asdict(LEVELS[level]), "methods": methods})
     spec = pattern_spec(config.pattern)
-    p = cascade_fit(config.gravity, spec.balls).pattern
-    r = p.dwell_ratio if spec.dwell_ratio is None else spec.dwell_ratio
-    period, beat = p.timing(r)
+    check = pattern_check(config.pattern, config.gravity)
+    if spec.fitted:
+        p = cascade_fit(config.gravity, spec.balls).pattern
+        r = p.dwell_ratio if spec.dwell_ratio is None else spec.dwell_ratio
+        flight, demo_r, demo_period = p.flight, p.dwell_ratio, p.demo_period
+    else:  # the siteswap juggler: the flight of the highest throw
+        r = float(spec.dwell_ratio or 0.0)
+        flight, demo_r, demo_period = check.throws[0].flight, None, None
     return {
         "benchmark": f"juggling pattern {config.pattern} ({CASCADE_ENV_ID})",
         "config": asdict(config),
@@ -237,16 +239,17 @@ def run_cascade(config: CascadeConfig) -> dict[str, Any]:
         "pattern": {
             "name": spec.name,
             "siteswap": spec.siteswap,
+            "juggler": "fitted cascade" if spec.fitted else "siteswap",
             "hands": 2,
             "balls": spec.balls,
             "dwell_ratio": r,
             "dwell_ratio_source": spec.note,
-            "flight_s": p.flight,
-            "period_s": period,
-            "beat_s": beat,
-            "demonstrations_dwell_ratio": p.dwell_ratio,
-            "demonstrations_period_s": p.demo_period,
-            "throws": [asdict(n) for n in pattern_check(config.pattern, config.gravity).throws],
+            "flight_s": flight,
+            "period_s": 2.0 * check.beat,
+            "beat_s": check.beat,
+            "demonstrations_dwell_ratio": demo_r,
+            "demonstrations_period_s": demo_period,
+            "throws": [asdict(n) for n in check.throws],
         },
         "seeds": {
             "split": config.split,

@@ -25,9 +25,10 @@ from motion_envs.models.juggling import (
     CascadeSensor,
     CascadeState,
     CascadeTunables,
-    cascade_fit,
-    cascade_likeness,
-    make_cascade_controller,
+    SiteswapController,
+    SiteswapStyle,
+    pattern_controller,
+    pattern_likeness,
     pattern_spec,
 )
 
@@ -201,9 +202,9 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `velocity_std`      | **float** | `None`      | m/s, measurement noise of the ball velocities; None: the level's |
     | `release_speed_std` | **float** | `None`      | relative std of the release speed; None: the level's |
     | `release_angle_std` | **float** | `None`      | degrees, std of the release direction; None: the level's |
-    | `pattern`           | **str**   | `"3"`       | a registered pattern's name (`PATTERNS`: `"3"`, `"3-human"` at dwell ratio 2/3, `"5"` the five-ball cascade); anything else is refused with the reason |
+    | `pattern`           | **str**   | `"3"`       | a registered pattern's name (`PATTERNS`: `"3"`, `"3-human"` at dwell ratio 2/3 (the fitted cascade juggler); `"5"`, `"4"`, `"441"`, `"531"`, `"423"`, `"51"` (the siteswap juggler)); anything else is refused with the reason |
     | `dwell_ratio`       | **float** | `None`      | ``D / (V + D)`` in (0.2, 0.8); None: the pattern's (for `"3"` the demonstrations' median, ~0.56) |
-    | `tunables`          | **CascadeTunables** | `None` | the controller's tunables; None: the pattern's |
+    | `tunables`          | **CascadeTunables** or **SiteswapStyle** | `None` | the controller's tunables (the pattern's juggler's kind); None: the pattern's |
     | `gravity`           | **float** | `9.81`      | m/s^2 (the demonstrations are generated at this gravity) |
     | `controller`        | **str**   | `"juggler"` | `juggler`, `juggler_latency_aware`, `fixed_point`, `commanded_intercept` |
     | `max_catches`       | **int**   | `30`        | catches after which the episode is truncated |
@@ -264,20 +265,23 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             if dwell_ratio is None
             else check_number(dwell_ratio, "dwell_ratio", 0.2, 0.8)
         )
-        if tunables is not None and not isinstance(tunables, CascadeTunables):
-            raise ValueError(f"tunables must be a CascadeTunables; got {tunables!r}")
+        if tunables is not None and not isinstance(tunables, (CascadeTunables, SiteswapStyle)):
+            raise ValueError(
+                f"tunables must be a CascadeTunables or SiteswapStyle; got {tunables!r}"
+            )
         self.tunables = self.pattern.tunables if tunables is None else tunables
         self.task = JugglingTask(gravity=self.gravity)
         self.delay_steps = round(self.latency / self.task.dt)
-        self.controller: CascadeController = make_cascade_controller(
+        self.controller: CascadeController | SiteswapController = pattern_controller(
+            self.pattern,
             self.controller_name,
-            cascade_fit(self.gravity, self.balls),
+            self.gravity,
             self.delay_steps * self.task.dt,
             self.dwell_ratio,
             self.tunables,
         )
         self.home = self.controller.home
-        self.likeness = cascade_likeness(self.gravity, "train", self.balls)
+        self.likeness = pattern_likeness(self.pattern, self.gravity)
         self._likeness = LikenessQuery(self.likeness)
         self.world = CascadeWorld(
             self.task, self.release_speed_std, math.radians(self.release_angle_std), self.balls

@@ -47,8 +47,10 @@ from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
 from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
+    CascadeController,
     CascadeHand,
     CascadeState,
+    ControlOptions,
     perturb_release,
     replan_many,
 )
@@ -119,7 +121,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
         self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
         self._sensor_rngs: list[Any] = [None] * n  # the generator of each sensor
         # the hands' plans
-        self._fast = first.controller_name in _FAST_CONTROLLERS
+        self._fast = first.controller_name in _FAST_CONTROLLERS and first.controller.compiled_events
         self._latency = first.controller.latency
         self._ahead = first.controller_name == "juggler_latency_aware" and self._latency > 0
         self._phase = np.zeros((n, 2), dtype=np.int64)
@@ -135,17 +137,13 @@ class CascadeVectorEnv(JugglingVectorEnv):
         self._catch_ball = np.full((n, 2), -1, dtype=np.int64)
         self._phase_time = np.zeros((n, 2))  # the slow controllers' observation
         self._next = np.zeros((n, 2, 2))
-        options = first.controller.options
+        c0 = first.controller  # the fitted juggler's constants (the siteswap juggler's: unused)
+        options = c0.options if isinstance(c0, CascadeController) else ControlOptions()
         self._options = options
-        ctask = first.controller.task  # the controller's (the same numbers)
+        ctask = c0.task  # the controller's (the same numbers)
+        reaim = c0.tunables.reaim_after * c0.beat if isinstance(c0, CascadeController) else 0.0
         self._event_constants = np.array(
-            [
-                ctask.dt,
-                ctask.gravity,
-                first.controller.tunables.reaim_after * first.controller.beat,
-                self._latency,
-                options.correction_tolerance,
-            ]
+            [ctask.dt, ctask.gravity, reaim, self._latency, options.correction_tolerance]
         )
         self._advance_constants = np.array([ctask.dt, options.release_after, _TOSS])
         self._record_constants = np.array([task.dt, first.max_catches, first._time_limit])
@@ -178,14 +176,14 @@ class CascadeVectorEnv(JugglingVectorEnv):
     def _load_hand(self, i: int, h: int) -> None:
         """Copy hand ``h`` of sub-environment ``i``'s controller into the arrays."""
         c = self.envs[i].controller
-        hand: CascadeHand = c.hands[h]
-        self._phase[i, h] = PHASES.index(hand.phase)
+        self._phase[i, h] = PHASES.index(c.phase(h))
         if not self._fast:
             self._phase_time[i, h] = c.phase_time(h)
             self._duration[i, h] = c.duration(h)
             self._next[i, h] = c.nominal_next(h)
             self._end[i, h] = c.plan_end(h)
             return
+        hand: CascadeHand = c.hands[h]
         self._pk[i, h] = hand.k
         self._end_k[i, h] = hand.end_k
         self._load_grid(i, h, hand)

@@ -30,8 +30,15 @@ The public names of small private modules, one concern each:
   hands of the one-ball juggler scheduled by Shannon's theorem,
   :class:`CascadeController`), its start and reference controllers
   (:func:`make_cascade_controller`);
-* ``_patterns``: which siteswaps the cascade juggler can play at its tempo, and why not
-  the others (:func:`check_pattern`);
+* ``_cascade_siteswap``: the siteswap juggler's plan (any vanilla siteswap of 2 to 5
+  balls: each throw value's flight and landing hand, quintic movements within the hand's
+  limits, the tempo, :func:`choose_beat`) and its SIMULATED demonstrations
+  (:func:`siteswap_demonstrations`); ``_cascade_siteswap_control``: the siteswap juggler
+  (:class:`SiteswapController`) and its reference variants;
+* ``_patterns``: the registered patterns (:class:`PatternSpec`, :func:`register_pattern`),
+  which juggler plays which and why a siteswap is refused (:func:`pattern_reasons`,
+  :func:`check_pattern`), a pattern's controller and likeness reference
+  (:func:`pattern_controller`, :func:`pattern_likeness`);
 * ``_gravity``: the gravities Juggling-v1 and Cascade-v0 can be built at, from the
   task's timing (:func:`check_gravity`);
 * ``_fit``: THE default fit (``motion-bench juggling``'s, which ``Juggling-v0`` uses) and
@@ -57,6 +64,15 @@ from motion_envs.models.juggling._cascade_hand import (
     CascadeHand,
     CascadeTunables,
 )
+from motion_envs.models.juggling._cascade_siteswap import (
+    SiteswapPlan,
+    SiteswapStyle,
+    SiteswapTiming,
+    choose_beat,
+    siteswap_demonstrations,
+    siteswap_reasons,
+)
+from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
 from motion_envs.models.juggling._controller import (
     ControlOptions,
     Eq10Rows,
@@ -123,9 +139,14 @@ from motion_envs.models.juggling._patterns import (
     PatternCheck,
     PatternSpec,
     ThrowNeed,
+    cascade_reasons,
     check_pattern,
+    pattern_controller,
+    pattern_likeness,
+    pattern_plan,
     pattern_reasons,
     pattern_spec,
+    pattern_tempo,
     register_pattern,
 )
 from motion_envs.models.juggling._run import (
@@ -202,13 +223,19 @@ __all__ = [
     "PatternSpec",
     "PatternSummary",
     "PhaseFit",
+    "SiteswapController",
+    "SiteswapPlan",
+    "SiteswapStyle",
+    "SiteswapTiming",
     "ThrowEvent",
     "ThrowNeed",
     "across_axis",
     "cascade_fit",
     "cascade_likeness",
+    "cascade_reasons",
     "check_gravity",
     "check_pattern",
+    "choose_beat",
     "cycle_rng",
     "cycle_rngs",
     "default_fit",
@@ -225,9 +252,13 @@ __all__ = [
     "load_juggling_csv",
     "make_cascade_controller",
     "make_controller",
+    "pattern_controller",
+    "pattern_likeness",
+    "pattern_plan",
     "pattern_reasons",
     "pattern_spec",
     "pattern_summary",
+    "pattern_tempo",
     "perturb_release",
     "phase_conditions",
     "plan_catch",
@@ -239,6 +270,8 @@ __all__ = [
     "run_cycles_fast",
     "segment_demos",
     "segment_juggling",
+    "siteswap_demonstrations",
+    "siteswap_reasons",
     "tracked_hand",
     "v1_fit",
     "v1_juggler",

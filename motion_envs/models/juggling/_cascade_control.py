@@ -126,6 +126,10 @@ class CascadeController:
         The controller's :class:`CascadeTunables`.
     """
 
+    #: The native vector env compiles this controller's events (its hands' plans are
+    #: grids indexed between them).
+    compiled_events = True
+
     def __init__(
         self,
         fit: CascadeFit,

@@ -25,23 +25,47 @@ own juggler's tempo (fitted on five-ball demonstrations).
 
 :class:`PatternSpec` and :func:`register_pattern`: a pattern Cascade-v0 plays is a spec
 (name, siteswap, dwell ratio, the controller's tunables) plus a registration
-(:data:`PATTERNS`); :func:`pattern_spec` finds it or refuses with the reason.
+(:data:`PATTERNS`); :func:`pattern_spec` finds it or refuses with the reason. Two jugglers
+play them, chosen by the spec's tunables: with
+:class:`~motion_envs.models.juggling.CascadeTunables` the fitted cascade juggler above (the
+odd cascades it has demonstrations for; ``"3"`` and ``"3-human"``), with a
+:class:`~motion_envs.models.juggling.SiteswapStyle` the siteswap juggler
+(:mod:`~motion_envs.models.juggling._cascade_siteswap`: any vanilla siteswap of 2 to 5
+balls without empty beats, each throw value on its own flight; ``"5"``, ``"4"``,
+``"441"``, ``"531"``, ``"423"``, ``"51"``). :func:`pattern_controller` and
+:func:`pattern_likeness` build a spec's controller and its human-likeness reference;
+:func:`pattern_tempo` checks it at its juggler's tempo.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 from motion_envs.datasets.juggling import (
     CASCADE_STYLES,
+    JugglingTask,
     format_siteswap,
     parse_siteswap,
     siteswap_balls,
     siteswap_flights,
+    split_cycles,
 )
-from motion_envs.models.juggling._cascade import CascadePattern
+from motion_envs.models.juggling._cascade import CascadePattern, cascade_fit, cascade_likeness
+from motion_envs.models.juggling._cascade_control import CascadeController, make_cascade_controller
 from motion_envs.models.juggling._cascade_hand import DEFAULT_TUNABLES, CascadeTunables
+from motion_envs.models.juggling._cascade_siteswap import (
+    HAND_SPEED_LIMIT,
+    SiteswapPlan,
+    SiteswapStyle,
+    choose_beat,
+    siteswap_demonstrations,
+    siteswap_reasons,
+)
+from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
+from motion_envs.models.juggling._fit import FIT_SEED, FIT_TEST_FRACTION
+from motion_envs.models.juggling._levels import CONTROLLERS, HumanLikeness
 
 __all__ = [
     "PATTERNS",
@@ -49,8 +73,12 @@ __all__ = [
     "PatternSpec",
     "ThrowNeed",
     "check_pattern",
+    "pattern_controller",
+    "pattern_likeness",
+    "pattern_plan",
     "pattern_reasons",
     "pattern_spec",
+    "pattern_tempo",
     "register_pattern",
 ]
 
@@ -145,18 +173,25 @@ def _s(n: int) -> str:
 
 @dataclass(frozen=True)
 class PatternSpec:
-    """A pattern the cascade juggler plays (:data:`PATTERNS`): its ``name`` (what
-    ``pattern=`` takes), its vanilla ``siteswap``, its ``dwell_ratio`` ``D / (V + D)``
-    (None: the pattern's training demonstrations' median) with the source of that value
-    in ``note``, and the controller's ``tunables`` for it (chosen on training seeds). The
-    flight is the juggler's own toss's (fitted on the pattern's SIMULATED
-    demonstrations), the tempo Shannon's theorem's."""
+    """A pattern Cascade-v0 plays (:data:`PATTERNS`): its ``name`` (what ``pattern=``
+    takes), its vanilla ``siteswap``, its ``dwell_ratio`` ``D / (V + D)`` (None: the
+    pattern's training demonstrations' median, the fitted juggler only) with the source of
+    that value in ``note``, and the controller's ``tunables`` for it, which also choose the
+    juggler (module docstring): :class:`CascadeTunables` the fitted cascade juggler (its
+    flight its own toss's, fitted on the pattern's SIMULATED demonstrations, the tempo
+    Shannon's theorem's), :class:`SiteswapStyle` the siteswap juggler (each throw value's
+    flight from the theorem at the tempo :func:`choose_beat` finds)."""
 
     name: str
     siteswap: str
     dwell_ratio: float | None = None
     note: str = ""
-    tunables: CascadeTunables = DEFAULT_TUNABLES
+    tunables: CascadeTunables | SiteswapStyle = DEFAULT_TUNABLES
+
+    @property
+    def fitted(self) -> bool:
+        """Whether the fitted cascade juggler plays it (else the siteswap juggler)."""
+        return isinstance(self.tunables, CascadeTunables)
 
     @property
     def throws(self) -> tuple[int, ...]:
@@ -173,9 +208,9 @@ class PatternSpec:
 PATTERNS: dict[str, PatternSpec] = {}
 
 
-def pattern_reasons(siteswap: str) -> tuple[str, ...]:
-    """Why the cascade juggler cannot play ``siteswap`` whatever its tempo (empty: it
-    can): it plays odd cascades (every throw the same odd value, each hand catching the
+def cascade_reasons(siteswap: str) -> tuple[str, ...]:
+    """Why the fitted cascade juggler cannot play ``siteswap`` whatever its tempo (empty:
+    it can): it plays odd cascades (every throw the same odd value, each hand catching the
     other hand's ball) of the ball counts it has demonstrations for
     (:data:`~motion_envs.datasets.juggling.CASCADE_STYLES`). Raises ``ValueError`` for a
     siteswap that is not one."""
@@ -185,7 +220,7 @@ def pattern_reasons(siteswap: str) -> tuple[str, ...]:
     if balls % 2 == 0 or set(throws) != {balls}:
         reasons.append(
             "it is not a cascade (every throw the same odd value, each hand catching the "
-            "other hand's ball): self-throws, holds, passes and empty beats are not modelled"
+            "other hand's ball): the fitted juggler has one toss"
         )
     if balls not in CASCADE_STYLES:
         reasons.append(
@@ -195,29 +230,45 @@ def pattern_reasons(siteswap: str) -> tuple[str, ...]:
     return tuple(reasons)
 
 
+def pattern_reasons(siteswap: str) -> tuple[str, ...]:
+    """Why no juggler can play ``siteswap`` (empty: the siteswap juggler can, at a tempo
+    within the hand's limits or not: :func:`~motion_envs.models.juggling.choose_beat`
+    says): it plays vanilla siteswaps of 2 to 5 balls without empty beats
+    (:func:`~motion_envs.models.juggling.siteswap_reasons`). Raises ``ValueError`` for a
+    text that is no valid siteswap (:func:`parse_siteswap`, :func:`siteswap_balls`)."""
+    return siteswap_reasons(siteswap)
+
+
 def register_pattern(spec: PatternSpec) -> PatternSpec:
     """Add ``spec`` to :data:`PATTERNS` (a name is registered once); ``ValueError`` with
-    the reasons if the juggler cannot play its siteswap or its dwell ratio is not in
-    (0.2, 0.9) or leaves no flight (``N / 2 - r <= 0``)."""
+    the reasons if its juggler cannot play its siteswap (the fitted one:
+    :func:`cascade_reasons`; the siteswap one: :func:`pattern_reasons`, or no tempo within
+    the hand's limits at 9.81 m/s^2), or its dwell ratio is not in (0.2, 0.9) (the
+    siteswap juggler needs one) or leaves no flight."""
     if not isinstance(spec, PatternSpec):
         raise ValueError(f"register_pattern takes a PatternSpec; got {type(spec).__name__}")
     if spec.name in PATTERNS:
         raise ValueError(f"pattern {spec.name!r} is already registered")
-    reasons = pattern_reasons(spec.siteswap)
+    if not isinstance(spec.tunables, (CascadeTunables, SiteswapStyle)):
+        raise ValueError(
+            "PatternSpec.tunables must be a CascadeTunables or a SiteswapStyle; "
+            f"got {spec.tunables!r}"
+        )
+    reasons = cascade_reasons(spec.siteswap) if spec.fitted else pattern_reasons(spec.siteswap)
     if reasons:
         raise ValueError(f"pattern {spec.siteswap!r} cannot be played: " + "; ".join(reasons))
     r = spec.dwell_ratio
-    if r is not None and not (isinstance(r, float) and 0.2 < r < 0.9):
+    if (r is not None or not spec.fitted) and not (isinstance(r, float) and 0.2 < r < 0.9):
         raise ValueError(f"PatternSpec.dwell_ratio must be a float in (0.2, 0.9); got {r!r}")
-    if not isinstance(spec.tunables, CascadeTunables):
-        raise ValueError(f"PatternSpec.tunables must be a CascadeTunables; got {spec.tunables!r}")
+    if not spec.fitted:
+        pattern_plan(spec, 9.81)  # raises with the reason when no tempo fits
     PATTERNS[spec.name] = spec
     return spec
 
 
 def pattern_spec(name: str) -> PatternSpec:
-    """The registered pattern ``name``; ``ValueError`` naming the registered ones and,
-    for a siteswap the juggler cannot play, why."""
+    """The registered pattern ``name``; ``ValueError`` in one line naming the registered
+    ones and, for a siteswap no juggler can play, why."""
     if name in PATTERNS:
         return PATTERNS[name]
     known = ", ".join(repr(p) for p in PATTERNS)
@@ -227,6 +278,91 @@ def pattern_spec(name: str) -> PatternSpec:
         raise ValueError(f"pattern must be one of {known}; {exc}") from None
     why = "; ".join(reasons) if reasons else "it is not registered (register_pattern)"
     raise ValueError(f"pattern must be one of {known}; {name!r}: {why}")
+
+
+@functools.lru_cache(maxsize=32)
+def pattern_plan(spec: PatternSpec, gravity: float) -> SiteswapPlan:
+    """The siteswap juggler's plan of ``spec`` at ``gravity`` (its tempo:
+    :func:`~motion_envs.models.juggling.choose_beat`); ``ValueError`` for a spec the
+    fitted juggler plays."""
+    if spec.fitted or spec.dwell_ratio is None:
+        raise ValueError(f"pattern {spec.name!r} is played by the fitted cascade juggler")
+    assert isinstance(spec.tunables, SiteswapStyle)
+    return choose_beat(
+        spec.siteswap, spec.dwell_ratio, spec.tunables, JugglingTask(gravity=gravity)
+    )
+
+
+def pattern_controller(
+    spec: PatternSpec,
+    name: str,
+    gravity: float,
+    latency: float = 0.0,
+    dwell_ratio: float | None = None,
+    tunables: CascadeTunables | SiteswapStyle | None = None,
+) -> CascadeController | SiteswapController:
+    """The reference controller ``name`` (one of ``CONTROLLERS``) playing ``spec`` at
+    ``gravity`` with the sensor's ``latency`` (s), at ``dwell_ratio`` (None: the spec's)
+    with ``tunables`` (None: the spec's; of the spec's juggler's kind)."""
+    if name not in CONTROLLERS:
+        raise ValueError(f"controller must be one of {list(CONTROLLERS)}; got {name!r}")
+    t = spec.tunables if tunables is None else tunables
+    if not isinstance(t, type(spec.tunables)):
+        raise ValueError(
+            f"tunables must be a {type(spec.tunables).__name__} for pattern {spec.name!r}; "
+            f"got {t!r}"
+        )
+    r = spec.dwell_ratio if dwell_ratio is None else float(dwell_ratio)
+    if isinstance(t, CascadeTunables):
+        return make_cascade_controller(name, cascade_fit(gravity, spec.balls), latency, r, t)
+    own = PatternSpec(spec.name, spec.siteswap, r, spec.note, t)
+    return SiteswapController(pattern_plan(own, gravity), name, latency)
+
+
+@functools.lru_cache(maxsize=16)
+def pattern_likeness(spec: PatternSpec, gravity: float) -> HumanLikeness:
+    """The human-likeness reference of ``spec`` at ``gravity``: the training cycles of its
+    SIMULATED demonstrations (the fitted juggler's: the cascade's,
+    :func:`~motion_envs.models.juggling.cascade_likeness`; the siteswap juggler's:
+    :func:`~motion_envs.models.juggling.siteswap_demonstrations` at the spec's dwell
+    ratio, split as the cascade's, held-out share ``FIT_TEST_FRACTION``)."""
+    if spec.fitted:
+        return cascade_likeness(gravity, "train", spec.balls)
+    assert isinstance(spec.tunables, SiteswapStyle) and spec.dwell_ratio is not None
+    task = JugglingTask(gravity=gravity)
+    demos = siteswap_demonstrations(
+        spec.siteswap, spec.dwell_ratio, spec.tunables, task, seed=FIT_SEED
+    )
+    train, _ = split_cycles(demos, FIT_TEST_FRACTION, FIT_SEED)
+    return HumanLikeness(demos, train)
+
+
+def pattern_tempo(spec: PatternSpec, gravity: float) -> PatternCheck:
+    """``spec`` at its juggler's tempo: the beat, the dwell and each throw value's
+    :class:`ThrowNeed` (the fitted juggler: :func:`check_pattern` at its fit; the
+    siteswap juggler: its plan's flights and release velocities, a hold's all 0)."""
+    if spec.fitted:
+        fit = cascade_fit(gravity, spec.balls)
+        return check_pattern(
+            spec.siteswap, fit.pattern, gravity, HAND_SPEED_LIMIT, spec.dwell_ratio
+        )
+    plan = pattern_plan(spec, gravity)
+    tm = plan.timing
+    needs = []
+    for h in sorted(set(tm.throws), reverse=True):
+        if h == 2:
+            needs.append(ThrowNeed(h, False, 0.0, 0.0, 0.0))
+            continue
+        v = float(plan.throw_velocity(h)[1])
+        apex = v * v / (2 * gravity) if v > 0 else 0.0
+        needs.append(ThrowNeed(h, h % 2 == 1, tm.flight(h), v, apex))
+    return PatternCheck(spec.siteswap, plan.balls, plan.beat, tm.dwell, tuple(needs), ())
+
+
+_KALVAN = (
+    "J. Kalvan, 'How many objects can be juggled', 1997: 'My tests show r is usually "
+    "about 2/3'; his 'Optimal Juggling', 1996: near 2/3 for cascades of 3, 5, 7 and 9 balls"
+)
 
 
 register_pattern(
@@ -247,14 +383,25 @@ register_pattern(
         "'3', a slower beat",
     )
 )
-register_pattern(
-    PatternSpec(
-        "5",
-        "5",
-        2.0 / 3.0,
-        "the five-ball cascade at a human dwell ratio of 2/3 (J. Kalvan, 'How many objects "
-        "can be juggled', 1997: 'My tests show r is usually about 2/3'; his 'Optimal "
-        "Juggling', 1996: near 2/3 for cascades of 3, 5, 7 and 9 balls); flight: the "
-        "juggler's own toss fitted on the SIMULATED five-ball demonstrations",
-    )
+#: The siteswap juggler's registered patterns: (name, what it is).
+SITESWAP_PATTERNS = (
+    ("5", "the five-ball cascade"),
+    ("4", "the four-ball fountain (each hand its own two balls, throws of 4 come back)"),
+    ("441", "three balls: two throws of 4 and a pass (a 1)"),
+    ("531", "three balls: a 5, a 3 and a pass (a 1)"),
+    ("423", "three balls: a 4, a hold (the 2) and a 3"),
+    ("51", "three balls: a 5 and a pass (a 1), the shower"),
 )
+for _name, _what in SITESWAP_PATTERNS:
+    register_pattern(
+        PatternSpec(
+            _name,
+            _name,
+            2.0 / 3.0,
+            f"{_what}, played by the siteswap juggler at a human dwell ratio of 2/3 "
+            f"({_KALVAN}; measured on cascades, taken for every pattern); each throw value's "
+            "flight from Shannon's theorem at the tempo whose nominal peak acceleration is "
+            "least (choose_beat)",
+            SiteswapStyle(),
+        )
+    )
