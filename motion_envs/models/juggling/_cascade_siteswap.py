@@ -46,8 +46,8 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import (
     JugglingDemos,
     JugglingRecording,
@@ -73,7 +73,6 @@ __all__ = [
     "siteswap_reasons",
 ]
 
-FloatArray = NDArray[np.float64]
 
 #: The hand's limits (the world's ``WorldSpec`` defaults; the models layer cannot import
 #: the env layer, a test checks they are equal).
@@ -100,7 +99,9 @@ class SiteswapStyle:
     caught, at the release height; ``pass_flight``: a pass's flight in beats;
     ``release_brake``: the planned vertical deceleration at the release, in toss
     thresholds (> 1: the release rule fires); ``catch_follow``: share of the ball's
-    velocity the hand has when it meets the ball; ``toss_share``: the last share of a
+    velocity the hand has when it meets the ball; ``catch_below``, ``catch_above``: m,
+    the band around the catch height the intercept is chosen in (a hand rising high into a
+    falling ball meets it rising, and the ball bounces off); ``toss_share``: the last share of a
     carry that is the toss phase (observed, the release armed there); ``limit_share``:
     share of the hand's limits the nominal plan may use; ``beat``: s, None for
     :func:`choose_beat`'s.
@@ -112,6 +113,8 @@ class SiteswapStyle:
     pass_flight: float = 0.25
     release_brake: float = 1.5
     catch_follow: float = 0.25
+    catch_below: float = 0.2
+    catch_above: float = 0.0
     toss_share: float = 0.5
     limit_share: float = 1.0
     beat: float | None = None
@@ -126,6 +129,8 @@ class SiteswapStyle:
             "pass_flight": (0.05, 0.95),
             "release_brake": (1.05, 3.0),
             "catch_follow": (0.0, 0.9),
+            "catch_below": (0.0, 1.0),
+            "catch_above": (-0.5, 1.0),
             "toss_share": (0.1, 1.0),
             "limit_share": (0.1, 1.0),
         }

@@ -39,8 +39,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import NDArray
 
+from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES, ballistic_position
 from motion_envs.geometry.minimum_jerk import quintic, quintic_evaluate
 from motion_envs.models.juggling._cascade import CascadeState
@@ -50,7 +50,6 @@ from motion_envs.models.juggling._sensor import predict_forward
 
 __all__ = ["INTERCEPT_CANDIDATES", "MIN_CARRY", "MIN_CATCH_HEIGHT", "SiteswapController"]
 
-FloatArray = NDArray[np.float64]
 #: Intercept times a hand compares.
 INTERCEPT_CANDIDATES = 25
 #: The shortest carry, in dwells (after a late catch the release waits).
@@ -219,12 +218,16 @@ class SiteswapController:
         hi = min(t_nom + 0.5 * tm.hold(h), t_rel - MIN_CARRY * tm.hold(h))
         t_b, p_b, v_b = ball
         g, floor = self.task.gravity, self.task.floor_z + MIN_CATCH_HEIGHT
+        z_c = plan.catch_point(h)[1]
+        low = max(floor, z_c - plan.style.catch_below)
+        high = z_c + plan.style.catch_above
         p0, v0, a0 = hand.state(t)
         rel = plan.release_state(tm.value(nxt))
         best, best_t = math.inf, math.nan
         for ts in np.linspace(lo, hi, INTERCEPT_CANDIDATES) if hi > lo else []:
             s = float(ts) - t_b
-            if v_b[1] - g * s >= 0 or p_b[1] + v_b[1] * s - 0.5 * g * s * s < floor:
+            z = p_b[1] + v_b[1] * s - 0.5 * g * s * s
+            if v_b[1] - g * s >= 0 or not low <= z <= high:
                 continue
             p, v = self._target(hand, ball, float(ts))
             d1, d2 = float(ts) - t, t_rel - float(ts)
