@@ -34,7 +34,6 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode
-from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from motion_envs._typing import FloatArray
@@ -47,14 +46,11 @@ from motion_envs.envs._common import (
     as_action,
     check_fraction,
     check_integer,
-    check_max_episode_steps,
-    check_num_envs,
     check_scale,
     check_seed,
-    env_footprint,
-    has_render_mode,
 )
-from motion_envs.envs._reach import TrajectoryLabelsMixin, reset_labels
+from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResult
+from motion_envs.envs._reach import FrameAfterResetMixin, TrajectoryLabelsMixin, reset_labels
 from motion_envs.models.person_calibration import SUMMARY_BOUND, SUMMARY_SINES
 
 __all__ = [
@@ -104,7 +100,7 @@ def line_frames(starts: Any, goals: Any, min_scale: float = 1e-9) -> tuple[Float
     return F, np.maximum(dist, min_scale)
 
 
-class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
+class CoefficientEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym.Env):
     """One movement per episode: the context in, residual coefficients out.
 
     A subclass builds ``task`` (the step environments' task), sets ``_context``
@@ -290,18 +286,8 @@ class CoefficientEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
         curve = self.curves(idx, a[None])
         return self._result(float(self._errors(idx, curve)[0]), curve[0])
 
-    def render(self) -> NDArray[np.uint8] | None:
-        if not has_render_mode(self.render_mode):
-            return None
-        if self._index < 0:
-            raise RuntimeError("call reset() before render()")
-        return self._render_frame()
 
-    def _render_frame(self) -> NDArray[np.uint8]:
-        raise NotImplementedError
-
-
-class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.VectorEnv):
+class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, NativeVectorEnv):
     """``num_envs`` copies of a coefficient environment, scored in one batch.
 
     Sub-environment ``i`` is bit-identical to a single environment made with the same
@@ -338,23 +324,14 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ) -> None:
-        from motion_envs.envs._common import check_autoreset_mode
-
         first = self.single_class(**kwargs)
-        self.num_envs = check_num_envs(num_envs, env_footprint(first))
-        self._max_steps = check_max_episode_steps(max_episode_steps, 2**62)
-        self.autoreset_mode = check_autoreset_mode(autoreset_mode)
-        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        self._setup_batch(
+            first, num_envs, autoreset_mode, max_episode_steps, 2**62, type(self).metadata
+        )
         self.envs = [first] + [first.twin() for _ in range(self.num_envs - 1)]
         self.single = first
         self._labels = first._labels
-        self.single_action_space = first.action_space
-        self.single_observation_space = first.observation_space
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.render_mode = first.render_mode
         self._autoreset = np.zeros(self.num_envs, dtype=bool)
-        self._started = False
 
     def reset(
         self,
@@ -363,24 +340,10 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         options: dict[str, Any] | None = None,
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         N = self.num_envs
-        if seed is None:
-            seeds: list[int | None] = [None] * N
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(N)]
-        else:
-            seeds = list(seed)  # type: ignore[arg-type]
-            if len(seeds) != N:
-                raise ValueError(f"seed must be an int or a list of {N} seeds; got {len(seeds)}")
+        seeds = self._seeds(seed)
         options = dict(options or {})
-        mask = options.pop("reset_mask", None)
-        if mask is None:
-            mask = np.ones(N, dtype=bool)
-        else:
-            mask = np.asarray(mask)
-            if mask.shape != (N,) or mask.dtype != bool:
-                raise ValueError(f"options['reset_mask'] must be a bool array ({N},)")
-            if not self._started and not mask.all():
-                raise ValueError("the first reset must reset every sub-environment")
+        envs = self._reset_targets(options)
+        options.pop("reset_mask", None)
         traj = options.pop("trajectory", None)
         if traj is not None:  # one trajectory per sub-environment (broadcast)
             traj = np.broadcast_to(np.asarray(traj), (N,))
@@ -388,7 +351,7 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         if self._started:
             obs[:] = self._obs
         infos: dict[str, Any] = {}
-        for i in np.flatnonzero(mask).tolist():
+        for i in envs.tolist():
             sub = dict(options)
             if traj is not None:
                 t = traj[i]
@@ -400,32 +363,14 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         self._obs = obs.copy()
         return obs, infos
 
-    def step(
-        self, actions: Any
-    ) -> tuple[
-        NDArray[np.float32],
-        NDArray[np.float64],
-        NDArray[np.bool_],
-        NDArray[np.bool_],
-        dict[str, Any],
-    ]:
+    def step(self, actions: Any) -> StepResult:
         N = self.num_envs
-        a = as_action(actions, (N, *self.single_action_space.shape), "actions")  # type: ignore[misc]
-        if not self._started:
-            raise RuntimeError("call reset() before step()")
+        a = self._check_actions(actions)
         bad = ~np.isfinite(a).all(axis=1)
         if bad.any():
             i = int(np.flatnonzero(bad)[0])
             raise ValueError(f"actions must be finite; got {a[i].tolist()} at index {i}")
-        resetting = self._autoreset.copy()
-        if self.autoreset_mode == AutoresetMode.DISABLED and resetting.any():
-            i = int(np.flatnonzero(resetting)[0])
-            raise RuntimeError(
-                f"sub-environment {i} has ended and autoreset_mode is DISABLED; call "
-                "reset(options={'reset_mask': mask}) for the ended sub-environments first"
-            )
-        if self.autoreset_mode != AutoresetMode.NEXT_STEP:
-            resetting[:] = False
+        resetting = self._resetting(self._autoreset)
         stepped = np.flatnonzero(~resetting)
         index = np.array([self.envs[i]._index for i in stepped.tolist()], dtype=np.int64)
         curves = self.single.curves(index, a[stepped])
@@ -444,7 +389,7 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
                 obs[i], rewards[i], terminated[i], _, info = env._result(errors[j], curves[j])
                 truncated[i] = self._max_steps <= 1
                 j += 1
-                if self.autoreset_mode == AutoresetMode.SAME_STEP:
+                if self._mode == SAME_STEP:
                     final = {"final_obs": obs[i].copy(), "final_info": info}
                     infos = self._add_info(infos, final, i)
                     obs[i], info = env.reset()
@@ -461,9 +406,5 @@ class CoefficientVectorEnv(TrajectoryLabelsMixin, JsonSpecMixin, gym.vector.Vect
         for env in self.envs:
             env.close()
 
-    def render(self) -> tuple[NDArray[np.uint8], ...] | None:
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode")
-            return None
-        frames = [env.render() for env in self.envs]
-        return tuple(np.asarray(f, dtype=np.uint8) for f in frames)
+    def _render_env(self, i: int) -> NDArray[np.uint8]:
+        return np.asarray(self.envs[i].render(), dtype=np.uint8)

@@ -1,7 +1,8 @@
 """The native vector environments' episode bookkeeping, written once.
 
 :class:`NativeVectorEnv` is the base of every native vector environment of the package
-(the reaching ones, :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`, and the
+(the reaching ones, :class:`~motion_envs.envs._reach_vector.ReachVectorEnv`, the
+coefficient ones, :class:`~motion_envs.envs._coefficients.CoefficientVectorEnv`, and the
 juggling ones, :class:`~motion_envs.envs.juggling._vector.JugglingVectorEnv`). It keeps
 what :class:`gymnasium.vector.SyncVectorEnv` keeps around its sub-environments, so that a
 subclass writes only its batched step:

@@ -264,7 +264,26 @@ def _finite_clipped(acts: list[float]) -> list[float]:
     return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in acts]
 
 
-class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
+class FrameAfterResetMixin:
+    """``render()`` of a single environment that draws the trajectory of its episode: the
+    frame of :meth:`_render_frame`, None without a render mode, ``RuntimeError`` before
+    the first reset (``_index < 0``)."""
+
+    render_mode: str | None
+    _index: int
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if not has_render_mode(self.render_mode):
+            return None
+        if self._index < 0:
+            raise RuntimeError("call reset() before render()")
+        return self._render_frame()
+
+    def _render_frame(self) -> NDArray[np.uint8]:
+        raise NotImplementedError
+
+
+class ReachEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym.Env):
     """A single reaching environment over a :class:`ReachKind`.
 
     A subclass sets ``kind`` (class attribute), checks its arguments with
@@ -414,17 +433,6 @@ class ReachEnv(JsonSpecMixin, LazyRendererMixin, gym.Env):
             for key, j in self._end_of:
                 info[key] = running[j]
         return obs, reward, terminated, False, info
-
-    # -- rendering ------------------------------------------------------------------
-    def render(self) -> NDArray[np.uint8] | None:
-        if not has_render_mode(self.render_mode):
-            return None
-        if self._index < 0:
-            raise RuntimeError("call reset() before render()")
-        return self._render_frame()
-
-    def _render_frame(self) -> NDArray[np.uint8]:
-        raise NotImplementedError
 
 
 def step_table(layout: Mapping[str, slice], parts: Mapping[str, NDArray[np.float64]]) -> Any:
