@@ -23,6 +23,12 @@ episodes end and restart as under ``SyncVectorEnv`` with the same ``autoreset_mo
 * ``AutoresetMode.DISABLED``: no autoreset; reset ended sub-environments with
   ``reset(options={"reset_mask": mask})`` before stepping them again.
 
+This bookkeeping is written once for every native vector environment of the package
+(:class:`~motion_envs.envs._native_vector.NativeVectorEnv`): ``seed`` is an int (``seed +
+i``), a list of ``N`` seeds or None (each sub-environment keeps its generator);
+``reset_mask`` is a bool array ``(N,)`` with a ``True`` entry, and the first reset
+resets every sub-environment; anything else is a one-line ``ValueError``.
+
 Pass the mode as ``gym.make_vec(id, N, autoreset_mode=AutoresetMode.SAME_STEP)`` (or
 its value ``"SameStep"``); Gymnasium forwards only keyword arguments, not
 ``vector_kwargs``, to a ``vector_entry_point``. ``max_episode_steps`` (from the
