@@ -16,6 +16,7 @@ id                                         environment
 ``MotionEnvs/PositionCoefficients-v0``     one step per movement (:mod:`.position_coefficients`)
 ``MotionEnvs/Juggling-v0``                 :class:`~.juggling.JugglingEnv` (MuJoCo)
 ``MotionEnvs/Juggling-v1``                 :class:`~.juggling.JugglingV1Env` (contacts)
+``MotionEnvs/Juggling-v2``                 :class:`~.juggling.JugglingV2Env` (delay, camera, drag)
 ``MotionEnvs/Cascade-v0``                  :class:`~.juggling.CascadeEnv` (three balls, two hands)
 =========================================  ========================================================
 
@@ -83,6 +84,10 @@ _SPECS: dict[str, dict[str, object]] = {
     "MotionEnvs/Juggling-v1": {
         "entry_point": "motion_envs.envs.juggling:JugglingV1Env",
         "vector_entry_point": "motion_envs.envs.juggling:JugglingV1VectorEnv",
+    },
+    "MotionEnvs/Juggling-v2": {
+        "entry_point": "motion_envs.envs.juggling:JugglingV2Env",
+        "vector_entry_point": "motion_envs.envs.vector:juggling_v2_vector_env",
     },
     "MotionEnvs/Cascade-v0": {
         "entry_point": "motion_envs.envs.juggling:CascadeEnv",

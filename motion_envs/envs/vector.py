@@ -80,6 +80,7 @@ __all__ = [
     "PositionReachVectorEnv",
     "ReachVectorEnv",
     "juggling_v0_vector_env",
+    "juggling_v2_vector_env",
     "juggling_vector_env",
 ]
 
@@ -106,3 +107,9 @@ def juggling_vector_env(
 def juggling_v0_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.SyncVectorEnv:
     """The ``vector_entry_point`` of ``MotionEnvs/Juggling-v0`` (:func:`juggling_vector_env`)."""
     return juggling_vector_env("MotionEnvs/Juggling-v0", num_envs, **kwargs)
+
+
+def juggling_v2_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.SyncVectorEnv:
+    """The ``vector_entry_point`` of ``MotionEnvs/Juggling-v2`` (:func:`juggling_vector_env`:
+    its infos' phase as a number)."""
+    return juggling_vector_env("MotionEnvs/Juggling-v2", num_envs, **kwargs)

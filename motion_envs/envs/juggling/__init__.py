@@ -10,7 +10,9 @@ MuJoCo) and ``_period`` (the one control period: servo, physics, grasp rule, rel
 plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
 (:class:`JugglingV1World`, one hand and one ball) and ``_cascade_scene``
 (:class:`CascadeWorld`, two hands and a pattern's balls) are its batches of one with their
-task's state types; ``_v1_env`` (:class:`JugglingV1Env`) and ``_cascade_env``
+task's state types; ``_v1_env`` (:class:`JugglingV1Env`), ``_v2_env``
+(:class:`JugglingV2Env`: a hidden delay, a position-only camera, air drag, the capture at
+impact) and ``_cascade_env``
 (:class:`CascadeEnv`) the environments; the native vector environments ``_vector``
 (:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
 (:class:`JugglingV1VectorEnv`) and ``_cascade_vector`` (:class:`CascadeVectorEnv`).
@@ -52,6 +54,7 @@ from motion_envs.envs.juggling._v1_env import (
 )
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._v1_vector import JugglingV1VectorEnv
+from motion_envs.envs.juggling._v2_env import AIR_DENSITY, FRAMES, V2_OBS_DIM, JugglingV2Env
 from motion_envs.envs.juggling._vector import (
     PHASE_NAMES,
     JugglingVectorEnv,
@@ -82,6 +85,7 @@ from motion_envs.models.juggling import (
 )
 
 __all__ = [
+    "AIR_DENSITY",
     "CAPTURE_SPEED",
     "CASCADE_HISTORY",
     "CASCADE_OBS_DIM",
@@ -92,6 +96,7 @@ __all__ = [
     "DEFAULT_V1_REWARD_WEIGHTS",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
+    "FRAMES",
     "HAND_ACCEL_LIMIT",
     "HAND_MASS",
     "HAND_SPEED_LIMIT",
@@ -108,6 +113,7 @@ __all__ = [
     "TRACKING_NOISE",
     "V1_CYCLE_TIME",
     "V1_OBS_DIM",
+    "V2_OBS_DIM",
     "CascadeEnv",
     "CascadeVectorEnv",
     "CascadeWorld",
@@ -117,6 +123,7 @@ __all__ = [
     "JugglingV1Env",
     "JugglingV1VectorEnv",
     "JugglingV1World",
+    "JugglingV2Env",
     "JugglingVectorEnv",
     "NumericInfo",
     "WorldSpec",

@@ -17,6 +17,12 @@ control period of ``dt`` is, for each world ``i`` in ``envs``:
      whose palm it touches (MuJoCo's contact), with its centre above the palm's top face
      and its speed relative to the hand below ``capture_speed``; else the contact
      computes the bounce;
+   * with ``impact_capture`` (the rule in the hand's frame), instead: a ball that has
+     left is captured by the first EMPTY hand whose palm contact BEGINS at this step
+     (reported now, not at the step before), its centre above the palm's top face, when
+     its velocity relative to the hand before the step approached the palm (relative
+     ``v_z < 0``) slower than ``capture_speed``; a faster ball bounces and is not
+     caught during that contact;
 
 3. **held balls follow their hands** (a held ball's contacts are off, so its own motion
    during the period touches nothing: writing it once at the period's end is the same
@@ -76,6 +82,7 @@ CONSTANT_NAMES = (
     "capture_speed",
     "servo_omega",
     "substeps",
+    "impact_capture",
 )
 
 
@@ -193,9 +200,14 @@ def world_periods(
     ball_contype, ball_conaffinity = int(constants[6]), int(constants[7])
     mass, speed, accel_limit = constants[8], constants[9], constants[10]
     capture_speed, omega, substeps = constants[11], constants[12], int(constants[13])
+    impact = constants[14] > 0.0
     kp, kd, amax2 = omega**2, 2.0 * omega, accel_limit**2
     hands, balls = ref.shape[1], holder.shape[1]
     plan = np.empty((hands, 9))  # per hand: the servo plan, the height at the start
+    # impact capture: per ball and hand, the contact at the step before, and the relative
+    # speed and vertical velocity before the current step
+    touch = np.zeros((balls, hands), dtype=np.bool_)
+    approach = np.zeros((balls, hands, 2))
     for i in envs:
         for hh in range(hands):
             servo_plan(ref[i, hh], vref[i, hh], target[i, hh, 0], target[i, hh, 1], dt, speed,
@@ -206,6 +218,10 @@ def world_periods(
             caught[i, hh] = -1
             released[i, hh] = -1
             plan[hh, 8] = qp[2 * hh + 1]  # the hand's height at the period's start
+        if impact:  # the contacts of the last physics step (its sensors persist)
+            for b in range(balls):
+                for hh in range(hands):
+                    touch[b, hh] = sens[b * (1 + hands) + 1 + hh] > 0.0
         for j in range(1, substeps + 1):
             f = j / substeps
             for hh in range(hands):
@@ -215,6 +231,13 @@ def world_periods(
                 )  # fmt: skip
                 u[2 * hh] = mass * ax
                 u[2 * hh + 1] = mass * az
+            if impact:  # the velocities relative to each hand before the step
+                for b in range(balls):
+                    c = 2 * hands + 2 * b
+                    for hh in range(hands):
+                        rvx, rvz = qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1]
+                        approach[b, hh, 0] = py_hypot(rvx, rvz)
+                        approach[b, hh, 1] = rvz
             mj_step_c(model_addr[i], data_addr[i])
             for b in range(balls):
                 if holder[i, b] >= 0:  # held: follows its hand (written at the period's end)
@@ -231,7 +254,7 @@ def world_periods(
                 if bz - radius <= floor_z or sens[s] > 0.0:
                     dropped[i, b] = True
                     continue
-                if qv[c + 1] >= 0.0 or not left[i, b]:
+                if (qv[c + 1] >= 0.0 and not impact) or not left[i, b]:
                     continue
                 for hh in range(hands):
                     busy = False
@@ -240,13 +263,26 @@ def world_periods(
                             busy = True
                     if busy or bz < qp[2 * hh + 1] + palm_top:
                         continue
-                    rel = py_hypot(qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1])
-                    if rel < capture_speed and sens[s + 1 + hh] > 0.0:
+                    if impact:
+                        grip = (
+                            sens[s + 1 + hh] > 0.0
+                            and not touch[b, hh]
+                            and approach[b, hh, 1] < 0.0
+                            and approach[b, hh, 0] < capture_speed
+                        )
+                    else:
+                        rel = py_hypot(qv[c] - qv[2 * hh], qv[c + 1] - qv[2 * hh + 1])
+                        grip = rel < capture_speed and sens[s + 1 + hh] > 0.0
+                    if grip:
                         holder[i, b] = hh
                         caught[i, hh] = b
                         ct[ball_geoms[b]] = 0
                         ca[ball_geoms[b]] = 0
                         break
+            if impact:
+                for b in range(balls):
+                    for hh in range(hands):
+                        touch[b, hh] = sens[b * (1 + hands) + 1 + hh] > 0.0
         for b in range(balls):  # held balls follow their hands
             hh = holder[i, b]
             if hh >= 0:

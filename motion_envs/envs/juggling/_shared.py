@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import PHASES
+from motion_envs.datasets.juggling import PHASES, JugglingState
 from motion_envs.envs._common import (
     check_choice,
     check_integer,
@@ -70,6 +70,7 @@ class LevelsEnvMixin:
     height: int
     _time_limit: float
     _catches: int
+    _tosses: int
     _done: bool
 
     def _init_arguments(
@@ -87,12 +88,6 @@ class LevelsEnvMixin:
         ``(len(PHASES),)`` bool mask of the phases in which a hand's residual acts (all
         with None): a hand whose controller is in phase ``PHASES[i]`` after its command
         gets the residual only where ``residual_acts[i]``."""
-        render_mode, width, height = rendering
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
         name, latency, position_std, velocity_std, release_speed_std, release_angle_std = level
         self.level = check_choice(name, "level", tuple(LEVELS))
         base = LEVELS[self.level]
@@ -113,6 +108,25 @@ class LevelsEnvMixin:
         self.gravity = check_number(gravity, "gravity", 0.0, 100.0, low_open=True)
         check_gravity(self.gravity, self._WORLD)  # what the demonstrations' timing allows
         self.controller_name = check_choice(controller, "controller", self._CONTROLLERS)
+        self._init_episode_arguments(
+            (max_catches, residual_scale, residual_phases, reward_weights), rendering
+        )
+
+    def _init_episode_arguments(
+        self,
+        episode: tuple[int, float, Sequence[str] | None, Mapping[str, float] | None],
+        rendering: tuple[str | None, int, int],
+    ) -> None:
+        """Check and set ``episode = (max_catches, residual_scale, residual_phases,
+        reward_weights)`` and ``rendering = (render_mode, width, height)`` (every
+        juggling env with levels has them; :meth:`_init_arguments` ends with this)."""
+        render_mode, width, height = rendering
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be None or one of {self.metadata['render_modes']}; "
+                f"got {render_mode!r}"
+            )
+        max_catches, residual_scale, residual_phases, reward_weights = episode
         self.max_catches = check_integer(max_catches, "max_catches", 1, 10**6)
         self.residual_scale = check_scale(residual_scale, 1.0)
         #: Phases in which a hand's residual acts (None: all).
@@ -146,6 +160,25 @@ class LevelsEnvMixin:
             "likeness": likeness,
         }
         return float(reward), terms
+
+    def _step_info(
+        self, terms: dict[str, float], true: JugglingState, phase: str, invalid: bool
+    ) -> dict[str, Any]:
+        """A step's ``info`` (the one-ball envs'): the reward's ``terms``, the event and
+        the counts, the phase, the true hand and ball, ``action_invalid``."""
+        return {
+            **terms,
+            "caught": bool(true.caught),
+            "catches": self._catches,
+            "tosses": self._tosses,
+            "cycles": self._tosses,
+            "phase": phase,
+            "held": true.held,
+            "time": true.time,
+            "hand": true.hand_pos.copy(),
+            "ball": true.ball_pos.copy(),
+            "action_invalid": invalid,
+        }
 
     def _episode_end(self, dropped: bool, time: float) -> tuple[bool, bool]:
         """``(terminated, truncated)`` after a step ending at ``time`` (s): terminated by a

@@ -58,12 +58,22 @@ class JugglingV1World(HandsWorld):
         The task constants (gravity, dt, ball, floor, toss threshold).
     release_speed_std, release_angle_std:
         Release noise: relative speed error and direction error (rad), per toss.
+    spec:
+        The world (one hand, one ball, ``task``'s constants); None: ``WorldSpec.of(task)``
+        (Juggling-v2 passes its own: air and the capture at impact).
     """
 
     def __init__(
-        self, task: JugglingTask, release_speed_std: float = 0.0, release_angle_std: float = 0.0
+        self,
+        task: JugglingTask,
+        release_speed_std: float = 0.0,
+        release_angle_std: float = 0.0,
+        spec: WorldSpec | None = None,
     ) -> None:
-        super().__init__(WorldSpec.of(task, hands=1, balls=1), release_speed_std, release_angle_std)
+        spec = WorldSpec.of(task, hands=1, balls=1) if spec is None else spec
+        if (spec.hands, spec.balls) != (1, 1):
+            raise ValueError(f"spec must have one hand and one ball; got {spec!r}")
+        super().__init__(spec, release_speed_std, release_angle_std)
         self.task = task
         self.state: JugglingState | None = None
 

@@ -35,6 +35,30 @@ within a step or two of touching, so a ball hitting a still palm much faster tha
 only a ball that the contact throws back up (or off the palm's edge) before it is slow
 enough bounces off. ``capture_speed`` is therefore a limit on the relative speed at which
 the fingers close, not on the speed of the impact.
+
+**Capture at impact** (``impact_capture=True``, Juggling-v2's world): the rule in the
+hand's frame. A ball is caught only at the physics step at which its contact with an
+empty palm BEGINS (the contact sensor reports it, and did not at the step before), when
+the ball's velocity relative to the hand just before that step (before the contact's
+force acted) points at the palm (relative ``v_z < 0``) and its magnitude, the speed at
+which the palm meets the ball, is below ``capture_speed``; its centre must be above the
+palm's top face and it must have left its thrower. A ball that meets the palm faster
+bounces off (the contact computes the bounce) and cannot be caught during that contact;
+it may be caught at a later contact that begins slowly enough.
+
+**Air drag** (``air_density > 0``): MuJoCo's fluid model (``option density``; every ball
+geom and palm with ``fluidshape="ellipsoid"``, every coefficient 0 but a ball's blunt
+drag; the air at rest, no viscosity). On a sphere of radius ``r`` moving at ``v`` it is
+the quadratic drag ``F = -rho C_b pi r^2 |v| v``, MuJoCo's blunt-drag coefficient ``C_b``
+being half the textbook drag coefficient (``F = 1/2 rho C_d A v^2``, ``A = pi r^2``;
+checked against ``mj_forward``). :meth:`HandsWorld.set_drag` sets a ball's drag per
+episode as ``k = rho C_d A / (2 m)`` (1/m, the deceleration per squared speed, the
+only number of the drag that the flight depends on): the world's ball keeps its mass and
+radius and flies as a ball with that ``k`` (a table-tennis ball, 2.7 g, 40 mm, ``C_d``
+0.5: ``k = 0.14/m``; a 130 g 70 mm juggling ball, ``C_d`` 0.47: ``0.009/m``). The palms
+carry zero coefficients (a body with an ellipsoid geom gets no inertia-box drag; the
+hands feel no air) and the balls slide without rotating (no Magnus lift; the added-mass
+terms vanish without rotation).
 """
 
 from __future__ import annotations
@@ -105,6 +129,18 @@ class WorldSpec:
         The computed-torque servo's bandwidth, rad/s (critically damped).
     substeps : int
         Physics steps per control period.
+    air_density : float
+        kg/m^3 of the air the balls fly through (MuJoCo's fluid model, ``option
+        density``); 0 (the default): no air. With air, each ball's quadratic drag is set
+        per episode by :meth:`HandsWorld.set_drag` (module docstring, *Air drag*).
+    impact_capture : bool
+        The capture rule in the hand's frame (module docstring, *Capture at impact*);
+        False (the default): the contact rule above.
+    contact_damping : float
+        The damping ratio of the balls' and palms' contacts (MuJoCo ``solref``'s second
+        number; time constant 4 ms). 1 (the default): critically damped, a ball does not
+        bounce; below 1 a palm met too fast throws the ball back (0.2: a restitution of
+        about 0.5), as a stiff hand does.
     """
 
     hands: int = 1
@@ -121,8 +157,24 @@ class WorldSpec:
     capture_speed: float = 5.0
     servo_omega: float = 60.0
     substeps: int = 5
+    air_density: float = 0.0
+    impact_capture: bool = False
+    contact_damping: float = 1.0
 
     def __post_init__(self) -> None:
+        if not isinstance(self.impact_capture, (bool, np.bool_)):
+            raise ValueError(
+                f"WorldSpec.impact_capture must be a bool; got {self.impact_capture!r}"
+            )
+        if not (
+            isinstance(self.air_density, (int, float))
+            and math.isfinite(self.air_density)
+            and 0 <= self.air_density <= 100
+        ):
+            raise ValueError(
+                "WorldSpec.air_density must be a number in [0, 100] kg/m^3; "
+                f"got {self.air_density!r}"
+            )
         for name in ("hands", "balls", "substeps"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
@@ -135,7 +187,7 @@ class WorldSpec:
             raise ValueError(f"WorldSpec.substeps must be 1 to 100; got {self.substeps}")
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name in ("hands", "balls", "substeps") or f.name == "floor_z":
+            if f.name in ("hands", "balls", "substeps", "floor_z", "air_density", "impact_capture"):
                 continue
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"WorldSpec.{f.name} must be a finite number > 0; got {value!r}")
@@ -186,6 +238,7 @@ class WorldSpec:
             palm_top=self.palm_top,
             ball_contype=BALL_CONTYPE,
             ball_conaffinity=BALL_CONAFFINITY,
+            impact_capture=float(self.impact_capture),
         )
         return np.array([float(values[name]) for name in _period.CONSTANT_NAMES])
 
@@ -213,6 +266,16 @@ def world_mjcf(spec: WorldSpec) -> str:
     # the hand stops where its palm's underside meets the floor
     z_min = spec.floor_z + r + 2 * PALM_HALF_THICKNESS
     hands, balls, motors, sensors = [], [], [], []
+    # with air, every palm and ball uses the ellipsoid fluid model; the coefficients are
+    # zero (a ball's blunt drag is set per episode by HandsWorld.set_drag)
+    extra = ' fluidshape="ellipsoid" fluidcoef="0 0 0 0 0"' if spec.air_density > 0 else ""
+    if spec.contact_damping != 1.0:  # springy palms and balls (the default's class: 1)
+        extra += f' solref="0.004 {spec.contact_damping!r}"'
+    density = f' density="{spec.air_density!r}"' if spec.air_density > 0 else ""
+    option = (
+        f'<option timestep="{spec.physics_step!r}" gravity="0 0 {-spec.gravity!r}" '
+        f'integrator="Euler"{density}/>'
+    )
     for h, name in enumerate(spec.hand_names):
         palm, colour = _palm_name(name), _HAND_COLOURS[h]
         hands.append(f"""
@@ -223,7 +286,7 @@ def world_mjcf(spec: WorldSpec) -> str:
       <inertial pos="0 0 0" mass="{spec.hand_mass!r}" diaginertia="0.001 0.001 0.001"/>
       <geom name="{palm}" type="box" size="0.045 0.03 {PALM_HALF_THICKNESS!r}"
             pos="0 0 {palm_z!r}" rgba="{colour} 1" contype="1" conaffinity="0" condim="3"
-            mass="0"/>
+            mass="0"{extra}/>
       <geom name="{name}_mark" type="sphere" size="0.02" pos="0 0 -0.06"
             rgba="{colour} 0.35" contype="0" conaffinity="0" mass="0"/>
     </body>""")
@@ -241,7 +304,7 @@ def world_mjcf(spec: WorldSpec) -> str:
       <inertial pos="0 0 0" mass="{m!r}" diaginertia="{inertia!r} {inertia!r} {inertia!r}"/>
       <geom name="{name}" type="sphere" size="{r!r}" mass="0"
             rgba="{_BALL_COLOURS[b]}" contype="{BALL_CONTYPE}"
-            conaffinity="{BALL_CONAFFINITY}" condim="3"/>
+            conaffinity="{BALL_CONAFFINITY}" condim="3"{extra}/>
     </body>""")
         sensors.append(
             f'    <contact name="{name}_floor" geom1="{name}" geom2="floor" data="found" num="1"/>'
@@ -256,7 +319,7 @@ def world_mjcf(spec: WorldSpec) -> str:
      motion_envs.envs.juggling._world.world_mjcf from {spec!r} -->
 <mujoco model="juggling_{spec.hands}h{spec.balls}b">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{spec.physics_step!r}" gravity="0 0 {-spec.gravity!r}" integrator="Euler"/>
+  {option}
   <visual>
     <global offwidth="640" offheight="480"/>
     <headlight ambient="0.4 0.4 0.4" diffuse="0.6 0.6 0.6"/>
@@ -401,6 +464,19 @@ class HandsWorld:
         self._link()
 
     # -- setup ----------------------------------------------------------------------------
+    def set_drag(self, ball: int, drag: float) -> None:
+        """Give ``ball`` the quadratic air drag ``drag`` = ``k = rho C_d A / (2 m)`` (1/m;
+        module docstring, *Air drag*): MuJoCo's blunt-drag coefficient of its geom becomes
+        ``k m / (rho pi r^2)``. Needs a spec with air (``air_density > 0``)."""
+        spec = self.spec
+        if spec.air_density <= 0:
+            raise ValueError("set_drag needs a world with air (WorldSpec.air_density > 0)")
+        if not (math.isfinite(drag) and drag >= 0):
+            raise ValueError(f"drag must be a finite number >= 0 (1/m); got {drag!r}")
+        area = math.pi * spec.ball_radius**2
+        g = int(self.ball_geoms[ball])
+        self.model.geom_fluid[g, 1] = drag * spec.ball_mass / (spec.air_density * area)
+
     def set_contacts(self, ball: int, on: bool) -> None:
         """Switch ``ball``'s contacts on (flying) or off (held in the fingers)."""
         g = int(self.ball_geoms[ball])

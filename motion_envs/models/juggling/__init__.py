@@ -16,6 +16,10 @@ The public names of small private modules, one concern each:
 * ``_segmentation``: recordings cut into phases by the online criteria;
 * ``_sensor``: how Juggling-v1 sees the ball (:class:`BallSensor`: delay and noise) and
   scatters a toss (:func:`perturb_release`);
+* ``_camera``: how Juggling-v2 sees the ball (:class:`CameraSensor`: positions at a
+  camera rate, a hidden delay with jitter, drops, occlusion) and the flight estimators
+  fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
+  Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:func:`make_v2_controller`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -45,6 +49,15 @@ The public names of small private modules, one concern each:
   its constants; Juggling-v1's fit (:func:`v1_fit`).
 """
 
+from motion_envs.models.juggling._camera import (
+    ANCHOR_FRAMES,
+    DELAY_GRID,
+    ESTIMATORS,
+    CameraFrame,
+    CameraSensor,
+    FlightEstimator,
+    drag_flight,
+)
 from motion_envs.models.juggling._cascade import (
     CascadeFit,
     CascadePattern,
@@ -168,6 +181,13 @@ from motion_envs.models.juggling._sensor import (
     perturb_release,
     predict_forward,
 )
+from motion_envs.models.juggling._v2_levels import (
+    V2_CONTROLLERS,
+    V2_LEVELS,
+    V2Controller,
+    V2Level,
+    make_v2_controller,
+)
 from motion_envs.models.juggling._world import (
     TRACKING_ROWS,
     BallisticWorld,
@@ -178,10 +198,13 @@ from motion_envs.models.juggling._world import (
 )
 
 __all__ = [
+    "ANCHOR_FRAMES",
     "CASCADE_CONTROLLERS",
     "CONTROLLERS",
     "DEFAULT_TUNABLES",
+    "DELAY_GRID",
     "DEMO_CYCLES",
+    "ESTIMATORS",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
     "LEVELS",
@@ -194,10 +217,14 @@ __all__ = [
     "TRACKING_NOISE",
     "TRACKING_ROWS",
     "V1_N_SINES",
+    "V2_CONTROLLERS",
+    "V2_LEVELS",
     "AnalyticJuggler",
     "BallMeasurement",
     "BallSensor",
     "BallisticWorld",
+    "CameraFrame",
+    "CameraSensor",
     "CascadeController",
     "CascadeFit",
     "CascadeHand",
@@ -212,6 +239,7 @@ __all__ = [
     "Eq10Rows",
     "Flight",
     "FlightAnalysis",
+    "FlightEstimator",
     "FlightOptions",
     "HumanLikeness",
     "JugglerController",
@@ -229,6 +257,8 @@ __all__ = [
     "SiteswapTiming",
     "ThrowEvent",
     "ThrowNeed",
+    "V2Controller",
+    "V2Level",
     "across_axis",
     "cascade_fit",
     "cascade_likeness",
@@ -240,6 +270,7 @@ __all__ = [
     "cycle_rngs",
     "default_fit",
     "detect_flights",
+    "drag_flight",
     "draw_episode_noise",
     "eq10_many",
     "eq10_rows",
@@ -252,6 +283,7 @@ __all__ = [
     "load_juggling_csv",
     "make_cascade_controller",
     "make_controller",
+    "make_v2_controller",
     "pattern_controller",
     "pattern_likeness",
     "pattern_plan",

@@ -1,0 +1,423 @@
+"""``MotionEnvs/Juggling-v2``: juggle one ball seen through a delayed camera, in air."""
+
+# ruff: noqa: E501  (the class docstring holds Gymnasium-style Markdown tables)
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
+from motion_envs.envs._common import (
+    SideCameraMixin,
+    check_choice,
+    clipped_pair,
+)
+from motion_envs.envs.juggling._likeness import LikenessQuery
+from motion_envs.envs.juggling._shared import LevelsEnvMixin
+from motion_envs.envs.juggling._v1_env import DEFAULT_V1_REWARD_WEIGHTS, V1_CYCLE_TIME
+from motion_envs.envs.juggling._v1_scene import JugglingV1World
+from motion_envs.envs.juggling._world import WorldSpec
+from motion_envs.models.juggling import (
+    V2_CONTROLLERS,
+    V2_LEVELS,
+    CameraFrame,
+    CameraSensor,
+    V2Controller,
+    make_v2_controller,
+    v1_juggler,
+    v1_likeness,
+)
+
+__all__ = ["AIR_DENSITY", "FRAMES", "V2_OBS_DIM", "JugglingV2Env"]
+
+#: kg/m^3, the air of Juggling-v2's world (sea level, 20 C).
+AIR_DENSITY = 1.2
+#: The damping ratio of the palm's and ball's contact (a restitution of about 0.5: a
+#: ball met too fast bounces out of the hand).
+CONTACT_DAMPING = 0.2
+#: Received camera frames in the observation (newest first).
+FRAMES = 4
+#: Observation size (see the class docstring).
+V2_OBS_DIM = 16 + 4 * FRAMES
+_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
+_POS_MARGIN = 10.0
+_SPEED_BOUND = 30.0
+
+
+class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
+    r"""Toss and catch one ball seen through a camera with a hidden human delay, in air.
+
+    ## Description
+    Juggling-v1's world and analytic juggler (one actuated hand within human limits, one
+    ball, MuJoCo contacts, the juggler of Lippi et al. fitted on the **SIMULATED**
+    demonstrations; :class:`~motion_envs.envs.juggling.JugglingV1Env`), with what a
+    person faces and the juggler does not model, drawn per episode:
+
+    * **a visuomotor delay** drawn from the level's part of the human range (100-250
+      ms), hidden from the observation, plus a per-frame jitter;
+    * **a camera** that reports ball POSITIONS only, at 100 Hz, with frame drops,
+      occlusion near the palm and millimetre noise
+      (:class:`~motion_envs.models.juggling.CameraSensor`);
+    * **quadratic air drag** ``F = 1/2 rho C_d A v^2`` in MuJoCo's fluid model, with a
+      per-episode coefficient ``k = rho C_d A / (2 m)`` between a juggling ball
+      (0.009/m) and a table-tennis ball (0.14/m), unknown to the juggler
+      (:mod:`~motion_envs.envs.juggling._world`, *Air drag*);
+    * **the capture rule in the hand's frame**: a catch needs the palm to meet the
+      ball slower than ``capture_speed`` (3 m/s) at the first physics step of their
+      contact; a faster ball bounces off (*Capture at impact*).
+
+    The analytic juggler's eq. 10 correction is fed the ball's state fitted to the
+    frames it has received, taking them as the present (``controller="juggler"``); the
+    agent adds a residual to each of its commands. Reference controllers
+    (:data:`~motion_envs.models.juggling.V2_CONTROLLERS`): ``juggler_mean_delay``
+    (frames shifted by the level's mean delay), ``juggler_delay_estimator`` (the
+    delay estimated from the release, a hand-written fix) and ``juggler_oracle`` (given
+    the true delay, jitter and drag: an UPPER REFERENCE, not a competitor).
+
+    Levels (the delay and the drag are drawn uniformly per episode):
+
+    | level    | delay (ms) | jitter (ms) | frame drops | noise (mm) | drag `k` (1/m) | release speed / angle std | `capture_speed` (m/s) |
+    |----------|------------|-------------|-------------|------------|----------------|---------------------------|------------------------|
+    | `easy`   | 100-150    | 5           | 2 %         | 1          | 0.009-0.02     | 0.05 / 4 deg              | 3                      |
+    | `medium` | 100-200    | 10          | 5 %         | 2          | 0.009-0.07     | 0.08 / 6 deg              | 3                      |
+    | `hard`   | 150-250    | 15          | 10 %        | 3          | 0.009-0.14     | 0.12 / 12 deg             | 3                      |
+
+    Every level's camera runs at 100 Hz and loses the ball within 10 cm of the hand's
+    origin. The episode's true delay and drag are the attributes ``delay`` and ``drag``
+    (for evaluation; never in the observation or the info).
+
+    ## Action Space
+    ``Box(-1, 1, (2,), float32)``: the residual ``(dx, dz)`` added to the controller's
+    next hand target, times `residual_scale` (m), in the phases of `residual_phases`.
+
+    ## Observation Space
+    ``Box(low, high, (32,), float32)`` (positions within 10 m of the home, speeds within 30 m/s):
+
+    | index   | observation                                                              | unit           |
+    |---------|--------------------------------------------------------------------------|----------------|
+    | 0, 1    | hand position ``x, z`` (proprioception, exact)                           | position (m)   |
+    | 2, 3    | hand velocity                                                            | velocity (m/s) |
+    | 4       | 1 if the ball is held, else 0 (touch)                                    | unitless       |
+    | 5..8    | phase one-hot: toss, go_down, catch, return                              | unitless       |
+    | 9       | time within the phase                                                    | time (s)       |
+    | 10      | duration of the current phase plan                                       | time (s)       |
+    | 11, 12  | the controller's next hand target (its plan, no residual)                | position (m)   |
+    | 13, 14  | the plan's end point (in the catch phase: the planned catch point)       | position (m)   |
+    | 15      | time since the hand last released the ball (0 before the first toss)     | time (s)       |
+    | 16..31  | the last 4 received frames ``x, z, age, valid``, newest first: the ball's measured position, the time since the frame ARRIVED (s; its capture time is hidden), 1 if the slot holds a frame | m, s |
+
+    **Memory.** The observation is the present only: the delay is a property of the
+    episode, and a policy can infer it only by relating the frames' arrivals to its
+    own release (entry 15) over a flight (about 0.4 s, 80 steps): an agent needs memory
+    over a flight, a recurrent policy (sb3-contrib's ``RecurrentPPO``) or a frame stack
+    long enough to span one (Gymnasium's ``FrameStackObservation``; 4 frames of 5 ms
+    see only the last 20 ms). Every entry is a plain number in a fixed slot, so frames
+    stack.
+
+    ## Rewards
+    Juggling-v1's: ``w_catch * caught - w_drop * dropped - w_likeness * likeness -
+    w_action * |a|^2`` (default weights ``catch: 10, drop: 10, likeness: 0.01, action:
+    0.01``; ``likeness`` against the TRAINING demonstrations). `info` holds each
+    weighted term, ``likeness``, ``catches``, ``tosses`` (``cycles``), ``phase``,
+    ``held``, ``time``, the true ``hand`` and ``ball`` positions and
+    ``action_invalid``; at a step with a catch also the task-error vector
+    ``task_error = (offset, timing)``: where the ball met the palm relative to its
+    centre (m, along ``x``) and the catch time minus the plan's catch time (s), and
+    ``catch_speed`` (m/s), the speed at which the palm met the ball. The offset and the meeting time are interpolated within
+    the control period from its start (relative motion linear over 5 ms).
+
+    ## Starting State
+    The hand rests at the juggler's home with the ball in it, time 0, toss phase.
+    `reset(seed=S)` seeds five independent streams ``SeedSequence(S).spawn(5)``: the
+    world (release noise), the camera, the controller, the episode's delay and the
+    episode's drag.
+
+    ## Episode End
+    ### Termination
+    The ball touches the floor (a drop).
+
+    ### Truncation
+    After `max_catches` catches, or ``max_catches * 4 s`` of simulated time.
+
+    ## Arguments
+    ```python
+    import gymnasium as gym
+    import motion_envs
+    env = gym.make("MotionEnvs/Juggling-v2", level="medium")
+    ```
+
+    | Parameter         | Type      | Default     | Description |
+    |-------------------|-----------|-------------|-------------|
+    | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle` |
+    | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
+    | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
+    | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
+    | `reward_weights`  | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
+    | `render_mode`     | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
+    | `width`           | **int**   | `480`       | frame width in pixels |
+    | `height`          | **int**   | `480`       | frame height in pixels |
+
+    ## Version History
+    * v2: a hidden per-episode human delay with jitter, a position-only camera with
+      drops and occlusion, air drag, the capture at impact, the task-error vector.
+    * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
+      sensor with a fixed latency per level.
+    * v0: the paper's setting (kinematic hand, exact ball state).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+    _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
+    controller: V2Controller
+
+    def __init__(
+        self,
+        level: str = "medium",
+        controller: str = "juggler",
+        max_catches: int = 10,
+        residual_scale: float = 0.05,
+        residual_phases: Sequence[str] | None = None,
+        reward_weights: Mapping[str, float] | None = None,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+    ) -> None:
+        self.level = check_choice(level, "level", tuple(V2_LEVELS))
+        self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
+        self._init_episode_arguments(
+            (max_catches, residual_scale, residual_phases, reward_weights),
+            (render_mode, width, height),
+        )
+        lv = self.spec_level = V2_LEVELS[self.level]
+        self.gravity = 9.81
+        self.task = JugglingTask(gravity=self.gravity)
+        juggler = v1_juggler(self.gravity)
+        self.home = np.asarray(juggler.home_, dtype=np.float64)
+        self.controller = make_v2_controller(
+            self.controller_name, juggler, self.gravity, lv.mean_delay
+        )
+        self.likeness = v1_likeness(self.gravity, "train")
+        self._likeness = LikenessQuery(self.likeness)
+        spec = WorldSpec.of(
+            self.task,
+            capture_speed=lv.capture_speed,
+            air_density=AIR_DENSITY,
+            impact_capture=True,
+            contact_damping=CONTACT_DAMPING,
+        )
+        self.world = JugglingV1World(
+            self.task, lv.release_speed_std, math.radians(lv.release_angle_std), spec=spec
+        )
+        self.camera = CameraSensor(
+            self.task.dt,
+            lv.frame_rate,
+            lv.jitter_std,
+            lv.drop_prob,
+            lv.occlusion_radius,
+            lv.position_std,
+        )
+        self.model, self.data = self.world.model, self.world.data
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
+        self._time_limit = self.max_catches * V1_CYCLE_TIME
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        low, high = self._bounds()
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self._low, self._high = low, high
+        self._renderer: Any = None
+        self._done = True
+        self._state: JugglingState | None = None
+        self._frames: deque[CameraFrame] = deque(maxlen=FRAMES)
+        self._catches = self._tosses = 0
+        self._release_time = math.nan
+        #: s and 1/m: the episode's true delay and drag (hidden from the policy)
+        self.delay = self.drag = math.nan
+
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
+        fz, t = self.task.floor_z, self._time_limit
+        low = [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m, 0]
+        high = [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, t, t, hx + m, hz + m, hx + m, hz + m, t]
+        low += [hx - m, fz - m, 0, 0] * FRAMES
+        high += [hx + m, hz + m, t, 1] * FRAMES
+        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+
+    @property
+    def dt(self) -> float:
+        """s of simulated time per step (one control period)."""
+        return self.task.dt
+
+    # -- episode ------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        super().reset(seed=seed)
+        base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
+        streams = np.random.SeedSequence(base).spawn(5)
+        world_rng, camera_rng, controller_rng, delay_rng, drag_rng = (
+            np.random.default_rng(s) for s in streams
+        )
+        lv = self.spec_level
+        self.delay = float(delay_rng.uniform(*lv.delay))
+        self.drag = float(drag_rng.uniform(*lv.drag))
+        true = self.world.reset(self.home, rng=world_rng)
+        self.world.set_drag(0, self.drag)
+        self.camera.reset(self.delay, camera_rng)
+        self.controller.estimator.reset(self.drag)
+        state = self._controller_state(true)
+        self.controller.reset(state, controller_rng)
+        self._state = state
+        self._frames.clear()
+        self._done = False
+        self._catches = self._tosses = 0
+        self._release_time = math.nan
+        info = {
+            "phase": self.controller.phase,
+            "time": true.time,
+            "hand": true.hand_pos.copy(),
+            "ball": true.ball_pos.copy(),
+            "seed": base,
+        }
+        return self._observation(true), info
+
+    @staticmethod
+    def _controller_state(true: JugglingState) -> JugglingState:
+        """What the controller is given: the true hand and events; the ball's fields
+        are the hand's (in flight it sees the ball only through its estimator)."""
+        return JugglingState(
+            time=true.time,
+            hand_pos=true.hand_pos,
+            hand_vel=true.hand_vel,
+            ball_pos=true.hand_pos,
+            ball_vel=true.hand_vel,
+            held=true.held,
+            released=true.released,
+            caught=true.caught,
+            dropped=true.dropped,
+        )
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._done or self._state is None:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        ax, az, invalid = clipped_pair(action)
+        true, terminated, truncated, error, speed = self._advance(ax, az)
+        caught = int(true.caught)
+        phase = self.controller.phase
+        like = self._likeness.distance(phase, true.hand_pos, true.hand_vel)
+        reward, terms = self._rewards(caught, true.dropped, like, ax * ax + az * az)
+        info = self._step_info(terms, true, phase, invalid)
+        if caught:
+            info["task_error"] = error
+            info["catch_speed"] = speed
+        return self._observation(true), reward, terminated, truncated, info
+
+    def _advance(
+        self, ax: float, az: float
+    ) -> tuple[JugglingState, bool, bool, NDArray[np.float64], float]:
+        """One control period with the residual ``(ax, az)``: the controller's command,
+        the world, the camera and the estimator, the episode's counts and end; returns
+        ``(true state, terminated, truncated, task_error, catch_speed)``."""
+        state = self._state
+        assert state is not None
+        controller = self.controller
+        target, armed = controller.command(state)
+        if self.residual_phases is not None:  # as Juggling-v1: the phase after the command
+            if not self.residual_acts[PHASES.index(controller.phase)]:
+                ax, az = 0.0, 0.0
+        planned = math.nan
+        if controller.phase == "catch":
+            episode = controller._episode
+            planned = episode.t_start + episode.duration
+        before = self.world.data.qpos[:4].copy(), self.world.data.qvel[:4].copy()
+        s = self.residual_scale
+        true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
+        error = np.full(2, np.nan)
+        speed = math.nan
+        if true.caught:
+            error, speed = self._task_error(before, true.time - self.task.dt, planned)
+        k = int(self.world.k[0])
+        hand = (float(true.hand_pos[0]), float(true.hand_pos[1]))
+        ball = (float(true.ball_pos[0]), float(true.ball_pos[1]))
+        frames = self.camera.record(k, ball, hand, true.held)
+        if true.released:
+            controller.estimator.released(true.time, *hand)
+            self._release_time = true.time
+        controller.estimator.add(frames)
+        self._frames.extendleft(frames)
+        self._state = self._controller_state(true)
+        self._catches += int(true.caught)
+        self._tosses += int(true.released)
+        terminated, truncated = self._episode_end(true.dropped, true.time)
+        return true, terminated, truncated, error, speed
+
+    def _task_error(
+        self, before: tuple[NDArray[np.float64], NDArray[np.float64]], t0: float, planned: float
+    ) -> tuple[NDArray[np.float64], float]:
+        """The catch's ``(offset, timing)`` and meeting speed from the state at the
+        period's start: the relative motion, linear over the period, meets the palm's
+        top (the ball's centre level with the hand's origin) at ``s`` in ``[0, dt]``."""
+        q, v = before
+        rx, rz = q[2] - q[0], q[3] - q[1]
+        vx, vz = v[2] - v[0], v[3] - v[1]
+        dt = self.task.dt
+        s = min(max(-rz / vz, 0.0), dt) if vz < 0 else 0.0
+        return np.array([rx + vx * s, t0 + s - planned]), math.hypot(vx, vz)
+
+    def nominal_episode(self, seed: int) -> dict[str, Any]:
+        """``reset(seed=seed)``, then the zero action until the episode ends (the
+        controller alone), as Juggling-v1's: ``time``, ``hand``, ``phase`` at the reset
+        and after every step, the episode's ``tosses``, ``catches``, ``dropped``, and
+        the catches' ``task_errors (n, 2)``."""
+        _, info = self.reset(seed=seed)
+        times = [float(info["time"])]
+        hands = [info["hand"].tolist()]
+        phases = [str(info["phase"])]
+        errors = []
+        terminated = truncated = False
+        while not (terminated or truncated):
+            true, terminated, truncated, error, _ = self._advance(0.0, 0.0)
+            times.append(true.time)
+            hands.append(true.hand_pos.tolist())
+            phases.append(self.controller.phase)
+            if true.caught:
+                errors.append(error)
+        return {
+            "time": np.array(times, dtype=np.float64),
+            "hand": np.array(hands, dtype=np.float64),
+            "phase": phases,
+            "tosses": self._tosses,
+            "catches": self._catches,
+            "dropped": terminated,
+            "task_errors": np.array(errors, dtype=np.float64).reshape(-1, 2),
+        }
+
+    def _observation(self, true: JugglingState) -> NDArray[np.float32]:
+        c = self.controller
+        row = true.hand_pos.tolist()
+        row += true.hand_vel.tolist()
+        row.append(float(true.held))
+        row += _ONE_HOT[c.phase]
+        row += (c.phase_time, c.duration)
+        row += c.nominal_next().tolist()
+        row += c.plan_end.tolist()
+        since = true.time - self._release_time
+        row.append(0.0 if math.isnan(since) else since)
+        for i in range(FRAMES):
+            if i < len(self._frames):
+                f = self._frames[i]
+                row += (f.x, f.z, true.time - f.arrival, 1.0)
+            else:
+                row += (float(self.home[0]), float(self.home[1]), 0.0, 0.0)
+        obs = np.array(row, dtype=np.float32)
+        np.minimum(obs, self._high, out=obs)
+        return np.maximum(obs, self._low, out=obs)
+
+    # -- rendering (SideCameraMixin.render) ----------------------------------------------
+    def _sync_scene(self) -> None:
+        self.world.sync()

@@ -1,0 +1,357 @@
+r"""How Juggling-v2 sees the ball: a camera with a hidden human delay, and estimators of
+the flight from its frames.
+
+**The camera** (:class:`CameraSensor`) reports ball POSITIONS only, at a camera rate
+(``frame_rate``, frames captured every ``round(1 / (frame_rate dt))`` control periods),
+as a motion-capture system does: each captured frame is lost with probability
+``drop_prob`` (a frame drop), is missing while the ball is held or its centre is within
+``occlusion_radius`` of the hand's origin (the hand occludes it; near the palm markers
+vanish), and carries white Gaussian noise of ``position_std`` m. A frame reaches the
+controller after the episode's visuomotor delay plus a per-frame jitter (normal,
+``jitter_std`` s), at the first control step at or after ``capture + delay + jitter``,
+in capture order (a frame never overtakes an earlier one: first in, first out). The
+delay is drawn per episode by the environment from the level's human range and never
+shown: a frame says where the ball was, not when.
+
+Four random numbers are drawn per captured frame (drop, jitter, two noises), whether or
+not the frame is lost, so a frame's fate does not shift the next frames' draws.
+
+**The estimators** (:class:`FlightEstimator`) turn the frames received since the last
+release into the ball's position and velocity NOW, for the analytic juggler's eq. 10
+correction. Each fits the flight ``p(t) = a + b (t - t_0) + c (t - t_0)^2 / 2`` (``c``
+gravity, plus, for an estimator that knows it, the drag deceleration ``-k |b| b`` held
+constant over the window, one fixed-point refit) by least squares to the newest
+``window`` frames, each frame placed at a time that the estimator believes it was
+captured at:
+
+* ``"arrival"`` (the analytic juggler): at its arrival (the delay ignored, as the
+  juggler of Lippi et al. takes what it sees as the present);
+* ``"mean_delay"``: at its arrival minus a fixed delay (the level's mean);
+* ``"release"`` (the hand-written delay estimator): at its arrival minus the delay
+  estimated from the release. The hand knows when and where it let the ball go (touch,
+  no delay); the ball's flight from that point, ``r + v s - g s^2 / 2``, must pass
+  through the frames at ``s = arrival - t_r - d``: for each delay ``d`` on a 5 ms grid
+  over ``DELAY_GRID`` the least-squares ``v`` and the residual, the best ``d`` per
+  flight from its first ``ANCHOR_FRAMES`` frames (the drag has not yet bent the flight
+  much), averaged over the episode's flights (the delay is one per episode);
+* ``"oracle"``: at its TRUE capture time, with the ball's true drag (an upper reference,
+  given what the world hides; labelled so wherever it is reported).
+
+The fitted state is carried to the present along the estimator's model of the flight
+(ballistic, or with the known drag by :func:`drag_flight`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "ANCHOR_FRAMES",
+    "DELAY_GRID",
+    "ESTIMATORS",
+    "CameraFrame",
+    "CameraSensor",
+    "FlightEstimator",
+    "drag_flight",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: The estimators' names (module docstring).
+ESTIMATORS = ("arrival", "mean_delay", "release", "oracle")
+#: s; the delays the release-anchored estimator tries (5 ms apart).
+DELAY_GRID = np.round(np.arange(0.0, 0.4001, 0.005), 6)
+#: Frames after a release from which the release-anchored estimator finds the delay.
+ANCHOR_FRAMES = 8
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One received frame: the ball's measured ``x, z`` (m), when it was captured
+    (``capture``, s; hidden from all but the oracle) and when it arrived (``arrival``)."""
+
+    capture: float
+    arrival: float
+    x: float
+    z: float
+
+
+class CameraSensor:
+    """A position-only, delayed camera (module docstring).
+
+    Parameters
+    ----------
+    dt:
+        s, the control period.
+    frame_rate:
+        Hz; frames are captured every ``round(1 / (frame_rate dt))`` control periods.
+    jitter_std:
+        s, the std of each frame's extra latency.
+    drop_prob:
+        Probability that a captured frame is lost.
+    occlusion_radius:
+        m; a ball whose centre is this close to the hand's origin is not seen.
+    position_std:
+        m, the std of the white noise on each coordinate.
+    """
+
+    def __init__(
+        self,
+        dt: float,
+        frame_rate: float,
+        jitter_std: float,
+        drop_prob: float,
+        occlusion_radius: float,
+        position_std: float,
+    ) -> None:
+        for name, value, low, high in (
+            ("dt", dt, 1e-6, 1.0),
+            ("frame_rate", frame_rate, 1.0, 1e4),
+            ("jitter_std", jitter_std, 0.0, 1.0),
+            ("drop_prob", drop_prob, 0.0, 1.0),
+            ("occlusion_radius", occlusion_radius, 0.0, 10.0),
+            ("position_std", position_std, 0.0, 1.0),
+        ):
+            if not (math.isfinite(value) and low <= value <= high):
+                raise ValueError(f"{name} must be in [{low}, {high}]; got {value!r}")
+        self.dt = float(dt)
+        self.frame_steps = max(1, round(1.0 / (frame_rate * dt)))
+        self.jitter_std = float(jitter_std)
+        self.drop_prob = float(drop_prob)
+        self.occlusion_radius = float(occlusion_radius)
+        self.position_std = float(position_std)
+        self.delay = 0.0
+        self._pending: list[tuple[int, CameraFrame]] = []
+        self._last_arrival = -1
+        self._rng: np.random.Generator = np.random.default_rng(0)
+
+    def reset(self, delay: float, rng: np.random.Generator) -> None:
+        """A new episode with the visuomotor ``delay`` (s); no frame in flight."""
+        if not (math.isfinite(delay) and delay >= 0):
+            raise ValueError(f"delay must be finite and >= 0; got {delay!r}")
+        self.delay = float(delay)
+        self._rng = rng
+        self._pending = []
+        self._last_arrival = -1
+
+    def record(
+        self, k: int, ball: tuple[float, float], hand: tuple[float, float], held: bool
+    ) -> list[CameraFrame]:
+        """The world at control step ``k`` (time ``k dt``): capture a frame when one is
+        due; return the frames that arrive at step ``k`` (capture order)."""
+        if k % self.frame_steps == 0:
+            u = float(self._rng.random())
+            jitter, ex, ez = (float(e) for e in self._rng.standard_normal(3))
+            bx, bz = ball
+            near = math.hypot(bx - hand[0], bz - hand[1]) < self.occlusion_radius
+            if not (held or near or u < self.drop_prob):
+                t = k * self.dt
+                latency = max(self.delay + self.jitter_std * jitter, 0.0)
+                arrive = max(k + math.ceil(latency / self.dt - 1e-9), self._last_arrival)
+                self._last_arrival = arrive
+                frame = CameraFrame(
+                    t,
+                    arrive * self.dt,
+                    bx + self.position_std * ex,
+                    bz + self.position_std * ez,
+                )
+                self._pending.append((arrive, frame))
+        out = [f for a, f in self._pending if a <= k]
+        if out:
+            self._pending = [(a, f) for a, f in self._pending if a > k]
+        return out
+
+
+def drag_flight(
+    p: tuple[float, float], v: tuple[float, float], seconds: float, gravity: float, drag: float
+) -> tuple[float, float, float, float]:
+    """``(x, z, vx, vz)`` ``seconds`` later (may be negative) of a ball at ``p`` moving at
+    ``v`` under gravity and the quadratic drag ``dv/dt = -k |v| v`` (``k = drag``, 1/m):
+    classical Runge-Kutta (Nystrom form for the position) with steps of at most 10 ms
+    (ballistic, exactly, when ``drag == 0``; the test compares it with scipy's
+    ``solve_ivp``)."""
+    x, z = p
+    vx, vz = v
+    if drag == 0.0:
+        s = seconds
+        return x + vx * s, z + vz * s - 0.5 * gravity * s * s, vx, vz - gravity * s
+    n = max(1, math.ceil(abs(seconds) / 0.01))
+    h = seconds / n
+    hyp, k, g = math.hypot, drag, gravity
+    for _ in range(n):
+        s1 = k * hyp(vx, vz)
+        a1x, a1z = -s1 * vx, -g - s1 * vz
+        ux, uz = vx + 0.5 * h * a1x, vz + 0.5 * h * a1z
+        s2 = k * hyp(ux, uz)
+        a2x, a2z = -s2 * ux, -g - s2 * uz
+        ux, uz = vx + 0.5 * h * a2x, vz + 0.5 * h * a2z
+        s3 = k * hyp(ux, uz)
+        a3x, a3z = -s3 * ux, -g - s3 * uz
+        ux, uz = vx + h * a3x, vz + h * a3z
+        s4 = k * hyp(ux, uz)
+        a4x, a4z = -s4 * ux, -g - s4 * uz
+        x += h * (vx + h / 6 * (a1x + a2x + a3x))
+        z += h * (vz + h / 6 * (a1z + a2z + a3z))
+        vx += h / 6 * (a1x + 2 * a2x + 2 * a3x + a4x)
+        vz += h / 6 * (a1z + 2 * a2z + 2 * a3z + a4z)
+    return x, z, vx, vz
+
+
+class FlightEstimator:
+    """The ball's position and velocity now, from the frames since the last release
+    (module docstring).
+
+    Parameters
+    ----------
+    mode:
+        One of :data:`ESTIMATORS`.
+    gravity:
+        m/s^2.
+    window:
+        The newest frames the flight is fitted to (>= 3).
+    delay:
+        s; ``"mean_delay"``'s fixed delay.
+    drag:
+        1/m; the oracle's drag (set per episode by :meth:`reset`).
+    """
+
+    def __init__(self, mode: str, gravity: float, window: int = 10, delay: float = 0.0) -> None:
+        if mode not in ESTIMATORS:
+            raise ValueError(f"mode must be one of {list(ESTIMATORS)}; got {mode!r}")
+        if window < 3:
+            raise ValueError(f"window must be >= 3; got {window!r}")
+        self.mode = mode
+        self.gravity = float(gravity)
+        self.window = int(window)
+        self.fixed_delay = float(delay)
+        self.drag = 0.0
+        self.reset()
+
+    def reset(self, drag: float = 0.0) -> None:
+        """A new episode (the oracle is told the ball's ``drag``)."""
+        self.drag = float(drag) if self.mode == "oracle" else 0.0
+        self.frames: list[CameraFrame] = []
+        self.release: tuple[float, float, float] | None = None
+        self._delays: list[float] = []
+        self._anchored = False
+        self._fit: tuple[float, FloatArray, FloatArray] | None = None
+        self._fitted = False
+        self._cached: tuple[tuple[int, float], tuple[float, float]] | None = None
+        self._version = 0
+
+    def released(self, time: float, x: float, z: float) -> None:
+        """The hand let the ball go at ``time`` from ``(x, z)``: a new flight."""
+        if self.mode == "release" and self.release is not None and not self._anchored:
+            self._anchor()  # a short flight still tells the delay
+        self.release = (float(time), float(x), float(z))
+        self.frames = []
+        self._anchored = False
+        self._fitted = False
+
+    def add(self, frames: list[CameraFrame]) -> None:
+        """Frames that arrived this step."""
+        if self.release is None:
+            return
+        if frames:
+            self.frames.extend(frames)
+            self._fitted = False
+        if self.mode == "release" and not self._anchored and len(self.frames) >= ANCHOR_FRAMES:
+            self._anchor()
+
+    def _anchor(self) -> None:
+        """The release-anchored delay of the current flight (module docstring)."""
+        self._anchored = True
+        if self.release is None or len(self.frames) < 3:
+            return
+        t_r, rx, rz = self.release
+        arrivals = np.array([f.arrival for f in self.frames[:ANCHOR_FRAMES]])
+        q = np.array([[f.x - rx, f.z - rz] for f in self.frames[:ANCHOR_FRAMES]])
+        s = arrivals[None, :] - t_r - DELAY_GRID[:, None]  # (delays, frames)
+        ok = (s > 0).all(axis=1)
+        if not ok.any():
+            return
+        s = s[ok]
+        q = np.broadcast_to(q, (s.shape[0], *q.shape)).copy()
+        q[..., 1] += 0.5 * self.gravity * s * s
+        v = (s[..., None] * q).sum(axis=1) / (s * s).sum(axis=1)[:, None]
+        sse = ((q - s[..., None] * v[:, None, :]) ** 2).sum(axis=(1, 2))
+        self._delays.append(float(DELAY_GRID[ok][int(np.argmin(sse))]))
+        self._fitted = False
+
+    @property
+    def delay_estimate(self) -> float | None:
+        """s; the release-anchored estimator's delay (the mean over the episode's
+        flights so far), or None before the first."""
+        return float(np.mean(self._delays)) if self._delays else None
+
+    def _times(self, frames: list[CameraFrame]) -> FloatArray | None:
+        arrivals = np.array([f.arrival for f in frames])
+        if self.mode == "arrival":
+            return arrivals
+        if self.mode == "mean_delay":
+            return arrivals - self.fixed_delay
+        if self.mode == "release":
+            d = self.delay_estimate
+            return None if d is None else arrivals - d
+        return np.array([f.capture for f in frames])
+
+    def fit(self) -> tuple[float, FloatArray, FloatArray] | None:
+        """The fitted flight ``(t0, position, velocity)`` at the newest frame's believed
+        time ``t0`` (refitted only when frames arrived), or None (fewer than 3 frames of
+        this flight, or no delay estimate yet)."""
+        if not self._fitted:
+            self._fit = self._refit()
+            self._fitted = True
+            self._version += 1
+        return self._fit
+
+    def _refit(self) -> tuple[float, FloatArray, FloatArray] | None:
+        frames = self.frames[-self.window :]
+        if len(frames) < 3:
+            return None
+        times = self._times(frames)
+        if times is None:
+            return None
+        t0 = float(times[-1])
+        tau = times - t0
+        p = np.array([[f.x, f.z] for f in frames])
+        design = np.stack([np.ones_like(tau), tau], axis=1)
+        acc = np.array([0.0, -self.gravity])
+        for _ in range(2 if self.drag > 0 else 1):
+            y = p - 0.5 * (tau * tau)[:, None] * acc[None, :]
+            (a, b), *_ = np.linalg.lstsq(design, y, rcond=None)
+            sp = math.hypot(float(b[0]), float(b[1]))
+            acc = np.array([-self.drag * sp * b[0], -self.gravity - self.drag * sp * b[1]])
+        return t0, a, b
+
+    def estimate(self, now: float) -> tuple[FloatArray, FloatArray] | None:
+        """The ball's ``(position, velocity)`` at ``now`` along the fitted flight
+        (:meth:`fit`) under this estimator's model, or None without a fit."""
+        fit = self.fit()
+        if fit is None:
+            return None
+        t0, a, b = fit
+        x, z, vx, vz = drag_flight(
+            (float(a[0]), float(a[1])), (float(b[0]), float(b[1])), now - t0, self.gravity,
+            self.drag,
+        )  # fmt: skip
+        return np.array([x, z]), np.array([vx, vz])
+
+    def position_at(self, time: float) -> tuple[float, float] | None:
+        """The fitted flight's position at ``time`` (cached per fit and time)."""
+        fit = self.fit()
+        if fit is None:
+            return None
+        key = (self._version, time)
+        if self._cached is None or self._cached[0] != key:
+            t0, a, b = fit
+            x, z, _, _ = drag_flight(
+                (float(a[0]), float(a[1])), (float(b[0]), float(b[1])), time - t0,
+                self.gravity, self.drag,
+            )  # fmt: skip
+            self._cached = (key, (x, z))
+        return self._cached[1]

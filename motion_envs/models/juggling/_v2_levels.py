@@ -1,0 +1,148 @@
+r"""Juggling-v2's levels and its reference controllers: the analytic juggler fed by a
+flight estimator (:mod:`~motion_envs.models.juggling._camera`).
+
+**Levels** (:data:`V2_LEVELS`): what varies per episode and how the ball is seen and
+tossed. Every level's visuomotor delay is drawn per episode, uniformly, from a part of
+the human range 100-250 ms (visual feedback delays of 100 ms and more, Franklin &
+Wolpert 2011, *Computational mechanisms of sensorimotor control*, Neuron 72: 425-442;
+the upper end is that of simple visual reaction times, about 200-250 ms); a camera at
+100 Hz with frame drops, occlusion near the palm and millimetre noise; and a quadratic
+air drag ``k = rho C_d A / (2 m)`` drawn per episode, uniformly, between a 130 g
+juggling ball (``k = 0.009/m``) and, on the harder levels, a table-tennis ball
+(``k = 0.14/m``; :mod:`~motion_envs.envs.juggling._world`, *Air drag*).
+
+**Controllers** (:data:`V2_CONTROLLERS`): the analytic juggler of Juggling-v1 (eq. 9
+toss, eq. 10 correction; the same fit) whose eq. 10 correction is fed the ball's state
+from a :class:`~motion_envs.models.juggling.FlightEstimator`:
+
+* ``"juggler"``: frames taken as the present (``"arrival"``);
+* ``"juggler_mean_delay"``: frames shifted by the level's mean delay;
+* ``"juggler_delay_estimator"``: the hand-written delay estimator (the delay found
+  from the release, per episode; ``"release"``);
+* ``"juggler_oracle"``: the true capture times and the ball's true drag (an UPPER
+  REFERENCE: it is given what the world hides). With drag the juggler's ballistic
+  prediction is handed the equivalent ballistic state: the velocity whose ballistic
+  flight reaches, at the plan's catch time, the point the drag flight reaches.
+
+Without a state estimate (fewer than 3 frames of the flight) the juggler does not
+correct; the controller never sees the true ball in flight.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import JugglingState
+from motion_envs.models.juggling._camera import FlightEstimator
+from motion_envs.models.juggling._juggler import AnalyticJuggler
+from motion_envs.models.juggling._levels import JugglerController
+
+__all__ = ["V2_CONTROLLERS", "V2_LEVELS", "V2Controller", "V2Level", "make_v2_controller"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class V2Level:
+    """What a Juggling-v2 level fixes.
+
+    Attributes
+    ----------
+    delay:
+        s, the range ``(low, high)`` the episode's visuomotor delay is drawn from.
+    jitter_std:
+        s, the std of each frame's extra latency.
+    frame_rate:
+        Hz, the camera's.
+    drop_prob:
+        The probability that a frame is lost.
+    occlusion_radius:
+        m; the ball is not seen this close to the hand's origin.
+    position_std:
+        m, the camera's noise per coordinate.
+    drag:
+        1/m, the range ``(low, high)`` the episode's drag ``k`` is drawn from.
+    release_speed_std, release_angle_std:
+        The toss's scatter (relative; degrees).
+    capture_speed:
+        m/s; a catch needs the palm to meet the ball slower than this.
+    """
+
+    delay: tuple[float, float]
+    jitter_std: float
+    frame_rate: float
+    drop_prob: float
+    occlusion_radius: float
+    position_std: float
+    drag: tuple[float, float]
+    release_speed_std: float
+    release_angle_std: float
+    capture_speed: float
+
+    @property
+    def mean_delay(self) -> float:
+        """s, the mean of the episode's delay."""
+        return 0.5 * (self.delay[0] + self.delay[1])
+
+
+#: Juggling-v2's levels (the env docstring has the table).
+V2_LEVELS: dict[str, V2Level] = {
+    "easy": V2Level((0.10, 0.15), 0.005, 100.0, 0.02, 0.10, 0.001, (0.009, 0.02), 0.05, 4.0, 5.0),
+    "medium": V2Level((0.10, 0.20), 0.01, 100.0, 0.05, 0.10, 0.002, (0.009, 0.07), 0.08, 6.0, 5.0),
+    "hard": V2Level((0.15, 0.25), 0.015, 100.0, 0.10, 0.10, 0.003, (0.009, 0.14), 0.12, 12.0, 5.0),
+}
+
+#: The controllers' names and their estimators.
+V2_CONTROLLERS: dict[str, str] = {
+    "juggler": "arrival",
+    "juggler_mean_delay": "mean_delay",
+    "juggler_delay_estimator": "release",
+    "juggler_oracle": "oracle",
+}
+
+
+class V2Controller(JugglerController):
+    """The analytic juggler fed by ``estimator`` (module docstring)."""
+
+    def __init__(self, juggler: AnalyticJuggler, estimator: FlightEstimator) -> None:
+        super().__init__(juggler)
+        self.estimator = estimator
+
+    def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
+        """Start a toss from the state (ball in hand); the estimator keeps its drag (set
+        by :meth:`FlightEstimator.reset` before)."""
+        super().reset(state, rng)
+
+    def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
+        """Next hand target and release arming; in the catch phase the state's ball is
+        the estimator's (``state``'s own ball fields are never read in flight)."""
+        if self.phase != "catch" or state.held or state.caught:
+            return self.juggler.command(state)
+        est = self.estimator.estimate(state.time)
+        if est is None:  # nothing to correct from: the juggler's "held" skips eq. 10
+            return self.juggler.command(replace(state, held=True))
+        p, v = est
+        drag = self.estimator.drag
+        if drag > 0:
+            episode = self._episode
+            s = episode.t_start + episode.duration - state.time
+            end = self.estimator.position_at(episode.t_start + episode.duration)
+            if s > self.juggler.task.dt and end is not None:
+                g = self.juggler.task.gravity
+                x, z = end
+                v = np.array([(x - p[0]) / s, (z - p[1] + 0.5 * g * s * s) / s])
+        return self.juggler.command(replace(state, ball_pos=p, ball_vel=v))
+
+
+def make_v2_controller(
+    name: str, juggler: AnalyticJuggler, gravity: float, mean_delay: float
+) -> V2Controller:
+    """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
+    ``juggler`` (its episodes never touch ``juggler``)."""
+    if name not in V2_CONTROLLERS:
+        raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
+    estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
+    return V2Controller(juggler.variant(), estimator)
