@@ -455,6 +455,18 @@ def missing_data(text: str, kind: Kind) -> argparse.ArgumentTypeError:
     )
 
 
+def data_file(text: str, kind: Kind) -> str:
+    """``--data`` of a ``kind`` benchmark: a built-in name of ``kind``, a motion capture
+    recording (``FILE.c3d?opt=...``) or an existing, readable CSV file (its path)."""
+    if builtin_data(text, kind):
+        return text
+    if (recording := mocap_data(text, kind)) is not None:
+        return recording
+    if not Path(text).exists():
+        raise missing_data(text, kind)
+    return str(input_file(text))
+
+
 def wrote(paths: Sequence[object]) -> str:
     """The line a sub-command prints after writing ``paths``: ``wrote a``, ``wrote a and
     b``, ``wrote a, b and c``."""

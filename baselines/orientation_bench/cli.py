@@ -45,13 +45,7 @@ def main(args: argparse.Namespace) -> int:
 @options.reads_files
 def orientation_data(text: str) -> str:
     """``--data``: a built-in name, ``cohort:CONFIG`` or an existing CSV file."""
-    if options.builtin_data(text, "orientation"):
-        return text
-    if (recording := options.mocap_data(text, "orientation")) is not None:  # FILE.c3d?opt=...
-        return recording
-    if not Path(text).exists():
-        raise options.missing_data(text, "orientation")
-    return str(options.input_file(text))
+    return options.data_file(text, "orientation")
 
 
 def up_option(text: str) -> tuple[float, float, float]:

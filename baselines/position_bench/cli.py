@@ -60,13 +60,7 @@ def main(args: argparse.Namespace) -> int:
 @options.reads_files
 def position_data(text: str) -> str:
     """``--data``: a built-in position dataset (``lasa``), a recording or a position CSV."""
-    if options.builtin_data(text, "position"):
-        return text
-    if (recording := options.mocap_data(text, "position")) is not None:  # FILE.c3d?opt=...
-        return recording
-    if not Path(text).exists():
-        raise options.missing_data(text, "position")
-    return str(options.input_file(text))
+    return options.data_file(text, "position")
 
 
 def n_sines_option(text: str) -> int | None:
