@@ -19,7 +19,8 @@ leaves room for:
 
 For each ``residual_scale`` and phase set: mean and median catches before the first drop
 (at most ``--max-catches``), drops, and the paired difference from the juggler alone
-(same seeds) with a 95 % normal interval over episodes. Then trivial policies in the
+(same seeds) with a 95 % paired bootstrap interval over episodes and its power line
+(:func:`baselines.stats.paired_mean_difference`). Then trivial policies in the
 shipped agents' action space (``residual_scale`` 0.4, the catch phase alone): uniform
 random actions and constant vertical actions of 0.4 and 1 up and down: what an agent
 must beat besides the juggler. The demonstrations the juggler is
@@ -46,6 +47,7 @@ from tqdm import tqdm
 
 import motion_envs  # noqa: F401  (registers the ids)
 from baselines.agents.config import resolve_hyperparams
+from baselines.stats import paired_mean_difference
 from motion_envs.datasets.juggling import PHASES, SIMULATED_LABEL, SPLIT_SEEDS
 from motion_envs.models.juggling import CascadeController, cascade_fit, make_cascade_controller
 
@@ -191,8 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[list[str]] = []
     for (clip, phases), (catches, dropped, _) in results.items():
         diff = catches - base
-        half = 1.96 * float(diff.std(ddof=1)) / math.sqrt(diff.size)
-        lo, hi = float(diff.mean()) - half, float(diff.mean()) + half
+        paired = paired_mean_difference(catches, base, "residual", "juggler alone")
+        lo, hi = paired.ci95
         if isinstance(clip, str):
             name = f"{clip}, s = {SHIPPED['residual_scale']:g}"
         else:
@@ -208,6 +210,8 @@ def main(argv: list[str] | None = None) -> int:
                 "drops": int(dropped.sum()),
                 "diff_vs_juggler": round(float(diff.mean()), 3),
                 "diff_ci95": [round(lo, 3), round(hi, 3)],
+                "diff_detectable": [round(v, 3) for v in paired.detectable or ()],
+                "diff_power": paired.power_text(),
             }
         )
         rows.append(
@@ -218,6 +222,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{np.median(catches):g}",
                 str(int(dropped.sum())),
                 "" if clip is None else f"{diff.mean():+.2f} [{lo:+.2f}, {hi:+.2f}]",
+                "" if clip is None else paired.power_cell(),
             ]
         )
     records = results[math.inf, PHASES][2]
@@ -245,7 +250,8 @@ def main(argv: list[str] | None = None) -> int:
         f"Cascade-v0 {args.level}, {args.episodes} {seeds} seeds, at most {args.max_catches}"
         f" catches ({SIMULATED_LABEL})"
     )
-    header = ["residual", "phases", "mean", "median", "drops", "vs juggler [95 %]"]
+    header = ["residual", "phases", "mean", "median", "drops", "vs juggler [95 %]",
+              "80 % power for"]  # fmt: skip
     print_table(header, rows)
     print("\nthe unclipped oracle residual per hand phase, x / z (mm):")
     print_table(["phase", "periods", "median", "90th pct", "largest"], spread)

@@ -9,7 +9,9 @@ to a JSON file; run it once on each commit (the test seeds are refused: they are
 measured once, by ``motion-bench juggling --pattern 3``). ``compare`` prints, per split and
 run, the median, the episodes reaching the cap, the mean and the paired difference of
 the means (after minus before) with its standard error (the standard deviation of the
-per-seed differences over ``sqrt(n)``). The demonstrations are SIMULATED.
+per-seed differences over ``sqrt(n)``), its 95 % paired bootstrap interval, the verdict
+in words and the power line (:func:`baselines.stats.paired_mean_difference`). The
+demonstrations are SIMULATED.
 
     python experiments/cascade_paired.py play --split train --out before_train.json
     python experiments/cascade_paired.py compare before_train.json after_train.json
@@ -26,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from baselines.juggling_bench.cascade import cascade_episode
+from baselines.stats import paired_mean_difference
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
 
 #: ``(level, controller)`` pairs played.
@@ -74,6 +77,7 @@ def compare(before: dict[str, Any], after: dict[str, Any]) -> list[dict[str, Any
                       "mean": float(y.mean())},
             "diff": float(d.mean()),
             "se": float(d.std(ddof=1) / math.sqrt(d.size)),
+            "paired": paired_mean_difference(y, x, "after", "before").to_dict(),
         })  # fmt: skip
     return rows
 
@@ -106,11 +110,13 @@ def main(argv: list[str] | None = None) -> None:
     rows = compare(before, after)
     for r in rows:
         b, a = r["before"], r["after"]
+        lo, hi = r["paired"]["ci95"]
         print(
             f"{before['split']:5s} {r['run']:28s} before: median {b['median']:5.1f}, "
             f"{b['at_cap']:2d} of {r['n']} at cap, mean {b['mean']:6.2f} | after: median "
             f"{a['median']:5.1f}, {a['at_cap']:2d} at cap, mean {a['mean']:6.2f} | "
-            f"{r['diff']:+.2f} [SE {r['se']:.2f}]"
+            f"{r['diff']:+.2f} [SE {r['se']:.2f}; 95% CI {lo:+.2f} to {hi:+.2f}]: "
+            f"{r['paired']['sentence']}; {r['paired']['power_line']}"
         )
     print(json.dumps(rows))
 

@@ -19,9 +19,11 @@ information:
   Juggling-v1 agent learned, help the cascade juggler?
 
 For each: mean catches before the first drop, drops per catch (the agents' validation
-criterion) and the paired difference of catches from ``zero`` (same seeds) with a 95 %
-normal interval over episodes. ``--split train`` plays the TRAINING seeds instead. The
-demonstrations the juggler is fitted on are SIMULATED.
+criterion) and the paired difference of mean catches from ``zero`` (same seeds) with a
+95 % paired bootstrap interval over episodes and its power line (the differences it
+detects 80 % of the time at this many episodes:
+:func:`baselines.stats.paired_mean_difference`). ``--split train`` plays the TRAINING
+seeds instead. The demonstrations the juggler is fitted on are SIMULATED.
 
     python experiments/cascade_residual_sensitivity.py [--level medium] [--episodes 80]
         [--scales 0.02 0.05 0.1] [--split val] [--fixed=DX,DZ,DX,DZ ...]
@@ -31,7 +33,6 @@ demonstrations the juggler is fitted on are SIMULATED.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
@@ -40,6 +41,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from baselines.stats import paired_mean_difference
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
 from motion_envs.envs.juggling import CascadeVectorEnv
 
@@ -145,9 +147,9 @@ def main(argv: list[str] | None = None) -> int:
     }
     for (kind, scale), (catches, dropped) in results.items():
         diff = catches - base
-        half = 1.96 * float(diff.std(ddof=1)) / math.sqrt(diff.size) if kind != "zero" else 0.0
+        paired = paired_mean_difference(catches, base, kind, "zero")
         per_catch = float(dropped.sum()) / max(float(catches.sum()), 1.0)
-        lo, hi = float(diff.mean()) - half, float(diff.mean()) + half
+        lo, hi = paired.ci95
         row = {
             "residual": kind,
             "std_action": scale,
@@ -156,6 +158,8 @@ def main(argv: list[str] | None = None) -> int:
             "drops_per_catch": round(per_catch, 3),
             "diff_vs_zero": round(float(diff.mean()), 3),
             "diff_ci95": [round(lo, 3), round(hi, 3)],
+            "diff_detectable": [round(v, 3) for v in paired.detectable or ()],
+            "diff_power": paired.power_text(),
         }
         out["rows"].append(row)
         rows.append(
@@ -166,6 +170,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{row['mean_catches']:.2f}",
                 f"{per_catch:.3f}",
                 f"{float(diff.mean()):+.2f} [{lo:+.2f}, {hi:+.2f}]",
+                paired.power_cell(),
             ]
         )
     out["cpu_seconds"] = round(time.process_time() - c0, 1)
@@ -173,7 +178,8 @@ def main(argv: list[str] | None = None) -> int:
     seeds = "validation" if args.split == "val" else "training"
     where = ", residual in " + " + ".join(args.residual_phases) if args.residual_phases else ""
     print(f"Cascade-v0 {args.level}, {args.episodes} {seeds} seeds{where} ({SIMULATED_LABEL})")
-    header = ["residual", "std (action)", "std (mm)", "catches", "drops/catch", "vs zero [95 %]"]
+    header = ["residual", "std (action)", "std (mm)", "catches", "drops/catch", "vs zero [95 %]",
+              "80 % power for"]  # fmt: skip
     print_table(header, rows)
     print_json(out)
     return 0

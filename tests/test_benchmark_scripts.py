@@ -80,6 +80,7 @@ def test_residual_sensitivity_fixed_offsets_on_training_seeds():
     assert doc["split"] == "train"
     assert [r["residual"] for r in doc["rows"]][-1] == "fixed -0.05,0,0.05,0"
     assert "2 training seeds" in out.stdout
+    assert all(r["diff_power"].startswith("80% power at 2 episodes") for r in doc["rows"])
     bad = subprocess.run([*argv, "--fixed=1,2,x"], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and "--fixed: '1,2,x' is not four" in bad.stderr
 

@@ -454,6 +454,9 @@ def test_cascade_paired_plays_no_test_seeds_and_pairs_by_seed():
     (row,) = mod.compare(a, b)
     assert row["diff"] == pytest.approx(5 / 3)
     assert row["after"]["at_cap"] == 1 and row["before"]["median"] == 4
+    assert row["paired"]["difference"] == pytest.approx(5 / 3)  # with its power line
+    assert row["paired"]["power_line"].startswith("80% power at 3 episodes for differences")
+    assert row["paired"]["verdict"] == "cannot decide"  # 3 seeds: fewer than MIN_GROUPS
     with pytest.raises(ValueError, match="seeds"):
         mod.compare(a, {**b, "split": "val"})
 

@@ -100,3 +100,24 @@ def test_compare_difference_is_the_paired_bootstrap():
     point, lo, hi, reps = group_bootstrap_replicates(stat, np.arange(50), seed=4)
     assert (c.difference, c.ci95, c.n_groups) == (point, (lo, hi), 50)
     assert c.detectable == detectable_differences(point, lo, hi, reps)
+
+
+def test_paired_mean_difference_and_its_table_cell():
+    """The mean of the per-seed differences with the paired interval (the mean of
+    normal differences: mean +- 1.96 sd / sqrt(n), closely); a constant gain has a point
+    interval; the table cell says where the claimed difference is below the detectable."""
+    from baselines.stats import paired_mean_difference
+
+    rng = np.random.default_rng(9)
+    before = rng.integers(0, 30, 400).astype(float)
+    after = before + rng.normal(0.2, 3.0, 400)
+    d = paired_mean_difference(after, before, "after", "before")
+    half = 1.96 * np.std(after - before, ddof=1) / np.sqrt(400)
+    assert d.difference == pytest.approx(np.mean(after - before))
+    assert d.ci95 == pytest.approx((d.difference - half, d.difference + half), abs=0.06)
+    assert d.power_cell().endswith("; cannot decide at this size")  # 0.2 against ~0.42
+    assert d.power_cell().startswith("<= -0.")
+    sure = paired_mean_difference(before + 1, before, "after", "before")
+    assert sure.ci95 == (1.0, 1.0) and sure.power_cell() == "<= +0 or >= +0"
+    with pytest.raises(ValueError, match="values_a and values_b"):
+        paired_mean_difference([], [], "a", "b")
