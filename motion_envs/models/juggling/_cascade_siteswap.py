@@ -101,7 +101,9 @@ class SiteswapStyle:
     thresholds (> 1: the release rule fires); ``catch_follow``: share of the ball's
     velocity the hand has when it meets the ball; ``catch_below``, ``catch_above``: m,
     the band around the catch height the intercept is chosen in (a hand rising high into a
-    falling ball meets it rising, and the ball bounces off); ``toss_share``: the last share of a
+    falling ball meets it rising, and the ball bounces off); ``clearance``: m, how far a
+    falling ball must stay from a carrying palm (across, and above it) for the carry's
+    release point to stay where it is; ``toss_share``: the last share of a
     carry that is the toss phase (observed, the release armed there); ``limit_share``:
     share of the hand's limits the nominal plan may use; ``beat``: s, None for
     :func:`choose_beat`'s.
@@ -115,6 +117,7 @@ class SiteswapStyle:
     catch_follow: float = 0.25
     catch_below: float = 0.2
     catch_above: float = 0.0
+    clearance: float = 0.1
     toss_share: float = 0.5
     limit_share: float = 1.0
     beat: float | None = None
@@ -131,6 +134,7 @@ class SiteswapStyle:
             "catch_follow": (0.0, 0.9),
             "catch_below": (0.0, 1.0),
             "catch_above": (-0.5, 1.0),
+            "clearance": (0.0, 0.5),
             "toss_share": (0.1, 1.0),
             "limit_share": (0.1, 1.0),
         }

@@ -24,6 +24,10 @@ mirrored), on a metronome (beat ``k`` at ``t_0 + k b``):
   velocity), from the commanded position, velocity and acceleration. Before its ball is
   thrown (a pass not yet made) it aims at the nominal catch. Past ``t*`` without a catch
   it follows the ball down (the ball predicted one period ahead);
+* **clearance**: when a falling ball would come within ``clearance`` of the carrying
+  palm (across, and from just below the palm to ``clearance`` above it), the carry's
+  release point moves along ``x`` (:data:`_SHIFTS`) until the path clears it, the throw's
+  velocity recomputed from there;
 * **which ball**: each release registers the ball for the beat it lands on (the thrower's
   beat plus the throw value).
 
@@ -57,6 +61,9 @@ MIN_CARRY = 0.4
 #: m above the floor: the lowest intercept.
 MIN_CATCH_HEIGHT = 0.2
 _SIGN = (np.array((1.0, 1.0)), np.array((-1.0, 1.0)))
+#: m: the release points a carry tries, in order, until its path clears the falling balls
+#: (the last one is taken if none does).
+_SHIFTS = (0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15)
 
 
 class _Hand:
@@ -144,7 +151,7 @@ class SiteswapController:
             here = state.hand_pos[h] * _SIGN[h]
             hand = _Hand(h, here, state.time)
             self.hands.append(hand)
-            self._plan_carry(hand, state.time)
+            self._plan_carry(hand, state)
             hand.pending = hand.beat
         self._time = state.time
 
@@ -155,24 +162,64 @@ class SiteswapController:
             k += 2
         return k
 
-    def _plan_carry(self, hand: _Hand, t: float) -> None:
-        """The carry from the commanded state at ``t`` to the release on the hand's next
-        beat (module docstring)."""
+    def _plan_carry(self, hand: _Hand, state: CascadeState) -> None:
+        """The carry from the commanded state at the state's time to the release on the
+        hand's next beat, its release point moved aside from falling balls
+        (:meth:`_clearance`; module docstring)."""
         plan, tm = self.plan, self.plan.timing
+        t = state.time
         hand.beat = self._next_release(hand.beat)
         k = hand.beat
         h = tm.value(k)
         t_rel = max(plan.time(k), t + MIN_CARRY * tm.dwell)
         t_land = plan.time(k + h) - tm.hold(h)  # the ball's nominal catch time
         flight = max(t_land - t_rel, 0.7 * tm.flight(h))
-        p, v, a = plan.release_state(h)
-        v = _velocity(plan, h, p, flight)
         p0, v0, a0 = hand.state(t)
         duration = t_rel - t
-        hand.set(quintic(p0, v0, a0, p, v, a, duration), t, duration)
+        falling = self._falling(hand, state)
+        for dx in _SHIFTS if falling else (0.0,):
+            p, v, a = plan.release_state(h)
+            p = p + np.array((dx, 0.0))
+            v = _velocity(plan, h, p, flight)
+            c = quintic(p0, v0, a0, p, v, a, duration)
+            if self._clear(c, t, duration, falling):
+                break
+        hand.set(c, t, duration)
         hand.mode = "carry"
         toss = plan.style.toss_share * duration
         hand.labels = [("return", t, duration - toss), ("toss", t_rel - toss, toss)]
+
+    def _falling(self, hand: _Hand, state: CascadeState) -> list[tuple[FloatArray, FloatArray]]:
+        """Own frame ``(position, velocity)`` now of the flying balls as the variant knows
+        them (``fixed_point``: none)."""
+        out = []
+        g = self.task.gravity
+        for b in range(self.balls):
+            seen = self._ball(b, state, hand)
+            if seen is not None:
+                t_b, p, v = seen
+                s = state.time - t_b
+                out.append((ballistic_position(p, v, s, g), v - np.array((0.0, g * s))))
+        return out
+
+    def _clear(
+        self, c: FloatArray, t: float, duration: float, falling: list[tuple[FloatArray, FloatArray]]
+    ) -> bool:
+        """Whether the carry ``c`` (from ``t`` over ``duration``) keeps every falling ball
+        off its palm: no ball, falling, within ``clearance`` across and from just below
+        the palm to ``clearance`` above it."""
+        clr = self.plan.style.clearance
+        s = np.linspace(0.0, duration, 24)
+        hand = quintic_evaluate(c, s)
+        g = self.task.gravity
+        for p, v in falling:
+            ball = ballistic_position(p, v, s, g)
+            down = v[1] - g * s < 0
+            dz = ball[:, 1] - hand[:, 1]
+            near = down & (np.abs(ball[:, 0] - hand[:, 0]) < clr) & (dz > -0.02) & (dz < clr)
+            if near.any():
+                return False
+        return True
 
     def _ball(
         self, b: int, state: CascadeState, hand: _Hand
@@ -295,7 +342,7 @@ class SiteswapController:
                 hand.labels = [("go_down", t, 0.0)]
             elif hand.mode == "vacant" and (state.caught[h] >= 0 or (holding and hand.pending < 0)):
                 hand.pending = self._next_release(hand.beat)
-                self._plan_carry(hand, t)
+                self._plan_carry(hand, state)
             if hand.mode == "vacant":
                 self._vacant(hand, state)
             p = hand.state(t + self.task.dt)[0]
