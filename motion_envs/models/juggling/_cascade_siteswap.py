@@ -113,6 +113,7 @@ class SiteswapStyle:
     catch: tuple[float, float] = (0.24, 1.15)
     pass_x: float = 0.0
     pass_flight: float = 0.25
+    pass_rise: float = -0.05
     release_brake: float = 1.5
     catch_follow: float = 0.25
     catch_below: float = 0.2
@@ -130,6 +131,7 @@ class SiteswapStyle:
         bounds = {
             "pass_x": (-0.5, 1.0),
             "pass_flight": (0.05, 0.95),
+            "pass_rise": (-0.3, 0.3),
             "release_brake": (1.05, 3.0),
             "catch_follow": (0.0, 0.9),
             "catch_below": (0.0, 1.0),
@@ -240,7 +242,7 @@ class SiteswapPlan:
     def catch_point(self, h: int) -> FloatArray:
         """Own frame: where a ball thrown with value ``h`` is caught."""
         if h == 1:
-            return np.array((self.style.pass_x, self.style.release[1]))
+            return np.array((self.style.pass_x, self.style.release[1] + self.style.pass_rise))
         return np.array(self.style.catch)
 
     def throw_velocity(self, h: int, release: FloatArray | None = None) -> FloatArray:

@@ -52,7 +52,13 @@ from motion_envs.models.juggling._cascade_control import CascadeStart
 from motion_envs.models.juggling._cascade_siteswap import SiteswapPlan, peak
 from motion_envs.models.juggling._sensor import predict_forward
 
-__all__ = ["INTERCEPT_CANDIDATES", "MIN_CARRY", "MIN_CATCH_HEIGHT", "SiteswapController"]
+__all__ = [
+    "INTERCEPT_CANDIDATES",
+    "MIN_CARRY",
+    "MIN_CATCH_HEIGHT",
+    "MIN_RELEASE_X",
+    "SiteswapController",
+]
 
 #: Intercept times a hand compares.
 INTERCEPT_CANDIDATES = 25
@@ -64,6 +70,8 @@ _SIGN = (np.array((1.0, 1.0)), np.array((-1.0, 1.0)))
 #: m: the release points a carry tries, in order, until its path clears the falling balls
 #: (the last one is taken if none does).
 _SHIFTS = (0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15)
+#: m, own ``x``: a release point moved inwards stays on its own side of the midline.
+MIN_RELEASE_X = 0.03
 
 
 class _Hand:
@@ -177,7 +185,9 @@ class SiteswapController:
         p0, v0, a0 = hand.state(t)
         duration = t_rel - t
         falling = self._falling(hand, state)
-        for dx in _SHIFTS if falling else (0.0,):
+        home = plan.release[0]
+        shifts = [dx for dx in _SHIFTS if home + dx >= MIN_RELEASE_X] if falling else [0.0]
+        for dx in shifts:
             p, v, a = plan.release_state(h)
             p = p + np.array((dx, 0.0))
             v = _velocity(plan, h, p, flight)
