@@ -86,7 +86,11 @@ __all__ = [
 Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 #: Environment ids scored by this module.
-JUGGLING_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Juggling-v0", "MotionEnvs/Juggling-v1")
+JUGGLING_ENV_IDS: tuple[str, ...] = (
+    "MotionEnvs/Juggling-v0",
+    "MotionEnvs/Juggling-v1",
+    "MotionEnvs/Juggling-v2",
+)
 #: Episodes per split when not given.
 DEFAULT_EPISODES: Mapping[str, int] = {"train": 20, "val": 20, "test": 50}
 #: Points of normalised time a phase segment is resampled to.
@@ -225,7 +229,10 @@ def juggling_episodes(
     kwargs = {k: v for k, v in env_kwargs.items() if k != "split"}
     if env_id == "MotionEnvs/Juggling-v1":  # its default gravity, that of its demonstrations
         kwargs.setdefault("gravity", 9.81)
-    demos = demonstration_paths(kwargs, split)
+    # Juggling-v2 lives at 9.81 m/s^2 (no gravity argument): its demonstrations'
+    demos = demonstration_paths(
+        {**kwargs, "gravity": 9.81} if env_id == "MotionEnvs/Juggling-v2" else kwargs, split
+    )
     seeds = episode_seeds(split, n)
     if policy is None:  # the controller alone: one env plays the episodes one by one
         env = gym.make(env_id, **kwargs)

@@ -26,6 +26,7 @@ from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_lev
 from baselines.juggling_bench.media import write
 from baselines.juggling_bench.runner import run
 from baselines.juggling_bench.text import report
+from baselines.juggling_bench.v2 import V2Config, report_v2, run_v2, write_v2
 from motion_envs.datasets.juggling import (
     JugglingTask,
     format_siteswap,
@@ -64,6 +65,19 @@ def main(args: argparse.Namespace) -> int:
         print(report_cascade(doc))
         out = options.results_folder(args.out, f"juggling-pattern-{args.pattern}")
         print(options.wrote(write_cascade(doc, out)))
+        return 0
+    if args.version == "v2":
+        if args.agent is not None:
+            return options.fail("motion-bench juggling", "--agent: not with --version v2")
+        v2 = V2Config(
+            levels=args.levels or V2Config.levels,
+            episodes=args.episodes or V2Config.episodes,
+            max_catches=args.max_catches or V2Config.max_catches,
+        )
+        doc = run_v2(v2)
+        print(report_v2(doc))
+        out = options.results_folder(args.out, "juggling-v2")
+        print(options.wrote(write_v2(doc, out)))
         return 0
     if args.levels is None:
         if args.agent is not None:
@@ -351,6 +365,14 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         type=options.int_at_least(2),
         default=None,
         help="test episodes per level and method (--levels: default 200; --pattern: 50)",
+    )
+    p.add_argument(
+        "--version",
+        choices=("v1", "v2"),
+        default="v1",
+        help="with --levels: v1 (Juggling-v1's levels and controllers, default) or v2 "
+        "(Juggling-v2's reference rows, on medium,hard unless --levels names others; "
+        "catch rate against deviation plotted)",
     )
     p.add_argument(
         "--max-catches",

@@ -1,0 +1,327 @@
+"""``motion-bench juggling --version v2``: Juggling-v2's reference rows, on catches and
+human likeness together.
+
+For each level (``medium`` and ``hard`` by default; :data:`motion_envs.models.juggling.V2_LEVELS`)
+the rows (:data:`ROWS`) are played in ``MotionEnvs/Juggling-v2`` with the residual in
+the env's own action space (``ROW_ENV_KWARGS``: every phase, :data:`RESIDUAL_SCALE` m per
+unit action, the scale an agent is given):
+
+* ``juggler``: the analytic juggler (the zero action; also the trivial *zero* policy);
+* ``oracle``: the juggler given the true delay, jitter and drag (``juggler_oracle``): an
+  UPPER REFERENCE, not a competitor;
+* ``best_constant``: the constant action, from the grid :data:`CONSTANT_GRID`, with the
+  highest catch rate on the VALIDATION seeds;
+* ``velocity_x_mean_delay``: in the catch phase, the ball's velocity (from the oldest and
+  newest of the observed frames) times the level's mean delay, as the residual (the
+  two-line fix of Juggling-v1);
+* ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
+  delay found from the release, per episode);
+* ``random``: uniform random actions (seeded);
+* ``task_error_ilc``: the residual learner from the task-error vector
+  (:class:`~baselines.juggling_bench.ilc.TaskErrorILC`: iterative learning control, a
+  Gauss-Newton update of ``r = c + d v``, starting from the level's mean delay), trained
+  on a budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10).
+
+Choices (the constant) are made on the validation seeds (``SPLIT_SEEDS["val"] + i``)
+before any test seed is played (tested with a spy); every row is then played on the
+TEST seeds (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per
+toss, pooled) and the hand's deviation from the held-out SIMULATED demonstrations
+(:mod:`baselines.agents.juggling_score`, the likeness criterion), each with a 95 %
+bootstrap interval over episodes, and the room left below the oracle by the best
+non-oracle row (a paired interval). :func:`write_v2` writes ``results.json`` and
+``juggling_v2_rows.png`` (catch rate against deviation, one point per row with its
+interval bars, a panel per level).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from baselines import options
+from baselines.agents.juggling_score import (
+    JugglingEpisodes,
+    Policy,
+    catch_rate_difference,
+    juggling_episodes,
+)
+from baselines.juggling_bench.ilc import ILCConfig, TaskErrorILC
+from baselines.juggling_bench.levels import summary
+from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
+from motion_envs.models.juggling import V2_LEVELS
+
+__all__ = [
+    "CONSTANT_GRID",
+    "ENV_ID_V2",
+    "RESIDUAL_SCALE",
+    "ROWS",
+    "V2Config",
+    "VelocityTimesDelay",
+    "check_v2_config",
+    "choose_constant",
+    "report_v2",
+    "run_v2",
+    "write_v2",
+]
+
+ENV_ID_V2 = "MotionEnvs/Juggling-v2"
+#: m of residual per unit action for every residual row.
+RESIDUAL_SCALE = 0.2
+#: The constant actions tried (each coordinate in -0.5, 0, 0.5: up to 10 cm).
+CONSTANT_GRID: tuple[tuple[float, float], ...] = tuple(
+    (x, z) for x in (-0.5, 0.0, 0.5) for z in (-0.5, 0.0, 0.5)
+)
+#: The rows, in the report's order.
+ROWS = (
+    "juggler",
+    "oracle",
+    "best_constant",
+    "velocity_x_mean_delay",
+    "delay_estimator",
+    "random",
+    "task_error_ilc",
+)
+#: Observation indices (JugglingV2Env's docstring): the catch phase's one-hot and the
+#: first frame slot ``(x, z, age, valid)``.
+_CATCH, _FRAME0 = 7, 16
+
+Play = Callable[[Policy | None, str, dict[str, Any], str, int], JugglingEpisodes]
+
+
+@dataclass(frozen=True)
+class V2Config:
+    """What ``motion-bench juggling --version v2`` runs."""
+
+    levels: tuple[str, ...] = ("medium", "hard")
+    episodes: int = 100
+    val_episodes: int = 30
+    max_catches: int = 3
+    ilc: bool = True
+    ilc_iterations: int = 6
+    ilc_episodes: int = 10
+
+
+def check_v2_config(config: V2Config) -> None:
+    """Raise :class:`baselines.options.ConfigError` naming the first bad field."""
+    if not config.levels:
+        raise options.ConfigError("levels", "must name at least one level")
+    for level in config.levels:
+        if level not in V2_LEVELS:
+            raise options.ConfigError("levels", f"must be among {list(V2_LEVELS)}; got {level!r}")
+    for name in ("episodes", "val_episodes", "ilc_iterations", "ilc_episodes"):
+        if getattr(config, name) < 2:
+            raise options.ConfigError(name, f"must be >= 2; got {getattr(config, name)}")
+    if config.max_catches < 1:
+        raise options.ConfigError("max_catches", f"must be >= 1; got {config.max_catches}")
+
+
+class VelocityTimesDelay:
+    """The residual ``v delay / scale`` in the catch phase (0 elsewhere): ``v`` the ball's
+    velocity from the newest and the oldest valid frame of the observation (their
+    arrival ages apart), ``delay`` the level's mean delay; clipped to the action box."""
+
+    def __init__(self, delay: float, scale: float) -> None:
+        self.delay, self.scale = float(delay), float(scale)
+
+    def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
+        obs = np.asarray(obs, dtype=np.float64)
+        frames = obs[:, _FRAME0 : _FRAME0 + 16].reshape(-1, 4, 4)
+        valid = frames[:, :, 3] > 0.5
+        last = np.where(valid.all(axis=1), 3, np.maximum(valid.sum(axis=1) - 1, 0))
+        rows = np.arange(obs.shape[0])
+        old = frames[rows, last]
+        span = old[:, 2] - frames[:, 0, 2]
+        ok = (obs[:, _CATCH] > 0.5) & valid[:, 0] & (last > 0) & (span > 0)
+        v = (frames[:, 0, :2] - old[:, :2]) / np.where(ok, span, 1.0)[:, None]
+        out = np.where(ok[:, None], v * self.delay / self.scale, 0.0)
+        return np.clip(out, -1.0, 1.0)
+
+
+class _Constant:
+    def __init__(self, action: tuple[float, float]) -> None:
+        self.action = np.asarray(action, dtype=np.float64)
+
+    def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
+        out: NDArray[np.float64] = np.tile(self.action, (len(obs), 1))
+        return out
+
+
+class _Random:
+    def __init__(self, seed: int) -> None:
+        self.rng = np.random.default_rng(seed)
+
+    def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
+        return self.rng.uniform(-1.0, 1.0, (len(obs), 2))
+
+
+def _kwargs(level: str, config: V2Config, controller: str = "juggler") -> dict[str, Any]:
+    return {
+        "level": level,
+        "controller": controller,
+        "max_catches": config.max_catches,
+        "residual_scale": RESIDUAL_SCALE,
+    }
+
+
+def choose_constant(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The constant of :data:`CONSTANT_GRID` with the highest catch rate on
+    ``config.val_episodes`` VALIDATION episodes (ties: the first), and every candidate's
+    validation catch rate."""
+    rates: dict[str, float] = {}
+    best, best_rate = CONSTANT_GRID[0], -1.0
+    for action in CONSTANT_GRID:
+        policy = None if action == (0.0, 0.0) else _Constant(action)
+        eps = play(policy, ENV_ID_V2, _kwargs(level, config), "val", config.val_episodes)
+        rates[f"{action[0]:+.1f},{action[1]:+.1f}"] = eps.catch_rate
+        if eps.catch_rate > best_rate:
+            best, best_rate = action, eps.catch_rate
+    return best, rates
+
+
+def run_v2(
+    config: V2Config, play: Play = juggling_episodes, chooser: Any = choose_constant
+) -> dict[str, Any]:
+    """Every level's rows (module docstring); JSON-ready. ``play`` and ``chooser`` are
+    for tests (the spy that proves the choice reads no test seed)."""
+    check_v2_config(config)
+    t0 = time.process_time()
+    levels = []
+    for level in config.levels:
+        constant, val_rates = chooser(level, config, play)
+        delay = V2_LEVELS[level].mean_delay
+        rows: dict[str, tuple[str, Policy | None]] = {
+            "juggler": ("juggler", None),
+            "oracle": ("juggler_oracle", None),
+            "best_constant": ("juggler", None if constant == (0.0, 0.0) else _Constant(constant)),
+            "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE)),
+            "delay_estimator": ("juggler_delay_estimator", None),
+            "random": ("juggler", _Random(0)),
+        }
+        played = {
+            name: play(policy, ENV_ID_V2, _kwargs(level, config, ctl), "test", config.episodes)
+            for name, (ctl, policy) in rows.items()
+        }
+        ilc = TaskErrorILC(
+            level, RESIDUAL_SCALE, delay,
+            ILCConfig(config.ilc_iterations, config.ilc_episodes, max_catches=config.max_catches),
+        )  # fmt: skip
+        if config.ilc:
+            ilc.train()
+            played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
+        entries = {name: summary(eps) for name, eps in played.items()}
+        rivals = [r for r in ROWS if r != "oracle" and r in entries]
+        best = max(rivals, key=lambda r: entries[r]["catch_rate"])
+        room, lo, hi = catch_rate_difference(played["oracle"], played[best])
+        levels.append(
+            {
+                "level": level,
+                "values": asdict(V2_LEVELS[level]),
+                "constant": list(constant),
+                "constant_val_catch_rates": val_rates,
+                "rows": entries,
+                "best_non_oracle": best,
+                "ilc": {
+                    "budget_train_episodes": config.ilc_iterations * config.ilc_episodes,
+                    "c_m": [float(v) for v in ilc.c],
+                    "d_s": ilc.d,
+                    "history": ilc.history,
+                },
+                "room_below_oracle": {"value": room, "ci": [lo, hi]},
+            }
+        )
+    return {
+        "benchmark": f"juggling v2 rows ({ENV_ID_V2})",
+        "config": asdict(config),
+        "demonstrations": SIMULATED_LABEL,
+        "residual_scale_m": RESIDUAL_SCALE,
+        "seeds": {
+            "choice": {"split": "val", "first": SPLIT_SEEDS["val"], "count": config.val_episodes},
+            "test": {"split": "test", "first": SPLIT_SEEDS["test"], "count": config.episodes},
+        },
+        "levels": levels,
+        "timing": {"cpu_s": time.process_time() - t0},
+    }
+
+
+def report_v2(doc: dict[str, Any]) -> str:
+    """The printed table of :func:`run_v2`'s document."""
+    test = doc["seeds"]["test"]
+    lines = [
+        f"Juggling-v2 rows ({doc['demonstrations']}); {test['count']} test episodes per level "
+        f"and row (seeds from {test['first']}); choices on {doc['seeds']['choice']['count']} "
+        "validation episodes; oracle = UPPER REFERENCE (given the true delay and drag)",
+        f"{'level':7s} {'row':22s} {'catch rate [95% CI]':24s} {'deviation m [95% CI]':24s}",
+    ]
+    for lv in doc["levels"]:
+        for name, m in lv["rows"].items():
+            lo, hi = m["catch_rate_ci"]
+            dlo, dhi = m["deviation_ci"]
+            lines.append(
+                f"{lv['level']:7s} {name:22s} {m['catch_rate']:.3f} [{lo:.3f}, {hi:.3f}]   "
+                f"{m['deviation_m']:.4f} [{dlo:.4f}, {dhi:.4f}]"
+            )
+        room = lv["room_below_oracle"]
+        lines.append(
+            f"{lv['level']:7s} best constant {tuple(lv['constant'])}; room below the oracle "
+            f"(oracle - {lv['best_non_oracle']}): {room['value']:+.3f} "
+            f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
+        )
+    lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
+    return "\n".join(lines)
+
+
+def plot_v2(doc: dict[str, Any]) -> Any:
+    """Catch rate against deviation, one point per row with its interval bars, a panel
+    per level (matplotlib imported on call)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = len(doc["levels"])
+    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False, sharey=True)
+    markers = dict(zip(ROWS, "os^Dvxp", strict=True))
+    for ax, lv in zip(axes[0], doc["levels"], strict=True):
+        for name, m in lv["rows"].items():
+            dev, rate = m["deviation_m"] * 1000, m["catch_rate"]
+            xerr = [[dev - m["deviation_ci"][0] * 1000], [m["deviation_ci"][1] * 1000 - dev]]
+            yerr = [[rate - m["catch_rate_ci"][0]], [m["catch_rate_ci"][1] - rate]]
+            label = "oracle (upper reference)" if name == "oracle" else name.replace("_", " ")
+            ax.errorbar(dev, rate, xerr=xerr, yerr=yerr, fmt=markers[name], capsize=3,
+                        label=label)  # fmt: skip
+        ax.set_title(f"Juggling-v2 {lv['level']}")
+        ax.set_xlabel("hand deviation from held-out demonstrations (mm)")
+        ax.grid(alpha=0.3)
+    axes[0][0].set_ylabel("catch rate (catches per toss)")
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4, frameon=False)
+    fig.suptitle("demonstrations SIMULATED; bars: 95 % bootstrap intervals over test episodes",
+                 fontsize=9)  # fmt: skip
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    return fig
+
+
+def write_v2(doc: dict[str, Any], out: str | Path) -> list[Path]:
+    """``results.json`` and ``juggling_v2_rows.png`` in ``out`` (atomically)."""
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from motion_envs._io import atomic_write_text, save_figure
+
+    out = Path(out)
+    paths = [atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")]
+    fig = plot_v2(doc)
+    try:
+        paths.append(save_figure(fig, out / "juggling_v2_rows.png", dpi=150))
+    finally:
+        plt.close(fig)
+    return paths

@@ -1,0 +1,150 @@
+"""``motion-bench juggling --version v2``: the rows' choices read no test seed (a spy
+that can fail), the two-line row's arithmetic, and a small real run with its files."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from baselines.agents.juggling_score import JugglingEpisodes
+from baselines.juggling_bench.v2 import (
+    CONSTANT_GRID,
+    V2Config,
+    VelocityTimesDelay,
+    choose_constant,
+    run_v2,
+    write_v2,
+)
+from motion_envs.datasets.juggling import episode_seeds
+
+
+class Spy:
+    """A ``play`` that records the splits it is asked for and fails when a test seed is
+    played while a choice is being made (synthetic episodes: the order is the point)."""
+
+    def __init__(self) -> None:
+        self.choosing = False
+        self.calls: list[tuple[str, bool]] = []
+
+    def play(
+        self, policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int
+    ) -> JugglingEpisodes:
+        self.calls.append((split, self.choosing))
+        if split == "test" and self.choosing:
+            raise AssertionError("a test seed was played before the choice was made")
+        seeds = episode_seeds(split, n)
+        catches = np.arange(n, dtype=np.int64) % 3 + len(self.calls) % 2
+        return JugglingEpisodes(
+            seeds=seeds,
+            tosses=np.full(n, 3, dtype=np.int64),
+            catches=catches,
+            dropped=catches < 3,
+            segment_phase=np.array(["catch"] * n),
+            segment_episode=np.arange(n, dtype=np.int64),
+            segment_deviation=np.linspace(0.01, 0.02, n),
+        )
+
+    def chooser(self, inner: Any) -> Any:
+        def choose(level: str, config: V2Config, play: Any) -> Any:
+            self.choosing = True
+            try:
+                return inner(level, config, play)
+            finally:
+                self.choosing = False
+
+        return choose
+
+
+def test_choices_read_only_validation_seeds() -> None:
+    spy = Spy()
+    config = V2Config(levels=("medium", "hard"), episodes=5, val_episodes=4, ilc=False)
+    doc = run_v2(config, spy.play, spy.chooser(choose_constant))
+    during = [split for split, choosing in spy.calls if choosing]
+    assert during == ["val"] * (2 * len(CONSTANT_GRID))
+    assert {split for split, choosing in spy.calls if not choosing} == {"test"}
+    assert [lv["level"] for lv in doc["levels"]] == ["medium", "hard"]
+
+
+def test_the_spy_catches_a_choice_made_on_test_seeds() -> None:
+    def leaky(level: str, config: V2Config, play: Any) -> Any:
+        eps = play(None, "MotionEnvs/Juggling-v2", {"level": level}, "test", 3)
+        return (0.0, 0.0), {"leaked": eps.catch_rate}
+
+    spy = Spy()
+    with pytest.raises(AssertionError, match="before the choice"):
+        run_v2(V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False), spy.play,
+               spy.chooser(leaky))  # fmt: skip
+
+
+def test_velocity_times_delay_is_the_two_line_fix() -> None:
+    policy = VelocityTimesDelay(delay=0.15, scale=0.2)
+    obs = np.zeros((2, 32), dtype=np.float32)
+    obs[:, 7] = 1.0  # catch phase
+    # newest first: x, z, age since arrival, valid; the ball moves at (1, -3) m/s
+    for i, age in enumerate((0.0, 0.01, 0.02, 0.03)):
+        obs[:, 16 + 4 * i : 20 + 4 * i] = (0.1 - 1.0 * age, 1.0 + 3.0 * age, age, 1.0)
+    obs[1, 7] = 0.0  # another phase: no residual
+    got = policy(obs)
+    np.testing.assert_allclose(got[0], np.clip([1.0 * 0.15 / 0.2, -3.0 * 0.15 / 0.2], -1, 1),
+                               atol=1e-4)  # fmt: skip
+    np.testing.assert_array_equal(got[1], [0.0, 0.0])
+    obs[0, 20:32] = 0.0  # only one frame: no velocity
+    assert np.array_equal(policy(obs)[0], [0.0, 0.0])
+
+
+def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
+    config = V2Config(levels=("easy",), episodes=3, val_episodes=2, max_catches=1,
+                      ilc_iterations=2, ilc_episodes=2)  # fmt: skip
+    doc = run_v2(config)
+    (level,) = doc["levels"]
+    assert set(level["rows"]) == {
+        "juggler", "oracle", "best_constant", "velocity_x_mean_delay", "delay_estimator",
+        "random", "task_error_ilc",
+    }  # fmt: skip
+    assert level["ilc"]["budget_train_episodes"] == 4
+    for row in level["rows"].values():
+        lo, hi = row["catch_rate_ci"]
+        assert lo <= row["catch_rate"] <= hi and row["deviation_m"] > 0
+    paths = write_v2(doc, tmp_path)
+    assert [p.name for p in paths] == ["results.json", "juggling_v2_rows.png"]
+    assert all(p.stat().st_size > 0 for p in paths)
+
+
+def test_ilc_solve_is_least_squares_and_trains_on_training_seeds(monkeypatch: Any) -> None:
+    """The Gauss-Newton step is the least squares of r* = c + d v (numpy's lstsq on the
+    stacked rows); training resets only TRAINING seeds."""
+    from baselines.juggling_bench import ilc as ilc_module
+
+    rng = np.random.default_rng(0)
+    learner = ilc_module.TaskErrorILC("medium", 0.2, 0.15)
+    v = rng.normal(0, 2, (20, 2))
+    truth = np.array([0.03, -0.02, 0.17])
+    r = truth[:2] + truth[2] * v + rng.normal(0, 1e-3, (20, 2))
+    learner.samples = [(a, b, c, d) for (a, b), (c, d) in zip(v, r, strict=True)]
+    learner._solve()
+    a = np.zeros((40, 3))
+    a[:20, 0], a[20:, 1], a[:20, 2], a[20:, 2] = 1, 1, v[:, 0], v[:, 1]
+    expected, *_ = np.linalg.lstsq(a, np.concatenate([r[:, 0], r[:, 1]]), rcond=None)
+    np.testing.assert_allclose([*learner.c, learner.d], expected, atol=1e-6)
+    np.testing.assert_allclose(expected, truth, atol=2e-3)
+
+    seen: list[int] = []
+    make = ilc_module.TaskErrorILC._env
+
+    def spying_env(self: Any) -> Any:
+        env = make(self)
+        reset = env.reset
+
+        def spy_reset(*, seed: int, **kw: Any) -> Any:
+            seen.append(seed)
+            return reset(seed=seed, **kw)
+
+        env.reset = spy_reset  # type: ignore[method-assign,assignment]
+        return env
+
+    monkeypatch.setattr(ilc_module.TaskErrorILC, "_env", spying_env)
+    learner = ilc_module.TaskErrorILC("medium", 0.2, 0.15, ilc_module.ILCConfig(2, 2))
+    learner.train()
+    assert seen == [0, 1, 2, 3]  # SPLIT_SEEDS["train"] + i
