@@ -276,3 +276,21 @@ def test_env_rejects_bad_arguments() -> None:
         JugglingV2Env(level="expert")
     with pytest.raises(ValueError, match="controller"):
         JugglingV2Env(controller="psychic")
+
+
+def test_a_drop_reports_its_miss_vector() -> None:
+    """The analytic juggler on hard drops; the drop's step carries the closest
+    approach's offset and timing (finite), and no catch's task error."""
+    env = JugglingV2Env(level="hard")
+    seen = 0
+    for seed in range(5):
+        env.reset(seed=seed)
+        done = False
+        while not done:
+            _, _, term, trunc, info = env.step(np.zeros(2))
+            done = term or trunc
+        if term and "miss_error" in info:
+            seen += 1
+            assert np.isfinite(info["miss_error"]).all() and info["miss_speed"] >= 0
+            assert abs(info["miss_error"][0]) < 1.0 and "task_error" not in info
+    assert seen >= 3

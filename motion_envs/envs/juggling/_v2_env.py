@@ -130,7 +130,12 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``action_invalid``; at a step with a catch also the task-error vector
     ``task_error = (offset, timing)``: where the ball met the palm relative to its
     centre (m, along ``x``) and the catch time minus the plan's catch time (s), and
-    ``catch_speed`` (m/s), the speed at which the palm met the ball. The offset and the meeting time are interpolated within
+    ``catch_speed`` (m/s), the speed at which the palm met the ball. At the step of a
+    drop, the same vector of the miss, ``miss_error = (offset, timing)``, and
+    ``miss_speed``: at the closest approach (sampled every 5 ms) of the falling ball's
+    centre to the hand's origin in the last catch phase, the ``x`` offset, the time
+    minus the plan's catch time, and the relative speed (absent when the ball fell
+    before a catch phase). The offset and the meeting time are interpolated within
     the control period from its start (relative motion linear over 5 ms).
 
     ## Starting State
@@ -236,6 +241,9 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._frames: deque[CameraFrame] = deque(maxlen=FRAMES)
         self._catches = self._tosses = 0
         self._release_time = math.nan
+        #: the falling ball's closest approach to the hand in this catch phase:
+        #: ``(distance, x offset, time - planned catch time, relative speed)``
+        self._closest: tuple[float, float, float, float] | None = None
         #: s and 1/m: the episode's true delay and drag (hidden from the policy)
         self.delay = self.drag = math.nan
 
@@ -277,6 +285,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._done = False
         self._catches = self._tosses = 0
         self._release_time = math.nan
+        self._closest = None
         info = {
             "phase": self.controller.phase,
             "time": true.time,
@@ -315,6 +324,10 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         if caught:
             info["task_error"] = error
             info["catch_speed"] = speed
+        elif terminated and self._closest is not None:  # the drop's miss
+            _, offset, timing, rel_speed = self._closest
+            info["miss_error"] = np.array([offset, timing])
+            info["miss_speed"] = rel_speed
         return self._observation(true), reward, terminated, truncated, info
 
     def _advance(
@@ -348,6 +361,14 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         if true.released:
             controller.estimator.released(true.time, *hand)
             self._release_time = true.time
+            self._closest = None
+        elif not true.held and controller.phase == "catch" and true.ball_vel[1] < 0:
+            rel = true.ball_pos - true.hand_pos
+            dist = math.hypot(float(rel[0]), float(rel[1]))
+            if self._closest is None or dist < self._closest[0]:
+                rv = true.ball_vel - true.hand_vel
+                self._closest = (dist, float(rel[0]), true.time - planned,
+                                 math.hypot(float(rv[0]), float(rv[1])))  # fmt: skip
         controller.estimator.add(frames)
         self._frames.extendleft(frames)
         self._state = self._controller_state(true)
