@@ -186,6 +186,19 @@ ENVS: dict[str, dict[str, object]] = {
             "height": "size",
         },
     },
+    "MotionEnvs/Juggling-v2": {
+        "kwargs": {
+            "level": "name",
+            "controller": "name",
+            "max_catches": "small_int",
+            "residual_scale": "positive",
+            "residual_phases": "phases",
+            "reward_weights": "weights",
+            "render_mode": "render_mode",
+            "width": "size",
+            "height": "size",
+        },
+    },
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
             "level": "name",
