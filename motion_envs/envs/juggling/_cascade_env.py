@@ -333,8 +333,11 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
-        world_ss, sensor_ss, controller_ss = np.random.SeedSequence(base).spawn(3)
-        start = self.controller.start()
+        world_ss, sensor_ss, controller_ss, start_ss = np.random.SeedSequence(base).spawn(4)
+        start = self.controller.start(
+            (self.release_speed_std, math.radians(self.release_angle_std)),
+            np.random.default_rng(start_ss),
+        )
         true = self.world.reset(self.home, start=start, rng=np.random.default_rng(world_ss))
         state = self.sensor.reset(true, np.random.default_rng(sensor_ss), self.task.gravity)
         self.controller.reset(state, np.random.default_rng(controller_ss))

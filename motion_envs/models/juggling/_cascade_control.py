@@ -170,9 +170,16 @@ class CascadeController:
         n = self.balls
         return [(b, (b - n) % 2, self.first_release + (b - n) * self.beat) for b in range(2, n)]
 
-    def start(self) -> CascadeStart:
+    def start(
+        self,
+        release_noise: tuple[float, float] = (0.0, 0.0),
+        rng: np.random.Generator | None = None,
+    ) -> CascadeStart:
         """The world at ``t = 0`` (module docstring; world frame): each flying ball where
-        its thrower's nominal release puts it ``-t_r`` after the release at ``t_r``."""
+        its thrower's nominal release puts it ``-t_r`` after the release at ``t_r``. The
+        fitted juggler's balls fly nominally (``release_noise`` and ``rng`` unused: its
+        seeded rollouts are those of before the siteswap juggler's scattered start)."""
+        del release_noise, rng
         n, g = self.balls, self.task.gravity
         pos, vel = np.zeros((n, 2)), np.zeros((n, 2))
         thrower = [-1] * n

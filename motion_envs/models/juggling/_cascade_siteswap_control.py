@@ -50,7 +50,7 @@ from motion_envs.geometry.minimum_jerk import quintic, quintic_evaluate
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_control import CascadeStart
 from motion_envs.models.juggling._cascade_siteswap import SiteswapPlan, peak
-from motion_envs.models.juggling._sensor import predict_forward
+from motion_envs.models.juggling._sensor import perturb_release, predict_forward
 
 __all__ = [
     "INTERCEPT_CANDIDATES",
@@ -133,18 +133,30 @@ class SiteswapController:
         out = [(k + tm.value(k), k) for k in range(-max(tm.throws), 0) if k + tm.value(k) >= 0]
         return sorted(out)
 
-    def start(self) -> CascadeStart:
+    def start(
+        self,
+        release_noise: tuple[float, float] = (0.0, 0.0),
+        rng: np.random.Generator | None = None,
+    ) -> CascadeStart:
         """The world at ``t = 0``: the ball landing on beat 0 in the right hand, the one
-        landing on beat 1 in the left, every other ball where its nominal throw on beat
-        ``k < 0`` (by that beat's hand) has flown it."""
+        landing on beat 1 in the left, every other ball where its throw on beat ``k < 0``
+        (by that beat's hand, from the release point) has flown it, thrown with the world's
+        release scatter ``release_noise`` (relative speed std, angle std in radians;
+        :func:`~motion_envs.models.juggling.perturb_release`, drawn from ``rng`` ball by
+        ball), as every ball the world releases: a blind hand does not get the start's
+        balls for free."""
         n = self.balls
         pos, vel = np.zeros((n, 2)), np.zeros((n, 2))
         holder, thrower = [-1] * n, [-1] * n
+        g = self.task.gravity
         for b, (land, k) in enumerate(self._past()):
             if land <= 1:
                 holder[b] = land
                 continue
-            pos[b], vel[b] = self.plan.ball_at(k, 0.0)
+            p, v = self.plan.ball_at(k, self.plan.time(k))  # at its release
+            v = perturb_release(v, release_noise[0], release_noise[1], rng)
+            s = -self.plan.time(k)
+            pos[b], vel[b] = ballistic_position(p, v, s, g), v - np.array((0.0, g * s))
             thrower[b] = k % 2
         return CascadeStart(tuple(holder), tuple(thrower), pos, vel)
 
