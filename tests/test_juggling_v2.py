@@ -294,3 +294,24 @@ def test_a_drop_reports_its_miss_vector() -> None:
             assert np.isfinite(info["miss_error"]).all() and info["miss_speed"] >= 0
             assert abs(info["miss_error"][0]) < 1.0 and "task_error" not in info
     assert seen >= 3
+
+
+@pytest.mark.slow
+def test_memory_agents_can_train_on_it() -> None:
+    """What an agent with memory needs works: Gymnasium's frame stack (the stacked
+    observation stays in its space) and sb3-contrib's RecurrentPPO (a short learn)."""
+    from gymnasium.wrappers import FrameStackObservation
+
+    stacked = FrameStackObservation(gym.make("MotionEnvs/Juggling-v2", max_catches=1), 16)
+    obs, _ = stacked.reset(seed=0)
+    for _ in range(20):
+        obs, *_ = stacked.step(np.zeros(2, dtype=np.float32))
+    assert obs.shape == (16, 32) and stacked.observation_space.contains(obs)
+    contrib = pytest.importorskip("sb3_contrib")
+    model = contrib.RecurrentPPO(
+        "MlpLstmPolicy", JugglingV2Env(max_catches=1), n_steps=64, batch_size=64, seed=0,
+        policy_kwargs={"lstm_hidden_size": 16, "net_arch": [16]},
+    )  # fmt: skip
+    model.learn(128)
+    action, state = model.predict(obs[-1], deterministic=True)
+    assert action.shape == (2,) and state is not None
