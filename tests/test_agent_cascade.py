@@ -48,7 +48,9 @@ def lifting_policy(obs):
 
 
 def loaded(policy):
-    return SimpleNamespace(env_id=ENV_ID, env_kwargs=dict(KWARGS), predict=policy, manifest={})
+    return SimpleNamespace(
+        env_id=ENV_ID, env_kwargs=dict(KWARGS), predict=policy, policy=lambda: policy, manifest={}
+    )
 
 
 def independent_episode(policy, seed: int) -> tuple[int, int, bool, float]:

@@ -237,7 +237,7 @@ def cascade_agent_results(loaded: Any, split: str, episodes: int | None) -> dict
     from baselines.verdicts import verdicts_document
 
     kwargs = loaded.env_kwargs
-    agent = cascade_agent_episodes(loaded.predict, loaded.env_id, kwargs, split, episodes)
+    agent = cascade_agent_episodes(loaded.policy(), loaded.env_id, kwargs, split, episodes)
     nominal = cascade_agent_episodes(None, loaded.env_id, kwargs, split, episodes)
     a, b = _summary(agent), _summary(nominal)
     median_diff = catches_median_comparison(agent, nominal)

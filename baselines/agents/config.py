@@ -21,6 +21,9 @@ does), ``eval_freq`` (environment steps between validation evaluations),
 ``torch_threads``, ``vec_env`` (``dummy`` or ``subproc``: SB3's vector environment for
 an environment without a native one, Juggling-v0; ``subproc`` steps each copy in its own
 process, rl-zoo's ``vec_env_type``; ignored where the native vector env is used),
+``frame_stack`` (the policy observes its last ``k`` observations, flattened: Gymnasium's
+``FrameStackObservation``, :mod:`baselines.agents.memory`; 1 = none; with a stack
+the copies are SB3's ``DummyVecEnv`` / ``SubprocVecEnv``),
 ``learning_rate``, ``gamma`` and the algorithm's own keys (see :data:`ALGO_KEYS`), among
 them PPO's ``use_sde`` / ``sde_sample_freq`` (SB3's generalized state-dependent
 exploration: noise that is a function of the state, redrawn every ``sde_sample_freq``
@@ -72,6 +75,8 @@ ALGOS: tuple[str, ...] = ("ppo", "sac", "td3")
 DEFAULT_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "agents"
 #: The sweep files shipped in the package (``configs/sweeps`` links here, as above).
 SWEEP_CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "sweeps"
+#: The longest frame stack (observations) a config may ask for.
+MAX_FRAME_STACK = 256
 #: Activation names and their ``torch.nn`` classes.
 ACTIVATIONS: tuple[str, ...] = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
 
@@ -97,6 +102,7 @@ COMMON_KEYS: dict[str, Checker] = {
     "eval_episodes": V.optional(V.int_in(1)),
     "torch_threads": V.int_in(1, 1024),
     "vec_env": V.choice("dummy", "subproc"),
+    "frame_stack": V.int_in(1, MAX_FRAME_STACK),
     "learning_rate": _LR,
     "gamma": V.float_in(0.0, 1.0),  # 0: a one-step (episodic) environment
     "batch_size": V.int_in(1, MAX_BATCH),
@@ -167,6 +173,7 @@ COMMAND_KEYS: tuple[str, ...] = (
     "eval_episodes",
     "torch_threads",
     "vec_env",
+    "frame_stack",
     "action_noise_sigma",
 )
 
@@ -182,6 +189,7 @@ COMMAND_DEFAULTS: dict[str, Any] = {
     "eval_episodes": None,
     "torch_threads": 1,
     "vec_env": "dummy",
+    "frame_stack": 1,
 }
 
 

@@ -64,13 +64,18 @@ def split_criterion(
     env_kwargs: Mapping[str, Any],
     split: str,
     episodes: int | None = None,
+    frame_stack: int = 1,
 ) -> float:
     """The criterion checkpoints are chosen by (lower is better), the env family's
     (:func:`baselines.agents.scorers.scorer_for`): for the reaching environments the
     papers' criterion (:func:`episode_max_errors`), for Juggling-v0 the drop rate per toss
-    on the split's seeds (:func:`~baselines.agents.juggling_score.juggling_episodes`)."""
+    on the split's seeds (:func:`~baselines.agents.juggling_score.juggling_episodes`).
+    ``policy`` takes stacks of ``frame_stack`` observations (:mod:`baselines.agents.memory`)."""
+    from baselines.agents.memory import stacked_policy
     from baselines.agents.scorers import scorer_for
 
+    if policy is not None:
+        policy = stacked_policy(policy, frame_stack)
     got = scorer_for(env_id).episodes(policy, env_id, env_kwargs, split, episodes)
     return float(got.criterion)
 

@@ -37,7 +37,7 @@ import shutil
 import tempfile
 import warnings
 import zipfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -285,10 +285,23 @@ class LoadedRun:
     def env_kwargs(self) -> dict[str, Any]:
         return dict(self.config["hyperparams"]["env_kwargs"])
 
+    @property
+    def frame_stack(self) -> int:
+        """Observations the policy sees at once (``frame_stack``; 1 for runs without)."""
+        return int(self.config["hyperparams"].get("frame_stack", 1))
+
     def predict(self, obs: NDArray[np.floating]) -> NDArray[np.float32]:
-        """Deterministic (mean) actions of a batch of raw observations."""
+        """Deterministic (mean) actions of a batch of the policy's own observations (the
+        stack of :attr:`frame_stack` raw ones)."""
         actions, _ = self.model.predict(self.normalizer(obs), deterministic=True)
         return np.asarray(actions, dtype=np.float32)
+
+    def policy(self) -> Callable[[NDArray[np.float32]], NDArray[np.floating]]:
+        """Raw observations ``(N, obs_dim)`` to deterministic actions for ONE batch of
+        episodes that start together (a fresh stack, :mod:`baselines.agents.memory`)."""
+        from baselines.agents.memory import stacked_policy
+
+        return stacked_policy(self.predict, self.frame_stack)
 
 
 def read_run_json(path: Path, run_dir: Path) -> dict[str, Any]:
@@ -397,7 +410,9 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     split = "val" if hp["env_kwargs"].get("val_fraction", 0) > 0 else "train"
     stage = "config.json"
     try:
-        env = make_sb3_vec_env(env_id, 1, hp["env_kwargs"], split)
+        env = make_sb3_vec_env(
+            env_id, 1, hp["env_kwargs"], split, frame_stack=int(hp.get("frame_stack", 1))
+        )
         model = build_model(algo, hp, env, seed)
         stage = f"{prefix}agent.zip"
         try:

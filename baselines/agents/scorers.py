@@ -136,7 +136,7 @@ def check_validation_split(
 def reaching_agent_results(loaded: Any, split: str, episodes: int | None) -> dict[str, Any]:
     """The agent, the zero action and the learned regressor on the same episodes."""
     kwargs = loaded.env_kwargs
-    agent = episode_max_errors(loaded.predict, loaded.env_id, kwargs, split, episodes)
+    agent = episode_max_errors(loaded.policy(), loaded.env_id, kwargs, split, episodes)
     nominal = episode_max_errors(None, loaded.env_id, kwargs, split, episodes)
     learned_entries, learned = _learned(loaded.env_id, kwargs, split, episodes)
     results: dict[str, Any] = {
@@ -195,7 +195,7 @@ def juggling_agent_results(loaded: Any, split: str, episodes: int | None) -> dic
     """Catch rate and the hand's deviation from the demonstrations (held-out ones on
     ``test``), agent and zero action on the same seeds."""
     kwargs = loaded.env_kwargs
-    agent = juggling_episodes(loaded.predict, loaded.env_id, kwargs, split, episodes)
+    agent = juggling_episodes(loaded.policy(), loaded.env_id, kwargs, split, episodes)
     nominal = juggling_episodes(None, loaded.env_id, kwargs, split, episodes)
     from motion_envs.datasets.juggling import PHASES
 

@@ -149,7 +149,14 @@ def _make_train_env(env_id: str, hp: Mapping[str, Any]) -> Any:
     from baselines.agents.vec import make_sb3_vec_env
 
     env: Any = VecMonitor(
-        make_sb3_vec_env(env_id, hp["n_envs"], hp["env_kwargs"], "train", hp["vec_env"])
+        make_sb3_vec_env(
+            env_id,
+            hp["n_envs"],
+            hp["env_kwargs"],
+            "train",
+            hp["vec_env"],
+            int(hp.get("frame_stack", 1)),
+        )
     )
     norm = hp.get("normalize", {})
     if norm.get("obs") or norm.get("reward"):
@@ -236,6 +243,7 @@ def _train(
                 env_kwargs=hp["env_kwargs"],
                 split="val",
                 episodes=hp.get("eval_episodes"),
+                frame_stack=int(hp.get("frame_stack", 1)),
             ),
             eval_freq=int(hp["eval_freq"]),
             callback_on_new_best=SaveBestCallback(run_dir),

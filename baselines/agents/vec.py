@@ -56,11 +56,15 @@ def make_sb3_vec_env(
     env_kwargs: Mapping[str, Any],
     split: str = "train",
     vec_env: str = "dummy",
+    frame_stack: int = 1,
 ) -> Any:
     """An SB3 ``VecEnv`` of ``n_envs`` copies of ``env_id`` (``split`` passed to the
     environments that take one). Without a native vector env: ``DummyVecEnv``
     (``vec_env="dummy"``) or ``SubprocVecEnv`` (``"subproc"``, one process per copy,
-    started with ``forkserver``; the same episodes as ``DummyVecEnv``)."""
+    started with ``forkserver``; the same episodes as ``DummyVecEnv``), each copy
+    observing its last ``frame_stack`` observations (:func:`baselines.agents.memory.stack_env`;
+    with a stack the copies are built one by one even where a native vector env exists:
+    Gymnasium has no vector frame-stack wrapper)."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401
@@ -68,7 +72,7 @@ def make_sb3_vec_env(
     kwargs = dict(env_kwargs)
     if takes_keyword(env_id, "split"):
         kwargs["split"] = split
-    if has_native_vector_env(env_id):
+    if frame_stack == 1 and has_native_vector_env(env_id):
         from baselines.sb3 import GymnasiumVecEnv
 
         venv = gym.make_vec(
@@ -79,16 +83,18 @@ def make_sb3_vec_env(
         raise ValueError(f"vec_env must be 'dummy' or 'subproc'; got {vec_env!r}")
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    factory = functools.partial(_make_registered, env_id, kwargs)
+    factory = functools.partial(_make_registered, env_id, kwargs, frame_stack)
     if vec_env == "subproc" and n_envs > 1:
         return SubprocVecEnv([factory] * n_envs, start_method="forkserver")
     return DummyVecEnv([factory] * n_envs)
 
 
-def _make_registered(env_id: str, kwargs: Mapping[str, Any]) -> Any:
-    """``gym.make`` after registering the ids (also inside a fresh worker process)."""
+def _make_registered(env_id: str, kwargs: Mapping[str, Any], frame_stack: int = 1) -> Any:
+    """``gym.make`` after registering the ids (also inside a fresh worker process),
+    stacked over ``frame_stack`` observations."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401
+    from baselines.agents.memory import stack_env
 
-    return gym.make(env_id, **kwargs)
+    return stack_env(gym.make(env_id, **kwargs), frame_stack)

@@ -168,7 +168,7 @@ def run_levels(config: LevelsConfig) -> dict[str, Any]:
             methods[method] = summary(played[method])
         if loaded is not None:
             kwargs = {k: v for k, v in loaded.env_kwargs.items() if k != "controller"}
-            eps = level_episodes(level, config, "juggler", loaded.predict, kwargs)
+            eps = level_episodes(level, config, "juggler", loaded.policy(), kwargs)
             entry = summary(eps)
             juggler = played.get("juggler") or level_episodes(level, config)
             diff, lo, hi = catch_rate_difference(eps, juggler)

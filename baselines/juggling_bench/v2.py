@@ -66,6 +66,7 @@ __all__ = [
     "check_v2_config",
     "choose_constant",
     "report_v2",
+    "row_players",
     "run_v2",
     "write_v2",
 ]
@@ -186,6 +187,21 @@ def choose_constant(
     return best, rates
 
 
+def row_players(level: str, constant: tuple[float, float]) -> dict[str, tuple[str, Policy | None]]:
+    """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller and
+    residual policy (None: the zero action), played with :func:`_kwargs`'s keywords;
+    ``constant`` is :func:`choose_constant`'s choice."""
+    delay = V2_LEVELS[level].mean_delay
+    return {
+        "juggler": ("juggler", None),
+        "oracle": ("juggler_oracle", None),
+        "best_constant": ("juggler", None if constant == (0.0, 0.0) else _Constant(constant)),
+        "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE)),
+        "delay_estimator": ("juggler_delay_estimator", None),
+        "random": ("juggler", _Random(0)),
+    }
+
+
 def run_v2(
     config: V2Config, play: Play = juggling_episodes, chooser: Any = choose_constant
 ) -> dict[str, Any]:
@@ -197,14 +213,7 @@ def run_v2(
     for level in config.levels:
         constant, val_rates = chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
-        rows: dict[str, tuple[str, Policy | None]] = {
-            "juggler": ("juggler", None),
-            "oracle": ("juggler_oracle", None),
-            "best_constant": ("juggler", None if constant == (0.0, 0.0) else _Constant(constant)),
-            "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE)),
-            "delay_estimator": ("juggler_delay_estimator", None),
-            "random": ("juggler", _Random(0)),
-        }
+        rows = row_players(level, constant)
         played = {
             name: play(policy, ENV_ID_V2, _kwargs(level, config, ctl), "test", config.episodes)
             for name, (ctl, policy) in rows.items()

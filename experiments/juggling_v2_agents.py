@@ -1,0 +1,238 @@
+"""The shipped agent block on Juggling-v2 (medium, hard) against the reference rows (issue 34).
+
+For each level and seed: ``motion-bench train`` (``baselines.agents.train.run``) with
+``configs/agents/ppo.yaml``'s Juggling-v2 block (the residual on top of the hand-written
+delay estimator, a frame stack of 8 observations; ``level`` overridden), the checkpoint
+chosen on the VALIDATION seeds (drop rate per toss, 40 episodes), then the kept policy
+played on the TEST seeds (``SPLIT_SEEDS["test"] + i``). The reference rows are
+``motion-bench juggling --version v2``'s (:func:`baselines.juggling_bench.v2.run_v2`:
+every choice on validation seeds, the same test seeds); the best non-oracle row and the
+oracle (an UPPER REFERENCE) are replayed on the same test seeds for paired differences.
+
+Per run: the agent's catch rate with its 95 % bootstrap interval, its hand deviation
+from the HELD-OUT SIMULATED demonstrations (the rows' likeness criterion), ``agent -
+best non-oracle row`` and ``oracle - agent`` (paired bootstrap intervals over episodes).
+Per level: the median over seeds (the run whose difference is the median) and the
+validation pick (the seed with the lowest validation drop rate), and the issue's targets
+in words: ``agent - best row >= +0.05`` with the interval above 0, deviation <= the
+juggler's + 5 mm, the oracle above the agent (the room left reported).
+
+    python experiments/juggling_v2_agents.py [--levels medium hard] [--seeds 0 1 2]
+        [--timesteps N] [--test-episodes 100] [--runs DIR] [--out results.json]
+
+``--timesteps`` defaults to the config's (2.5e6, the full budget: about 21 min of CPU per
+seed at the measured 2,000 steps per CPU-second; the issue allows 30). Existing complete run folders in ``--runs`` are reused (not retrained).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
+from _timing import machine, print_json
+
+ENV = "MotionEnvs/Juggling-v2"
+#: mm of deviation the agent may add to the juggler's (the issue's likeness target).
+DEVIATION_SLACK_MM = 5.0
+#: The catch-rate margin over the best non-oracle row (the issue's target).
+MARGIN = 0.05
+
+
+def train_or_reuse(level: str, seed: int, args: argparse.Namespace, root: Path) -> Path:
+    """The run folder of ``level`` and ``seed``: trained unless a complete one exists."""
+    from baselines.agents.train import TrainConfig
+    from baselines.agents.train import run as train
+
+    out = root / f"{level}-seed{seed}"
+    if (out / "run.json").exists():
+        return out
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        train(
+            TrainConfig(
+                algo="ppo",
+                env_id=ENV,
+                out=str(out),
+                seed=seed,
+                timesteps=args.timesteps,
+                env_kwargs={"level": level},
+                progress=True,
+                tensorboard=False,
+            )
+        )
+    return out
+
+
+def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The rows' document of ``level`` (:func:`run_v2`) and the test episodes of its best
+    non-oracle row, its juggler and its oracle, replayed on the same seeds."""
+    from baselines.agents.juggling_score import juggling_episodes
+    from baselines.juggling_bench.v2 import (
+        ENV_ID_V2,
+        RESIDUAL_SCALE,
+        V2Config,
+        row_players,
+        run_v2,
+    )
+
+    config = V2Config(levels=(level,), episodes=episodes)
+    doc = run_v2(config)
+    lv = doc["levels"][0]
+    best = lv["best_non_oracle"]
+    players = row_players(level, tuple(lv["constant"]))
+    if best not in players:
+        raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
+    played = {}
+    for name in dict.fromkeys(("juggler", "oracle", best)):
+        controller, policy = players[name]
+        kwargs = {
+            "level": level,
+            "controller": controller,
+            "max_catches": config.max_catches,
+            "residual_scale": RESIDUAL_SCALE,
+        }
+        played[name] = juggling_episodes(policy, ENV_ID_V2, kwargs, "test", episodes)
+    for name, eps in played.items():  # the replay is the rows' own episodes
+        if not math.isclose(eps.catch_rate, lv["rows"][name]["catch_rate"]):
+            raise RuntimeError(f"{level} {name}: the replay differs from run_v2's row")
+    return lv, played
+
+
+def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -> dict[str, Any]:
+    """The kept policy of ``run_dir`` on the test seeds against the replayed rows."""
+    from baselines.agents.juggling_score import (
+        catch_rate_difference,
+        catch_rate_interval,
+        deviation_interval,
+        juggling_episodes,
+    )
+    from baselines.agents.rundir import load_run
+
+    loaded = load_run(run_dir)
+    eps = juggling_episodes(loaded.policy(), ENV, loaded.env_kwargs, "test", episodes)
+    if not np.array_equal(eps.seeds, played[best].seeds):
+        raise RuntimeError("the agent and the rows were played on different seeds")
+    rate, lo, hi = catch_rate_interval(eps)
+    dev, dlo, dhi = deviation_interval(eps)
+    diff, diff_lo, diff_hi = catch_rate_difference(eps, played[best])
+    room, room_lo, room_hi = catch_rate_difference(played["oracle"], eps)
+    return {
+        "run_dir": str(run_dir),
+        "seed": int(loaded.config["seed"]),
+        "timesteps": int(loaded.manifest["timesteps"]),
+        "train_seconds": float(loaded.manifest["train_seconds"]),
+        "best_timesteps": int(loaded.manifest["best_timesteps"]),
+        "val_drop_rate": float(loaded.manifest["best_val_criterion"]),
+        "val_nominal_drop_rate": float(loaded.manifest["val_nominal_criterion"]),
+        "catch_rate": rate,
+        "catch_rate_ci": [lo, hi],
+        "deviation_mm": 1000 * dev,
+        "deviation_ci_mm": [1000 * dlo, 1000 * dhi],
+        "minus_best_row": diff,
+        "minus_best_row_ci": [diff_lo, diff_hi],
+        "oracle_minus_agent": room,
+        "oracle_minus_agent_ci": [room_lo, room_hi],
+    }
+
+
+def verdict(run: dict[str, Any], juggler_mm: float) -> dict[str, bool]:
+    """The issue's three targets for one run."""
+    return {
+        "margin": run["minus_best_row"] >= MARGIN and run["minus_best_row_ci"][0] > 0,
+        "likeness": run["deviation_mm"] <= juggler_mm + DEVIATION_SLACK_MM,
+        "oracle_above": run["oracle_minus_agent"] > 0,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--levels", nargs="+", default=["medium", "hard"])
+    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    p.add_argument("--timesteps", type=int, default=None, help="default: the config's (2.5e6)")
+    p.add_argument("--test-episodes", type=int, default=100)
+    p.add_argument("--runs", default="juggling_v2_agent_runs", help="run folders' root")
+    p.add_argument("--out", default=None, help="results JSON (default: RUNS/results.json)")
+    args = p.parse_args(argv)
+    root = Path(args.runs)
+    t0 = time.process_time()
+    levels = []
+    jobs = [(lv, s) for lv in args.levels for s in args.seeds]
+    runs_dirs = {job: train_or_reuse(*job, args, root) for job in tqdm(jobs, desc="train")}
+    for level in tqdm(args.levels, desc="score"):
+        lv, played = level_rows(level, args.test_episodes)
+        best = lv["best_non_oracle"]
+        juggler_mm = 1000 * lv["rows"]["juggler"]["deviation_m"]
+        runs = [
+            score_run(runs_dirs[level, s], played, best, args.test_episodes) for s in args.seeds
+        ]
+        for run in runs:
+            run["targets"] = verdict(run, juggler_mm)
+        order = sorted(range(len(runs)), key=lambda i: runs[i]["minus_best_row"])
+        median = runs[order[len(runs) // 2]]
+        pick = min(runs, key=lambda r: r["val_drop_rate"])
+        levels.append(
+            {
+                "level": level,
+                "rows": lv["rows"],
+                "best_non_oracle": best,
+                "juggler_deviation_mm": juggler_mm,
+                "runs": runs,
+                "median_seed": median["seed"],
+                "median": {k: median[k] for k in ("catch_rate", "minus_best_row", "targets")},
+                "median_catch_rate_over_seeds": float(np.median([r["catch_rate"] for r in runs])),
+                "median_deviation_mm_over_seeds": float(
+                    np.median([r["deviation_mm"] for r in runs])
+                ),
+                "validation_pick_seed": pick["seed"],
+            }
+        )
+    doc = {
+        "benchmark": f"agents on {ENV} (SIMULATED demonstrations)",
+        "test_episodes": args.test_episodes,
+        "seeds": args.seeds,
+        "timesteps": args.timesteps,
+        "levels": levels,
+        "machine": machine(),
+        "cpu_s_scoring_and_training_in_process": time.process_time() - t0,
+    }
+    for lv in levels:
+        best, rows = lv["best_non_oracle"], lv["rows"]
+        print(
+            f"{lv['level']}: best non-oracle row {best} {rows[best]['catch_rate']:.3f}, "
+            f"juggler deviation {lv['juggler_deviation_mm']:.1f} mm, "
+            f"oracle {rows['oracle']['catch_rate']:.3f}"
+        )
+        for r in lv["runs"]:
+            print(
+                f"  seed {r['seed']}: {r['timesteps']} steps (best at {r['best_timesteps']}), "
+                f"catch {r['catch_rate']:.3f} [{r['catch_rate_ci'][0]:.3f}, "
+                f"{r['catch_rate_ci'][1]:.3f}], deviation {r['deviation_mm']:.1f} mm, "
+                f"- best row {r['minus_best_row']:+.3f} [{r['minus_best_row_ci'][0]:+.3f}, "
+                f"{r['minus_best_row_ci'][1]:+.3f}], oracle - agent "
+                f"{r['oracle_minus_agent']:+.3f} [{r['oracle_minus_agent_ci'][0]:+.3f}, "
+                f"{r['oracle_minus_agent_ci'][1]:+.3f}], targets {r['targets']}"
+            )
+        print(
+            f"  median seed {lv['median_seed']}, validation pick seed {lv['validation_pick_seed']}"
+        )
+    from motion_envs._io import atomic_write_text
+
+    out = Path(args.out) if args.out else root / "results.json"
+    atomic_write_text(out, json.dumps(doc, indent=2) + "\n")
+    print(f"wrote {out}")
+    print_json(doc)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
