@@ -261,10 +261,11 @@ hands at once; warnings where the recording does not fit (vanilla asynchronous
 juggling, reflective balls). results.json, flights.csv and flights.png (heights,
 gravity, ladder diagram) in --out; docs/recordings.md.
 
-With --pattern P (a registered pattern: 3, the three-ball cascade, or 5, the five-ball
-cascade at its own tempo): MotionEnvs/Cascade-v0 (two hands, the pattern's balls,
-Juggling-v1's physics, sensor and levels, the timing of Shannon's juggling theorem). Per
-level, --episodes (50) test-seed episodes of the analytic cascade juggler, its
+With --pattern P (a registered pattern: 3 and 3-human, the three-ball cascade of the
+fitted cascade juggler; 5, 4, 441, 531, 423, 51, the siteswap juggler's, each throw value
+on its own flight): MotionEnvs/Cascade-v0 (two hands, the pattern's balls, Juggling-v1's
+physics, sensor and levels, the timing of Shannon's juggling theorem). Per level,
+--episodes (50) test-seed episodes of the analytic juggler, its
 latency-aware variant and the two trivial catches, each ending at the first drop or after
 --max-catches (10) catches. Reported with 95 % bootstrap intervals: catches before the
 first drop (median), catch rate, time to the first drop (SIMULATED demonstrations).
@@ -357,8 +358,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         type=siteswap_pattern,
         default=None,
         help="a juggling pattern (a registered name or siteswap): run its levels benchmark "
-        "on MotionEnvs/Cascade-v0 (every level unless --levels); the cascade juggler plays "
-        "the registered patterns (3, 5) and says why another pattern does not fit",
+        "on MotionEnvs/Cascade-v0 (every level unless --levels); the registered patterns "
+        "(3, 3-human, 5, 4, 441, 531, 423, 51) are played, another siteswap is refused "
+        "with the reason",
     )
     p.add_argument(
         "--episodes",

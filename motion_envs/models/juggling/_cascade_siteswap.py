@@ -258,10 +258,21 @@ class SiteswapPlan:
     def release_state(
         self, h: int, release: FloatArray | None = None
     ) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Own frame ``(p, v, a)`` at the release of a throw of ``h``."""
+        """Own frame ``(p, v, a)`` at the release of a throw of ``h``
+        (:meth:`release_acceleration`)."""
         p = self.release if release is None else release
-        a = np.array((0.0, -self.style.release_brake * self.task.toss_threshold))
-        return p.copy(), self.throw_velocity(h, p), a
+        v = self.throw_velocity(h, p)
+        return p.copy(), v, self.release_acceleration(h, v)
+
+    def release_acceleration(self, h: int, v: FloatArray) -> FloatArray:
+        """Own frame: the hand's acceleration at the release of a throw of ``h`` with
+        velocity ``v``: braking vertically at ``release_brake`` toss thresholds (the
+        world's release rule fires there) and, for a pass, as hard horizontally against
+        the pass's direction (the hand stops under the ball instead of carrying it
+        along: a pass's ball barely rises off the palm)."""
+        brake = self.style.release_brake * self.task.toss_threshold
+        ax = -brake * float(np.sign(v[0])) if h == 1 else 0.0
+        return np.array((ax, -brake))
 
     def catch_state(self, h: int) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Own frame ``(p, v, a)`` of the nominal catch of a ball thrown with ``h``."""

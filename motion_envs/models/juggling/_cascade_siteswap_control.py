@@ -203,6 +203,7 @@ class SiteswapController:
             p, v, a = plan.release_state(h)
             p = p + np.array((dx, 0.0))
             v = _velocity(plan, h, p, flight)
+            a = plan.release_acceleration(h, v)
             c = quintic(p0, v0, a0, p, v, a, duration)
             if self._clear(c, t, duration, falling):
                 break
