@@ -201,7 +201,7 @@ def _juggling_v2_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     true = world.reset(juggler.home_, rng=w)
     world.set_drag(0, drag)
     camera.reset(delay, c)
-    ctrl.estimator.reset(drag)
+    ctrl.estimator.reset(drag, delay)
     blind = dict(ball_pos=true.hand_pos, ball_vel=true.hand_vel)
     state = dataclasses.replace(true, **blind)
     ctrl.reset(state, k)

@@ -198,7 +198,7 @@ def test_release_estimator_finds_the_delay_and_the_oracle_the_state(delay: float
     p_naive, _ = naive.estimate(now)  # type: ignore[misc]
     assert np.linalg.norm(p_naive - truth) > 0.05  # what the delay costs the juggler
     oracle = FlightEstimator("oracle", 9.81)
-    oracle.reset(0.0)
+    oracle.reset(0.0, delay)
     oracle.released(1.0, 0.1, 1.0)
     oracle.add(_frames(delay, (-0.8, 3.5), 12))
     np.testing.assert_allclose(oracle.estimate(now)[0], truth, atol=1e-9)  # type: ignore[index]

@@ -7,7 +7,7 @@ the env's own action space (``ROW_ENV_KWARGS``: every phase, :data:`RESIDUAL_SCA
 unit action, the scale an agent is given):
 
 * ``juggler``: the analytic juggler (the zero action; also the trivial *zero* policy);
-* ``oracle``: the juggler given the true delay, jitter and drag (``juggler_oracle``): an
+* ``oracle``: the juggler given the episode's true delay and drag (``juggler_oracle``): an
   UPPER REFERENCE, not a competitor;
 * ``best_constant``: the constant action, from the grid :data:`CONSTANT_GRID`, with the
   highest catch rate on the VALIDATION seeds;

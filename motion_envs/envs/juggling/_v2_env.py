@@ -79,7 +79,8 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     (:data:`~motion_envs.models.juggling.V2_CONTROLLERS`): ``juggler_mean_delay``
     (frames shifted by the level's mean delay), ``juggler_delay_estimator`` (the
     delay estimated from the release, a hand-written fix) and ``juggler_oracle`` (given
-    the true delay, jitter and drag: an UPPER REFERENCE, not a competitor).
+    the episode's true delay and drag, not the frames' jitter: an UPPER REFERENCE, not a
+    competitor).
 
     Levels (the delay and the drag are drawn uniformly per episode):
 
@@ -277,7 +278,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         true = self.world.reset(self.home, rng=world_rng)
         self.world.set_drag(0, self.drag)
         self.camera.reset(self.delay, camera_rng)
-        self.controller.estimator.reset(self.drag)
+        self.controller.estimator.reset(self.drag, self.delay)
         state = self._controller_state(true)
         self.controller.reset(state, controller_rng)
         self._state = state

@@ -34,8 +34,10 @@ captured at:
   over ``DELAY_GRID`` the least-squares ``v`` and the residual, the best ``d`` per
   flight from its first ``ANCHOR_FRAMES`` frames (the drag has not yet bent the flight
   much), averaged over the episode's flights (the delay is one per episode);
-* ``"oracle"``: at its TRUE capture time, with the ball's true drag (an upper reference,
-  given what the world hides; labelled so wherever it is reported).
+* ``"oracle"``: at its arrival minus the episode's TRUE delay, with the ball's true drag
+  (an upper reference, given what the world hides; labelled so wherever it is reported).
+  Like every other estimator it does not know a frame's jitter: no observation could
+  tell it (a frame carries no capture time).
 
 The fitted state is carried to the present along the estimator's model of the flight
 (ballistic, or with the known drag by :func:`drag_flight`).
@@ -231,9 +233,11 @@ class FlightEstimator:
         self.drag = 0.0
         self.reset()
 
-    def reset(self, drag: float = 0.0) -> None:
-        """A new episode (the oracle is told the ball's ``drag``)."""
+    def reset(self, drag: float = 0.0, delay: float = 0.0) -> None:
+        """A new episode (the oracle is told the ball's ``drag`` and the episode's
+        ``delay``)."""
         self.drag = float(drag) if self.mode == "oracle" else 0.0
+        self.true_delay = float(delay) if self.mode == "oracle" else 0.0
         self.frames: list[CameraFrame] = []
         self.release: tuple[float, float, float] | None = None
         self._delays: list[float] = []
@@ -297,7 +301,7 @@ class FlightEstimator:
         if self.mode == "release":
             d = self.delay_estimate
             return None if d is None else arrivals - d
-        return np.array([f.capture for f in frames])
+        return arrivals - self.true_delay
 
     def fit(self) -> tuple[float, FloatArray, FloatArray] | None:
         """The fitted flight ``(t0, position, velocity)`` at the newest frame's believed

@@ -19,8 +19,9 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
 * ``"juggler_mean_delay"``: frames shifted by the level's mean delay;
 * ``"juggler_delay_estimator"``: the hand-written delay estimator (the delay found
   from the release, per episode; ``"release"``);
-* ``"juggler_oracle"``: the true capture times and the ball's true drag (an UPPER
-  REFERENCE: it is given what the world hides). With drag the juggler's ballistic
+* ``"juggler_oracle"``: the episode's true delay and the ball's true drag (an UPPER
+  REFERENCE: it is given what the world hides; not the frames' jitter, which nothing
+  observable tells). With drag the juggler's ballistic
   prediction is handed the equivalent ballistic state: the velocity whose ballistic
   flight reaches, at the plan's catch time, the point the drag flight reaches.
 
