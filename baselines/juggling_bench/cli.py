@@ -35,7 +35,7 @@ from motion_envs.datasets.juggling import (
 )
 from motion_envs.datasets.registry import describe_names
 from motion_envs.datasets.sample_table import missing_columns_message
-from motion_envs.models.juggling import LEVELS, PATTERNS
+from motion_envs.models.juggling import LEVELS, PATTERNS, V2_LEVELS
 
 
 def main(args: argparse.Namespace) -> int:
@@ -140,12 +140,14 @@ TRACKING_RANGE = (0.0, 0.1)
 
 
 def level_names(text: str) -> tuple[str, ...]:
-    """``--levels``: a comma list of Juggling-v1's levels (easy, medium, hard)."""
+    """``--levels``: a comma list of Juggling-v1's levels (easy, medium, hard) or
+    Juggling-v2's (also ``drift``; which version's is checked by its config)."""
     names = tuple(v.strip() for v in text.split(",") if v.strip())
-    bad = [n for n in names if n not in LEVELS]
+    known = list(dict.fromkeys([*LEVELS, *V2_LEVELS]))
+    bad = [n for n in names if n not in known]
     if not names or bad or len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(
-            f"expected a comma list of distinct levels among {list(LEVELS)}; got {text!r}"
+            f"expected a comma list of distinct levels among {known}; got {text!r}"
         )
     return names
 

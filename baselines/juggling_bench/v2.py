@@ -229,6 +229,7 @@ def run_v2(
         rivals = [r for r in ROWS if r != "oracle" and r in entries]
         best = max(rivals, key=lambda r: entries[r]["catch_rate"])
         room, lo, hi = catch_rate_difference(played["oracle"], played[best])
+        est = catch_rate_difference(played["oracle"], played["delay_estimator"])
         levels.append(
             {
                 "level": level,
@@ -244,6 +245,7 @@ def run_v2(
                     "history": ilc.history,
                 },
                 "room_below_oracle": {"value": room, "ci": [lo, hi]},
+                "oracle_minus_delay_estimator": {"value": est[0], "ci": [est[1], est[2]]},
             }
         )
     return {
@@ -283,6 +285,12 @@ def report_v2(doc: dict[str, Any]) -> str:
             f"(oracle - {lv['best_non_oracle']}): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
         )
+        if "oracle_minus_delay_estimator" in lv:
+            est = lv["oracle_minus_delay_estimator"]
+            lines.append(
+                f"{lv['level']:7s} oracle - delay_estimator (paired): {est['value']:+.3f} "
+                f"[{est['ci'][0]:+.3f}, {est['ci'][1]:+.3f}]"
+            )
     lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
     return "\n".join(lines)
 

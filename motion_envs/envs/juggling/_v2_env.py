@@ -89,10 +89,15 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `easy`   | 100-150    | 5           | 2 %         | 1          | 0.009-0.02     | 0.05 / 4 deg              | 3                      |
     | `medium` | 100-200    | 10          | 5 %         | 2          | 0.009-0.07     | 0.08 / 6 deg              | 3                      |
     | `hard`   | 150-250    | 15          | 10 %        | 3          | 0.009-0.14     | 0.12 / 12 deg             | 3                      |
+    | `drift`  | 100-250, a walk | 10     | 5 %         | 2          | 0.009-0.03, per catch | 0.08 / 6 deg       | 3                      |
 
     Every level's camera runs at 100 Hz and loses the ball within 10 cm of the hand's
-    origin. The episode's true delay and drag are the attributes ``delay`` and ``drag``
-    (for evaluation; never in the observation or the info).
+    origin. On `drift` the delay and the drag change WITHIN the episode, at every catch
+    (between flights): the delay takes a normal step of std 20 ms reflected at 100 and
+    250 ms, the drag (a beanbag landing in a new shape) is drawn afresh; the oracle is
+    told the new values (:mod:`~motion_envs.models.juggling._v2_levels` has the
+    reasoning). The true current delay and drag are the attributes ``delay`` and
+    ``drag`` (for evaluation; never in the observation or the info).
 
     ## Action Space
     ``Box(-1, 1, (2,), float32)``: the residual ``(dx, dz)`` added to the controller's
@@ -143,7 +148,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     The hand rests at the juggler's home with the ball in it, time 0, toss phase.
     `reset(seed=S)` seeds five independent streams ``SeedSequence(S).spawn(5)``: the
     world (release noise), the camera, the controller, the episode's delay and the
-    episode's drag.
+    episode's drag (on `drift` their streams also draw every catch's step and drag).
 
     ## Episode End
     ### Termination
@@ -161,7 +166,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
 
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
-    | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
+    | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle` |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
@@ -245,8 +250,9 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         #: the falling ball's closest approach to the hand in this catch phase:
         #: ``(distance, x offset, time - planned catch time, relative speed)``
         self._closest: tuple[float, float, float, float] | None = None
-        #: s and 1/m: the episode's true delay and drag (hidden from the policy)
+        #: s and 1/m: the episode's true (current) delay and drag (hidden from the policy)
         self.delay = self.drag = math.nan
+        self._drift_rngs: tuple[np.random.Generator, np.random.Generator] | None = None
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
@@ -275,6 +281,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         lv = self.spec_level
         self.delay = float(delay_rng.uniform(*lv.delay))
         self.drag = float(drag_rng.uniform(*lv.drag))
+        self._drift_rngs = (delay_rng, drag_rng)  # drawn from again at catches (drift)
         true = self.world.reset(self.home, rng=world_rng)
         self.world.set_drag(0, self.drag)
         self.camera.reset(self.delay, camera_rng)
@@ -372,11 +379,27 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
                                  math.hypot(float(rv[0]), float(rv[1])))  # fmt: skip
         controller.estimator.add(frames)
         self._frames.extendleft(frames)
+        if true.caught and self.spec_level.drifts:
+            self._drift()
         self._state = self._controller_state(true)
         self._catches += int(true.caught)
         self._tosses += int(true.released)
         terminated, truncated = self._episode_end(true.dropped, true.time)
         return true, terminated, truncated, error, speed
+
+    def _drift(self) -> None:
+        """Level ``drift``: at a catch the delay takes its next step and the drag is
+        drawn afresh (``V2Level.next_delay``/``next_drag``, from the episode's delay and
+        drag streams); the camera's frames captured from now on carry the new delay, the
+        ball flies with the new drag, the oracle is told both."""
+        lv = self.spec_level
+        assert self._drift_rngs is not None
+        delay_rng, drag_rng = self._drift_rngs
+        self.delay = lv.next_delay(self.delay, delay_rng)
+        self.drag = lv.next_drag(self.drag, drag_rng)
+        self.camera.delay = self.delay
+        self.world.set_drag(0, self.drag)
+        self.controller.estimator.retell(self.drag, self.delay)
 
     def _task_error(
         self, before: tuple[NDArray[np.float64], NDArray[np.float64]], t0: float, planned: float

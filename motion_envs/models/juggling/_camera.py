@@ -247,6 +247,14 @@ class FlightEstimator:
         self._cached: tuple[tuple[int, float], tuple[float, float]] | None = None
         self._version = 0
 
+    def retell(self, drag: float, delay: float) -> None:
+        """The world's drag and delay changed between flights (Juggling-v2's ``drift``
+        level): the oracle is told the new values; every other estimator ignores this
+        (it keeps its frames and its delay estimates)."""
+        if self.mode == "oracle":
+            self.drag, self.true_delay = float(drag), float(delay)
+            self._fitted = False
+
     def released(self, time: float, x: float, z: float) -> None:
         """The hand let the ball go at ``time`` from ``(x, z)``: a new flight."""
         if self.mode == "release" and self.release is not None and not self._anchored:

@@ -11,6 +11,26 @@ air drag ``k = rho C_d A / (2 m)`` drawn per episode, uniformly, between a 130 g
 juggling ball (``k = 0.009/m``) and, on the harder levels, a table-tennis ball
 (``k = 0.14/m``; :mod:`~motion_envs.envs.juggling._world`, *Air drag*).
 
+**The level ``drift``**: the juggler's parameters change WITHIN the episode, at every
+catch (while the ball is in the hand, between flights), so that an estimate pooled over
+the episode's past flights lags. Its camera and toss scatter are ``medium``'s.
+
+* The delay starts uniform in the whole human range 100-250 ms and then follows a random
+  walk, a normal step of std 20 ms per catch, reflected at 100 and 250 ms. A person's
+  visuomotor latency is not a constant: reaction-time series fluctuate slowly, with
+  serial correlation over many trials (1/f noise: Gilden, Thornton & Mallon 1995, *1/f
+  noise in human cognition*, Science 267: 1837-1839), with attention and fatigue; a step
+  of 20 ms per toss spreads about 60 ms over ten tosses (about 8 s of juggling), the
+  order of a person's trial-to-trial spread of simple visual reaction times (tens of
+  ms). The step is a reasoned choice, not a measurement, and not tuned against any row.
+* The drag is drawn afresh at every catch, uniformly in 0.009-0.03 /m: a beanbag of a
+  juggling ball's mass and size lands in a new shape each catch; its drag coefficient
+  lies between a sphere's (``C_d = 0.47``, ``k = 0.009``) and a flat disc's face on
+  (``C_d`` about 1.1-1.2, standard drag tables) with a frontal area up to about 1.3
+  times the ball's when flattened: ``0.009 x 1.17 / 0.47 x 1.3 = 0.03``.
+
+The oracle is told the current delay and drag after every change.
+
 **Controllers** (:data:`V2_CONTROLLERS`): the analytic juggler of Juggling-v1 (eq. 9
 toss, eq. 10 correction; the same fit) whose eq. 10 correction is fed the ball's state
 from a :class:`~motion_envs.models.juggling.FlightEstimator`:
@@ -19,7 +39,7 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
 * ``"juggler_mean_delay"``: frames shifted by the level's mean delay;
 * ``"juggler_delay_estimator"``: the hand-written delay estimator (the delay found
   from the release, per episode; ``"release"``);
-* ``"juggler_oracle"``: the episode's true delay and the ball's true drag (an UPPER
+* ``"juggler_oracle"``: the episode's true (current) delay and the ball's true drag (an UPPER
   REFERENCE: it is given what the world hides; not the frames' jitter, which nothing
   observable tells). With drag the juggler's ballistic
   prediction is handed the equivalent ballistic state: the velocity whose ballistic
@@ -70,6 +90,12 @@ class V2Level:
         The toss's scatter (relative; degrees).
     capture_speed:
         m/s; a catch needs the palm to meet the ball slower than this.
+    delay_walk:
+        s; the std of the delay's step at every catch (a random walk reflected at the
+        ends of ``delay``, :meth:`next_delay`); 0: one delay per episode.
+    drag_per_toss:
+        The drag is drawn afresh from ``drag`` at every catch (:meth:`next_drag`; a
+        beanbag lands in a new shape); False: one drag per episode.
     """
 
     delay: tuple[float, float]
@@ -82,6 +108,29 @@ class V2Level:
     release_speed_std: float
     release_angle_std: float
     capture_speed: float
+    delay_walk: float = 0.0
+    drag_per_toss: bool = False
+
+    @property
+    def drifts(self) -> bool:
+        """True if the delay or the drag changes within the episode (at catches)."""
+        return self.delay_walk > 0 or self.drag_per_toss
+
+    def next_delay(self, delay: float, rng: np.random.Generator) -> float:
+        """s; the delay after one more catch: ``delay + delay_walk N(0, 1)`` reflected
+        into ``[low, high]`` of ``delay`` (unchanged, and no draw, when ``delay_walk`` is
+        0)."""
+        if self.delay_walk <= 0:
+            return delay
+        low, high = self.delay
+        width = high - low
+        y = (delay + self.delay_walk * float(rng.standard_normal()) - low) % (2 * width)
+        return low + (2 * width - y if y > width else y)
+
+    def next_drag(self, drag: float, rng: np.random.Generator) -> float:
+        """1/m; the drag after one more catch: drawn afresh from ``drag`` when
+        ``drag_per_toss`` (else unchanged, no draw)."""
+        return float(rng.uniform(*self.drag)) if self.drag_per_toss else drag
 
     @property
     def mean_delay(self) -> float:
@@ -94,6 +143,20 @@ V2_LEVELS: dict[str, V2Level] = {
     "easy": V2Level((0.10, 0.15), 0.005, 100.0, 0.02, 0.10, 0.001, (0.009, 0.02), 0.05, 4.0, 5.0),
     "medium": V2Level((0.10, 0.20), 0.01, 100.0, 0.05, 0.10, 0.002, (0.009, 0.07), 0.08, 6.0, 5.0),
     "hard": V2Level((0.15, 0.25), 0.015, 100.0, 0.10, 0.10, 0.003, (0.009, 0.14), 0.12, 12.0, 5.0),
+    "drift": V2Level(
+        (0.10, 0.25),
+        0.01,
+        100.0,
+        0.05,
+        0.10,
+        0.002,
+        (0.009, 0.03),
+        0.08,
+        6.0,
+        5.0,
+        delay_walk=0.02,
+        drag_per_toss=True,
+    ),
 }
 
 #: The controllers' names and their estimators.
