@@ -103,7 +103,13 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     `pattern` names a registered pattern
     (:data:`~motion_envs.models.juggling.PATTERNS`: a vanilla siteswap and its dwell
     ratio; :func:`~motion_envs.models.juggling.register_pattern` adds one); every size
-    below that counts balls is for ``N`` balls (the table: ``N = 3``, the default).
+    below that counts balls is for ``N`` balls (the table: ``N = 3``, the default). The
+    juggler above plays ``"3"`` and ``"3-human"``; ``"5"``, ``"4"``, ``"441"``, ``"531"``,
+    ``"423"`` and ``"51"`` are played by the siteswap juggler
+    (:class:`~motion_envs.models.juggling.SiteswapController`: each throw value on its own
+    flight and landing hand, a 2 held, a 1 a short pass, quintic movements within the
+    hand's limits; its start's flying balls carry the level's release scatter; docs/models.md
+    section 5).
 
     Levels: Juggling-v1's (every value can also be passed on its own):
 
