@@ -6,8 +6,9 @@ flight and landing hand, quintic movements within the hand's limits).
 mirrored), on a metronome (beat ``k`` at ``t_0 + k b``):
 
 * **carry**: from the catch (or from rest at the start) to the release of the hand's next
-  throw (its next beat whose value is not a hold, ``2``): a quintic from the commanded
-  state to the release state (the release point, the throw's velocity, decelerating at
+  throw (its next beat whose value is not a hold, ``2``; over a hold: to rest
+  :data:`HOLD_DEPTH` below the release point, then a toss of one dwell): a quintic from
+  the commanded state to the release state (the release point, the throw's velocity, decelerating at
   ``release_brake`` toss thresholds), timed to the beat (at least ``MIN_CARRY`` of the
   dwell after a late catch); the throw's velocity flies the ball to its landing hand's
   catch point by that ball's nominal catch time (Shannon's theorem for its value). The
@@ -53,6 +54,7 @@ from motion_envs.models.juggling._cascade_siteswap import SiteswapPlan, peak
 from motion_envs.models.juggling._sensor import perturb_release, predict_forward
 
 __all__ = [
+    "HOLD_DEPTH",
     "INTERCEPT_CANDIDATES",
     "MIN_CARRY",
     "MIN_CATCH_HEIGHT",
@@ -72,6 +74,9 @@ _SIGN = (np.array((1.0, 1.0)), np.array((-1.0, 1.0)))
 _SHIFTS = (0.0, 0.05, -0.05, 0.1, -0.1, 0.15, -0.15)
 #: m, own ``x``: a release point moved inwards stays on its own side of the midline.
 MIN_RELEASE_X = 0.03
+#: m: a ball held over a beat (a 2) rests this far below the release point before its
+#: toss (one dwell long).
+HOLD_DEPTH = 0.2
 
 
 class _Hand:
@@ -89,8 +94,14 @@ class _Hand:
         self.t_star = math.nan
         self.known = -1  # the ball t_star was chosen for (-1: the nominal)
         self.labels: list[tuple[str, float, float]] = []  # (phase, start, duration)
+        #: a quintic before ``c`` (a held ball's rest before its toss), or None
+        self.before: tuple[FloatArray, float] | None = None
 
     def state(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        if self.before is not None and t < self.t0:
+            c, t0 = self.before
+            s0 = max(t - t0, 0.0)
+            return (quintic_evaluate(c, s0), quintic_evaluate(c, s0, 1), quintic_evaluate(c, s0, 2))
         s = min(max(t - self.t0, 0.0), self.T)
         p, v, a = (quintic_evaluate(self.c, s, k) for k in range(3))
         if t - self.t0 > self.T:  # past the end: coast at the end velocity
@@ -99,6 +110,7 @@ class _Hand:
 
     def set(self, c: FloatArray, t0: float, duration: float) -> None:
         self.c, self.t0, self.T = c, t0, duration
+        self.before = None
 
 
 class SiteswapController:
@@ -196,6 +208,10 @@ class SiteswapController:
         flight = max(t_land - t_rel, 0.7 * tm.flight(h))
         p0, v0, a0 = hand.state(t)
         duration = t_rel - t
+        # a carry over a hold (longer than a dwell and a beat): to rest HOLD_DEPTH below
+        # the release point, then a toss of one dwell (one quintic would dip to the floor)
+        held = duration > tm.dwell + plan.beat
+        toss_time = tm.dwell if held else duration
         falling = self._falling(hand, state)
         home = plan.release[0]
         shifts = [dx for dx in _SHIFTS if home + dx >= MIN_RELEASE_X] if falling else [0.0]
@@ -204,10 +220,20 @@ class SiteswapController:
             p = p + np.array((dx, 0.0))
             v = _velocity(plan, h, p, flight)
             a = plan.release_acceleration(h, v)
-            c = quintic(p0, v0, a0, p, v, a, duration)
-            if self._clear(c, t, duration, falling):
+            start = (
+                (p - np.array((0.0, HOLD_DEPTH)), np.zeros(2), np.zeros(2))
+                if held
+                else (p0, v0, a0)
+            )
+            c = quintic(*start, p, v, a, toss_time)
+            if self._clear(c, toss_time, falling, duration - toss_time):
                 break
-        hand.set(c, t, duration)
+        if held:
+            rest = quintic(p0, v0, a0, start[0], np.zeros(2), np.zeros(2), duration - toss_time)
+            hand.set(c, t_rel - toss_time, toss_time)
+            hand.before = (rest, t)
+        else:
+            hand.set(c, t, duration)
         hand.mode = "carry"
         toss = plan.style.toss_share * duration
         hand.labels = [("return", t, duration - toss), ("toss", t_rel - toss, toss)]
@@ -226,9 +252,14 @@ class SiteswapController:
         return out
 
     def _clear(
-        self, c: FloatArray, t: float, duration: float, falling: list[tuple[FloatArray, FloatArray]]
+        self,
+        c: FloatArray,
+        duration: float,
+        falling: list[tuple[FloatArray, FloatArray]],
+        after: float = 0.0,
     ) -> bool:
-        """Whether the carry ``c`` (from ``t`` over ``duration``) keeps every falling ball
+        """Whether the carry ``c`` (starting ``after`` s from now, over ``duration``) keeps
+        every falling ball
         off its palm: no ball, falling, within ``clearance`` across and from just below
         the palm to ``clearance`` above it."""
         clr = self.plan.style.clearance
@@ -236,8 +267,8 @@ class SiteswapController:
         hand = quintic_evaluate(c, s)
         g = self.task.gravity
         for p, v in falling:
-            ball = ballistic_position(p, v, s, g)
-            down = v[1] - g * s < 0
+            ball = ballistic_position(p, v, s + after, g)  # the quintic starts ``after`` s on
+            down = v[1] - g * (s + after) < 0
             dz = ball[:, 1] - hand[:, 1]
             near = down & (np.abs(ball[:, 0] - hand[:, 0]) < clr) & (dz > -0.02) & (dz < clr)
             if near.any():
