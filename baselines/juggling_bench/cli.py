@@ -352,8 +352,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--levels",
         type=level_names,
         default=None,
-        help="Juggling-v1's levels, comma-separated (e.g. easy,medium,hard): run the levels "
-        "benchmark instead of the paper's",
+        help="levels, comma-separated (e.g. easy,medium,hard): run the levels benchmark "
+        "instead of the paper's; with --version v2 also drift (Juggling-v2's level whose "
+        "delay and drag change at every catch)",
     )
     p.add_argument(
         "--pattern",

@@ -319,10 +319,11 @@ def plot_v2(doc: dict[str, Any]) -> Any:
         ax.grid(alpha=0.3)
     axes[0][0].set_ylabel("catch rate (catches per toss)")
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=4, frameon=False)
+    ncol = 4 if n > 1 else 2  # one panel: two columns fit its width
+    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=ncol, frameon=False)
     fig.suptitle("demonstrations SIMULATED; bars: 95 % bootstrap intervals over test episodes",
                  fontsize=9)  # fmt: skip
-    fig.tight_layout(rect=(0, 0.1, 1, 1))
+    fig.tight_layout(rect=(0, 0.1 if n > 1 else 0.2, 1, 1))
     return fig
 
 
