@@ -169,3 +169,30 @@ def test_cli_levels_name_drift_and_reject_unknown() -> None:
     assert level_names("medium,drift") == ("medium", "drift")
     with pytest.raises(argparse.ArgumentTypeError, match="drift"):
         level_names("drifty")
+
+
+def test_bench_reports_oracle_minus_delay_estimator_paired() -> None:
+    """With synthetic episodes per controller, the reported difference is the pooled
+    catch rates' difference (catches / tosses, computed here) with an interval around it."""
+    from baselines.agents.juggling_score import JugglingEpisodes
+    from baselines.juggling_bench.v2 import V2Config, report_v2, run_v2
+    from motion_envs.datasets.juggling import episode_seeds
+
+    catches = {"juggler_oracle": [3, 2, 3, 1, 3, 2], "juggler_delay_estimator": [1, 2, 0, 1, 3, 0]}
+
+    def play(policy: object, env_id: str, kwargs: dict, split: str, n: int) -> JugglingEpisodes:
+        c = np.array(catches.get(kwargs["controller"], [1] * 6)[:n], dtype=np.int64)
+        return JugglingEpisodes(
+            seeds=episode_seeds(split, n), tosses=np.full(n, 3, dtype=np.int64), catches=c,
+            dropped=c < 3, segment_phase=np.array(["catch"] * n),
+            segment_episode=np.arange(n, dtype=np.int64),
+            segment_deviation=np.linspace(0.01, 0.02, n),
+        )  # fmt: skip
+
+    doc = run_v2(V2Config(levels=("drift",), episodes=6, val_episodes=2, ilc=False), play)
+    (level,) = doc["levels"]
+    got = level["oracle_minus_delay_estimator"]
+    expected = (14 - 7) / 18
+    assert got["value"] == pytest.approx(expected)
+    assert got["ci"][0] <= expected <= got["ci"][1] and got["ci"][0] >= 0
+    assert "oracle - delay_estimator (paired): +0.389" in report_v2(doc)
