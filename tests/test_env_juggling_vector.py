@@ -410,9 +410,9 @@ def test_replan_many_is_replan_of_each() -> None:
 
 @needs_numba
 def test_v1_controllers_get_the_corrections_at_their_events() -> None:
-    """The vector env's eq. 10 corrections reach each sub-environment's controller at
-    its next event: at a reset and after _sync the controller holds the single
-    environment's plan and corrections (and the world its time)."""
+    """The batch's eq. 10 corrections reach each episode's controller at its next event:
+    after ``sync`` a vector sub-environment's controller holds the single environment's
+    (its batch of one, synced too) plan and corrections, and the world its time."""
     n, steps = 3, 400
     vec = JugglingV1VectorEnv(n, level="medium")
     singles = [gym.make(V1, level="medium").unwrapped for _ in range(n)]
@@ -427,14 +427,15 @@ def test_v1_controllers_get_the_corrections_at_their_events() -> None:
         if (term | trunc).any():  # compare before the autoreset
             break
     for i, env in enumerate(singles):
-        vec._sync(i)
-        a, b = vec._episode(i), env.controller.juggler.episode
+        vec._batch.sync(i)
+        env._batch.sync(0)
+        a, b = vec._batch._episode(i), env.controller.juggler.episode
         assert a.phase == b.phase
         assert a.corrections == b.corrections
         assert np.array_equal(a.coefficients, b.coefficients)
         assert np.array_equal(a.end, b.end)
         assert np.array_equal(a.grid, b.grid)
-        assert vec._datas[i].time == env.world.data.time
+        assert vec.envs[i].world.data.time == env.world.data.time
         corrected += len(b.corrections)
     assert corrected > 10  # corrections happened
 

@@ -34,6 +34,7 @@ from motion_envs.envs.juggling import _period
 from motion_envs.envs.juggling._compiled_likeness import likeness_tree, nearest_point, nearest_rows
 
 __all__ = [
+    "bound",
     "cascade_advance",
     "cascade_events",
     "cascade_measure",
@@ -130,7 +131,7 @@ def hypot_rows(x: Any, y: Any) -> Any:
     return out
 
 
-def _bound(func: Any, **names: Any) -> Any:
+def bound(func: Any, **names: Any) -> Any:
     """``func``'s body with some of its global names bound to other objects (the compiled
     equivalents), for numba to compile: one source, two paths."""
     scope = dict(func.__globals__)
@@ -141,12 +142,12 @@ def _bound(func: Any, **names: Any) -> Any:
 
 
 #: :func:`~motion_envs.envs.juggling._period.servo_plan` compiled.
-servo_plan = njit(cache=True)(_bound(_period.servo_plan, py_hypot=py_hypot))
+servo_plan = njit(cache=True)(bound(_period.servo_plan, py_hypot=py_hypot))
 #: :func:`~motion_envs.envs.juggling._period.servo_acceleration` compiled.
-servo_acceleration = njit(cache=True)(_bound(_period.servo_acceleration, py_hypot=py_hypot))
+servo_acceleration = njit(cache=True)(bound(_period.servo_acceleration, py_hypot=py_hypot))
 #: :func:`~motion_envs.envs.juggling._period.world_periods` compiled (releases the GIL).
 world_periods = njit(cache=True, nogil=True)(
-    _bound(
+    bound(
         _period.world_periods,
         py_hypot=py_hypot,
         mj_step_c=mj_step_c,

@@ -14,7 +14,13 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["likeness_tree", "nearest_point", "nearest_rows"]
+__all__ = [
+    "likeness_forest",
+    "likeness_tree",
+    "nearest_in_tree",
+    "nearest_point",
+    "nearest_rows",
+]
 
 
 def likeness_tree(samples: Any, leaf: int = 64) -> tuple[Any, ...]:
@@ -77,10 +83,31 @@ def _box(lo: Any, hi: Any, node: int, q: Any) -> float:
     return s
 
 
+def likeness_forest(trees: Any) -> tuple[tuple[Any, ...], Any]:
+    """The trees of :func:`likeness_tree` (one per phase) as one tree's arrays holding
+    them all, and each one's root node ``(P,)``: one tuple of 7 arrays to pass to
+    compiled code instead of ``7 P`` (each array costs its unboxing at every call)."""
+    parts: list[list[Any]] = [[] for _ in range(7)]
+    roots, nodes, points = [], 0, 0
+    for pts, start, stop, left, right, lo, hi in trees:
+        roots.append(nodes)
+        shifted = (
+            pts, start + points, stop + points, np.where(left >= 0, left + nodes, -1),
+            np.where(right >= 0, right + nodes, -1), lo, hi,
+        )  # fmt: skip
+        for part, array in zip(parts, shifted, strict=True):
+            part.append(array)
+        nodes += start.shape[0]
+        points += pts.shape[0]
+    forest = tuple(np.ascontiguousarray(np.concatenate(part)) for part in parts)
+    return forest, np.array(roots, dtype=np.int64)
+
+
 @njit(cache=True)
-def _nearest(tree: Any, q: Any, stack: Any) -> float:
+def nearest_in_tree(tree: Any, q: Any, stack: Any, root: int = 0) -> float:
     """m; the distance of ``q (4,)`` to the nearest sample of ``tree``
-    (:func:`likeness_tree`), ``inf`` where not finite (:func:`nearest_rows`' search;
+    (:func:`likeness_tree`; or of the tree at node ``root`` of a
+    :func:`likeness_forest`), ``inf`` where not finite (:func:`nearest_rows`' search;
     ``stack``: the search's node stack, 256 entries)."""
     pts, start, stop, left, right, lo, hi = tree
     q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
@@ -89,7 +116,7 @@ def _nearest(tree: Any, q: Any, stack: Any) -> float:
     if not math.isfinite(q3):
         return math.inf
     best = math.inf
-    stack[0] = 0
+    stack[0] = root
     top = 1
     while top > 0:
         top -= 1
@@ -119,10 +146,10 @@ def _nearest(tree: Any, q: Any, stack: Any) -> float:
 def nearest_point(
     pts: Any, start: Any, stop: Any, left: Any, right: Any, lo: Any, hi: Any, q: Any, stack: Any
 ) -> float:
-    """:func:`_nearest` of one point ``q (4,)`` in the tree :func:`likeness_tree` returned
+    """:func:`nearest_in_tree` of one point ``q (4,)`` in the tree :func:`likeness_tree` returned
     (its arrays passed one by one: a tuple costs more to pass from Python than the
     search)."""
-    return _nearest((pts, start, stop, left, right, lo, hi), q, stack)
+    return nearest_in_tree((pts, start, stop, left, right, lo, hi), q, stack)
 
 
 @njit(cache=True)
@@ -136,5 +163,5 @@ def nearest_rows(points: Any, phase: Any, trees: Any) -> Any:
     out = np.empty(points.shape[0])
     stack = np.empty(256, dtype=np.int64)
     for j in range(points.shape[0]):
-        out[j] = _nearest(trees[phase[j]], points[j], stack)
+        out[j] = nearest_in_tree(trees[phase[j]], points[j], stack)
     return out

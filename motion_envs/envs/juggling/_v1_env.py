@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import math
-from collections import deque
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -14,9 +13,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
-from motion_envs.envs._common import SideCameraMixin, clipped_pair
-from motion_envs.envs.juggling._likeness import LikenessQuery
+from motion_envs.envs._common import SideCameraMixin, as_action
+from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
+from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
@@ -50,7 +50,6 @@ V1_OBS_DIM = 15 + 4 * HISTORY
 #: s of simulated time per catch (at 9.81 m/s^2; times ``sqrt(9.81 / g)``) after which an
 #: episode is truncated anyway; a cycle of the juggler lasts about 1.1 s at 9.81 m/s^2.
 V1_CYCLE_TIME = 4.0
-_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
 _POS_MARGIN = 10.0
 _SPEED_BOUND = 30.0
 
@@ -184,6 +183,8 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+    #: Ball measurements in the observation.
+    history = HISTORY
     _CONTROLLERS = CONTROLLERS
     _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
 
@@ -218,7 +219,6 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.controller_name, juggler, self.delay_steps * self.task.dt
         )
         self.likeness = v1_likeness(self.gravity, "train")
-        self._likeness = LikenessQuery(self.likeness)
         self.world = JugglingV1World(
             self.task, self.release_speed_std, math.radians(self.release_angle_std)
         )
@@ -234,10 +234,11 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._low, self._high = low, high
         self._renderer: Any = None
         self._done = True
+        #: the measured state at the reset (the batch's starting point)
         self._state: JugglingState | None = None
-        #: the last HISTORY ball measurements ``(x, z, vx, vz)``, newest first
-        self._history: deque[tuple[float, ...]] = deque(maxlen=HISTORY)
-        self._catches = self._tosses = 0
+        #: the batch stepping this episode and its row (:meth:`_batch_row`)
+        self._batch: V1Batch | None = None
+        self._rows = np.zeros(1, dtype=np.int64)
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
@@ -255,21 +256,31 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         return self.task.dt
 
     # -- episode ------------------------------------------------------------------------
+    def _batch_row(self) -> tuple[V1Batch, NDArray[np.int64]]:
+        """The batch this episode is stepped in and its row: the native vector
+        environment's (set by it) or this environment's own batch of one."""
+        if self._batch is None:
+            backend = "numba" if numba_available() else "python"
+            self._batch, self._rows = V1Batch([self], backend), np.zeros(1, dtype=np.int64)
+        return self._batch, self._rows
+
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
         world_ss, sensor_ss, controller_ss = np.random.SeedSequence(base).spawn(3)
+        batch, rows = self._batch_row()
+        i = int(rows[0])
+        if not self._done:
+            batch.sync(i)  # the ending episode's controller complete
         true = self.world.reset(self.home, rng=np.random.default_rng(world_ss))
         meas = self.sensor.reset(true.ball_pos, true.ball_vel, np.random.default_rng(sensor_ss))
         state = self._measured(true, meas.position, meas.velocity)
         self.controller.reset(state, np.random.default_rng(controller_ss))
         self._state = state
-        row = (*meas.position.tolist(), *meas.velocity.tolist())
-        self._history = deque([row] * HISTORY, maxlen=HISTORY)
+        batch.load(i)
         self._done = False
-        self._catches = self._tosses = 0
         info = {
             "phase": self.controller.phase,
             "time": true.time,
@@ -277,7 +288,7 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             "ball": true.ball_pos.copy(),
             "seed": base,
         }
-        return self._observation(true), info
+        return batch.observation(i), info
 
     @staticmethod
     def _measured(true: JugglingState, ball_pos: Any, ball_vel: Any) -> JugglingState:
@@ -296,94 +307,57 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        ax, az, invalid = clipped_pair(action)
-        true, terminated, truncated = self._advance(ax, az)
-        caught = int(true.caught)
-        phase = self.controller.phase
-        like = self._likeness.distance(phase, true.hand_pos, true.hand_vel)
-        reward, terms = self._rewards(caught, true.dropped, like, ax * ax + az * az)
+        a = as_action(action, (2,))
+        batch, rows = self._batch_row()
+        obs, out = batch.step(rows, a[None])
+        r = out[0].tolist()
+        term, trunc = r[17] > 0.0, r[18] > 0.0
+        self._done = term or trunc
         info = {
-            **terms,
-            "caught": bool(caught),
-            "catches": self._catches,
-            "tosses": self._tosses,
-            "cycles": self._tosses,
-            "phase": phase,
-            "held": true.held,
-            "time": true.time,
-            "hand": true.hand_pos.copy(),
-            "ball": true.ball_pos.copy(),
-            "action_invalid": invalid,
+            "reward_catch": r[1],
+            "reward_drop": r[2],
+            "reward_likeness": r[3],
+            "reward_action": r[4],
+            "likeness": r[5],
+            "caught": r[7] > 0.0,
+            "catches": int(r[8]),
+            "tosses": int(r[9]),
+            "cycles": int(r[9]),
+            "phase": PHASES[int(r[10])],
+            "held": r[11] > 0.0,
+            "time": r[6],
+            "hand": out[0, 13:15].copy(),
+            "ball": out[0, 15:17].copy(),
+            "action_invalid": r[12] > 0.0,
         }
-        return self._observation(true), reward, terminated, truncated, info
-
-    def _advance(self, ax: float, az: float) -> tuple[JugglingState, bool, bool]:
-        """One control period with the residual ``(ax, az)`` (clipped, finite; 0 outside
-        ``residual_phases``): the controller's command, the world, the sensor, the history
-        and the episode's counts and end; returns ``(true state, terminated, truncated)``.
-        :meth:`step` and :meth:`nominal_episode` play through it (the reward and
-        observation are step's)."""
-        target, armed = self.controller.command(self._state)  # type: ignore[arg-type]
-        if self.residual_phases is not None:  # as CascadeEnv._period: the phase after
-            acts = self.residual_acts[PHASES.index(self.controller.phase)]  # the command
-            ax, az = (ax, az) if acts else (0.0, 0.0)
-        s = self.residual_scale
-        true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
-        bx, bz = true.ball_pos.tolist()
-        ux, uz = true.ball_vel.tolist()
-        row = self.sensor.measure_values(bx, bz, ux, uz, true.held)
-        if true.held:  # measured exactly: the true state is the measured one
-            self._state = true
-        else:
-            self._state = self._measured(true, np.array(row[:2]), np.array(row[2:]))
-        self._history.appendleft(row)
-        self._catches += int(true.caught)
-        self._tosses += int(true.released)
-        terminated, truncated = self._episode_end(true.dropped, true.time)
-        return true, terminated, truncated
+        return obs[0], r[0], term, trunc, info
 
     def nominal_episode(self, seed: int) -> dict[str, Any]:
-        """``reset(seed=seed)``, then the zero action until the episode ends, without the
-        reward and the observations (the controller alone; what the benchmarks score).
+        """``reset(seed=seed)``, then the zero action until the episode ends (the
+        controller alone; what the benchmarks score).
 
         Returns ``time (n,)``, ``hand (n, 2)`` and ``phase`` (n labels) at the reset and
         after every step (the values of the infos ``time``, ``hand`` and ``phase``), and the
-        episode's ``tosses``, ``catches`` and ``dropped`` (it ended by a drop): the same
-        numbers as stepping the zero action (one code path, :meth:`_advance`)."""
+        episode's ``tosses``, ``catches`` and ``dropped`` (it ended by a drop)."""
         _, info = self.reset(seed=seed)
         times = [float(info["time"])]
         hands = [info["hand"].tolist()]
         phases = [str(info["phase"])]
-        controller = self.controller
+        zero = np.zeros(2)
         terminated = truncated = False
         while not (terminated or truncated):
-            true, terminated, truncated = self._advance(0.0, 0.0)
-            times.append(true.time)
-            hands.append(true.hand_pos.tolist())
-            phases.append(controller.phase)
+            _, _, terminated, truncated, info = self.step(zero)
+            times.append(info["time"])
+            hands.append(info["hand"].tolist())
+            phases.append(info["phase"])
         return {
             "time": np.array(times, dtype=np.float64),
             "hand": np.array(hands, dtype=np.float64),
             "phase": phases,
-            "tosses": self._tosses,
-            "catches": self._catches,
+            "tosses": info["tosses"],
+            "catches": info["catches"],
             "dropped": terminated,
         }
-
-    def _observation(self, true: JugglingState) -> NDArray[np.float32]:
-        c = self.controller
-        row = true.hand_pos.tolist()
-        row += true.hand_vel.tolist()
-        row.append(float(true.held))
-        row += _ONE_HOT[c.phase]
-        row += (c.phase_time, c.duration)
-        row += c.nominal_next().tolist()
-        row += c.plan_end.tolist()
-        for measurement in self._history:
-            row += measurement
-        obs = np.array(row, dtype=np.float32)
-        np.minimum(obs, self._high, out=obs)
-        return np.maximum(obs, self._low, out=obs)
 
     # -- rendering (SideCameraMixin.render) ----------------------------------------------
     def _sync_scene(self) -> None:

@@ -75,7 +75,7 @@ class JugglingV1World(HandsWorld):
             raise ValueError(f"spec must have one hand and one ball; got {spec!r}")
         super().__init__(spec, release_speed_std, release_angle_std)
         self.task = task
-        self.state: JugglingState | None = None
+        self._reset = False
 
     def reset(
         self,
@@ -90,13 +90,14 @@ class JugglingV1World(HandsWorld):
         vel = np.array([xz_pair(hand_vel, "hand_vel")])
         self._rng = rng
         self.reset_state(pos, vel, (0,), (-1,), pos, vel)
-        self.state = self._make_state(False, False)
-        return self.state
+        self.caught[0, 0] = self.released[0, 0] = -1
+        self._reset = True
+        return self._make_state(False, False)
 
     def step(self, hand_target: ArrayLike, release_armed: bool) -> JugglingState:
         """One control period: servo the hand toward ``hand_target`` (rate limited), grasp
         rule after every physics step, release decision at the period's end."""
-        if self.state is None:
+        if not self._reset:
             raise RuntimeError("call reset() before step()")
         tx, tz = xz_pair(hand_target, "hand_target")
         return self.advance(tx, tz, release_armed)
@@ -105,15 +106,23 @@ class JugglingV1World(HandsWorld):
         """:meth:`step` toward the finite floats ``(tx, tz)``, unchecked (the env's hot
         path; the episode must have been reset)."""
         self.period(((tx, tz),), (release_armed,))
-        self.state = self._make_state(bool(self.released[0, 0] >= 0), bool(self.caught[0, 0] >= 0))
-        return self.state
+        return self._make_state(bool(self.released[0, 0] >= 0), bool(self.caught[0, 0] >= 0))
 
     def launch(self, ball_pos: ArrayLike, ball_vel: ArrayLike) -> JugglingState:
         """Put the ball in flight at ``ball_pos`` with ``ball_vel`` (as if tossed long ago:
         it may be captured at once), the hand unchanged; for tests and demonstrations."""
         self.launch_ball(0, xz_pair(ball_pos, "ball_pos"), xz_pair(ball_vel, "ball_vel"))
-        self.state = self._make_state(False, False)
-        return self.state
+        self.caught[0, 0] = self.released[0, 0] = -1
+        return self._make_state(False, False)
+
+    @property
+    def state(self) -> JugglingState | None:
+        """The TRUE state now (None before the first reset): after a control period,
+        whether it caught or released the ball (the period's, also when the
+        environment's batch of one stepped it)."""
+        if not self._reset:
+            return None
+        return self._make_state(bool(self.released[0, 0] >= 0), bool(self.caught[0, 0] >= 0))
 
     @property
     def held(self) -> bool:

@@ -117,6 +117,8 @@ class JugglingVectorEnv(NativeVectorEnv):
     #: Whether the subclass batches the episodes with numba (``_setup_arrays``,
     #: ``_link``, ``_after_reset``, ``_step_batch``).
     _batched: ClassVar[bool] = False
+    #: Whether the subclass's batch also runs as plain Python (``backend="python"``).
+    _python_batch: ClassVar[bool] = False
     #: The lookup of the infos' ``phase`` (and ``phases``) codes.
     phase_names: ClassVar[tuple[str, ...]] = PHASE_NAMES
 
@@ -151,7 +153,7 @@ class JugglingVectorEnv(NativeVectorEnv):
         self._pool: ThreadPoolExecutor | None = None
         batched = backend != "python" and numba_available() and self._batched
         self.backend = "numba" if batched else "python"
-        if batched:
+        if batched or self._python_batch:
             self._setup_arrays()
 
     # -- the compiled code's links to the worlds -------------------------------------------

@@ -1,0 +1,476 @@
+"""Juggling-v1's step for a batch of episodes: the ONE home of its controller's commands
+between events, its sensor, reward, observation and episode end.
+
+:class:`V1Batch` steps the episodes of ``parts`` (Juggling-v1 single environments: each
+its world, controller, sensor and generators) together. The single environment is the
+batch of one (its rows are its world's own arrays); the native vector environment
+(:class:`~motion_envs.envs.juggling.JugglingV1VectorEnv`) is the batch of ``N``. A step:
+
+* the controller's plan in arrays: between the plan's events (a release, a catch, a
+  reached end point, all decided as the controller decides them:
+  :func:`~motion_envs.envs.juggling._v1_step.v1_events`) a command is an index into the
+  plan on the control grid (:func:`~motion_envs.envs.juggling._v1_step.v1_advance`); at
+  an event the episode's own controller runs in Python and its new plan is copied back
+  (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
+  Python); with ``residual_phases`` the residual acts where the phase after the command
+  is one of them;
+* the eq. 10 corrections (found due by ``v1_events`` with the controller's test) made in
+  the arrays with the controller's numbers: the catch's rows and pseudo-inverses are
+  shared by the catches of its duration
+  (:func:`~motion_envs.models.juggling.eq10_rows`), the products stacked
+  (:func:`~motion_envs.models.juggling.eq10_many`); the controller gets them at its
+  next event or reset (:meth:`V1Batch.sync`), as it gets its step count there;
+* the worlds' one control period (:class:`~motion_envs.envs.juggling._batch.WorldBatch`);
+  the release's noise from the world's generator; the hand's human-likeness
+  (:class:`~motion_envs.models.juggling.HumanLikeness`'s number, by the compiled k-d tree
+  search with numba);
+* the rest (:func:`~motion_envs.envs.juggling._v1_step.v1_finish`): the sensor's delay
+  line (its noise drawn ahead in blocks from the sensor's own generator: the same
+  sequence), the counts, the reward, the episode's end and the observation.
+
+``backend="numba"`` runs the compiled kernels (:mod:`~motion_envs.envs.juggling._compiled_v1`),
+``"python"`` the same functions as plain Python (bit-identical).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs.datasets.juggling import PHASES, JugglingState
+from motion_envs.envs.juggling import _v1_step
+from motion_envs.envs.juggling._batch import WorldBatch
+from motion_envs.envs.juggling._v1_step import OUT_COLUMNS
+from motion_envs.models.juggling import (
+    LIKENESS_TAU,
+    ControlOptions,
+    JugglingController,
+    eq10_many,
+    eq10_rows,
+)
+
+__all__ = ["V1Batch"]
+
+_TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
+_FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
+#: Measurement-noise rows drawn from a sensor's generator at a time.
+_NOISE_BLOCK = 64
+#: A step's per-episode values by info key (the stepped episodes along the first axis).
+Columns = dict[str, NDArray[Any]]
+
+
+class V1Batch(WorldBatch):
+    """Juggling-v1's episodes of ``parts`` stepped together (see the module docstring).
+
+    ``parts``: ``JugglingV1Env`` instances with the same arguments; ``backend``:
+    ``"numba"`` or ``"python"``; ``threads``: threads stepping the worlds (numba)."""
+
+    LINKED = (*WorldBatch.LINKED, "_kernels", "_trees")
+
+    def __init__(self, parts: Sequence[Any], backend: str, threads: int = 1) -> None:
+        super().__init__(parts, backend, threads)
+        n, first = self.n, self.parts[0]
+        task = first.task
+        self._dt, self._gravity = task.dt, task.gravity
+        # the true state after the last period
+        self._true = np.zeros((n, 8))  # hand x, z, vx, vz, ball x, z, vx, vz
+        self._t_flags = np.zeros((n, 3), dtype=np.bool_)  # held, left, dropped
+        # what the controller was last shown (the measured state)
+        self._values = np.zeros((n, 5))  # time, ball x, z, vx, vz
+        self._m_flags = np.zeros((n, 3), dtype=np.bool_)  # held, released, caught
+        # the sensor's delay line (a ring shared by all episodes: a reset fills every
+        # slot of its own), the observation's measurement history, the noise drawn ahead
+        self._ring = np.zeros((first.delay_steps + 1, n, 5))
+        self._slot = 0
+        self._history = np.zeros((n, first.history, 4))
+        self._noisy = first.position_std > 0 or first.velocity_std > 0
+        self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
+        self._noise = np.zeros((n, _NOISE_BLOCK, 4))
+        self._noise_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)  # next unused row
+        world = first.world
+        self._rel_std = np.array([world.release_speed_std, world.release_angle_std])
+        self._scatter = bool(self._rel_std.any())
+        self._rel_noise = np.zeros((n, _NOISE_BLOCK, 2))
+        self._rel_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)
+        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        # the controller's plan
+        self._fast = first.controller_name in _FAST_CONTROLLERS
+        self._latency = first.delay_steps * task.dt
+        self._ahead = first.controller_name == "juggler_latency_aware" and self._latency > 0
+        self._phase = np.zeros(n, dtype=np.int64)
+        self._pk = np.zeros(n, dtype=np.int64)
+        self._end_k = np.zeros(n, dtype=np.int64)
+        self._grid = np.zeros((n, 1, 2))
+        self._glen = np.ones(n, dtype=np.int64)
+        self._last = np.zeros((n, 2, 2))
+        self._t_start = np.zeros(n)
+        self._duration = np.zeros(n)
+        self._end = np.zeros((n, 2))
+        self._next = np.zeros((n, 2))  # nominal_next, for the slow controllers
+        # the current catch's eq. 10 rows (eq10_rows) and coefficients, by grid step;
+        # corrections made here reach the controller at its next event (sync)
+        self._stale = np.zeros(n, dtype=np.bool_)
+        self._pending: list[list[tuple[float, float]]] = [[] for _ in range(n)]
+        self._coef = np.zeros((n, 1, 2))
+        self._c_basis = np.zeros((n, 1, 1))
+        self._c_derivative = np.zeros((n, 1, 1))
+        self._c_a = np.zeros((n, 1, 3, 1))
+        self._c_pinv = np.zeros((n, 1, 1, 3))
+        w = first.reward_weights
+        self._bounds = np.stack([first._low, first._high])
+        self._residual = (float(first.residual_scale), first.residual_acts.copy())
+        self._options: ControlOptions | None = None
+        if self._fast:
+            self._use_options(first.controller.juggler.options)
+        else:
+            self._ctl = np.zeros(7)
+            self._flags_ctl = (False, False, False)
+        scalars = [task.dt, LIKENESS_TAU, w["catch"], w["drop"], w["likeness"], w["action"]]
+        scalars += [first.max_catches, first._time_limit, float(self._noisy)]
+        self._scalars = np.array(scalars)
+
+    def link(self) -> None:
+        """The worlds' links, the kernels and the likeness's compiled k-d trees (made
+        again after unpickling, which copies the worlds)."""
+        super().link()
+        likeness = self.parts[0].likeness
+        if self.backend == "numba":
+            from motion_envs.envs.juggling import _compiled_v1
+
+            self._kernels: Any = _compiled_v1
+            from motion_envs.envs.juggling._compiled_likeness import likeness_forest
+
+            trees = [self._compiled.likeness_tree(likeness.trees[p].data) for p in PHASES]
+            self._trees: Any = likeness_forest(trees)
+        else:
+            self._kernels = _v1_step
+            self._trees = likeness
+        self._stack = np.empty(256, dtype=np.int64)
+
+    def _use_options(self, options: ControlOptions) -> None:
+        """The juggler's options as the command reads them."""
+        self._options = options
+        task = self.parts[0].task
+        self._flags_ctl = (True, bool(options.correction), self._ahead)
+        self._ctl = np.array(
+            [task.dt, task.gravity, self._latency, options.correction_tolerance, _TOSS, _CATCH,
+             options.release_after]
+        )  # fmt: skip
+
+    def _episode(self, i: int) -> JugglingController:
+        episode = self.parts[i].controller.juggler.episode
+        assert episode is not None
+        return episode  # type: ignore[no-any-return]
+
+    # -- a reset ---------------------------------------------------------------------------
+    def load(self, i: int) -> None:
+        """Copy episode ``i``'s state after its reset (world, sensor, controller) into
+        the arrays; draw its noise ahead."""
+        if not self._linked:
+            self.link()
+        env = self.parts[i]
+        self.load_world(i)
+        q, v = env.data.qpos, env.data.qvel
+        self._true[i] = (q[0], q[1], v[0], v[1], q[2], q[3], v[2], v[3])
+        self._t_flags[i] = (self._holder[i, 0] >= 0, self._left[i, 0], self._dropped[i, 0])
+        state = env._state
+        self._values[i] = (state.time, *state.ball_pos, *state.ball_vel)
+        self._m_flags[i] = (state.held, state.released, state.caught)
+        self._ring[:, i] = env.sensor._buffer[0]
+        self._history[i] = self._values[i, 1:]
+        self._counts[i] = 0
+        self._stale[i] = False
+        self._pending[i].clear()
+        self._noise_at[i] = self._rel_at[i] = _NOISE_BLOCK
+        self._draw(i)
+        self._load_plan(i)
+
+    def _draw(self, i: int) -> None:
+        """Draw episode ``i``'s used-up noise ahead: a block of rows from the sensor's own
+        generator (the sequence of as many ``standard_normal(4)`` calls), from the world's
+        for the releases (of ``standard_normal(2)`` calls)."""
+        if self._noisy and self._noise_at[i] == _NOISE_BLOCK:
+            self._noise[i] = self.parts[i].sensor._rng.standard_normal((_NOISE_BLOCK, 4))
+            self._noise_at[i] = 0
+        if self._scatter and self._rel_at[i] == _NOISE_BLOCK:
+            self._rel_noise[i] = self.parts[i].world._rng.standard_normal((_NOISE_BLOCK, 2))
+            self._rel_at[i] = 0
+
+    def _plan(self) -> tuple[Any, ...]:
+        """The plans as :func:`~motion_envs.envs.juggling._v1_step.v1_finish` reads them."""
+        return (
+            self._phase, self._pk, self._duration, self._end, self._grid, self._glen,
+            self._next, self._fast, self._history,
+        )  # fmt: skip
+
+    def observation(self, i: int) -> NDArray[np.float32]:
+        """Episode ``i``'s observation now (at its reset)."""
+        obs = np.empty(self._bounds.shape[1], dtype=np.float32)
+        true = (self._true, self._t_flags)
+        self._kernels.v1_observe(i, obs, true, self._plan(), self._bounds, self._dt)
+        return obs
+
+    def _load_plan(self, i: int) -> None:
+        """Copy episode ``i``'s controller state into the arrays."""
+        c = self.parts[i].controller
+        if not self._fast:
+            self._phase[i] = PHASES.index(c.phase)
+            self._pk[i] = self._episode(i).k
+            self._duration[i] = c.duration
+            self._end[i] = c.plan_end
+            self._next[i] = c.nominal_next()
+            return
+        ep = self._episode(i)
+        self._phase[i] = PHASES.index(ep.phase)
+        self._pk[i] = ep.k
+        self._end_k[i] = ep.end_k
+        grid = ep.grid
+        if grid.shape[0] > self._grid.shape[1]:
+            wider = np.zeros((self.n, grid.shape[0], 2))
+            wider[:, : self._grid.shape[1]] = self._grid
+            self._grid = wider
+        self._grid[i, : grid.shape[0]] = grid
+        self._glen[i] = grid.shape[0]
+        self._last[i, 0], self._last[i, 1] = ep._last[0], ep._last[1]
+        self._t_start[i] = ep.t_start
+        self._duration[i] = ep.duration
+        self._end[i] = ep.end
+        if ep.phase == "catch":
+            self._load_rows(i, ep)
+
+    def _load_rows(self, i: int, ep: JugglingController) -> None:
+        """Copy the eq. 10 rows of ``ep``'s catch plan (shared by the plans of its
+        duration: :func:`~motion_envs.models.juggling.eq10_rows`), its basis on the grid
+        and its coefficients into row ``i`` of the arrays the corrections gather from."""
+        rows = eq10_rows(ep._tau, ep._basis, ep.duration, self._dt)
+        m, nb = ep._basis.shape
+        if m > self._c_basis.shape[1] or nb != self._c_basis.shape[2]:
+            n, width = self.n, max(m, self._c_basis.shape[1])
+            if nb != self._c_basis.shape[2]:  # the first catch (one model: one basis size)
+                width = m
+            self._c_basis = _wider(self._c_basis, (n, width, nb))
+            self._c_derivative = _wider(self._c_derivative, (n, width, nb))
+            self._c_a = _wider(self._c_a, (n, width, 3, nb))
+            self._c_pinv = _wider(self._c_pinv, (n, width, nb, 3))
+            self._coef = _wider(self._coef, (n, nb, 2))
+        self._c_basis[i, :m] = ep._basis
+        self._c_derivative[i, :m] = rows.derivative
+        self._c_a[i, :m] = rows.a
+        self._c_pinv[i, :m] = rows.pinv
+        self._coef[i] = ep.coefficients
+
+    # -- the step -------------------------------------------------------------------------
+    def step(self, envs: NDArray[np.int64], actions: NDArray[np.float64]) -> tuple[
+        NDArray[np.float32], NDArray[np.float64]
+    ]:  # fmt: skip
+        """Step episodes ``envs`` with ``actions (m, 2)`` (as given: clipped here, NaN
+        counts as 0); returns their observations and their rows of
+        :data:`~motion_envs.envs.juggling._v1_step.OUT_COLUMNS` (reward, its terms, the
+        infos, the episode's end)."""
+        if not self._linked:
+            self.link()
+        kernels, entry = self._kernels, self.entry
+        plan = (
+            self._phase, self._pk, self._end_k, self._t_start, self._duration, self._end,
+            self._grid, self._glen, self._last,
+        )  # fmt: skip
+        measured = (self._values, self._m_flags)
+        world = (self._target, self._armed)
+        n = envs.size
+        a_out = np.empty((n, 3))
+        args: tuple[Any, ...] = (
+            envs, actions, plan, measured, self._ctl, self._flags_ctl, self._residual,
+            world, a_out,
+        )  # fmt: skip
+        if self._fast:
+            options = self._episode(int(envs[0])).options
+            if options is not self._options:  # the juggler's options were replaced
+                self._use_options(options)
+        status, predicted = entry(kernels.v1_command, *args)(*args)
+        if status.any():
+            self._commands(envs, status, predicted, plan, a_out)
+        self.world_periods(envs)
+        self._slot = (self._slot + 1) % self._ring.shape[0]
+        obs = np.empty((n, self._bounds.shape[1]), dtype=np.float32)
+        out = np.empty((n, len(OUT_COLUMNS)))
+        args = (
+            envs,
+            (self._worlds[2], self._worlds[3]),
+            (self._holder, self._left, self._dropped, self._k, self._caught, self._released),
+            (self._true, self._t_flags),
+            (self._ring, self._slot, self._noise, self._noise_at, self._noise_std),
+            (self._rel_noise, self._rel_at, self._rel_std),
+            self._counts,
+            self._plan(),
+            (self._trees, self._stack),
+            self._scalars,
+            self._bounds,
+            a_out,
+            measured,
+            obs,
+            out,
+        )
+        if entry(kernels.v1_finish, *args)(*args):
+            for i in envs.tolist():
+                self._draw(i)
+        if n == 1:
+            self._datas[int(envs[0])].time = out[0, 6]
+        else:
+            for i, t in zip(envs.tolist(), out[:, 6].tolist(), strict=True):
+                self._datas[i].time = t
+        return obs, out
+
+    def columns(self, out: NDArray[np.float64]) -> Columns:
+        """The infos of step rows ``out`` as columns (``phase`` as its index in
+        ``PHASES``)."""
+        catches, tosses = out[:, 8].astype(np.int64), out[:, 9].astype(np.int64)
+        return {
+            "reward_catch": out[:, 1],
+            "reward_drop": out[:, 2],
+            "reward_likeness": out[:, 3],
+            "reward_action": out[:, 4],
+            "likeness": out[:, 5],
+            "caught": out[:, 7] > 0.0,
+            "catches": catches,
+            "tosses": tosses,
+            "cycles": tosses.copy(),
+            "phase": out[:, 10].astype(np.int64),
+            "held": out[:, 11] > 0.0,
+            "time": out[:, 6],
+            "hand": out[:, 13:15],
+            "ball": out[:, 15:17],
+            "action_invalid": out[:, 12] > 0.0,
+        }
+
+    def _commands(
+        self,
+        envs: NDArray[np.int64],
+        status: NDArray[np.int64],
+        predicted: NDArray[np.float64],
+        plan: tuple[Any, ...],
+        a_out: NDArray[np.float64],
+    ) -> None:
+        """The commands :func:`~motion_envs.envs.juggling._v1_step.v1_command` left: the
+        eq. 10 corrections due (status 2), then their commands; the controllers in Python
+        at their events (status 1; every controller but ``juggler`` and
+        ``juggler_latency_aware``)."""
+        world = (self._target, self._armed)
+        due = status == 2
+        if due.any():
+            self._correct(envs[due], predicted[due])
+            self._kernels.v1_advance(envs[due], plan, self._ctl, a_out[due], self._residual, world)
+        python = status == 1
+        if python.any():
+            target, armed = self._python_commands(envs[python])
+            self._kernels.v1_aim(
+                envs[python], target, armed, a_out[python], self._phase, self._residual, world
+            )
+
+    def _correct(self, rows: NDArray[np.int64], target: NDArray[np.float64]) -> None:
+        """The eq. 10 corrections of the catches ``rows`` toward the predicted intercepts
+        ``target (r, 2)`` (where :meth:`JugglingController.correct` would re-plan): on the
+        catch's rows (:meth:`JugglingController.replan`'s numbers: the same stacked
+        products, :func:`~motion_envs.models.juggling.eq10_many`, and the same product of
+        the basis and the new coefficients for the rest of the grid), or, where the
+        controller has no rows for the step, by the episode's own controller. A
+        controller gets the corrections made here at its next event or reset
+        (:meth:`sync`), as it gets its step count there."""
+        dt = self._dt
+        k = self._pk[rows]
+        duration = self._duration[rows]
+        tau1 = k * dt / duration
+        glen = self._glen[rows]
+        on_rows = (tau1 < 1.0) & (k < glen)  # JugglingController._rows is not None
+        times = self._values[rows, 0].tolist()
+        if not on_rows.all():
+            for j in np.flatnonzero(~on_rows).tolist():
+                i, kj = int(rows[j]), int(k[j])
+                self.sync(i)
+                ep = self._episode(i)
+                ep.k = kj
+                ep.replan(times[j], target[j].copy())
+                self._grid[i, kj + 1 : self._glen[i]] = ep.grid[kj + 1 :]
+                self._end[i] = ep.end
+                self._coef[i] = ep.coefficients
+            rows, k, duration, tau1, glen, target = (
+                x[on_rows] for x in (rows, k, duration, tau1, glen, target)
+            )
+            times = [t for t, on in zip(times, on_rows.tolist(), strict=True) if on]
+            if not rows.size:
+                return
+        n, nb = rows.size, self._coef.shape[1]
+        derivative = np.empty((n, 1, nb))
+        derivative[:, 0] = self._c_derivative[rows, k]
+        out = eq10_many(
+            derivative,
+            self._c_a[rows, k],
+            self._c_pinv[rows, k],
+            self._coef[rows],
+            duration,
+            self._grid[rows, k],
+            target,
+        )
+        self._coef[rows] = out
+        self._end[rows] = target
+        self._stale[rows] = True
+        basis, grid, pending = self._c_basis, self._grid, self._pending
+        for j, (i, kj, gj, t, tj) in enumerate(
+            zip(rows.tolist(), k.tolist(), glen.tolist(), times, tau1.tolist(), strict=True)
+        ):
+            grid[i, kj + 1 : gj] = basis[i, kj + 1 : gj] @ out[j]  # as _grid_from does
+            pending[i].append((t, tj))
+
+    def sync(self, i: int) -> None:
+        """Give episode ``i``'s controller the corrections made here since its last event
+        (its coefficients, end, grid and their record) and its step count."""
+        if not self._fast:
+            return
+        ep = self._episode(i)
+        ep.k = int(self._pk[i])
+        ep._last = [self._last[i, 0].copy(), self._last[i, 1].copy()]
+        if not self._stale[i]:
+            return
+        self._stale[i] = False
+        ep.coefficients = self._coef[i].copy()
+        ep.end = self._end[i].copy()
+        ep.grid[:] = self._grid[i, : self._glen[i]]
+        ep.corrections.extend(self._pending[i])
+        self._pending[i].clear()
+
+    def _python_commands(
+        self, envs: NDArray[np.int64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """The controllers of ``envs`` run in Python on the measured state; their plans
+        are copied back into the arrays."""
+        target = np.empty((envs.size, 2))
+        armed = np.empty(envs.size, dtype=np.bool_)
+        for j, i in enumerate(envs.tolist()):
+            self.sync(i)
+            held, released, caught = self._m_flags[i].tolist()
+            state = JugglingState(
+                time=float(self._values[i, 0]),
+                hand_pos=self._true[i, 0:2].copy(),
+                hand_vel=self._true[i, 2:4].copy(),
+                ball_pos=self._values[i, 1:3].copy(),
+                ball_vel=self._values[i, 3:5].copy(),
+                held=held,
+                released=released,
+                caught=caught,
+                dropped=bool(self._t_flags[i, 2]),
+            )
+            t, a = self.parts[i].controller.command(state)
+            target[j], armed[j] = t, a
+            self._load_plan(i)
+        return target, armed
+
+
+def _wider(array: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    """``array`` in a zero array of ``shape``, its old content kept where it fits (the
+    basis size axis only grows from the placeholder's 1)."""
+    out = np.zeros(shape)
+    if array.shape[2:] == shape[2:]:
+        out[:, : array.shape[1]] = array
+    return out
