@@ -43,8 +43,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
+from motion_envs.envs.juggling._batch import WorldBatch
 from motion_envs.envs.juggling._cascade_env import CASCADE_HISTORY, CascadeEnv
-from motion_envs.envs.juggling._vector import WORLD_LINKS, Columns, JugglingVectorEnv
+from motion_envs.envs.juggling._vector import Columns, JugglingVectorEnv
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
     CascadeController,
@@ -84,25 +85,30 @@ class CascadeVectorEnv(JugglingVectorEnv):
     """
 
     single_class = CascadeEnv
-    _LINKED = (*WORLD_LINKS, "_trees")
+    _LINKED = ("_compiled", "_datas", "_trees")
     _batched = True
 
     # -- state ----------------------------------------------------------------------------
     def _link(self) -> None:
         """The worlds' links and the likeness's compiled k-d trees (made again after
         unpickling, which copies the worlds)."""
-        self._link_worlds()
+        batch = self._batch
+        assert batch is not None
+        batch.link()
+        self._compiled, self._datas = batch._compiled, batch._datas
         likeness = self.envs[0].likeness
         compiled = self._compiled
         self._trees = tuple(compiled.likeness_tree(likeness.trees[p].data) for p in PHASES)
 
     def _setup_arrays(self) -> None:
+        # the worlds' batch; its arrays are this env's
+        self._batch = batch = WorldBatch(self.envs, "numba", self.threads)
+        self._holder, self._dropped, self._k = batch._holder, batch._dropped, batch._k
+        self._caught, self._released = batch._caught, batch._released
         self._link()
         n, first = self.num_envs, self.envs[0]
         task = first.task
         self._dt, self._gravity = task.dt, task.gravity
-        # the world (HandsWorld's state, batched; the last step's events)
-        self._setup_world_arrays()
         nb = self._nb = first.balls
         self._q = np.zeros((n, 4 + 2 * nb))
         self._v = np.zeros((n, 4 + 2 * nb))
@@ -156,7 +162,7 @@ class CascadeVectorEnv(JugglingVectorEnv):
             return
         env = self.envs[i]
         w = env.world
-        self._load_world(i)
+        self._batch.load_world(i)
         self._q[i], self._v[i] = w.data.qpos, w.data.qvel
         state = env._state
         self._caught[i], self._released[i] = state.caught, state.released
@@ -266,8 +272,10 @@ class CascadeVectorEnv(JugglingVectorEnv):
         if first.residual_phases is not None:  # as CascadeEnv._period: a selection
             acts = first.residual_acts[self._phase[envs]]
             residual = np.where(acts[:, :, None], residual, 0.0)
-        self._world_periods(envs, targets + residual, armed)
-        self._q[envs], self._v[envs] = self._qv(envs)
+        batch = self._batch
+        assert batch is not None
+        batch.world_periods(envs, targets + residual, armed)
+        self._q[envs], self._v[envs] = batch.qv(envs)
         released = self._released[envs]
         if (released >= 0).any():
             self._release(envs[(released >= 0).any(axis=1)])

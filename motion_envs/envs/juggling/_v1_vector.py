@@ -11,8 +11,6 @@ runs the compiled kernels, ``"python"`` the same functions as plain Python.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -56,7 +54,3 @@ class JugglingV1VectorEnv(JugglingVectorEnv):
     ]:  # fmt: skip
         obs, out = self._batch.step(envs, actions)
         return obs, out[:, 0], out[:, 17] > 0.0, out[:, 18] > 0.0, self._batch.columns(out)
-
-    def close_extras(self, **kwargs: Any) -> None:
-        self._batch.close()
-        super().close_extras(**kwargs)

@@ -32,18 +32,15 @@ passes it): a sub-environment's episode is also truncated at its ``K``-th step, 
 ``TimeLimit`` truncates a single environment made with ``max_episode_steps=K``; ``None``
 (the registration's) keeps only the environment's own end (``max_catches``, time limit).
 
-Threads (``threads=``, numba backend): the worlds' control periods (MuJoCo's ``mj_step``
-and the servo, the bulk of a step) run in up to ``threads`` threads, each on its own
-contiguous block of sub-environments; the compiled periods release the GIL (as MuJoCo's
-own bindings do around ``mj_step``). Each world is stepped by exactly the code that steps
-it in one thread (its own model and data, nothing shared), so the result does not depend
-on the number of threads (tested bit for bit).
+Threads (``threads=``, numba backend): the worlds' control periods run in up to
+``threads`` threads (:mod:`~motion_envs.envs.juggling._batch`); the episodes do not
+depend on it (tested bit for bit).
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, ClassVar, SupportsFloat
 
@@ -59,7 +56,6 @@ from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResu
 
 __all__ = [
     "PHASE_NAMES",
-    "WORLD_LINKS",
     "Columns",
     "JugglingVectorEnv",
     "NumericInfo",
@@ -71,11 +67,6 @@ PHASE_NAMES: tuple[str, ...] = PHASES
 _PHASE_CODE = {name: code for code, name in enumerate(PHASE_NAMES)}
 
 _BACKENDS = ("auto", "numba", "python")
-#: What :meth:`JugglingVectorEnv._link_worlds` makes from the sub-environments' worlds.
-WORLD_LINKS = ("_compiled", "_datas", "_worlds", "_entries")
-#: Fewest sub-environments a thread is given (below, handing work to a thread costs more
-#: than it saves).
-MIN_ENVS_PER_THREAD = 8
 
 #: A step's per-sub-environment values by info key: arrays with the stepped
 #: sub-environments along the first axis.
@@ -150,7 +141,8 @@ class JugglingVectorEnv(NativeVectorEnv):
         self._ended = np.zeros(n, dtype=bool)
         self._elapsed = np.zeros(n, dtype=np.int64)  # steps since the reset (TimeLimit's)
         self.threads = threads
-        self._pool: ThreadPoolExecutor | None = None
+        #: The episodes' batch (a :class:`~motion_envs.envs.juggling._batch.WorldBatch`).
+        self._batch: Any = None
         batched = backend != "python" and numba_available() and self._batched
         self.backend = "numba" if batched else "python"
         if batched or self._python_batch:
@@ -163,109 +155,10 @@ class JugglingVectorEnv(NativeVectorEnv):
     def _link(self) -> None:
         """Hook: make the ``_LINKED`` attributes (a batched subclass)."""
 
-    def _link_worlds(self) -> None:
-        """The compiled code and what it reads and writes in place: each world's
-        ``MjModel``/``MjData`` address and array views (:data:`WORLD_LINKS`)."""
-        from motion_envs.envs.juggling import _compiled
-
-        self._compiled = _compiled
-        self._entries: dict[str, Callable[..., None]] = {}
-        worlds = [env.world for env in self.envs]
-        self._datas = [w.data for w in worlds]
-        self._worlds = _compiled.world_links(worlds)
-
-    # -- the worlds' state, batched (HandsWorld's rows) -------------------------------------
-    def _setup_world_arrays(self) -> None:
-        """The batch of the worlds' state (:class:`~motion_envs.envs.juggling.HandsWorld`'s
-        arrays with ``N`` rows) and its constants."""
-        n, world = self.num_envs, self.envs[0].world
-        hands, balls = world.spec.hands, world.spec.balls
-        self._ball_geoms = world.ball_geoms.copy()
-        self._constants = world.constants.copy()
-        self._ref = np.zeros((n, hands, 2))
-        self._vref = np.zeros((n, hands, 2))
-        self._z_before = np.zeros((n, hands))
-        self._holder = np.full((n, balls), -1, dtype=np.int64)
-        self._thrower = np.full((n, balls), -1, dtype=np.int64)
-        self._left = np.zeros((n, balls), dtype=np.bool_)
-        self._dropped = np.zeros((n, balls), dtype=np.bool_)
-        self._k = np.zeros(n, dtype=np.int64)
-        self._caught = np.full((n, hands), -1, dtype=np.int64)
-        self._released = np.full((n, hands), -1, dtype=np.int64)
-        self._target = np.zeros((n, hands, 2))
-        self._armed = np.zeros((n, hands), dtype=np.bool_)
-
-    def _load_world(self, i: int) -> None:
-        """Copy sub-environment ``i``'s world state (after its reset) into the batch."""
-        w = self.envs[i].world
-        for name in ("ref", "vref", "z_before", "holder", "thrower", "left", "dropped", "k"):
-            getattr(self, "_" + name)[i] = getattr(w, name)[0]
-
-    def _world_periods(
-        self, envs: NDArray[np.int64], target: NDArray[np.float64], armed: NDArray[np.bool_]
-    ) -> None:
-        """One control period of the worlds ``envs`` toward ``target (m, H, 2)`` with
-        ``armed (m, H)`` (:func:`~motion_envs.envs.juggling._period.world_periods`, in
-        threads); what each hand caught and released is in ``_caught`` and ``_released``."""
-        self._target[envs], self._armed[envs] = target, armed
-        self._in_threads(
-            self._compiled.world_periods,
-            envs,
-            self._worlds,
-            self._ball_geoms,
-            self._target,
-            self._armed,
-            self._ref,
-            self._vref,
-            self._z_before,
-            self._holder,
-            self._thrower,
-            self._left,
-            self._dropped,
-            self._k,
-            self._constants,
-            self._caught,
-            self._released,
-        )
-
-    def _qv(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The worlds' ``qpos`` and ``qvel`` rows for ``envs``, ``(m, nq)`` each."""
-        datas = [self._datas[i] for i in envs.tolist()]
-        return np.array([d.qpos for d in datas]), np.array([d.qvel for d in datas])
-
-    def _in_threads(
-        self, periods: Callable[..., None], envs: NDArray[np.int64], *args: Any
-    ) -> None:
-        """``periods(envs, *args)`` (a compiled kernel that releases the GIL and touches
-        only its sub-environments' rows and worlds), ``envs`` split into contiguous blocks
-        run in up to :attr:`threads` threads, the caller's thread among them."""
-        periods = self._entry(periods, envs, *args)
-        blocks = min(self.threads, envs.size // MIN_ENVS_PER_THREAD)
-        if blocks <= 1:
-            periods(envs, *args)
-            return
-        if self._pool is None:
-            self._pool = ThreadPoolExecutor(self.threads - 1, thread_name_prefix="juggling")
-        first, *rest = np.array_split(envs, blocks)
-        futures = [self._pool.submit(periods, block, *args) for block in rest]
-        periods(first, *args)
-        for future in futures:
-            future.result()
-
-    def _entry(self, kernel: Any, *args: Any) -> Callable[..., None]:
-        """:func:`~motion_envs.envs.juggling._compiled.entry_point` of ``kernel`` for
-        ``args``, found once per kernel."""
-        name = kernel.py_func.__name__
-        entry = self._entries.get(name)
-        if entry is None:
-            entry = self._entries[name] = self._compiled.entry_point(kernel, *args)
-        return entry
-
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         for key in self._LINKED:
             state.pop(key, None)
-        state["_pool"] = None  # threads are not pickled: made again when needed
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -378,10 +271,14 @@ class JugglingVectorEnv(NativeVectorEnv):
     def _render_env(self, i: int) -> Any:
         return self.envs[i].render()
 
+    @property
+    def _pool(self) -> ThreadPoolExecutor | None:
+        """The batch's threads (None: none running)."""
+        return None if self._batch is None else self._batch._pool
+
     def close_extras(self, **kwargs: Any) -> None:
-        if self._pool is not None:
-            self._pool.shutdown()
-            self._pool = None
+        if self._batch is not None:
+            self._batch.close()
         for env in self.envs:
             env.close()
 
