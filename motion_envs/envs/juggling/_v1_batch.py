@@ -2,34 +2,27 @@
 between events, its sensor, reward, observation and episode end.
 
 :class:`V1Batch` steps the episodes of ``parts`` (Juggling-v1 single environments: each
-its world, controller, sensor and generators) together. The single environment is the
-batch of one (its rows are its world's own arrays); the native vector environment
-(:class:`~motion_envs.envs.juggling.JugglingV1VectorEnv`) is the batch of ``N``. A step:
+its world, controller, sensor and generators) together: the single environment is the
+batch of one (its rows are its world's own arrays), the native vector environment
+(:class:`~motion_envs.envs.juggling.JugglingV1VectorEnv`) the batch of ``N``. A step:
 
-* the controller's plan in arrays: between the plan's events (a release, a catch, a
-  reached end point, all decided as the controller decides them:
-  :func:`~motion_envs.envs.juggling._v1_step.v1_events`) a command is an index into the
-  plan on the control grid (:func:`~motion_envs.envs.juggling._v1_step.v1_advance`); at
-  an event the episode's own controller runs in Python and its new plan is copied back
-  (controllers other than ``juggler`` and ``juggler_latency_aware`` always run in
-  Python); with ``residual_phases`` the residual acts where the phase after the command
-  is one of them;
-* the eq. 10 corrections (found due by ``v1_events`` with the controller's test) made in
-  the arrays with the controller's numbers: the catch's rows and pseudo-inverses are
-  shared by the catches of its duration
-  (:func:`~motion_envs.models.juggling.eq10_rows`), the products stacked
-  (:func:`~motion_envs.models.juggling.eq10_many`); the controller gets them at its
-  next event or reset (:meth:`V1Batch.sync`), as it gets its step count there;
+* the command (:func:`~motion_envs.envs.juggling._v1_step.v1_command`): between the
+  plan's events (a release, a catch, a reached end point, decided as the controller
+  decides them) an index into the plan on the control grid; at an event the episode's
+  own controller runs in Python, its new plan copied back (always, for controllers other
+  than ``juggler`` and ``juggler_latency_aware``); the eq. 10 corrections found due made
+  in the arrays with the controller's numbers (the catch's rows shared by the catches of
+  its duration, :func:`~motion_envs.models.juggling.eq10_rows`; the products stacked,
+  :func:`~motion_envs.models.juggling.eq10_many`), the controller given them at its next
+  event or reset (:meth:`V1Batch.sync`);
 * the worlds' one control period (:class:`~motion_envs.envs.juggling._batch.WorldBatch`);
-  the release's noise from the world's generator; the hand's human-likeness
-  (:class:`~motion_envs.models.juggling.HumanLikeness`'s number, by the compiled k-d tree
-  search with numba);
-* the rest (:func:`~motion_envs.envs.juggling._v1_step.v1_finish`): the sensor's delay
-  line (its noise drawn ahead in blocks from the sensor's own generator: the same
-  sequence), the counts, the reward, the episode's end and the observation.
+* the rest (:func:`~motion_envs.envs.juggling._v1_step.v1_finish`): the release scatter
+  and the sensor's noise (drawn ahead in blocks from the world's and the sensor's own
+  generators: the same sequences), the human-likeness, the reward, the episode's end, the
+  observation.
 
-``backend="numba"`` runs the compiled kernels (:mod:`~motion_envs.envs.juggling._compiled_v1`),
-``"python"`` the same functions as plain Python (bit-identical).
+``backend="numba"`` runs the kernels compiled (:mod:`~motion_envs.envs.juggling._compiled_v1`),
+``"python"`` as plain Python (bit-identical).
 """
 
 from __future__ import annotations
@@ -324,8 +317,7 @@ class V1Batch(WorldBatch):
         return obs, out
 
     def columns(self, out: NDArray[np.float64]) -> Columns:
-        """The infos of step rows ``out`` as columns (``phase`` as its index in
-        ``PHASES``)."""
+        """The infos of step rows ``out`` as columns (``phase``: its index in PHASES)."""
         catches, tosses = out[:, 8].astype(np.int64), out[:, 9].astype(np.int64)
         return {
             "reward_catch": out[:, 1],
@@ -378,6 +370,9 @@ class V1Batch(WorldBatch):
         controller has no rows for the step, by the episode's own controller. A
         controller gets the corrections made here at its next event or reset
         (:meth:`sync`), as it gets its step count there."""
+        if rows.size == 1:  # the batch of one's case: the same numbers, less indexing
+            self._correct_one(int(rows[0]), target)
+            return
         dt = self._dt
         k = self._pk[rows]
         duration = self._duration[rows]
@@ -387,14 +382,7 @@ class V1Batch(WorldBatch):
         times = self._values[rows, 0].tolist()
         if not on_rows.all():
             for j in np.flatnonzero(~on_rows).tolist():
-                i, kj = int(rows[j]), int(k[j])
-                self.sync(i)
-                ep = self._episode(i)
-                ep.k = kj
-                ep.replan(times[j], target[j].copy())
-                self._grid[i, kj + 1 : self._glen[i]] = ep.grid[kj + 1 :]
-                self._end[i] = ep.end
-                self._coef[i] = ep.coefficients
+                self._replan(int(rows[j]), int(k[j]), times[j], target[j])
             rows, k, duration, tau1, glen, target = (
                 x[on_rows] for x in (rows, k, duration, tau1, glen, target)
             )
@@ -422,6 +410,42 @@ class V1Batch(WorldBatch):
         ):
             grid[i, kj + 1 : gj] = basis[i, kj + 1 : gj] @ out[j]  # as _grid_from does
             pending[i].append((t, tj))
+
+    def _correct_one(self, i: int, target: NDArray[np.float64]) -> None:
+        """:meth:`_correct` of the one catch ``i`` toward ``target (1, 2)``: its arrays
+        gathered as contiguous copies of one row, as the indexing of :meth:`_correct`
+        gathers them (the same stacked products)."""
+        k, glen = int(self._pk[i]), int(self._glen[i])
+        duration = self._duration[i : i + 1].copy()
+        tau1 = k * self._dt / float(duration[0])
+        time = float(self._values[i, 0])
+        if not (tau1 < 1.0 and k < glen):
+            self._replan(i, k, time, target[0])
+            return
+        row = slice(i, i + 1)
+        out = eq10_many(
+            self._c_derivative[row, k : k + 1].copy(),
+            self._c_a[row, k].copy(),
+            self._c_pinv[row, k].copy(),
+            self._coef[row].copy(),
+            duration,
+            self._grid[row, k].copy(),
+            target,
+        )
+        self._coef[i], self._end[i], self._stale[i] = out[0], target[0], True
+        self._grid[i, k + 1 : glen] = self._c_basis[i, k + 1 : glen] @ out[0]
+        self._pending[i].append((time, tau1))
+
+    def _replan(self, i: int, k: int, time: float, target: NDArray[np.float64]) -> None:
+        """Catch ``i``'s correction at step ``k`` where the batch has no eq. 10 rows for
+        it: by the episode's own controller (synced first), its plan copied back."""
+        self.sync(i)
+        ep = self._episode(i)
+        ep.k = k
+        ep.replan(time, target.copy())
+        self._grid[i, k + 1 : self._glen[i]] = ep.grid[k + 1 :]
+        self._end[i] = ep.end
+        self._coef[i] = ep.coefficients
 
     def sync(self, i: int) -> None:
         """Give episode ``i``'s controller the corrections made here since its last event
