@@ -13,9 +13,12 @@ plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
 task's state types; ``_v1_env`` (:class:`JugglingV1Env`), ``_v2_env``
 (:class:`JugglingV2Env`: a hidden delay, a position-only camera, air drag, the capture at
 impact) and ``_cascade_env``
-(:class:`CascadeEnv`) the environments; the native vector environments ``_vector``
+(:class:`CascadeEnv`) the environments; ``_batch`` (the worlds' state as one batch) and
+``_v1_batch`` (Juggling-v1's step for a batch, written once in ``_v1_step``: the single
+environment is its batch of one); the native vector environments ``_vector``
 (:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
-(:class:`JugglingV1VectorEnv`) and ``_cascade_vector`` (:class:`CascadeVectorEnv`).
+(:class:`JugglingV1VectorEnv`, the batch of N) and ``_cascade_vector``
+(:class:`CascadeVectorEnv`).
 The default fit the environment acts on (``load_juggler``, ``juggler_demonstrations``,
 ``TRACKING_NOISE``, ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in
 :mod:`motion_envs.models.juggling` and is re-exported here.
