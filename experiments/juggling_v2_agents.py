@@ -21,7 +21,9 @@ juggler's + 5 mm, the oracle above the agent (the room left reported).
         [--timesteps N] [--test-episodes 100] [--runs DIR] [--out results.json]
 
 ``--timesteps`` defaults to the config's (2.5e6, the full budget: about 21 min of CPU per
-seed at the measured 2,000 steps per CPU-second; the issue allows 30). Existing complete run folders in ``--runs`` are reused (not retrained).
+seed at the measured 2,000 steps per CPU-second; the issue allows 30). Existing complete
+run folders in ``--runs`` are reused (not retrained). Writes ``results.json`` and
+``juggling_v2_agents.png`` (the rows' catch rate against deviation with the agent).
 """
 
 from __future__ import annotations
@@ -154,6 +156,49 @@ def verdict(run: dict[str, Any], juggler_mm: float) -> dict[str, bool]:
     }
 
 
+def words(lv: dict[str, Any]) -> str:
+    """The level's verdict on the issue's targets, for the median seed, in words."""
+    run = next(r for r in lv["runs"] if r["seed"] == lv["median_seed"])
+    lo, hi = run["minus_best_row_ci"]
+    t = run["targets"]
+    margin = "met" if t["margin"] else "NOT met"
+    like = "met" if t["likeness"] else "NOT met"
+    above = "the oracle is above the agent" if t["oracle_above"] else "the agent reaches the oracle"
+    return (
+        f"agent - {lv['best_non_oracle']} {run['minus_best_row']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
+        f"(target >= +{MARGIN:.2f}, interval above 0: {margin}); deviation "
+        f"{run['deviation_mm']:.1f} mm against the juggler's {lv['juggler_deviation_mm']:.1f} "
+        f"+ {DEVIATION_SLACK_MM:.0f} mm ({like}); {above} (room "
+        f"{run['oracle_minus_agent']:+.3f})"
+    )
+
+
+def write_plot(levels: list[dict[str, Any]], path: Path) -> Path:
+    """The rows' catch rate against deviation (``plot_v2``) with the median seed's agent
+    as a star, a panel per level."""
+    import matplotlib.pyplot as plt
+
+    from baselines.juggling_bench.v2 import plot_v2
+    from motion_envs._io import save_figure
+
+    panels = []
+    for lv in levels:
+        run = next(r for r in lv["runs"] if r["seed"] == lv["median_seed"])
+        agent = {
+            "catch_rate": run["catch_rate"],
+            "catch_rate_ci": run["catch_rate_ci"],
+            "deviation_m": run["deviation_mm"] / 1000,
+            "deviation_ci": [v / 1000 for v in run["deviation_ci_mm"]],
+        }
+        name = f"PPO agent, frame stack (median of {len(lv['runs'])} seeds)"
+        panels.append({"level": lv["level"], "rows": {**lv["rows"], name: agent}})
+    fig = plot_v2({"levels": panels})
+    try:
+        return save_figure(fig, path, dpi=150)
+    finally:
+        plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--levels", nargs="+", default=["medium", "hard"])
@@ -223,13 +268,15 @@ def main(argv: list[str] | None = None) -> int:
                 f"{r['oracle_minus_agent_ci'][1]:+.3f}], targets {r['targets']}"
             )
         print(
-            f"  median seed {lv['median_seed']}, validation pick seed {lv['validation_pick_seed']}"
+            f"  median seed {lv['median_seed']}, validation pick seed "
+            f"{lv['validation_pick_seed']}: {words(lv)}"
         )
     from motion_envs._io import atomic_write_text
 
     out = Path(args.out) if args.out else root / "results.json"
     atomic_write_text(out, json.dumps(doc, indent=2) + "\n")
     print(f"wrote {out}")
+    print(f"wrote {write_plot(levels, out.with_name('juggling_v2_agents.png'))}")
     print_json(doc)
     return 0
 

@@ -297,7 +297,8 @@ def report_v2(doc: dict[str, Any]) -> str:
 
 def plot_v2(doc: dict[str, Any]) -> Any:
     """Catch rate against deviation, one point per row with its interval bars, a panel
-    per level (matplotlib imported on call)."""
+    per level (matplotlib imported on call); a row not in :data:`ROWS` (an agent's,
+    ``experiments/juggling_v2_agents.py``) is drawn as a star."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -312,7 +313,7 @@ def plot_v2(doc: dict[str, Any]) -> Any:
             xerr = [[dev - m["deviation_ci"][0] * 1000], [m["deviation_ci"][1] * 1000 - dev]]
             yerr = [[rate - m["catch_rate_ci"][0]], [m["catch_rate_ci"][1] - rate]]
             label = "oracle (upper reference)" if name == "oracle" else name.replace("_", " ")
-            ax.errorbar(dev, rate, xerr=xerr, yerr=yerr, fmt=markers[name], capsize=3,
+            ax.errorbar(dev, rate, xerr=xerr, yerr=yerr, fmt=markers.get(name, "*"), capsize=3,
                         label=label)  # fmt: skip
         ax.set_title(f"Juggling-v2 {lv['level']}")
         ax.set_xlabel("hand deviation from held-out demonstrations (mm)")
