@@ -75,6 +75,7 @@ __all__ = [
     "demonstration_paths",
     "departure_from_line",
     "deviation_interval",
+    "episodes_from_paths",
     "is_juggling",
     "juggling_episodes",
     "play_until_ended",
@@ -242,7 +243,7 @@ def juggling_episodes(
                 played = [play(int(seed)) for seed in seeds.tolist()]
             finally:
                 env.close()
-            return _episodes(
+            return episodes_from_paths(
                 seeds,
                 [p["time"] for p in played],
                 [p["hand"] for p in played],
@@ -274,7 +275,7 @@ def juggling_episodes(
         times[i].insert(0, float(info["time"]))
         hands[i].insert(0, np.asarray(info["hand"], dtype=np.float64))
         phases[i].insert(0, str(info["phase"]))
-    return _episodes(
+    return episodes_from_paths(
         seeds,
         [np.asarray(t) for t in times],
         [np.stack(h) for h in hands],
@@ -332,7 +333,7 @@ def play_until_ended(
     return [info for _, info in first]
 
 
-def _episodes(
+def episodes_from_paths(
     seeds: NDArray[np.int64],
     times: list[FloatArray],
     hands: list[FloatArray],

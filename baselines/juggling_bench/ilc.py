@@ -43,8 +43,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 import motion_envs  # noqa: F401  (registers the ids)
-from baselines.agents.juggling_score import JugglingEpisodes, demonstration_paths
-from baselines.agents.juggling_score import _episodes as episodes_from_paths
+from baselines.agents.juggling_score import (
+    JugglingEpisodes,
+    demonstration_paths,
+    episodes_from_paths,
+)
 from motion_envs.datasets.juggling import episode_seeds
 
 __all__ = ["ILCConfig", "TaskErrorILC"]

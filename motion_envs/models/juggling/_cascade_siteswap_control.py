@@ -225,7 +225,7 @@ class SiteswapController:
                 if held
                 else (p0, v0, a0)
             )
-            c = quintic(*start, p, v, a, toss_time)
+            c = quintic(start[0], start[1], start[2], p, v, a, toss_time)
             if self._clear(c, toss_time, falling, duration - toss_time):
                 break
         if held:
