@@ -3,7 +3,7 @@ that can fail), the two-line row's arithmetic, and a small real run with its fil
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import pytest
@@ -11,6 +11,7 @@ import pytest
 from baselines.agents.juggling_score import JugglingEpisodes
 from baselines.juggling_bench.v2 import (
     CONSTANT_GRID,
+    ROWS,
     V2Config,
     VelocityTimesDelay,
     choose_constant,
@@ -24,18 +25,33 @@ class Spy:
     """A ``play`` that records the splits it is asked for and fails when a test seed is
     played while a choice is being made (synthetic episodes: the order is the point)."""
 
+    #: Synthetic rankings that differ between the splits: on validation the delay
+    #: estimator catches every toss, on test the mean-delay juggler does (and the delay
+    #: estimator none), so a best row chosen on test seeds is told apart.
+    FAVOURED: ClassVar[dict[str, str]] = {
+        "val": "juggler_delay_estimator",
+        "test": "juggler_mean_delay",
+    }
+
     def __init__(self) -> None:
         self.choosing = False
         self.calls: list[tuple[str, bool]] = []
+        self.levels: list[tuple[str, str]] = []
 
     def play(
         self, policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int
     ) -> JugglingEpisodes:
         self.calls.append((split, self.choosing))
+        self.levels.append((kwargs["level"], split))
         if split == "test" and self.choosing:
             raise AssertionError("a test seed was played before the choice was made")
         seeds = episode_seeds(split, n)
-        catches = np.arange(n, dtype=np.int64) % 3 + len(self.calls) % 2
+        catches = np.minimum(np.arange(n, dtype=np.int64) % 3 + len(self.calls) % 2, 2)
+        controller = kwargs.get("controller")
+        if controller == self.FAVOURED[split]:
+            catches = np.full(n, 3, dtype=np.int64)
+        elif controller in self.FAVOURED.values():
+            catches = np.zeros(n, dtype=np.int64)
         return JugglingEpisodes(
             seeds=seeds,
             tosses=np.full(n, 3, dtype=np.int64),
@@ -63,8 +79,25 @@ def test_choices_read_only_validation_seeds() -> None:
     doc = run_v2(config, spy.play, spy.chooser(choose_constant))
     during = [split for split, choosing in spy.calls if choosing]
     assert during == ["val"] * (2 * len(CONSTANT_GRID))
-    assert {split for split, choosing in spy.calls if not choosing} == {"test"}
     assert [lv["level"] for lv in doc["levels"]] == ["medium", "hard"]
+    for level in ("medium", "hard"):  # per level, every validation play before any test play
+        splits = [split for lv, split in spy.levels if lv == level]
+        assert "test" in splits and "val" not in splits[splits.index("test") :]
+
+
+def test_the_best_non_oracle_row_is_chosen_on_validation_seeds() -> None:
+    spy = Spy()
+    config = V2Config(levels=("medium", "hard"), episodes=5, val_episodes=4, ilc=False)
+    doc = run_v2(config, spy.play, spy.chooser(choose_constant))
+    for lv in doc["levels"]:
+        rates = {name: m["catch_rate"] for name, m in lv["rows"].items() if name != "oracle"}
+        # on test the mean-delay juggler is best: a choice on test would pick it
+        assert max(rates, key=lambda r: rates[r]) == "juggler_mean_delay"
+        assert lv["best_non_oracle"] == "delay_estimator"
+        assert lv["val_catch_rates"]["delay_estimator"] == 1.0
+        assert lv["val_catch_rates"]["juggler_mean_delay"] == 0.0
+        assert "oracle" not in lv["val_catch_rates"]
+        assert set(lv["val_catch_rates"]) == set(ROWS) - {"oracle", "task_error_ilc"}
 
 
 def test_the_spy_catches_a_choice_made_on_test_seeds() -> None:
@@ -100,9 +133,13 @@ def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
     doc = run_v2(config)
     (level,) = doc["levels"]
     assert set(level["rows"]) == {
-        "juggler", "oracle", "best_constant", "velocity_x_mean_delay", "delay_estimator",
-        "random", "task_error_ilc",
+        "juggler", "oracle", "best_constant", "velocity_x_mean_delay", "juggler_mean_delay",
+        "delay_estimator", "random", "task_error_ilc",
     }  # fmt: skip
+    assert set(level["val_catch_rates"]) == set(level["rows"]) - {"oracle"}
+    assert level["best_non_oracle"] == max(
+        level["val_catch_rates"], key=lambda r: level["val_catch_rates"][r]
+    )
     assert level["ilc"]["budget_train_episodes"] == 4
     for row in level["rows"].values():
         lo, hi = row["catch_rate_ci"]
