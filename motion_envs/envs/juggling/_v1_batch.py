@@ -126,8 +126,7 @@ class V1Batch(WorldBatch):
         self._scalars = np.array(scalars)
 
     def link(self) -> None:
-        """The worlds' links, the kernels and the likeness's compiled k-d trees (made
-        again after unpickling, which copies the worlds)."""
+        """The worlds' links, the kernels, the likeness's k-d trees (again when unpickled)."""
         super().link()
         likeness = self.parts[0].likeness
         if self.backend == "numba":
@@ -345,21 +344,23 @@ class V1Batch(WorldBatch):
         plan: tuple[Any, ...],
         a_out: NDArray[np.float64],
     ) -> None:
-        """The commands :func:`~motion_envs.envs.juggling._v1_step.v1_command` left: the
-        eq. 10 corrections due (status 2), then their commands; the controllers in Python
-        at their events (status 1; every controller but ``juggler`` and
-        ``juggler_latency_aware``)."""
-        world = (self._target, self._armed)
-        due = status == 2
-        if due.any():
-            self._correct(envs[due], predicted[due])
-            self._kernels.v1_advance(envs[due], plan, self._ctl, a_out[due], self._residual, world)
-        python = status == 1
-        if python.any():
-            target, armed = self._python_commands(envs[python])
-            self._kernels.v1_aim(
-                envs[python], target, armed, a_out[python], self._phase, self._residual, world
-            )
+        """The commands ``v1_command`` left: the eq. 10 corrections due (status 2), then
+        their commands; the controllers in Python at their events (status 1)."""
+        world, kernels, entry = (self._target, self._armed), self._kernels, self.entry
+        one = envs.size == 1  # the batch of one: its rows as they are
+        for code in (2, 1):
+            hit = (status[0] == code) if one else (status == code)
+            if not hit.any():
+                continue
+            rows, a = (envs, a_out) if one else (envs[hit], a_out[hit])
+            if code == 2:
+                self._correct(rows, predicted if one else predicted[hit])
+                args: tuple[Any, ...] = (rows, plan, self._ctl, a, self._residual, world)
+                entry(kernels.v1_advance, *args)(*args)
+            else:
+                target, armed = self._python_commands(rows)
+                args = (rows, target, armed, a, self._phase, self._residual, world)
+                entry(kernels.v1_aim, *args)(*args)
 
     def _correct(self, rows: NDArray[np.int64], target: NDArray[np.float64]) -> None:
         """The eq. 10 corrections of the catches ``rows`` toward the predicted intercepts
@@ -437,8 +438,7 @@ class V1Batch(WorldBatch):
         self._pending[i].append((time, tau1))
 
     def _replan(self, i: int, k: int, time: float, target: NDArray[np.float64]) -> None:
-        """Catch ``i``'s correction at step ``k`` where the batch has no eq. 10 rows for
-        it: by the episode's own controller (synced first), its plan copied back."""
+        """Catch ``i``'s correction at step ``k`` by its own controller (no rows here)."""
         self.sync(i)
         ep = self._episode(i)
         ep.k = k
