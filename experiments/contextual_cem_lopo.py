@@ -3,13 +3,18 @@ OrientationCoefficients-v0, leave one person out, against the nominal and the ri
 
 The protocol of the PPO headline (``configs/sweeps/orientation_lopo.yaml``,
 docs/protocol.md): fold ``i`` holds the ``i``-th person out (the env's ``fold``); the
-nominal (``bezier-null``) is fitted on the fold's training people; per seed, the step
-(generation) at which the policy is kept is chosen by 3 inner folds over the training
-people (the env's ``val_folds = 3``: a learner trained on two groups, validated on the
-third; the mean over the three of the validation criterion over the nominal's), then one
-learner is trained on all training people with the same seed and budget and kept at that
-step; the held-out person's episodes score it. The ridge is the regressor of
-``motion-bench agent`` fitted on the same training people
+nominal (``bezier-null``) is fitted on the fold's training people. Every choice is made
+by inner folds over the fold's training people only
+(:func:`baselines.agents.contextual_cem.lopo_fold`): each setting of the declared grid
+(:func:`~baselines.agents.contextual_cem.settings_grid`, 12 settings) is trained per seed
+on the training people minus one and scored on that one, every generation, for each of
+the 7 training people (the env's ``val_folds = 7``); the setting with the lowest mean
+inner criterion over the inner nominal's (each seed at its best generation) is the
+fold's, each seed keeps its best generation; one learner per seed is then trained on all
+training people with that setting and kept at that generation, and only then are the
+held-out person's episodes read, once. Every learner, inner or final, has the PPO
+agents' budget (30,000 episodes; a PPO step is one episode). The ridge is the regressor
+of ``motion-bench agent`` fitted on the same training people
 (:func:`baselines.agents.learned_criterion.learned_episode_errors`). The summary is
 :func:`baselines.agents.sweep.lopo.lopo_summary`'s: per person the ratio of every seed,
 the IQM over (seeds, people) with its 95 % interval over people, its power, the verdict,
@@ -26,73 +31,13 @@ import json
 import time
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
+from tqdm import tqdm
 
-import motion_envs  # noqa: F401  (registers the ids)
-from baselines.agents.contextual_cem import CEMConfig, CEMResult, train_cem
-from baselines.agents.learned_criterion import learned_episode_errors
+from baselines.agents.contextual_cem import ENV_ID, lopo_fold, settings_grid
 from baselines.agents.sweep.lopo import format_lopo, lopo_summary
 from motion_envs._io import atomic_write_text
-
-ENV_ID = "MotionEnvs/OrientationCoefficients-v0"
-INNER_FOLDS = 3
-
-
-def _env(fold: int, split: str, data: str, **kwargs: Any) -> Any:
-    return gym.make(ENV_ID, data=data, nominal="bezier-null", fold=fold, split=split,
-                    **kwargs).unwrapped  # fmt: skip
-
-
-def _ratio(env: Any, result: CEMResult, generation: int) -> tuple[float, float]:
-    """(criterion, criterion over the nominal's) of the policy kept at ``generation`` on
-    every episode of ``env``."""
-    policy = result.at(generation)
-    n = env._context.shape[0]
-    errors = env.score(np.arange(n), policy.act(env._context))
-    crit = float(np.median(errors))
-    return crit, crit / float(np.median(env._nominal_errors))
-
-
-def run_fold(fold: int, seeds: list[int], config: CEMConfig, data: str) -> list[dict[str, Any]]:
-    """One trial per seed of fold ``fold`` (the keys :func:`lopo_summary` reads)."""
-    steps = list(range(0, config.generations + 1))
-    inner = [
-        (_env(fold, "train", data, val_folds=INNER_FOLDS, val_fold=j),
-         _env(fold, "val", data, val_folds=INNER_FOLDS, val_fold=j))
-        for j in range(INNER_FOLDS)
-    ]  # fmt: skip
-    train, test = _env(fold, "train", data), _env(fold, "test", data)
-    ridge = learned_episode_errors(ENV_ID, {"data": data, "nominal": "bezier-null",
-                                            "fold": fold}, "test").errors  # fmt: skip
-    if not np.array_equal(ridge.trajectory_ids, np.asarray(test.task.trajectory_ids)):
-        raise RuntimeError(f"fold {fold}: the ridge's episodes are not the test episodes")
-    nominal = float(np.median(test._nominal_errors))
-    trials = []
-    for seed in seeds:
-        scores = np.zeros(len(steps))
-        for tr, va in inner:
-            res = train_cem(tr, config, seed)
-            scores += np.array([_ratio(va, res, g)[1] for g in steps]) / len(inner)
-        best = steps[int(np.argmin(scores))]  # first on ties
-        res = train_cem(train, config, seed)
-        crit, ratio = _ratio(test, res, best)
-        trials.append(
-            {
-                "config_index": fold,
-                "seed": seed,
-                "test_ratio": ratio,
-                "test_criterion": crit,
-                "test_nominal_criterion": nominal,
-                "test_learned_criterion": ridge.criterion,
-                "test_learned_ratio": crit / ridge.criterion,
-                "inner_val_ratio": float(scores[steps.index(best)]),
-                "chosen_generation": best,
-                "kept_initial_policy": best == 0,
-                "episodes_trained": best * res.episodes_per_generation,
-            }
-        )
-    return trials
+from motion_envs.datasets import load_orientation_dataset
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -105,22 +50,45 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     folds = [int(v) for v in args.folds.split(",")]
     seeds = [int(v) for v in args.seeds.split(",")]
-    config = CEMConfig(budget=args.budget)
+    grid = settings_grid(args.budget)
     t0, c0 = time.perf_counter(), time.process_time()
     trials: list[dict[str, Any]] = []
-    for fold in folds:
-        f0 = time.process_time()
-        trials += run_fold(fold, seeds, config, args.data)
-        print(f"fold {fold}: {time.process_time() - f0:.1f} s CPU", flush=True)
+    choices = {}
+    # the bar's length: each fold's training people are its inner folds (labels only)
+    inner = np.unique(load_orientation_dataset(args.data).subjects).size - 1
+    per_fold = len(seeds) * (len(grid) * inner + 1)
+    with tqdm(total=len(folds) * per_fold, desc="CEM learners", unit="learner") as bar:
+        for fold in folds:
+            f0 = time.process_time()
+            fold_trials, choice = lopo_fold(fold, seeds, grid, args.data, bar)
+            trials += fold_trials
+            choices[str(fold)] = {
+                "inner_people": list(choice.inner_people),
+                "setting_scores": choice.setting_scores().tolist(),
+                "chosen_setting": choice.config_index,
+                "chosen_config": vars(choice.config),
+                "generation_per_seed": {str(s): choice.generation(s) for s in seeds},
+                "cpu_seconds": time.process_time() - f0,
+            }
+            c = choice.config
+            bar.write(
+                f"fold {fold}: setting {choice.config_index} (sigma {c.sigma}, policy_sines "
+                f"{c.policy_sines}, population {c.population}, elite {c.elite}), generations "
+                f"{[choice.generation(s) for s in seeds]}, inner score "
+                f"{choice.setting_scores()[choice.config_index]:.4f}; "
+                f"{time.process_time() - f0:.1f} s CPU"
+            )
     configs = [{"overrides": {"env_kwargs": {"fold": f}}} for f in range(max(folds) + 1)]
     summary = lopo_summary(trials, configs)
     doc = {
         "env_id": ENV_ID,
         "data": args.data,
         "learner": "linear policy from the context, CEM (baselines.agents.contextual_cem)",
-        "config": vars(config) | {"generations": config.generations},
+        "grid": [vars(c) | {"generations": c.generations} for c in grid],
+        "selection": "leave one person out over the fold's training people (inner folds)",
         "seeds": seeds,
         "folds": folds,
+        "choices": choices,
         "trials": trials,
         "lopo": summary,
         "seconds": time.perf_counter() - t0,
@@ -129,7 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     if summary is not None:
         print(format_lopo(summary))
     kept = sum(t["kept_initial_policy"] for t in trials)
+    chosen = np.bincount([v["chosen_setting"] for v in choices.values()], minlength=len(grid))
     print(f"kept the initial policy (the nominal) in {kept}/{len(trials)} trials")
+    print(f"settings chosen per fold (grid index: folds): {dict(enumerate(chosen.tolist()))}")
     print(f"{doc['cpu_seconds']:.1f} s CPU, {doc['seconds']:.1f} s wall")
     if args.out:
         atomic_write_text(args.out, json.dumps(doc, indent=2))

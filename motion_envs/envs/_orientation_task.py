@@ -150,12 +150,16 @@ def orientation_split_parts(
         return dataset, fit, part
     if fold is None:
         train, test = split_by_subject(dataset, test_fraction=test_fraction, seed=split_seed)
+        part = train if split == "train" else test
     else:
         people = np.unique(np.asarray(dataset.subjects).astype(str))
         check_integer(fold, "fold", 0, people.size - 1)
         is_test = np.asarray(dataset.subjects).astype(str) == people[fold]
-        train, test = dataset.subset(~is_test), dataset.subset(is_test)
-    fit, part = train, (train if split == "train" else test)
+        train = dataset.subset(~is_test)
+        # the held-out person's reaches are copied for the test split only (a "val" split
+        # is always carved below): the inner folds never touch them (test_contextual_cem)
+        part = dataset.subset(is_test) if split == "test" else train
+    fit = train
     if val_folds and split != "test":  # inner K-fold over the training people
         groups = validation_groups(train.subjects, val_folds, split_seed)
         is_val = np.isin(np.asarray(train.subjects).astype(str), groups[val_fold])
