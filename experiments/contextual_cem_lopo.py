@@ -22,6 +22,10 @@ against the nominal and against the ridge.
 
     python experiments/contextual_cem_lopo.py --seeds 0,1,2 --out results/cem_lopo.json
     python experiments/contextual_cem_lopo.py --folds 0 --seeds 0   # the cost of one fold
+    # the folds in two processes, then one summary:
+    python experiments/contextual_cem_lopo.py --folds 0,1,2,3 --out a.json
+    python experiments/contextual_cem_lopo.py --folds 4,5,6,7 --out b.json
+    python experiments/contextual_cem_lopo.py --combine a.json b.json --out cem_lopo.json
 """
 
 from __future__ import annotations
@@ -40,6 +44,44 @@ from motion_envs._io import atomic_write_text
 from motion_envs.datasets import load_orientation_dataset
 
 
+def _report(doc: dict[str, Any]) -> dict[str, Any]:
+    """``doc`` with the LOPO summary of its trials (``lopo``), printed in words."""
+    configs = [{"overrides": {"env_kwargs": {"fold": f}}} for f in range(max(doc["folds"]) + 1)]
+    doc["lopo"] = summary = lopo_summary(doc["trials"], configs)
+    if summary is not None:
+        print(format_lopo(summary))
+    trials, choices = doc["trials"], doc["choices"]
+    kept = sum(t["kept_initial_policy"] for t in trials)
+    chosen = np.bincount(
+        [v["chosen_setting"] for v in choices.values()], minlength=len(doc["grid"])
+    )
+    print(f"kept the initial policy (the nominal) in {kept}/{len(trials)} trials")
+    print(f"settings chosen per fold (grid index: folds): {dict(enumerate(chosen.tolist()))}")
+    print(f"{doc['cpu_seconds']:.1f} s CPU, {doc['seconds']:.1f} s wall")
+    return doc
+
+
+def combine(paths: list[str]) -> dict[str, Any]:
+    """One document from runs on disjoint folds with the same seeds and grid (the folds
+    run in separate processes); the times are their sums."""
+    docs = [json.loads(open(p).read()) for p in paths]
+    first = docs[0]
+    for p, d in zip(paths, docs, strict=True):
+        if (d["seeds"], d["grid"], d["data"]) != (first["seeds"], first["grid"], first["data"]):
+            raise ValueError(f"{p}: other seeds, grid or data than {paths[0]}")
+    folds = [f for d in docs for f in d["folds"]]
+    if len(set(folds)) != len(folds):
+        raise ValueError(f"the runs share folds: {sorted(folds)}")
+    return first | {
+        "folds": sorted(folds),
+        "trials": [t for d in docs for t in d["trials"]],
+        "choices": {k: v for d in docs for k, v in d["choices"].items()},
+        "seconds": sum(d["seconds"] for d in docs),
+        "cpu_seconds": sum(d["cpu_seconds"] for d in docs),
+        "combined_from": paths,
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--folds", default="0,1,2,3,4,5,6,7")
@@ -47,7 +89,17 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--data", default="vr-kitchen")
     p.add_argument("--budget", type=int, default=30_000)
     p.add_argument("--out", default=None)
+    p.add_argument("--combine", nargs="+", metavar="JSON",
+                   help="summarise runs on disjoint folds (their --out files) instead")  # fmt: skip
     args = p.parse_args(argv)
+    if args.combine:
+        try:
+            doc = _report(combine(args.combine))
+        except (OSError, ValueError, KeyError) as e:
+            p.error(f"--combine: {e}")
+        if args.out:
+            atomic_write_text(args.out, json.dumps(doc, indent=2))
+        return 0
     folds = [int(v) for v in args.folds.split(",")]
     seeds = [int(v) for v in args.seeds.split(",")]
     grid = settings_grid(args.budget)
@@ -78,8 +130,6 @@ def main(argv: list[str] | None = None) -> int:
                 f"{choice.setting_scores()[choice.config_index]:.4f}; "
                 f"{time.process_time() - f0:.1f} s CPU"
             )
-    configs = [{"overrides": {"env_kwargs": {"fold": f}}} for f in range(max(folds) + 1)]
-    summary = lopo_summary(trials, configs)
     doc = {
         "env_id": ENV_ID,
         "data": args.data,
@@ -90,17 +140,10 @@ def main(argv: list[str] | None = None) -> int:
         "folds": folds,
         "choices": choices,
         "trials": trials,
-        "lopo": summary,
         "seconds": time.perf_counter() - t0,
         "cpu_seconds": time.process_time() - c0,
     }
-    if summary is not None:
-        print(format_lopo(summary))
-    kept = sum(t["kept_initial_policy"] for t in trials)
-    chosen = np.bincount([v["chosen_setting"] for v in choices.values()], minlength=len(grid))
-    print(f"kept the initial policy (the nominal) in {kept}/{len(trials)} trials")
-    print(f"settings chosen per fold (grid index: folds): {dict(enumerate(chosen.tolist()))}")
-    print(f"{doc['cpu_seconds']:.1f} s CPU, {doc['seconds']:.1f} s wall")
+    _report(doc)
     if args.out:
         atomic_write_text(args.out, json.dumps(doc, indent=2))
     return 0

@@ -34,7 +34,16 @@ the nominal fitted on the inner training people). Per seed and setting the gener
 with the lowest mean over the inner people is kept; the setting with the lowest mean of
 those over seeds is the fold's (first on ties); then one learner per seed is trained on
 all training people with it and kept at its seed's generation, and only then is the
-held-out person read, once. :class:`InnerChoice` records the choice and every inner score.
+held-out person read, once. :class:`InnerChoice` records the choice and every inner score;
+``tests/test_contextual_cem.py`` watches the held-out person's reaches in the dataset the
+environments are built from and fails if one is read before the choice.
+
+The budget is PPO's: every learner, inner or final, trains on ``budget`` episodes
+(30,000, the PPO agents' timesteps: one step is one episode), and the kept learner has
+used ``g * population * batch <= budget`` of them, as a PPO checkpoint at most its
+timesteps. The choice multiplies the compute, not the final learner's data: per fold and
+seed 12 settings x 7 inner folds = 84 inner learners (2.52 M episodes of the training
+people), where the PPO sweep trains 3 inner agents and searches no hyper-parameter.
 An earlier version of this module fixed ``sigma = 0.05``, ``smoothing = 0.3`` and 3 sine
 terms by hand from trials on fold 0 with the held-out person printed beside; those
 defaults stay as :class:`CEMConfig`'s, the LOPO run no longer uses them unchosen.
