@@ -81,10 +81,11 @@ def play(
             done = terminated or truncated
             # the phase the step's target belonged to (the controller's after its command)
             # and the residual the hand got in it (none outside the env's residual_phases)
-            phase = PHASES.index(env.unwrapped.controller.phase)
+            controller = env.unwrapped.synced_controller()
+            phase = PHASES.index(controller.phase)
             rows["res"].append(scale * action * env.unwrapped.residual_acts[phase])
             rows["phase"].append(phase)
-            rows["t"].append(env.unwrapped.controller.phase_time)
+            rows["t"].append(controller.phase_time)
     out = {k: np.asarray(v) for k, v in rows.items()}
     out["latency"] = np.array(env.unwrapped.delay_steps * env.unwrapped.dt)
     return out

@@ -513,3 +513,19 @@ def test_release_fires_on_the_second_difference_of_the_hand_height():
         if term or trunc:
             break
     assert fired >= 5
+
+
+def test_synced_controller_is_the_stepped_plan():
+    """``synced_controller()`` gives the controller the batch's step count between its
+    plan's events: its phase and time in the phase are the step's (info, observation)."""
+    env = JugglingV1Env(level="easy", max_catches=3)
+    env.reset(seed=2)
+    rng = np.random.default_rng(0)
+    for _ in range(400):
+        obs, _, term, trunc, info = env.step(0.1 * rng.uniform(-1, 1, 2))
+        c = env.synced_controller()
+        assert c.phase == info["phase"]
+        assert np.float32(c.phase_time) == obs[9]
+        if term or trunc:
+            break
+    assert info["time"] > 1.0  # past the first events

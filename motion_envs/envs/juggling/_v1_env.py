@@ -332,6 +332,15 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         }
         return obs[0], r[0], term, trunc, info
 
+    def synced_controller(self) -> JugglerController:
+        """:attr:`controller` as of the last step: between its plan's events the batch
+        steps the plan in arrays and gives the controller its step count and corrections
+        at the next event; this gives them now (for reading ``phase_time`` and the plan)."""
+        if self._state is not None:
+            batch, rows = self._batch_row()
+            batch.sync(int(rows[0]))
+        return self.controller
+
     def nominal_episode(self, seed: int) -> dict[str, Any]:
         """``reset(seed=seed)``, then the zero action until the episode ends (the
         controller alone; what the benchmarks score).
