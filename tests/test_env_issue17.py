@@ -96,10 +96,14 @@ def test_every_env_uses_the_one_action_check():
     import motion_envs.envs as envs
 
     root = pathlib.Path(envs.__file__).parent
-    for path in [root / "juggling" / "_env.py", root / "_reach.py", root / "_reach_vector.py"]:
+    for path in [root / "juggling" / "_env.py", root / "_reach.py", root / "_native_vector.py"]:
         text = path.read_text()
         assert "as_action(" in text or "clipped_pair(" in text, path  # built on as_action
         assert "np.asarray(action" not in text, path
+    # the native vector envs check their actions in their shared base only
+    for path in [root / "_reach_vector.py", root / "juggling" / "_vector.py"]:
+        text = path.read_text()
+        assert "_check_actions(" in text and "np.asarray(action" not in text, path
 
 
 def test_nan_action_is_zero_and_flagged():

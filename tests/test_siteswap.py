@@ -206,7 +206,11 @@ def test_pattern_cli_refuses_what_does_not_fit(tmp_path, capsys):
     with pytest.raises(SystemExit):
         build_parser().parse_args(["juggling", "--pattern", "45"])
     assert "land on the same beat" in capsys.readouterr().err
-    for text, why in (("441", "not a cascade"), ("7", "demonstrations exist for 3, 5")):
+    for text, why in (
+        ("7", "the world holds at most 5"),
+        ("501", "empty beats"),
+        ("3333", "not registered"),
+    ):
         assert main(["juggling", "--pattern", text, "--out", str(tmp_path / text)]) == 2
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and "argument --pattern" in err and why in err

@@ -71,10 +71,10 @@ __all__ = [
 CASCADE_ENV_ID = "MotionEnvs/Cascade-v0"
 #: Catches before the first drop the analytic juggler should sustain on ``easy`` (median).
 TARGET_EASY_CATCHES = 100
-#: ... per pattern where the issue that set it says otherwise (issue 33: the five-ball
-#: cascade, median >= 50 of at most 100, the trivial policies' median <= 2).
+#: ... per pattern where the benchmark's target says otherwise (the five-ball cascade:
+#: median >= 50 of at most 100, the trivial policies' median <= 2).
 PATTERN_EASY_CATCHES = {"5": 50}
-#: The trivial policies' easy median at most (issue 33's five-ball target).
+#: The trivial policies' easy median at most (the five-ball target).
 TARGET_TRIVIAL_CATCHES = 2
 
 

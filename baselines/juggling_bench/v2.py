@@ -329,13 +329,11 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     """Catch rate against deviation, one point per row with its interval bars, a panel
     per level (matplotlib imported on call); a row not in :data:`ROWS` (an agent's,
     ``experiments/juggling_v2_agents.py``) is drawn as a star."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from baselines.plots import new_figure
 
     n = len(doc["levels"])
-    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 4.4), squeeze=False, sharey=True)
+    fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
+    axes = fig.subplots(1, n, squeeze=False, sharey=True)
     markers = dict(zip(ROWS, "os^D<vxp", strict=True))
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
@@ -351,10 +349,9 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     axes[0][0].set_ylabel("catch rate (catches per toss)")
     handles, labels = axes[0][0].get_legend_handles_labels()
     ncol = 4 if n > 1 else 2  # one panel: two columns fit its width
-    fig.legend(handles, labels, fontsize=8, loc="lower center", ncol=ncol, frameon=False)
+    fig.legend(handles, labels, fontsize=8, loc="outside lower center", ncol=ncol, frameon=False)
     fig.suptitle("demonstrations SIMULATED; bars: 95 % bootstrap intervals over test episodes",
                  fontsize=9)  # fmt: skip
-    fig.tight_layout(rect=(0, 0.1 if n > 1 else 0.2, 1, 1))
     return fig
 
 
@@ -362,15 +359,9 @@ def write_v2(doc: dict[str, Any], out: str | Path) -> list[Path]:
     """``results.json`` and ``juggling_v2_rows.png`` in ``out`` (atomically)."""
     import json
 
-    import matplotlib.pyplot as plt
-
     from motion_envs._io import atomic_write_text, save_figure
 
     out = Path(out)
     paths = [atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")]
-    fig = plot_v2(doc)
-    try:
-        paths.append(save_figure(fig, out / "juggling_v2_rows.png", dpi=150))
-    finally:
-        plt.close(fig)
+    paths.append(save_figure(plot_v2(doc), out / "juggling_v2_rows.png", dpi=150))
     return paths

@@ -1,6 +1,6 @@
 """The MJCF of a juggling world, written from its spec.
 
-:class:`~motion_envs.envs.juggling._world.WorldSpec` says what the world is;
+:class:`~motion_envs.envs.juggling._world_spec.WorldSpec` says what the world is;
 one template for every spec (1-2 hands, 1-5 balls): bodies, slide joints, the hands'
 motors with force range ``hand_mass x accel_limit``, the floor limit of each hand, the
 contacts and the contact sensors; air drag through MuJoCo's fluid model when the spec
@@ -9,27 +9,21 @@ has air. What each part means is in :mod:`motion_envs.envs.juggling._world`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import mujoco
 
-if TYPE_CHECKING:
-    from motion_envs.envs.juggling._world import WorldSpec
+from motion_envs.envs.juggling._world_spec import (
+    BALL_CONAFFINITY,
+    BALL_CONTYPE,
+    PALM_HALF_THICKNESS,
+    WorldSpec,
+)
 
 __all__ = [
-    "BALL_CONAFFINITY",
-    "BALL_CONTYPE",
-    "PALM_HALF_THICKNESS",
     "load_world_model",
     "palm_name",
     "world_mjcf",
 ]
 
-#: The palm box's half-thickness, m.
-PALM_HALF_THICKNESS = 0.008
-#: A flying ball's ``contype`` and ``conaffinity`` (a held ball's are 0: in the fingers):
-#: it collides with palms and the floor (contype 1), not with another ball (2 & 1 = 0).
-BALL_CONTYPE, BALL_CONAFFINITY = 2, 1
 _BALL_COLOURS = (
     "0.85 0.15 0.15 1",
     "0.15 0.65 0.2 1",
