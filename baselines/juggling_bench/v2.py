@@ -14,14 +14,16 @@ unit action, the scale an agent is given):
   predicts the flight best (after 0.3-0.5 s of flight its mean state error is under 8
   mm against the mean-delay fit's 26-37 mm), but what it feeds is the juggler's plan,
   which puts the palm AT the predicted ball at the planned catch time; an exact
-  prediction makes the palm meet the ball there, where the hand is not moving down with
-  it, and the ball bounces off (most oracle drops: within 15 mm and 5 ms of the plan,
-  relative speed 5-6.5 m/s against the 5 m/s limit). A prediction 40 ms "late" (the
-  true delay + 40 ms) catches more (medium 0.938 against 0.798, hard 46 against 33
-  catches): the error moves the meeting off the plan's end. Not a bug in the flight
-  model (the drag, its sign and the delay are used as the env applies them); an upper
-  reference would need the oracle's information AND a catch planned for the capture
-  rule (the palm moving with the ball at the meeting), which no row has yet;
+  prediction makes the palm meet the ball there while the hand still rushes up to it,
+  and the ball bounces off (medium: 16 of the oracle's 19 drops met a rising hand, 8
+  within 15 mm and 5 ms of the plan at 4.9-6.5 m/s against the 5 m/s limit; hard: 33 of
+  34 rising). A late prediction (the true delay + 40 ms) puts the hand lower on the
+  ball's path, where it waits and the ball falls in: it catches more (medium 0.938
+  against 0.798, hard 46 against 33 catches); the mean-delay fit errs that way too (its
+  estimate 12-37 mm low). Not a bug in the flight model (the drag, its sign and the
+  delay are used as the env applies them); an upper reference would need the oracle's
+  information AND a catch planned for the capture rule (the palm at rest or moving down
+  with the ball when they meet), which no row has yet;
 * ``best_constant``: the constant action, from the grid :data:`CONSTANT_GRID`, with the
   highest catch rate on the VALIDATION seeds;
 * ``velocity_x_mean_delay``: in the catch phase, the ball's velocity (from the oldest and
