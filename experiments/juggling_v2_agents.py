@@ -91,17 +91,18 @@ def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any
     doc = run_v2(config)
     lv = doc["levels"][0]
     best = lv["best_non_oracle"]
-    players = row_players(level, tuple(lv["constant"]))
+    players = row_players(level, tuple(lv["constant"]), lv.get("late_offset_s", 0.0))
     if best not in players:
         raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
     played = {}
     for name in dict.fromkeys(("juggler", "oracle", best)):
-        controller, policy = players[name]
+        controller, policy, extra = players[name]
         kwargs = {
             "level": level,
             "controller": controller,
             "max_catches": config.max_catches,
             "residual_scale": RESIDUAL_SCALE,
+            **extra,
         }
         played[name] = juggling_episodes(policy, ENV_ID_V2, kwargs, "test", episodes)
     for name, eps in played.items():  # the replay is the rows' own episodes

@@ -3,6 +3,7 @@ that can fail), the two-line row's arithmetic, and a small real run with its fil
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -11,14 +12,18 @@ import pytest
 from baselines.agents.juggling_score import JugglingEpisodes
 from baselines.juggling_bench.v2 import (
     CONSTANT_GRID,
+    LATE_OFFSETS,
     ROWS,
     V2Config,
     VelocityTimesDelay,
     choose_constant,
+    choose_offset,
     run_v2,
     write_v2,
 )
 from motion_envs.datasets.juggling import episode_seeds
+from motion_envs.envs.juggling import JugglingV2Env
+from motion_envs.models.juggling import V2_LEVELS
 
 
 class Spy:
@@ -76,9 +81,9 @@ class Spy:
 def test_choices_read_only_validation_seeds() -> None:
     spy = Spy()
     config = V2Config(levels=("medium", "hard"), episodes=5, val_episodes=4, ilc=False)
-    doc = run_v2(config, spy.play, spy.chooser(choose_constant))
+    doc = run_v2(config, spy.play, spy.chooser(choose_constant), spy.chooser(choose_offset))
     during = [split for split, choosing in spy.calls if choosing]
-    assert during == ["val"] * (2 * len(CONSTANT_GRID))
+    assert during == ["val"] * (2 * (len(CONSTANT_GRID) + len(LATE_OFFSETS)))
     assert [lv["level"] for lv in doc["levels"]] == ["medium", "hard"]
     for level in ("medium", "hard"):  # per level, every validation play before any test play
         splits = [split for lv, split in spy.levels if lv == level]
@@ -98,6 +103,45 @@ def test_the_best_non_oracle_row_is_chosen_on_validation_seeds() -> None:
         assert lv["val_catch_rates"]["juggler_mean_delay"] == 0.0
         assert "oracle" not in lv["val_catch_rates"]
         assert set(lv["val_catch_rates"]) == set(ROWS) - {"oracle", "task_error_ilc"}
+
+
+def test_the_late_offset_is_chosen_on_validation_seeds() -> None:
+    """On validation the mean-delay juggler catches every toss only with +40 ms, on test
+    only with +80 ms: ``late_meeting`` must carry the validation choice (and so catch
+    nothing on test), and it enters the best non-oracle row's choice."""
+    spy = Spy()
+    favoured = {"val": 0.04, "test": 0.08}
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        eps = spy.play(policy, env_id, kwargs, split, n)
+        if kwargs.get("controller") != "juggler_mean_delay":
+            return eps
+        catches = np.full(n, 3 if kwargs.get("delay_offset", 0.0) == favoured[split] else 0)
+        return replace(eps, catches=catches, dropped=catches < 3)
+
+    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    lv = run_v2(config, play, spy.chooser(choose_constant), spy.chooser(choose_offset))["levels"][0]
+    assert lv["late_offset_s"] == 0.04
+    assert lv["late_offset_val_catch_rates"] == {"0 ms": 0.0, "20 ms": 0.0, "40 ms": 1.0,
+                                                 "60 ms": 0.0, "80 ms": 0.0}  # fmt: skip
+    assert lv["val_catch_rates"]["late_meeting"] == 1.0
+    assert lv["val_catch_rates"]["juggler_mean_delay"] == 0.0
+    assert lv["rows"]["late_meeting"]["catch_rate"] == 0.0
+    # ties with the delay estimator (1.0 on validation): the first in ROWS
+    assert lv["best_non_oracle"] == "late_meeting"
+
+
+def test_env_delay_offset_shifts_only_the_mean_delay_juggler() -> None:
+    env = JugglingV2Env(level="medium", controller="juggler_mean_delay", delay_offset=0.04)
+    assert env.controller.estimator.fixed_delay == V2_LEVELS["medium"].mean_delay + 0.04
+    base = JugglingV2Env(level="medium", controller="juggler_mean_delay")
+    assert base.controller.estimator.fixed_delay == V2_LEVELS["medium"].mean_delay
+    with pytest.raises(ValueError, match="delay_offset must be in"):
+        JugglingV2Env(controller="juggler_mean_delay", delay_offset=-0.01)
+    with pytest.raises(ValueError, match="delay_offset must be in"):
+        JugglingV2Env(controller="juggler_mean_delay", delay_offset=float("nan"))
+    with pytest.raises(ValueError, match="delay_offset is for"):
+        JugglingV2Env(controller="juggler", delay_offset=0.02)
 
 
 def test_the_spy_catches_a_choice_made_on_test_seeds() -> None:
@@ -134,7 +178,7 @@ def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
     (level,) = doc["levels"]
     assert set(level["rows"]) == {
         "juggler", "oracle", "best_constant", "velocity_x_mean_delay", "juggler_mean_delay",
-        "delay_estimator", "random", "task_error_ilc",
+        "late_meeting", "delay_estimator", "random", "task_error_ilc",
     }  # fmt: skip
     assert set(level["val_catch_rates"]) == set(level["rows"]) - {"oracle"}
     assert level["best_non_oracle"] == max(

@@ -31,6 +31,11 @@ unit action, the scale an agent is given):
   two-line fix of Juggling-v1);
 * ``juggler_mean_delay``: the env's ``juggler_mean_delay`` controller (the camera frames
   shifted by the level's mean delay before the juggler's state estimate; no learning);
+* ``late_meeting``: ``juggler_mean_delay`` told a later delay, the level's mean plus the
+  offset of :data:`LATE_OFFSETS` (the env's ``delay_offset``) with the highest catch rate
+  on the VALIDATION seeds (:func:`choose_offset`): the hand-written fix of the oracle
+  diagnosis above (a late estimate puts the hand lower on the ball's path, where it
+  waits and the ball falls in);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
   delay found from the release, per episode);
 * ``random``: uniform random actions (seeded);
@@ -40,10 +45,11 @@ unit action, the scale an agent is given):
   on a budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10).
 
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
-seed is played (tested with a spy): the constant, and then the best non-oracle row (the
-highest catch rate on ``val_episodes`` VALIDATION episodes; the constant grid's plays
-are reused for ``juggler`` and ``best_constant``, the ILC row is scored on validation
-after its training). Every row is then played on the TEST seeds
+seed is played (tested with a spy): the constant, the late offset, and then the best
+non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; the
+constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
+grid's for ``juggler_mean_delay`` and ``late_meeting``, the ILC row is scored on
+validation after its training). Every row is then played on the TEST seeds
 (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
 (:mod:`baselines.agents.juggling_score`, the likeness criterion), each with a 95 %
@@ -79,12 +85,14 @@ from motion_envs.models.juggling import V2_LEVELS
 __all__ = [
     "CONSTANT_GRID",
     "ENV_ID_V2",
+    "LATE_OFFSETS",
     "RESIDUAL_SCALE",
     "ROWS",
     "V2Config",
     "VelocityTimesDelay",
     "check_v2_config",
     "choose_constant",
+    "choose_offset",
     "report_v2",
     "row_players",
     "run_v2",
@@ -98,6 +106,8 @@ RESIDUAL_SCALE = 0.2
 CONSTANT_GRID: tuple[tuple[float, float], ...] = tuple(
     (x, z) for x in (-0.5, 0.0, 0.5) for z in (-0.5, 0.0, 0.5)
 )
+#: s added to the level's mean delay by ``late_meeting`` (the env's ``delay_offset``).
+LATE_OFFSETS: tuple[float, ...] = (0.0, 0.02, 0.04, 0.06, 0.08)
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
@@ -105,6 +115,7 @@ ROWS = (
     "best_constant",
     "velocity_x_mean_delay",
     "juggler_mean_delay",
+    "late_meeting",
     "delay_estimator",
     "random",
     "task_error_ilc",
@@ -182,13 +193,20 @@ class _Random:
         return self.rng.uniform(-1.0, 1.0, (len(obs), 2))
 
 
-def _kwargs(level: str, config: V2Config, controller: str = "juggler") -> dict[str, Any]:
+def _kwargs(
+    level: str, config: V2Config, controller: str = "juggler", extra: dict[str, Any] | None = None
+) -> dict[str, Any]:
     return {
         "level": level,
         "controller": controller,
         "max_catches": config.max_catches,
         "residual_scale": RESIDUAL_SCALE,
+        **(extra or {}),
     }
+
+
+def _offset_key(offset: float) -> str:
+    return f"{offset * 1000:.0f} ms"
 
 
 def _grid_key(action: tuple[float, float]) -> str:
@@ -212,44 +230,81 @@ def choose_constant(
     return best, rates
 
 
-def row_players(level: str, constant: tuple[float, float]) -> dict[str, tuple[str, Policy | None]]:
-    """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller and
-    residual policy (None: the zero action), played with :func:`_kwargs`'s keywords;
-    ``constant`` is :func:`choose_constant`'s choice."""
+def choose_offset(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[float, dict[str, float]]:
+    """The offset of :data:`LATE_OFFSETS` (s added to the level's mean delay by
+    ``juggler_mean_delay``) with the highest catch rate on ``config.val_episodes``
+    VALIDATION episodes (ties: the first, the smallest), and every candidate's validation
+    catch rate."""
+    rates: dict[str, float] = {}
+    best, best_rate = LATE_OFFSETS[0], -1.0
+    for offset in LATE_OFFSETS:
+        kw = _kwargs(level, config, "juggler_mean_delay", {"delay_offset": offset})
+        eps = play(None, ENV_ID_V2, kw, "val", config.val_episodes)
+        rates[_offset_key(offset)] = eps.catch_rate
+        if eps.catch_rate > best_rate:
+            best, best_rate = offset, eps.catch_rate
+    return best, rates
+
+
+def row_players(
+    level: str, constant: tuple[float, float], offset: float = 0.0
+) -> dict[str, tuple[str, Policy | None, dict[str, Any]]]:
+    """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller,
+    residual policy (None: the zero action) and extra env keywords, played with
+    :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice and
+    ``offset`` :func:`choose_offset`'s."""
     delay = V2_LEVELS[level].mean_delay
     return {
-        "juggler": ("juggler", None),
-        "oracle": ("juggler_oracle", None),
-        "best_constant": ("juggler", None if constant == (0.0, 0.0) else _Constant(constant)),
-        "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE)),
-        "juggler_mean_delay": ("juggler_mean_delay", None),
-        "delay_estimator": ("juggler_delay_estimator", None),
-        "random": ("juggler", _Random(0)),
+        "juggler": ("juggler", None, {}),
+        "oracle": ("juggler_oracle", None, {}),
+        "best_constant": (
+            "juggler",
+            None if constant == (0.0, 0.0) else _Constant(constant),
+            {},
+        ),
+        "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE), {}),
+        "juggler_mean_delay": ("juggler_mean_delay", None, {}),
+        "late_meeting": ("juggler_mean_delay", None, {"delay_offset": offset}),
+        "delay_estimator": ("juggler_delay_estimator", None, {}),
+        "random": ("juggler", _Random(0), {}),
     }
 
 
 def run_v2(
-    config: V2Config, play: Play = juggling_episodes, chooser: Any = choose_constant
+    config: V2Config,
+    play: Play = juggling_episodes,
+    chooser: Any = choose_constant,
+    offset_chooser: Any = choose_offset,
 ) -> dict[str, Any]:
-    """Every level's rows (module docstring); JSON-ready. ``play`` and ``chooser`` are
-    for tests (the spy that proves the choice reads no test seed)."""
+    """Every level's rows (module docstring); JSON-ready. ``play``, ``chooser`` and
+    ``offset_chooser`` are for tests (the spy that proves the choices read no test seed)."""
     check_v2_config(config)
     t0 = time.process_time()
     levels = []
     for level in config.levels:
         constant, val_rates = chooser(level, config, play)
+        offset, offset_rates = offset_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
-        # the grid's plays reused where the chooser made them (juggler, best_constant).
-        reuse = {"juggler": _grid_key((0.0, 0.0)), "best_constant": _grid_key(constant)}
+        # the grids' plays reused where the choosers made them.
+        reuse = {
+            "juggler": (val_rates, _grid_key((0.0, 0.0))),
+            "best_constant": (val_rates, _grid_key(constant)),
+            "juggler_mean_delay": (offset_rates, _offset_key(0.0)),
+            "late_meeting": (offset_rates, _offset_key(offset)),
+        }
+        players = row_players(level, constant, offset)
         val_catch: dict[str, float] = {}
-        for name, (ctl, policy) in row_players(level, constant).items():
+        for name, (ctl, policy, extra) in players.items():
+            rates, key = reuse.get(name, ({}, ""))
             if name == "oracle":
                 continue
-            if reuse.get(name) in val_rates:
-                val_catch[name] = val_rates[reuse[name]]
+            if key in rates:
+                val_catch[name] = rates[key]
             else:
-                kw = _kwargs(level, config, ctl)
+                kw = _kwargs(level, config, ctl, extra)
                 val_catch[name] = play(policy, ENV_ID_V2, kw, "val", config.val_episodes).catch_rate
         ilc = TaskErrorILC(
             level, RESIDUAL_SCALE, delay,
@@ -260,8 +315,10 @@ def run_v2(
             val_catch["task_error_ilc"] = ilc.evaluate("val", config.val_episodes).catch_rate
         best = max((r for r in ROWS if r in val_catch), key=lambda r: val_catch[r])
         played = {
-            name: play(policy, ENV_ID_V2, _kwargs(level, config, ctl), "test", config.episodes)
-            for name, (ctl, policy) in row_players(level, constant).items()
+            name: play(
+                policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
+            )
+            for name, (ctl, policy, extra) in players.items()
         }
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -274,6 +331,8 @@ def run_v2(
                 "values": asdict(V2_LEVELS[level]),
                 "constant": list(constant),
                 "constant_val_catch_rates": val_rates,
+                "late_offset_s": offset,
+                "late_offset_val_catch_rates": offset_rates,
                 "rows": entries,
                 "best_non_oracle": best,
                 "val_catch_rates": val_catch,
@@ -325,7 +384,8 @@ def report_v2(doc: dict[str, Any]) -> str:
             )
         room = lv["room_below_oracle"]
         lines.append(
-            f"{lv['level']:7s} best constant {tuple(lv['constant'])}; best non-oracle row "
+            f"{lv['level']:7s} best constant {tuple(lv['constant'])}; late offset "
+            f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; best non-oracle row "
             f"{lv['best_non_oracle']} (chosen on validation: {_val(lv)}); room below the "
             f"oracle (oracle - {lv['best_non_oracle']}): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
@@ -349,7 +409,7 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "os^D<vxp", strict=True))
+    markers = dict(zip(ROWS, "os^D<>vxp", strict=True))
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
             dev, rate = m["deviation_m"] * 1000, m["catch_rate"]

@@ -168,6 +168,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle` |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
@@ -192,6 +193,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self,
         level: str = "medium",
         controller: str = "juggler",
+        delay_offset: float = 0.0,
         max_catches: int = 10,
         residual_scale: float = 0.05,
         residual_phases: Sequence[str] | None = None,
@@ -202,6 +204,14 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
         self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
+        offset = float(delay_offset)
+        if not 0.0 <= offset <= 0.25:  # also rejects NaN
+            raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r}")
+        if offset and self.controller_name != "juggler_mean_delay":
+            raise ValueError(
+                f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}"
+            )
+        self.delay_offset = offset
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -212,7 +222,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         juggler = v1_juggler(self.gravity)
         self.home = np.asarray(juggler.home_, dtype=np.float64)
         self.controller = make_v2_controller(
-            self.controller_name, juggler, self.gravity, lv.mean_delay
+            self.controller_name, juggler, self.gravity, lv.mean_delay + offset
         )
         self.likeness = v1_likeness(self.gravity, "train")
         self._likeness = LikenessQuery(self.likeness)
