@@ -318,7 +318,8 @@ def run_v2(
             name: play(
                 policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
             )
-            for name, (ctl, policy, extra) in players.items()
+            # fresh players: the random row's generator restarts for the test seeds
+            for name, (ctl, policy, extra) in row_players(level, constant, offset).items()
         }
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
