@@ -190,6 +190,7 @@ ENVS: dict[str, dict[str, object]] = {
         "kwargs": {
             "level": "name",
             "controller": "name",
+            "delay_offset": "fraction",
             "max_catches": "small_int",
             "residual_scale": "positive",
             "residual_phases": "phases",
