@@ -673,3 +673,16 @@ def test_ball_assembly_decisions():
     }
     assert np.array_equal(present, ~np.isin(np.arange(t.size), np.arange(80, 86)))
     np.testing.assert_array_equal(ball[present], flight[present])
+
+
+def test_tsv_with_a_non_utf8_byte_past_the_header_is_one_value_error_naming_it(tmp_path):
+    """Found by the recording fuzz test: a byte that is not UTF-8 in the data lines (the
+    header read stops before it) raised Python's UnicodeDecodeError without the file."""
+    from motion_envs.datasets.mocap._readers import read_qualisys_tsv
+
+    path = tmp_path / "late.tsv"
+    header = b"NO_OF_FRAMES\t2\nFREQUENCY\t100\nMARKER_NAMES\tO\tX\tP\n"
+    path.write_bytes(header + b"1\t2\t3\t1\t2\t3\t1\t2\t3\n" * 2000 + b"\x80\t1\n")
+    with pytest.raises(ValueError, match=r"late\.tsv: not a Qualisys TSV text file") as info:
+        read_qualisys_tsv(path)
+    assert type(info.value) is ValueError and "\n" not in str(info.value)

@@ -313,8 +313,13 @@ def read_qualisys_tsv(path: str | Path, unit: str | None = None) -> MocapRecordi
     names, has_frame_time = _tsv_markers(p, meta, columns)
     first_col = 2 if has_frame_time else 0
     width = first_col + 3 * len(names)
-    with open(p, encoding="utf-8-sig") as fh:
-        lines = fh.read().splitlines()[n_header:]
+    try:  # the data lines too: a byte that is not UTF-8 may sit past the header
+        with open(p, encoding="utf-8-sig", errors="strict") as fh:
+            lines = fh.read().splitlines()[n_header:]
+    except UnicodeDecodeError as exc:
+        raise ValueError(
+            f"{p}: not a Qualisys TSV text file (not UTF-8 at byte {exc.start})"
+        ) from None
     rows = [k for k, line in enumerate(lines) if line]  # "\t\t..." is a frame: all blank
     if not rows:
         raise ValueError(f"{p}: no data lines")
