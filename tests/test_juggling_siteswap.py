@@ -17,7 +17,7 @@ import motion_envs  # noqa: F401
 from motion_envs.datasets.juggling import JugglingTask, ballistic_position, siteswap_flights
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling import CascadeEnv
-from motion_envs.envs.juggling._world import HAND_ACCEL_LIMIT, HAND_SPEED_LIMIT
+from motion_envs.envs.juggling._world_spec import HAND_ACCEL_LIMIT, HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     PATTERNS,
     PatternSpec,

@@ -64,7 +64,9 @@ from motion_envs.envs.juggling._vector import (
     NumericInfo,
     numeric_info,
 )
-from motion_envs.envs.juggling._world import (
+from motion_envs.envs.juggling._world import HandsWorld
+from motion_envs.envs.juggling._world_mjcf import load_world_model, world_mjcf
+from motion_envs.envs.juggling._world_spec import (
     CAPTURE_SPEED,
     HAND_ACCEL_LIMIT,
     HAND_MASS,
@@ -72,10 +74,7 @@ from motion_envs.envs.juggling._world import (
     MAX_BALLS,
     SERVO_OMEGA,
     SUBSTEPS,
-    HandsWorld,
     WorldSpec,
-    load_world_model,
-    world_mjcf,
 )
 from motion_envs.models.juggling import (
     FIT_SEED,

@@ -18,7 +18,7 @@ from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, 
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
-from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
+from motion_envs.envs.juggling._world_spec import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CASCADE_CONTROLLERS,
     CascadeController,

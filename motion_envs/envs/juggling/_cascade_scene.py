@@ -30,7 +30,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, JugglingTask
-from motion_envs.envs.juggling._world import HandsWorld, WorldSpec
+from motion_envs.envs.juggling._world import HandsWorld
+from motion_envs.envs.juggling._world_spec import WorldSpec
 from motion_envs.models.juggling import CascadeStart, CascadeState
 
 __all__ = ["CascadeWorld"]

@@ -1,7 +1,7 @@
 r"""One control period of a juggling world, written once for every world and pattern.
 
 A world (:class:`~motion_envs.envs.juggling._world.HandsWorld`) has ``H`` actuated
-hands and ``B`` balls (:class:`~motion_envs.envs.juggling._world.WorldSpec`). One
+hands and ``B`` balls (:class:`~motion_envs.envs.juggling._world_spec.WorldSpec`). One
 control period of ``dt`` is, for each world ``i`` in ``envs``:
 
 1. **the servo plan** of each hand (:func:`servo_plan`): the command from the hand's last

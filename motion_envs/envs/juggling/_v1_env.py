@@ -18,7 +18,7 @@ from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
-from motion_envs.envs.juggling._world import HAND_SPEED_LIMIT
+from motion_envs.envs.juggling._world_spec import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
     CONTROLLERS,
     BallSensor,

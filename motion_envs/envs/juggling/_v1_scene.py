@@ -3,7 +3,7 @@ r"""The Juggling-v1 world: one actuated hand and one ball, the one juggling worl
 ``WorldSpec.of(task, hands=1, balls=1)``.
 
 In the style of dm_control's ``ball_in_cup``: the physics lives in the model
-(:func:`~motion_envs.envs.juggling._world.world_mjcf`: joints, motors with force limits,
+(:func:`~motion_envs.envs.juggling._world_mjcf.world_mjcf`: joints, motors with force limits,
 contacts), the control period in :mod:`~motion_envs.envs.juggling._period` (the servo
 within a human hand's limits, the grasp rule), and :class:`JugglingV1World` is the thin
 task on top: it returns the world's TRUE state as a
@@ -39,7 +39,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from motion_envs.datasets.juggling import JugglingState, JugglingTask
-from motion_envs.envs.juggling._world import HandsWorld, WorldSpec
+from motion_envs.envs.juggling._world import HandsWorld
+from motion_envs.envs.juggling._world_spec import WorldSpec
 from motion_envs.models.juggling import xz_pair
 
 __all__ = ["JugglingV1World"]

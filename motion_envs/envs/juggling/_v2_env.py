@@ -23,7 +23,7 @@ from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_env import DEFAULT_V1_REWARD_WEIGHTS, V1_CYCLE_TIME
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
-from motion_envs.envs.juggling._world import WorldSpec
+from motion_envs.envs.juggling._world_spec import WorldSpec
 from motion_envs.models.juggling import (
     V2_CONTROLLERS,
     V2_LEVELS,

@@ -73,36 +73,11 @@ from numpy.typing import NDArray
 
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling import _period
-from motion_envs.envs.juggling._world_mjcf import load_world_model, palm_name, world_mjcf
-from motion_envs.envs.juggling._world_spec import (
-    BALL_CONAFFINITY,
-    BALL_CONTYPE,
-    CAPTURE_SPEED,
-    HAND_ACCEL_LIMIT,
-    HAND_MASS,
-    HAND_SPEED_LIMIT,
-    MAX_BALLS,
-    PALM_HALF_THICKNESS,
-    SERVO_OMEGA,
-    SUBSTEPS,
-    WorldSpec,
-)
+from motion_envs.envs.juggling._world_mjcf import load_world_model, palm_name
+from motion_envs.envs.juggling._world_spec import BALL_CONAFFINITY, BALL_CONTYPE, WorldSpec
 from motion_envs.models.juggling import perturb_release
 
-__all__ = [
-    "CAPTURE_SPEED",
-    "HAND_ACCEL_LIMIT",
-    "HAND_MASS",
-    "HAND_SPEED_LIMIT",
-    "MAX_BALLS",
-    "PALM_HALF_THICKNESS",
-    "SERVO_OMEGA",
-    "SUBSTEPS",
-    "HandsWorld",
-    "WorldSpec",
-    "load_world_model",
-    "world_mjcf",
-]
+__all__ = ["HandsWorld"]
 
 
 class HandsWorld:
