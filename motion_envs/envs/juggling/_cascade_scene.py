@@ -44,7 +44,9 @@ class CascadeWorld(HandsWorld):
     :class:`~motion_envs.models.juggling.CascadeState`. qpos/qvel layout: right hand
     ``x, z``, left hand ``x, z``, then ``x, z`` of balls 0, 1, ..., ``balls - 1``. The
     parameters are :class:`~motion_envs.envs.juggling.JugglingV1World`'s (the task
-    constants, the release noise per toss) and the number of balls.
+    constants, the release noise per toss, ``spec``: None for ``WorldSpec.of(task,
+    hands=2, balls=balls)``; Cascade-v1 passes air and the capture at impact) and the
+    number of balls.
     """
 
     def __init__(
@@ -53,8 +55,11 @@ class CascadeWorld(HandsWorld):
         release_speed_std: float = 0.0,
         release_angle_std: float = 0.0,
         balls: int = CASCADE_BALLS,
+        spec: WorldSpec | None = None,
     ) -> None:
-        spec = WorldSpec.of(task, hands=CASCADE_HANDS, balls=balls)
+        spec = WorldSpec.of(task, hands=CASCADE_HANDS, balls=balls) if spec is None else spec
+        if (spec.hands, spec.balls) != (CASCADE_HANDS, balls):
+            raise ValueError(f"spec must have 2 hands and {balls} balls; got {spec!r}")
         super().__init__(spec, release_speed_std, release_angle_std)
         self.task = task
         self.state: CascadeState | None = None

@@ -23,7 +23,11 @@ from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._v1_env import DEFAULT_V1_REWARD_WEIGHTS, V1_CYCLE_TIME
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
-from motion_envs.envs.juggling._world_spec import WorldSpec
+from motion_envs.envs.juggling._world_spec import (
+    AIR_DENSITY,
+    IMPACT_CONTACT_DAMPING,
+    WorldSpec,
+)
 from motion_envs.models.juggling import (
     V2_CONTROLLERS,
     V2_LEVELS,
@@ -37,11 +41,6 @@ from motion_envs.models.juggling import (
 
 __all__ = ["AIR_DENSITY", "FRAMES", "V2_OBS_DIM", "JugglingV2Env"]
 
-#: kg/m^3, the air of Juggling-v2's world (sea level, 20 C).
-AIR_DENSITY = 1.2
-#: The damping ratio of the palm's and ball's contact (a restitution of about 0.5: a
-#: ball met too fast bounces out of the hand).
-CONTACT_DAMPING = 0.2
 #: Received camera frames in the observation (newest first).
 FRAMES = 4
 #: Observation size (see the class docstring).
@@ -231,7 +230,7 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             capture_speed=lv.capture_speed,
             air_density=AIR_DENSITY,
             impact_capture=True,
-            contact_damping=CONTACT_DAMPING,
+            contact_damping=IMPACT_CONTACT_DAMPING,
         )
         self.world = JugglingV1World(
             self.task, lv.release_speed_std, math.radians(lv.release_angle_std), spec=spec

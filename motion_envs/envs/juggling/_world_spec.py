@@ -18,12 +18,14 @@ from motion_envs.datasets.juggling import JugglingTask
 from motion_envs.envs.juggling import _period
 
 __all__ = [
+    "AIR_DENSITY",
     "BALL_CONAFFINITY",
     "BALL_CONTYPE",
     "CAPTURE_SPEED",
     "HAND_ACCEL_LIMIT",
     "HAND_MASS",
     "HAND_SPEED_LIMIT",
+    "IMPACT_CONTACT_DAMPING",
     "MAX_BALLS",
     "PALM_HALF_THICKNESS",
     "SERVO_OMEGA",
@@ -38,6 +40,12 @@ PALM_HALF_THICKNESS = 0.008
 BALL_CONTYPE, BALL_CONAFFINITY = 2, 1
 #: The most balls a world holds.
 MAX_BALLS = 5
+#: kg/m^3, the air of the worlds with drag (Juggling-v2, Cascade-v1): sea level, 20 C.
+AIR_DENSITY = 1.2
+#: The damping ratio of the palm's and ball's contact in the worlds with the capture at
+#: impact (Juggling-v2, Cascade-v1): a restitution of about 0.5, so a ball met too fast
+#: bounces out of the hand.
+IMPACT_CONTACT_DAMPING = 0.2
 
 
 @dataclass(frozen=True)
