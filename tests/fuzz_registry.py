@@ -200,6 +200,21 @@ ENVS: dict[str, dict[str, object]] = {
             "height": "size",
         },
     },
+    "MotionEnvs/Cascade-v1": {
+        "kwargs": {
+            "level": "name",
+            "pattern": "name",
+            "controller": "name",
+            "delay_offset": "fraction",
+            "max_catches": "small_int",
+            "residual_scale": "positive",
+            "residual_phases": "phases",
+            "reward_weights": "weights",
+            "render_mode": "render_mode",
+            "width": "size",
+            "height": "size",
+        },
+    },
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
             "level": "name",

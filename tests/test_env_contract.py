@@ -252,6 +252,74 @@ def _cascade_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     return np.array(got), np.array(expected)
 
 
+def _cascade_v1_nominal(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
+    """A zero-action Cascade-v1 episode's hand paths against the pattern's juggler alone,
+    in a fresh world with air and the capture at impact, a fresh camera per ball and a
+    fresh view, seeded as the env documents (``spawn(6)``: world, controller, start,
+    delay, drags, cameras)."""
+    import math
+
+    from motion_envs.envs.juggling import CascadeWorld, WorldSpec
+    from motion_envs.models.juggling import (
+        V2_LEVELS,
+        CameraSensor,
+        CascadeBallView,
+        catch_height,
+        pattern_controller,
+        pattern_spec,
+    )
+
+    c = env.unwrapped
+    lv = V2_LEVELS[c.level]
+    seed = next(s for s in range(21, 200) if c.play(s)[0] >= 1)  # an episode with a catch
+    env.reset(seed=seed)
+    got = []
+    terminated = truncated = False
+    while not (terminated or truncated):
+        _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        got.append(info["hands"].ravel())
+    assert info["catches"] >= 1
+    spec = pattern_spec(c.pattern.name)
+    ctrl = pattern_controller(spec, "juggler", 9.81)
+    view = CascadeBallView(spec.balls, "arrival", 9.81, lv.mean_delay, catch_height(ctrl))
+    world_spec = WorldSpec.of(
+        c.task, hands=2, balls=spec.balls, capture_speed=lv.capture_speed, air_density=1.2,
+        impact_capture=True, contact_damping=0.2,
+    )  # fmt: skip
+    world = CascadeWorld(c.task, lv.release_speed_std, math.radians(lv.release_angle_std),
+                         spec.balls, spec=world_spec)  # fmt: skip
+    w, k, st, d, g, cam = np.random.SeedSequence(seed).spawn(6)
+    delay = float(np.random.default_rng(d).uniform(*lv.delay))
+    drags = np.random.default_rng(g).uniform(*lv.drag, size=spec.balls)
+    scatter = (lv.release_speed_std, math.radians(lv.release_angle_std))
+    start = ctrl.start(scatter, np.random.default_rng(st))
+    true = world.reset(ctrl.home, start=start, rng=np.random.default_rng(w))
+    cameras = []
+    for i, ss in enumerate(cam.spawn(spec.balls)):
+        world.set_drag(i, float(drags[i]))
+        cameras.append(CameraSensor(c.task.dt, lv.frame_rate, lv.jitter_std, lv.drop_prob,
+                                    lv.occlusion_radius, lv.position_std))  # fmt: skip
+        cameras[-1].reset(delay, np.random.default_rng(ss))
+    view.reset(ctrl.start(), drags, delay)
+    state = view.view(true)
+    ctrl.reset(state, np.random.default_rng(k))
+    expected = []
+    for _ in got:
+        targets, armed = ctrl.command(state)
+        true = world.step(targets, armed)
+        frames = []
+        for i, camera in enumerate(cameras):
+            b = true.ball_pos[i]
+            near = min(true.hand_pos, key=lambda h, b=b: math.hypot(*(b - h)))
+            frames.append(camera.record(int(world.k[0]), (float(b[0]), float(b[1])),
+                                        (float(near[0]), float(near[1])),
+                                        true.holder[i] >= 0))  # fmt: skip
+        view.record(true, frames)
+        state = view.view(true)
+        expected.append(true.hand_pos.ravel())
+    return np.array(got), np.array(expected)
+
+
 @dataclass(frozen=True)
 class Case:
     """What the contract needs to know about one environment (all its versions).
@@ -310,6 +378,16 @@ CASES: dict[str, Case] = {
             {"level": "easy", "controller": "juggler_mean_delay", "max_catches": 1},
             {"level": "hard", "controller": "juggler_delay_estimator"},
             {"level": "medium", "residual_phases": ["catch"]},
+        ),
+    ),
+    "MotionEnvs/Cascade-v1": Case(
+        _cascade_v1_nominal,
+        {"level": "medium", "max_catches": 2},
+        action_scale=0.2,
+        checked=(
+            {"level": "easy", "pattern": "5", "controller": "juggler_mean_delay"},
+            {"level": "hard", "controller": "juggler_oracle", "max_catches": 1},
+            {"level": "medium", "controller": "fixed_point", "residual_phases": ["catch"]},
         ),
     ),
     "MotionEnvs/Cascade": Case(

@@ -18,6 +18,7 @@ id                                         environment
 ``MotionEnvs/Juggling-v1``                 :class:`~.juggling.JugglingV1Env` (contacts)
 ``MotionEnvs/Juggling-v2``                 :class:`~.juggling.JugglingV2Env` (delay, camera, drag)
 ``MotionEnvs/Cascade-v0``                  :class:`~.juggling.CascadeEnv` (three balls, two hands)
+``MotionEnvs/Cascade-v1``                  :class:`~.juggling.CascadeV1Env` (human levels)
 =========================================  ========================================================
 
 The two reaching environments come with a native vector environment
@@ -92,6 +93,10 @@ _SPECS: dict[str, dict[str, object]] = {
     "MotionEnvs/Cascade-v0": {
         "entry_point": "motion_envs.envs.juggling:CascadeEnv",
         "vector_entry_point": "motion_envs.envs.juggling:CascadeVectorEnv",
+    },
+    "MotionEnvs/Cascade-v1": {
+        "entry_point": "motion_envs.envs.juggling:CascadeV1Env",
+        "vector_entry_point": "motion_envs.envs.vector:cascade_v1_vector_env",
     },
 }
 

@@ -79,6 +79,7 @@ __all__ = [
     "OrientationReachVectorEnv",
     "PositionReachVectorEnv",
     "ReachVectorEnv",
+    "cascade_v1_vector_env",
     "juggling_v0_vector_env",
     "juggling_v2_vector_env",
     "juggling_vector_env",
@@ -113,3 +114,9 @@ def juggling_v2_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.SyncV
     """The ``vector_entry_point`` of ``MotionEnvs/Juggling-v2`` (:func:`juggling_vector_env`:
     its infos' phase as a number)."""
     return juggling_vector_env("MotionEnvs/Juggling-v2", num_envs, **kwargs)
+
+
+def cascade_v1_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.SyncVectorEnv:
+    """The ``vector_entry_point`` of ``MotionEnvs/Cascade-v1`` (:func:`juggling_vector_env`:
+    its infos' phase as a number)."""
+    return juggling_vector_env("MotionEnvs/Cascade-v1", num_envs, **kwargs)

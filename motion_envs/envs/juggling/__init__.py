@@ -12,8 +12,10 @@ plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
 (:class:`CascadeWorld`, two hands and a pattern's balls) are its batches of one with their
 task's state types; ``_v1_env`` (:class:`JugglingV1Env`), ``_v2_env``
 (:class:`JugglingV2Env`: a hidden delay, a position-only camera, air drag, the capture at
-impact) and ``_cascade_env``
-(:class:`CascadeEnv`) the environments; ``_batch`` (the worlds' state as one batch) and
+impact), ``_cascade_env``
+(:class:`CascadeEnv`) and ``_cascade_v1_env`` (:class:`CascadeV1Env`: Cascade-v0's
+patterns at Juggling-v2's human levels) the environments; ``_batch`` (the worlds' state
+as one batch) and
 ``_v1_batch`` (Juggling-v1's step for a batch, written once in ``_v1_step``: the single
 environment is its batch of one); the native vector environments ``_vector``
 (:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
@@ -33,6 +35,11 @@ from motion_envs.envs.juggling._cascade_env import (
     cascade_obs_dim,
 )
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
+from motion_envs.envs.juggling._cascade_v1_env import (
+    CASCADE_V1_FRAMES,
+    CascadeV1Env,
+    cascade_v1_obs_dim,
+)
 from motion_envs.envs.juggling._cascade_vector import CascadeVectorEnv
 from motion_envs.envs.juggling._env import (
     CYCLE_TIME_LIMIT,
@@ -92,6 +99,7 @@ __all__ = [
     "CASCADE_HISTORY",
     "CASCADE_OBS_DIM",
     "CASCADE_TIME_PER_CATCH",
+    "CASCADE_V1_FRAMES",
     "CYCLE_TIME_LIMIT",
     "DEFAULT_CASCADE_REWARD_WEIGHTS",
     "DEFAULT_JUGGLING_REWARD_WEIGHTS",
@@ -117,6 +125,7 @@ __all__ = [
     "V1_OBS_DIM",
     "V2_OBS_DIM",
     "CascadeEnv",
+    "CascadeV1Env",
     "CascadeVectorEnv",
     "CascadeWorld",
     "HandsWorld",
@@ -130,6 +139,7 @@ __all__ = [
     "NumericInfo",
     "WorldSpec",
     "cascade_obs_dim",
+    "cascade_v1_obs_dim",
     "check_task",
     "cycle_rngs",
     "juggler_demonstrations",

@@ -20,6 +20,8 @@ The public names of small private modules, one concern each:
   camera rate, a hidden delay with jitter, drops, occlusion) and the flight estimators
   fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:func:`make_v2_controller`);
+  ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
+  (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -86,6 +88,14 @@ from motion_envs.models.juggling._cascade_siteswap import (
     siteswap_reasons,
 )
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
+from motion_envs.models.juggling._cascade_v1 import (
+    CASCADE_V1_CONTROLLERS,
+    CASCADE_V1_LEVELS,
+    CascadeBallView,
+    catch_height,
+    equivalent_ballistic,
+    nearest_palm,
+)
 from motion_envs.models.juggling._controller import (
     ControlOptions,
     Eq10Rows,
@@ -200,6 +210,8 @@ from motion_envs.models.juggling._world import (
 __all__ = [
     "ANCHOR_FRAMES",
     "CASCADE_CONTROLLERS",
+    "CASCADE_V1_CONTROLLERS",
+    "CASCADE_V1_LEVELS",
     "CONTROLLERS",
     "DEFAULT_TUNABLES",
     "DELAY_GRID",
@@ -225,6 +237,7 @@ __all__ = [
     "BallisticWorld",
     "CameraFrame",
     "CameraSensor",
+    "CascadeBallView",
     "CascadeController",
     "CascadeFit",
     "CascadeHand",
@@ -263,6 +276,7 @@ __all__ = [
     "cascade_fit",
     "cascade_likeness",
     "cascade_reasons",
+    "catch_height",
     "check_gravity",
     "check_pattern",
     "choose_beat",
@@ -274,6 +288,7 @@ __all__ = [
     "draw_episode_noise",
     "eq10_many",
     "eq10_rows",
+    "equivalent_ballistic",
     "estimate_noise",
     "fit_juggler",
     "gravity_range",
@@ -284,6 +299,7 @@ __all__ = [
     "make_cascade_controller",
     "make_controller",
     "make_v2_controller",
+    "nearest_palm",
     "pattern_controller",
     "pattern_likeness",
     "pattern_plan",

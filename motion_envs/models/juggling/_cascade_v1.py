@@ -1,0 +1,202 @@
+r"""Cascade-v1's reference controllers: a pattern's juggler (the fitted cascade juggler
+for ``"3"``, the siteswap juggler for the others) seeing each ball through Juggling-v2's
+delayed, position-only camera (:class:`~motion_envs.models.juggling.CameraSensor`, one
+per ball) and flight estimator (:class:`~motion_envs.models.juggling.FlightEstimator`,
+one per ball).
+
+The levels are Juggling-v2's human levels ``easy``, ``medium`` and ``hard``
+(:data:`~motion_envs.models.juggling.V2_LEVELS`: the delay drawn per episode from the
+human visuomotor range with per-frame jitter, the camera's rate, drops, occlusion and
+noise, the drag range, the toss scatter, the capture speed); ``drift`` is not offered
+(its changes at every catch are a one-ball design).
+
+**What the juggler is told of a ball** (:class:`CascadeBallView`):
+
+* a HELD ball: its true state (touch, no delay);
+* a FLYING ball with at least 3 frames of its current flight: the estimator's state now
+  (the flight fitted to its newest frames, each placed at the time the estimator
+  believes it was captured: ``"arrival"`` for the analytic juggler, ``"mean_delay"``
+  for the level's mean delay plus an offset, ``"oracle"`` for the episode's true delay
+  and the ball's true drag);
+* a FLYING ball without 3 frames yet (just thrown, or in flight at the start before
+  the first frames arrive): the ballistic flight from its thrower's hand state at the
+  release (proprioception: the hand knows where and how fast it let go; the release
+  scatter is unknown to it), or for a ball in flight at ``t = 0`` its nominal start
+  (the pattern's unscattered throw).
+
+The oracle knows the drag: the juggler predicts ballistically, so it is handed the
+EQUIVALENT ballistic state, the velocity whose ballistic flight reaches, when the drag
+flight comes down through the pattern's catch height, the point the drag flight reaches
+(:func:`equivalent_ballistic`), as Juggling-v2's oracle is matched at its plan's catch
+time.
+
+:data:`CASCADE_V1_CONTROLLERS` maps each controller name to the pattern's juggler
+variant and the estimator's mode; ``fixed_point`` (the juggler that catches at the
+nominal point and time, never looking) is the trivial row.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from motion_envs._typing import FloatArray
+from motion_envs.models.juggling._camera import CameraFrame, FlightEstimator, drag_flight
+from motion_envs.models.juggling._cascade import CascadeState
+from motion_envs.models.juggling._cascade_control import CascadeController, CascadeStart
+from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
+
+__all__ = [
+    "CASCADE_V1_CONTROLLERS",
+    "CASCADE_V1_LEVELS",
+    "CascadeBallView",
+    "catch_height",
+    "equivalent_ballistic",
+    "nearest_palm",
+]
+
+#: Cascade-v1's levels (Juggling-v2's human levels; ``drift`` is not offered).
+CASCADE_V1_LEVELS: tuple[str, ...] = ("easy", "medium", "hard")
+#: Controller name -> (the pattern's juggler variant, the estimator's mode).
+CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
+    "juggler": ("juggler", "arrival"),
+    "juggler_mean_delay": ("juggler", "mean_delay"),
+    "juggler_oracle": ("juggler", "oracle"),
+    "fixed_point": ("fixed_point", "arrival"),
+}
+#: s, the step and the horizon of the oracle's search for the catch-height crossing.
+_SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
+
+
+def catch_height(controller: CascadeController | SiteswapController) -> float:
+    """m, the height at which the pattern's juggler catches (the siteswap juggler's
+    catch point; the fitted juggler's release height, its catches' height in the
+    symmetric cascade)."""
+    if isinstance(controller, SiteswapController):
+        return float(controller.plan.style.catch[1])
+    return float(controller.pattern.release_position[1])
+
+
+def equivalent_ballistic(
+    p: FloatArray, crossing: tuple[float, float, float] | None, now: float, gravity: float
+) -> FloatArray | None:
+    """The velocity at ``now`` whose ballistic flight from ``p`` reaches ``crossing``
+    ``(time, x, z)`` at its time; None when there is no crossing or it is less than 5 ms
+    away."""
+    if crossing is None:
+        return None
+    t_e, x_e, z_e = crossing
+    s = t_e - now
+    if s <= 0.005:
+        return None
+    return np.array(((x_e - p[0]) / s, (z_e - p[1] + 0.5 * gravity * s * s) / s))
+
+
+class CascadeBallView:
+    """Each ball as the juggler is told it (module docstring).
+
+    Parameters
+    ----------
+    balls:
+        Balls of the pattern.
+    mode:
+        The estimators' mode (:data:`~motion_envs.models.juggling._camera.ESTIMATORS`
+        but ``"release"``).
+    gravity:
+        m/s^2.
+    delay:
+        s, ``"mean_delay"``'s fixed delay.
+    height:
+        m, the catch height (:func:`catch_height`; the oracle's drag matching).
+    """
+
+    def __init__(self, balls: int, mode: str, gravity: float, delay: float, height: float) -> None:
+        if mode == "release":
+            raise ValueError(
+                "mode 'release' (one delay pooled over a ball's flights) is not offered"
+            )
+        self.estimators = [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
+        self.gravity = float(gravity)
+        self.height = float(height)
+        self.priors: list[tuple[float, FloatArray, FloatArray]] = []
+        self._crossings: list[tuple[int, tuple[float, float, float] | None]] = []
+
+    def reset(self, nominal: CascadeStart, drags: FloatArray, delay: float) -> None:
+        """A new episode at ``t = 0``: the oracle told each ball's drag and the delay;
+        each ball in flight at the start known by its ``nominal`` (unscattered) state."""
+        self.priors = []
+        for i, est in enumerate(self.estimators):
+            est.reset(float(drags[i]), delay)
+            p, v = nominal.ball_pos[i].copy(), nominal.ball_vel[i].copy()
+            self.priors.append((0.0, p, v))
+            if nominal.holder[i] < 0:
+                est.released(0.0, float(p[0]), float(p[1]))
+        self._crossings = [(-1, None)] * len(self.estimators)
+
+    def record(self, true: CascadeState, frames: list[list[CameraFrame]]) -> None:
+        """After a control period: each ball released in it starts a new flight (from its
+        thrower's hand state), then each ball's frames that arrived are added."""
+        for h, b in enumerate(true.released):
+            if b >= 0:
+                p, v = true.hand_pos[h].copy(), true.hand_vel[h].copy()
+                self.priors[b] = (true.time, p, v)
+                self.estimators[b].released(true.time, float(p[0]), float(p[1]))
+        for est, new in zip(self.estimators, frames, strict=True):
+            est.add(new)
+
+    def ball(self, i: int, now: float) -> tuple[FloatArray, FloatArray]:
+        """Flying ball ``i``'s ``(position, velocity)`` at ``now`` as the juggler is told."""
+        est = self.estimators[i]
+        got = est.estimate(now)
+        if got is None:
+            t0, p0, v0 = self.priors[i]
+            s, g = now - t0, self.gravity
+            return p0 + v0 * s - np.array((0.0, 0.5 * g * s * s)), v0 - np.array((0.0, g * s))
+        p, v = got
+        if est.drag > 0:
+            v_eq = equivalent_ballistic(p, self._crossing(i, now, p, v), now, self.gravity)
+            if v_eq is not None:
+                v = v_eq
+        return p, v
+
+    def _crossing(
+        self, i: int, now: float, p: FloatArray, v: FloatArray
+    ) -> tuple[float, float, float] | None:
+        """``(time, x, z)`` at which ball ``i``'s drag flight comes down through the catch
+        height (searched in 10 ms steps, linear within the step; cached per fit)."""
+        version = self.estimators[i]._version
+        cached_version, cached = self._crossings[i]
+        if cached_version == version:
+            return cached
+        x, z, vx, vz = float(p[0]), float(p[1]), float(v[0]), float(v[1])
+        g, k, h = self.gravity, self.estimators[i].drag, self.height
+        out = None
+        t = now
+        while t - now < _SEARCH_HORIZON:
+            nx, nz, nvx, nvz = drag_flight((x, z), (vx, vz), _SEARCH_STEP, g, k)
+            if nvz < 0 and z >= h > nz:
+                f = (z - h) / (z - nz)
+                out = (t + f * _SEARCH_STEP, x + f * (nx - x), h)
+                break
+            x, z, vx, vz = nx, nz, nvx, nvz
+            t += _SEARCH_STEP
+        self._crossings[i] = (version, out)
+        return out
+
+    def view(self, true: CascadeState) -> CascadeState:
+        """The state the juggler is given: the true hands and events, each held ball's
+        true state, each flying ball's :meth:`ball`."""
+        pos, vel = true.ball_pos.copy(), true.ball_vel.copy()
+        for i, holder in enumerate(true.holder):
+            if holder < 0:
+                pos[i], vel[i] = self.ball(i, true.time)
+        return replace(true, ball_pos=pos, ball_vel=vel)
+
+
+def nearest_palm(hands: FloatArray, ball: FloatArray) -> tuple[float, float]:
+    """The hand position ``(x, z)`` of ``hands (2, 2)`` nearest to ``ball``."""
+    d = [math.hypot(float(ball[0] - h[0]), float(ball[1] - h[1])) for h in hands]
+    h = hands[int(np.argmin(d))]
+    return float(h[0]), float(h[1])
