@@ -274,6 +274,22 @@ def header_line(text: str) -> list[str]:
     return [h.strip() for h in next(csv.reader([decoded]), [])]
 
 
+def csv_with_columns(text: str, required: Sequence[str], expected: str) -> str:
+    """An existing, readable CSV file whose header line holds every ``required`` column
+    (its path); else ``ArgumentTypeError`` naming the missing ones and the ``expected``
+    header. Only the header line is read (the rows are checked when a run loads them)."""
+    from motion_envs.datasets.sample_table import missing_columns_message
+
+    path = input_file(text)
+    header = header_line(text)
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise argparse.ArgumentTypeError(
+            missing_columns_message(f"{text}: line 1", header, missing, expected)
+        )
+    return str(path)
+
+
 def input_paths(values: Iterable[object]) -> list[Path]:
     """The existing files and folders named by option values (``FILE?query`` is FILE,
     ``cohort:CONFIG`` is CONFIG; names of built-in data that are no paths are skipped)."""

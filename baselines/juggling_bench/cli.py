@@ -34,7 +34,6 @@ from motion_envs.datasets.juggling import (
     siteswap_balls,
 )
 from motion_envs.datasets.registry import describe_names
-from motion_envs.datasets.sample_table import missing_columns_message
 from motion_envs.models.juggling import LEVELS, PATTERNS, V2_LEVELS
 
 
@@ -188,15 +187,9 @@ def juggling_data(text: str) -> str:
         return text
     if (recording := options.mocap_data(text, "juggling")) is not None:  # FILE.c3d?opt=...
         return recording
-    path = options.input_file(text)
-    header = options.header_line(text)
-    missing = [c for c in ("t", "x", "z") if c not in header]
-    if missing:
-        expected = "t,x,z[,ball_x,ball_z][,phase][,recording]"
-        raise argparse.ArgumentTypeError(
-            missing_columns_message(f"{text}: line 1", header, missing, expected)
-        )
-    return str(path)
+    return options.csv_with_columns(
+        text, ("t", "x", "z"), "t,x,z[,ball_x,ball_z][,phase][,recording]"
+    )
 
 
 @options.reads_files
@@ -218,15 +211,11 @@ def analyse_source(text: str) -> str:
                 f"{path}: give the ball markers (FILE?ball=NAME[,NAME...]) or FILE?balls=unlabelled"
             )
         return text
-    path = options.input_file(text)
-    header = options.header_line(text)
-    missing = [c for c in ("t", "ball_x", "ball_z") if c not in header]
-    if missing:
-        expected = "t,x,z,ball_x,ball_z[,recording] (or give a .c3d/.bvh/.tsv recording)"
-        raise argparse.ArgumentTypeError(
-            missing_columns_message(f"{text}: line 1", header, missing, expected)
-        )
-    return str(path)
+    return options.csv_with_columns(
+        text,
+        ("t", "ball_x", "ball_z"),
+        "t,x,z,ball_x,ball_z[,recording] (or give a .c3d/.bvh/.tsv recording)",
+    )
 
 
 DESCRIPTION = """\

@@ -218,35 +218,36 @@ def learned_orientation_rows(
     P_pt = np.empty((len(folds), L, n_points, 3))
     R_hat_timing = empty()
     timing_chosen = []
-    for o, (train, test) in enumerate(folds):
-        null = NullBezierModel(degree).fit(R[train])
-        pred["null_d2_loso"][test] = null.predict(n=test.size)
-        task = TaskBezierModel(degree, unseen="global").fit(R[train], tasks=tasks[train])
-        pred["task_predictor_d2_loso"][test] = task.predict(tasks=tasks[test])
-        path = NullBezierModel(degree, frame="path", up=up).fit(
-            R[train], starts=S[train], ends=E[train]
-        )
-        pred["null_d2_path_loso"][test] = path.predict(starts=S[test], ends=E[test])
-        path_task = TaskBezierModel(degree, unseen="global", frame="path", up=up).fit(
-            R[train], tasks=tasks[train], starts=S[train], ends=E[train]
-        )
-        pred["task_predictor_d2_path_loso"][test] = path_task.predict(
-            tasks=tasks[test], starts=S[test], ends=E[test]
-        )
 
+    def bezier_rows(
+        res: FloatArray, train: NDArray[Any], test: NDArray[Any], out: dict[str, FloatArray]
+    ) -> None:
+        """The Bézier rows among ``out``'s keys (``NAME_loso[_predicted_timing]``): fitted
+        on the residuals ``res[train]``, predicted for ``test``."""
+        fit, at = {"starts": S[train], "ends": E[train]}, {"starts": S[test], "ends": E[test]}
+        predicted = {
+            "null_d2": NullBezierModel(degree).fit(res[train]).predict(n=test.size),
+            "task_predictor_d2": TaskBezierModel(degree, unseen="global")
+            .fit(res[train], tasks=tasks[train])
+            .predict(tasks=tasks[test]),
+            "null_d2_path": NullBezierModel(degree, frame="path", up=up)
+            .fit(res[train], **fit)
+            .predict(**at),
+            "task_predictor_d2_path": TaskBezierModel(degree, unseen="global", frame="path", up=up)
+            .fit(res[train], tasks=tasks[train], **fit)
+            .predict(tasks=tasks[test], **at),
+        }
+        for name, values in predicted.items():
+            for key in (f"{name}_loso", f"{name}_loso_predicted_timing"):
+                if key in out:
+                    out[key][test] = values
+
+    for o, (train, test) in enumerate(folds):
+        bezier_rows(R, train, test, pred)
         Ro = _residuals_against(q_grid, S, E, A[train].mean(axis=0))
         R_pt[test] = Ro[test]
         pred_pt["slerp_loso_predicted_timing"][test] = 0.0
-        null = NullBezierModel(degree).fit(Ro[train])
-        pred_pt["null_d2_loso_predicted_timing"][test] = null.predict(n=test.size)
-        task = TaskBezierModel(degree, unseen="global").fit(Ro[train], tasks=tasks[train])
-        pred_pt["task_predictor_d2_loso_predicted_timing"][test] = task.predict(tasks=tasks[test])
-        path = NullBezierModel(degree, frame="path", up=up).fit(
-            Ro[train], starts=S[train], ends=E[train]
-        )
-        pred_pt["null_d2_path_loso_predicted_timing"][test] = path.predict(
-            starts=S[test], ends=E[test]
-        )
+        bezier_rows(Ro, train, test, pred_pt)
 
         timing = SpeedProfileModel().fit(Xt[train], A[train])
         timing_chosen.append({"lam": timing.lam_})
