@@ -127,6 +127,15 @@ _REACH_COMMON = {
     "val_fraction": "fraction",
     "calibration": "small_int",
 }
+#: A Juggling-v1 level and the sensor and release noise it sets (Cascade-v0 takes them too).
+_JUGGLING_LEVEL = {
+    "level": "name",
+    "latency": "fraction",
+    "position_std": "fraction",
+    "velocity_std": "fraction",
+    "release_speed_std": "fraction",
+    "release_angle_std": "angle",
+}
 ENVS: dict[str, dict[str, object]] = {
     "MotionEnvs/OrientationReach-v0": {
         "kwargs": {
@@ -169,12 +178,7 @@ ENVS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Juggling-v1": {
         "kwargs": {
-            "level": "name",
-            "latency": "fraction",
-            "position_std": "fraction",
-            "velocity_std": "fraction",
-            "release_speed_std": "fraction",
-            "release_angle_std": "angle",
+            **_JUGGLING_LEVEL,
             "gravity": "gravity",
             "controller": "name",
             "max_catches": "small_int",
@@ -217,12 +221,7 @@ ENVS: dict[str, dict[str, object]] = {
     },
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
-            "level": "name",
-            "latency": "fraction",
-            "position_std": "fraction",
-            "velocity_std": "fraction",
-            "release_speed_std": "fraction",
-            "release_angle_std": "angle",
+            **_JUGGLING_LEVEL,
             "pattern": "name",
             "tunables": "name",
             "dwell_ratio": "fraction",

@@ -32,15 +32,18 @@ ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 HANG = 60  # s: the audit's bound
 
 
-def cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    """``motion-bench ARGS`` in a subprocess (60 s bound: a hang raises TimeoutExpired)."""
+def cli(
+    *args: str, cwd: Path | None = None, timeout: float = HANG
+) -> subprocess.CompletedProcess[str]:
+    """``motion-bench ARGS`` in a subprocess (``timeout`` s bound, default :data:`HANG`:
+    a hang raises TimeoutExpired)."""
     return subprocess.run(
         [sys.executable, "-m", "baselines.cli", *args],
         capture_output=True,
         text=True,
         env=ENV,
         cwd=cwd or ROOT,
-        timeout=HANG,
+        timeout=timeout,
     )
 
 
@@ -117,26 +120,9 @@ def test_an_output_folder_holding_the_input_does_not_replace_it(tmp_path):
     out.mkdir()
     data = load_position_dataset("lasa").to_csv(out / "results.csv")
     before = Path(data).read_bytes()
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "baselines.cli",
-            "position",
-            "--data",
-            str(data),
-            "--out",
-            str(out),
-            "--n-sines",
-            "2",
-            "--no-progress",
-            "--learned",
-            "off",
-        ],
-        capture_output=True,
-        text=True,
-        env=ENV,
-        cwd=ROOT,
+    proc = cli(
+        *("position", "--data", str(data), "--out", str(out), "--n-sines", "2"),
+        *("--no-progress", "--learned", "off"),
         timeout=600,
     )
     line = one_line(proc)
@@ -576,14 +562,7 @@ def test_a_tampered_run_folder_is_one_line(trained, tmp_path, change):
 
 def test_agent_command_on_a_tampered_agent_zip_is_one_line(trained, tmp_path):
     folder = _rehashed(trained, tmp_path / "run", _pickle_in_zip)
-    proc = subprocess.run(
-        [sys.executable, "-m", "baselines.cli", "agent", str(folder), "--episodes", "1"],
-        capture_output=True,
-        text=True,
-        env=ENV,
-        cwd=ROOT,
-        timeout=300,
-    )
+    proc = cli("agent", str(folder), "--episodes", "1", timeout=300)
     line = one_line(proc)
     assert str(folder) in line and "UnpicklingError" in line
 

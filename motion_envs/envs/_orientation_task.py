@@ -193,13 +193,15 @@ def _build_task(
     test_fraction: float,
     split_seed: int,
     min_deg: float,
-    val_fraction: float = 0.0,
-    observe_timing: bool = False,
-    fold: int | None = None,
-    val_folds: int = 0,
-    val_fold: int = 0,
-    split_by: str = "subject",
+    val_fraction: float,
+    observe_timing: bool,
+    fold: int | None,
+    val_folds: int,
+    val_fold: int,
+    split_by: str,
 ) -> OrientationTask:
+    """The episodes of a split; every argument checked and given by
+    :func:`load_orientation_task` (the defaults live there)."""
     from motion_envs.geometry import quaternion as quat
     from motion_envs.models.orientation_nominal import OrientationNominal
 

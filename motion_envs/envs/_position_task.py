@@ -143,9 +143,11 @@ def _build_task(
     test_fraction: float,
     split_seed: int,
     residual_scale: float,
-    val_fraction: float = 0.0,
-    observe_timing: bool = False,
+    val_fraction: float,
+    observe_timing: bool,
 ) -> PositionTask:
+    """The episodes of a split; every argument checked and given by
+    :func:`load_position_task` (the defaults live there)."""
     from motion_envs.models.position_nominal import position_grids
 
     full, dataset, inner, fraction = position_split_source(
