@@ -21,6 +21,12 @@ from baselines.juggling_bench.cascade import (
     run_cascade,
     write_cascade,
 )
+from baselines.juggling_bench.cascade_v1 import (
+    CascadeV1Config,
+    report_cascade_v1,
+    run_cascade_v1,
+    write_cascade_v1,
+)
 from baselines.juggling_bench.config import JugglingConfig
 from baselines.juggling_bench.levels import LevelsConfig, report_levels, run_levels, write_levels
 from baselines.juggling_bench.media import write
@@ -35,6 +41,21 @@ from motion_envs.datasets.juggling import (
 )
 from motion_envs.datasets.registry import describe_names
 from motion_envs.models.juggling import LEVELS, PATTERNS, V2_LEVELS
+
+
+def _cascade_v1(args: argparse.Namespace) -> int:
+    """``--version v2 --pattern P``: Cascade-v1's reference rows."""
+    config = CascadeV1Config(
+        pattern=args.pattern,
+        levels=args.levels or CascadeV1Config.levels,
+        episodes=args.episodes or CascadeV1Config.episodes,
+        max_catches=args.max_catches or CascadeV1Config.max_catches,
+    )
+    doc = run_cascade_v1(config)
+    print(report_cascade_v1(doc))
+    out = options.results_folder(args.out, f"juggling-v2-pattern-{args.pattern}")
+    print(options.wrote(write_cascade_v1(doc, out)))
+    return 0
 
 
 def main(args: argparse.Namespace) -> int:
@@ -54,6 +75,8 @@ def main(args: argparse.Namespace) -> int:
     if args.pattern is not None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: not with --pattern")
+        if args.version == "v2":
+            return _cascade_v1(args)
         cascade = CascadeConfig(
             pattern=args.pattern,
             levels=args.levels or CascadeConfig.levels,
@@ -261,7 +284,17 @@ latency-aware variant and the two trivial catches, each ending at the first drop
 --max-catches (10) catches. Reported with 95 % bootstrap intervals: catches before the
 first drop (median), catch rate, time to the first drop (SIMULATED demonstrations).
 Another siteswap (e.g. 5 or 441) is checked at the cascade juggler's tempo and refused
-with the reasons it does not fit (ball count, flight, the hand's speed limit)."""
+with the reasons it does not fit (ball count, flight, the hand's speed limit).
+
+With --version v2 --pattern P: MotionEnvs/Cascade-v1 instead (the pattern at Juggling-v2's
+human levels easy, medium, hard: a hidden per-episode delay, a position-only camera per
+ball, drag per ball, the capture at impact). Per level, the late-meeting offset and the
+best non-oracle row are chosen on 30 validation episodes, then --episodes (100) test
+episodes of each row (the juggler, the oracle given the true delay and drag, the
+mean-delay juggler, late meeting, a fixed catch point, random actions), each ending at
+the first drop or after --max-catches (30) catches. Reported with 95 % bootstrap
+intervals: catches before the first drop (median and mean), catch rate, and the paired
+oracle minus best row (SIMULATED demonstrations)."""
 
 
 def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
@@ -350,7 +383,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         type=siteswap_pattern,
         default=None,
         help="a juggling pattern (a registered name or siteswap): run its levels benchmark "
-        "on MotionEnvs/Cascade-v0 (every level unless --levels); the registered patterns "
+        "on MotionEnvs/Cascade-v0 (with --version v2: Cascade-v1's rows; every level unless "
+        "--levels); the registered patterns "
         "(3, 3-human, 5, 4, 441, 531, 423, 51) are played, another siteswap is refused "
         "with the reason",
     )
@@ -358,7 +392,8 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         "--episodes",
         type=options.int_at_least(2),
         default=None,
-        help="test episodes per level and method (--levels: default 200; --pattern: 50)",
+        help="test episodes per level and method (--levels: default 200; --pattern: 50; "
+        "--version v2 --pattern: 100)",
     )
     p.add_argument(
         "--version",
@@ -366,13 +401,14 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         default="v1",
         help="with --levels: v1 (Juggling-v1's levels and controllers, default) or v2 "
         "(Juggling-v2's reference rows, on medium,hard unless --levels names others; "
-        "catch rate against deviation plotted)",
+        "catch rate against deviation plotted); with --pattern: v2 runs Cascade-v1's rows",
     )
     p.add_argument(
         "--max-catches",
         type=options.positive_int,
         default=None,
-        help="catches after which an episode ends (--levels: default 3; --pattern: 10)",
+        help="catches after which an episode ends (--levels: default 3; --pattern: 10; "
+        "--version v2 --pattern: 30)",
     )
     p.add_argument(
         "--agent",
