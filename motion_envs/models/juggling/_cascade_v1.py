@@ -121,7 +121,7 @@ class CascadeBallView:
         self.gravity = float(gravity)
         self.height = float(height)
         self.priors: list[tuple[float, FloatArray, FloatArray]] = []
-        self._crossings: list[tuple[int, tuple[float, float, float] | None]] = []
+        self._crossings: list[tuple[int, tuple[float, float, float] | None]] = [(-1, None)] * balls
 
     def reset(self, nominal: CascadeStart, drags: FloatArray, delay: float) -> None:
         """A new episode at ``t = 0``: the oracle told each ball's drag and the delay;
