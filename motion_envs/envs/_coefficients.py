@@ -39,15 +39,16 @@ from numpy.typing import NDArray
 from motion_envs._typing import FloatArray
 from motion_envs.envs._calibration import MAX_CALIBRATION, CalibrationDraws
 from motion_envs.envs._common import (
-    MAX_FRAME_SIZE,
     N_STEPS,
     JsonSpecMixin,
     LazyRendererMixin,
     as_action,
     check_fraction,
     check_integer,
+    check_render,
     check_scale,
     check_seed,
+    draw_trajectory,
 )
 from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResult
 from motion_envs.envs._reach import FrameAfterResetMixin, TrajectoryLabelsMixin, reset_labels
@@ -132,13 +133,7 @@ class CoefficientEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym
         is built)."""
         check_fraction(test_fraction)
         check_seed(split_seed)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        for name, value in (("width", width), ("height", height)):
-            check_integer(value, name, 16, MAX_FRAME_SIZE)
+        check_render(render_mode, self.metadata["render_modes"], width, height)
         self.n_sines = check_integer(n_sines, "n_sines", 1, MAX_COEFFICIENT_SINES)
         self.residual_scale = check_scale(residual_scale)
         self.render_mode = render_mode
@@ -234,22 +229,11 @@ class CoefficientEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym
         return self._errors(idx, self.curves(idx, actions))
 
     # -- episode ------------------------------------------------------------------------
-    def _draw(self, options: dict[str, Any] | None) -> int:
-        L = self.task.n_trajectories
-        if options is not None and options.get("trajectory") is not None:
-            index = options["trajectory"]
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
-                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
-            if not 0 <= index < L:
-                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
-            return int(index)
-        return int(self.np_random.integers(L))
-
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        index = self._draw(options)
+        index = draw_trajectory(options, self.task.n_trajectories, self.np_random)
         self._index = index
         self._done = False
         self._predicted = None

@@ -8,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -33,11 +33,13 @@ __all__ = [
     "check_max_episode_steps",
     "check_num_envs",
     "check_number",
+    "check_render",
     "check_reward_weights",
     "check_scale",
     "check_seed",
     "check_val_fraction",
     "clipped_pair",
+    "draw_trajectory",
     "env_footprint",
     "has_render_mode",
     "physical_memory",
@@ -88,6 +90,28 @@ def check_integer(value: Any, name: str, low: int, high: int) -> int:
     if not low <= value <= high:
         raise ValueError(f"{name} must be an integer in [{low}, {high}]; got {_short(value)}")
     return int(value)
+
+
+def check_render(render_mode: Any, render_modes: Sequence[str], width: Any, height: Any) -> None:
+    """``render_mode`` None or one of ``render_modes``, ``width`` and ``height`` integers in
+    ``[16, MAX_FRAME_SIZE]``; ``ValueError`` naming the argument else."""
+    if render_mode is not None and render_mode not in render_modes:
+        raise ValueError(f"render_mode must be None or one of {render_modes}; got {render_mode!r}")
+    for name, value in (("width", width), ("height", height)):
+        check_integer(value, name, 16, MAX_FRAME_SIZE)
+
+
+def draw_trajectory(options: Mapping[str, Any] | None, n: int, rng: np.random.Generator) -> int:
+    """The episode's trajectory at ``reset``: ``options["trajectory"]`` (an integer in
+    ``[0, n)``, else ``ValueError``) when given, else one drawn uniformly with ``rng``."""
+    if options is not None and options.get("trajectory") is not None:
+        index = options["trajectory"]
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+            raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
+        if not 0 <= index < n:
+            raise ValueError(f"options['trajectory'] must be in [0, {n}); got {index}")
+        return int(index)
+    return int(rng.integers(n))
 
 
 def _short(value: Any) -> str:

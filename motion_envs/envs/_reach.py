@@ -42,16 +42,16 @@ from numpy.typing import NDArray
 
 from motion_envs.envs._calibration import CalibrationDraws, check_calibration
 from motion_envs.envs._common import (
-    MAX_FRAME_SIZE,
     N_STEPS,
     JsonSpecMixin,
     LazyRendererMixin,
     as_action,
     check_fraction,
-    check_integer,
+    check_render,
     check_reward_weights,
     check_scale,
     check_seed,
+    draw_trajectory,
     has_render_mode,
 )
 
@@ -316,15 +316,10 @@ class ReachEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym.Env):
 
         ``residual_scale`` must lie in ``(0, kind.max_residual_scale]``, ``test_fraction``
         in ``(0, 1)``, ``split_seed`` be an integer ``>= 0``, ``width`` and ``height``
-        integers in ``[16, MAX_FRAME_SIZE]``, reward weights in ``[0, MAX_REWARD_WEIGHT]``.
+        integers in ``[16, MAX_FRAME_SIZE]`` (:func:`check_render`), reward weights in
+        ``[0, MAX_REWARD_WEIGHT]``.
         """
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"render_mode must be None or one of {self.metadata['render_modes']}; "
-                f"got {render_mode!r}"
-            )
-        for name, value in (("width", width), ("height", height)):
-            check_integer(value, name, 16, MAX_FRAME_SIZE)
+        check_render(render_mode, self.metadata["render_modes"], width, height)
         self.residual_scale = check_scale(residual_scale, self.kind.max_residual_scale)
         check_fraction(test_fraction)
         check_seed(split_seed)
@@ -375,16 +370,7 @@ class ReachEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        L = self.task.n_trajectories
-        if options is not None and options.get("trajectory") is not None:
-            index = options["trajectory"]
-            if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
-                raise ValueError(f"options['trajectory'] must be an integer; got {index!r}")
-            if not 0 <= index < L:
-                raise ValueError(f"options['trajectory'] must be in [0, {L}); got {index}")
-            index = int(index)
-        else:
-            index = int(self.np_random.integers(L))
+        index = draw_trajectory(options, self.task.n_trajectories, self.np_random)
         self._index = index
         self._k = 0
         self._steps = self.task.steps[index].tolist()
