@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,12 +21,26 @@ from motion_envs.geometry import quaternion as quat
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["DEFAULT_N_POINTS", "MIN_SAMPLES", "RaggedTrajectories", "normalised_grid"]
+__all__ = [
+    "DEFAULT_N_POINTS",
+    "MIN_SAMPLES",
+    "RaggedTrajectories",
+    "check_n_points",
+    "normalised_grid",
+]
 
 #: Number of points on the common normalised-time grid (the paper's 50).
 DEFAULT_N_POINTS = 50
 #: Fewest samples accepted for one trajectory (orientation and position CSVs).
 MIN_SAMPLES = 5
+
+
+def check_n_points(n_points: Any) -> int:
+    """``n_points`` as an ``int``: the size of a model's normalised-time grid is an integer
+    >= 3 (``ValueError`` else)."""
+    if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)) or n_points < 3:
+        raise ValueError(f"n_points must be an integer >= 3; got {n_points!r}")
+    return int(n_points)
 
 
 def normalised_grid(n_points: int = DEFAULT_N_POINTS) -> FloatArray:

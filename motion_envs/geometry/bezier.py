@@ -16,6 +16,8 @@ shape ``(..., d - 1, dim)`` (interior points only).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import comb
@@ -24,13 +26,15 @@ from motion_envs._typing import FloatArray
 
 __all__ = [
     "bernstein_interior",
+    "check_degree",
     "evaluate",
     "fit",
     "fit_operator",
 ]
 
 
-def _check_degree(degree: int) -> int:
+def check_degree(degree: Any) -> int:
+    """``degree`` as an ``int``: a Bézier degree is an integer >= 1 (``ValueError`` else)."""
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
         raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
     return int(degree)
@@ -42,7 +46,7 @@ def bernstein_interior(t: ArrayLike, degree: int) -> FloatArray:
     Returns shape ``t.shape + (degree - 1,)``; for ``degree == 1`` the last axis is empty
     (the curve is identically zero: the plain slerp).
     """
-    d = _check_degree(degree)
+    d = check_degree(degree)
     t = np.asarray(t, dtype=np.float64)
     if not np.all(np.isfinite(t)):
         raise ValueError("t contains NaN or infinite values")
@@ -62,7 +66,7 @@ def evaluate(control_points: ArrayLike, t: ArrayLike, degree: int | None = None)
         raise ValueError(
             f"control_points must have shape (..., degree - 1, dim); got shape {P.shape}"
         )
-    d = P.shape[-2] + 1 if degree is None else _check_degree(degree)
+    d = P.shape[-2] + 1 if degree is None else check_degree(degree)
     if P.shape[-2] != d - 1:
         raise ValueError(
             f"control_points has {P.shape[-2]} interior points but degree {d} needs {d - 1}"
@@ -81,7 +85,7 @@ def fit_operator(t: ArrayLike, degree: int) -> FloatArray:
     ends), so including the end samples does not change the fit. Raises ``ValueError``
     when the grid has fewer distinct interior points than free control points.
     """
-    d = _check_degree(degree)
+    d = check_degree(degree)
     t = np.asarray(t, dtype=np.float64)
     if t.ndim != 1:
         raise ValueError(f"t must be a 1-D grid; got shape {t.shape}")

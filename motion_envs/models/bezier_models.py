@@ -140,8 +140,7 @@ class BezierResidualModel(SerializableModel):
     """
 
     def __init__(self, degree: int = 2, frame: str = "body", up: ArrayLike = DEFAULT_UP) -> None:
-        if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
-            raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
+        bezier.check_degree(degree)
         if frame not in FRAMES:
             raise ValueError(f"frame must be one of {FRAMES}; got {frame!r}")
         check_up(up)

@@ -33,7 +33,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motion_envs._typing import FloatArray
-from motion_envs.datasets.ragged import DEFAULT_N_POINTS, RaggedTrajectories, normalised_grid
+from motion_envs.datasets.ragged import (
+    DEFAULT_N_POINTS,
+    RaggedTrajectories,
+    check_n_points,
+    normalised_grid,
+)
 from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
 from motion_envs.geometry.resampling import recording_times
@@ -97,10 +102,7 @@ class OrientationModel(SerializableModel):
             raise ValueError(f"by must be one of {ORIENTATION_PREDICTORS}; got {by!r}")
         if unseen not in ("error", "global"):
             raise ValueError(f"unseen must be 'error' or 'global'; got {unseen!r}")
-        if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)):
-            raise ValueError(f"n_points must be an integer >= 3; got {n_points!r}")
-        if n_points < 3:
-            raise ValueError(f"n_points must be an integer >= 3; got {n_points!r}")
+        check_n_points(n_points)
         NullBezierModel(degree)  # validates degree
         self.degree = degree
         self.by = by

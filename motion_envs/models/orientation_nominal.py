@@ -44,8 +44,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from motion_envs._typing import FloatArray
-from motion_envs.datasets.ragged import DEFAULT_N_POINTS, normalised_grid
+from motion_envs.datasets.ragged import DEFAULT_N_POINTS, check_n_points, normalised_grid
 from motion_envs.datasets.resampling import resample_orientations
+from motion_envs.geometry import bezier
 from motion_envs.geometry import quaternion as quat
 from motion_envs.models.bezier_models import (
     BezierResidualModel,
@@ -137,12 +138,8 @@ class OrientationNominal:
     def __init__(self, kind: str = "slerp", degree: int = 2, n_points: int = DEFAULT_N_POINTS):
         if kind not in ORIENTATION_NOMINALS:
             raise ValueError(f"nominal must be one of {list(ORIENTATION_NOMINALS)}; got {kind!r}")
-        if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or degree < 1:
-            raise ValueError(f"degree must be an integer >= 1; got {degree!r}")
-        if isinstance(n_points, bool) or not isinstance(n_points, (int, np.integer)):
-            raise ValueError(f"n_points must be an integer >= 3; got {n_points!r}")
-        if n_points < 3:
-            raise ValueError(f"n_points must be an integer >= 3; got {n_points!r}")
+        bezier.check_degree(degree)
+        check_n_points(n_points)
         self.kind = kind
         self.degree = int(degree)
         self.n_points = int(n_points)
