@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from baselines import juggling_bench, options, orientation_bench, position_bench
-from baselines.learned import LEARNED_MODES
+from baselines.learned import LEARNED_MODES, add_learned_option
 from baselines.report import write_report
 from motion_envs._io import atomic_write_text
 from motion_envs.models.person_calibration import DEFAULT_CALIBRATION
@@ -269,11 +269,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         help=f"run only these jobs, among {', '.join(job.folder for job in JOBS)} (default: all)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument(
-        "--learned",
-        choices=LEARNED_MODES,
-        default="full",
-        help="budget of the learned rows and columns of every job (quick: one MLP candidate "
-        "and 30 epochs; off: none); the cohort job runs with the learned rows off",
+    add_learned_option(
+        p,
+        "budget of the learned rows and columns of every job",
+        "the cohort job runs with the learned rows off",
     )
     p.set_defaults(func=main)

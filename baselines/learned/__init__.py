@@ -21,6 +21,7 @@ from typing import Any
 __all__ = [
     "LEARNED_MODES",
     "QUICK_MLP",
+    "add_learned_option",
     "mlp_config",
     "sklearn_missing_reason",
     "torch_available",
@@ -31,6 +32,18 @@ __all__ = [
 #: over every candidate), ``quick`` (:data:`QUICK_MLP`: one candidate, 30 epochs, 2
 #: inner folds), ``off`` (none).
 LEARNED_MODES: tuple[str, ...] = ("full", "quick", "off")
+
+
+def add_learned_option(parser: Any, what: str, note: str) -> None:
+    """Add ``--learned`` (:data:`LEARNED_MODES`, default ``full``) to a sub-command's
+    ``parser``; its help: ``what`` the budget covers, the modes, then ``note``."""
+    parser.add_argument(
+        "--learned",
+        choices=LEARNED_MODES,
+        default="full",
+        help=f"{what} (docs/learned.md); quick: one MLP candidate, 30 epochs, 2 inner folds; "
+        f"off: none; {note}",
+    )
 
 
 def torch_available() -> bool:

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from baselines import options
-from baselines.learned import LEARNED_MODES
+from baselines.learned import add_learned_option
 from baselines.orientation_bench.config import SPLITS, OrientationConfig
 from baselines.orientation_bench.media import write
 from baselines.orientation_bench.runner import run
@@ -135,15 +135,10 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     p.add_argument(
         "--degree", type=options.positive_int, default=2, help="Bezier degree of --nominal"
     )
-    p.add_argument(
-        "--learned",
-        choices=LEARNED_MODES,
-        default="full",
-        help=(
-            "path-frame, predicted-timing and learned (ridge, torch MLP) leave-one-subject-"
-            "out rows (docs/learned.md); quick: one MLP candidate, 30 epochs, 2 inner folds; "
-            "off: none; the MLP rows are skipped with a message when torch is not installed"
-        ),
+    add_learned_option(
+        p,
+        "path-frame, predicted-timing and learned (ridge, torch MLP) leave-one-subject-out rows",
+        "the MLP rows are skipped with a message when torch is not installed",
     )
     p.add_argument(
         "--up",

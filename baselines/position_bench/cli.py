@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from baselines import options
-from baselines.learned import LEARNED_MODES
+from baselines.learned import add_learned_option
 from baselines.peers import peers_missing_reason
 from baselines.position_bench.config import PositionConfig
 from baselines.position_bench.media import write
@@ -169,12 +169,9 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
     )
     p.add_argument("--no-peers", action="store_true", help="skip DMP and ProMP")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--learned",
-        choices=LEARNED_MODES,
-        default="full",
-        help="budget of the learned ridge and torch-MLP columns (docs/learned.md); quick: one "
-        "MLP candidate, 30 epochs, 2 inner folds; off: neither column; the mlp column is "
-        "skipped with a message when torch is not installed",
+    add_learned_option(
+        p,
+        "budget of the learned ridge and torch-MLP columns",
+        "the mlp column is skipped with a message when torch is not installed",
     )
     p.set_defaults(func=main)
