@@ -45,7 +45,7 @@ from motion_envs.models.juggling import (
     eq10_rows,
 )
 
-__all__ = ["V1Batch"]
+__all__ = ["V1Batch", "v1_info"]
 
 _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
@@ -62,6 +62,9 @@ class V1Batch(WorldBatch):
     ``"numba"`` or ``"python"``; ``threads``: threads stepping the worlds (numba)."""
 
     LINKED = (*WorldBatch.LINKED, "_kernels", "_trees")
+    #: The controllers whose commands between events are made in the arrays (the others'
+    #: every command runs in Python).
+    FAST: tuple[str, ...] = _FAST_CONTROLLERS
 
     def __init__(self, parts: Sequence[Any], backend: str, threads: int = 1) -> None:
         super().__init__(parts, backend, threads)
@@ -90,7 +93,7 @@ class V1Batch(WorldBatch):
         self._rel_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)
         self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
         # the controller's plan
-        self._fast = first.controller_name in _FAST_CONTROLLERS
+        self._fast = first.controller_name in self.FAST
         self._latency = first.delay_steps * task.dt
         self._ahead = first.controller_name == "juggler_latency_aware" and self._latency > 0
         self._phase = np.zeros(n, dtype=np.int64)
@@ -171,7 +174,8 @@ class V1Batch(WorldBatch):
         state = env._state
         self._values[i] = (state.time, *state.ball_pos, *state.ball_vel)
         self._m_flags[i] = (state.held, state.released, state.caught)
-        self._ring[:, i] = env.sensor._buffer[0]
+        self._ring[:, i, :4] = self._true[i, 4:]  # BallSensor.reset: the held ball
+        self._ring[:, i, 4] = 1.0
         self._history[i] = self._values[i, 1:]
         self._counts[i] = 0
         self._stale[i] = False
@@ -473,22 +477,48 @@ class V1Batch(WorldBatch):
         armed = np.empty(envs.size, dtype=np.bool_)
         for j, i in enumerate(envs.tolist()):
             self.sync(i)
-            held, released, caught = self._m_flags[i].tolist()
-            state = JugglingState(
-                time=float(self._values[i, 0]),
-                hand_pos=self._true[i, 0:2].copy(),
-                hand_vel=self._true[i, 2:4].copy(),
-                ball_pos=self._values[i, 1:3].copy(),
-                ball_vel=self._values[i, 3:5].copy(),
-                held=held,
-                released=released,
-                caught=caught,
-                dropped=bool(self._t_flags[i, 2]),
-            )
-            t, a = self.parts[i].controller.command(state)
+            t, a = self.parts[i].controller.command(self.shown(i))
             target[j], armed[j] = t, a
             self._load_plan(i)
         return target, armed
+
+    def shown(self, i: int) -> JugglingState:
+        """What episode ``i``'s controller is shown: the true hand, the measured ball."""
+        held, released, caught = self._m_flags[i].tolist()
+        return JugglingState(
+            time=float(self._values[i, 0]),
+            hand_pos=self._true[i, 0:2].copy(),
+            hand_vel=self._true[i, 2:4].copy(),
+            ball_pos=self._values[i, 1:3].copy(),
+            ball_vel=self._values[i, 3:5].copy(),
+            held=held,
+            released=released,
+            caught=caught,
+            dropped=bool(self._t_flags[i, 2]),
+        )
+
+
+def v1_info(out: NDArray[np.float64]) -> dict[str, Any]:
+    """The single environment's step ``info`` from its row ``out (1, len(OUT_COLUMNS))``
+    of :meth:`V1Batch.step` (:meth:`V1Batch.columns`' keys, plain values)."""
+    r = out[0].tolist()
+    return {
+        "reward_catch": r[1],
+        "reward_drop": r[2],
+        "reward_likeness": r[3],
+        "reward_action": r[4],
+        "likeness": r[5],
+        "caught": r[7] > 0.0,
+        "catches": int(r[8]),
+        "tosses": int(r[9]),
+        "cycles": int(r[9]),
+        "phase": PHASES[int(r[10])],
+        "held": r[11] > 0.0,
+        "time": r[6],
+        "hand": out[0, 13:15].copy(),
+        "ball": out[0, 15:17].copy(),
+        "action_invalid": r[12] > 0.0,
+    }
 
 
 def _wider(array: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:

@@ -6,17 +6,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
+from motion_envs.datasets.juggling import JugglingState, JugglingTask
 from motion_envs.envs._common import SideCameraMixin, as_action
 from motion_envs.envs._kernels import numba_available
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
-from motion_envs.envs.juggling._v1_batch import V1Batch
+from motion_envs.envs.juggling._v1_batch import V1Batch, v1_info
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._world_spec import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
@@ -31,9 +32,11 @@ from motion_envs.models.juggling import (
 __all__ = [
     "DEFAULT_V1_REWARD_WEIGHTS",
     "HISTORY",
+    "OBS_HEAD",
     "V1_CYCLE_TIME",
     "V1_OBS_DIM",
     "JugglingV1Env",
+    "OneBallEnv",
 ]
 
 #: Default reward weights (see the class docstring, section Rewards).
@@ -51,10 +54,151 @@ V1_OBS_DIM = 15 + 4 * HISTORY
 #: episode is truncated anyway; a cycle of the juggler lasts about 1.1 s at 9.81 m/s^2.
 V1_CYCLE_TIME = 4.0
 _POS_MARGIN = 10.0
+#: The kinds (``OneBallEnv._OBS_KINDS``) of the observation's first 15 entries, the
+#: batch's: hand position and velocity, held, the phase one-hot, the phase's time and
+#: duration, the next target, the plan's end.
+OBS_HEAD = ("x", "z", "v", "v", "1", "1", "1", "1", "1", "t", "t", "x", "z", "x", "z")
 _SPEED_BOUND = 30.0
 
 
-class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
+class OneBallEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
+    """What the one-hand, one-ball environments (Juggling-v1, Juggling-v2) share: their
+    episode is the batch of one of :attr:`_BATCH` (:class:`V1Batch`: the command with the
+    residual, the world's period, the likeness, the reward, the episode's end, the
+    observation's first 15 entries), its spaces, its reset's info, its step and its
+    nominal episode.
+
+    A subclass sets :attr:`_OBS_KINDS`; in ``__init__`` ``task``, ``home``, ``world``,
+    ``controller``, ``likeness`` and the arguments, then calls :meth:`_init_spaces`; its
+    ``reset`` ends with :meth:`_start`."""
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
+    _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
+    #: The batch class stepping the episodes.
+    _BATCH: type[V1Batch] = V1Batch
+    #: The kind of each observation entry, which gives its bounds: ``x``, ``z`` a
+    #: position within ``_POS_MARGIN`` of the home (``z`` down to the floor's margin),
+    #: ``v`` a speed within ``_SPEED_BOUND``, ``t`` a time within the time limit, ``1`` a
+    #: flag; the batch's first 15 entries are :data:`OBS_HEAD`.
+    _OBS_KINDS: tuple[str, ...]
+    task: JugglingTask
+    home: NDArray[np.float64]
+    world: JugglingV1World
+    controller: JugglerController
+
+    def _init_spaces(self, time_limit: float) -> None:
+        """The MuJoCo handles, the time limit, the spaces and the episode's bookkeeping."""
+        self.model, self.data = self.world.model, self.world.data
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
+        self._time_limit = time_limit
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+        low, high = self._bounds()
+        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
+        self._low, self._high = low, high
+        self._renderer: Any = None
+        self._done = True
+        #: the state the controller was shown at the reset (the batch's starting point)
+        self._state: JugglingState | None = None
+        #: the batch stepping this episode and its row (:meth:`_batch_row`)
+        self._batch: V1Batch | None = None
+        self._rows = np.zeros(1, dtype=np.int64)
+
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """The observation's bounds, entry by entry from its kind (:data:`_OBS_KINDS`)."""
+        (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
+        fz, t = self.task.floor_z, self._time_limit
+        ranges = {"x": (hx - m, hx + m), "z": (fz - m, hz + m), "v": (-v, v), "t": (0, t)}
+        ranges["1"] = (0, 1)
+        low, high = zip(*(ranges[kind] for kind in self._OBS_KINDS), strict=True)
+        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
+
+    @property
+    def dt(self) -> float:
+        """s of simulated time per step (one control period)."""
+        return self.task.dt
+
+    def _batch_row(self) -> tuple[V1Batch, NDArray[np.int64]]:
+        """The batch this episode is stepped in and its row: the native vector
+        environment's (set by it) or this environment's own batch of one."""
+        if self._batch is None:
+            backend = "numba" if numba_available() else "python"
+            self._batch, self._rows = self._BATCH([self], backend), np.zeros(1, dtype=np.int64)
+        return self._batch, self._rows
+
+    def _start(
+        self, true: JugglingState, state: JugglingState, seed: int
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        """The end of a reset (the world, the sensors and the controller reset; ``state``
+        what the controller was shown): the batch's row loaded, the observation and the
+        reset's info."""
+        batch, rows = self._batch_row()
+        i = int(rows[0])
+        self._state = state
+        batch.load(i)
+        self._done = False
+        info = {
+            "phase": self.controller.phase,
+            "time": true.time,
+            "hand": true.hand_pos.copy(),
+            "ball": true.ball_pos.copy(),
+            "seed": seed,
+        }
+        return batch.observation(i), info
+
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if self._done or self._state is None:
+            raise RuntimeError("the episode has ended (or never started); call reset() first")
+        obs, out = self._step_batch(as_action(action, (2,)))
+        term, trunc = bool(out[0, 17] > 0.0), bool(out[0, 18] > 0.0)
+        self._done = term or trunc
+        info = v1_info(out)
+        self._add_info(info, term)
+        return obs, float(out[0, 0]), term, trunc, info
+
+    def _step_batch(
+        self, action: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
+        """One step of the batch with ``action (2,)``: the observation and the row."""
+        batch, rows = self._batch_row()
+        obs, out = batch.step(rows, action[None])
+        return obs[0], out
+
+    def _add_info(self, info: dict[str, Any], terminated: bool) -> None:
+        """A subclass's own entries of a step's ``info`` (none here)."""
+
+    def nominal_episode(self, seed: int) -> dict[str, Any]:
+        """``reset(seed=seed)``, then the zero action until the episode ends (the
+        controller alone; what the benchmarks score).
+
+        Returns ``time (n,)``, ``hand (n, 2)`` and ``phase`` (n labels) at the reset and
+        after every step (the values of the infos ``time``, ``hand`` and ``phase``), and the
+        episode's ``tosses``, ``catches`` and ``dropped`` (it ended by a drop)."""
+        _, info = self.reset(seed=seed)
+        times = [float(info["time"])]
+        hands = [info["hand"].tolist()]
+        phases = [str(info["phase"])]
+        zero = np.zeros(2)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            _, _, terminated, truncated, info = self.step(zero)
+            times.append(info["time"])
+            hands.append(info["hand"].tolist())
+            phases.append(info["phase"])
+        return {
+            "time": np.array(times, dtype=np.float64),
+            "hand": np.array(hands, dtype=np.float64),
+            "phase": phases,
+            "tosses": info["tosses"],
+            "catches": info["catches"],
+            "dropped": terminated,
+        }
+
+    # -- rendering (SideCameraMixin.render) ----------------------------------------------
+    def _sync_scene(self) -> None:
+        self.world.sync()
+
+
+class JugglingV1Env(OneBallEnv):
     r"""Toss and catch one ball with an actuated hand that sees the ball late.
 
     ## Description
@@ -182,11 +326,10 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     * v0: the paper's setting (kinematic hand, exact ball state).
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
     #: Ball measurements in the observation.
     history = HISTORY
+    _OBS_KINDS = (*OBS_HEAD, *("x", "z", "v", "v") * HISTORY)
     _CONTROLLERS = CONTROLLERS
-    _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
 
     def __init__(
         self,
@@ -223,47 +366,11 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.task, self.release_speed_std, math.radians(self.release_angle_std)
         )
         self.sensor = BallSensor(self.delay_steps, self.position_std, self.velocity_std)
-        self.model, self.data = self.world.model, self.world.data
         #: m/s, the hand's speed limit.
         self.hand_speed_limit = HAND_SPEED_LIMIT
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
-        self._time_limit = self.max_catches * V1_CYCLE_TIME * math.sqrt(9.81 / self.gravity)
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
-        low, high = self._bounds()
-        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
-        self._low, self._high = low, high
-        self._renderer: Any = None
-        self._done = True
-        #: the measured state at the reset (the batch's starting point)
-        self._state: JugglingState | None = None
-        #: the batch stepping this episode and its row (:meth:`_batch_row`)
-        self._batch: V1Batch | None = None
-        self._rows = np.zeros(1, dtype=np.int64)
-
-    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-        (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
-        fz = self.task.floor_z
-        low = [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m]
-        high = [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, self._time_limit, self._time_limit]
-        high += [hx + m, hz + m, hx + m, hz + m]
-        low += [hx - m, fz - m, -v, -v] * HISTORY
-        high += [hx + m, hz + m, v, v] * HISTORY
-        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
-
-    @property
-    def dt(self) -> float:
-        """s of simulated time per step (one control period)."""
-        return self.task.dt
+        self._init_spaces(self.max_catches * V1_CYCLE_TIME * math.sqrt(9.81 / self.gravity))
 
     # -- episode ------------------------------------------------------------------------
-    def _batch_row(self) -> tuple[V1Batch, NDArray[np.int64]]:
-        """The batch this episode is stepped in and its row: the native vector
-        environment's (set by it) or this environment's own batch of one."""
-        if self._batch is None:
-            backend = "numba" if numba_available() else "python"
-            self._batch, self._rows = V1Batch([self], backend), np.zeros(1, dtype=np.int64)
-        return self._batch, self._rows
-
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
@@ -278,59 +385,11 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         meas = self.sensor.reset(true.ball_pos, true.ball_vel, np.random.default_rng(sensor_ss))
         state = self._measured(true, meas.position, meas.velocity)
         self.controller.reset(state, np.random.default_rng(controller_ss))
-        self._state = state
-        batch.load(i)
-        self._done = False
-        info = {
-            "phase": self.controller.phase,
-            "time": true.time,
-            "hand": true.hand_pos.copy(),
-            "ball": true.ball_pos.copy(),
-            "seed": base,
-        }
-        return batch.observation(i), info
+        return self._start(true, state, base)
 
     @staticmethod
     def _measured(true: JugglingState, ball_pos: Any, ball_vel: Any) -> JugglingState:
-        return JugglingState(
-            time=true.time,
-            hand_pos=true.hand_pos,
-            hand_vel=true.hand_vel,
-            ball_pos=ball_pos,
-            ball_vel=ball_vel,
-            held=true.held,
-            released=true.released,
-            caught=true.caught,
-            dropped=true.dropped,
-        )
-
-    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        if self._done or self._state is None:
-            raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = as_action(action, (2,))
-        batch, rows = self._batch_row()
-        obs, out = batch.step(rows, a[None])
-        r = out[0].tolist()
-        term, trunc = r[17] > 0.0, r[18] > 0.0
-        self._done = term or trunc
-        info = {
-            "reward_catch": r[1],
-            "reward_drop": r[2],
-            "reward_likeness": r[3],
-            "reward_action": r[4],
-            "likeness": r[5],
-            "caught": r[7] > 0.0,
-            "catches": int(r[8]),
-            "tosses": int(r[9]),
-            "cycles": int(r[9]),
-            "phase": PHASES[int(r[10])],
-            "held": r[11] > 0.0,
-            "time": r[6],
-            "hand": out[0, 13:15].copy(),
-            "ball": out[0, 15:17].copy(),
-            "action_invalid": r[12] > 0.0,
-        }
-        return obs[0], r[0], term, trunc, info
+        return replace(true, ball_pos=ball_pos, ball_vel=ball_vel)
 
     def synced_controller(self) -> JugglerController:
         """:attr:`controller` as of the last step: between its plan's events the batch
@@ -340,34 +399,3 @@ class JugglingV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             batch, rows = self._batch_row()
             batch.sync(int(rows[0]))
         return self.controller
-
-    def nominal_episode(self, seed: int) -> dict[str, Any]:
-        """``reset(seed=seed)``, then the zero action until the episode ends (the
-        controller alone; what the benchmarks score).
-
-        Returns ``time (n,)``, ``hand (n, 2)`` and ``phase`` (n labels) at the reset and
-        after every step (the values of the infos ``time``, ``hand`` and ``phase``), and the
-        episode's ``tosses``, ``catches`` and ``dropped`` (it ended by a drop)."""
-        _, info = self.reset(seed=seed)
-        times = [float(info["time"])]
-        hands = [info["hand"].tolist()]
-        phases = [str(info["phase"])]
-        zero = np.zeros(2)
-        terminated = truncated = False
-        while not (terminated or truncated):
-            _, _, terminated, truncated, info = self.step(zero)
-            times.append(info["time"])
-            hands.append(info["hand"].tolist())
-            phases.append(info["phase"])
-        return {
-            "time": np.array(times, dtype=np.float64),
-            "hand": np.array(hands, dtype=np.float64),
-            "phase": phases,
-            "tosses": info["tosses"],
-            "catches": info["catches"],
-            "dropped": terminated,
-        }
-
-    # -- rendering (SideCameraMixin.render) ----------------------------------------------
-    def _sync_scene(self) -> None:
-        self.world.sync()

@@ -271,11 +271,12 @@ def v1_finish(
         values[i, 0], values[i, 1], values[i, 2] = time, px, pz
         values[i, 3], values[i, 4] = vx, vz
         m_flags[i, 0], m_flags[i, 1], m_flags[i, 2] = held, released, caught
-        for h in range(n_hist - 1, 0, -1):
-            for c in range(4):
-                history[i, h, c] = history[i, h - 1, c]
-        history[i, 0, 0], history[i, 0, 1] = px, pz
-        history[i, 0, 2], history[i, 0, 3] = vx, vz
+        if n_hist > 0:  # Juggling-v2 keeps no measurement history
+            for h in range(n_hist - 1, 0, -1):
+                for c in range(4):
+                    history[i, h, c] = history[i, h - 1, c]
+            history[i, 0, 0], history[i, 0, 1] = px, pz
+            history[i, 0, 2], history[i, 0, 3] = vx, vz
         if caught:
             counts[i, 0] += 1
         if released:

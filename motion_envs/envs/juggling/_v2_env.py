@@ -7,21 +7,16 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import PHASES, JugglingState, JugglingTask
-from motion_envs.envs._common import (
-    SideCameraMixin,
-    check_choice,
-    clipped_pair,
-)
-from motion_envs.envs.juggling._likeness import LikenessQuery
-from motion_envs.envs.juggling._shared import LevelsEnvMixin
-from motion_envs.envs.juggling._v1_env import DEFAULT_V1_REWARD_WEIGHTS, V1_CYCLE_TIME
+from motion_envs.datasets.juggling import JugglingState, JugglingTask
+from motion_envs.envs._common import check_choice
+from motion_envs.envs.juggling._v1_batch import V1Batch
+from motion_envs.envs.juggling._v1_env import OBS_HEAD, V1_CYCLE_TIME, OneBallEnv
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
 from motion_envs.envs.juggling._world_spec import (
     AIR_DENSITY,
@@ -39,18 +34,34 @@ from motion_envs.models.juggling import (
     v1_likeness,
 )
 
-__all__ = ["AIR_DENSITY", "FRAMES", "V2_OBS_DIM", "JugglingV2Env"]
+__all__ = ["AIR_DENSITY", "FRAMES", "V2_OBS_DIM", "JugglingV2Env", "V2Batch", "controller_view"]
 
 #: Received camera frames in the observation (newest first).
 FRAMES = 4
 #: Observation size (see the class docstring).
 V2_OBS_DIM = 16 + 4 * FRAMES
-_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
-_POS_MARGIN = 10.0
-_SPEED_BOUND = 30.0
 
 
-class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
+def controller_view(true: JugglingState) -> JugglingState:
+    """What Juggling-v2's controller is given: the true hand and events; the ball's fields
+    are the hand's (in flight it sees the ball only through its estimator)."""
+    return replace(true, ball_pos=true.hand_pos, ball_vel=true.hand_vel)
+
+
+class V2Batch(V1Batch):
+    """Juggling-v2's batch: Juggling-v1's step (:class:`~motion_envs.envs.juggling._v1_batch.V1Batch`:
+    the command with the residual, the world's period, the release scatter, the likeness,
+    the reward, the episode's end, the observation's first 15 entries) with every command
+    made by the controller in Python (it reads its camera's estimator), shown the hand
+    in the ball's fields."""
+
+    FAST = ()
+
+    def shown(self, i: int) -> JugglingState:
+        return controller_view(super().shown(i))
+
+
+class JugglingV2Env(OneBallEnv):
     r"""Toss and catch one ball seen through a camera with a hidden human delay, in air.
 
     ## Description
@@ -184,8 +195,12 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     * v0: the paper's setting (kinematic hand, exact ball state).
     """
 
-    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 200}  # noqa: RUF012
-    _DEFAULT_WEIGHTS = DEFAULT_V1_REWARD_WEIGHTS
+    _OBS_KINDS = (*OBS_HEAD, "t", *("x", "z", "t", "1") * FRAMES)
+    _BATCH = V2Batch
+    #: Juggling-v1's ball sensor, which this world does not have (its camera runs in
+    #: Python, beside the batch): no delay, no noise, no measurement in the batch's
+    #: observation; the batch's measured ball is never shown to the controller.
+    delay_steps, position_std, velocity_std, history = 0, 0.0, 0.0, 0
     controller: V2Controller
 
     def __init__(
@@ -224,7 +239,6 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.controller_name, juggler, self.gravity, lv.mean_delay + offset
         )
         self.likeness = v1_likeness(self.gravity, "train")
-        self._likeness = LikenessQuery(self.likeness)
         spec = WorldSpec.of(
             self.task,
             capture_speed=lv.capture_speed,
@@ -243,18 +257,12 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             lv.occlusion_radius,
             lv.position_std,
         )
-        self.model, self.data = self.world.model, self.world.data
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
-        self._time_limit = self.max_catches * V1_CYCLE_TIME
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
-        low, high = self._bounds()
-        self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
-        self._low, self._high = low, high
-        self._renderer: Any = None
-        self._done = True
-        self._state: JugglingState | None = None
+        self._init_spaces(self.max_catches * V1_CYCLE_TIME)
         self._frames: deque[CameraFrame] = deque(maxlen=FRAMES)
-        self._catches = self._tosses = 0
+        #: this step's catch: its task error and meeting speed (None: no catch)
+        self._caught: tuple[NDArray[np.float64], float] | None = None
+        #: the episode's catches' task errors
+        self._task_errors: list[NDArray[np.float64]] = []
         self._release_time = math.nan
         #: the falling ball's closest approach to the hand in this catch phase:
         #: ``(distance, x offset, time - planned catch time, relative speed)``
@@ -262,20 +270,6 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         #: s and 1/m: the episode's true (current) delay and drag (hidden from the policy)
         self.delay = self.drag = math.nan
         self._drift_rngs: tuple[np.random.Generator, np.random.Generator] | None = None
-
-    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-        (hx, hz), m, v = self.home, _POS_MARGIN, _SPEED_BOUND
-        fz, t = self.task.floor_z, self._time_limit
-        low = [hx - m, fz - m, -v, -v, 0, 0, 0, 0, 0, 0, 0, hx - m, fz - m, hx - m, fz - m, 0]
-        high = [hx + m, hz + m, v, v, 1, 1, 1, 1, 1, t, t, hx + m, hz + m, hx + m, hz + m, t]
-        low += [hx - m, fz - m, 0, 0] * FRAMES
-        high += [hx + m, hz + m, t, 1] * FRAMES
-        return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
-
-    @property
-    def dt(self) -> float:
-        """s of simulated time per step (one control period)."""
-        return self.task.dt
 
     # -- episode ------------------------------------------------------------------------
     def reset(
@@ -295,86 +289,39 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.world.set_drag(0, self.drag)
         self.camera.reset(self.delay, camera_rng)
         self.controller.estimator.reset(self.drag, self.delay)
-        state = self._controller_state(true)
+        state = controller_view(true)
         self.controller.reset(state, controller_rng)
-        self._state = state
         self._frames.clear()
-        self._done = False
-        self._catches = self._tosses = 0
         self._release_time = math.nan
         self._closest = None
-        info = {
-            "phase": self.controller.phase,
-            "time": true.time,
-            "hand": true.hand_pos.copy(),
-            "ball": true.ball_pos.copy(),
-            "seed": base,
-        }
-        return self._observation(true), info
+        self._caught = None
+        self._task_errors.clear()
+        obs, info = self._start(true, state, base)
+        self._observe_frames(obs, true.time)
+        return obs, info
 
-    @staticmethod
-    def _controller_state(true: JugglingState) -> JugglingState:
-        """What the controller is given: the true hand and events; the ball's fields
-        are the hand's (in flight it sees the ball only through its estimator)."""
-        return JugglingState(
-            time=true.time,
-            hand_pos=true.hand_pos,
-            hand_vel=true.hand_vel,
-            ball_pos=true.hand_pos,
-            ball_vel=true.hand_vel,
-            held=true.held,
-            released=true.released,
-            caught=true.caught,
-            dropped=true.dropped,
-        )
-
-    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        if self._done or self._state is None:
-            raise RuntimeError("the episode has ended (or never started); call reset() first")
-        ax, az, invalid = clipped_pair(action)
-        true, terminated, truncated, error, speed = self._advance(ax, az)
-        caught = int(true.caught)
-        phase = self.controller.phase
-        like = self._likeness.distance(phase, true.hand_pos, true.hand_vel)
-        reward, terms = self._rewards(caught, true.dropped, like, ax * ax + az * az)
-        info = self._step_info(terms, true, phase, invalid)
-        if caught:
-            info["task_error"] = error
-            info["catch_speed"] = speed
-        elif terminated and self._closest is not None:  # the drop's miss
-            _, offset, timing, rel_speed = self._closest
-            info["miss_error"] = np.array([offset, timing])
-            info["miss_speed"] = rel_speed
-        return self._observation(true), reward, terminated, truncated, info
-
-    def _advance(
-        self, ax: float, az: float
-    ) -> tuple[JugglingState, bool, bool, NDArray[np.float64], float]:
-        """One control period with the residual ``(ax, az)``: the controller's command,
-        the world, the camera and the estimator, the episode's counts and end; returns
-        ``(true state, terminated, truncated, task_error, catch_speed)``."""
-        state = self._state
-        assert state is not None
+    def _step_batch(
+        self, action: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
+        """The batch's step (Juggling-v1's command, period, reward and episode end), then
+        the camera and the estimator, the catch's task error, the closest approach in a
+        catch phase, the drift, the observation's entries from 15 on."""
+        before = self.data.qpos[:4].copy(), self.data.qvel[:4].copy()
+        obs, out = super()._step_batch(action)
+        true = self.world.state
+        assert true is not None
         controller = self.controller
-        target, armed = controller.command(state)
-        if self.residual_phases is not None:  # as Juggling-v1: the phase after the command
-            if not self.residual_acts[PHASES.index(controller.phase)]:
-                ax, az = 0.0, 0.0
         planned = math.nan
-        if controller.phase == "catch":
+        if controller.phase == "catch":  # the phase after the step's command
             episode = controller._episode
             planned = episode.t_start + episode.duration
-        before = self.world.data.qpos[:4].copy(), self.world.data.qvel[:4].copy()
-        s = self.residual_scale
-        true = self.world.advance(float(target[0]) + s * ax, float(target[1]) + s * az, armed)
-        error = np.full(2, np.nan)
-        speed = math.nan
+        self._caught = None
         if true.caught:
-            error, speed = self._task_error(before, true.time - self.task.dt, planned)
-        k = int(self.world.k[0])
+            self._caught = self._task_error(before, true.time - self.task.dt, planned)
+            self._task_errors.append(self._caught[0])
         hand = (float(true.hand_pos[0]), float(true.hand_pos[1]))
         ball = (float(true.ball_pos[0]), float(true.ball_pos[1]))
-        frames = self.camera.record(k, ball, hand, true.held)
+        frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)
         if true.released:
             controller.estimator.released(true.time, *hand)
             self._release_time = true.time
@@ -390,11 +337,18 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._frames.extendleft(frames)
         if true.caught and self.spec_level.drifts:
             self._drift()
-        self._state = self._controller_state(true)
-        self._catches += int(true.caught)
-        self._tosses += int(true.released)
-        terminated, truncated = self._episode_end(true.dropped, true.time)
-        return true, terminated, truncated, error, speed
+        self._observe_frames(obs, true.time)
+        return obs, out
+
+    def _add_info(self, info: dict[str, Any], terminated: bool) -> None:
+        """At a catch its ``task_error`` and ``catch_speed``; at a drop its ``miss_error``
+        and ``miss_speed``."""
+        if self._caught is not None:
+            info["task_error"], info["catch_speed"] = self._caught
+        elif terminated and self._closest is not None:  # the drop's miss
+            _, offset, timing, rel_speed = self._closest
+            info["miss_error"] = np.array([offset, timing])
+            info["miss_speed"] = rel_speed
 
     def _drift(self) -> None:
         """Level ``drift``: at a catch the delay takes its next step and the drag is
@@ -424,54 +378,23 @@ class JugglingV2Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         return np.array([rx + vx * s, t0 + s - planned]), math.hypot(vx, vz)
 
     def nominal_episode(self, seed: int) -> dict[str, Any]:
-        """``reset(seed=seed)``, then the zero action until the episode ends (the
-        controller alone), as Juggling-v1's: ``time``, ``hand``, ``phase`` at the reset
-        and after every step, the episode's ``tosses``, ``catches``, ``dropped``, and
-        the catches' ``task_errors (n, 2)``."""
-        _, info = self.reset(seed=seed)
-        times = [float(info["time"])]
-        hands = [info["hand"].tolist()]
-        phases = [str(info["phase"])]
-        errors = []
-        terminated = truncated = False
-        while not (terminated or truncated):
-            true, terminated, truncated, error, _ = self._advance(0.0, 0.0)
-            times.append(true.time)
-            hands.append(true.hand_pos.tolist())
-            phases.append(self.controller.phase)
-            if true.caught:
-                errors.append(error)
-        return {
-            "time": np.array(times, dtype=np.float64),
-            "hand": np.array(hands, dtype=np.float64),
-            "phase": phases,
-            "tosses": self._tosses,
-            "catches": self._catches,
-            "dropped": terminated,
-            "task_errors": np.array(errors, dtype=np.float64).reshape(-1, 2),
-        }
+        """Juggling-v1's (:meth:`OneBallEnv.nominal_episode`) and the catches'
+        ``task_errors (n, 2)``."""
+        episode = super().nominal_episode(seed)
+        episode["task_errors"] = np.array(self._task_errors, dtype=np.float64).reshape(-1, 2)
+        return episode
 
-    def _observation(self, true: JugglingState) -> NDArray[np.float32]:
-        c = self.controller
-        row = true.hand_pos.tolist()
-        row += true.hand_vel.tolist()
-        row.append(float(true.held))
-        row += _ONE_HOT[c.phase]
-        row += (c.phase_time, c.duration)
-        row += c.nominal_next().tolist()
-        row += c.plan_end.tolist()
-        since = true.time - self._release_time
-        row.append(0.0 if math.isnan(since) else since)
+    def _observe_frames(self, obs: NDArray[np.float32], time: float) -> None:
+        """Entries 15.. of the observation ``obs`` (the batch wrote Juggling-v1's first
+        15, the same entries): the time since the release and the received frames."""
+        since = time - self._release_time
+        row = [0.0 if math.isnan(since) else since]
         for i in range(FRAMES):
             if i < len(self._frames):
                 f = self._frames[i]
-                row += (f.x, f.z, true.time - f.arrival, 1.0)
+                row += (f.x, f.z, time - f.arrival, 1.0)
             else:
                 row += (float(self.home[0]), float(self.home[1]), 0.0, 0.0)
-        obs = np.array(row, dtype=np.float32)
-        np.minimum(obs, self._high, out=obs)
-        return np.maximum(obs, self._low, out=obs)
-
-    # -- rendering (SideCameraMixin.render) ----------------------------------------------
-    def _sync_scene(self) -> None:
-        self.world.sync()
+        tail = np.array(row, dtype=np.float32)
+        np.minimum(tail, self._high[15:], out=tail)
+        obs[15:] = np.maximum(tail, self._low[15:], out=tail)
