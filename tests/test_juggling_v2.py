@@ -242,6 +242,43 @@ def test_env_is_deterministic_and_zero_action_is_the_juggler() -> None:
     assert (rows[0][2], rows[0][3]) == (played["catches"], played["tosses"])
 
 
+def test_step_is_juggling_v1s_batch_bit_identical_compiled_and_python() -> None:
+    """Juggling-v2 steps Juggling-v1's batch of one (``V2Batch``): its compiled kernels and
+    the plain-Python path give the same episode bit for bit (residual actions, catches,
+    the drift's changes, a NaN action), and the reward is Juggling-v1's formula."""
+    pytest.importorskip("numba")
+    from motion_envs.envs.juggling._v2_env import V2Batch
+
+    runs = []
+    for backend in ("numba", "python"):
+        env = JugglingV2Env(level="drift", controller="juggler_oracle", max_catches=3)
+        env._batch = V2Batch([env], backend)
+        rng = np.random.default_rng(0)
+        obs, _ = env.reset(seed=2)  # two catches, then a drop
+        trace, values, done = [obs], [], False
+        while not done:
+            action = rng.uniform(-0.2, 0.2, 2)
+            if len(values) == 50:
+                action[1] = np.nan
+            obs, reward, term, trunc, info = env.step(action)
+            a = np.nan_to_num(np.clip(action, -1, 1))
+            w = env.reward_weights
+            formula = (
+                w["catch"] * info["caught"]
+                - w["drop"] * term
+                - w["likeness"] * info["likeness"]
+                - w["action"] * float(a @ a)
+            )
+            assert reward == pytest.approx(formula, abs=1e-12)
+            trace.append(obs)
+            values.append((reward, info["likeness"], info["time"], env.delay, env.drag))
+            done = term or trunc
+        runs.append((np.stack(trace), np.array(values), info["catches"]))
+    assert runs[0][2] == 2 and term
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    np.testing.assert_array_equal(runs[0][1], runs[1][1])
+
+
 def test_delay_and_drag_are_drawn_per_episode_in_the_level_range() -> None:
     env = JugglingV2Env(level="medium")
     delays, drags = [], []

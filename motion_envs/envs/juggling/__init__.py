@@ -3,16 +3,17 @@
 The public names of small private modules: ``_env`` (:class:`JugglingEnv`, the registered
 entry point ``motion_envs.envs.juggling:JugglingEnv``, the paper's kinematic setting) and
 ``_scene`` (:class:`JugglingScene`, compiled from ``juggling.xml`` beside them). The one
-world of actuated hands and balls that Juggling-v1 and Cascade-v0 share: ``_world``
+world of actuated hands and balls that Juggling-v1 and Cascade-v0 share: ``_world_spec``
 (:class:`WorldSpec`, what a world is: hands, balls, the task's constants, the hands' and
-the catch's limits; :func:`world_mjcf`, its MJCF; :class:`HandsWorld`, the world on
-MuJoCo) and ``_period`` (the one control period: servo, physics, grasp rule, release,
-plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
+the catch's limits), ``_world_mjcf`` (:func:`world_mjcf`, its MJCF), ``_world``
+(:class:`HandsWorld`, the world on MuJoCo) and ``_period`` (the one control period: servo,
+physics, grasp rule, release, plain Python and compiled by numba in ``_compiled``); ``_v1_scene``
 (:class:`JugglingV1World`, one hand and one ball) and ``_cascade_scene``
 (:class:`CascadeWorld`, two hands and a pattern's balls) are its batches of one with their
-task's state types; ``_v1_env`` (:class:`JugglingV1Env`), ``_v2_env``
-(:class:`JugglingV2Env`: a hidden delay, a position-only camera, air drag, the capture at
-impact), ``_cascade_env``
+task's state types; ``_v1_env`` (:class:`JugglingV1Env`, and ``OneBallEnv``, what it
+shares with Juggling-v2), ``_v2_env`` (:class:`JugglingV2Env`: a hidden delay, a
+position-only camera, air drag, the capture at impact; stepped by Juggling-v1's batch of
+one, ``V2Batch``), ``_cascade_env``
 (:class:`CascadeEnv`) and ``_cascade_v1_env`` (:class:`CascadeV1Env`: Cascade-v0's
 patterns at Juggling-v2's human levels) the environments; ``_batch`` (the worlds' state
 as one batch) and

@@ -4,7 +4,9 @@ between events, its sensor, reward, observation and episode end.
 :class:`V1Batch` steps the episodes of ``parts`` (Juggling-v1 single environments: each
 its world, controller, sensor and generators) together: the single environment is the
 batch of one (its rows are its world's own arrays), the native vector environment
-(:class:`~motion_envs.envs.juggling.JugglingV1VectorEnv`) the batch of ``N``. A step:
+(:class:`~motion_envs.envs.juggling.JugglingV1VectorEnv`) the batch of ``N``; Juggling-v2's
+single environment is a batch of one too (``V2Batch``: no ball sensor, every command by
+its controller in Python, its camera and the rest of its observation beside). A step:
 
 * the command (:func:`~motion_envs.envs.juggling._v1_step.v1_command`): between the
   plan's events (a release, a catch, a reached end point, decided as the controller

@@ -92,6 +92,12 @@ class JugglingV2Env(OneBallEnv):
     the episode's true delay and drag, not the frames' jitter: an UPPER REFERENCE, not a
     competitor).
 
+    A step is Juggling-v1's, in its batch of one (``V2Batch``, a
+    :class:`~motion_envs.envs.juggling._v1_batch.V1Batch`: the command with the
+    residual, the world's period, the release scatter, the human-likeness, the reward,
+    the episode's end, observation entries 0-14), the controller given the hand in the
+    ball's fields; the camera, the estimator and entries 15-31 are this environment's.
+
     Levels (the delay and the drag are drawn uniformly per episode):
 
     | level    | delay (ms) | jitter (ms) | frame drops | noise (mm) | drag `k` (1/m) | release speed / angle std | `capture_speed` (m/s) |
