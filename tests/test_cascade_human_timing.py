@@ -1,0 +1,299 @@
+"""The pattern timing measurer (motion_envs.datasets.juggling.timing): a synthetic
+three-ball cascade whose timing is worked by hand, the simulated jugglers' own timing
+recovered from their trajectories (checked against the world's events), and bad
+recordings refused in one line naming the file."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motion_envs.datasets.juggling.timing import (
+    PatternTrajectories,
+    TimingOptions,
+    detect_throws,
+    measure_timing,
+    read_pattern_markers,
+)
+from tests.test_mocap import write_c3d, write_tsv
+
+ROOT = Path(__file__).resolve().parents[1]
+G = 9.81
+
+# The hand-worked oracle: a three-ball cascade at beat b = 0.25 s and dwell ratio 0.7.
+# D = 0.7 * 2 * 0.25 = 0.35 s, F = 3 b - D = 0.40 s, V = 2 b - D = 0.15 s; 4 throws per
+# second, 2 per hand; the apex above the release g F^2 / 8 = 9.81 * 0.16 / 8 = 0.1962 m;
+# each hand's x from its release point (own 0.1 m) to its catch point (own 0.3 m): a span
+# of 0.2 m; release and catch points 0.1 m and 0.3 m from the midline.
+BEAT, RATIO = 0.25, 0.7
+DWELL, FLIGHT, VACANT = 0.35, 0.40, 0.15
+APEX = 0.1962
+
+
+def cascade(
+    beat: float = BEAT,
+    dwell: float = DWELL,
+    rate: float = 200.0,
+    seconds: float = 8.0,
+    offset: tuple[float, float] = (0.0, 0.0),
+    noise: float = 0.0,
+    seed: int = 0,
+) -> PatternTrajectories:
+    """The synthetic three-ball cascade: beat k at ``k beat``, thrown by hand ``k % 2``
+    (0 right at x > 0), ball ``k % 3``, from the thrower's release point (own x 0.1, z 1)
+    to the other hand's catch point (own x 0.3, z 1) in ``3 beat - dwell``; in hand the
+    ball follows its hand's carry (a half-cosine in x, dipping 0.1 m), an empty hand its
+    vacant path (dipping 0.05 m). The hand markers sit at the ball's centre minus
+    ``offset``; Gaussian ``noise`` (m) on every marker."""
+    flight, vacant = 3 * beat - dwell, 2 * beat - dwell
+    t = np.arange(0.0, seconds, 1.0 / rate)
+    sign = np.array([1.0, -1.0])
+
+    def carry(h: int, s: np.ndarray) -> np.ndarray:
+        x = 0.3 - 0.2 * (1 - np.cos(np.pi * s / dwell)) / 2
+        return np.stack([sign[h] * x, 1.0 - 0.1 * np.sin(np.pi * s / dwell)], axis=-1)
+
+    def empty(h: int, s: np.ndarray) -> np.ndarray:
+        x = 0.1 + 0.2 * (1 - np.cos(np.pi * s / vacant)) / 2
+        return np.stack([sign[h] * x, 1.0 - 0.05 * np.sin(np.pi * s / vacant)], axis=-1)
+
+    point = np.empty((t.size, 2, 2))  # where each hand holds a ball
+    for h in range(2):
+        s = np.mod(t - h * beat, 2 * beat)  # since the hand's last release
+        point[:, h] = np.where((s < vacant)[:, None], empty(h, s), carry(h, s - vacant))
+    balls = np.empty((t.size, 3, 2))
+    for j in range(3):
+        k = np.floor((t / beat - j) / 3) * 3 + j  # the ball's last throw's beat
+        tau = t - k * beat
+        thrower = (k % 2).astype(int)
+        sg = sign[thrower]
+        vx = (-0.3 * sg - 0.1 * sg) / flight
+        fly = np.stack([0.1 * sg + vx * tau, 1.0 + G * flight / 2 * tau - G / 2 * tau**2], -1)
+        held = point[np.arange(t.size), 1 - thrower]
+        balls[:, j] = np.where((tau < flight)[:, None], fly, held)
+    hands = point - np.asarray(offset)
+    rng = np.random.default_rng(seed)
+    hands = hands + rng.normal(0.0, noise, hands.shape)
+    balls = balls + rng.normal(0.0, noise, balls.shape)
+    return PatternTrajectories(t=t, hands=hands, balls=balls, source="synthetic cascade")
+
+
+def check_oracle(timing, tol_t: float) -> None:
+    assert timing.beat == pytest.approx(BEAT, rel=2e-3)
+    assert timing.throws_per_second == pytest.approx(1 / BEAT, rel=0.01)
+    # per hand: the tempo times the hand's share of the counted throws (+-1 of ~30)
+    assert timing.throws_per_second_per_hand == pytest.approx((2.0, 2.0), rel=0.05)
+    assert timing.dwell == pytest.approx(DWELL, abs=tol_t)
+    assert timing.dwell_ratio == pytest.approx(RATIO, abs=2 * tol_t / (2 * BEAT))
+    assert set(timing.count_by_value) == {3}
+    assert timing.flight_by_value[3] == pytest.approx(FLIGHT, abs=tol_t)
+    assert timing.height_by_value[3] == pytest.approx(APEX, abs=0.01)
+    assert timing.hand_span == pytest.approx((0.2, 0.2), abs=0.01)
+    assert timing.release_offset == pytest.approx(0.1, abs=0.01)
+    assert timing.catch_offset == pytest.approx(0.3, abs=0.01)
+
+
+def test_synthetic_cascade_every_event_at_its_time():
+    """Every release on its beat, every catch a flight later, the thrower and catcher
+    the hands of the cascade, the ball's value 3; at 200 Hz within one frame."""
+    traj = cascade()
+    flights = detect_throws(traj, TimingOptions(contact_radius=0.02))
+    assert len(flights) >= 25
+    for f in flights:
+        k = round(f.release / BEAT)
+        assert f.release == pytest.approx(k * BEAT, abs=0.0051)
+        assert f.catch == pytest.approx(k * BEAT + FLIGHT, abs=0.0051)
+        assert (f.thrower, f.catcher, f.ball) == (k % 2, 1 - k % 2, k % 3)
+    timing = measure_timing(traj, TimingOptions(contact_radius=0.02))
+    check_oracle(timing, 0.006)
+    assert set(timing.holds) == {0}
+
+
+@pytest.mark.parametrize(
+    ("rate", "offset", "noise", "radius", "tol"),
+    [
+        (240.0, (0.0, 0.04), 0.0, 0.08, 0.006),  # a marker 4 cm under the ball's centre
+        (200.0, (0.02, 0.03), 0.001, 0.08, 0.012),  # and 1 mm of marker noise
+        (120.0, (0.0, 0.0), 0.0005, 0.05, 0.012),  # a slower camera
+    ],
+)
+def test_synthetic_cascade_with_offsets_noise_and_rates(rate, offset, noise, radius, tol):
+    traj = cascade(beat=BEAT, rate=rate, offset=offset, noise=noise)
+    check_oracle(measure_timing(traj, TimingOptions(contact_radius=radius)), tol)
+
+
+def test_other_tempo_and_dwell_and_missing_frames():
+    """Another beat and dwell ratio (b = 0.3 s, r = 0.6: D = 0.36 s, F = 0.54 s), with
+    frames missing: a whole flight of one ball, then a hand for 20 ms."""
+    traj = cascade(beat=0.3, dwell=0.36)
+    balls, hands = traj.balls.copy(), traj.hands.copy()
+    balls[400:420, 1] = np.nan
+    hands[700:704, 0] = np.nan
+    traj = PatternTrajectories(traj.t, hands, balls, "gappy")
+    timing = measure_timing(traj, TimingOptions(contact_radius=0.02))
+    assert timing.beat == pytest.approx(0.3, rel=2e-3)
+    assert timing.dwell_ratio == pytest.approx(0.6, abs=0.02)
+    assert timing.flight_by_value[3] == pytest.approx(0.54, abs=0.006)
+    assert timing.height_by_value[3] == pytest.approx(G * 0.54**2 / 8, abs=0.01)
+
+
+def test_a_carried_ball_is_no_flight():
+    """The ball carried 10 cm from a hand marker (beyond contact_radius) is not ballistic:
+    no flight is found where the ball only follows the hand."""
+    t = np.arange(0.0, 2.0, 0.005)
+    hand = np.stack([0.2 * np.sin(2 * np.pi * t), 1.0 + 0.1 * np.cos(2 * np.pi * t)], -1)
+    hands = np.stack([hand, hand * (-1.0, 1.0)], axis=1)
+    balls = (hand + np.array([0.0, 0.1]))[:, None, :]
+    traj = PatternTrajectories(t, hands, balls, "carried")
+    assert detect_throws(traj, TimingOptions(contact_radius=0.05)) == []
+    with pytest.raises(ValueError, match="carried: 0 throws detected"):
+        measure_timing(traj)
+
+
+@pytest.fixture(scope="module")
+def experiment():
+    path = ROOT / "experiments" / "cascade_human_timing.py"
+    spec = importlib.util.spec_from_file_location("cascade_human_timing", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["cascade_human_timing"] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def world_beat(events) -> float:
+    """s: the mean gap between consecutive releases of the world (after 1 s), over the
+    gaps shorter than 1.5 times the shortest quarter's (a held 2 leaves a double gap)."""
+    rel = np.sort([e[0] for e in events if e[2] == "release" and e[0] >= 1.0])
+    gaps = np.diff(rel)
+    return float(gaps[gaps < 1.5 * np.percentile(gaps, 25)].mean())
+
+
+def world_dwell(events, beat: float) -> float:
+    """The median time from a catch to the same ball's next release, less the whole hand
+    periods it was held over (the world's own events)."""
+    out = []
+    for when, ball, kind in events:
+        if kind != "catch" or when < 1.0:
+            continue
+        nxt = [e[0] for e in events if e[1] == ball and e[2] == "release" and e[0] > when]
+        if nxt:
+            d = nxt[0] - when
+            out.append(d - 2 * beat * math.floor(d / (2 * beat)))
+    return float(np.median(out))
+
+
+@pytest.mark.parametrize(("pattern", "ratio_tol"), [("3-human", 0.03), ("5", 0.1), ("423", 0.2)])
+def test_simulated_juggler_recovered(experiment, pattern, ratio_tol):
+    """From the SIMULATED positions alone: every release and catch within one 5 ms period
+    of the world's, the beat within 0.5 % of the world's releases' (and 2 % of the
+    juggler's nominal beat: the fitted juggler plays ~1.5 % faster than its own), the
+    dwell within 10 ms of the world's events' and the dwell ratio near the juggler's
+    planned one (its catches fall late of the plan: the five-ball juggler's by 10-30 ms,
+    423's 3s far later); the throws per second 1 / b but for the held beats (423: 2/3)."""
+    traj, nominal, events = experiment.simulate(pattern, 2026, "easy", 30)
+    assert traj.simulated and "SIMULATED" in traj.source
+    timing = measure_timing(traj, TimingOptions(contact_radius=0.02, skip_start=1.0))
+    assert experiment.event_error(timing, events) <= 0.0051
+    assert timing.beat == pytest.approx(world_beat(events), rel=0.005)
+    assert timing.beat == pytest.approx(nominal["beat"], rel=0.02)
+    assert timing.dwell == pytest.approx(world_dwell(events, timing.beat), abs=0.01)
+    assert timing.dwell_ratio == pytest.approx(nominal["dwell_ratio"], abs=ratio_tol)
+    share = 2 / 3 if pattern == "423" else 1.0
+    assert timing.throws_per_second == pytest.approx(share / timing.beat, rel=0.03)
+    expected = {"3-human": {3}, "5": {5}, "423": {3, 4}}[pattern]
+    main = {v for v, n in timing.count_by_value.items() if n >= 0.2 * len(timing.flights)}
+    assert main == expected
+
+
+def test_recording_round_trip_tsv_and_c3d(tmp_path):
+    """The synthetic cascade written as a Qualisys TSV (mm, Z up) and as a C3D (mm, Y up,
+    the left hand missing in two gaps) is read back and measured as the oracle says."""
+    traj = cascade(rate=120.0, seconds=10.0)
+    n = traj.t.size
+    names = ["RH", "LH", "B1", "B2", "B3"]
+    xz = np.concatenate([traj.hands, traj.balls], axis=1)
+    pts = np.zeros((n, 5, 3))
+    pts[:, :, 0], pts[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
+    pts[:, :, 1] = 0.4  # the pattern's plane 0.4 m in front
+    write_tsv(tmp_path / "c.tsv", pts * 1000.0, names, rate=120.0)
+    read = read_pattern_markers(tmp_path / "c.tsv", ["RH", "LH"], ["B1", "B2", "B3"])
+    assert not read.simulated
+    check_oracle(measure_timing(read, TimingOptions(contact_radius=0.05)), 0.012)
+    write_c3d(tmp_path / "c.c3d", pts, names)
+    read = read_pattern_markers(tmp_path / "c.c3d", ["RH", "LH"], ["B1", "B2", "B3"], up="y")
+    assert np.isnan(read.hands[300:303, 1]).all()
+    check_oracle(measure_timing(read, TimingOptions(contact_radius=0.05)), 0.012)
+
+
+def test_recording_csv(tmp_path):
+    traj = cascade(rate=200.0)
+    cols = {"t": traj.t}
+    for i, m in enumerate(["R", "L"]):
+        cols[f"{m}_x"], cols[f"{m}_z"] = traj.hands[:, i, 0], traj.hands[:, i, 1]
+    for i in range(3):
+        cols[f"b{i}_x"], cols[f"b{i}_z"] = traj.balls[:, i, 0], traj.balls[:, i, 1]
+    import pandas as pd
+
+    frame = pd.DataFrame(cols)
+    frame.loc[50:52, "b1_x"] = np.nan  # empty cells: missing samples
+    frame.to_csv(tmp_path / "c.csv", index=False)
+    read = read_pattern_markers(tmp_path / "c.csv", ["R", "L"], ["b0", "b1", "b2"])
+    assert np.isnan(read.balls[50:53, 1, 0]).all()
+    check_oracle(measure_timing(read, TimingOptions(contact_radius=0.02)), 0.006)
+
+
+def bad(tmp_path: Path, name: str, text: str) -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_bad_recordings_one_line_naming_the_file(tmp_path):
+    header = "t,R_x,R_z,L_x,L_z,b_x,b_z\n"
+    rows = "".join(f"{i / 100},0,1,0,1,0,1\n" for i in range(20))
+    cases = [
+        (bad(tmp_path, "cols.csv", "t,R_x,R_z\n0,0,1\n"), "missing column"),
+        (bad(tmp_path, "cell.csv", header + rows + "0.2,0,1,0,1,x,1\n"), "line(s) 22"),
+        (bad(tmp_path, "back.csv", header + rows + "0.1,0,1,0,1,0,1\n"), "not strictly"),
+        (bad(tmp_path, "short.csv", header + "0,0,1,0,1,0,1\n"), "at least 10"),
+        (bad(tmp_path, "x.txt", "hello"), "unknown motion capture format"),
+        (bad(tmp_path, "empty.csv", ""), "empty"),
+    ]
+    for path, what in cases:
+        with pytest.raises(ValueError) as err:
+            read_pattern_markers(path, ["R", "L"], ["b"])
+        message = str(err.value)
+        assert str(path) in message and what in message and "\n" not in message, message
+    with pytest.raises(FileNotFoundError, match=r"nope\.csv"):
+        read_pattern_markers(tmp_path / "nope.csv", ["R", "L"], ["b"])
+    ok = bad(tmp_path, "ok.csv", header + rows)
+    with pytest.raises(ValueError, match="two hand markers"):
+        read_pattern_markers(ok, ["R"], ["b"])
+    with pytest.raises(ValueError, match="named twice"):
+        read_pattern_markers(ok, ["R", "L"], ["R"])
+    with pytest.raises(ValueError, match="unit applies to C3D"):
+        read_pattern_markers(ok, ["R", "L"], ["b"], unit="mm")
+    gone = bad(tmp_path, "gone.csv", header + rows.replace(",0,1\n", ",,\n"))
+    with pytest.raises(ValueError, match="marker 'b' has no sample"):
+        read_pattern_markers(gone, ["R", "L"], ["b"])
+    slow = bad(tmp_path, "slow.csv", header + "".join(f"{i / 10},0,1,0,1,0,1\n" for i in range(20)))
+    with pytest.raises(ValueError, match="10 Hz; measuring a timing needs at least 50 Hz"):
+        read_pattern_markers(slow, ["R", "L"], ["b"])
+    with pytest.raises(ValueError, match=r"TimingOptions\.contact_radius"):
+        TimingOptions(contact_radius=-1.0)
+
+
+def test_experiment_cli_errors(experiment, tmp_path, capsys):
+    with pytest.raises(SystemExit) as ex:
+        experiment.main(["--recording", str(tmp_path / "x.csv")])
+    assert ex.value.code == 2
+    with pytest.raises(SystemExit) as ex:
+        experiment.main(["--recording", str(tmp_path / "no.csv"), "--hands", "R,L", "--balls", "b"])
+    assert ex.value.code == 2
+    assert "no.csv does not exist" in capsys.readouterr().err
