@@ -8,7 +8,7 @@ human values; and the same measurement on a human recording.
 ``--level`` (default ``easy``: 5 % release-speed and 4 deg release-angle scatter) with
 at most ``--max-catches`` catches is played (``CascadeEnv.play``) and the true hand and
 ball positions of every 5 ms period are kept. The timing is then measured from those
-positions alone by :func:`motion_envs.datasets.juggling.timing.measure_timing` (releases
+positions alone by :func:`motion_envs.models.juggling.timing.measure_timing` (releases
 and catches detected from the ball-hand distance and the ballistic fit, throw values
 from the release times; the first ``--skip-start`` s, the start from rest, and in an
 episode ending in a drop the last :data:`DROP_TAIL` s, not counted), and checked against
@@ -22,7 +22,7 @@ published human values (:data:`PUBLISHED`, each with its source and where it was
 
 **A recording** (``--recording FILE --hands R,L --balls B1,B2,B3``): a C3D, Qualisys TSV
 or CSV (``t, <marker>_x, <marker>_z``) read by
-:func:`~motion_envs.datasets.juggling.timing.read_pattern_markers` and measured the same
+:func:`~motion_envs.models.juggling.timing.read_pattern_markers` and measured the same
 way; printed beside the published values. No human juggling recording is on this
 machine: the comparison with recordings is for whoever has one.
 
@@ -44,7 +44,7 @@ from scipy import stats
 
 from motion_envs._io import atomic_write_text
 from motion_envs.datasets.juggling import SIMULATED_LABEL, episode_seeds
-from motion_envs.datasets.juggling.timing import (
+from motion_envs.models.juggling.timing import (
     PatternTiming,
     PatternTrajectories,
     TimingOptions,

@@ -1,4 +1,4 @@
-"""The pattern timing measurer (motion_envs.datasets.juggling.timing): a synthetic
+"""The pattern timing measurer (motion_envs.models.juggling.timing): a synthetic
 three-ball cascade whose timing is worked by hand, the simulated jugglers' own timing
 recovered from their trajectories (checked against the world's events), and bad
 recordings refused in one line naming the file."""
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from motion_envs.datasets.juggling.timing import (
+from motion_envs.models.juggling.timing import (
     PatternTrajectories,
     TimingOptions,
     detect_throws,

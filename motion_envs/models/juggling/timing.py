@@ -7,10 +7,10 @@ vertical plane of the pattern (``x`` lateral, ``z`` up, metres; NaN where a mark
 missing), from a simulation or from a recording (:func:`read_pattern_markers`: a C3D or
 Qualisys TSV file through :func:`motion_envs.datasets.mocap.read_recording`, or a CSV of
 ``t`` and ``<marker>_x, <marker>_z`` columns). Nothing here knows the pattern played:
-every quantity is measured from the positions alone. (The models layer's
-:func:`motion_envs.models.juggling.detect_flights` finds flights from ball markers alone,
-unlabelled fragments included; this module needs labelled balls and both hands, and
-from the hands it gets the thrower, the catcher and each dwell.)
+every quantity is measured from the positions alone.
+(:func:`motion_envs.models.juggling.detect_flights` finds flights from ball markers
+alone, unlabelled fragments included; this module needs labelled balls and both hands,
+and from the hands it gets the thrower, the catcher and each dwell.)
 
 **Flights** (:func:`detect_throws`). For each ball, the frames where it is farther than
 ``contact_radius`` from both hands are runs (the *core* of a flight, at least
