@@ -289,6 +289,27 @@ def test_bad_recordings_one_line_naming_the_file(tmp_path):
         TimingOptions(contact_radius=-1.0)
 
 
+def test_experiment_measures_a_recording(experiment, tmp_path, capsys):
+    """``--recording``: the synthetic cascade as a TSV, measured by the experiment's CLI
+    (the JSON it prints and writes with --out)."""
+    import json
+
+    traj = cascade(rate=200.0)
+    xz = np.concatenate([traj.hands, traj.balls], axis=1)
+    pts = np.zeros((traj.t.size, 5, 3))
+    pts[:, :, 0], pts[:, :, 2] = xz[:, :, 0], xz[:, :, 1]
+    write_tsv(tmp_path / "c.tsv", pts * 1000.0, ["R", "L", "a", "b", "c"], rate=200.0)
+    out = tmp_path / "out.json"
+    argv = ["--recording", str(tmp_path / "c.tsv"), "--hands", "R,L", "--balls", "a,b,c"]
+    experiment.main([*argv, "--contact-radius", "0.02", "--out", str(out)])
+    doc = json.loads(out.read_text())
+    assert doc["recording"]["beat"] == pytest.approx(BEAT, rel=2e-3)
+    assert doc["recording"]["dwell_ratio"] == pytest.approx(RATIO, abs=0.03)
+    assert doc["recording"]["simulated"] is False
+    assert doc["published"][0]["url"].startswith("http")
+    assert '"dwell_ratio"' in capsys.readouterr().out
+
+
 def test_experiment_cli_errors(experiment, tmp_path, capsys):
     with pytest.raises(SystemExit) as ex:
         experiment.main(["--recording", str(tmp_path / "x.csv")])
