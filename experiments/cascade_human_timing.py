@@ -26,7 +26,8 @@ or CSV (``t, <marker>_x, <marker>_z``) read by
 way; printed beside the published values. No human juggling recording is on this
 machine: the comparison with recordings is for whoever has one.
 
-Prints a table and one JSON object; ``--out`` writes it (atomically). ``python
+Prints a table and one JSON object; ``--out`` writes it (atomically), ``--plot`` a
+figure (``--from-json`` re-reads a written JSON instead of running). ``python
 experiments/cascade_human_timing.py --episodes 8``: about 1.5 min CPU.
 """
 
@@ -159,15 +160,16 @@ def event_error(timing: PatternTiming, events: list[tuple[float, int, str]]) -> 
 
 
 def _interval(x: list[float]) -> dict[str, float]:
-    """Mean, sd, 95 % t-interval of the mean, min and max of the finite ``x``."""
+    """Mean, sd, 95 % t-interval of the mean, min and max of the finite ``x`` (the mean
+    alone, and no interval, for one value)."""
     a = np.array([v for v in x if math.isfinite(v)])
     if a.size == 0:
         return {"n": 0}
     mean = float(a.mean())
-    sd = float(a.std(ddof=1)) if a.size > 1 else 0.0
-    half = (
-        float(stats.t.ppf(0.975, a.size - 1) * sd / math.sqrt(a.size)) if a.size > 1 else math.nan
-    )
+    if a.size == 1:
+        return {"n": 1, "mean": mean, "min": mean, "max": mean}
+    sd = float(a.std(ddof=1))
+    half = float(stats.t.ppf(0.975, a.size - 1) * sd / math.sqrt(a.size))
     return {
         "n": int(a.size),
         "mean": mean,
@@ -244,9 +246,22 @@ def run(config: TimingConfig) -> dict[str, Any]:
     }
 
 
+def _finite(x: Any) -> Any:
+    """``x`` with every non-finite float as None (strict JSON)."""
+    if isinstance(x, dict):
+        return {k: _finite(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
+
+
 def _fmt(d: dict[str, Any], scale: float = 1.0, digits: int = 3) -> str:
     if not d.get("n"):
         return "-"
+    if d["n"] == 1:
+        return f"{scale * d['mean']:.{digits}f} (one seed)"
     return (
         f"{scale * d['mean']:.{digits}f} [{scale * d['ci_low']:.{digits}f}, "
         f"{scale * d['ci_high']:.{digits}f}]"
@@ -296,6 +311,51 @@ def measure_recording(args: argparse.Namespace) -> dict[str, Any]:
     return {"recording": measure_timing(traj, opts).summary(), "published": list(PUBLISHED)}
 
 
+def plot(results: dict[str, Any], path: str) -> None:
+    """Two panels: each pattern's measured dwell ratio (mean and 95 % interval over seeds)
+    against its juggler's planned one and the published human value; each throw value's
+    measured flight against the planned ``h b - D_h`` (the siteswap juggler's)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from motion_envs._io import save_figure
+
+    rows = [r for r in results["rows"] if r["measured"]["dwell_ratio"].get("n", 0) >= 2]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for i, r in enumerate(rows):
+        d = r["measured"]["dwell_ratio"]
+        err = [[d["mean"] - d["ci_low"]], [d["ci_high"] - d["mean"]]]
+        first = i == 0
+        ax1.errorbar(i, d["mean"], err, fmt="o", color="C0", capsize=3,
+                     label="measured" if first else None)  # fmt: skip
+        ax1.plot(i, r["nominal"]["dwell_ratio"], "x", color="C1",
+                 label="planned" if first else None)  # fmt: skip
+    human = [p["value"] for p in results["published"] if p["quantity"] == "dwell_ratio"]
+    if human:
+        ax1.axhline(human[0], color="k", lw=0.8, ls="--", label="human, Kalvan: about 2/3")
+    ax1.set_xticks(range(len(rows)), [r["pattern"] for r in rows])
+    ax1.set_ylabel("dwell ratio D / 2b")
+    ax1.set_xlabel("pattern")
+    ax1.legend(fontsize=8)
+    for r in rows:
+        planned = r["nominal"].get("flight_by_value", {})
+        for v, d in r["measured"]["flight_by_value"].items():
+            if v in planned and d.get("n", 0) >= 2:
+                ax2.plot(planned[v], d["mean"], "o")
+                ax2.annotate(f"{r['pattern']}:{v}", (planned[v], d["mean"]), fontsize=7)
+    lim = [0.0, 1.0]
+    ax2.plot(lim, lim, color="k", lw=0.8, ls="--")
+    ax2.set_xlabel("planned flight h b - D_h, s")
+    ax2.set_ylabel("measured flight, s")
+    fig.suptitle(f"{SIMULATED_LABEL}: Cascade-v0's jugglers, measured from their trajectories",
+                 fontsize=9)  # fmt: skip
+    fig.tight_layout()
+    save_figure(fig, path, dpi=120)
+    plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Parse the arguments, run, print (module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -318,6 +378,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--up", default="z", choices=("z", "y"))
     parser.add_argument("--lateral", default="x", choices=("x", "y"))
     parser.add_argument("--out", default=None, help="write the JSON here")
+    parser.add_argument("--plot", default=None, help="write the figure here (simulated runs)")
+    parser.add_argument(
+        "--from-json", default=None, help="plot and report a JSON written by --out (no run)"
+    )
     args = parser.parse_args(argv)
     try:
         if args.recording is not None:
@@ -338,12 +402,20 @@ def main(argv: list[str] | None = None) -> None:
                 skip_start=args.skip_start,
                 contact_radius=0.02 if args.contact_radius is None else args.contact_radius,
             )
-            results = run(config)
+            if args.from_json:
+                from motion_envs._io import strict_json_loads
+
+                with open(args.from_json, encoding="utf-8") as fh:
+                    results = strict_json_loads(fh.read(), args.from_json)
+            else:
+                results = run(config)
             print(report(results))
+            if args.plot:
+                plot(results, args.plot)
     except (ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         raise SystemExit(2) from None
-    text = json.dumps(results, default=float)
+    text = json.dumps(_finite(results), default=float)
     print(text)
     if args.out:
         atomic_write_text(args.out, text + "\n")
