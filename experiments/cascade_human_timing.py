@@ -77,6 +77,15 @@ PUBLISHED: tuple[dict[str, Any], ...] = (
         "source": "J. Kalvan, quoted on solipsys.co.uk 'Dwell Time'",
         "url": "https://www.solipsys.co.uk/new/DwellTime.html?TheBox",
     },
+    {
+        "quantity": "catches_per_second",
+        "pattern": "speed juggling (a record, not a preferred tempo)",
+        "value": 500.0 / 60.0,
+        "text": "'Speed jugglers can achieve nearly 500 catches in a minute, a rate that "
+        "allows just 120 ms per catch'",
+        "source": "Physics Today, 'Juggling dynamics', DOI 10.1063/PT.3.4417",
+        "url": "https://physicstoday.aip.org/quick-study/juggling-dynamics",
+    },
 )
 
 
