@@ -6,6 +6,7 @@ recordings refused in one line naming the file."""
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import math
 import sys
 from pathlib import Path
@@ -140,6 +141,110 @@ def test_other_tempo_and_dwell_and_missing_frames():
     assert timing.dwell_ratio == pytest.approx(0.6, abs=0.02)
     assert timing.flight_by_value[3] == pytest.approx(0.54, abs=0.006)
     assert timing.height_by_value[3] == pytest.approx(G * 0.54**2 / 8, abs=0.01)
+
+
+def siteswap(
+    throws: tuple[int, ...], beat: float, dwell: float, seconds: float = 9.0, rate: float = 200.0
+) -> PatternTrajectories:
+    """A synthetic vanilla siteswap (values >= 2; a 2 held): beat k at ``k beat`` by hand
+    ``k % 2``; a throw of ``h`` released from the thrower's release point (own x 0.1, z 1)
+    lands in hand ``(k + h) % 2``'s catch point (own x 0.3, z 1) at ``(k + h) beat -
+    dwell`` and is next released on the first beat ``k + h + 2m`` whose value is not 2.
+    Between a catch and its hand's next release the hand carries the ball (half-cosine in
+    x, a 0.1 m dip); between a release and the next catch it moves empty (a 0.05 m dip)."""
+    t = np.arange(0.0, seconds, 1.0 / rate)
+    sign = np.array([1.0, -1.0])
+    p = len(throws)
+
+    def value(k: int) -> int:
+        return throws[k % p]
+
+    def next_release(landing: int) -> int:
+        while value(landing) == 2:
+            landing += 2
+        return landing
+
+    k0, k1 = -24, int(seconds / beat) + 24
+    flights = []  # (ball, release beat, catch time)
+    ball_of: dict[int, int] = {}
+    n_balls = 0
+    for k in range(k0, k1):
+        if value(k) == 2:
+            continue
+        if k not in ball_of:
+            ball_of[k] = n_balls
+            n_balls += 1
+        land = k + value(k)
+        ball_of[next_release(land)] = ball_of[k]
+        flights.append((ball_of[k], k, land * beat - dwell))
+    events = {0: [], 1: []}  # per hand: (time, "catch" | "release")
+    for _, k, tc in flights:
+        events[k % 2].append((k * beat, "release"))
+        events[(k + value(k)) % 2].append((tc, "catch"))
+    hands = np.full((t.size, 2, 2), np.nan)
+    for h in range(2):
+        ev = sorted(events[h])
+        for (ta, kind), (tb, _) in itertools.pairwise(ev):
+            m = (t >= ta) & (t < tb)
+            u = (t[m] - ta) / (tb - ta)
+            ease = (1 - np.cos(np.pi * u)) / 2
+            if kind == "catch":  # carry: catch point -> release point
+                x, dip = 0.3 - 0.2 * ease, 0.1
+            else:
+                x, dip = 0.1 + 0.2 * ease, 0.05
+            hands[m, h, 0] = sign[h] * x
+            hands[m, h, 1] = 1.0 - dip * np.sin(np.pi * u)
+    balls = np.full((t.size, n_balls, 2), np.nan)
+    for j, k, tc in flights:
+        thrower, catcher = k % 2, (k + value(k)) % 2
+        tr = k * beat
+        m = (t >= tr) & (t < tc)
+        tau = t[m] - tr
+        f = tc - tr
+        vx = (0.3 * sign[catcher] - 0.1 * sign[thrower]) / f
+        balls[m, j] = np.stack(
+            [0.1 * sign[thrower] + vx * tau, 1.0 + G * f / 2 * tau - G / 2 * tau**2], -1
+        )
+        nxt = next_release(k + value(k)) * beat
+        m = (t >= tc) & (t < nxt)
+        balls[m, j] = hands[m, catcher]
+    return PatternTrajectories(t, hands, balls, f"synthetic {throws}")
+
+
+@pytest.mark.parametrize(
+    ("throws", "flights", "heights", "tempo", "holds"),
+    [
+        # 423 at b = 0.25 s, D = 0.35 s: F4 = 1.00 - 0.35 = 0.65 s, F3 = 0.75 - 0.35 =
+        # 0.40 s; apex g F^2 / 8 = 0.5181 m and 0.1962 m; two throws in three beats:
+        # 2/3 / 0.25 = 2.667 throws/s; each 4 lands on a 2: held one hand period.
+        ((4, 2, 3), {4: 0.65, 3: 0.40}, {4: 0.5181, 3: 0.1962}, 8 / 3, {4: 1, 3: 0}),
+        # the fountain: F4 = 0.65 s, every beat a throw: 4 throws/s
+        ((4,), {4: 0.65}, {4: 0.5181}, 4.0, {4: 0}),
+        # the five-ball cascade: F5 = 1.25 - 0.35 = 0.90 s, apex 9.81 * 0.81 / 8 = 0.9933 m
+        ((5,), {5: 0.90}, {5: 0.9933}, 4.0, {5: 0}),
+    ],
+)
+def test_synthetic_siteswaps_with_holds(throws, flights, heights, tempo, holds):
+    """Other siteswaps worked by hand at b = 0.25 s and D = 0.35 s (r = 0.7), the 2 of
+    423 held: the values, their flights and heights, the beats held, the tempo."""
+    traj = siteswap(throws, BEAT, DWELL)
+    assert traj.balls.shape[1] == sum(throws) // len(throws)
+    timing = measure_timing(traj, TimingOptions(contact_radius=0.02, skip_start=0.5))
+    assert timing.beat == pytest.approx(BEAT, rel=2e-3)
+    assert set(timing.count_by_value) == set(flights)
+    for v, f in flights.items():
+        assert timing.flight_by_value[v] == pytest.approx(f, abs=0.006)
+        # the apex above the release: a release placed half a frame late lowers it by
+        # v_z * 2.5 ms (1.1 cm for the five-ball cascade's 4.4 m/s)
+        assert timing.height_by_value[v] == pytest.approx(heights[v], abs=0.015)
+        assert timing.dwell_by_value[v] == pytest.approx(DWELL, abs=0.006)
+    for v, n in zip(timing.values, timing.holds, strict=True):
+        if v:
+            assert n == holds[v]
+    assert timing.dwell_ratio == pytest.approx(RATIO, abs=0.02)
+    # each ball's last throw has no value: at the ends a throw or hold of ~40 may be off
+    assert timing.throws_per_second == pytest.approx(tempo, rel=0.03)
+    assert timing.throws_per_second_per_hand == pytest.approx((tempo / 2, tempo / 2), rel=0.06)
 
 
 def test_a_carried_ball_is_no_flight():

@@ -42,11 +42,13 @@ value ``h`` is thrown again on beat ``k + h``). The dwell ``D``: the median of `
 2nb`` (the catch to the beat the ball landed on) after the throws of 3 or more (all
 throws if there are none); the dwell ratio ``r = D / 2b``. Per throw value: the
 flights', dwells' and heights' (apex above the release: ``v_z^2 / 2g`` of the fitted
-parabola) medians. The tempo: per hand, the share of its beats with a throw (its throws
-of known value over those plus the beats it held) per hand period ``2b``; in all, their
-sum. The span: each hand's horizontal range (5th to 95th percentile), and the mean
-distance of the release and catch points from the pattern's midline (the mean of the two
-hands' ``x``).
+parabola) medians. The tempo: the share of beats with a throw (the throws of known value
+over those plus the beats held after them) over ``b``; per hand, its throws of known
+value over those plus the beats it held, over its period ``2b`` (each ball's last throw
+has no value, so at the ends a throw or a hold may be missing from the count: about 1/40
+at 40 throws). The span: each hand's horizontal range (5th to 95th percentile), and the
+mean distance of the release and catch points from the pattern's midline (the mean of
+the two hands' ``x``).
 """
 
 from __future__ import annotations
@@ -416,13 +418,15 @@ def measure_timing(
     high = [d for d, v in zip(plain, values, strict=True) if v >= 3 and math.isfinite(d)]
     pool = high or [d for d in plain if math.isfinite(d)]
     dwell = float(np.median(pool)) if pool else math.nan
-    # the tempo: per hand, its beats with a throw (not a hold) per hand period 2b
+    # the tempo: the beats with a throw (not a hold) per second; per hand, its throws
+    # against the beats it held, per hand period 2b
+    known = sum(v > 0 for v in values)
+    tempo = known / (known + sum(holds)) / beat if known else math.nan
     per_hand = []
     for h in range(HANDS):
         thrown = sum(f.thrower == h and v > 0 for f, v in zip(counted, values, strict=True))
         held = sum(n for f, n in zip(counted, holds, strict=True) if f.catcher == h)
         per_hand.append(thrown / (thrown + held) / (2.0 * beat) if thrown else math.nan)
-    tempo = float(np.nansum(per_hand))
     # the span: the hands' horizontal ranges over the counted time
     keep = (traj.t >= start) & (traj.t <= end)
     x = traj.hands[keep, :, 0]
