@@ -7,7 +7,7 @@ negative of the papers' criterion, ``-median_l max_t e_l(t)``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from motion_envs._typing import FloatArray
 from motion_envs.geometry.resampling import recording_times
 
-__all__ = ["batch_row", "check_order", "negative_criterion", "score_times"]
+__all__ = ["batch_row", "check_order", "criterion_score", "negative_criterion", "score_times"]
 
 
 def _looks_like_movements(X: Any) -> bool:
@@ -80,6 +80,15 @@ def score_times(
 def negative_criterion(max_errors: Sequence[float] | FloatArray) -> float:
     """``-median_l max_t e_l(t)`` from each movement's largest error: greater is better."""
     return -float(np.median(np.asarray(max_errors, dtype=np.float64)))
+
+
+def criterion_score(
+    times: Sequence[FloatArray], errors: Callable[[int, FloatArray], FloatArray]
+) -> float:
+    """``score``'s ``-median_l max_t e_l(t)``: ``errors(l, t)`` are movement ``l``'s errors
+    ``e_l`` at ``t = times[l] - times[l][0]`` (s since its first sample; ``times`` from
+    :func:`score_times`)."""
+    return negative_criterion([float(np.max(errors(i, t - t[0]))) for i, t in enumerate(times)])
 
 
 def batch_row(values: Any, i: int) -> Any:

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from motion_envs._typing import FloatArray
 from motion_envs.geometry.minimum_jerk import minimum_jerk, minimum_jerk_profile
 from motion_envs.geometry.resampling import recording_times
-from motion_envs.models._sklearn import check_order, negative_criterion, score_times
+from motion_envs.models._sklearn import check_order, criterion_score, score_times
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
@@ -158,12 +158,12 @@ class MinimumJerk(SerializableModel):
         check_order(X, y, type(self).__name__, "the starts and ends [s, e] (n, 2D)")
         ys = [np.asarray(v, dtype=np.float64) for v in y]
         starts, ends = self._ends(X, ys[0].shape[-1])
-        errors = []
-        for s, e, t, v in zip(starts, ends, score_times(y, times, rate), ys, strict=True):
-            t0 = t - t[0]
-            fit = self.predict(s, e, t0, duration=float(t0[-1]))
-            errors.append(float(np.max(np.linalg.norm(fit - v, axis=1))))
-        return negative_criterion(errors)
+
+        def errors(i: int, t0: FloatArray) -> FloatArray:
+            fit = self.predict(starts[i], ends[i], t0, duration=float(t0[-1]))
+            return np.linalg.norm(fit - ys[i], axis=1)
+
+        return criterion_score(score_times(y, times, rate), errors)
 
     state_schema = StateSchema(
         params={"duration_model": "str"},

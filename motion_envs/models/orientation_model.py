@@ -45,7 +45,7 @@ from motion_envs.geometry.resampling import recording_times
 from motion_envs.models._sklearn import (
     batch_row,
     check_order,
-    negative_criterion,
+    criterion_score,
     score_times,
 )
 from motion_envs.models.bezier_models import (
@@ -242,14 +242,14 @@ class OrientationModel(SerializableModel):
         """
         check_order(X, y, type(self).__name__, f"what by={self.by!r} predicts from")
         labels = self.labels(X)
-        errors = []
-        for i, t in enumerate(score_times(y, times, rate)):
+
+        def errors(i: int, t0: FloatArray) -> FloatArray:
             q = self._unit(y[i], f"y[{i}]")
-            t0 = t - t[0]
             row = {k: batch_row(v, i) for k, v in labels.items()}
             fit = self.predict(q[0], q[-1], t0, duration=float(t0[-1]), **row)
-            errors.append(float(np.max(quat.angle(fit, q))))
-        return negative_criterion(errors)
+            return quat.angle(fit, q)
+
+        return criterion_score(score_times(y, times, rate), errors)
 
     # -- serialization --------------------------------------------------------------
     state_schema = StateSchema(

@@ -34,7 +34,7 @@ from motion_envs.geometry.resampling import recording_times
 from motion_envs.models._sklearn import (
     batch_row,
     check_order,
-    negative_criterion,
+    criterion_score,
     score_times,
 )
 from motion_envs.models.estimator import check_is_fitted
@@ -230,15 +230,14 @@ class PoseModel(SerializableModel):
         check_is_fitted(self, "orientation_model_")
         ys, quaternions = self.split_poses(y)
         labels = self.orientation_model_.labels(X)
-        errors = []
-        for i, t in enumerate(score_times(ys, times, rate)):
+
+        def errors(i: int, t0: FloatArray) -> FloatArray:
             p, q = ys[i], quaternions[i]
-            t0 = t - t[0]
             row = {k: batch_row(v, i) for k, v in labels.items()}
             p_hat, q_hat = self.predict(p[0], p[-1], q[0], q[-1], t0, duration=float(t0[-1]), **row)
-            e = np.linalg.norm(p_hat - p, axis=1) + lever * quat.angle(q_hat, q)
-            errors.append(float(np.max(e)))
-        return negative_criterion(errors)
+            return np.linalg.norm(p_hat - p, axis=1) + lever * quat.angle(q_hat, q)
+
+        return criterion_score(score_times(ys, times, rate), errors)
 
     # -- serialization: the two parts' states, prefixed ------------------------------
     state_schema = StateSchema(

@@ -66,7 +66,7 @@ from motion_envs._typing import FloatArray
 from motion_envs.datasets.ragged import MIN_SAMPLES
 from motion_envs.geometry import sine_series as ss
 from motion_envs.geometry.resampling import recording_times
-from motion_envs.models._sklearn import check_order, negative_criterion, score_times
+from motion_envs.models._sklearn import check_order, criterion_score, score_times
 from motion_envs.models.estimator import check_is_fitted
 from motion_envs.models.serialization import SerializableModel, State, StateSchema
 
@@ -441,15 +441,15 @@ class SineSeriesRegression(SerializableModel):
         q = _as_conditions(X)
         ts = score_times(y, times, rate)
         self._warn_extrapolation(q)  # one warning for all the movements scored
-        errors = []
+
+        def errors(i: int, t0: FloatArray) -> FloatArray:
+            v = np.asarray(y[i], dtype=np.float64)
+            fit = self.predict(q[i], duration=float(t0[-1]), times=t0, start=v[0], end=v[-1])
+            return np.linalg.norm(fit - v, axis=1)
+
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ExtrapolationWarning)
-            for q_l, t, y_l in zip(q, ts, y, strict=True):
-                v = np.asarray(y_l, dtype=np.float64)
-                t0 = t - t[0]
-                fit = self.predict(q_l, duration=float(t0[-1]), times=t0, start=v[0], end=v[-1])
-                errors.append(float(np.max(np.linalg.norm(fit - v, axis=1))))
-        return negative_criterion(errors)
+            return criterion_score(ts, errors)
 
     def fit_coefficients(
         self, coefficients: ArrayLike, conditions: ArrayLike, durations: ArrayLike | None = None
