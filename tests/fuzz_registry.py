@@ -136,6 +136,19 @@ _JUGGLING_LEVEL = {
     "release_speed_std": "fraction",
     "release_angle_std": "angle",
 }
+#: What every juggling env with a controller and a residual action takes.
+_JUGGLING_RESIDUAL = {
+    "controller": "name",
+    "max_catches": "small_int",
+    "residual_scale": "positive",
+    "residual_phases": "phases",
+    "reward_weights": "weights",
+    "render_mode": "render_mode",
+    "width": "size",
+    "height": "size",
+}
+#: Juggling-v2's arguments (Cascade-v1 takes them and a pattern).
+_JUGGLING_V2 = {"level": "name", "delay_offset": "fraction", **_JUGGLING_RESIDUAL}
 ENVS: dict[str, dict[str, object]] = {
     "MotionEnvs/OrientationReach-v0": {
         "kwargs": {
@@ -180,45 +193,11 @@ ENVS: dict[str, dict[str, object]] = {
         "kwargs": {
             **_JUGGLING_LEVEL,
             "gravity": "gravity",
-            "controller": "name",
-            "max_catches": "small_int",
-            "residual_scale": "positive",
-            "residual_phases": "phases",
-            "reward_weights": "weights",
-            "render_mode": "render_mode",
-            "width": "size",
-            "height": "size",
+            **_JUGGLING_RESIDUAL,
         },
     },
-    "MotionEnvs/Juggling-v2": {
-        "kwargs": {
-            "level": "name",
-            "controller": "name",
-            "delay_offset": "fraction",
-            "max_catches": "small_int",
-            "residual_scale": "positive",
-            "residual_phases": "phases",
-            "reward_weights": "weights",
-            "render_mode": "render_mode",
-            "width": "size",
-            "height": "size",
-        },
-    },
-    "MotionEnvs/Cascade-v1": {
-        "kwargs": {
-            "level": "name",
-            "pattern": "name",
-            "controller": "name",
-            "delay_offset": "fraction",
-            "max_catches": "small_int",
-            "residual_scale": "positive",
-            "residual_phases": "phases",
-            "reward_weights": "weights",
-            "render_mode": "render_mode",
-            "width": "size",
-            "height": "size",
-        },
-    },
+    "MotionEnvs/Juggling-v2": {"kwargs": _JUGGLING_V2},
+    "MotionEnvs/Cascade-v1": {"kwargs": {**_JUGGLING_V2, "pattern": "name"}},
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
             **_JUGGLING_LEVEL,
@@ -226,15 +205,8 @@ ENVS: dict[str, dict[str, object]] = {
             "tunables": "name",
             "dwell_ratio": "fraction",
             "gravity": "gravity",
-            "controller": "name",
-            "max_catches": "small_int",
-            "residual_scale": "positive",
-            "reward_weights": "weights",
             "frame_skip": "small_int",
-            "residual_phases": "phases",
-            "render_mode": "render_mode",
-            "width": "size",
-            "height": "size",
+            **_JUGGLING_RESIDUAL,
         },
     },
     "MotionEnvs/OrientationCoefficients-v0": {

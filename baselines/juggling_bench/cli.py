@@ -6,6 +6,9 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
 
 from baselines import options
 from baselines.agents.checks import run_folder
@@ -42,19 +45,27 @@ from motion_envs.datasets.juggling import (
 from motion_envs.datasets.registry import describe_names
 from motion_envs.models.juggling import LEVELS, PATTERNS, V2_LEVELS
 
+#: A benchmark's run, report and write functions.
+Bench = tuple[Callable[[Any], Any], Callable[[Any], str], Callable[[Any, Path], Any]]
 
-def _cascade_v1(args: argparse.Namespace) -> int:
-    """``--version v2 --pattern P``: Cascade-v1's reference rows."""
-    config = CascadeV1Config(
-        pattern=args.pattern,
-        levels=args.levels or CascadeV1Config.levels,
-        episodes=args.episodes or CascadeV1Config.episodes,
-        max_catches=args.max_catches or CascadeV1Config.max_catches,
+
+def _levels_benchmark(
+    args: argparse.Namespace, config_class: Any, bench: Bench, folder: str, **fields: Any
+) -> int:
+    """A levels benchmark (``--levels``, ``--version v2``, ``--pattern``): its config from
+    ``--levels``, ``--episodes`` and ``--max-catches`` (the config's defaults where not
+    given) and ``fields``; ``bench`` = (run, report, write): run, print, write to
+    ``folder`` (under results/ unless ``--out``)."""
+    run_bench, report_bench, write_bench = bench
+    config = config_class(
+        levels=args.levels or config_class.levels,
+        episodes=args.episodes or config_class.episodes,
+        max_catches=args.max_catches or config_class.max_catches,
+        **fields,
     )
-    doc = run_cascade_v1(config)
-    print(report_cascade_v1(doc))
-    out = options.results_folder(args.out, f"juggling-v2-pattern-{args.pattern}")
-    print(options.wrote(write_cascade_v1(doc, out)))
+    doc = run_bench(config)
+    print(report_bench(doc))
+    print(options.wrote(write_bench(doc, options.results_folder(args.out, folder))))
     return 0
 
 
@@ -75,47 +86,27 @@ def main(args: argparse.Namespace) -> int:
     if args.pattern is not None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: not with --pattern")
-        if args.version == "v2":
-            return _cascade_v1(args)
-        cascade = CascadeConfig(
-            pattern=args.pattern,
-            levels=args.levels or CascadeConfig.levels,
-            episodes=args.episodes or CascadeConfig.episodes,
-            max_catches=args.max_catches or CascadeConfig.max_catches,
-        )
-        doc = run_cascade(cascade)
-        print(report_cascade(doc))
-        out = options.results_folder(args.out, f"juggling-pattern-{args.pattern}")
-        print(options.wrote(write_cascade(doc, out)))
-        return 0
+        if args.version == "v2":  # Cascade-v1's reference rows
+            config_class: Any = CascadeV1Config
+            bench: Bench = (run_cascade_v1, report_cascade_v1, write_cascade_v1)
+            folder = f"juggling-v2-pattern-{args.pattern}"
+        else:
+            config_class, bench = CascadeConfig, (run_cascade, report_cascade, write_cascade)
+            folder = f"juggling-pattern-{args.pattern}"
+        return _levels_benchmark(args, config_class, bench, folder, pattern=args.pattern)
     if args.version == "v2":
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: not with --version v2")
-        v2 = V2Config(
-            levels=args.levels or V2Config.levels,
-            episodes=args.episodes or V2Config.episodes,
-            max_catches=args.max_catches or V2Config.max_catches,
-        )
-        doc = run_v2(v2)
-        print(report_v2(doc))
-        out = options.results_folder(args.out, "juggling-v2")
-        print(options.wrote(write_v2(doc, out)))
-        return 0
+        return _levels_benchmark(args, V2Config, (run_v2, report_v2, write_v2), "juggling-v2")
     if args.levels is None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: needs --levels")
     else:
-        levels = LevelsConfig(
-            levels=args.levels,
-            episodes=args.episodes or LevelsConfig.episodes,
-            max_catches=args.max_catches or LevelsConfig.max_catches,
-            agent=None if args.agent is None else str(args.agent),
-        )
-        doc = run_levels(levels)
-        print(report_levels(doc))
-        out = options.results_folder(args.out, "juggling-levels")
-        print(options.wrote(write_levels(doc, out)))
-        return 0
+        agent = None if args.agent is None else str(args.agent)
+        return _levels_benchmark(
+            args, LevelsConfig, (run_levels, report_levels, write_levels), "juggling-levels",
+            agent=agent,
+        )  # fmt: skip
     out = options.results_folder(args.out, "juggling")
     config = JugglingConfig(
         cycles=args.cycles,

@@ -48,7 +48,6 @@ from motion_envs.envs._common import (
     check_render,
     check_scale,
     check_seed,
-    draw_trajectory,
 )
 from motion_envs.envs._native_vector import SAME_STEP, NativeVectorEnv, StepResult
 from motion_envs.envs._reach import FrameAfterResetMixin, TrajectoryLabelsMixin, reset_labels
@@ -233,8 +232,7 @@ class CoefficientEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        index = draw_trajectory(options, self.task.n_trajectories, self.np_random)
-        self._index = index
+        index = self._draw_episode(options, self.np_random)
         self._done = False
         self._predicted = None
         self._obs = self._observe(index)

@@ -265,12 +265,20 @@ def _finite_clipped(acts: list[float]) -> list[float]:
 
 
 class FrameAfterResetMixin:
-    """``render()`` of a single environment that draws the trajectory of its episode: the
-    frame of :meth:`_render_frame`, None without a render mode, ``RuntimeError`` before
-    the first reset (``_index < 0``)."""
+    """A single environment whose episode is one trajectory of its task: drawn at reset
+    (:meth:`_draw_episode`) and drawn by ``render()`` (the frame of
+    :meth:`_render_frame`, None without a render mode, ``RuntimeError`` before the first
+    reset, ``_index < 0``)."""
 
     render_mode: str | None
+    task: Any
     _index: int
+
+    def _draw_episode(self, options: dict[str, Any] | None, rng: np.random.Generator) -> int:
+        """At ``reset``: the episode's trajectory (:func:`draw_trajectory` over the task's),
+        kept as ``_index``."""
+        self._index = draw_trajectory(options, self.task.n_trajectories, rng)
+        return self._index
 
     def render(self) -> NDArray[np.uint8] | None:
         if not has_render_mode(self.render_mode):
@@ -370,8 +378,7 @@ class ReachEnv(JsonSpecMixin, FrameAfterResetMixin, LazyRendererMixin, gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
-        index = draw_trajectory(options, self.task.n_trajectories, self.np_random)
-        self._index = index
+        index = self._draw_episode(options, self.np_random)
         self._k = 0
         self._steps = self.task.steps[index].tolist()
         self._obs = self.task.obs[index]
