@@ -529,3 +529,23 @@ def test_synced_controller_is_the_stepped_plan():
         if term or trunc:
             break
     assert info["time"] > 1.0  # past the first events
+
+
+def test_observed_plan_is_the_controllers_after_its_grid_widens():
+    """The observation's next target and plan end are the (synced) controller's at every
+    step, also after a plan longer than any before has widened the batch's grid (at the
+    paper's slow gravity the first flights lengthen it): the step reads its plans'
+    arrays after the Python commands that replace them."""
+    env = JugglingV1Env(level="easy", gravity=1.0, max_catches=5)
+    env.reset(seed=0)
+    batch, _ = env._batch_row()
+    widths = {batch._grid.shape[1]}
+    for _ in range(4000):
+        obs, _, term, trunc, _ = env.step(np.zeros(2))
+        c = env.synced_controller()
+        np.testing.assert_array_equal(obs[11:13], c.nominal_next().astype(np.float32))
+        np.testing.assert_array_equal(obs[13:15], c.plan_end.astype(np.float32))
+        widths.add(batch._grid.shape[1])
+        if term or trunc:
+            break
+    assert len(widths) >= 2  # the grid widened during the episode

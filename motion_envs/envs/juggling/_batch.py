@@ -137,25 +137,16 @@ class WorldBatch:
         what each hand caught and released is in ``_caught`` and ``_released``."""
         if target is not None:
             self._target[envs], self._armed[envs] = target, armed
-        self.in_threads(
-            self._periods,
-            envs,
-            self._worlds,
-            self._ball_geoms,
-            self._target,
-            self._armed,
-            self._ref,
-            self._vref,
-            self._z_before,
-            self._holder,
-            self._thrower,
-            self._left,
-            self._dropped,
-            self._k,
-            self._constants,
-            self._caught,
-            self._released,
-        )
+        self.in_threads(self._periods, envs, *self.period_args())
+
+    def period_args(self) -> tuple[Any, ...]:
+        """:func:`~motion_envs.envs.juggling._period.world_periods`' arguments after
+        ``envs``: the worlds' links and the batch's state arrays."""
+        return (
+            self._worlds, self._ball_geoms, self._target, self._armed, self._ref,
+            self._vref, self._z_before, self._holder, self._thrower, self._left,
+            self._dropped, self._k, self._constants, self._caught, self._released,
+        )  # fmt: skip
 
     def qv(self, envs: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The worlds' ``qpos`` and ``qvel`` rows for ``envs``, ``(m, nq)`` each."""
@@ -167,7 +158,7 @@ class WorldBatch:
         worlds' rows), ``envs`` split into contiguous blocks run in up to ``threads``
         threads, the caller's thread among them."""
         periods = self.entry(periods, envs, *args)
-        blocks = min(self.threads, envs.size // MIN_ENVS_PER_THREAD)
+        blocks = self.blocks(envs.size)
         if blocks <= 1:
             periods(envs, *args)
             return
@@ -178,6 +169,11 @@ class WorldBatch:
         periods(first, *args)
         for future in futures:
             future.result()
+
+    def blocks(self, n: int) -> int:
+        """In how many threads' blocks :meth:`in_threads` runs ``n`` worlds (1 or less:
+        in the caller's thread alone)."""
+        return min(self.threads, n // MIN_ENVS_PER_THREAD)
 
     def entry(self, kernel: Any, *args: Any) -> Callable[..., Any]:
         """The compiled ``kernel``'s entry point for ``args`` (numba backend:

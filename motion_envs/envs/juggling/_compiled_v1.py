@@ -15,10 +15,11 @@ import numpy as np
 from numba import njit
 
 from motion_envs.envs.juggling import _v1_step
-from motion_envs.envs.juggling._compiled import bound, py_hypot
+from motion_envs.envs.juggling._compiled import bound, py_hypot, world_periods
 from motion_envs.envs.juggling._compiled_likeness import nearest_in_tree
 
 __all__ = ["hand_likeness", "v1_advance", "v1_aim", "v1_command", "v1_finish", "v1_observe"]
+__all__ += ["v1_rest", "v1_step"]
 
 
 @njit(cache=True)
@@ -48,3 +49,10 @@ v1_observe = njit(cache=True)(bound(_v1_step.v1_observe))
 v1_finish = njit(cache=True)(
     bound(_v1_step.v1_finish, hand_likeness=hand_likeness, v1_observe=v1_observe)
 )
+#: :func:`~motion_envs.envs.juggling._v1_step.v1_rest` compiled (the period and the finish
+#: in one call).
+v1_rest = njit(cache=True)(
+    bound(_v1_step.v1_rest, world_periods=world_periods, v1_finish=v1_finish)
+)
+#: :func:`~motion_envs.envs.juggling._v1_step.v1_step` compiled (a whole step in one call).
+v1_step = njit(cache=True)(bound(_v1_step.v1_step, v1_command=v1_command, v1_rest=v1_rest))

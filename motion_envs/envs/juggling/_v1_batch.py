@@ -23,6 +23,12 @@ its controller in Python, its camera and the rest of its observation beside). A 
   generators: the same sequences), the human-likeness, the reward, the episode's end, the
   observation.
 
+When the worlds' periods run in the caller's thread (always for a single environment),
+the three are one call (:func:`~motion_envs.envs.juggling._v1_step.v1_step`) unless a
+world needs Python (an event or a correction): then the commands are completed in Python
+and the period and the rest are one call (``v1_rest``). With threads the period runs
+between two calls.
+
 ``backend="numba"`` runs the kernels compiled (:mod:`~motion_envs.envs.juggling._compiled_v1`),
 ``"python"`` as plain Python (bit-identical).
 """
@@ -63,7 +69,7 @@ class V1Batch(WorldBatch):
     ``parts``: ``JugglingV1Env`` instances with the same arguments; ``backend``:
     ``"numba"`` or ``"python"``; ``threads``: threads stepping the worlds (numba)."""
 
-    LINKED = (*WorldBatch.LINKED, "_kernels", "_trees")
+    LINKED = (*WorldBatch.LINKED, "_kernels", "_trees", "_scratch")
     #: The controllers whose commands between events are made in the arrays (the others'
     #: every command runs in Python).
     FAST: tuple[str, ...] = _FAST_CONTROLLERS
@@ -146,6 +152,8 @@ class V1Batch(WorldBatch):
             self._kernels = _v1_step
             self._trees = likeness
         self._stack = np.empty(256, dtype=np.int64)
+        #: per step size ``m``: ``a_out (m, 3)``, ``status (m,)``, ``predicted (m, 2)``
+        self._scratch: dict[int, tuple[Any, ...]] = {}
 
     def _use_options(self, options: ControlOptions) -> None:
         """The juggler's options as the command reads them."""
@@ -276,26 +284,54 @@ class V1Batch(WorldBatch):
             self._grid, self._glen, self._last,
         )  # fmt: skip
         measured = (self._values, self._m_flags)
-        world = (self._target, self._armed)
         n = envs.size
-        a_out = np.empty((n, 3))
-        args: tuple[Any, ...] = (
-            envs, actions, plan, measured, self._ctl, self._flags_ctl, self._residual,
-            world, a_out,
+        scratch = self._scratch.get(n)
+        if scratch is None:  # per step size: the actions clipped, the commands' status
+            scratch = self._scratch[n] = (np.empty((n, 3)), np.empty(n, np.int64), np.empty((n, 2)))
+        a_out, status, predicted = scratch
+        command = (
+            plan, measured, self._ctl, self._flags_ctl, self._residual,
+            (self._target, self._armed), a_out, status, predicted,
         )  # fmt: skip
         if self._fast:
             options = self._episode(int(envs[0])).options
             if options is not self._options:  # the juggler's options were replaced
                 self._use_options(options)
-        status, predicted = entry(kernels.v1_command, *args)(*args)
-        if status.any():
-            self._commands(envs, status, predicted, plan, a_out)
-        self.world_periods(envs)
         self._slot = (self._slot + 1) % self._ring.shape[0]
         obs = np.empty((n, self._bounds.shape[1]), dtype=np.float32)
         out = np.empty((n, len(OUT_COLUMNS)))
-        args = (
-            envs,
+        finish = (a_out, obs, out)
+        if self.blocks(n) <= 1:  # the whole step in one call unless a world needs Python
+            args: tuple[Any, ...] = (
+                envs, actions, command, self.period_args(), self._finish_args(*finish),
+            )  # fmt: skip
+            used = entry(kernels.v1_step, *args)(*args)
+            if used < 0:
+                self._commands(envs, status, predicted, plan, a_out)
+                # (the plans' arrays read again: a new plan may have widened the grid)
+                args = (envs, self.period_args(), self._finish_args(*finish))
+                used = entry(kernels.v1_rest, *args)(*args)
+        else:  # the periods in threads
+            args = (envs, actions, *command)
+            if entry(kernels.v1_command, *args)(*args):
+                self._commands(envs, status, predicted, plan, a_out)
+            self.world_periods(envs)
+            args = (envs, *self._finish_args(*finish))
+            used = entry(kernels.v1_finish, *args)(*args)
+        if used:
+            for i in envs.tolist():
+                self._draw(i)
+        if n == 1:
+            self._datas[int(envs[0])].time = out[0, 6]
+        else:
+            for i, t in zip(envs.tolist(), out[:, 6].tolist(), strict=True):
+                self._datas[i].time = t
+        return obs, out
+
+    def _finish_args(self, a_out: Any, obs: Any, out: Any) -> tuple[Any, ...]:
+        """:func:`~motion_envs.envs.juggling._v1_step.v1_finish`'s arguments after
+        ``envs``, the step's clipped actions ``a_out`` and its outputs ``obs``, ``out``."""
+        return (
             (self._worlds[2], self._worlds[3]),
             (self._holder, self._left, self._dropped, self._k, self._caught, self._released),
             (self._true, self._t_flags),
@@ -307,19 +343,10 @@ class V1Batch(WorldBatch):
             self._scalars,
             self._bounds,
             a_out,
-            measured,
+            (self._values, self._m_flags),
             obs,
             out,
         )
-        if entry(kernels.v1_finish, *args)(*args):
-            for i in envs.tolist():
-                self._draw(i)
-        if n == 1:
-            self._datas[int(envs[0])].time = out[0, 6]
-        else:
-            for i, t in zip(envs.tolist(), out[:, 6].tolist(), strict=True):
-                self._datas[i].time = t
-        return obs, out
 
     def columns(self, out: NDArray[np.float64]) -> Columns:
         """The infos of step rows ``out`` as columns (``phase``: its index in PHASES)."""

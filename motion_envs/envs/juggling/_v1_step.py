@@ -8,7 +8,11 @@ environment is the batch of one):
   the residual (:func:`aim`);
 * :func:`v1_finish`: after the world's period, the release's scatter, the sensor, the
   counts, the human-likeness, the reward, the episode's end and the observation
-  (:func:`v1_observe`).
+  (:func:`v1_observe`);
+* :func:`v1_step` and :func:`v1_rest`: the step in one call (the command, the worlds'
+  period of :mod:`~motion_envs.envs.juggling._period`, the finish) while no world needs
+  the controller in Python, and the period with the finish after it does (each compiled
+  call costs the unboxing of its arrays, so fewer calls make a cheaper step).
 
 **Written once, run two ways** (as :mod:`~motion_envs.envs.juggling._period`): plain
 Python here (the path without numba), and compiled by
@@ -22,10 +26,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
 from motion_envs.datasets.juggling import PHASES
-from motion_envs.envs.juggling._period import py_hypot
+from motion_envs.envs.juggling._period import py_hypot, world_periods
 
 __all__ = [
     "OUT_COLUMNS",
@@ -37,6 +39,8 @@ __all__ = [
     "v1_command",
     "v1_finish",
     "v1_observe",
+    "v1_rest",
+    "v1_step",
 ]
 
 #: The columns of :func:`v1_finish`'s ``out`` rows.
@@ -96,27 +100,30 @@ def v1_command(
     residual: Any,
     world: Any,
     a_out: Any,
-) -> Any:
+    status: Any,
+    predicted: Any,
+) -> int:
     """The start of a step for ``envs``: each action ``actions[j]`` clipped to [-1, 1]
     (NaN as 0) into ``a_out[j] = (ax, az, invalid)``; which worlds need the controller
-    in Python (a phase event: status 1) or an eq. 10 correction (status 2, the predicted
-    intercept in ``predicted[j]``; the latency-aware controller's forward prediction
-    first); the others' commands (:func:`advance`, :func:`aim`: status 0).
+    in Python (a phase event: ``status[j] = 1``) or an eq. 10 correction (status 2, the
+    predicted intercept in ``predicted[j]``; the latency-aware controller's forward
+    prediction first); the others' commands (:func:`advance`, :func:`aim`: status 0).
 
     ``plan`` as :func:`advance` takes it; ``measured = (values (N, 5): time, ball x, z,
     vx, vz; flags (N, 3): held, released, caught)``; ``constants = (dt, gravity,
     latency, tolerance, toss, catch, release_after)``; ``flags = (fast, correction,
-    ahead)`` (not ``fast``: every world's controller runs in Python). Returns ``status
-    (m,)`` and ``predicted (m, 2)``."""
+    ahead)`` (not ``fast``: every world's controller runs in Python); ``status (m,)``
+    and ``predicted (m, 2)`` are written. Returns how many worlds need Python (status
+    not 0)."""
     phase, pk, end_k, t_start, duration, end = plan[0], plan[1], plan[2], plan[3], plan[4], plan[5]
     values, m_flags = measured
     dt, g, latency, tolerance = constants[0], constants[1], constants[2], constants[3]
     toss, catch, release_after = int(constants[4]), int(constants[5]), constants[6]
     fast, correction, ahead = flags
     m = envs.shape[0]
-    status = np.zeros(m, dtype=np.int64)
-    predicted = np.zeros((m, 2))
+    events = 0
     for j in range(m):
+        status[j] = 0
         i = envs[j]
         ax, az = actions[j, 0], actions[j, 1]
         invalid = not (math.isfinite(ax) and math.isfinite(az))
@@ -132,6 +139,7 @@ def v1_command(
             or (end_k[i] >= 0 and k >= end_k[i])
         ):
             status[j] = 1
+            events += 1
             continue
         if correction and ph == catch and not held:
             bx, bz = values[i, 1], values[i, 2]
@@ -145,11 +153,31 @@ def v1_command(
             pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
             if s > dt and py_hypot(px - end[i, 0], pz - end[i, 1]) > tolerance:
                 status[j] = 2
+                events += 1
                 predicted[j, 0], predicted[j, 1] = px, pz
                 continue
         tx, tz, armed = advance(i, plan, dt, release_after, toss)
         aim(i, tx, tz, armed, a_out[j], phase, residual, world)
-    return status, predicted
+    return events
+
+
+def v1_rest(envs: Any, period: Any, finish: Any) -> int:
+    """The rest of a step once every world's command is made: the worlds' control period
+    (:func:`~motion_envs.envs.juggling._period.world_periods`, ``period`` its arguments
+    after ``envs``), then :func:`v1_finish` (``finish`` its arguments after ``envs``);
+    returns :func:`v1_finish`'s count."""
+    world_periods(envs, *period)
+    return v1_finish(envs, *finish)
+
+
+def v1_step(envs: Any, actions: Any, command: Any, period: Any, finish: Any) -> int:
+    """A whole step in one call where no world needs Python: :func:`v1_command`
+    (``command`` its arguments after ``envs, actions``), then, if no world has an event
+    or a correction due, :func:`v1_rest`. Returns -1 when some world needs Python
+    (its commands to be completed, then :func:`v1_rest`), else :func:`v1_finish`'s count."""
+    if v1_command(envs, actions, *command) > 0:
+        return -1
+    return v1_rest(envs, period, finish)
 
 
 def v1_advance(rows: Any, plan: Any, constants: Any, a_out: Any, residual: Any, world: Any) -> None:
