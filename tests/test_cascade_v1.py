@@ -281,3 +281,33 @@ def test_a_small_real_run_writes_its_table(tmp_path: Any) -> None:
         assert 0 <= m["catches_mean"] <= 2
     (path,) = write_cascade_v1(doc, tmp_path)
     assert path.exists()
+
+
+@pytest.mark.parametrize("pattern", ["3", "5"])
+def test_each_catch_carries_its_task_error_per_hand(pattern: str) -> None:
+    """At every step with a catch: the catching hand's ``(offset, timing)`` and meeting
+    speed are finite, the speed below the level's capture speed (the capture at impact),
+    the offset within the palm's reach and the timing within half a second of the plan;
+    a hand that did not catch has NaN; steps without a catch carry neither key."""
+    env = CascadeV1Env(level="easy", pattern=pattern, controller="juggler_mean_delay",
+                       max_catches=8)  # fmt: skip
+    lv = V2_LEVELS["easy"]
+    seen = 0
+    for seed in range(3):
+        env.reset(seed=seed)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+            if not info["caught"]:
+                assert "task_error" not in info and "catch_speed" not in info
+                continue
+            err, speed = info["task_error"], info["catch_speed"]
+            assert err.shape == (2, 2) and speed.shape == (2,)
+            catching = np.isfinite(speed)
+            assert catching.sum() == info["caught"]
+            assert np.isnan(err[~catching]).all()
+            assert (speed[catching] < lv.capture_speed).all()
+            assert (np.abs(err[catching, 0]) < 0.1).all()
+            assert (np.abs(err[catching, 1]) < 0.5).all()
+            seen += int(catching.sum())
+    assert seen >= 5

@@ -43,6 +43,7 @@ from motion_envs.models.juggling import (
     pattern_controller,
     pattern_likeness,
     pattern_spec,
+    planned_catch,
 )
 
 __all__ = ["CASCADE_V1_FRAMES", "CascadeV1Env", "cascade_v1_obs_dim"]
@@ -145,7 +146,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     each weighted term, ``likeness``, the step's catches ``caught``, ``catches`` and
     ``tosses`` (``cycles``) so far, ``phase`` (the right hand's) and ``phases``, ``held``
     per hand, ``time``, the true ``hands`` ``(2, 2)``, ``balls`` ``(N, 2)`` and ``hand``,
-    and ``action_invalid``.
+    and ``action_invalid``; at a step with a catch also the task-error vector per hand,
+    ``task_error`` ``(2, 2)``: where the ball met the palm relative to its centre (m,
+    along ``x``, world frame) and the catch time minus the hand's planned catch time (s),
+    and ``catch_speed`` ``(2,)`` (m/s, the speed at which the palm met the ball); NaN for
+    a hand that did not catch (Juggling-v2's vector, per hand).
 
     ## Starting State
     Cascade-v0's: the hands at their homes, ball 0 in the right hand, ball 1 in the left,
@@ -279,6 +284,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         ]
         self._catches = self._tosses = 0
         self._release_time = [math.nan, math.nan]
+        self._errors = (np.full((2, 2), np.nan), np.full(2, np.nan))
         #: s and 1/m ``(N,)``: the episode's true delay and the balls' drags (hidden)
         self.delay = math.nan
         self.drags = np.full(self.balls, np.nan)
@@ -354,6 +360,9 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
         true = self._advance(self.residual_scale * a.reshape(2, 2))
         caught = sum(int(c >= 0) for c in true.caught)
+        events: dict[str, Any] = {}
+        if caught:
+            events = {"task_error": self._errors[0], "catch_speed": self._errors[1]}
         like = 0.0
         for h in range(CASCADE_HANDS):
             sign = (1.0 if h == 0 else -1.0, 1.0)
@@ -369,6 +378,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             tosses=self._tosses,
             cycles=self._tosses,
             action_invalid=invalid,
+            **events,
         )
         return self._observation(true), reward, terminated, truncated, info
 
@@ -383,7 +393,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         if self.residual_phases is not None:
             acts = self.residual_acts[[PHASES.index(c.phase(h)) for h in range(CASCADE_HANDS)]]
             residual = np.where(acts[:, None], residual, 0.0)
+        planned = [planned_catch(c, h) for h in range(CASCADE_HANDS)]
+        before = self.data.qpos.copy(), self.data.qvel.copy()
         true = self.world.step(targets + residual, armed)
+        if any(b >= 0 for b in true.caught):
+            self._errors = self._task_errors(before, true, planned)
         k = int(self.world.k[0])
         frames = []
         for i, camera in enumerate(self.cameras):
@@ -400,6 +414,33 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._catches += sum(int(x >= 0) for x in true.caught)
         self._tosses += sum(int(x >= 0) for x in true.released)
         return true
+
+    def _task_errors(
+        self,
+        before: tuple[NDArray[np.float64], NDArray[np.float64]],
+        true: CascadeState,
+        planned: list[float],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Per hand, the catch's ``(offset, timing)`` and meeting speed (NaN for a hand
+        that did not catch) from the state at the period's start: the relative motion of
+        the ball and the palm, linear over the period, meets the palm's top (the ball's
+        centre level with the hand's origin) at ``s`` in ``[0, dt]``; the offset is along
+        ``x`` (world frame), the timing the meeting time minus the plan's catch time."""
+        q, v = before
+        dt = self.task.dt
+        t0 = true.time - dt
+        errors = np.full((CASCADE_HANDS, 2), np.nan)
+        speeds = np.full(CASCADE_HANDS, np.nan)
+        for h, b in enumerate(true.caught):
+            if b < 0:
+                continue
+            hb, bb = 2 * h, 2 * CASCADE_HANDS + 2 * b
+            rx, rz = q[bb] - q[hb], q[bb + 1] - q[hb + 1]
+            vx, vz = v[bb] - v[hb], v[bb + 1] - v[hb + 1]
+            s = min(max(-rz / vz, 0.0), dt) if vz < 0 else 0.0
+            errors[h] = (rx + vx * s, t0 + s - planned[h])
+            speeds[h] = math.hypot(vx, vz)
+        return errors, speeds
 
     def play(self, seed: int) -> tuple[int, int, bool, float]:
         """The zero-action episode reset with ``seed`` (the controller alone; the same

@@ -95,6 +95,7 @@ from motion_envs.models.juggling._cascade_v1 import (
     catch_height,
     equivalent_ballistic,
     nearest_palm,
+    planned_catch,
 )
 from motion_envs.models.juggling._controller import (
     ControlOptions,
@@ -310,6 +311,7 @@ __all__ = [
     "perturb_release",
     "phase_conditions",
     "plan_catch",
+    "planned_catch",
     "predict_forward",
     "register_pattern",
     "replan_many",

@@ -55,6 +55,7 @@ __all__ = [
     "catch_height",
     "equivalent_ballistic",
     "nearest_palm",
+    "planned_catch",
 ]
 
 #: Cascade-v1's levels (Juggling-v2's human levels; ``drift`` is not offered).
@@ -200,3 +201,15 @@ def nearest_palm(hands: FloatArray, ball: FloatArray) -> tuple[float, float]:
     d = [math.hypot(float(ball[0] - h[0]), float(ball[1] - h[1])) for h in hands]
     h = hands[int(np.argmin(d))]
     return float(h[0]), float(h[1])
+
+
+def planned_catch(controller: CascadeController | SiteswapController, h: int) -> float:
+    """s, hand ``h``'s planned catch time (its current catch plan's end), NaN outside its
+    catch phase."""
+    if controller.phase(h) != "catch":
+        return math.nan
+    if isinstance(controller, SiteswapController):
+        _, start, duration = controller._label(h)
+        return float(start + duration)
+    hand = controller.hands[h]
+    return float(hand.t_start + hand.duration)
