@@ -8,6 +8,7 @@ the controller alone) is in ``tests/test_env_contract.py``."""
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -230,23 +231,21 @@ def test_pattern_cli_writes_results_json(tmp_path, capsys):
 def test_release_fires_on_the_second_difference_of_the_hand_height():
     """Each hand releases on the demonstrations' rule (``rules.hand_acceleration`` of its
     height at the control samples, at rest before time 0), not on a velocity change."""
-    env = gym.make("MotionEnvs/Cascade-v0", level="easy", max_catches=12)
-    env.reset(seed=3)
-    world = env.unwrapped.world
-    heights = [world.state.hand_pos[:, 1].copy()] * 2  # at rest before time 0
-    thr, dt = world.task.toss_threshold, world.task.dt
+    env = gym.make("MotionEnvs/Cascade-v0", level="easy", max_catches=12).unwrapped
+    heights = [env.home[:, 1].copy()] * 2  # at rest before time 0
+    thr, dt = env.task.toss_threshold, env.task.dt
     fired = 0
-    while True:
-        _, _, term, trunc, _ = env.step(np.zeros(4, np.float32))
-        st = world.state
+
+    def check(st: Any) -> None:  # the true state after each period
+        nonlocal fired
         heights.append(st.hand_pos[:, 1].copy())
         a_z = rules.hand_acceleration(heights[-1], heights[-2], heights[-3], dt)
         for h in range(2):
             if st.released[h] >= 0:
                 fired += 1
                 assert a_z[h] < -thr
-        if term or trunc:
-            break
+
+    env.play(3, check)
     env.close()
     assert fired >= 10
 
@@ -279,18 +278,17 @@ def test_the_tempo_keeps_the_beat_on_easy():
     """Over an easy episode the hands release in turn about a beat apart: the mean interval
     between consecutive releases is within 3 % of the beat (it was 4 % short when the
     right hand's next beat was taken one cycle early). A training seed."""
-    env = gym.make("MotionEnvs/Cascade-v0", level="easy", max_catches=40)
-    env.reset(seed=0)
-    ctrl, world = env.unwrapped.controller, env.unwrapped.world
+    env = gym.make("MotionEnvs/Cascade-v0", level="easy", max_catches=40).unwrapped
+    ctrl = env.controller
     times, hands = [], []
-    while True:
-        _, _, term, trunc, _ = env.step(np.zeros(4, np.float32))
+
+    def record(st: Any) -> None:  # the true state after each period
         for h in range(2):
-            if world.state.released[h] >= 0:
-                times.append(world.state.time)
+            if st.released[h] >= 0:
+                times.append(st.time)
                 hands.append(h)
-        if term or trunc:
-            break
+
+    env.play(0, record)
     env.close()
     assert len(times) >= 30
     assert np.all(np.diff(hands) != 0)  # in turn

@@ -18,10 +18,11 @@ one, ``V2Batch``), ``_cascade_env``
 patterns at Juggling-v2's human levels) the environments; ``_batch`` (the worlds' state
 as one batch) and
 ``_v1_batch`` (Juggling-v1's step for a batch, written once in ``_v1_step``: the single
-environment is its batch of one); the native vector environments ``_vector``
+environment is its batch of one), ``_cascade_batch`` (Cascade-v0's, written once in
+``_cascade_step``; the same); the native vector environments ``_vector``
 (:class:`JugglingVectorEnv`, the episode bookkeeping), ``_v1_vector``
-(:class:`JugglingV1VectorEnv`, the batch of N) and ``_cascade_vector``
-(:class:`CascadeVectorEnv`).
+(:class:`JugglingV1VectorEnv`) and ``_cascade_vector`` (:class:`CascadeVectorEnv`), each
+its id's batch of N.
 The default fit the environment acts on (``load_juggler``, ``juggler_demonstrations``,
 ``TRACKING_NOISE``, ``FIT_SEED``, ``FIT_TEST_FRACTION``) lives in
 :mod:`motion_envs.models.juggling` and is re-exported here.

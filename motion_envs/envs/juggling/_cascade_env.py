@@ -13,10 +13,12 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, PHASES, JugglingTask
+from motion_envs.datasets.juggling import CASCADE_BALLS, CASCADE_HANDS, JugglingTask
 from motion_envs.envs._common import SideCameraMixin, as_action, check_integer, check_number
+from motion_envs.envs._kernels import numba_available
+from motion_envs.envs.juggling._cascade_batch import CascadeBatch
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
-from motion_envs.envs.juggling._likeness import LikenessQuery
+from motion_envs.envs.juggling._cascade_step import OUT_COLUMNS
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._world_spec import HAND_SPEED_LIMIT
 from motion_envs.models.juggling import (
@@ -63,7 +65,8 @@ CASCADE_OBS_DIM = cascade_obs_dim(CASCADE_BALLS)
 #: s of simulated time per catch (at 9.81 m/s^2; times ``sqrt(9.81 / g)``) after which an
 #: episode is truncated anyway; the pattern catches a ball every ~0.4 s.
 CASCADE_TIME_PER_CATCH = 2.0
-_ONE_HOT = {name: tuple(float(i == j) for j in range(len(PHASES))) for i, name in enumerate(PHASES)}
+_TIME, _CATCHES, _TOSSES = (OUT_COLUMNS.index(k) for k in ("time", "catches", "tosses"))
+_TERMINATED, _TRUNCATED = OUT_COLUMNS.index("terminated"), OUT_COLUMNS.index("truncated")
 #: Most control periods per step (as Juggling-v0's ``frame_skip``).
 MAX_FRAME_SKIP = 10_000
 _POS_MARGIN = 10.0
@@ -120,7 +123,12 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `hard`   | 0.11          | 0.004              | 0.05                 | 0.12                | 12.0                      |
 
     The zero action reproduces the reference controller exactly (the same world, sensor
-    and seeds; tested against an independent loop).
+    and seeds; tested against an independent loop). A step runs the environment's batch
+    of one (:class:`~motion_envs.envs.juggling._cascade_batch.CascadeBatch`: the step
+    written once, compiled with numba when installed), the same code that steps the
+    native vector environment's ``N`` episodes; between its hands' events the batch
+    steps the controller's plans in arrays (:meth:`CascadeEnv.synced_controller` gives
+    the controller its hands' step counts).
 
     ## Action Space
     `Box(-1, 1, (4,), float32)`: the residuals added to the controller's hand targets, in
@@ -232,6 +240,8 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
     _CONTROLLERS = CASCADE_CONTROLLERS
     _WORLD = "Cascade-v0"
     _DEFAULT_WEIGHTS = DEFAULT_CASCADE_REWARD_WEIGHTS
+    #: Delayed measurements of each ball in the observation.
+    history = CASCADE_HISTORY
 
     def __init__(
         self,
@@ -288,7 +298,6 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         self.home = self.controller.home
         self.likeness = pattern_likeness(self.pattern, self.gravity)
-        self._likeness = LikenessQuery(self.likeness)
         self.world = CascadeWorld(
             self.task, self.release_speed_std, math.radians(self.release_angle_std), self.balls
         )
@@ -308,9 +317,11 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._low, self._high = low, high
         self._renderer: Any = None
         self._done = True
+        #: the measured state at the reset (the batch's starting point)
         self._state: CascadeState | None = None
-        self._history: list[list[float]] = []
-        self._catches = self._tosses = 0
+        #: the batch stepping this episode and its row (:meth:`_batch_row`)
+        self._batch: CascadeBatch | None = None
+        self._rows = np.zeros(1, dtype=np.int64)
 
     def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         hx, hz = self.home[0]
@@ -334,12 +345,22 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         return self.task.dt * self.frame_skip
 
     # -- episode ------------------------------------------------------------------------
+    def _batch_row(self) -> tuple[CascadeBatch, NDArray[np.int64]]:
+        """The batch this episode is stepped in and its row: the native vector
+        environment's (set by it) or this environment's own batch of one."""
+        if self._batch is None:
+            backend = "numba" if numba_available() else "python"
+            self._batch, self._rows = CascadeBatch([self], backend), np.zeros(1, dtype=np.int64)
+        return self._batch, self._rows
+
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
         world_ss, sensor_ss, controller_ss, start_ss = np.random.SeedSequence(base).spawn(4)
+        batch, rows = self._batch_row()
+        i = int(rows[0])
         start = self.controller.start(
             (self.release_speed_std, math.radians(self.release_angle_std)),
             np.random.default_rng(start_ss),
@@ -348,19 +369,10 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         state = self.sensor.reset(true, np.random.default_rng(sensor_ss), self.task.gravity)
         self.controller.reset(state, np.random.default_rng(controller_ss))
         self._state = state
-        rows = [self._ball_row(state, i) for i in range(self.balls)]
-        self._history = [row * CASCADE_HISTORY for row in rows]
+        batch.load(i, state)
         self._done = False
-        self._catches = self._tosses = 0
-        return self._observation(true), self._info(true, seed=base)
-
-    @staticmethod
-    def _ball_row(state: CascadeState, i: int) -> list[float]:
-        return [*state.ball_pos[i].tolist(), *state.ball_vel[i].tolist()]
-
-    def _info(self, true: CascadeState, **extra: Any) -> dict[str, Any]:
         c = self.controller
-        return {
+        info = {
             "phase": c.phase(0),
             "phases": (c.phase(0), c.phase(1)),
             "held": tuple(h in true.holder for h in range(CASCADE_HANDS)),
@@ -368,114 +380,48 @@ class CascadeEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
             "hand": true.hand_pos[0].copy(),
             "hands": true.hand_pos.copy(),
             "balls": true.ball_pos.copy(),
-            **extra,
+            "seed": base,
         }
+        return batch.observation(i), info
 
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
         a = as_action(action, (2 * CASCADE_HANDS,))
-        invalid = not bool(np.isfinite(a).all())
-        a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
-        residual = self.residual_scale * a.reshape(2, 2)
-        action_sq = float(a @ a)
-        reward = 0.0
-        summed: dict[str, Any] = {}
-        state = self._state
-        for period in range(self.frame_skip):
-            state, true, r, terms, terminated, truncated = self._period(state, residual, action_sq)
-            if period == 0:  # frame_skip 1: the period's own values (no 0.0 + -0.0)
-                reward, summed = r, terms
-            else:
-                reward += r
-                for key, value in terms.items():
-                    summed[key] += value
-            if terminated or truncated:
-                break
-        info = self._info(
-            true,
-            **summed,
-            catches=self._catches,
-            tosses=self._tosses,
-            cycles=self._tosses,
-            action_invalid=invalid,
-        )
-        return self._observation(true), reward, terminated, truncated, info
+        batch, rows = self._batch_row()
+        obs, out = batch.step(rows, a[None])
+        info = batch.info(out[0])
+        terminated, truncated = bool(out[0, _TERMINATED] > 0.0), bool(out[0, _TRUNCATED] > 0.0)
+        self._done = terminated or truncated
+        return obs[0], float(out[0, 0]), terminated, truncated, info
 
-    def _advance(
-        self, measured: CascadeState, residual: NDArray[np.float64]
-    ) -> tuple[CascadeState, CascadeState]:
-        """The episode's one period (the env's step and :meth:`play` both run it): the
-        controller's command on the ``measured`` state plus ``residual`` (masked by
-        `residual_phases`), the world's period, the sensor; counts the catches and
-        tosses. Returns the measured and the true state after it."""
-        targets, armed = self.controller.command(measured)
-        if self.residual_phases is not None:
-            c = self.controller
-            acts = self.residual_acts[[PHASES.index(c.phase(h)) for h in range(CASCADE_HANDS)]]
-            residual = np.where(acts[:, None], residual, 0.0)
-        true = self.world.step(targets + residual, armed)
-        state = self.sensor.measure(true)
-        self._state = state
-        self._catches += sum(int(c >= 0) for c in true.caught)
-        self._tosses += sum(int(r >= 0) for r in true.released)
-        return state, true
+    def synced_controller(self) -> CascadeController | SiteswapController:
+        """:attr:`controller` as of the last step: between its hands' events the batch
+        steps their plans in arrays and gives the hands their step counts at the next
+        event; this gives them now (for reading ``phase_time`` and the plans)."""
+        if self._state is not None:
+            batch, rows = self._batch_row()
+            batch.sync(int(rows[0]))
+        return self.controller
 
     def play(
         self, seed: int, on_period: Callable[[CascadeState], None] | None = None
     ) -> tuple[int, int, bool, float]:
         """The zero-action episode reset with ``seed`` (the controller alone; the same
-        periods as ``reset(seed=seed)`` then ``step(0)`` until the episode ends, without
-        the observations and rewards): ``(catches, tosses, dropped, time)``.
-        ``on_period(true_state)`` is called after every period."""
+        periods as ``reset(seed=seed)`` then ``step(0)`` until the episode ends):
+        ``(catches, tosses, dropped, time)``. ``on_period(true_state)`` is called after
+        every period."""
         self.reset(seed=seed)
-        state, zero = self._state, np.zeros((CASCADE_HANDS, 2))
+        batch, rows = self._batch_row()
+        zero = np.zeros((1, 2 * CASCADE_HANDS))
         while True:
-            assert state is not None
-            state, true = self._advance(state, zero)
+            _, out = batch.period(rows, zero)
             if on_period is not None:
-                on_period(true)
-            terminated, truncated = self._episode_end(true.any_dropped, true.time)
-            if terminated or truncated:
-                return self._catches, self._tosses, terminated, true.time
-
-    def _period(
-        self, measured: CascadeState, residual: NDArray[np.float64], action_sq: float
-    ) -> tuple[CascadeState, CascadeState, float, dict[str, Any], bool, bool]:
-        """One control period from the ``measured`` state with the residual ``residual
-        (2, 2)`` (m): the measured and the true state after it, its reward, its reward
-        terms with ``likeness`` and ``caught``, and ``(terminated, truncated)``."""
-        state, true = self._advance(measured, residual)
-        for i in range(self.balls):
-            self._history[i] = self._ball_row(state, i) + self._history[i][:-4]
-        caught = sum(int(c >= 0) for c in true.caught)
-        dropped = true.any_dropped
-        like = 0.0
-        for h in range(CASCADE_HANDS):
-            sign = 1.0 if h == 0 else -1.0
-            pos = true.hand_pos[h] * (sign, 1.0)
-            vel = true.hand_vel[h] * (sign, 1.0)
-            like += self._likeness.distance(self.controller.phase(h), pos, vel) / CASCADE_HANDS
-        reward, terms = self._rewards(caught, dropped, like, action_sq)
-        terminated, truncated = self._episode_end(dropped, true.time)
-        return state, true, reward, {**terms, "caught": caught}, terminated, truncated
-
-    def _observation(self, true: CascadeState) -> NDArray[np.float32]:
-        c = self.controller
-        row: list[float] = []
-        for h in range(CASCADE_HANDS):
-            row += [*true.hand_pos[h].tolist(), *true.hand_vel[h].tolist()]
-            row.append(float(h in true.holder))
-            row += _ONE_HOT[c.phase(h)]
-            row += [c.phase_time(h), c.duration(h)]
-            row += [*c.nominal_next(h).tolist(), *c.plan_end(h).tolist()]
-        for i in range(self.balls):
-            row += [float(true.holder[i] == 0), float(true.holder[i] == 1)]
-        for i in range(self.balls):
-            row += self._history[i]
-        obs = np.array(row, dtype=np.float32)
-        np.minimum(obs, self._high, out=obs)
-        return np.maximum(obs, self._low, out=obs)
+                on_period(batch.true_state(int(rows[0])))
+            r = out[0].tolist()
+            if r[_TERMINATED] > 0.0 or r[_TRUNCATED] > 0.0:
+                self._done = True
+                return int(r[_CATCHES]), int(r[_TOSSES]), r[_TERMINATED] > 0.0, r[_TIME]
 
     # -- rendering (SideCameraMixin.render) ----------------------------------------------
     def _sync_scene(self) -> None:
