@@ -16,7 +16,9 @@ period:
   and both hands' plans are copied back (always, for controllers other than ``juggler``
   and ``juggler_latency_aware`` and for the siteswap juggler); the residual added where
   ``residual_phases`` lets it act;
-* the worlds' one control period (:class:`~motion_envs.envs.juggling._batch.WorldBatch`);
+* the worlds' one control period (:class:`~motion_envs.envs.juggling._batch.WorldBatch`,
+  in threads for a large batch; else in the same compiled call as the rest,
+  :func:`~motion_envs.envs.juggling._cascade_step.cascade_period`);
 * the rest (:func:`~motion_envs.envs.juggling._cascade_step.cascade_finish`): the
   releases' scatter and the sensors' noise (drawn ahead in blocks from the world's and
   the sensors' own generators: the same sequences), the human-likeness, the reward, the
@@ -40,7 +42,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
 from motion_envs.envs.juggling import _cascade_step
-from motion_envs.envs.juggling._batch import WorldBatch
+from motion_envs.envs.juggling._batch import MIN_ENVS_PER_THREAD, WorldBatch
 from motion_envs.envs.juggling._cascade_step import OUT_COLUMNS, out_columns
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
@@ -73,7 +75,7 @@ class CascadeBatch(WorldBatch):
     ``parts``: ``CascadeEnv`` instances with the same arguments; ``backend``: ``"numba"``
     or ``"python"``; ``threads``: threads stepping the worlds (numba)."""
 
-    LINKED = (*WorldBatch.LINKED, "_kernels", "_trees", "_qv")
+    LINKED = (*WorldBatch.LINKED, "_kernels", "_trees", "_qv", "_args", "_period_args")
 
     def __init__(self, parts: Sequence[Any], backend: str, threads: int = 1) -> None:
         super().__init__(parts, backend, threads)
@@ -89,7 +91,7 @@ class CascadeBatch(WorldBatch):
         # the sensors' delay line (a ring shared by all episodes: a reset fills every
         # slot of its own), the observation's measurement history, the noise drawn ahead
         self._ring = np.zeros((first.delay_steps + 1, n, nb, 5))
-        self._slot = 0
+        self._slot = np.zeros(1, dtype=np.int64)  # the ring's newest entry
         self._history = np.zeros((n, nb, 4 * first.history))
         self._noisy = first.position_std > 0 or first.velocity_std > 0
         self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
@@ -152,6 +154,37 @@ class CascadeBatch(WorldBatch):
             self._trees = likeness
         self._stack = np.empty(256, dtype=np.int64)
         self._qv = (self._worlds[2], self._worlds[3])
+        self._period_args = (
+            self._worlds, self._ball_geoms, self._target, self._armed, self._ref, self._vref,
+            self._z_before, self._holder, self._thrower, self._left, self._dropped, self._k,
+            self._constants, self._caught, self._released,
+        )  # fmt: skip
+        self._args: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None
+
+    def _kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The arguments of ``cascade_command`` and ``cascade_finish`` that are this
+        batch's arrays (made again when a wider grid replaces ``_grid``)."""
+        if self._args is None:
+            plan = self._plan()
+            command = (
+                plan,
+                (self._holder, self._caught, self._released, self._qv[0], self._qv[1]),
+                (self._m_time, self._m_ball, self._m_ball_vel), self._ctl, self._flags,
+                self._residual, (self._target, self._armed),
+            )  # fmt: skip
+            finish = (
+                self._qv,
+                (self._holder, self._dropped, self._k, self._caught, self._released),
+                (self._ring, self._slot, self._noise, self._noise_at, self._noise_std),
+                (self._rel_noise, self._rel_at, self._rel_std),
+                self._counts,
+                plan,
+                (self._trees, self._stack),
+                self._scalars,
+                self._bounds,
+            )
+            self._args = (command, finish)
+        return self._args
 
     # -- a reset ---------------------------------------------------------------------------
     def load(self, i: int, measured: CascadeState) -> None:
@@ -168,7 +201,7 @@ class CascadeBatch(WorldBatch):
         size = self._ring.shape[0]
         for b, sensor in enumerate(env.sensor.sensors):
             for j, entry in enumerate(sensor._buffer):
-                self._ring[(self._slot + 1 + j) % size, i, b] = entry
+                self._ring[(int(self._slot[0]) + 1 + j) % size, i, b] = entry
         rows = np.concatenate([measured.ball_pos, measured.ball_vel], axis=1)
         self._history[i] = np.tile(rows, env.history)
         self._counts[i] = 0
@@ -222,6 +255,7 @@ class CascadeBatch(WorldBatch):
             wider = np.zeros((self.n, 2, grid.shape[0], 2))
             wider[:, :, : self._grid.shape[2]] = self._grid
             self._grid = wider
+            self._args = None
         self._grid[i, h, : grid.shape[0]] = grid
         self._glen[i, h] = grid.shape[0]
 
@@ -290,45 +324,33 @@ class CascadeBatch(WorldBatch):
         if not self._linked:
             self.link()
         kernels, entry = self._kernels, self.entry
-        plan = self._plan()
-        command = (self._target, self._armed)
+        command, finish = self._kernel_args()
         m = envs.size
         a_out = np.empty((m, 6))
-        args: tuple[Any, ...] = (
-            envs, actions, plan,
-            (self._holder, self._caught, self._released, self._qv[0], self._qv[1]),
-            (self._m_time, self._m_ball, self._m_ball_vel), self._ctl, self._flags,
-            self._residual, command, a_out,
-        )  # fmt: skip
-        status, due, ball = entry(kernels.cascade_command, *args)(*args)
-        if status.any():
-            self._commands(envs, status, due, ball, a_out)
-            plan = self._plan()  # a wider grid may have replaced self._grid
+        args: tuple[Any, ...] = (envs, actions, *command, a_out)
+        status, due, predicted = entry(kernels.cascade_command, *args)(*args)
+        if (status[0] != 0) if m == 1 else status.any():
+            self._commands(envs, status, due, predicted, a_out)
+            command, finish = self._kernel_args()  # a wider grid may have replaced _grid
         # the action's squared norm as CascadeEnv computed it (numpy's matmul over a stack
         # calls the BLAS dot per row as for one row; its order is not the naive sum's)
-        a = a_out[:, :4].copy()  # contiguous, as the rows of a (m, 4) array
-        a_out[:, 5] = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
-        self.world_periods(envs)
-        self._slot = (self._slot + 1) % self._ring.shape[0]
+        if m == 1:
+            a = a_out[0, :4].copy()
+            a_out[0, 5] = a @ a
+        else:
+            a = a_out[:, :4].copy()  # contiguous, as the rows of a (m, 4) array
+            a_out[:, 5] = np.matmul(a[:, None, :], a[:, :, None])[:, 0, 0]
         obs = np.empty((m, self._bounds.shape[1]), dtype=np.float32)
         out = np.empty((m, self._width))
-        args = (
-            envs,
-            self._qv,
-            (self._holder, self._dropped, self._k, self._caught, self._released),
-            (self._ring, self._slot, self._noise, self._noise_at, self._noise_std),
-            (self._rel_noise, self._rel_at, self._rel_std),
-            self._counts,
-            plan,
-            (self._trees, self._stack),
-            self._scalars,
-            self._bounds,
-            a_out,
-            (self._m_time, self._m_ball, self._m_ball_vel, self._history),
-            obs,
-            out,
-        )
-        if entry(kernels.cascade_finish, *args)(*args):
+        measured = (self._m_time, self._m_ball, self._m_ball_vel, self._history)
+        rest = (*finish, a_out, measured, obs, out)
+        if self.threads > 1 and m >= 2 * MIN_ENVS_PER_THREAD:  # the periods in threads
+            self.world_periods(envs)
+            used_up = entry(kernels.cascade_finish, envs, *rest)(envs, *rest)
+        else:  # the periods and the rest in one call
+            args = (envs, self._period_args, rest)
+            used_up = entry(kernels.cascade_period, *args)(*args)
+        if used_up:
             for i in envs.tolist():
                 self._draw(i)
         time = _COL["time"]
@@ -397,7 +419,7 @@ class CascadeBatch(WorldBatch):
         envs: NDArray[np.int64],
         status: NDArray[np.int64],
         due: NDArray[np.bool_],
-        ball: NDArray[np.float64],
+        predicted: NDArray[np.float64],
         a_out: NDArray[np.float64],
     ) -> None:
         """The commands ``cascade_command`` left: the eq. 10 corrections due (status 2),
@@ -409,7 +431,7 @@ class CascadeBatch(WorldBatch):
                 continue
             rows, a = envs[hit], a_out[hit]
             if code == 2:
-                self._correct(rows, due[hit], ball[hit])
+                self._correct(rows, due[hit], predicted[hit])
                 plan = self._plan()
                 args: tuple[Any, ...] = (rows, plan, self._ctl, a, self._residual, command)
                 entry(kernels.cascade_advance, *args)(*args)
@@ -419,27 +441,27 @@ class CascadeBatch(WorldBatch):
                 entry(kernels.cascade_aim, *args)(*args)
 
     def _correct(
-        self, envs: NDArray[np.int64], due: NDArray[np.bool_], ball: NDArray[np.float64]
+        self, envs: NDArray[np.int64], due: NDArray[np.bool_], predicted: NDArray[np.float64]
     ) -> None:
         """The eq. 10 corrections found due: each hand re-plans toward its view's ball's
-        predicted intercept (:meth:`JugglingController.correct`'s flight, own frame),
-        all of them together (:func:`~motion_envs.models.juggling.replan_many`); the new
-        plans are copied back."""
+        predicted intercept ``predicted (m, 2, 2)`` (:meth:`JugglingController.correct`'s
+        flight, own frame): one by one (:meth:`JugglingController.replan`), or all of
+        them together (:func:`~motion_envs.models.juggling.replan_many`, the same
+        numbers); the new plans are copied back."""
         rows, hands_at = np.nonzero(due)
-        at = envs[rows]
-        g = float(self._ctl[1])
-        b = ball[rows, hands_at]
-        s = self._t_start[at, hands_at] + self._duration[at, hands_at] - self._m_time[at]
-        predicted = np.empty((rows.size, 2))
-        predicted[:, 0] = b[:, 0] + b[:, 2] * (s - 0.0)
-        predicted[:, 1] = b[:, 1] + b[:, 3] * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
+        at, target = envs[rows].tolist(), predicted[rows, hands_at]
         hands: list[CascadeHand] = []
-        for i, hh in zip(at.tolist(), hands_at.tolist(), strict=True):
+        for i, hh in zip(at, hands_at.tolist(), strict=True):
             hand = self.parts[i].controller.hands[hh]
             hand.k = int(self._pk[i, hh])
             hands.append(hand)
-        replan_many(hands, self._m_time[at].tolist(), predicted)
-        for i, hh, hand in zip(at.tolist(), hands_at.tolist(), hands, strict=True):
+        times = self._m_time[at].tolist()
+        if len(hands) <= CASCADE_HANDS:  # a batch of one's: no stacking
+            for hand, t, p in zip(hands, times, target, strict=True):
+                hand.replan(t, p.copy())
+        else:
+            replan_many(hands, times, target)
+        for i, hh, hand in zip(at, hands_at.tolist(), hands, strict=True):
             self._load_grid(i, hh, hand)
             self._end[i, hh] = hand.end
 

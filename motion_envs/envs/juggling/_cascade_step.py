@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from motion_envs.envs.juggling._period import py_hypot
+from motion_envs.envs.juggling._period import py_hypot, world_periods
 from motion_envs.envs.juggling._v1_step import hand_likeness
 
 __all__ = [
@@ -37,6 +37,7 @@ __all__ = [
     "cascade_command",
     "cascade_finish",
     "cascade_observe",
+    "cascade_period",
     "holds",
     "out_columns",
 ]
@@ -110,8 +111,8 @@ def cascade_command(
     """The start of a control period for ``envs``: each action ``actions[j] (4,)``
     clipped to [-1, 1] (NaN as 0) into ``a_out[j] = (a_0 .. a_3, invalid)``; which worlds
     need their controller in Python (an event of either hand, or not ``fast``: status 1)
-    or an eq. 10 correction (status 2: ``due[j, h]`` and the view's ball ``ball[j, h] =
-    (x, z, vx, vz)``, own frame); the others' commands (:func:`advance`, :func:`aim`:
+    or an eq. 10 correction (status 2: ``due[j, h]`` and the predicted intercept
+    ``predicted[j, h]``, own frame); the others' commands (:func:`advance`, :func:`aim`:
     status 0) into ``command = (target (N, 2, 2), armed (N, 2))``.
 
     ``plan = (phase, k, end_k, t_start, duration, end, incoming, catch_ball, grid, glen,
@@ -119,8 +120,8 @@ def cascade_command(
     q, v)`` (the last period's; ``q, v`` the worlds' ``qpos``/``qvel`` views);
     ``measured = (time, ball, ball_vel)``; ``constants = (dt, gravity, reaim, latency,
     tolerance, release_after, toss, go_down, catch)`` (``reaim``: s); ``flags = (fast,
-    correction, ahead)``. Returns ``status (m,)``, ``due (m, 2)`` and ``ball (m, 2,
-    4)``."""
+    correction, ahead)``. Returns ``status (m,)``, ``due (m, 2)`` and ``predicted (m,
+    2, 2)``."""
     phase, pk, end_k, t_start, duration, end, incoming, catch_ball = plan[:8]
     holder, caught, released, q, v = world
     m_time, m_ball, m_ball_vel = measured
@@ -133,7 +134,7 @@ def cascade_command(
     m = envs.shape[0]
     status = np.zeros(m, dtype=np.int64)
     due = np.zeros((m, 2), dtype=np.bool_)
-    ball = np.zeros((m, 2, 4))
+    predicted = np.zeros((m, 2, 2))
     for j in range(m):
         i = envs[j]
         invalid = False
@@ -188,14 +189,14 @@ def cascade_command(
             pz = bz + vz * (s - 0.0) - 0.5 * g * (s - 0.0) * (s - 0.0)
             if py_hypot(px - end[i, h, 0], pz - end[i, h, 1]) > tolerance:
                 due[j, h] = True
-                ball[j, h, 0], ball[j, h, 1], ball[j, h, 2], ball[j, h, 3] = bx, bz, vx, vz
+                predicted[j, h, 0], predicted[j, h, 1] = px, pz
         if due[j, 0] or due[j, 1]:
             status[j] = 2
             continue
         for h in range(2):
             tx, tz, armed = advance(i, h, plan, dt, release_after, toss)
             aim(i, h, -tx if h == 1 else tx, tz, armed, a_out[j], phase, residual, command)
-    return status, due, ball
+    return status, due, predicted
 
 
 def cascade_advance(
@@ -248,8 +249,9 @@ def cascade_finish(
       the world (``worlds = (qpos, qvel)`` views per world; ``world = (holder, dropped,
       k, caught, released)``);
     * the sensors (:meth:`~motion_envs.models.juggling.CascadeSensor.measure`): ``sensor
-      = (ring (S, N, B, 5), slot, noise (N, R, 4), at (N,), std (4,))``; the delay line
-      takes each true ball ``(x, z, vx, vz, held)`` at ``slot``; its measurement is the
+      = (ring (S, N, B, 5), slot (1,), noise (N, R, 4), at (N,), std (4,))``; the delay
+      line takes each true ball ``(x, z, vx, vz, held)`` at the next slot (``slot[0]``
+      advanced); its measurement is the
       true state while held, else the oldest entry, plus the next row of noise (drawn
       ahead from the sensors' generator, ball by ball) times ``std`` when that entry was
       flying and the sensor is noisy;
@@ -267,7 +269,10 @@ def cascade_finish(
     may take (one per ball, one per hand: to be drawn again before the next period)."""
     qs, vs = worlds
     holder, dropped_w, k, caught_w, released_w = world
-    ring, slot, noise, noise_at, noise_std = sensor
+    ring, slot_at, noise, noise_at, noise_std = sensor
+    slot = (slot_at[0] + 1) % ring.shape[0]  # the ring's newest entry: this period's
+    if envs.shape[0] > 0:  # (a call with no world, compiling the kernel, changes nothing)
+        slot_at[0] = slot
     r_noise, r_at, r_std = release
     trees, stack = likeness
     m_time, m_ball, m_ball_vel, history = measured
@@ -357,6 +362,20 @@ def cascade_finish(
             row[_HANDS + c] = q[c]
         cascade_observe(i, obs[j], (q, v, holder, history), plan, bounds, dt)
     return used_up
+
+
+def cascade_period(envs: Any, period: Any, rest: Any) -> int:
+    """The worlds' control period (:func:`~motion_envs.envs.juggling._period.world_periods`
+    with the arguments ``period`` after ``envs``), then :func:`cascade_finish` (with the
+    arguments ``rest`` after ``envs``): one call for a batch whose worlds are stepped in
+    one thread."""
+    (links, ball_geoms, target, armed, ref, vref, z_before, holder, thrower, left, dropped,
+     k, constants, caught, released) = period  # fmt: skip
+    world_periods(
+        envs, links, ball_geoms, target, armed, ref, vref, z_before, holder, thrower, left,
+        dropped, k, constants, caught, released,
+    )  # fmt: skip
+    return cascade_finish(envs, *rest)
 
 
 def cascade_observe(i: int, row: Any, true: Any, plan: Any, bounds: Any, dt: float) -> None:

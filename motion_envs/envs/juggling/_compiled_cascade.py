@@ -12,7 +12,7 @@ from __future__ import annotations
 from numba import njit
 
 from motion_envs.envs.juggling import _cascade_step
-from motion_envs.envs.juggling._compiled import bound, py_hypot
+from motion_envs.envs.juggling._compiled import bound, py_hypot, world_periods
 from motion_envs.envs.juggling._compiled_v1 import hand_likeness
 
 __all__ = [
@@ -21,6 +21,7 @@ __all__ = [
     "cascade_command",
     "cascade_finish",
     "cascade_observe",
+    "cascade_period",
 ]
 
 _holds = njit(cache=True)(bound(_cascade_step.holds))
@@ -42,3 +43,7 @@ cascade_finish = njit(cache=True)(
     bound(_cascade_step.cascade_finish, hand_likeness=hand_likeness, holds=_holds,
           cascade_observe=cascade_observe)
 )  # fmt: skip
+#: :func:`~motion_envs.envs.juggling._cascade_step.cascade_period` compiled.
+cascade_period = njit(cache=True)(
+    bound(_cascade_step.cascade_period, world_periods=world_periods, cascade_finish=cascade_finish)
+)
