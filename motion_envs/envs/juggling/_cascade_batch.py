@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
 from motion_envs.envs.juggling import _cascade_step
-from motion_envs.envs.juggling._batch import MIN_ENVS_PER_THREAD, WorldBatch
+from motion_envs.envs.juggling._batch import WorldBatch
 from motion_envs.envs.juggling._cascade_step import OUT_COLUMNS, out_columns
 from motion_envs.models.juggling import (
     LIKENESS_TAU,
@@ -154,11 +154,7 @@ class CascadeBatch(WorldBatch):
             self._trees = likeness
         self._stack = np.empty(256, dtype=np.int64)
         self._qv = (self._worlds[2], self._worlds[3])
-        self._period_args = (
-            self._worlds, self._ball_geoms, self._target, self._armed, self._ref, self._vref,
-            self._z_before, self._holder, self._thrower, self._left, self._dropped, self._k,
-            self._constants, self._caught, self._released,
-        )  # fmt: skip
+        self._period_args = self.period_args()
         self._args: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None
 
     def _kernel_args(self) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
@@ -344,7 +340,7 @@ class CascadeBatch(WorldBatch):
         out = np.empty((m, self._width))
         measured = (self._m_time, self._m_ball, self._m_ball_vel, self._history)
         rest = (*finish, a_out, measured, obs, out)
-        if self.threads > 1 and m >= 2 * MIN_ENVS_PER_THREAD:  # the periods in threads
+        if self.blocks(m) > 1:  # the periods in threads
             self.world_periods(envs)
             used_up = entry(kernels.cascade_finish, envs, *rest)(envs, *rest)
         else:  # the periods and the rest in one call
