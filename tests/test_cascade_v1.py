@@ -285,14 +285,15 @@ def test_a_small_real_run_writes_its_table(tmp_path: Any) -> None:
 
 @pytest.mark.parametrize("pattern", ["3", "5"])
 def test_each_catch_carries_its_task_error_per_hand(pattern: str) -> None:
-    """At every step with a catch: the catching hand's ``(offset, timing)`` and meeting
-    speed are finite, the speed below the level's capture speed (the capture at impact),
-    the offset within the palm's reach and the timing within half a second of the plan;
-    a hand that did not catch has NaN; steps without a catch carry neither key."""
+    """At every step with a catch: the catching hand's offset and meeting speed are
+    finite, the speed below the level's capture speed (the capture at impact), the offset
+    within the palm's reach, the timing (NaN for a catch outside the hand's catch phase,
+    most are in it) within half a second of the plan; a hand that did not catch has NaN;
+    steps without a catch carry neither key."""
     env = CascadeV1Env(level="easy", pattern=pattern, controller="juggler_mean_delay",
                        max_catches=8)  # fmt: skip
     lv = V2_LEVELS["easy"]
-    seen = 0
+    seen = timings = 0
     for seed in range(3):
         env.reset(seed=seed)
         terminated = truncated = False
@@ -308,6 +309,8 @@ def test_each_catch_carries_its_task_error_per_hand(pattern: str) -> None:
             assert np.isnan(err[~catching]).all()
             assert (speed[catching] < lv.capture_speed).all()
             assert (np.abs(err[catching, 0]) < 0.1).all()
-            assert (np.abs(err[catching, 1]) < 0.5).all()
+            timed = err[catching, 1][np.isfinite(err[catching, 1])]  # NaN: not in its catch phase
+            assert (np.abs(timed) < 0.5).all()
             seen += int(catching.sum())
-    assert seen >= 5
+            timings += timed.size
+    assert seen >= 5 and timings >= seen // 2

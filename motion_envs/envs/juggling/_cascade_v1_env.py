@@ -150,7 +150,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``task_error`` ``(2, 2)``: where the ball met the palm relative to its centre (m,
     along ``x``, world frame) and the catch time minus the hand's planned catch time (s),
     and ``catch_speed`` ``(2,)`` (m/s, the speed at which the palm met the ball); NaN for
-    a hand that did not catch (Juggling-v2's vector, per hand).
+    a hand that did not catch, and the timing NaN for a catch outside the hand's catch
+    phase (no planned catch time; Juggling-v2's vector, per hand).
 
     ## Starting State
     Cascade-v0's: the hands at their homes, ball 0 in the right hand, ball 1 in the left,
@@ -425,7 +426,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         that did not catch) from the state at the period's start: the relative motion of
         the ball and the palm, linear over the period, meets the palm's top (the ball's
         centre level with the hand's origin) at ``s`` in ``[0, dt]``; the offset is along
-        ``x`` (world frame), the timing the meeting time minus the plan's catch time."""
+        ``x`` (world frame), the timing the meeting time minus the plan's catch time (NaN
+        outside the hand's catch phase)."""
         q, v = before
         dt = self.task.dt
         t0 = true.time - dt
