@@ -272,16 +272,17 @@ class CascadeBatch(WorldBatch):
         self._kernels.cascade_observe(i, obs, true, self._plan(), self._bounds, self._dt)
         return obs
 
-    def true_state(self, i: int) -> CascadeState:
-        """Episode ``i``'s true state after its last period."""
+    def true_state(self, i: int, measured: bool = False) -> CascadeState:
+        """Episode ``i``'s true state after its last period (``measured``: with the balls
+        as the controller sees them, at the time they were measured)."""
         d, nb = self._datas[i], self._nb
         q, v = d.qpos, d.qvel
         return CascadeState(
-            time=float(d.time),
-            hand_pos=np.array(q[0:4]).reshape(2, 2),
-            hand_vel=np.array(v[0:4]).reshape(2, 2),
-            ball_pos=np.array(q[4 : 4 + 2 * nb]).reshape(-1, 2),
-            ball_vel=np.array(v[4 : 4 + 2 * nb]).reshape(-1, 2),
+            time=float(self._m_time[i] if measured else d.time),
+            hand_pos=q[0:4].reshape(2, 2).copy(),
+            hand_vel=v[0:4].reshape(2, 2).copy(),
+            ball_pos=(self._m_ball[i] if measured else q[4 : 4 + 2 * nb].reshape(-1, 2)).copy(),
+            ball_vel=(self._m_ball_vel[i] if measured else v[4 : 4 + 2 * nb].reshape(-1, 2)).copy(),
             holder=tuple(self._holder[i].tolist()),
             released=(int(self._released[i, 0]), int(self._released[i, 1])),
             caught=(int(self._caught[i, 0]), int(self._caught[i, 1])),
@@ -479,18 +480,7 @@ class CascadeBatch(WorldBatch):
         armed = np.empty((envs.size, 2), dtype=np.bool_)
         for j, i in enumerate(envs.tolist()):
             self.sync(i)
-            q, v = self._datas[i].qpos, self._datas[i].qvel
-            state = CascadeState(
-                time=float(self._m_time[i]),
-                hand_pos=q[0:4].reshape(2, 2).copy(),
-                hand_vel=v[0:4].reshape(2, 2).copy(),
-                ball_pos=self._m_ball[i].copy(),
-                ball_vel=self._m_ball_vel[i].copy(),
-                holder=tuple(self._holder[i].tolist()),
-                released=(int(self._released[i, 0]), int(self._released[i, 1])),
-                caught=(int(self._caught[i, 0]), int(self._caught[i, 1])),
-                dropped=tuple(self._dropped[i].tolist()),
-            )
+            state = self.true_state(i, measured=True)
             t, a = self.parts[i].controller.command(state)
             targets[j], armed[j] = t, a
             for h in range(CASCADE_HANDS):
