@@ -513,3 +513,41 @@ def test_residual_phases_arguments():
     for bad in ("catch", ["catch", "catch"], [], ["throw"], [1]):
         with pytest.raises(ValueError, match="residual_phases"):
             gym.make("MotionEnvs/Cascade-v0", residual_phases=bad)
+
+
+@pytest.mark.parametrize(("pattern", "level"), [("5", "hard"), ("3", "medium")])
+def test_batch_of_one_is_the_controller_world_and_sensors_in_a_plain_loop(pattern, level):
+    """The env's step (its batch of one: the noise drawn ahead in blocks, several flying
+    balls' draws in one period) against the reference controller, a fresh world and
+    fresh sensors stepped in a plain loop, seeded as the env documents: the true balls
+    and the observation's newest measurements agree bit for bit over 400 periods."""
+    from motion_envs.models.juggling import CascadeSensor, pattern_controller, pattern_spec
+
+    env = gym.make("MotionEnvs/Cascade-v0", level=level, pattern=pattern, max_catches=100)
+    c = env.unwrapped
+    env.reset(seed=5)
+    spec = pattern_spec(pattern)
+    ctrl = pattern_controller(spec, "juggler", c.gravity, c.delay_steps * c.task.dt)
+    angle = math.radians(c.release_angle_std)
+    world = CascadeWorld(c.task, c.release_speed_std, angle, spec.balls)
+    sensor = CascadeSensor(c.delay_steps, c.position_std, c.velocity_std, c.task.dt, spec.balls)
+    w_ss, s_ss, c_ss, st_ss = np.random.SeedSequence(5).spawn(4)
+    start = ctrl.start((c.release_speed_std, angle), np.random.default_rng(st_ss))
+    true = world.reset(ctrl.home, start=start, rng=np.random.default_rng(w_ss))
+    state = sensor.reset(true, np.random.default_rng(s_ss), c.task.gravity)
+    ctrl.reset(state, np.random.default_rng(c_ss))
+    n = spec.balls
+    flying = 0
+    for _ in range(400):
+        obs, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        targets, armed = ctrl.command(state)
+        true = world.step(targets, armed)
+        state = sensor.measure(true)
+        assert np.array_equal(info["balls"], true.ball_pos)
+        newest = obs[30 + 2 * n :].reshape(n, -1)[:, :4]
+        rows = np.concatenate([state.ball_pos, state.ball_vel], axis=1)
+        assert np.array_equal(newest, rows.astype(np.float32))
+        flying = max(flying, sum(h < 0 for h in true.holder))
+        if terminated or truncated:
+            break
+    assert flying >= 2  # periods with two or more noisy draws
