@@ -13,7 +13,9 @@ from baselines.agents.juggling_score import JugglingEpisodes
 from baselines.juggling_bench.v2 import (
     CONSTANT_GRID,
     LATE_OFFSETS,
+    REFERENCES,
     ROWS,
+    UPPER_REFERENCE,
     V2Config,
     VelocityTimesDelay,
     choose_constant,
@@ -95,14 +97,14 @@ def test_the_best_non_oracle_row_is_chosen_on_validation_seeds() -> None:
     config = V2Config(levels=("medium", "hard"), episodes=5, val_episodes=4, ilc=False)
     doc = run_v2(config, spy.play, spy.chooser(choose_constant))
     for lv in doc["levels"]:
-        rates = {name: m["catch_rate"] for name, m in lv["rows"].items() if name != "oracle"}
+        rates = {n: m["catch_rate"] for n, m in lv["rows"].items() if n not in REFERENCES}
         # on test the mean-delay juggler is best: a choice on test would pick it
         assert max(rates, key=lambda r: rates[r]) == "juggler_mean_delay"
         assert lv["best_non_oracle"] == "delay_estimator"
         assert lv["val_catch_rates"]["delay_estimator"] == 1.0
         assert lv["val_catch_rates"]["juggler_mean_delay"] == 0.0
         assert "oracle" not in lv["val_catch_rates"]
-        assert set(lv["val_catch_rates"]) == set(ROWS) - {"oracle", "task_error_ilc"}
+        assert set(lv["val_catch_rates"]) == set(ROWS) - {*REFERENCES, "task_error_ilc"}
 
 
 def test_the_late_offset_is_chosen_on_validation_seeds() -> None:
@@ -122,13 +124,44 @@ def test_the_late_offset_is_chosen_on_validation_seeds() -> None:
     config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     lv = run_v2(config, play, spy.chooser(choose_constant), spy.chooser(choose_offset))["levels"][0]
     assert lv["late_offset_s"] == 0.04
-    assert lv["late_offset_val_catch_rates"] == {"0 ms": 0.0, "20 ms": 0.0, "40 ms": 1.0,
-                                                 "60 ms": 0.0, "80 ms": 0.0}  # fmt: skip
+    assert lv["late_offset_val_catch_rates"] == {
+        f"{20 * i} ms": 1.0 if i == 2 else 0.0 for i in range(11)
+    }
     assert lv["val_catch_rates"]["late_meeting"] == 1.0
     assert lv["val_catch_rates"]["juggler_mean_delay"] == 0.0
     assert lv["rows"]["late_meeting"]["catch_rate"] == 0.0
     # ties with the delay estimator (1.0 on validation): the first in ROWS
     assert lv["best_non_oracle"] == "late_meeting"
+
+
+def test_the_catch_rows_choice_is_made_on_validation_and_never_picks_a_reference() -> None:
+    """On validation the catch-plan oracle catches every toss and the mean-delay catch
+    plan every toss but one (the best competitor); on test the catch plan catches
+    nothing and the mean-delay juggler everything: the best row must be the catch plan
+    (a choice on test would pick the mean-delay juggler, one counting the references
+    the oracle), and the room is measured against the catch-plan oracle."""
+    spy = Spy()
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        eps = spy.play(policy, env_id, kwargs, split, n)
+        controller = kwargs.get("controller")
+        catches = eps.catches
+        if controller == "juggler_oracle_catch":
+            catches = np.full(n, 3)
+        elif controller == "juggler_mean_delay_catch":
+            catches = np.full(n, 3) if split == "val" else np.zeros(n, dtype=np.int64)
+            catches[0] = 2 if split == "val" else 0
+        elif controller == "juggler_delay_estimator":
+            catches = np.zeros(n, dtype=np.int64)
+        return replace(eps, catches=catches, dropped=catches < 3)
+
+    config = V2Config(levels=("hard",), episodes=5, val_episodes=4, ilc=False)
+    (lv,) = run_v2(config, play, spy.chooser(choose_constant), spy.chooser(choose_offset))["levels"]
+    assert lv["best_non_oracle"] == "mean_delay_catch"
+    assert lv["val_catch_rates"]["mean_delay_catch"] == pytest.approx(11 / 12)
+    assert UPPER_REFERENCE not in lv["val_catch_rates"]
+    assert lv["rows"]["mean_delay_catch"]["catch_rate"] == 0.0
+    assert lv["room_below_oracle_catch"]["value"] == pytest.approx(1.0)
 
 
 def test_env_delay_offset_shifts_only_the_mean_delay_juggler() -> None:
@@ -177,10 +210,14 @@ def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
     doc = run_v2(config)
     (level,) = doc["levels"]
     assert set(level["rows"]) == {
-        "juggler", "oracle", "best_constant", "velocity_x_mean_delay", "juggler_mean_delay",
-        "late_meeting", "delay_estimator", "random", "task_error_ilc",
+        "juggler", "oracle", "oracle_catch", "best_constant", "velocity_x_mean_delay",
+        "juggler_mean_delay", "late_meeting", "mean_delay_catch", "delay_estimator", "random",
+        "task_error_ilc",
     }  # fmt: skip
-    assert set(level["val_catch_rates"]) == set(level["rows"]) - {"oracle"}
+    assert set(level["val_catch_rates"]) == set(level["rows"]) - {"oracle", "oracle_catch"}
+    assert set(level["oracle_catch_minus_rows"]) == set(level["rows"]) - {"oracle_catch"}
+    room = level["room_below_oracle_catch"]
+    assert room == level["oracle_catch_minus_rows"][level["best_non_oracle"]]
     assert level["best_non_oracle"] == max(
         level["val_catch_rates"], key=lambda r: level["val_catch_rates"][r]
     )

@@ -7,23 +7,27 @@ the env's own action space (``ROW_ENV_KWARGS``: every phase, :data:`RESIDUAL_SCA
 unit action, the scale an agent is given):
 
 * ``juggler``: the analytic juggler (the zero action; also the trivial *zero* policy);
-* ``oracle``: the juggler given the episode's true delay and drag (``juggler_oracle``): a
-  reference, not a competitor. Meant as the upper reference, it is not one as measured:
-  the mean-delay juggler and the delay estimator catch as much or more on every level
-  (BENCHMARKS, Juggling-v2). Why (measured on VALIDATION seeds, BENCHMARKS): the oracle
-  predicts the flight best (after 0.3-0.5 s of flight its mean state error is under 8
-  mm against the mean-delay fit's 26-37 mm), but what it feeds is the juggler's plan,
-  which puts the palm AT the predicted ball at the planned catch time; an exact
-  prediction makes the palm meet the ball there while the hand still rushes up to it,
-  and the ball bounces off (medium: 16 of the oracle's 19 drops met a rising hand, 8
-  within 15 mm and 5 ms of the plan at 4.9-6.5 m/s against the 5 m/s limit; hard: 33 of
-  34 rising). A late prediction (the true delay + 40 ms) puts the hand lower on the
-  ball's path, where it waits and the ball falls in: it catches more (medium 0.938
-  against 0.798, hard 46 against 33 catches); the mean-delay fit errs that way too (its
-  estimate 12-37 mm low). Not a bug in the flight model (the drag, its sign and the
-  delay are used as the env applies them); an upper reference would need the oracle's
-  information AND a catch planned for the capture rule (the palm at rest or moving down
-  with the ball when they meet), which no row has yet;
+* ``oracle``: the juggler given the episode's true delay and drag (``juggler_oracle``):
+  a reference, not a competitor. It is not an upper reference: the mean-delay juggler
+  and the late meeting catch more (BENCHMARKS, Juggling-v2). Why (measured on VALIDATION
+  seeds, BENCHMARKS): the oracle predicts the flight best (after 0.3-0.5 s of flight its
+  mean state error is under 8 mm against the mean-delay fit's 26-37 mm), but what it
+  feeds is the juggler's plan, which puts the palm AT the predicted ball at the planned
+  catch time; an exact prediction makes the palm meet the ball there while the hand
+  still rushes up to it, and the ball bounces off (medium: 16 of the oracle's 19 drops
+  met a rising hand, 8 within 15 mm and 5 ms of the plan at 4.9-6.5 m/s against the 5
+  m/s limit; hard: 33 of 34 rising). A late prediction (the true delay + 40 ms) puts the
+  hand lower on the ball's path, where it waits and the ball falls in: it catches more
+  (medium 0.938 against 0.798, hard 46 against 33 catches); the mean-delay fit errs that
+  way too (its estimate 12-37 mm low). Not a bug in the flight model (the drag, its sign
+  and the delay are used as the env applies them); an upper reference would need the
+  oracle's information AND a catch planned for the capture rule (the palm at rest or
+  moving down with the ball when they meet): ``oracle_catch``;
+* ``oracle_catch``: the UPPER REFERENCE, the oracle's estimator with the catch plan
+  (``juggler_oracle_catch``; :mod:`motion_envs.models.juggling._v2_catch`: the reach
+  ends ``lead`` s before the planned meeting, above it, and the palm descends at
+  ``descent`` m/s to meet the ball; both numbers chosen on TRAINING seeds and declared
+  in the model); given what the world hides, never a competitor and never chosen;
 * ``best_constant``: the constant action, from the grid :data:`CONSTANT_GRID`, with the
   highest catch rate on the VALIDATION seeds;
 * ``velocity_x_mean_delay``: in the catch phase, the ball's velocity (from the oldest and
@@ -36,6 +40,8 @@ unit action, the scale an agent is given):
   on the VALIDATION seeds (:func:`choose_offset`): the hand-written fix of the oracle
   diagnosis above (a late estimate puts the hand lower on the ball's path, where it
   waits and the ball falls in);
+* ``mean_delay_catch``: the catch plan on the level's mean delay (``juggler_mean_delay_catch``,
+  its lead and descent chosen on TRAINING seeds; no hidden information: a competitor);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
   delay found from the release, per episode);
 * ``random``: uniform random actions (seeded);
@@ -53,10 +59,12 @@ validation after its training). Every row is then played on the TEST seeds
 (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
 (:mod:`baselines.agents.juggling_score`, the likeness criterion), each with a 95 %
-bootstrap interval over episodes, and the room left below the oracle by the best
-non-oracle row (a paired interval). :func:`write_v2` writes ``results.json`` and
-``juggling_v2_rows.png`` (catch rate against deviation, one point per row with its
-interval bars, a panel per level).
+bootstrap interval over episodes, and the ROOM left below the upper reference by the
+best non-oracle row (``oracle_catch`` minus it, a paired interval), with
+``oracle_catch`` minus every other row (paired) to tell whether it is above them all;
+``room_below_oracle`` keeps the old ``oracle`` minus the best row. :func:`write_v2`
+writes ``results.json`` and ``juggling_v2_rows.png`` (catch rate against deviation, one
+point per row with its interval bars, a panel per level).
 """
 
 from __future__ import annotations
@@ -106,20 +114,28 @@ RESIDUAL_SCALE = 0.2
 CONSTANT_GRID: tuple[tuple[float, float], ...] = tuple(
     (x, z) for x in (-0.5, 0.0, 0.5) for z in (-0.5, 0.0, 0.5)
 )
-#: s added to the level's mean delay by ``late_meeting`` (the env's ``delay_offset``).
-LATE_OFFSETS: tuple[float, ...] = (0.0, 0.02, 0.04, 0.06, 0.08)
+#: s added to the level's mean delay by ``late_meeting`` (the env's ``delay_offset``):
+#: 0 to 200 ms in steps of 20 ms, declared before the run that measured it (the first
+#: grid, 0-80 ms, chose its largest value on medium and hard).
+LATE_OFFSETS: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(11))
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
     "oracle",
+    "oracle_catch",
     "best_constant",
     "velocity_x_mean_delay",
     "juggler_mean_delay",
     "late_meeting",
+    "mean_delay_catch",
     "delay_estimator",
     "random",
     "task_error_ilc",
 )
+#: The references (given what the world hides): never a competitor, never chosen.
+REFERENCES = ("oracle", "oracle_catch")
+#: The upper reference the room is measured against.
+UPPER_REFERENCE = "oracle_catch"
 #: Observation indices (JugglingV2Env's docstring): the catch phase's one-hot and the
 #: first frame slot ``(x, z, age, valid)``.
 _CATCH, _FRAME0 = 7, 16
@@ -259,6 +275,7 @@ def row_players(
     return {
         "juggler": ("juggler", None, {}),
         "oracle": ("juggler_oracle", None, {}),
+        "oracle_catch": ("juggler_oracle_catch", None, {}),
         "best_constant": (
             "juggler",
             None if constant == (0.0, 0.0) else _Constant(constant),
@@ -267,6 +284,7 @@ def row_players(
         "velocity_x_mean_delay": ("juggler", VelocityTimesDelay(delay, RESIDUAL_SCALE), {}),
         "juggler_mean_delay": ("juggler_mean_delay", None, {}),
         "late_meeting": ("juggler_mean_delay", None, {"delay_offset": offset}),
+        "mean_delay_catch": ("juggler_mean_delay_catch", None, {}),
         "delay_estimator": ("juggler_delay_estimator", None, {}),
         "random": ("juggler", _Random(0), {}),
     }
@@ -299,7 +317,7 @@ def run_v2(
         val_catch: dict[str, float] = {}
         for name, (ctl, policy, extra) in players.items():
             rates, key = reuse.get(name, ({}, ""))
-            if name == "oracle":
+            if name in REFERENCES:
                 continue
             if key in rates:
                 val_catch[name] = rates[key]
@@ -324,8 +342,14 @@ def run_v2(
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
         entries = {name: summary(eps) for name, eps in played.items()}
-        room, lo, hi = catch_rate_difference(played["oracle"], played[best])
+        room, lo, hi = catch_rate_difference(played[UPPER_REFERENCE], played[best])
+        old = catch_rate_difference(played["oracle"], played[best])
         est = catch_rate_difference(played["oracle"], played["delay_estimator"])
+        above = {
+            name: _difference(played[UPPER_REFERENCE], eps)
+            for name, eps in played.items()
+            if name != UPPER_REFERENCE
+        }
         levels.append(
             {
                 "level": level,
@@ -343,7 +367,9 @@ def run_v2(
                     "d_s": ilc.d,
                     "history": ilc.history,
                 },
-                "room_below_oracle": {"value": room, "ci": [lo, hi]},
+                "room_below_oracle_catch": {"value": room, "ci": [lo, hi]},
+                "oracle_catch_minus_rows": above,
+                "room_below_oracle": {"value": old[0], "ci": [old[1], old[2]]},
                 "oracle_minus_delay_estimator": {"value": est[0], "ci": [est[1], est[2]]},
             }
         )
@@ -361,6 +387,11 @@ def run_v2(
     }
 
 
+def _difference(a: JugglingEpisodes, b: JugglingEpisodes) -> dict[str, Any]:
+    value, lo, hi = catch_rate_difference(a, b)
+    return {"value": value, "ci": [lo, hi]}
+
+
 def _val(lv: dict[str, Any]) -> str:
     rates = lv.get("val_catch_rates", {})
     return ", ".join(f"{k} {v:.3f}" for k, v in rates.items()) or "not recorded"
@@ -372,7 +403,8 @@ def report_v2(doc: dict[str, Any]) -> str:
     lines = [
         f"Juggling-v2 rows ({doc['demonstrations']}); {test['count']} test episodes per level "
         f"and row (seeds from {test['first']}); choices on {doc['seeds']['choice']['count']} "
-        "validation episodes; oracle = reference given the true delay and drag (not a competitor)",
+        "validation episodes; oracle, oracle_catch = references given the true delay and drag "
+        "(not competitors); oracle_catch (with the catch plan) is the UPPER REFERENCE",
         f"{'level':7s} {'row':22s} {'catch rate [95% CI]':24s} {'deviation m [95% CI]':24s}",
     ]
     for lv in doc["levels"]:
@@ -383,14 +415,27 @@ def report_v2(doc: dict[str, Any]) -> str:
                 f"{lv['level']:7s} {name:22s} {m['catch_rate']:.3f} [{lo:.3f}, {hi:.3f}]   "
                 f"{m['deviation_m']:.4f} [{dlo:.4f}, {dhi:.4f}]"
             )
-        room = lv["room_below_oracle"]
+        key = "room_below_oracle_catch" if "room_below_oracle_catch" in lv else "room_below_oracle"
+        room = lv[key]
+        ref = UPPER_REFERENCE if key == "room_below_oracle_catch" else "oracle"
         lines.append(
             f"{lv['level']:7s} best constant {tuple(lv['constant'])}; late offset "
             f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; best non-oracle row "
             f"{lv['best_non_oracle']} (chosen on validation: {_val(lv)}); room below the "
-            f"oracle (oracle - {lv['best_non_oracle']}): {room['value']:+.3f} "
+            f"upper reference ({ref} - {lv['best_non_oracle']}, paired): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
         )
+        below = [
+            name
+            for name, d in lv.get("oracle_catch_minus_rows", {}).items()
+            if name != "oracle" and d["ci"][0] <= 0
+        ]
+        if "oracle_catch_minus_rows" in lv:
+            lines.append(
+                f"{lv['level']:7s} {UPPER_REFERENCE} above every non-reference row (paired "
+                "interval above 0): "
+                + ("yes" if not below else f"no, not above {', '.join(below)}")
+            )
         if "oracle_minus_delay_estimator" in lv:
             est = lv["oracle_minus_delay_estimator"]
             lines.append(
@@ -399,6 +444,12 @@ def report_v2(doc: dict[str, Any]) -> str:
             )
     lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
     return "\n".join(lines)
+
+
+_LABELS = {
+    "oracle": "oracle (true delay and drag)",
+    "oracle_catch": "oracle + catch plan (UPPER REFERENCE)",
+}
 
 
 def plot_v2(doc: dict[str, Any]) -> Any:
@@ -410,13 +461,13 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "os^D<>vxp", strict=True))
+    markers = dict(zip(ROWS, "osP^D<>hvxp", strict=True))
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
             dev, rate = m["deviation_m"] * 1000, m["catch_rate"]
             xerr = [[dev - m["deviation_ci"][0] * 1000], [m["deviation_ci"][1] * 1000 - dev]]
             yerr = [[rate - m["catch_rate_ci"][0]], [m["catch_rate_ci"][1] - rate]]
-            label = "oracle (true delay and drag)" if name == "oracle" else name.replace("_", " ")
+            label = _LABELS.get(name, name.replace("_", " "))
             ax.errorbar(dev, rate, xerr=xerr, yerr=yerr, fmt=markers.get(name, "*"), capsize=3,
                         label=label)  # fmt: skip
         ax.set_title(f"Juggling-v2 {lv['level']}")

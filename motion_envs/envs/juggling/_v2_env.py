@@ -80,7 +80,7 @@ class JugglingV2Env(OneBallEnv):
       (0.009/m) and a table-tennis ball (0.14/m), unknown to the juggler
       (:mod:`~motion_envs.envs.juggling._world`, *Air drag*);
     * **the capture rule in the hand's frame**: a catch needs the palm to meet the
-      ball slower than ``capture_speed`` (3 m/s) at the first physics step of their
+      ball slower than ``capture_speed`` (5 m/s) at the first physics step of their
       contact; a faster ball bounces off (*Capture at impact*).
 
     The analytic juggler's eq. 10 correction is fed the ball's state fitted to the
@@ -89,8 +89,11 @@ class JugglingV2Env(OneBallEnv):
     (:data:`~motion_envs.models.juggling.V2_CONTROLLERS`): ``juggler_mean_delay``
     (frames shifted by the level's mean delay), ``juggler_delay_estimator`` (the
     delay estimated from the release, a hand-written fix) and ``juggler_oracle`` (given
-    the episode's true delay and drag, not the frames' jitter: an UPPER REFERENCE, not a
-    competitor).
+    the episode's true delay and drag, not the frames' jitter; not a competitor). With a
+    catch planned for the capture rule (the palm arrives early and meets the ball
+    descending slower than it; :mod:`~motion_envs.models.juggling._v2_catch`):
+    ``juggler_oracle_catch`` (the oracle's information, the UPPER REFERENCE) and
+    ``juggler_mean_delay_catch`` (the level's mean delay, a competitor).
 
     A step is Juggling-v1's, in its batch of one (``V2Batch``, a
     :class:`~motion_envs.envs.juggling._v1_batch.V1Batch`: the command with the
@@ -102,10 +105,10 @@ class JugglingV2Env(OneBallEnv):
 
     | level    | delay (ms) | jitter (ms) | frame drops | noise (mm) | drag `k` (1/m) | release speed / angle std | `capture_speed` (m/s) |
     |----------|------------|-------------|-------------|------------|----------------|---------------------------|------------------------|
-    | `easy`   | 100-150    | 5           | 2 %         | 1          | 0.009-0.02     | 0.05 / 4 deg              | 3                      |
-    | `medium` | 100-200    | 10          | 5 %         | 2          | 0.009-0.07     | 0.08 / 6 deg              | 3                      |
-    | `hard`   | 150-250    | 15          | 10 %        | 3          | 0.009-0.14     | 0.12 / 12 deg             | 3                      |
-    | `drift`  | 100-250, a walk | 10     | 5 %         | 2          | 0.009-0.03, per catch | 0.08 / 6 deg       | 3                      |
+    | `easy`   | 100-150    | 5           | 2 %         | 1          | 0.009-0.02     | 0.05 / 4 deg              | 5                      |
+    | `medium` | 100-200    | 10          | 5 %         | 2          | 0.009-0.07     | 0.08 / 6 deg              | 5                      |
+    | `hard`   | 150-250    | 15          | 10 %        | 3          | 0.009-0.14     | 0.12 / 12 deg             | 5                      |
+    | `drift`  | 100-250, a walk | 10     | 5 %         | 2          | 0.009-0.03, per catch | 0.08 / 6 deg       | 5                      |
 
     Every level's camera runs at 100 Hz and loses the ball within 10 cm of the hand's
     origin. On `drift` the delay and the drag change WITHIN the episode, at every catch
@@ -183,7 +186,7 @@ class JugglingV2Env(OneBallEnv):
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |

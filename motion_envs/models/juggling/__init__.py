@@ -22,6 +22,7 @@ The public names of small private modules, one concern each:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:func:`make_v2_controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
   (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`);
+  ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -192,6 +193,7 @@ from motion_envs.models.juggling._sensor import (
     perturb_release,
     predict_forward,
 )
+from motion_envs.models.juggling._v2_catch import CATCH_PLANS, CatchPlan, CatchPlanController
 from motion_envs.models.juggling._v2_levels import (
     V2_CONTROLLERS,
     V2_LEVELS,
@@ -213,6 +215,7 @@ __all__ = [
     "CASCADE_CONTROLLERS",
     "CASCADE_V1_CONTROLLERS",
     "CASCADE_V1_LEVELS",
+    "CATCH_PLANS",
     "CONTROLLERS",
     "DEFAULT_TUNABLES",
     "DELAY_GRID",
@@ -247,6 +250,8 @@ __all__ = [
     "CascadeStart",
     "CascadeState",
     "CascadeTunables",
+    "CatchPlan",
+    "CatchPlanController",
     "ControlOptions",
     "CycleResult",
     "DefaultFit",

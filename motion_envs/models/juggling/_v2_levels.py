@@ -43,7 +43,12 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
   REFERENCE: it is given what the world hides; not the frames' jitter, which nothing
   observable tells). With drag the juggler's ballistic
   prediction is handed the equivalent ballistic state: the velocity whose ballistic
-  flight reaches, at the plan's catch time, the point the drag flight reaches.
+  flight reaches, at the plan's catch time, the point the drag flight reaches;
+* ``"juggler_oracle_catch"``: the oracle's estimator with a catch planned for the
+  capture rule (:mod:`~motion_envs.models.juggling._v2_catch`: the palm arrives early
+  and meets the ball descending slower than it): the UPPER REFERENCE;
+* ``"juggler_mean_delay_catch"``: the same catch plan on the level's mean delay (no
+  hidden information: a competitor).
 
 Without a state estimate (fewer than 3 frames of the flight) the juggler does not
 correct; the controller never sees the true ball in flight.
@@ -165,6 +170,8 @@ V2_CONTROLLERS: dict[str, str] = {
     "juggler_mean_delay": "mean_delay",
     "juggler_delay_estimator": "release",
     "juggler_oracle": "oracle",
+    "juggler_oracle_catch": "oracle",
+    "juggler_mean_delay_catch": "mean_delay",
 }
 
 
@@ -209,4 +216,9 @@ def make_v2_controller(
     if name not in V2_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
     estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
+    # the catch-plan controllers subclass V2Controller in their own module
+    from motion_envs.models.juggling._v2_catch import CATCH_PLANS, CatchPlanController
+
+    if name in CATCH_PLANS:
+        return CatchPlanController(juggler.variant(), estimator, CATCH_PLANS[name])
     return V2Controller(juggler.variant(), estimator)
