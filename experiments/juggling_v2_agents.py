@@ -7,7 +7,8 @@ chosen on the VALIDATION seeds (drop rate per toss, 40 episodes), then the kept 
 played on the TEST seeds (``SPLIT_SEEDS["test"] + i``). The reference rows are
 ``motion-bench juggling --version v2``'s (:func:`baselines.juggling_bench.v2.run_v2`:
 every choice on validation seeds, the same test seeds); the best non-oracle row and the
-oracle (an UPPER REFERENCE) are replayed on the same test seeds for paired differences.
+UPPER REFERENCE (``oracle_catch``: the true delay and drag with the catch planned for the
+capture rule) are replayed on the same test seeds for paired differences.
 
 Per run: the agent's catch rate with its 95 % bootstrap interval, its hand deviation
 from the HELD-OUT SIMULATED demonstrations (the rows' likeness criterion), ``agent -
@@ -77,11 +78,12 @@ def train_or_reuse(level: str, seed: int, args: argparse.Namespace, root: Path) 
 
 def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any]]:
     """The rows' document of ``level`` (:func:`run_v2`) and the test episodes of its best
-    non-oracle row, its juggler and its oracle, replayed on the same seeds."""
+    non-oracle row, its juggler and its upper reference, replayed on the same seeds."""
     from baselines.agents.juggling_score import juggling_episodes
     from baselines.juggling_bench.v2 import (
         ENV_ID_V2,
         RESIDUAL_SCALE,
+        UPPER_REFERENCE,
         V2Config,
         row_players,
         run_v2,
@@ -95,7 +97,7 @@ def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any
     if best not in players:
         raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
     played = {}
-    for name in dict.fromkeys(("juggler", "oracle", best)):
+    for name in dict.fromkeys(("juggler", UPPER_REFERENCE, best)):
         controller, policy, extra = players[name]
         kwargs = {
             "level": level,
@@ -128,7 +130,9 @@ def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -
     rate, lo, hi = catch_rate_interval(eps)
     dev, dlo, dhi = deviation_interval(eps)
     diff, diff_lo, diff_hi = catch_rate_difference(eps, played[best])
-    room, room_lo, room_hi = catch_rate_difference(played["oracle"], eps)
+    from baselines.juggling_bench.v2 import UPPER_REFERENCE
+
+    room, room_lo, room_hi = catch_rate_difference(played[UPPER_REFERENCE], eps)
     return {
         "run_dir": str(run_dir),
         "seed": int(loaded.config["seed"]),
@@ -256,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"{lv['level']}: best non-oracle row {best} {rows[best]['catch_rate']:.3f}, "
             f"juggler deviation {lv['juggler_deviation_mm']:.1f} mm, "
-            f"oracle {rows['oracle']['catch_rate']:.3f}"
+            f"upper reference oracle_catch {rows['oracle_catch']['catch_rate']:.3f}"
         )
         for r in lv["runs"]:
             print(
