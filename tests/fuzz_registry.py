@@ -110,6 +110,12 @@ LOADERS: tuple[Loader, ...] = (
         not_fuzzed="reads its CSV with read_juggling_csv or a recording (both fuzzed)",
     ),
     Loader("baselines.calibrate_cohort:load_targets", "json_targets"),
+    Loader(
+        "motion_envs.models.juggling.timing:read_pattern_markers",
+        "mocap",
+        not_fuzzed="needs the marker names; fuzzed with corrupted CSV and Qualisys TSV files "
+        "by tests/test_cascade_human_timing.py (hypothesis)",
+    ),
 )
 
 #: Environment ids: every constructor argument (name -> kind of value fuzzed, see

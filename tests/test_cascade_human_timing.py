@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from motion_envs.models.juggling.timing import (
     PatternTrajectories,
@@ -392,6 +394,41 @@ def test_bad_recordings_one_line_naming_the_file(tmp_path):
         read_pattern_markers(slow, ["R", "L"], ["b"])
     with pytest.raises(ValueError, match=r"TimingOptions\.contact_radius"):
         TimingOptions(contact_radius=-1.0)
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    data=st.binary(max_size=2048),
+    keep=st.integers(min_value=0, max_value=2000),
+    suffix=st.sampled_from([".csv", ".tsv"]),
+)
+def test_corrupted_recordings_are_one_line_value_errors(tmp_path, data, keep, suffix):
+    """Fuzz: a valid CSV or Qualisys TSV cut short and followed by arbitrary bytes is read
+    or refused with one ValueError line naming the file, never another error."""
+    traj = cascade(rate=100.0)
+    path = tmp_path / f"r{suffix}"
+    if suffix == ".csv":
+        lines = ["t,R_x,R_z,L_x,L_z,b0_x,b0_z"]
+        lines += [
+            f"{t},{h[0, 0]},{h[0, 1]},{h[1, 0]},{h[1, 1]},{b[0, 0]},{b[0, 1]}"
+            for t, h, b in zip(traj.t[:80], traj.hands, traj.balls, strict=False)
+        ]
+        path.write_bytes("\n".join(lines).encode()[:keep] + data)
+    else:
+        points = 1000.0 * np.concatenate(
+            [np.insert(traj.hands[:80, i], 1, 0.0, axis=1)[:, None] for i in range(2)]
+            + [np.insert(traj.balls[:80, 0], 1, 0.0, axis=1)[:, None]],
+            axis=1,
+        )
+        write_tsv(path, points, ["R", "L", "b0"], rate=100.0)
+        path.write_bytes(path.read_bytes()[:keep] + data)
+    try:
+        read_pattern_markers(path, ["R", "L"], ["b0"])
+    except ValueError as err:
+        message = str(err)
+        assert str(path) in message and "\n" not in message, message
 
 
 def test_experiment_measures_a_recording(experiment, tmp_path, capsys):
