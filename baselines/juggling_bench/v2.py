@@ -462,6 +462,8 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
     markers = dict(zip(ROWS, "osP^D<>hvxp", strict=True))
+    # one colour per row (the default cycle has 10; the 11th row is black)
+    colors = {name: f"C{i}" if i < 10 else "black" for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
             dev, rate = m["deviation_m"] * 1000, m["catch_rate"]
@@ -469,7 +471,7 @@ def plot_v2(doc: dict[str, Any]) -> Any:
             yerr = [[rate - m["catch_rate_ci"][0]], [m["catch_rate_ci"][1] - rate]]
             label = _LABELS.get(name, name.replace("_", " "))
             ax.errorbar(dev, rate, xerr=xerr, yerr=yerr, fmt=markers.get(name, "*"), capsize=3,
-                        label=label)  # fmt: skip
+                        label=label, color=colors.get(name))  # fmt: skip
         ax.set_title(f"Juggling-v2 {lv['level']}")
         ax.set_xlabel("hand deviation from held-out demonstrations (mm)")
         ax.grid(alpha=0.3)
