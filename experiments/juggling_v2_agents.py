@@ -19,7 +19,8 @@ in words: ``agent - best row >= +0.05`` with the interval above 0, deviation <= 
 juggler's + 5 mm, the oracle above the agent (the room left reported).
 
     python experiments/juggling_v2_agents.py [--levels medium hard] [--seeds 0 1 2]
-        [--timesteps N] [--test-episodes 100] [--runs DIR] [--out results.json]
+        [--timesteps N] [--controller NAME] [--test-episodes 100] [--runs DIR]
+        [--out results.json]
 
 ``--timesteps`` defaults to the config's (2.5e6, the full budget: about 21 min of CPU per
 seed at the measured 2,000 steps per CPU-second; the issue allows 30). Existing complete
@@ -68,7 +69,8 @@ def train_or_reuse(level: str, seed: int, args: argparse.Namespace, root: Path) 
                 out=str(out),
                 seed=seed,
                 timesteps=args.timesteps,
-                env_kwargs={"level": level},
+                env_kwargs={"level": level}
+                | ({"controller": args.controller} if args.controller else {}),
                 progress=True,
                 tensorboard=False,
             )
@@ -210,6 +212,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     p.add_argument("--timesteps", type=int, default=None, help="default: the config's (2.5e6)")
     p.add_argument("--test-episodes", type=int, default=100)
+    p.add_argument(
+        "--controller",
+        default=None,
+        help="the controller the residual acts on (default: the config's, "
+        "juggler_delay_estimator); e.g. juggler_mean_delay_catch",
+    )
     p.add_argument("--runs", default="juggling_v2_agent_runs", help="run folders' root")
     p.add_argument("--out", default=None, help="results JSON (default: RUNS/results.json)")
     args = p.parse_args(argv)
