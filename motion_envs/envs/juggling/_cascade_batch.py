@@ -422,13 +422,17 @@ class CascadeBatch(WorldBatch):
         """The commands ``cascade_command`` left: the eq. 10 corrections due (status 2),
         then their commands; the controllers in Python at their events (status 1)."""
         command, kernels, entry = (self._target, self._armed), self._kernels, self.entry
+        one = envs.size == 1  # the batch of one: its rows as they are
         for code in (2, 1):
-            hit = status == code
+            hit = (status[0] == code) if one else (status == code)
             if not hit.any():
                 continue
-            rows, a = envs[hit], a_out[hit]
+            rows, a = (envs, a_out) if one else (envs[hit], a_out[hit])
             if code == 2:
-                self._correct(rows, due[hit], predicted[hit])
+                if one:
+                    self._correct_one(int(envs[0]), due[0].tolist(), predicted[0])
+                else:
+                    self._correct(rows, due[hit], predicted[hit])
                 plan = self._plan()
                 args: tuple[Any, ...] = (rows, plan, self._ctl, a, self._residual, command)
                 entry(kernels.cascade_advance, *args)(*args)
@@ -442,25 +446,32 @@ class CascadeBatch(WorldBatch):
     ) -> None:
         """The eq. 10 corrections found due: each hand re-plans toward its view's ball's
         predicted intercept ``predicted (m, 2, 2)`` (:meth:`JugglingController.correct`'s
-        flight, own frame): one by one (:meth:`JugglingController.replan`), or all of
-        them together (:func:`~motion_envs.models.juggling.replan_many`, the same
-        numbers); the new plans are copied back."""
+        flight, own frame), all of them together
+        (:func:`~motion_envs.models.juggling.replan_many`: each hand's
+        :meth:`JugglingController.replan` numbers); the new plans are copied back."""
         rows, hands_at = np.nonzero(due)
-        at, target = envs[rows].tolist(), predicted[rows, hands_at]
+        at = envs[rows].tolist()
         hands: list[CascadeHand] = []
         for i, hh in zip(at, hands_at.tolist(), strict=True):
             hand = self.parts[i].controller.hands[hh]
             hand.k = int(self._pk[i, hh])
             hands.append(hand)
-        times = self._m_time[at].tolist()
-        if len(hands) <= CASCADE_HANDS:  # a batch of one's: no stacking
-            for hand, t, p in zip(hands, times, target, strict=True):
-                hand.replan(t, p.copy())
-        else:
-            replan_many(hands, times, target)
+        replan_many(hands, self._m_time[at].tolist(), predicted[rows, hands_at])
         for i, hh, hand in zip(at, hands_at.tolist(), hands, strict=True):
             self._load_grid(i, hh, hand)
             self._end[i, hh] = hand.end
+
+    def _correct_one(self, i: int, due: list[bool], predicted: NDArray[np.float64]) -> None:
+        """:meth:`_correct` of episode ``i``'s hands ``due`` (hand 0 first), each by its
+        own :meth:`JugglingController.replan` (no stacking)."""
+        time = float(self._m_time[i])
+        for h in (0, 1):
+            if due[h]:
+                hand = self.parts[i].controller.hands[h]
+                hand.k = int(self._pk[i, h])
+                hand.replan(time, predicted[h].copy())
+                self._load_grid(i, h, hand)
+                self._end[i, h] = hand.end
 
     def sync(self, i: int) -> None:
         """Give episode ``i``'s controller its hands' step counts and last commands (the
