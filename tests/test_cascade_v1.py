@@ -20,6 +20,7 @@ from baselines import options
 from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1 import (
     LATE_OFFSETS,
+    REFERENCES,
     ROWS,
     CascadeV1Config,
     check_cascade_v1_config,
@@ -224,9 +225,11 @@ def test_every_choice_is_made_on_validation_seeds() -> None:
         assert lv["late_offset_s"] == 0.04  # test would pick 0.08
         assert lv["best_non_oracle"] == "late_meeting"  # 12 on validation
         assert lv["rows"]["late_meeting"]["catches_mean"] == 2.0  # its test value at +40 ms
-        assert set(lv["val_mean_catches"]) == set(ROWS) - {"oracle"}
+        assert set(lv["val_mean_catches"]) == set(ROWS) - set(REFERENCES)
         assert lv["val_mean_catches"]["fixed_point"] == 9.0
-        assert not lv["oracle_is_upper"]  # the oracle (1) is below late meeting (2)
+        assert not lv["upper_is_upper"]  # oracle_catch (1) is below late meeting (2)
+        assert lv["room"]["value"] == -1.0  # oracle_catch 1 - late meeting 2 on test
+        assert lv["upper_minus_rows"]["late_meeting"]["ci"][1] < 0
 
 
 def test_the_best_row_is_not_read_from_test_seeds() -> None:

@@ -9,13 +9,24 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
 * ``juggler``: the analytic juggler told each ball through the flight fitted to its
   frames taken as the present (the zero action);
 * ``oracle``: the juggler given the episode's true delay and each ball's true drag
-  (``juggler_oracle``); called the upper reference only where it is measured above every
-  other row (``oracle_is_upper``: the paired interval of oracle minus the best
-  non-oracle row above 0);
+  (``juggler_oracle``): a reference, never a competitor and never chosen;
+* ``oracle_catch``: the oracle with Juggling-v2's catch planned for the capture rule
+  (``juggler_oracle_catch``: each flying ball told ``lead`` s ahead, so the hand ends its
+  reach early at the meeting point and waits; the lead chosen per juggler on TRAINING
+  seeds, :data:`motion_envs.models.juggling.CASCADE_CATCH_PLANS`): the reference the
+  room is measured against (:data:`UPPER_REFERENCE`), called the UPPER reference only
+  where measured at or above every row (``upper_is_upper``: its paired difference from
+  every other row, in mean catches, is >= 0; the report names the rows with an interval
+  wholly above it);
 * ``juggler_mean_delay``: the frames shifted by the level's mean delay;
 * ``late_meeting``: the same told the mean delay plus an offset from
   :data:`LATE_OFFSETS` (declared here before any run), the offset with the most mean
   catches before the first drop on VALIDATION episodes;
+* ``mean_delay_catch``: the same catch plan on the level's mean delay
+  (``juggler_mean_delay_catch``, its lead chosen on TRAINING seeds; no hidden
+  information: a competitor). Without drag in its estimate, telling a ball ``lead``
+  ahead is what ``late_meeting``'s offset does (a later placed fit, predicted further);
+  the rows differ in the seeds the number is chosen on and the grid;
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -27,9 +38,10 @@ any test seed is played; the rows are then played on ``episodes`` TEST episodes.
 episode ends at the first drop or after ``max_catches`` catches (censored). Reported per
 row (:func:`baselines.juggling_bench.cascade.summary`, 95 % bootstrap intervals resampling
 episodes): the median and the mean catches before the first drop, the catch rate, the
-median time to the first drop; per level the paired difference of mean catches of the
-oracle and of the best non-oracle row. The demonstrations (the likeness reward, the
-siteswap juggler's style) are SIMULATED.
+median time to the first drop; per level the ROOM, the paired difference of mean catches
+of ``oracle_catch`` and of the best non-oracle row, ``oracle_catch`` minus every other
+row (paired), and the old ``oracle`` minus the best row. The demonstrations (the
+likeness reward, the siteswap juggler's style) are SIMULATED.
 """
 
 from __future__ import annotations
@@ -51,8 +63,10 @@ from motion_envs.models.juggling import CASCADE_V1_LEVELS, V2_LEVELS, pattern_sp
 __all__ = [
     "CASCADE_V1_ENV_ID",
     "LATE_OFFSETS",
+    "REFERENCES",
     "RESIDUAL_SCALE",
     "ROWS",
+    "UPPER_REFERENCE",
     "CascadeV1Config",
     "cascade_v1_episodes",
     "check_cascade_v1_config",
@@ -70,7 +84,21 @@ RESIDUAL_SCALE = 0.1
 #: 120 ms before any Cascade-v1 run.
 LATE_OFFSETS: tuple[float, ...] = (0.0, 0.02, 0.04, 0.06, 0.08, 0.10, 0.12)
 #: The rows, in the report's order.
-ROWS = ("juggler", "oracle", "juggler_mean_delay", "late_meeting", "fixed_point", "random")
+ROWS = (
+    "juggler",
+    "oracle",
+    "oracle_catch",
+    "juggler_mean_delay",
+    "late_meeting",
+    "mean_delay_catch",
+    "fixed_point",
+    "random",
+)
+#: The references (given what the world hides): never a competitor, never chosen.
+REFERENCES = ("oracle", "oracle_catch")
+#: The reference the room is measured against.
+UPPER_REFERENCE = "oracle_catch"
+_LABELS = {"oracle": "oracle (true delay, drag)", "oracle_catch": "oracle + catch plan"}
 #: A row's policy: None (the zero action) or ``"random"``.
 Policy = str | None
 Play = Callable[[Policy, dict[str, Any], str, int], CascadeEpisodes]
@@ -175,8 +203,10 @@ def _players(offset: float) -> dict[str, tuple[str, Policy, float]]:
     return {
         "juggler": ("juggler", None, 0.0),
         "oracle": ("juggler_oracle", None, 0.0),
+        "oracle_catch": ("juggler_oracle_catch", None, 0.0),
         "juggler_mean_delay": ("juggler_mean_delay", None, 0.0),
         "late_meeting": ("juggler_mean_delay", None, offset),
+        "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0),
         "fixed_point": ("fixed_point", None, 0.0),
         "random": ("juggler", "random", 0.0),
     }
@@ -220,7 +250,7 @@ def run_cascade_v1(
         }
         val_means: dict[str, float] = {}
         for name, (ctl, policy, off) in players.items():
-            if name == "oracle":
+            if name in REFERENCES:
                 continue
             key = reuse.get(name)
             if key is not None and key in offset_means:
@@ -236,7 +266,12 @@ def run_cascade_v1(
         rows = {
             name: {**summary(eps), "catches_mean_ci": _mean_ci(eps)} for name, eps in played.items()
         }
-        room = _paired(played["oracle"], played[best])
+        room = _paired(played[UPPER_REFERENCE], played[best])
+        above = {
+            name: _paired(played[UPPER_REFERENCE], eps)
+            for name, eps in played.items()
+            if name != UPPER_REFERENCE
+        }
         levels.append(
             {
                 "level": level,
@@ -246,8 +281,10 @@ def run_cascade_v1(
                 "val_mean_catches": val_means,
                 "best_non_oracle": best,
                 "rows": rows,
-                "oracle_minus_best": room,
-                "oracle_is_upper": bool(room["ci"][0] > 0),
+                "room": room,
+                "upper_minus_rows": above,
+                "upper_is_upper": all(d["value"] >= 0 for d in above.values()),
+                "oracle_minus_best": _paired(played["oracle"], played[best]),
                 "best_minus_juggler": _paired(played[best], played["juggler"]),
             }
         )
@@ -288,19 +325,25 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             c, (clo, chi) = m["catches_median"], m["catches_median_ci"]
             mean, (mlo, mhi) = m["catches_mean"], m["catches_mean_ci"]
             r, (rlo, rhi) = m["catch_rate"], m["catch_rate_ci"]
-            label = "oracle (true delay, drag)" if name == "oracle" else name
+            label = {
+                "oracle": "oracle (true delay, drag)",
+                "oracle_catch": "oracle_catch (upper)",
+            }.get(name, name)
             lines.append(
                 f"{lv['level']:7s} {label[:19]:19s} {c:5.1f} [{clo:5.1f}, {chi:5.1f}]{'':6s} "
                 f"{mean:5.2f} [{mlo:5.2f}, {mhi:5.2f}]{'':3s} {r:.3f} [{rlo:.3f}, {rhi:.3f}]"
                 f"{'':2s} {m['censored']:8d}"
             )
-        room = lv["oracle_minus_best"]
-        upper = "the upper reference" if lv["oracle_is_upper"] else "NOT an upper reference"
+        room, old = lv["room"], lv["oracle_minus_best"]
+        upper = "the upper reference" if lv["upper_is_upper"] else "NOT an upper reference"
+        below = [k for k, d in lv["upper_minus_rows"].items() if d["ci"][1] < 0]
         lines.append(
             f"{lv['level']:7s} late offset {lv['late_offset_s'] * 1000:.0f} ms; best non-oracle "
-            f"row {lv['best_non_oracle']} (chosen on validation); oracle - best (paired mean "
-            f"catches): {room['value']:+.2f} [{room['ci'][0]:+.2f}, {room['ci'][1]:+.2f}]: "
-            f"the oracle is {upper}"
+            f"row {lv['best_non_oracle']} (chosen on validation); ROOM oracle_catch - best "
+            f"(paired mean catches): {room['value']:+.2f} [{room['ci'][0]:+.2f}, "
+            f"{room['ci'][1]:+.2f}]; oracle - best {old['value']:+.2f} [{old['ci'][0]:+.2f}, "
+            f"{old['ci'][1]:+.2f}]; oracle_catch is {upper}"
+            + (f" (below {', '.join(below)})" if below else "")
         )
     lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
     return "\n".join(lines)

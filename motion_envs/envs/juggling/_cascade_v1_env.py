@@ -39,6 +39,7 @@ from motion_envs.models.juggling import (
     CascadeState,
     SiteswapController,
     catch_height,
+    catch_plan,
     nearest_palm,
     pattern_controller,
     pattern_likeness,
@@ -93,7 +94,12 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``juggler_mean_delay`` (frames shifted by the level's mean delay plus
     `delay_offset`), ``juggler_oracle`` (the true delay and each ball's true drag; a
     reference, labelled as upper only where measured above the others) and
-    ``fixed_point`` (catches at the nominal point and time, never looking: trivial).
+    ``fixed_point`` (catches at the nominal point and time, never looking: trivial),
+    and Juggling-v2's catch planned for the capture rule on the oracle's and on the
+    mean delay's estimates (``juggler_oracle_catch``, ``juggler_mean_delay_catch``:
+    each flying ball told as it will be the plan's ``lead`` later, so the catch reach
+    ends ``lead`` early at the meeting point and the hand waits there;
+    :data:`~motion_envs.models.juggling.CASCADE_CATCH_PLANS`, chosen on training seeds).
     The agent adds a residual to each hand's command.
 
     Levels (Juggling-v2's; :data:`~motion_envs.models.juggling.V2_LEVELS`):
@@ -148,7 +154,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     per hand, ``time``, the true ``hands`` ``(2, 2)``, ``balls`` ``(N, 2)`` and ``hand``,
     and ``action_invalid``; at a step with a catch also the task-error vector per hand,
     ``task_error`` ``(2, 2)``: where the ball met the palm relative to its centre (m,
-    along ``x``, world frame) and the catch time minus the hand's planned catch time (s),
+    along ``x``, world frame) and the catch time minus the hand's planned catch time (s;
+    with a catch plan its planned meeting, the plan's end plus ``lead``),
     and ``catch_speed`` ``(2,)`` (m/s, the speed at which the palm met the ball); NaN for
     a hand that did not catch, and the timing NaN for a catch outside the hand's catch
     phase (no planned catch time; Juggling-v2's vector, per hand).
@@ -179,7 +186,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
@@ -238,9 +245,13 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.pattern, variant, self.gravity
         )
         self.home = self.controller.home
+        #: the controller's catch plan (``*_catch`` controllers), else None
+        self.catch_plan = catch_plan(self.controller_name, self.pattern.fitted)
+        lead = 0.0 if self.catch_plan is None else self.catch_plan.lead
         self.view = CascadeBallView(
-            self.balls, mode, self.gravity, lv.mean_delay + offset, catch_height(self.controller)
-        )
+            self.balls, mode, self.gravity, lv.mean_delay + offset, catch_height(self.controller),
+            lead,
+        )  # fmt: skip
         self.likeness = pattern_likeness(self.pattern, self.gravity)
         self._likeness = LikenessQuery(self.likeness)
         spec = WorldSpec.of(
@@ -394,7 +405,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         if self.residual_phases is not None:
             acts = self.residual_acts[[PHASES.index(c.phase(h)) for h in range(CASCADE_HANDS)]]
             residual = np.where(acts[:, None], residual, 0.0)
-        planned = [planned_catch(c, h) for h in range(CASCADE_HANDS)]
+        planned = [planned_catch(c, h) + self.view.lead for h in range(CASCADE_HANDS)]
         before = self.data.qpos.copy(), self.data.qvel.copy()
         true = self.world.step(targets + residual, armed)
         if any(b >= 0 for b in true.caught):

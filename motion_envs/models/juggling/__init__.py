@@ -21,7 +21,8 @@ The public names of small private modules, one concern each:
   fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:func:`make_v2_controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
-  (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`);
+  (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`) and its catch plans
+  (:data:`CASCADE_CATCH_PLANS`);
   ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
@@ -90,10 +91,12 @@ from motion_envs.models.juggling._cascade_siteswap import (
 )
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
 from motion_envs.models.juggling._cascade_v1 import (
+    CASCADE_CATCH_PLANS,
     CASCADE_V1_CONTROLLERS,
     CASCADE_V1_LEVELS,
     CascadeBallView,
     catch_height,
+    catch_plan,
     equivalent_ballistic,
     nearest_palm,
     planned_catch,
@@ -212,6 +215,7 @@ from motion_envs.models.juggling._world import (
 
 __all__ = [
     "ANCHOR_FRAMES",
+    "CASCADE_CATCH_PLANS",
     "CASCADE_CONTROLLERS",
     "CASCADE_V1_CONTROLLERS",
     "CASCADE_V1_LEVELS",
@@ -283,6 +287,7 @@ __all__ = [
     "cascade_likeness",
     "cascade_reasons",
     "catch_height",
+    "catch_plan",
     "check_gravity",
     "check_pattern",
     "choose_beat",

@@ -24,6 +24,22 @@ noise, the drag range, the toss scatter, the capture speed); ``drift`` is not of
   scatter is unknown to it), or for a ball in flight at ``t = 0`` its nominal start
   (the pattern's unscattered throw).
 
+**The catch plan** (``juggler_oracle_catch``, ``juggler_mean_delay_catch``;
+:data:`CASCADE_CATCH_PLANS`): Juggling-v2's catch planned for the capture rule
+(:class:`~motion_envs.models.juggling.CatchPlan`; its lead only, ``descent = 0``: the
+hand arrives early and waits), given to the pattern's juggler through the view: each
+flying ball is told as it will be ``lead`` s later (its estimated state at ``now +
+lead``; before 3 frames its release flight at ``now + lead``). The juggler, which
+plans its palm AT the told ball at its catch time ``t_c``, so ends its catch reach at
+the point the ball reaches at ``t_c + lead``: ``lead`` early, where it waits while the
+ball falls in (the planned meeting at the ball's own speed,
+:meth:`~motion_envs.models.juggling.CatchPlan.meeting_speed` with no descent, instead
+of the palm rushing up into the ball). The lead is chosen per juggler (the fitted
+cascade juggler's on pattern ``"3"``, the siteswap juggler's on ``"5"``) on TRAINING
+seeds by ``experiments/cascade_v1_catch_plan.py`` from :data:`CASCADE_LEAD_GRID`
+(Juggling-v2's grid in the 20 ms steps of Cascade-v1's late-meeting offsets, declared
+before the run).
+
 The oracle knows the drag: the juggler predicts ballistically, so it is handed the
 EQUIVALENT ballistic state, the velocity whose ballistic flight reaches, when the drag
 flight comes down through the pattern's catch height, the point the drag flight reaches
@@ -47,12 +63,16 @@ from motion_envs.models.juggling._camera import CameraFrame, FlightEstimator, dr
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_control import CascadeController, CascadeStart
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
+from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = [
+    "CASCADE_CATCH_PLANS",
+    "CASCADE_LEAD_GRID",
     "CASCADE_V1_CONTROLLERS",
     "CASCADE_V1_LEVELS",
     "CascadeBallView",
     "catch_height",
+    "catch_plan",
     "equivalent_ballistic",
     "nearest_palm",
     "planned_catch",
@@ -66,9 +86,38 @@ CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
     "juggler_mean_delay": ("juggler", "mean_delay"),
     "juggler_oracle": ("juggler", "oracle"),
     "fixed_point": ("fixed_point", "arrival"),
+    "juggler_oracle_catch": ("juggler", "oracle"),
+    "juggler_mean_delay_catch": ("juggler", "mean_delay"),
+}
+#: s; the leads tried on training seeds (0-160 ms in 20 ms steps).
+CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9))
+#: The catch-plan controllers' plans per juggler (``"fitted"``: the fitted cascade
+#: juggler, pattern ``"3"``; ``"siteswap"``: the siteswap juggler), chosen on TRAINING
+#: seeds (module docstring; 12 training episodes per level, at most 10 catches, mean
+#: catches before the first drop pooled over the levels, 2026-12-06). Fitted juggler:
+#: lead 20 ms for both (oracle 5.94 against 3.19 at 0 ms and 1.9-4.1 at 40-160 ms; mean
+#: delay 4.36 against 3.44 at 0 ms, 4.06 at 40 ms). Siteswap juggler: lead 0 for both
+#: (oracle 3.64, then 2.92 at 20 ms and at most 1.19 beyond; mean delay 4.19, then 2.86):
+#: no lead helps it, so on pattern ``"5"`` the catch-plan controllers ARE
+#: ``juggler_oracle`` and ``juggler_mean_delay``.
+CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan]] = {
+    "juggler_oracle_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": CatchPlan(0.0, 0.0)},
+    "juggler_mean_delay_catch": {
+        "fitted": CatchPlan(0.02, 0.0),
+        "siteswap": CatchPlan(0.0, 0.0),
+    },
 }
 #: s, the step and the horizon of the oracle's search for the catch-height crossing.
 _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
+
+
+def catch_plan(name: str, fitted: bool) -> CatchPlan | None:
+    """Controller ``name``'s catch plan for the fitted cascade juggler (``fitted``) or the
+    siteswap juggler (:data:`CASCADE_CATCH_PLANS`), None for a controller without one."""
+    plans = CASCADE_CATCH_PLANS.get(name)
+    if plans is None:
+        return None
+    return plans["fitted" if fitted else "siteswap"]
 
 
 def catch_height(controller: CascadeController | SiteswapController) -> float:
@@ -111,9 +160,15 @@ class CascadeBallView:
         s, ``"mean_delay"``'s fixed delay.
     height:
         m, the catch height (:func:`catch_height`; the oracle's drag matching).
+    lead:
+        s (>= 0), the catch plan's lead: each flying ball told as it will be ``lead``
+        s later (module docstring); 0 for the controllers without the plan.
     """
 
-    def __init__(self, balls: int, mode: str, gravity: float, delay: float, height: float) -> None:
+    def __init__(
+        self, balls: int, mode: str, gravity: float, delay: float, height: float,
+        lead: float = 0.0,
+    ) -> None:  # fmt: skip
         if mode == "release":
             raise ValueError(
                 "mode 'release' (one delay pooled over a ball's flights) is not offered"
@@ -121,6 +176,9 @@ class CascadeBallView:
         self.estimators = [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
         self.gravity = float(gravity)
         self.height = float(height)
+        if not (math.isfinite(lead) and lead >= 0):
+            raise ValueError(f"lead must be finite and >= 0 s; got {lead!r}")
+        self.lead = float(lead)
         self.priors: list[tuple[float, FloatArray, FloatArray]] = []
         self._crossings: list[tuple[int, tuple[float, float, float] | None]] = [(-1, None)] * balls
 
@@ -148,16 +206,22 @@ class CascadeBallView:
             est.add(new)
 
     def ball(self, i: int, now: float) -> tuple[FloatArray, FloatArray]:
-        """Flying ball ``i``'s ``(position, velocity)`` at ``now`` as the juggler is told."""
+        """Flying ball ``i``'s ``(position, velocity)`` at ``now`` as the juggler is told:
+        its state at ``now + lead`` (the drag flight's equivalent ballistic state, crossing
+        the catch height ``lead`` s earlier than the ball, for the oracle)."""
         est = self.estimators[i]
-        got = est.estimate(now)
+        ahead = now + self.lead
+        got = est.estimate(ahead)
         if got is None:
             t0, p0, v0 = self.priors[i]
-            s, g = now - t0, self.gravity
+            s, g = ahead - t0, self.gravity
             return p0 + v0 * s - np.array((0.0, 0.5 * g * s * s)), v0 - np.array((0.0, g * s))
         p, v = got
         if est.drag > 0:
-            v_eq = equivalent_ballistic(p, self._crossing(i, now, p, v), now, self.gravity)
+            crossing = self._crossing(i, ahead, p, v)
+            if crossing is not None and self.lead:
+                crossing = (crossing[0] - self.lead, crossing[1], crossing[2])
+            v_eq = equivalent_ballistic(p, crossing, now, self.gravity)
             if v_eq is not None:
                 v = v_eq
         return p, v

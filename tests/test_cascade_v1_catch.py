@@ -1,0 +1,167 @@
+"""Cascade-v1's catch plan (``juggler_oracle_catch``, ``juggler_mean_delay_catch``): the
+view tells each flying ball ``lead`` s ahead, so the juggler's reach ends ``lead`` early
+at the meeting point (hand-worked flights; scipy's drag flight for the oracle's
+matching); the controllers' leads are the declared ones; the choice of the leads plays
+TRAINING seeds only (a spy on the experiment)."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from motion_envs.envs.juggling import CascadeV1Env
+from motion_envs.models.juggling import (
+    CASCADE_CATCH_PLANS,
+    CASCADE_V1_CONTROLLERS,
+    CameraFrame,
+    CascadeBallView,
+    CatchPlan,
+    catch_plan,
+)
+from motion_envs.models.juggling._cascade_v1 import CASCADE_LEAD_GRID
+
+
+def test_a_just_thrown_ball_is_told_lead_ahead_hand_worked() -> None:
+    """Thrown at t = 0 from (0, 1) m at (1, 4) m/s, g = 10: at now = 0.1 s with a lead of
+    0.12 s the juggler is told the ball at 0.22 s: (0.22, 1 + 0.88 - 0.242) m, (1, 1.8)
+    m/s. It comes down through z = 1 at 0.8 s at (1, -4) m/s: the told flight is there
+    at 0.68 s, where the hand waits; the planned meeting speed (no descent) is the
+    ball's, sqrt(17) = 4.123 m/s."""
+    view = CascadeBallView(1, "arrival", 10.0, 0.1, 1.0, lead=0.12)
+    view.estimators[0].reset()
+    view.priors = [(0.0, np.array([0.0, 1.0]), np.array([1.0, 4.0]))]
+    p, v = view.ball(0, 0.1)
+    np.testing.assert_allclose(p, [0.22, 1.638], atol=1e-12)
+    np.testing.assert_allclose(v, [1.0, 1.8], atol=1e-12)
+    s = 0.68 - 0.1  # the told flight at the juggler's catch time 0.68 s
+    told = p + v * s - np.array([0.0, 5.0 * s * s])
+    np.testing.assert_allclose(told, [0.8, 1.0], atol=1e-12)
+    assert CatchPlan(0.12, 0.0).meeting_speed(np.array([1.0, -4.0])) == pytest.approx(
+        math.sqrt(17.0)
+    )
+    assert CascadeBallView(1, "arrival", 10.0, 0.1, 1.0).lead == 0.0
+    with pytest.raises(ValueError, match="lead"):
+        CascadeBallView(1, "arrival", 10.0, 0.1, 1.0, lead=-0.1)
+
+
+def _thrown(view: CascadeBallView, delay: float) -> None:
+    """A ballistic flight (g = 9.81) from (0.1, 1) m at (-0.4, 4) m/s at t = 0, its frames
+    every 10 ms arriving ``delay`` s after their capture, up to 0.2 s."""
+    for est in view.estimators:
+        est.released(0.0, 0.1, 1.0)
+        frames = []
+        for k in range(1, 21):
+            t = 0.01 * k
+            frames.append(CameraFrame(t, t + delay, 0.1 - 0.4 * t, 1.0 + 4 * t - 4.905 * t * t))
+        est.add(frames)
+    view.priors = [(0.0, np.array([0.1, 1.0]), np.array([-0.4, 4.0]))]
+
+
+def test_with_frames_the_ball_is_the_estimate_lead_ahead() -> None:
+    """With 3+ frames (the mean-delay estimator, no drag): the ball told at ``now`` is the
+    estimator's state at ``now + lead``; with the true delay that is the true flight."""
+    lead, delay = 0.08, 0.15
+    planned = CascadeBallView(1, "mean_delay", 9.81, delay, 1.0, lead=lead)
+    plain = CascadeBallView(1, "mean_delay", 9.81, delay, 1.0)
+    _thrown(planned, delay)
+    _thrown(plain, delay)
+    now = 0.36
+    p, v = planned.ball(0, now)
+    q, w = plain.ball(0, now + lead)
+    np.testing.assert_array_equal(p, q)
+    np.testing.assert_array_equal(v, w)
+    t = now + lead
+    np.testing.assert_allclose(p, [0.1 - 0.4 * t, 1.0 + 4 * t - 4.905 * t * t], atol=1e-9)
+
+
+def test_the_oracle_plan_reaches_the_drag_crossing_lead_early() -> None:
+    """The oracle (true delay, drag k): the told ballistic flight reaches the point where
+    scipy's drag flight (from the oracle's estimate) comes down through the catch height,
+    ``lead`` s BEFORE the ball does; within 1 mm (the view's 10 ms search)."""
+    lead, delay, k, h = 0.1, 0.15, 0.1, 1.0
+    view = CascadeBallView(1, "oracle", 9.81, 0.0, h, lead=lead)
+    view.estimators[0].reset(k, delay)
+    _thrown(view, delay)
+    now = 0.36
+    est = view.estimators[0].estimate(now + lead)
+    assert est is not None
+
+    def rhs(_t: float, y: np.ndarray) -> list[float]:
+        s = math.hypot(y[2], y[3])
+        return [y[2], y[3], -k * s * y[2], -9.81 - k * s * y[3]]
+
+    def down(_t: float, y: np.ndarray) -> float:
+        return y[1] - h
+
+    down.terminal, down.direction = True, -1  # type: ignore[attr-defined]
+    y0 = [*est[0], *est[1]]
+    sol = solve_ivp(rhs, (0, 3), y0, events=down, rtol=1e-10, atol=1e-12)
+    t_h = now + lead + float(sol.t_events[0][0])  # the ball's crossing
+    x_h = float(sol.y_events[0][0][0])
+    p, v = view.ball(0, now)
+    s = t_h - lead - now
+    told = p + v * s - np.array([0.0, 0.5 * 9.81 * s * s])
+    np.testing.assert_allclose(told, [x_h, h], atol=1e-3)
+
+
+@pytest.mark.parametrize("pattern", ["3", "5"])
+def test_the_controllers_carry_their_declared_leads(pattern: str) -> None:
+    fitted = pattern == "3"
+    for name in CASCADE_V1_CONTROLLERS:
+        env = CascadeV1Env(level="easy", pattern=pattern, controller=name, max_catches=2)
+        plan = catch_plan(name, fitted)
+        if name in CASCADE_CATCH_PLANS:
+            assert plan is CASCADE_CATCH_PLANS[name]["fitted" if fitted else "siteswap"]
+            assert env.view.lead == plan.lead and plan.descent == 0.0
+            assert plan.lead in CASCADE_LEAD_GRID
+            assert env.view.estimators[0].mode == CASCADE_V1_CONTROLLERS[name][1]
+        else:
+            assert plan is None and env.view.lead == 0.0
+        catches, tosses, _, _ = env.play(1)
+        assert 0 <= catches <= 2 and tosses >= 0
+
+
+def _experiment() -> Any:
+    path = Path(__file__).resolve().parents[1] / "experiments" / "cascade_v1_catch_plan.py"
+    spec = importlib.util.spec_from_file_location("cascade_v1_catch_plan", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A spy on the experiment's seeds: every episode it plays is a TRAINING seed, and the
+    candidate lead is the one the view uses."""
+    module = _experiment()
+    from motion_envs.datasets.juggling import SPLIT_SEEDS, episode_seeds
+
+    asked: list[str] = []
+
+    def seeds(split: str, n: int) -> np.ndarray:
+        asked.append(split)
+        return episode_seeds(split, n)
+
+    played: list[tuple[int, float]] = []
+
+    def play(self: CascadeV1Env, seed: int) -> tuple[int, int, bool, float]:
+        played.append((seed, self.view.lead))
+        return 1, 2, True, 1.0
+
+    monkeypatch.setattr(module, "episode_seeds", seeds)
+    monkeypatch.setattr(CascadeV1Env, "play", play)
+    got = module.score("juggler_oracle_catch", "3", 0.06, 3, 2)
+    assert asked == ["train"] * 3 and got == {"easy": 1.0, "medium": 1.0, "hard": 1.0}
+    train = SPLIT_SEEDS["train"]
+    assert {s for s, _ in played} == {train, train + 1, train + 2}
+    assert {lead for _, lead in played} == {0.06}
+    others = [SPLIT_SEEDS[k] for k in SPLIT_SEEDS if k != "train"]
+    assert all(not (o <= s < o + 3) for s, _ in played for o in others)
