@@ -76,6 +76,10 @@ class OracleResidual:
     (clipped to ``clip`` per entry, zero outside ``phases``); records the unclipped
     difference and the hand's phase of every period."""
 
+    #: Its commands run in Python every period: the env's batch must not step the
+    #: juggler's plans in its compiled arrays between events.
+    compiled_events = False
+
     def __init__(
         self, juggler: CascadeController, aware: CascadeController, clip: float, phases: Any
     ) -> None:
