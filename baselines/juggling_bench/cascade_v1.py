@@ -26,7 +26,8 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   (``juggler_mean_delay_catch``, its lead chosen on TRAINING seeds; no hidden
   information: a competitor). Without drag in its estimate, telling a ball ``lead``
   ahead is what ``late_meeting``'s offset does (a later placed fit, predicted further);
-  the rows differ in the seeds the number is chosen on and the grid;
+  the rows differ in the seeds the number is chosen on (one lead for all levels) and in
+  the flight told before a ball's first three frames (advanced by the lead only);
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -98,7 +99,7 @@ ROWS = (
 REFERENCES = ("oracle", "oracle_catch")
 #: The reference the room is measured against.
 UPPER_REFERENCE = "oracle_catch"
-_LABELS = {"oracle": "oracle (true delay, drag)", "oracle_catch": "oracle + catch plan"}
+_LABELS = {"oracle": "oracle (true delay, drag)", "oracle_catch": "oracle+catch plan"}
 #: A row's policy: None (the zero action) or ``"random"``.
 Policy = str | None
 Play = Callable[[Policy, dict[str, Any], str, int], CascadeEpisodes]
@@ -325,10 +326,7 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             c, (clo, chi) = m["catches_median"], m["catches_median_ci"]
             mean, (mlo, mhi) = m["catches_mean"], m["catches_mean_ci"]
             r, (rlo, rhi) = m["catch_rate"], m["catch_rate_ci"]
-            label = {
-                "oracle": "oracle (true delay, drag)",
-                "oracle_catch": "oracle_catch (upper)",
-            }.get(name, name)
+            label = _LABELS.get(name, name)
             lines.append(
                 f"{lv['level']:7s} {label[:19]:19s} {c:5.1f} [{clo:5.1f}, {chi:5.1f}]{'':6s} "
                 f"{mean:5.2f} [{mlo:5.2f}, {mhi:5.2f}]{'':3s} {r:.3f} [{rlo:.3f}, {rhi:.3f}]"
