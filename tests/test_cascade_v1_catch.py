@@ -165,3 +165,51 @@ def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyP
     assert {lead for _, lead in played} == {0.06}
     others = [SPLIT_SEEDS[k] for k in SPLIT_SEEDS if k != "train"]
     assert all(not (o <= s < o + 3) for s, _ in played for o in others)
+
+
+@pytest.mark.parametrize("pattern", ["3", "5"])
+def test_a_drop_carries_the_miss_of_the_dropped_ball(pattern: str) -> None:
+    """At the drop step: ``miss_error`` is the dropped ball's x offset and timing at its
+    closest approach to a catching hand, recomputed here from the true states of every
+    step (the ball's ``x`` minus the hand's, while it falls and the hand is in its catch
+    phase); no other step carries it."""
+    env = CascadeV1Env(level="hard", pattern=pattern, controller="juggler", max_catches=30)
+    found = 0
+    for seed in range(4):
+        env.reset(seed=seed)
+        best: dict[int, tuple[float, int, float, float]] = {}
+        terminated = truncated = False
+        while not (terminated or truncated):
+            c = env.controller
+            phases = [c.phase(h) for h in range(2)]
+            planned = [math.nan if phases[h] != "catch" else _planned(env, h) for h in range(2)]
+            _, _, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+            state = env.world.state
+            for b in state.released:
+                if b >= 0:
+                    best.pop(b, None)
+            for i, holder in enumerate(state.holder):
+                if holder >= 0 or state.ball_vel[i, 1] >= 0:
+                    continue
+                for h in range(2):
+                    if phases[h] == "catch":
+                        d = float(np.hypot(*(state.ball_pos[i] - state.hand_pos[h])))
+                        if i not in best or d < best[i][0]:
+                            off = float(state.ball_pos[i, 0] - state.hand_pos[h, 0])
+                            best[i] = (d, h, off, state.time - planned[h])
+            if not terminated:
+                assert "miss_error" not in info
+        dropped = [i for i, d in enumerate(env.world.state.dropped) if d]
+        if terminated and dropped and dropped[0] in best:
+            found += 1
+            _, h, off, timing = best[dropped[0]]
+            assert info["miss_hand"] == h
+            np.testing.assert_allclose(info["miss_error"], [off, timing], atol=1e-12)
+            assert info["miss_speed"] > 0
+    assert found >= 2
+
+
+def _planned(env: CascadeV1Env, h: int) -> float:
+    from motion_envs.models.juggling import planned_catch
+
+    return planned_catch(env.controller, h) + env.view.lead

@@ -21,6 +21,7 @@ from motion_envs.envs.juggling._cascade_env import (
     DEFAULT_CASCADE_REWARD_WEIGHTS,
 )
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
+from motion_envs.envs.juggling._cascade_v1_errors import MissTracker, catch_errors
 from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin
 from motion_envs.envs.juggling._world_spec import (
@@ -158,7 +159,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     with a catch plan its planned meeting, the plan's end plus ``lead``),
     and ``catch_speed`` ``(2,)`` (m/s, the speed at which the palm met the ball); NaN for
     a hand that did not catch, and the timing NaN for a catch outside the hand's catch
-    phase (no planned catch time; Juggling-v2's vector, per hand).
+    phase (no planned catch time; Juggling-v2's vector, per hand). At the step of a
+    drop, the dropped ball's miss: ``miss_error`` ``(offset, timing)``, ``miss_speed``
+    and ``miss_hand`` at its closest approach (sampled every period since its release,
+    while it falls) to the origin of a hand in its catch phase (absent when it fell past
+    none; :class:`~motion_envs.envs.juggling._cascade_v1_errors.MissTracker`).
 
     ## Starting State
     Cascade-v0's: the hands at their homes, ball 0 in the right hand, ball 1 in the left,
@@ -297,6 +302,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._catches = self._tosses = 0
         self._release_time = [math.nan, math.nan]
         self._errors = (np.full((2, 2), np.nan), np.full(2, np.nan))
+        self._misses = MissTracker(self.balls)
         #: s and 1/m ``(N,)``: the episode's true delay and the balls' drags (hidden)
         self.delay = math.nan
         self.drags = np.full(self.balls, np.nan)
@@ -349,6 +355,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._done = False
         self._catches = self._tosses = 0
         self._release_time = [math.nan, math.nan]
+        self._misses.reset()
         return self._observation(true), self._info(true, seed=base)
 
     def _info(self, true: CascadeState, **extra: Any) -> dict[str, Any]:
@@ -382,6 +389,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             like += self._likeness.distance(phase, true.hand_pos[h] * sign, true.hand_vel[h] * sign)
         reward, terms = self._rewards(caught, true.any_dropped, like / CASCADE_HANDS, float(a @ a))
         terminated, truncated = self._episode_end(true.any_dropped, true.time)
+        if terminated:
+            events.update(self._misses.miss(true))
         info = self._info(
             true,
             **terms,
@@ -406,10 +415,12 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             acts = self.residual_acts[[PHASES.index(c.phase(h)) for h in range(CASCADE_HANDS)]]
             residual = np.where(acts[:, None], residual, 0.0)
         planned = [planned_catch(c, h) + self.view.lead for h in range(CASCADE_HANDS)]
+        phases = [c.phase(h) for h in range(CASCADE_HANDS)]
         before = self.data.qpos.copy(), self.data.qvel.copy()
         true = self.world.step(targets + residual, armed)
         if any(b >= 0 for b in true.caught):
-            self._errors = self._task_errors(before, true, planned)
+            self._errors = catch_errors(before, true, planned, self.task.dt)
+        self._misses.update(true, phases, planned)
         k = int(self.world.k[0])
         frames = []
         for i, camera in enumerate(self.cameras):
@@ -426,34 +437,6 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._catches += sum(int(x >= 0) for x in true.caught)
         self._tosses += sum(int(x >= 0) for x in true.released)
         return true
-
-    def _task_errors(
-        self,
-        before: tuple[NDArray[np.float64], NDArray[np.float64]],
-        true: CascadeState,
-        planned: list[float],
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Per hand, the catch's ``(offset, timing)`` and meeting speed (NaN for a hand
-        that did not catch) from the state at the period's start: the relative motion of
-        the ball and the palm, linear over the period, meets the palm's top (the ball's
-        centre level with the hand's origin) at ``s`` in ``[0, dt]``; the offset is along
-        ``x`` (world frame), the timing the meeting time minus the plan's catch time (NaN
-        outside the hand's catch phase)."""
-        q, v = before
-        dt = self.task.dt
-        t0 = true.time - dt
-        errors = np.full((CASCADE_HANDS, 2), np.nan)
-        speeds = np.full(CASCADE_HANDS, np.nan)
-        for h, b in enumerate(true.caught):
-            if b < 0:
-                continue
-            hb, bb = 2 * h, 2 * CASCADE_HANDS + 2 * b
-            rx, rz = q[bb] - q[hb], q[bb + 1] - q[hb + 1]
-            vx, vz = v[bb] - v[hb], v[bb + 1] - v[hb + 1]
-            s = min(max(-rz / vz, 0.0), dt) if vz < 0 else 0.0
-            errors[h] = (rx + vx * s, t0 + s - planned[h])
-            speeds[h] = math.hypot(vx, vz)
-        return errors, speeds
 
     def play(self, seed: int) -> tuple[int, int, bool, float]:
         """The zero-action episode reset with ``seed`` (the controller alone; the same
