@@ -87,9 +87,8 @@ class Eq10Corrections:
         if not on_rows.all():
             for j in np.flatnonzero(~on_rows).tolist():
                 self._replan(int(rows[j]), int(k[j]), times[j], target[j])
-            rows, k, duration, tau1, glen, target = (
-                x[on_rows] for x in (rows, k, duration, tau1, glen, target)
-            )
+            rows, k, glen = rows[on_rows], k[on_rows], glen[on_rows]
+            duration, tau1, target = duration[on_rows], tau1[on_rows], target[on_rows]
             times = [t for t, on in zip(times, on_rows.tolist(), strict=True) if on]
             if not rows.size:
                 return

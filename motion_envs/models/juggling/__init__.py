@@ -19,11 +19,12 @@ The public names of small private modules, one concern each:
 * ``_camera``: how Juggling-v2 sees the ball (:class:`CameraSensor`: positions at a
   camera rate, a hidden delay with jitter, drops, occlusion) and the flight estimators
   fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
-  Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:func:`make_v2_controller`);
+  Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:class:`V2Controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
   (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`) and its catch plans
   (:data:`CASCADE_CATCH_PLANS`);
-  ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`);
+  ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`)
+  and every Juggling-v2 controller by name (:func:`make_v2_controller`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -196,13 +197,17 @@ from motion_envs.models.juggling._sensor import (
     perturb_release,
     predict_forward,
 )
-from motion_envs.models.juggling._v2_catch import CATCH_PLANS, CatchPlan, CatchPlanController
+from motion_envs.models.juggling._v2_catch import (
+    CATCH_PLANS,
+    CatchPlan,
+    CatchPlanController,
+    make_v2_controller,
+)
 from motion_envs.models.juggling._v2_levels import (
     V2_CONTROLLERS,
     V2_LEVELS,
     V2Controller,
     V2Level,
-    make_v2_controller,
 )
 from motion_envs.models.juggling._world import (
     TRACKING_ROWS,

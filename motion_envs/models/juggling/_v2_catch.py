@@ -44,7 +44,7 @@ from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingState
 from motion_envs.models.juggling._camera import FlightEstimator
 from motion_envs.models.juggling._juggler import AnalyticJuggler
-from motion_envs.models.juggling._v2_levels import V2Controller
+from motion_envs.models.juggling._v2_levels import V2_CONTROLLERS, V2Controller
 
 __all__ = [
     "CATCH_PLANS",
@@ -52,6 +52,7 @@ __all__ = [
     "LEAD_GRID",
     "CatchPlan",
     "CatchPlanController",
+    "make_v2_controller",
 ]
 
 #: s; the leads tried on training seeds.
@@ -181,3 +182,16 @@ class CatchPlanController(V2Controller):
         if self.phase == "catch":
             end[1] -= self.plan.descent * self.plan.lead
         return end
+
+
+def make_v2_controller(
+    name: str, juggler: AnalyticJuggler, gravity: float, mean_delay: float
+) -> V2Controller:
+    """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
+    ``juggler`` (its episodes never touch ``juggler``)."""
+    if name not in V2_CONTROLLERS:
+        raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
+    estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
+    if name in CATCH_PLANS:
+        return CatchPlanController(juggler.variant(), estimator, CATCH_PLANS[name])
+    return V2Controller(juggler.variant(), estimator)

@@ -66,7 +66,7 @@ from motion_envs.models.juggling._camera import FlightEstimator
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._levels import JugglerController
 
-__all__ = ["V2_CONTROLLERS", "V2_LEVELS", "V2Controller", "V2Level", "make_v2_controller"]
+__all__ = ["V2_CONTROLLERS", "V2_LEVELS", "V2Controller", "V2Level"]
 
 FloatArray = NDArray[np.float64]
 
@@ -206,19 +206,3 @@ class V2Controller(JugglerController):
                 x, z = end
                 v = np.array([(x - p[0]) / s, (z - p[1] + 0.5 * g * s * s) / s])
         return self.juggler.command(replace(state, ball_pos=p, ball_vel=v))
-
-
-def make_v2_controller(
-    name: str, juggler: AnalyticJuggler, gravity: float, mean_delay: float
-) -> V2Controller:
-    """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
-    ``juggler`` (its episodes never touch ``juggler``)."""
-    if name not in V2_CONTROLLERS:
-        raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
-    estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
-    # the catch-plan controllers subclass V2Controller in their own module
-    from motion_envs.models.juggling._v2_catch import CATCH_PLANS, CatchPlanController
-
-    if name in CATCH_PLANS:
-        return CatchPlanController(juggler.variant(), estimator, CATCH_PLANS[name])
-    return V2Controller(juggler.variant(), estimator)
