@@ -19,6 +19,7 @@ the number of threads (tested bit for bit).
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -26,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from motion_envs.datasets.juggling import PHASES
 from motion_envs.envs.juggling import _period
 
 __all__ = ["MIN_ENVS_PER_THREAD", "WORLD_ROWS", "WorldBatch"]
@@ -101,6 +103,23 @@ class WorldBatch:
             )  # fmt: skip
             self._periods = _period.world_periods
         self._linked = True
+
+    def link_steps(self, compiled: str, plain: Any) -> None:
+        """The step kernels and the likeness's k-d trees, for the backend: the module
+        ``compiled`` (its dotted name; numba) or ``plain`` (the same functions as plain
+        Python), the first part's likeness as compiled trees or as it is, and the trees'
+        search stack."""
+        likeness = self.parts[0].likeness
+        if self.backend == "numba":
+            from motion_envs.envs.juggling._compiled_likeness import likeness_forest
+
+            self._kernels: Any = importlib.import_module(compiled)
+            trees = [self._compiled.likeness_tree(likeness.trees[p].data) for p in PHASES]
+            self._trees: Any = likeness_forest(trees)
+        else:
+            self._kernels = plain
+            self._trees = likeness
+        self._stack = np.empty(256, dtype=np.int64)
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()

@@ -141,18 +141,7 @@ class CascadeBatch(WorldBatch):
     def link(self) -> None:
         """The worlds' links, the kernels, the likeness's k-d trees (again when unpickled)."""
         super().link()
-        likeness = self.parts[0].likeness
-        if self.backend == "numba":
-            from motion_envs.envs.juggling import _compiled_cascade
-            from motion_envs.envs.juggling._compiled_likeness import likeness_forest
-
-            self._kernels: Any = _compiled_cascade
-            trees = [self._compiled.likeness_tree(likeness.trees[p].data) for p in PHASES]
-            self._trees: Any = likeness_forest(trees)
-        else:
-            self._kernels = _cascade_step
-            self._trees = likeness
-        self._stack = np.empty(256, dtype=np.int64)
+        self.link_steps("motion_envs.envs.juggling._compiled_cascade", _cascade_step)
         self._qv = (self._worlds[2], self._worlds[3])
         self._period_args = self.period_args()
         self._args: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None

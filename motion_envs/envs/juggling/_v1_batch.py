@@ -137,19 +137,7 @@ class V1Batch(Eq10Corrections, WorldBatch):
     def link(self) -> None:
         """The worlds' links, the kernels, the likeness's k-d trees (again when unpickled)."""
         super().link()
-        likeness = self.parts[0].likeness
-        if self.backend == "numba":
-            from motion_envs.envs.juggling import _compiled_v1
-
-            self._kernels: Any = _compiled_v1
-            from motion_envs.envs.juggling._compiled_likeness import likeness_forest
-
-            trees = [self._compiled.likeness_tree(likeness.trees[p].data) for p in PHASES]
-            self._trees: Any = likeness_forest(trees)
-        else:
-            self._kernels = _v1_step
-            self._trees = likeness
-        self._stack = np.empty(256, dtype=np.int64)
+        self.link_steps("motion_envs.envs.juggling._compiled_v1", _v1_step)
         #: per step size ``m``: ``a_out (m, 3)``, ``status (m,)``, ``predicted (m, 2)``
         self._scratch: dict[int, tuple[Any, ...]] = {}
 
