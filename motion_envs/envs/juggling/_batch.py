@@ -40,6 +40,10 @@ WORLD_ROWS = ("ref", "vref", "z_before", "holder", "thrower", "left", "dropped",
 _EVENTS = ("caught", "released", "_target", "_armed")
 
 
+#: Rows of noise an episode draws ahead at a time (sensor and release scatter).
+NOISE_BLOCK = 64
+
+
 class WorldBatch:
     """The worlds of ``parts`` (each with a ``world``) as one batch (see the module
     docstring); a subclass adds its task's step. ``backend``: ``"numba"`` or
@@ -103,6 +107,22 @@ class WorldBatch:
             )  # fmt: skip
             self._periods = _period.world_periods
         self._linked = True
+
+    def setup_draws(self, first: Any) -> None:
+        """The noise the episodes draw ahead, in blocks of :data:`NOISE_BLOCK` rows per
+        episode: the sensor's (``first``'s position and velocity std), the release
+        scatter's (its world's speed and angle std), and the catch and toss counts."""
+        n = self.n
+        self._noisy = first.position_std > 0 or first.velocity_std > 0
+        self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
+        self._noise = np.zeros((n, NOISE_BLOCK, 4))
+        self._noise_at = np.full(n, NOISE_BLOCK, dtype=np.int64)  # next unused row
+        world = first.world
+        self._rel_std = np.array([world.release_speed_std, world.release_angle_std])
+        self._scatter = bool(self._rel_std.any())
+        self._rel_noise = np.zeros((n, NOISE_BLOCK, 2))
+        self._rel_at = np.full(n, NOISE_BLOCK, dtype=np.int64)
+        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
 
     def link_steps(self, compiled: str, plain: Any) -> None:
         """The step kernels and the likeness's k-d trees, for the backend: the module

@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import CASCADE_HANDS, PHASES
 from motion_envs.envs.juggling import _cascade_step
+from motion_envs.envs.juggling._batch import NOISE_BLOCK as _NOISE_BLOCK
 from motion_envs.envs.juggling._batch import WorldBatch
 from motion_envs.envs.juggling._cascade_step import OUT_COLUMNS, out_columns
 from motion_envs.models.juggling import (
@@ -58,7 +59,6 @@ __all__ = ["CascadeBatch", "Columns"]
 _TOSS, _GO_DOWN, _CATCH = PHASES.index("toss"), PHASES.index("go_down"), PHASES.index("catch")
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 #: Noise rows drawn from a generator at a time.
-_NOISE_BLOCK = 64
 _COL = {name: c for c, name in enumerate(OUT_COLUMNS)}
 #: The columns a step sums over its periods.
 _SUMMED = np.array([_COL[k] for k in (
@@ -93,16 +93,7 @@ class CascadeBatch(WorldBatch):
         self._ring = np.zeros((first.delay_steps + 1, n, nb, 5))
         self._slot = np.zeros(1, dtype=np.int64)  # the ring's newest entry
         self._history = np.zeros((n, nb, 4 * first.history))
-        self._noisy = first.position_std > 0 or first.velocity_std > 0
-        self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
-        self._noise = np.zeros((n, _NOISE_BLOCK, 4))
-        self._noise_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)  # next unused row
-        world = first.world
-        self._rel_std = np.array([world.release_speed_std, world.release_angle_std])
-        self._scatter = bool(self._rel_std.any())
-        self._rel_noise = np.zeros((n, _NOISE_BLOCK, 2))
-        self._rel_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)
-        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        self.setup_draws(first)
         # the hands' plans
         c0 = first.controller
         self._fast = first.controller_name in _FAST_CONTROLLERS and c0.compiled_events

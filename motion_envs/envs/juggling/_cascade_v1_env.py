@@ -23,7 +23,7 @@ from motion_envs.envs.juggling._cascade_env import (
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
 from motion_envs.envs.juggling._cascade_v1_errors import MissTracker, catch_errors
 from motion_envs.envs.juggling._likeness import LikenessQuery
-from motion_envs.envs.juggling._shared import LevelsEnvMixin
+from motion_envs.envs.juggling._shared import LevelsEnvMixin, check_delay_offset
 from motion_envs.envs.juggling._world_spec import (
     AIR_DENSITY,
     IMPACT_CONTACT_DAMPING,
@@ -227,14 +227,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
         self.controller_name = check_choice(controller, "controller", tuple(CASCADE_V1_CONTROLLERS))
-        offset = float(delay_offset)
-        if not 0.0 <= offset <= 0.25:  # also rejects NaN
-            raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r}")
-        if offset and self.controller_name != "juggler_mean_delay":
-            raise ValueError(
-                f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}"
-            )
-        self.delay_offset = offset
+        self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -254,7 +247,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.catch_plan = catch_plan(self.controller_name, self.pattern.fitted)
         lead = 0.0 if self.catch_plan is None else self.catch_plan.lead
         self.view = CascadeBallView(
-            self.balls, mode, self.gravity, lv.mean_delay + offset, catch_height(self.controller),
+            self.balls, mode, self.gravity, lv.mean_delay + self.delay_offset, catch_height(self.controller),
             lead,
         )  # fmt: skip
         self.likeness = pattern_likeness(self.pattern, self.gravity)

@@ -22,7 +22,19 @@ from motion_envs.envs._common import (
 )
 from motion_envs.models.juggling import LEVELS, check_gravity
 
-__all__ = ["LevelsEnvMixin", "check_phases"]
+__all__ = ["LevelsEnvMixin", "check_delay_offset", "check_phases"]
+
+
+def check_delay_offset(delay_offset: float, controller: str) -> float:
+    """``delay_offset`` (s) as a float in [0, 0.25], given only to the
+    ``juggler_mean_delay`` controller (the later delay it is told); else one-line
+    ValueError naming the argument."""
+    offset = float(delay_offset)
+    if not 0.0 <= offset <= 0.25:  # also rejects NaN
+        raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r}")
+    if offset and controller != "juggler_mean_delay":
+        raise ValueError(f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}")
+    return offset
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import PHASES, JugglingState
 from motion_envs.envs.juggling import _v1_step
+from motion_envs.envs.juggling._batch import NOISE_BLOCK as _NOISE_BLOCK
 from motion_envs.envs.juggling._batch import WorldBatch
 from motion_envs.envs.juggling._v1_correct import Eq10Corrections
 from motion_envs.envs.juggling._v1_step import OUT_COLUMNS
@@ -56,7 +57,6 @@ __all__ = ["V1Batch", "v1_info"]
 _TOSS, _CATCH = PHASES.index("toss"), PHASES.index("catch")
 _FAST_CONTROLLERS = ("juggler", "juggler_latency_aware")
 #: Measurement-noise rows drawn from a sensor's generator at a time.
-_NOISE_BLOCK = 64
 #: A step's per-episode values by info key (the stepped episodes along the first axis).
 Columns = dict[str, NDArray[Any]]
 
@@ -88,16 +88,7 @@ class V1Batch(Eq10Corrections, WorldBatch):
         self._ring = np.zeros((first.delay_steps + 1, n, 5))
         self._slot = 0
         self._history = np.zeros((n, first.history, 4))
-        self._noisy = first.position_std > 0 or first.velocity_std > 0
-        self._noise_std = np.array([first.position_std] * 2 + [first.velocity_std] * 2)
-        self._noise = np.zeros((n, _NOISE_BLOCK, 4))
-        self._noise_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)  # next unused row
-        world = first.world
-        self._rel_std = np.array([world.release_speed_std, world.release_angle_std])
-        self._scatter = bool(self._rel_std.any())
-        self._rel_noise = np.zeros((n, _NOISE_BLOCK, 2))
-        self._rel_at = np.full(n, _NOISE_BLOCK, dtype=np.int64)
-        self._counts = np.zeros((n, 2), dtype=np.int64)  # catches, tosses
+        self.setup_draws(first)
         # the controller's plan
         self._fast = first.controller_name in self.FAST
         self._latency = first.delay_steps * task.dt

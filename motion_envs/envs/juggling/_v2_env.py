@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import JugglingState, JugglingTask
 from motion_envs.envs._common import check_choice
+from motion_envs.envs.juggling._shared import check_delay_offset
 from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_env import OBS_HEAD, V1_CYCLE_TIME, OneBallEnv
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
@@ -227,14 +228,7 @@ class JugglingV2Env(OneBallEnv):
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
         self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
-        offset = float(delay_offset)
-        if not 0.0 <= offset <= 0.25:  # also rejects NaN
-            raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r}")
-        if offset and self.controller_name != "juggler_mean_delay":
-            raise ValueError(
-                f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}"
-            )
-        self.delay_offset = offset
+        self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -245,7 +239,7 @@ class JugglingV2Env(OneBallEnv):
         juggler = v1_juggler(self.gravity)
         self.home = np.asarray(juggler.home_, dtype=np.float64)
         self.controller = make_v2_controller(
-            self.controller_name, juggler, self.gravity, lv.mean_delay + offset
+            self.controller_name, juggler, self.gravity, lv.mean_delay + self.delay_offset
         )
         self.likeness = v1_likeness(self.gravity, "train")
         spec = WorldSpec.of(
