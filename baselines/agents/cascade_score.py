@@ -1,6 +1,6 @@
-"""Cascade-v0's criteria for agents: catches before the first drop, and the drop hazard.
+"""The cascades' criteria for agents: catches before the first drop, and the drop hazard.
 
-An episode of ``MotionEnvs/Cascade-v0`` ends at the first drop (or after ``max_catches``
+An episode of ``MotionEnvs/Cascade-v0`` or ``-v1`` ends at the first drop (or after ``max_catches``
 catches: censored). Its splits are Juggling's seed ranges
 (:data:`motion_envs.datasets.juggling.SPLIT_SEEDS`: training seeds < validation seeds
 ``1e9 + i`` < test seeds ``2e9 + i``), so validation and test episodes are never trained
@@ -65,7 +65,7 @@ __all__ = [
 Policy = Callable[[NDArray[np.float32]], NDArray[np.floating]]
 
 #: Environment ids scored by this module.
-CASCADE_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Cascade-v0",)
+CASCADE_ENV_IDS: tuple[str, ...] = ("MotionEnvs/Cascade-v0", "MotionEnvs/Cascade-v1")
 
 
 def is_cascade(env_id: str) -> bool:
