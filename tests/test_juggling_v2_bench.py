@@ -266,3 +266,24 @@ def test_ilc_solve_is_least_squares_and_trains_on_training_seeds(monkeypatch: An
     learner = ilc_module.TaskErrorILC("medium", 0.2, 0.15, ilc_module.ILCConfig(2, 2))
     learner.train()
     assert seen == [0, 1, 2, 3]  # SPLIT_SEEDS["train"] + i
+
+
+def test_the_random_row_restarts_its_generator_for_the_test_seeds() -> None:
+    """The random row's test episodes do not depend on how many validation episodes were
+    played before: its generator is a fresh one, seeded as at the start, when the test
+    seeds are played (a generator carried over from validation would have moved on)."""
+    from baselines.juggling_bench.v2 import _Random
+
+    spy, states = Spy(), []
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        if isinstance(policy, _Random):
+            states.append((split, policy.rng.bit_generator.state["state"]))
+            policy(np.zeros((n, 4), dtype=np.float32))  # the draws an episode makes
+        return spy.play(policy, env_id, kwargs, split, n)
+
+    run_v2(V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False), play,
+           spy.chooser(choose_constant), spy.chooser(choose_offset))  # fmt: skip
+    fresh = np.random.default_rng(0).bit_generator.state["state"]
+    assert [s for s, _ in states] == ["val", "test"]
+    assert all(state == fresh for _, state in states)
