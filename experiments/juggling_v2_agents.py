@@ -19,23 +19,24 @@ in words: ``agent - best row >= +0.05`` with the interval above 0, deviation <= 
 juggler's + 5 mm, the oracle above the agent (the room left reported).
 
     python experiments/juggling_v2_agents.py [--levels medium hard] [--seeds 0 1 2]
-        [--timesteps N] [--controller NAME] [--test-episodes 100] [--runs DIR]
-        [--out results.json]
+        [--algo ppo] [--timesteps N] [--controller NAME] [--test-episodes 100] [--runs DIR]
+        [--reuse-only] [--out results.json]
 
 ``--timesteps`` defaults to the config's (2.5e6, the full budget: about 21 min of CPU per
 seed at the measured 2,000 steps per CPU-second; the issue allows 30). Existing complete
-run folders in ``--runs`` are reused (not retrained). Writes ``results.json`` and
+run folders in ``--runs`` are reused (not retrained; with ``--reuse-only`` a missing one is
+an error; a reused folder of another environment, algorithm, level or seed is refused).
+The parts shared with ``experiments/cascade_v1_agents.py`` are in
+:mod:`baselines.agents.against_rows`. Writes ``results.json`` and
 ``juggling_v2_agents.png`` (the rows' catch rate against deviation with the agent).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -45,37 +46,23 @@ from tqdm import tqdm
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing, shared
 from _timing import machine, print_json
 
+from baselines.agents.against_rows import (
+    DEVIATION_SLACK_MM,
+    MARGIN,
+    add_arguments,
+    check_run,
+    check_same_seeds,
+    format_difference,
+    margin_met,
+    median_run,
+    run_fields,
+    save_plot,
+    train_all,
+    validation_pick,
+    write_results,
+)
+
 ENV = "MotionEnvs/Juggling-v2"
-#: mm of deviation the agent may add to the juggler's (the issue's likeness target).
-DEVIATION_SLACK_MM = 5.0
-#: The catch-rate margin over the best non-oracle row (the issue's target).
-MARGIN = 0.05
-
-
-def train_or_reuse(level: str, seed: int, args: argparse.Namespace, root: Path) -> Path:
-    """The run folder of ``level`` and ``seed``: trained unless a complete one exists."""
-    from baselines.agents.train import TrainConfig
-    from baselines.agents.train import run as train
-
-    out = root / f"{level}-seed{seed}"
-    if (out / "run.json").exists():
-        return out
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        train(
-            TrainConfig(
-                algo="ppo",
-                env_id=ENV,
-                out=str(out),
-                seed=seed,
-                timesteps=args.timesteps,
-                env_kwargs={"level": level}
-                | ({"controller": args.controller} if args.controller else {}),
-                progress=True,
-                tensorboard=False,
-            )
-        )
-    return out
 
 
 def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -115,7 +102,9 @@ def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any
     return lv, played
 
 
-def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -> dict[str, Any]:
+def score_run(
+    run_dir: Path, played: dict[str, Any], best: str, args: argparse.Namespace, job: tuple[str, int]
+) -> dict[str, Any]:
     """The kept policy of ``run_dir`` on the test seeds against the replayed rows."""
     from baselines.agents.juggling_score import (
         catch_rate_difference,
@@ -126,9 +115,9 @@ def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -
     from baselines.agents.rundir import load_run
 
     loaded = load_run(run_dir)
-    eps = juggling_episodes(loaded.policy(), ENV, loaded.env_kwargs, "test", episodes)
-    if not np.array_equal(eps.seeds, played[best].seeds):
-        raise RuntimeError("the agent and the rows were played on different seeds")
+    check_run(loaded, ENV, args.algo, *job)
+    eps = juggling_episodes(loaded.policy(), ENV, loaded.env_kwargs, "test", args.test_episodes)
+    check_same_seeds(eps.seeds, played[best].seeds)
     rate, lo, hi = catch_rate_interval(eps)
     dev, dlo, dhi = deviation_interval(eps)
     diff, diff_lo, diff_hi = catch_rate_difference(eps, played[best])
@@ -136,13 +125,7 @@ def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -
 
     room, room_lo, room_hi = catch_rate_difference(played[UPPER_REFERENCE], eps)
     return {
-        "run_dir": str(run_dir),
-        "seed": int(loaded.config["seed"]),
-        "timesteps": int(loaded.manifest["timesteps"]),
-        "train_seconds": float(loaded.manifest["train_seconds"]),
-        "best_timesteps": int(loaded.manifest["best_timesteps"]),
-        "val_drop_rate": float(loaded.manifest["best_val_criterion"]),
-        "val_nominal_drop_rate": float(loaded.manifest["val_nominal_criterion"]),
+        **run_fields(loaded, "drop_rate"),
         "catch_rate": rate,
         "catch_rate_ci": [lo, hi],
         "deviation_mm": 1000 * dev,
@@ -157,7 +140,7 @@ def score_run(run_dir: Path, played: dict[str, Any], best: str, episodes: int) -
 def verdict(run: dict[str, Any], juggler_mm: float) -> dict[str, bool]:
     """The issue's three targets for one run."""
     return {
-        "margin": run["minus_best_row"] >= MARGIN and run["minus_best_row_ci"][0] > 0,
+        "margin": margin_met(run["minus_best_row"], run["minus_best_row_ci"]),
         "likeness": run["deviation_mm"] <= juggler_mm + DEVIATION_SLACK_MM,
         "oracle_above": run["oracle_minus_agent"] > 0,
     }
@@ -166,13 +149,13 @@ def verdict(run: dict[str, Any], juggler_mm: float) -> dict[str, bool]:
 def words(lv: dict[str, Any]) -> str:
     """The level's verdict on the issue's targets, for the median seed, in words."""
     run = next(r for r in lv["runs"] if r["seed"] == lv["median_seed"])
-    lo, hi = run["minus_best_row_ci"]
     t = run["targets"]
     margin = "met" if t["margin"] else "NOT met"
     like = "met" if t["likeness"] else "NOT met"
     above = "the oracle is above the agent" if t["oracle_above"] else "the agent reaches the oracle"
     return (
-        f"agent - {lv['best_non_oracle']} {run['minus_best_row']:+.3f} [{lo:+.3f}, {hi:+.3f}] "
+        f"agent - {lv['best_non_oracle']} "
+        f"{format_difference(run['minus_best_row'], run['minus_best_row_ci'])} "
         f"(target >= +{MARGIN:.2f}, interval above 0: {margin}); deviation "
         f"{run['deviation_mm']:.1f} mm against the juggler's {lv['juggler_deviation_mm']:.1f} "
         f"+ {DEVIATION_SLACK_MM:.0f} mm ({like}); {above} (room "
@@ -180,13 +163,10 @@ def words(lv: dict[str, Any]) -> str:
     )
 
 
-def write_plot(levels: list[dict[str, Any]], path: Path) -> Path:
+def write_plot(levels: list[dict[str, Any]], path: Path, algo: str = "ppo") -> Path:
     """The rows' catch rate against deviation (``plot_v2``) with the median seed's agent
     as a star, a panel per level."""
-    import matplotlib.pyplot as plt
-
     from baselines.juggling_bench.v2 import plot_v2
-    from motion_envs._io import save_figure
 
     panels = []
     for lv in levels:
@@ -197,47 +177,35 @@ def write_plot(levels: list[dict[str, Any]], path: Path) -> Path:
             "deviation_m": run["deviation_mm"] / 1000,
             "deviation_ci": [v / 1000 for v in run["deviation_ci_mm"]],
         }
-        name = f"PPO agent, frame stack (median of {len(lv['runs'])} seeds)"
+        name = f"{algo.upper()} agent, frame stack (median of {len(lv['runs'])} seeds)"
         panels.append({"level": lv["level"], "rows": {**lv["rows"], name: agent}})
-    fig = plot_v2({"levels": panels})
-    try:
-        return save_figure(fig, path, dpi=150)
-    finally:
-        plt.close(fig)
+    return save_plot(plot_v2({"levels": panels}), path)
 
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--levels", nargs="+", default=["medium", "hard"])
-    p.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
-    p.add_argument("--timesteps", type=int, default=None, help="default: the config's (2.5e6)")
-    p.add_argument("--test-episodes", type=int, default=100)
-    p.add_argument(
-        "--controller",
-        default=None,
-        help="the controller the residual acts on (default: the config's, "
+    add_arguments(
+        p,
+        levels=["medium", "hard"],
+        runs="juggling_v2_agent_runs",
+        timesteps_help="default: the config's (2.5e6)",
+        controller_help="the controller the residual acts on (default: the config's, "
         "juggler_delay_estimator); e.g. juggler_mean_delay_catch",
     )
-    p.add_argument("--runs", default="juggling_v2_agent_runs", help="run folders' root")
-    p.add_argument("--out", default=None, help="results JSON (default: RUNS/results.json)")
     args = p.parse_args(argv)
     root = Path(args.runs)
     t0 = time.process_time()
     levels = []
-    jobs = [(lv, s) for lv in args.levels for s in args.seeds]
-    runs_dirs = {job: train_or_reuse(*job, args, root) for job in tqdm(jobs, desc="train")}
+    runs_dirs = train_all(ENV, args)
     for level in tqdm(args.levels, desc="score"):
         lv, played = level_rows(level, args.test_episodes)
         best = lv["best_non_oracle"]
         juggler_mm = 1000 * lv["rows"]["juggler"]["deviation_m"]
-        runs = [
-            score_run(runs_dirs[level, s], played, best, args.test_episodes) for s in args.seeds
-        ]
+        runs = [score_run(runs_dirs[level, s], played, best, args, (level, s)) for s in args.seeds]
         for run in runs:
             run["targets"] = verdict(run, juggler_mm)
-        order = sorted(range(len(runs)), key=lambda i: runs[i]["minus_best_row"])
-        median = runs[order[len(runs) // 2]]
-        pick = min(runs, key=lambda r: r["val_drop_rate"])
+        median = median_run(runs, "minus_best_row")
+        pick = validation_pick(runs, "val_drop_rate")
         levels.append(
             {
                 "level": level,
@@ -284,12 +252,9 @@ def main(argv: list[str] | None = None) -> int:
             f"  median seed {lv['median_seed']}, validation pick seed "
             f"{lv['validation_pick_seed']}: {words(lv)}"
         )
-    from motion_envs._io import atomic_write_text
-
     out = Path(args.out) if args.out else root / "results.json"
-    atomic_write_text(out, json.dumps(doc, indent=2) + "\n")
-    print(f"wrote {out}")
-    print(f"wrote {write_plot(levels, out.with_name('juggling_v2_agents.png'))}")
+    print(f"wrote {write_results(doc, out)}")
+    print(f"wrote {write_plot(levels, out.with_name('juggling_v2_agents.png'), args.algo)}")
     print_json(doc)
     return 0
 

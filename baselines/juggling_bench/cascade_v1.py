@@ -73,6 +73,8 @@ __all__ = [
     "check_cascade_v1_config",
     "choose_late_offset",
     "report_cascade_v1",
+    "row_play",
+    "row_summary",
     "run_cascade_v1",
     "write_cascade_v1",
 ]
@@ -213,6 +215,22 @@ def _players(offset: float) -> dict[str, tuple[str, Policy, float]]:
     }
 
 
+def row_play(
+    level: str, config: CascadeV1Config, name: str, offset: float
+) -> tuple[Policy, dict[str, Any]]:
+    """Row ``name``'s policy and env keywords on ``level`` (``offset``: the late offset
+    :func:`choose_late_offset` chose), as :func:`run_cascade_v1` plays it."""
+    ctl, policy, off = _players(offset)[name]
+    return policy, _kwargs(level, config, ctl, off)
+
+
+def row_summary(eps: Any) -> dict[str, Any]:
+    """A row's entry of the results (:func:`~baselines.juggling_bench.cascade.summary`
+    and the 95 % interval of the mean catches before the first drop); any episodes with
+    seeds, catches, tosses, dropped and time (an agent's too)."""
+    return {**summary(eps), "catches_mean_ci": _mean_ci(eps)}
+
+
 def _paired(a: CascadeEpisodes, b: CascadeEpisodes) -> dict[str, Any]:
     """Mean catches of ``a`` minus ``b`` over the same seeds, with its 95 % interval."""
     from baselines.stats import group_bootstrap
@@ -264,9 +282,7 @@ def run_cascade_v1(
             name: play(policy, _kwargs(level, config, ctl, off), "test", config.episodes)
             for name, (ctl, policy, off) in players.items()
         }
-        rows = {
-            name: {**summary(eps), "catches_mean_ci": _mean_ci(eps)} for name, eps in played.items()
-        }
+        rows = {name: row_summary(eps) for name, eps in played.items()}
         room = _paired(played[UPPER_REFERENCE], played[best])
         above = {
             name: _paired(played[UPPER_REFERENCE], eps)
