@@ -21,7 +21,12 @@ from motion_envs.envs.juggling._cascade_env import (
     DEFAULT_CASCADE_REWARD_WEIGHTS,
 )
 from motion_envs.envs.juggling._cascade_scene import CascadeWorld
-from motion_envs.envs.juggling._cascade_v1_errors import MissTracker, catch_errors
+from motion_envs.envs.juggling._cascade_v1_errors import (
+    HeldTaskErrors,
+    MissTracker,
+    catch_errors,
+    check_observe_task_error,
+)
 from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import LevelsEnvMixin, check_delay_offset
 from motion_envs.envs.juggling._world_spec import (
@@ -122,7 +127,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     raises ``ValueError``.
 
     ## Observation Space
-    ``Box(low, high, (32 + 18 N,), float32)`` (86 for three balls, 122 for five);
+    ``Box(low, high, (32 + 18 N,), float32)`` (86 for three balls, 122 for five; 8 more
+    at the end with ``observe_task_error=True``);
     positions within 10 m of the right hand's home, speeds within 30 m/s, times within
     the time limit; world frame:
 
@@ -140,6 +146,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | 16..31           | the same for the left hand                                               |                |
     | 32..32 + 2N      | per ball: 1 if held by the right hand, 1 if held by the left hand        | unitless       |
     | then 16 per ball | the ball's last 4 received frames ``x, z, age, valid``, newest first: its measured position, the time since the frame ARRIVED, 1 if the slot holds a frame | m, s |
+    | then 4 per hand  | only with ``observe_task_error=True``, right hand then left: the hand's LAST catch's ``info["task_error"]`` row, ``offset`` (within 10 m) and ``timing`` (within the time limit; 0 when NaN), 1 if the timing is known, the hand's catches so far (at most `max_catches`); held until its next catch, all 0 before its first | m, s, unitless, count |
+
+    **Task error** (``observe_task_error=True``): Juggling-v2's, per hand: the haptic
+    feedback of where and when a ball landed in that palm, from the step of its catch
+    until the hand's next; the delay and the drags stay hidden.
 
     **Memory.** As Juggling-v2's: the delay can be inferred only by relating a ball's
     frames to its release over a flight; an agent needs memory (a frame stack or a
@@ -196,6 +207,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
+    | `observe_task_error` | **bool** | `False`  | 8 last entries: each hand's last catch's task error (table above) |
     | `reward_weights`  | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
     | `render_mode`     | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`           | **int**   | `480`       | frame width in pixels |
@@ -204,7 +216,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ## Version History
     * v1: Juggling-v2's human levels (a hidden per-episode delay with jitter, a
       position-only camera per ball with drops and occlusion near either palm, drag per
-      ball, the capture at impact).
+      ball, the capture at impact; ``observe_task_error`` added later, its default,
+      False, leaves every rollout unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -224,8 +237,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        observe_task_error: bool = False,
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
+        #: Whether the observation ends with each hand's last catch's task error.
+        self.observe_task_error = check_observe_task_error(observe_task_error)
         self.controller_name = check_choice(controller, "controller", tuple(CASCADE_V1_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self._init_episode_arguments(
@@ -283,6 +299,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
         self._time_limit = self.max_catches * CASCADE_TIME_PER_CATCH
         self.action_space = gym.spaces.Box(-1.0, 1.0, (2 * CASCADE_HANDS,), dtype=np.float32)
+        self._held = HeldTaskErrors(CASCADE_HANDS, self.max_catches)
         low, high = self._bounds()
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
         self._low, self._high = low, high
@@ -313,6 +330,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         high += [1.0] * (2 * self.balls)
         low += [hx - m, fz - m, 0, 0] * (self.balls * CASCADE_V1_FRAMES)
         high += [hx + m, hz + m, t, 1] * (self.balls * CASCADE_V1_FRAMES)
+        if self.observe_task_error:
+            low, high = (a + b for a, b in zip((low, high), self._held.bounds(t), strict=True))
         return np.array(low, dtype=np.float32), np.array(high, dtype=np.float32)
 
     @property
@@ -349,6 +368,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self._catches = self._tosses = 0
         self._release_time = [math.nan, math.nan]
         self._misses.reset()
+        self._held.reset()
         return self._observation(true), self._info(true, seed=base)
 
     def _info(self, true: CascadeState, **extra: Any) -> dict[str, Any]:
@@ -413,6 +433,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         true = self.world.step(targets + residual, armed)
         if any(b >= 0 for b in true.caught):
             self._errors = catch_errors(before, true, planned, self.task.dt)
+            self._held.record(self._errors[0])
         self._misses.update(true, phases, planned)
         k = int(self.world.k[0])
         frames = []
@@ -464,6 +485,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
                     row += (f.x, f.z, true.time - f.arrival, 1.0)
                 else:
                     row += (*home, 0.0, 0.0)
+        if self.observe_task_error:
+            row += self._held.entries()
         obs = np.array(row, dtype=np.float32)
         np.minimum(obs, self._high, out=obs)
         return np.maximum(obs, self._low, out=obs)

@@ -1,5 +1,7 @@
 """Cascade-v1's task-error vectors: per catch (:func:`catch_errors`) and, at a drop, the
-miss of the dropped ball (:class:`MissTracker`), Juggling-v2's vectors per hand."""
+miss of the dropped ball (:class:`MissTracker`), Juggling-v2's vectors per hand; and what
+Juggling-v2 and Cascade-v1 observe of them with ``observe_task_error=True``, each hand's
+last catch's vector held until its next catch (:class:`HeldTaskErrors`)."""
 
 from __future__ import annotations
 
@@ -12,7 +14,18 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import CASCADE_HANDS
 from motion_envs.models.juggling import CascadeState
 
-__all__ = ["MissTracker", "catch_errors"]
+__all__ = [
+    "TASK_ERROR_ENTRIES",
+    "HeldTaskErrors",
+    "MissTracker",
+    "catch_errors",
+    "check_observe_task_error",
+]
+
+#: Observation entries per hand with ``observe_task_error=True`` (:class:`HeldTaskErrors`).
+TASK_ERROR_ENTRIES = 4
+#: m: the observed offset's bound (the other positions' margin around the home).
+_OFFSET_BOUND = 10.0
 
 
 def catch_errors(
@@ -86,3 +99,52 @@ class MissTracker:
                 return {"miss_error": np.array([offset, timing]), "miss_speed": speed,
                         "miss_hand": h}  # fmt: skip
         return {}
+
+
+def check_observe_task_error(value: Any) -> bool:
+    """``observe_task_error`` as a bool (True/False, also numpy's); else a one-line
+    ValueError naming the argument."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"observe_task_error must be True or False; got {value!r}")
+    return bool(value)
+
+
+class HeldTaskErrors:
+    """The observation entries of ``observe_task_error=True``: per hand, its LAST catch's
+    task error held until its next catch, ``(offset, timing, timed, catches)``: the
+    catch's ``(offset, timing)`` as ``info["task_error"]`` gave it (m, s), the timing 0
+    and ``timed`` 0 where it is NaN (a catch outside the hand's catch phase, no planned
+    time; else ``timed`` 1), and the hand's catches so far (at most ``max_catches``);
+    all zeros after a reset (``catches`` 0: no error yet)."""
+
+    def __init__(self, hands: int, max_catches: int) -> None:
+        self.max_catches = max_catches
+        #: ``(hands, TASK_ERROR_ENTRIES)``: the entries now
+        self.values = np.zeros((hands, TASK_ERROR_ENTRIES))
+
+    def bounds(self, time_limit: float) -> tuple[list[float], list[float]]:
+        """The entries' ``(low, high)``: the offset within 10 m, the timing within the
+        time limit ``time_limit`` (s) either way, the flag in [0, 1], the catches in [0,
+        ``max_catches``]."""
+        hands = len(self.values)
+        low = [-_OFFSET_BOUND, -time_limit, 0.0, 0.0] * hands
+        high = [_OFFSET_BOUND, time_limit, 1.0, float(self.max_catches)] * hands
+        return low, high
+
+    def reset(self) -> None:
+        """A new episode: no catch yet."""
+        self.values[:] = 0.0
+
+    def record(self, errors: NDArray[np.float64]) -> None:
+        """A step's catches: ``errors`` ``(hands, 2)`` as ``info["task_error"]`` (a row
+        with a NaN offset: that hand did not catch)."""
+        for h, (offset, timing) in enumerate(np.asarray(errors).reshape(-1, 2).tolist()):
+            if math.isnan(offset):
+                continue
+            timed = not math.isnan(timing)
+            catches = min(self.values[h, 3] + 1.0, self.max_catches)
+            self.values[h] = (offset, timing if timed else 0.0, float(timed), catches)
+
+    def entries(self) -> list[float]:
+        """The entries, hand by hand."""
+        return [float(v) for v in self.values.ravel()]

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import JugglingState, JugglingTask
 from motion_envs.envs._common import check_choice
+from motion_envs.envs.juggling._cascade_v1_errors import HeldTaskErrors, check_observe_task_error
 from motion_envs.envs.juggling._shared import check_delay_offset
 from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_env import OBS_HEAD, V1_CYCLE_TIME, OneBallEnv
@@ -124,7 +125,8 @@ class JugglingV2Env(OneBallEnv):
     next hand target, times `residual_scale` (m), in the phases of `residual_phases`.
 
     ## Observation Space
-    ``Box(low, high, (32,), float32)`` (positions within 10 m of the home, speeds within 30 m/s):
+    ``Box(low, high, (32,), float32)``, ``(36,)`` with ``observe_task_error=True``
+    (positions within 10 m of the home, speeds within 30 m/s):
 
     | index   | observation                                                              | unit           |
     |---------|--------------------------------------------------------------------------|----------------|
@@ -138,6 +140,14 @@ class JugglingV2Env(OneBallEnv):
     | 13, 14  | the plan's end point (in the catch phase: the planned catch point)       | position (m)   |
     | 15      | time since the hand last released the ball (0 before the first toss)     | time (s)       |
     | 16..31  | the last 4 received frames ``x, z, age, valid``, newest first: the ball's measured position, the time since the frame ARRIVED (s; its capture time is hidden), 1 if the slot holds a frame | m, s |
+    | 32, 33  | only with ``observe_task_error=True``: the LAST catch's task error ``info["task_error"]``, ``offset`` (within 10 m) and ``timing`` (within the time limit; 0 when NaN), held until the next catch, 0 before the first | m, s |
+    | 34      | only with ``observe_task_error=True``: 1 if entry 33 holds a timing (the catch had a planned time), else 0 | unitless |
+    | 35      | only with ``observe_task_error=True``: the catches so far (0: no error yet; at most `max_catches`) | count |
+
+    **Task error** (``observe_task_error=True``): the haptic feedback a juggler has in
+    the palm, where and when the ball landed, entries 32-35 from the step of a catch
+    (the observation that step returns) until the next; the delay and the drag stay
+    hidden (:class:`~motion_envs.envs.juggling._cascade_v1_errors.HeldTaskErrors`).
 
     **Memory.** The observation is the present only: the delay is a property of the
     episode, and a policy can infer it only by relating the frames' arrivals to its
@@ -192,6 +202,7 @@ class JugglingV2Env(OneBallEnv):
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
+    | `observe_task_error` | **bool** | `False`  | entries 32-35: the last catch's task error (table above) |
     | `reward_weights`  | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
     | `render_mode`     | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`           | **int**   | `480`       | frame width in pixels |
@@ -199,7 +210,9 @@ class JugglingV2Env(OneBallEnv):
 
     ## Version History
     * v2: a hidden per-episode human delay with jitter, a position-only camera with
-      drops and occlusion, air drag, the capture at impact, the task-error vector.
+      drops and occlusion, air drag, the capture at impact, the task-error vector
+      (``observe_task_error`` added later; its default, False, leaves every rollout
+      unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -225,8 +238,11 @@ class JugglingV2Env(OneBallEnv):
         render_mode: str | None = None,
         width: int = 480,
         height: int = 480,
+        observe_task_error: bool = False,
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
+        #: Whether the observation holds the last catch's task error (entries 32-35).
+        self.observe_task_error = check_observe_task_error(observe_task_error)
         self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self._init_episode_arguments(
@@ -260,6 +276,7 @@ class JugglingV2Env(OneBallEnv):
             lv.occlusion_radius,
             lv.position_std,
         )
+        self._held = HeldTaskErrors(1, self.max_catches)
         self._init_spaces(self.max_catches * V1_CYCLE_TIME)
         self._frames: deque[CameraFrame] = deque(maxlen=FRAMES)
         #: this step's catch: its task error and meeting speed (None: no catch)
@@ -299,6 +316,7 @@ class JugglingV2Env(OneBallEnv):
         self._closest = None
         self._caught = None
         self._task_errors.clear()
+        self._held.reset()
         obs, info = self._start(true, state, base)
         self._observe_frames(obs, true.time)
         return obs, info
@@ -322,6 +340,7 @@ class JugglingV2Env(OneBallEnv):
         if true.caught:
             self._caught = self._task_error(before, true.time - self.task.dt, planned)
             self._task_errors.append(self._caught[0])
+            self._held.record(self._caught[0])
         hand = (float(true.hand_pos[0]), float(true.hand_pos[1]))
         ball = (float(true.ball_pos[0]), float(true.ball_pos[1]))
         frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)
@@ -380,6 +399,16 @@ class JugglingV2Env(OneBallEnv):
         s = min(max(-rz / vz, 0.0), dt) if vz < 0 else 0.0
         return np.array([rx + vx * s, t0 + s - planned]), math.hypot(vx, vz)
 
+    def _bounds(self) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """Juggling-v1's bounds by kind (:meth:`OneBallEnv._bounds`), then with
+        ``observe_task_error`` the task error's (:meth:`HeldTaskErrors.bounds`)."""
+        low, high = super()._bounds()
+        if not self.observe_task_error:
+            return low, high
+        lo, hi = self._held.bounds(self._time_limit)
+        f32 = np.float32
+        return np.append(low, np.array(lo, f32)), np.append(high, np.array(hi, f32))
+
     def nominal_episode(self, seed: int) -> dict[str, Any]:
         """Juggling-v1's (:meth:`OneBallEnv.nominal_episode`) and the catches'
         ``task_errors (n, 2)``."""
@@ -389,7 +418,8 @@ class JugglingV2Env(OneBallEnv):
 
     def _observe_frames(self, obs: NDArray[np.float32], time: float) -> None:
         """Entries 15.. of the observation ``obs`` (the batch wrote Juggling-v1's first
-        15, the same entries): the time since the release and the received frames."""
+        15, the same entries): the time since the release, the received frames and with
+        ``observe_task_error`` the last catch's task error."""
         since = time - self._release_time
         row = [0.0 if math.isnan(since) else since]
         for i in range(FRAMES):
@@ -398,6 +428,8 @@ class JugglingV2Env(OneBallEnv):
                 row += (f.x, f.z, time - f.arrival, 1.0)
             else:
                 row += (float(self.home[0]), float(self.home[1]), 0.0, 0.0)
+        if self.observe_task_error:
+            row += self._held.entries()
         tail = np.array(row, dtype=np.float32)
         np.minimum(tail, self._high[15:], out=tail)
         obs[15:] = np.maximum(tail, self._low[15:], out=tail)
