@@ -154,7 +154,12 @@ _JUGGLING_RESIDUAL = {
     "height": "size",
 }
 #: Juggling-v2's arguments (Cascade-v1 takes them and a pattern).
-_JUGGLING_V2 = {"level": "name", "delay_offset": "fraction", **_JUGGLING_RESIDUAL}
+_JUGGLING_V2 = {
+    "level": "name",
+    "delay_offset": "fraction",
+    "observe_task_error": "flag",
+    **_JUGGLING_RESIDUAL,
+}
 ENVS: dict[str, dict[str, object]] = {
     "MotionEnvs/OrientationReach-v0": {
         "kwargs": {

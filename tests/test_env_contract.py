@@ -378,6 +378,7 @@ CASES: dict[str, Case] = {
             {"level": "easy", "controller": "juggler_mean_delay", "max_catches": 1},
             {"level": "hard", "controller": "juggler_delay_estimator"},
             {"level": "medium", "residual_phases": ["catch"]},
+            {"controller": "juggler_mean_delay_catch", "observe_task_error": True},
         ),
     ),
     "MotionEnvs/Cascade-v1": Case(
@@ -388,6 +389,7 @@ CASES: dict[str, Case] = {
             {"level": "easy", "pattern": "5", "controller": "juggler_mean_delay"},
             {"level": "hard", "controller": "juggler_oracle", "max_catches": 1},
             {"level": "medium", "controller": "fixed_point", "residual_phases": ["catch"]},
+            {"level": "easy", "controller": "juggler_mean_delay_catch", "observe_task_error": True},
         ),
     ),
     "MotionEnvs/Cascade": Case(

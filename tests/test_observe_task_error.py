@@ -192,3 +192,12 @@ def test_held_errors_timing_unknown_count_capped_and_reset() -> None:
     assert held.entries() == [0.05, 0.02, 1.0, 2.0, -0.02, 0.03, 1.0, 1.0]
     held.reset()
     assert held.entries() == [0.0] * 8
+
+
+@pytest.mark.parametrize("bad", [10**400, None, "0.1", [0.1], True])
+def test_delay_offset_that_is_not_a_number_is_a_value_error(bad) -> None:
+    """Found by the fuzz once ``observe_task_error`` was listed beside it: an int beyond
+    float64's range raised OverflowError, None and a list TypeError."""
+    with pytest.raises(ValueError, match="delay_offset must be in") as exc:
+        JugglingV2Env(controller="juggler_mean_delay", delay_offset=bad)
+    assert "\n" not in str(exc.value)

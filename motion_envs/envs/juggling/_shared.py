@@ -6,6 +6,7 @@ step's bookkeeping (the weighted reward terms, termination at a drop, truncation
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -29,9 +30,13 @@ def check_delay_offset(delay_offset: float, controller: str) -> float:
     """``delay_offset`` (s) as a float in [0, 0.25], given only to the
     ``juggler_mean_delay`` controller (the later delay it is told); else one-line
     ValueError naming the argument."""
-    offset = float(delay_offset)
+    real = isinstance(delay_offset, (int, float, np.integer, np.floating))
+    try:  # bools, None, text, an int beyond float64's range: refused as out of range
+        offset = float(delay_offset) if real and not isinstance(delay_offset, bool) else math.nan
+    except OverflowError:
+        offset = math.nan
     if not 0.0 <= offset <= 0.25:  # also rejects NaN
-        raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r}")
+        raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r:.80}")
     if offset and controller != "juggler_mean_delay":
         raise ValueError(f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}")
     return offset
