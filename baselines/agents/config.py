@@ -28,6 +28,17 @@ the copies are SB3's ``DummyVecEnv`` / ``SubprocVecEnv``),
 them PPO's ``use_sde`` / ``sde_sample_freq`` (SB3's generalized state-dependent
 exploration: noise that is a function of the state, redrawn every ``sde_sample_freq``
 steps, so that exploration survives a hand that low-passes per-step white noise).
+
+ARS (sb3-contrib's Augmented Random Search, :mod:`baselines.agents.ars`) explores in
+parameter space and plays every episode with a deterministic policy. Its keys:
+``policy`` (``LinearPolicy`` or ``MlpPolicy``), ``n_delta``, ``n_top``, ``delta_std``
+(a number or schedule), ``learning_rate``, ``zero_policy``, ``alive_bonus_offset``,
+``n_eval_episodes`` (episodes per candidate), ``paired_seeds`` (the candidates
+``w + delta`` and ``w - delta`` play episodes of the same seeds) and ``policy_kwargs``
+(``with_bias``, ``squash_output``; ``net_arch`` (a list) and ``activation`` for
+``MlpPolicy`` only); it takes neither ``gamma`` nor ``batch_size`` (it has no discount
+and no batches), and ``normalize`` only ``obs`` and ``clip_obs`` (the candidates are
+ranked by their raw returns, as the ARS paper and rl-zoo's ``ars.yml`` do).
 """
 
 from __future__ import annotations
@@ -57,8 +68,10 @@ __all__ = [
     "COMMON_KEYS",
     "DEFAULT_CONFIG_DIR",
     "MAX_N_ENVS",
+    "NOT_TAKEN",
     "SWEEP_CONFIG_DIR",
     "YamlLoader",
+    "check_combination",
     "default_config_path",
     "load_hyperparams",
     "make_schedule",
@@ -68,7 +81,7 @@ __all__ = [
 ]
 
 #: Algorithms ``motion-bench train`` knows.
-ALGOS: tuple[str, ...] = ("ppo", "sac", "td3")
+ALGOS: tuple[str, ...] = ("ppo", "sac", "td3", "ars")
 #: The agent configs shipped in the package (``baselines/configs/agents``, package data),
 #: so that a wheel install finds them; the repository's ``configs/agents`` is a link to
 #: this folder, one file on disk (``tests/test_packaged_configs.py``).
@@ -159,7 +172,28 @@ ALGO_KEYS: dict[str, dict[str, Checker]] = {
         "action_noise_sigma": V.float_in(0.0),
         "policy_kwargs": V.sub({"net_arch": V.net_arch, "activation": V.choice(*ACTIVATIONS)}),
     },
+    "ars": {
+        "policy": V.choice("LinearPolicy", "MlpPolicy"),
+        "normalize": V.sub({"obs": V.bool_value, "clip_obs": V.float_in(0.0, open_lo=True)}),
+        "n_delta": V.int_in(1, MAX_BATCH),
+        "n_top": V.int_in(1, MAX_BATCH),
+        "delta_std": V.schedule_or(V.float_in(0.0, open_lo=True), V.float_in(0.0)),
+        "zero_policy": V.bool_value,
+        "alive_bonus_offset": V.float_in(),
+        "n_eval_episodes": V.int_in(1, MAX_BATCH),
+        "paired_seeds": V.bool_value,
+        "policy_kwargs": V.sub(
+            {
+                "net_arch": V.net_arch_list,
+                "activation": V.choice(*ACTIVATIONS),
+                "with_bias": V.bool_value,
+                "squash_output": V.bool_value,
+            }
+        ),
+    },
 }
+#: Keys of :data:`COMMON_KEYS` an algorithm does not take.
+NOT_TAKEN: dict[str, frozenset[str]] = {"ars": frozenset({"gamma", "batch_size"})}
 
 #: Keys the training command consumes itself (not passed to the SB3 constructor).
 COMMAND_KEYS: tuple[str, ...] = (
@@ -231,6 +265,8 @@ def validate_hyperparams(algo: str, block: Any, where: str = "config") -> dict[s
     if not isinstance(block, Mapping):
         raise V.fail(where, f"must be a mapping of hyper-parameters; got {block!r}")
     schema = {**COMMON_KEYS, **ALGO_KEYS[algo]}
+    for key in NOT_TAKEN.get(algo, ()):
+        del schema[key]
     out: dict[str, Any] = {}
     for key, value in block.items():
         if key not in schema:
@@ -320,7 +356,26 @@ def resolve_hyperparams(
     hp = _merge(COMMAND_DEFAULTS, load_hyperparams(path, algo, env_id))
     if overrides:
         hp = _merge(hp, validate_hyperparams(algo, dict(overrides), "overrides"))
+    check_combination(algo, hp, f"{path} ({env_id})")
     return hp
+
+
+def check_combination(algo: str, hp: Mapping[str, Any], where: str) -> None:
+    """Refuse keys that are valid one by one but not together (one-line ``ValueError``
+    starting with ``where``): ARS's ``LinearPolicy`` has no hidden layers, and its
+    ``n_top`` best directions are among its ``n_delta``."""
+    if algo != "ars":
+        return
+    if hp.get("policy") == "LinearPolicy":
+        hidden = sorted({"net_arch", "activation"} & set(hp.get("policy_kwargs", {})))
+        if hidden:
+            raise V.fail(
+                f"{where}: policy_kwargs.{hidden[0]}",
+                "LinearPolicy has no hidden layers (use policy: MlpPolicy for net_arch)",
+            )
+    n_delta, n_top = int(hp.get("n_delta", 8)), hp.get("n_top")  # 8: sb3-contrib's default
+    if n_top is not None and int(n_top) > n_delta:
+        raise V.fail(f"{where}: n_top", f"must be <= n_delta ({n_delta}); got {n_top}")
 
 
 def make_schedule(value: Any) -> float | Callable[[float], float]:

@@ -32,6 +32,7 @@ __all__ = [
     "int_in",
     "integral",
     "net_arch",
+    "net_arch_list",
     "no_python",
     "optional",
     "plain_mapping",
@@ -196,6 +197,15 @@ def net_arch(v: Any, where: str) -> Any:
             raise fail(where, f"unknown keys {sorted(extra)}; expected pi, vf (PPO) or pi, qf")
         return {k: layers(x, f"{where}.{k}") for k, x in v.items()}
     return layers(v, where)
+
+
+def net_arch_list(v: Any, where: str) -> list[int]:
+    """:func:`net_arch` as one list of layer sizes (a network without separate heads)."""
+    no_python(v, where)
+    if isinstance(v, Mapping):
+        raise fail(where, f"must be a list of layer sizes (one network, no pi/vf heads); got {v!r}")
+    out: list[int] = net_arch(v, where)
+    return out
 
 
 def plain_mapping(v: Any, where: str) -> dict[str, Any]:

@@ -4,7 +4,10 @@ Residual policy learning starts the policy at the base controller: here the acti
 residual on top of the analytic nominal, so an action head scaled by
 ``action_head_scale = 0`` makes the initial deterministic policy the nominal itself
 (the weights still get gradients, so learning proceeds), and a small ``log_std_init``
-keeps the initial exploration near it.
+keeps the initial exploration near it. ARS (:mod:`baselines.agents.ars`, sb3-contrib)
+starts there too: ``zero_policy`` zeroes every weight, and ``action_head_scale = 0`` zeroes
+the last layer of an ``MlpPolicy`` whose hidden layers keep their random start (so that a
+perturbation of the output layer changes the action at first order).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from baselines.agents.config import COMMAND_KEYS, make_schedule
 
-__all__ = ["ALGO_CLASSES", "build_model", "start_at_nominal"]
+__all__ = ["ALGO_CLASSES", "algo_class", "build_model", "start_at_nominal"]
 
 ALGO_CLASSES: dict[str, type[BaseAlgorithm]] = {"ppo": PPO, "sac": SAC, "td3": TD3}
 
@@ -33,6 +36,15 @@ _ACTIVATIONS: dict[str, type[torch.nn.Module]] = {
     "gelu": torch.nn.GELU,
     "silu": torch.nn.SiLU,
 }
+
+
+def algo_class(algo: str) -> type[BaseAlgorithm]:
+    """The model class of ``algo`` (ARS imported only when asked for: sb3-contrib)."""
+    if algo == "ars":
+        from baselines.agents.ars import ARS
+
+        return ARS
+    return ALGO_CLASSES[algo]
 
 
 def _policy_kwargs(algo: str, spec: Mapping[str, Any]) -> dict[str, Any]:
@@ -53,11 +65,17 @@ def build_model(
     env: VecEnv,
     seed: int,
     tensorboard_log: str | None = None,
+    seed_bound: int | None = None,
 ) -> BaseAlgorithm:
-    """The SB3 model of ``algo`` with hyper-parameters ``hp`` (validated), at the nominal."""
-    cls = ALGO_CLASSES[algo]
+    """The SB3 model of ``algo`` with hyper-parameters ``hp`` (validated), at the nominal.
+
+    ``seed_bound``: ARS's paired episode seeds stay below it (the environment's first
+    validation seed; None: any seed)."""
+    cls = algo_class(algo)
     kwargs = {k: v for k, v in hp.items() if k not in COMMAND_KEYS}
-    for key in ("learning_rate", "clip_range"):
+    if algo == "ars" and seed_bound is not None:
+        kwargs["seed_bound"] = int(seed_bound)
+    for key in ("learning_rate", "clip_range", "delta_std"):
         if key in kwargs:
             kwargs[key] = make_schedule(kwargs[key])
     kwargs["policy_kwargs"] = _policy_kwargs(algo, hp.get("policy_kwargs", {}))
@@ -84,8 +102,16 @@ def start_at_nominal(
 ) -> None:
     """Scale the action head's weights by ``scale`` and zero its bias (``scale = 0``: the
     deterministic policy is the zero action, i.e. the nominal); SAC's ``log_std`` head
-    starts at ``log_std_init`` (weights scaled likewise)."""
+    starts at ``log_std_init`` (weights scaled likewise); ARS's search starts from the
+    scaled weights."""
     policy: Any = model.policy
+    if algo == "ars":
+        head = [m for m in policy.action_net if isinstance(m, torch.nn.Linear)][-1]
+        head.weight.mul_(scale)
+        if head.bias is not None:
+            head.bias.zero_()
+        model.weights = torch.nn.utils.parameters_to_vector(policy.parameters()).detach()
+        return
     if algo == "ppo":
         heads = [policy.action_net]
     elif algo == "sac":

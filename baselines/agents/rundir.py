@@ -14,8 +14,11 @@ A run folder holds
 * ``evaluations.csv`` and ``tb/`` (TensorBoard).
 
 :func:`load_run` rebuilds the model from ``config.json`` and loads only the network
-weights from the zip (:meth:`~stable_baselines3.common.base_class.BaseAlgorithm.set_parameters`,
-``torch.load(weights_only=True)``), so nothing is unpickled; a modified file, a missing
+weights from the zip (SB3's ``load_from_zip_file(load_data=False)``, i.e.
+``torch.load(weights_only=True)``, then
+:meth:`~stable_baselines3.common.base_class.BaseAlgorithm.set_parameters` of those
+arrays), so nothing is unpickled (sb3-contrib's ARS, whose own ``set_parameters`` of a
+path would unpickle the zip's ``data``, included); a modified file, a missing
 file, a file that is not what it should be (JSON read strictly by
 :func:`motion_envs._io.strict_json_loads`, every file a regular file read within
 :data:`MAX_FILE_BYTES`) or a run written by another motion-envs version raises a one-line
@@ -339,6 +342,8 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
     SHA-256 before reading anything else; every error is one ``ValueError`` line naming
     the folder and the file.
     """
+    from stable_baselines3.common.save_util import load_from_zip_file
+
     import motion_envs
     from baselines.agents.config import validate_hyperparams
     from baselines.agents.policies import build_model
@@ -418,7 +423,12 @@ def load_run(run_dir: str | os.PathLike[str], which: str = "best") -> LoadedRun:
         try:
             with warnings.catch_warnings():  # torch's note on a tampered pickle: the error says it
                 warnings.simplefilter("ignore", UserWarning)
-                model.set_parameters(str(run_dir / stage), exact_match=True, device="cpu")
+                # the weights only (torch.load(weights_only=True)); not the zip's "data",
+                # which SB3 would unpickle (sb3-contrib's ARS.set_parameters of a path does)
+                _, params, _ = load_from_zip_file(
+                    str(run_dir / stage), device="cpu", load_data=False
+                )
+                model.set_parameters(params, exact_match=True, device="cpu")
         finally:
             env.close()
     except _READ_ERRORS as exc:

@@ -10,6 +10,8 @@ train`` and every trial of ``motion-bench sweep`` call it):
    :class:`baselines.sb3.GymnasiumVecEnv`, ``VecMonitor`` and, where the config says so,
    ``VecNormalize``;
 3. the model starts at the nominal (:func:`~baselines.agents.policies.start_at_nominal`);
+   ``--algo ars`` is sb3-contrib's ARS (:mod:`baselines.agents.ars`: parameter-space
+   exploration, every episode played by a deterministic policy), the rest unchanged;
 4. every ``eval_freq`` steps (and at the start and the end) the deterministic policy is
    scored on the *validation* split (``split="val"``: training subjects/demonstrations
    held out by ``val_fraction``) with the papers' criterion, the median over episodes of
@@ -18,9 +20,10 @@ train`` and every trial of ``motion-bench sweep`` call it):
    evaluation: :mod:`baselines.agents.sweep.nested`) has no validation split: it trains
    on all the training data and keeps the policy at the first point of the same
    evaluation schedule at or after ``keep_timesteps`` (a step chosen by inner folds),
-   then stops. ``Juggling-v0`` (no native vector environment: SB3's
-   ``DummyVecEnv``) is validated on its own seed range by the drop rate per toss
-   (:mod:`baselines.agents.juggling_score`);
+   then stops (ARS, whose evaluation loop ignores a callback's stop, trains on to
+   ``n_timesteps``; the kept policy is the same). ``Juggling-v0`` (no native vector
+   environment: SB3's ``DummyVecEnv``) is validated on its own seed range by the drop
+   rate per toss (:mod:`baselines.agents.juggling_score`);
 5. the run folder (:mod:`baselines.agents.rundir`) gets the final policy, the resolved
    config, the manifest and TensorBoard logs.
 """
@@ -208,6 +211,7 @@ def _train(
     from baselines.agents.evaluate import split_criterion
     from baselines.agents.policies import build_model
     from baselines.agents.rundir import ObsNormalizer, save_model, write_json, write_manifest
+    from baselines.agents.scorers import scorer_for
     from baselines.sb3 import TqdmCallback
 
     torch.set_num_threads(int(hp["torch_threads"]))
@@ -224,7 +228,11 @@ def _train(
                 "motion-bench train: tensorboard is not installed; no TensorBoard logs",
                 file=sys.stderr,
             )
-    model = build_model(config.algo, hp, env, config.seed, tensorboard_log=tb)
+    # ARS's paired episode seeds stay below the validation seeds (a seed-range split)
+    seed_bound = scorer_for(config.env_id).first_val_seed
+    model = build_model(
+        config.algo, hp, env, config.seed, tensorboard_log=tb, seed_bound=seed_bound
+    )
     selection = dict(config.selection or {})
     validation: ValidationCallback
     if config.keep_timesteps is not None:  # a refit: the validation's schedule, no split
@@ -382,7 +390,8 @@ def register(subparsers: Any) -> None:
     p = options.add_subcommand(
         subparsers,
         "train",
-        help="train an SB3 agent (ppo, sac, td3) on top of the nominal; zoo-style YAML configs",
+        help="train an agent (SB3's ppo, sac, td3; sb3-contrib's ars) on top of the nominal; "
+        "zoo-style YAML configs",
         description=__doc__.split("\n\n")[0].replace("``", ""),
     )
     p.add_argument("--algo", required=True, choices=ALGOS)
