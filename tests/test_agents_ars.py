@@ -77,8 +77,8 @@ def test_keys_ars_does_not_take_are_refused(block: dict[str, Any], message: str)
 def test_keys_that_do_not_go_together_are_refused() -> None:
     with pytest.raises(ValueError, match=r"policy_kwargs.net_arch: LinearPolicy has no hidden"):
         _hp(policy_kwargs={"net_arch": [16]})
-    with pytest.raises(ValueError, match=r"n_top: must be <= n_delta \(32\); got 33"):
-        _hp(n_top=33)
+    with pytest.raises(ValueError, match=r"n_top: must be <= n_delta \(8\); got 9"):
+        _hp(n_top=9)
     assert _hp(policy="MlpPolicy", policy_kwargs={"net_arch": [16]})["policy"] == "MlpPolicy"
 
 
