@@ -37,7 +37,7 @@ from motion_envs.models.juggling import V2_LEVELS, equivalent_ballistic
     ("kwargs", "match"),
     [
         ({"level": "drift"}, "level must be one of"),
-        ({"controller": "juggler_delay_estimator"}, "controller must be one of"),
+        ({"controller": "juggler_drift"}, "controller must be one of"),
         ({"controller": "juggler", "delay_offset": 0.02}, "delay_offset is for"),
         ({"controller": "juggler_mean_delay", "delay_offset": -0.01}, "delay_offset must be in"),
         ({"controller": "juggler_mean_delay", "delay_offset": float("nan")}, "delay_offset"),
@@ -180,10 +180,8 @@ class Spy:
         self.choosing = False
         self.calls: list[tuple[str, str, bool]] = []
 
-    def play(self, policy: Any, kwargs: dict[str, Any], split: str, n: int) -> CascadeEpisodes:
-        self.calls.append((kwargs["level"], split, self.choosing))
-        if split == "test" and self.choosing:
-            raise AssertionError("a test seed was played before the choice was made")
+    def catches(self, policy: Any, kwargs: dict[str, Any], split: str) -> int:
+        """Every episode's catches for a row (the ranking above)."""
         ctl, off = kwargs["controller"], kwargs.get("delay_offset", 0.0)
         good = {"val": ("fixed_point", 0.04), "test": ("juggler_mean_delay", 0.08)}[split]
         c = 1
@@ -191,7 +189,13 @@ class Spy:
             c = 9
         if ctl == "juggler_mean_delay":
             c = 12 if off == good[1] else (5 if split == "test" and off == 0.0 else 2)
-        catches = np.full(n, c, dtype=np.int64)
+        return c
+
+    def play(self, policy: Any, kwargs: dict[str, Any], split: str, n: int) -> CascadeEpisodes:
+        self.calls.append((kwargs["level"], split, self.choosing))
+        if split == "test" and self.choosing:
+            raise AssertionError("a test seed was played before the choice was made")
+        catches = np.full(n, self.catches(policy, kwargs, split), dtype=np.int64)
         return CascadeEpisodes(
             seeds=episode_seeds(split, n),
             catches=catches,

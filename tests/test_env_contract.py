@@ -390,6 +390,7 @@ CASES: dict[str, Case] = {
             {"level": "hard", "controller": "juggler_oracle", "max_catches": 1},
             {"level": "medium", "controller": "fixed_point", "residual_phases": ["catch"]},
             {"level": "easy", "controller": "juggler_mean_delay_catch", "observe_task_error": True},
+            {"level": "easy", "pattern": "5", "controller": "juggler_delay_estimator"},
         ),
     ),
     "MotionEnvs/Cascade": Case(

@@ -18,6 +18,15 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   where measured at or above every row (``upper_is_upper``: its paired difference from
   every other row, in mean catches, is >= 0; the report names the rows with an interval
   wholly above it);
+* ``best_constant``: the constant residual, from Juggling-v2's grid
+  (:data:`CONSTANT_GRID`, :data:`baselines.juggling_bench.v2.CONSTANT_GRID`, declared
+  before any run: each coordinate -0.5, 0 or 0.5, up to 5 cm at this scale) in each
+  hand's own frame (``x`` mirrored for the left hand, as the pattern mirrors it), the one
+  with the most mean catches before the first drop on VALIDATION episodes;
+* ``velocity_x_mean_delay``: Juggling-v2's two-line residual
+  (:class:`CascadeVelocityTimesDelay`): per hand in its catch phase, the velocity of the
+  ball it is about to catch (read from the observation's frames:
+  :func:`baselines.juggling_bench.v2.frame_velocity`) times the level's mean delay;
 * ``juggler_mean_delay``: the frames shifted by the level's mean delay;
 * ``late_meeting``: the same told the mean delay plus an offset from
   :data:`LATE_OFFSETS` (declared here before any run), the offset with the most mean
@@ -28,14 +37,19 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   ahead is what ``late_meeting``'s offset does (a later placed fit, predicted further);
   the rows differ in the seeds the number is chosen on (one lead for all levels) and in
   the flight told before a ball's first three frames (advanced by the lead only);
+* ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``:
+  Juggling-v2's release-anchored estimator, the delay found from each release, where
+  the hand knows when and where it let go, and pooled over the episode's releases of
+  every ball; :class:`~motion_envs.models.juggling.PooledReleaseEstimator`);
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
   seeded by its seed).
 
-Every choice (the late offset; the best non-oracle row, by mean catches before the first
-drop) is made on ``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before
-any test seed is played; the rows are then played on ``episodes`` TEST episodes. An
+Every choice (the constant, the late offset; the best non-oracle row, by mean catches
+before the first drop; ties: the first in grid or row order) is made on
+``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before any test seed is
+played; the rows are then played on ``episodes`` TEST episodes. An
 episode ends at the first drop or after ``max_catches`` catches (censored). Reported per
 row (:func:`baselines.juggling_bench.cascade.summary`, 95 % bootstrap intervals resampling
 episodes): the median and the mean catches before the first drop, the catch rate, the
@@ -55,22 +69,28 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from baselines import options
+from baselines.juggling_bench import v2
 from baselines.juggling_bench.cascade import CascadeEpisodes, summary
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, episode_seeds
 from motion_envs.models.juggling import CASCADE_V1_LEVELS, V2_LEVELS, pattern_spec
 
 __all__ = [
     "CASCADE_V1_ENV_ID",
+    "CONSTANT_GRID",
+    "FRESH_FRAME",
     "LATE_OFFSETS",
     "REFERENCES",
     "RESIDUAL_SCALE",
     "ROWS",
     "UPPER_REFERENCE",
     "CascadeV1Config",
+    "CascadeVelocityTimesDelay",
     "cascade_v1_episodes",
     "check_cascade_v1_config",
+    "choose_constant",
     "choose_late_offset",
     "report_cascade_v1",
     "row_play",
@@ -86,14 +106,26 @@ RESIDUAL_SCALE = 0.1
 #: Juggling-v2's grid (0-80 ms, its best at the largest on medium and hard) widened to
 #: 120 ms before any Cascade-v1 run.
 LATE_OFFSETS: tuple[float, ...] = (0.0, 0.02, 0.04, 0.06, 0.08, 0.10, 0.12)
+#: The constant residuals tried by ``best_constant`` (Juggling-v2's grid, in action units;
+#: ``(x, z)`` in each hand's own frame).
+CONSTANT_GRID: tuple[tuple[float, float], ...] = v2.CONSTANT_GRID
+#: s; ``velocity_x_mean_delay`` reads a ball's frames only while its newest arrived this
+#: recently (older ones are of its previous flight, or it is held), declared before any run.
+FRESH_FRAME = 0.1
+#: Observation entries per hand, and within a hand's the catch phase's one-hot and the
+#: plan's end point (CascadeV1Env's docstring).
+_PER_HAND, _CATCH, _PLAN_END = 16, 7, 13
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
     "oracle",
     "oracle_catch",
+    "best_constant",
+    "velocity_x_mean_delay",
     "juggler_mean_delay",
     "late_meeting",
     "mean_delay_catch",
+    "delay_estimator",
     "fixed_point",
     "random",
 )
@@ -102,8 +134,8 @@ REFERENCES = ("oracle", "oracle_catch")
 #: The reference the room is measured against.
 UPPER_REFERENCE = "oracle_catch"
 _LABELS = {"oracle": "oracle (true delay, drag)", "oracle_catch": "oracle+catch plan"}
-#: A row's policy: None (the zero action) or ``"random"``.
-Policy = str | None
+#: A row's policy: None (the zero action), ``"random"`` or a function of the observation.
+Policy = str | Callable[[NDArray[np.float32]], NDArray[np.float64]] | None
 Play = Callable[[Policy, dict[str, Any], str, int], CascadeEpisodes]
 
 
@@ -139,8 +171,9 @@ def cascade_v1_episodes(
     policy: Policy, kwargs: dict[str, Any], split: str, n: int
 ) -> CascadeEpisodes:
     """``n`` episodes of Cascade-v1 made with ``kwargs``, reset with the seeds of
-    ``split``: the zero action (``policy`` None; the env's :meth:`play`) or uniform
-    random actions (``"random"``, a generator per episode seeded with its seed)."""
+    ``split``: the zero action (``policy`` None; the env's :meth:`play`), uniform random
+    actions (``"random"``, a generator per episode seeded with its seed) or the action
+    ``policy(obs)``."""
     from motion_envs.envs.juggling import CascadeV1Env
 
     env = CascadeV1Env(**kwargs)
@@ -151,10 +184,11 @@ def cascade_v1_episodes(
             rows.append(env.play(seed))
             continue
         rng = np.random.default_rng(seed)
-        env.reset(seed=seed)
+        obs, _ = env.reset(seed=seed)
         terminated = truncated = False
         while not (terminated or truncated):
-            _, _, terminated, truncated, info = env.step(rng.uniform(-1.0, 1.0, 4))
+            a = rng.uniform(-1.0, 1.0, 4) if isinstance(policy, str) else policy(obs)
+            obs, _, terminated, truncated, info = env.step(a)
         rows.append((info["catches"], info["tosses"], terminated, info["time"]))
     return CascadeEpisodes(
         seeds=seeds,
@@ -180,8 +214,13 @@ def _kwargs(
     return out
 
 
-def _offset_key(offset: float) -> str:
-    return f"{offset * 1000:.0f} ms"
+def _best_on_val(
+    grid: tuple[Any, ...], key: Callable[[Any], str], mean: Callable[[Any], float]
+) -> tuple[Any, dict[str, float]]:
+    """The candidate of ``grid`` with the highest ``mean`` (ties: the first) and every
+    candidate's, keyed by ``key``."""
+    means = {key(c): mean(c) for c in grid}
+    return max(grid, key=lambda c: means[key(c)]), means
 
 
 def choose_late_offset(
@@ -190,26 +229,102 @@ def choose_late_offset(
     """The offset of :data:`LATE_OFFSETS` with the most mean catches before the first
     drop on ``config.val_episodes`` VALIDATION episodes (ties: the smallest), and every
     candidate's validation mean."""
-    means: dict[str, float] = {}
-    best, best_mean = LATE_OFFSETS[0], -1.0
-    for offset in LATE_OFFSETS:
-        eps = play(None, _kwargs(level, config, "juggler_mean_delay", offset), "val",
+
+    def mean(offset: float) -> float:
+        kw = _kwargs(level, config, "juggler_mean_delay", offset)
+        return float(play(None, kw, "val", config.val_episodes).catches.mean())
+
+    offset, means = _best_on_val(LATE_OFFSETS, v2.offset_key, mean)
+    return float(offset), means
+
+
+class _Constant:
+    """The constant action ``(x, z)`` for each hand in its own frame (``x`` mirrored for
+    the left hand)."""
+
+    def __init__(self, action: tuple[float, float]) -> None:
+        x, z = action
+        self.action = np.array([x, z, -x, z])
+
+    def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
+        return self.action.copy()
+
+
+def _constant_policy(action: tuple[float, float]) -> Policy:
+    return None if action == (0.0, 0.0) else _Constant(action)
+
+
+def choose_constant(
+    level: str, config: CascadeV1Config, play: Play = cascade_v1_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The constant of :data:`CONSTANT_GRID` with the most mean catches before the first
+    drop on ``config.val_episodes`` VALIDATION episodes (ties: the first), and every
+    candidate's validation mean."""
+
+    def mean(action: tuple[float, float]) -> float:
+        eps = play(_constant_policy(action), _kwargs(level, config, "juggler"), "val",
                    config.val_episodes)  # fmt: skip
-        means[_offset_key(offset)] = float(eps.catches.mean())
-        if means[_offset_key(offset)] > best_mean:
-            best, best_mean = offset, means[_offset_key(offset)]
-    return best, means
+        return float(eps.catches.mean())
+
+    action, means = _best_on_val(CONSTANT_GRID, v2.grid_key, mean)
+    return (float(action[0]), float(action[1])), means
 
 
-def _players(offset: float) -> dict[str, tuple[str, Policy, float]]:
+class CascadeVelocityTimesDelay:
+    """Juggling-v2's two-line residual per hand (module docstring): in a hand's catch
+    phase, ``v delay / scale`` (clipped to the action box) with ``v`` the velocity
+    (:func:`baselines.juggling_bench.v2.frame_velocity`) of the ball it is about to
+    catch: of the balls not held, with a velocity, falling, and whose newest frame
+    arrived within :data:`FRESH_FRAME` s, the one whose newest frame is nearest to the
+    hand's planned catch point (the observation's plan end); 0 without one.
+
+    Parameters
+    ----------
+    balls:
+        Balls of the pattern.
+    delay:
+        s, the level's mean delay.
+    scale:
+        m of residual per unit action.
+    """
+
+    def __init__(self, balls: int, delay: float, scale: float) -> None:
+        self.balls, self.delay, self.scale = int(balls), float(delay), float(scale)
+
+    def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
+        o = np.asarray(obs, dtype=np.float64)
+        n, hand = self.balls, _PER_HAND
+        held = o[2 * hand : 2 * hand + 2 * n].reshape(n, 2).max(axis=1) > 0.5
+        frames = o[2 * hand + 2 * n :].reshape(n, 4, 4)
+        v, ok = v2.frame_velocity(frames)
+        ok &= ~held & (v[:, 1] < 0) & (frames[:, 0, 2] <= FRESH_FRAME)
+        out = np.zeros(4)
+        for h in range(2):
+            row = o[h * hand : (h + 1) * hand]
+            if row[_CATCH] < 0.5 or not ok.any():
+                continue
+            d = np.hypot(*(frames[:, 0, :2] - row[_PLAN_END : _PLAN_END + 2]).T)
+            i = int(np.argmin(np.where(ok, d, np.inf)))
+            out[2 * h : 2 * h + 2] = v[i] * self.delay / self.scale
+        return np.clip(out, -1.0, 1.0)
+
+
+def _players(
+    level: str, config: CascadeV1Config, offset: float, constant: tuple[float, float]
+) -> dict[str, tuple[str, Policy, float]]:
     """Each row's controller, policy and delay offset."""
+    delay = V2_LEVELS[level].mean_delay
+    velocity = CascadeVelocityTimesDelay(pattern_spec(config.pattern).balls, delay, RESIDUAL_SCALE)
     return {
         "juggler": ("juggler", None, 0.0),
         "oracle": ("juggler_oracle", None, 0.0),
         "oracle_catch": ("juggler_oracle_catch", None, 0.0),
+        "best_constant": ("juggler", _constant_policy(constant), 0.0),
+        "velocity_x_mean_delay": ("juggler", velocity, 0.0),
         "juggler_mean_delay": ("juggler_mean_delay", None, 0.0),
         "late_meeting": ("juggler_mean_delay", None, offset),
         "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0),
+        "delay_estimator": ("juggler_delay_estimator", None, 0.0),
         "fixed_point": ("fixed_point", None, 0.0),
         "random": ("juggler", "random", 0.0),
     }
@@ -254,33 +369,39 @@ def run_cascade_v1(
     config: CascadeV1Config,
     play: Play = cascade_v1_episodes,
     offset_chooser: Any = choose_late_offset,
+    constant_chooser: Any = choose_constant,
 ) -> dict[str, Any]:
-    """Every level's rows (module docstring); JSON-ready. ``play`` and ``offset_chooser``
-    are for tests (the spy that proves the choices read no test seed)."""
+    """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
+    for tests (the spy that proves the choices read no test seed)."""
     check_cascade_v1_config(config)
     t0 = time.process_time()
     levels = []
     for level in config.levels:
+        constant, constant_means = constant_chooser(level, config, play)
         offset, offset_means = offset_chooser(level, config, play)
-        players = _players(offset)
+        players = _players(level, config, offset, constant)
+        # the grids' validation plays reused where the choosers made them
         reuse = {
-            "juggler_mean_delay": _offset_key(0.0),
-            "late_meeting": _offset_key(offset),
+            "juggler": (constant_means, v2.grid_key((0.0, 0.0))),
+            "best_constant": (constant_means, v2.grid_key(constant)),
+            "juggler_mean_delay": (offset_means, v2.offset_key(0.0)),
+            "late_meeting": (offset_means, v2.offset_key(offset)),
         }
         val_means: dict[str, float] = {}
         for name, (ctl, policy, off) in players.items():
             if name in REFERENCES:
                 continue
-            key = reuse.get(name)
-            if key is not None and key in offset_means:
-                val_means[name] = offset_means[key]
+            means, key = reuse.get(name, ({}, ""))
+            if key in means:
+                val_means[name] = means[key]
             else:
                 eps = play(policy, _kwargs(level, config, ctl, off), "val", config.val_episodes)
                 val_means[name] = float(eps.catches.mean())
         best = max((r for r in ROWS if r in val_means), key=lambda r: val_means[r])
         played = {
             name: play(policy, _kwargs(level, config, ctl, off), "test", config.episodes)
-            for name, (ctl, policy, off) in players.items()
+            # fresh players (no state is carried from the validation plays)
+            for name, (ctl, policy, off) in _players(level, config, offset, constant).items()
         }
         rows = {name: row_summary(eps) for name, eps in played.items()}
         room = _paired(played[UPPER_REFERENCE], played[best])
@@ -293,6 +414,8 @@ def run_cascade_v1(
             {
                 "level": level,
                 "values": asdict(V2_LEVELS[level]),
+                "constant": list(constant),
+                "constant_val_mean_catches": constant_means,
                 "late_offset_s": offset,
                 "late_offset_val_mean_catches": offset_means,
                 "val_mean_catches": val_means,
@@ -334,7 +457,7 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         f"{doc['demonstrations']}); {test['count']} test episodes per level and row (seeds "
         f"from {test['first']}), at most {doc['config']['max_catches']} catches; choices on "
         f"{doc['seeds']['choice']['count']} validation episodes",
-        f"{'level':7s} {'row':19s} {'catches median [95% CI]':24s} "
+        f"{'level':7s} {'row':21s} {'catches median [95% CI]':24s} "
         f"{'mean [95% CI]':22s} {'catch rate [95% CI]':22s} {'censored':>8s}",
     ]
     for lv in doc["levels"]:
@@ -344,7 +467,7 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             r, (rlo, rhi) = m["catch_rate"], m["catch_rate_ci"]
             label = _LABELS.get(name, name)
             lines.append(
-                f"{lv['level']:7s} {label[:19]:19s} {c:5.1f} [{clo:5.1f}, {chi:5.1f}]{'':6s} "
+                f"{lv['level']:7s} {label[:21]:21s} {c:5.1f} [{clo:5.1f}, {chi:5.1f}]{'':6s} "
                 f"{mean:5.2f} [{mlo:5.2f}, {mhi:5.2f}]{'':3s} {r:.3f} [{rlo:.3f}, {rhi:.3f}]"
                 f"{'':2s} {m['censored']:8d}"
             )
@@ -352,7 +475,8 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         upper = "the upper reference" if lv["upper_is_upper"] else "NOT an upper reference"
         below = [k for k, d in lv["upper_minus_rows"].items() if d["ci"][1] < 0]
         lines.append(
-            f"{lv['level']:7s} late offset {lv['late_offset_s'] * 1000:.0f} ms; best non-oracle "
+            f"{lv['level']:7s} best constant {tuple(lv.get('constant', (0.0, 0.0)))}; late "
+            f"offset {lv['late_offset_s'] * 1000:.0f} ms; best non-oracle "
             f"row {lv['best_non_oracle']} (chosen on validation); ROOM oracle_catch - best "
             f"(paired mean catches): {room['value']:+.2f} [{room['ci'][0]:+.2f}, "
             f"{room['ci'][1]:+.2f}]; oracle - best {old['value']:+.2f} [{old['ci'][0]:+.2f}, "

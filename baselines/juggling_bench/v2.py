@@ -101,6 +101,9 @@ __all__ = [
     "check_v2_config",
     "choose_constant",
     "choose_offset",
+    "frame_velocity",
+    "grid_key",
+    "offset_key",
     "report_v2",
     "row_players",
     "run_v2",
@@ -180,16 +183,26 @@ class VelocityTimesDelay:
 
     def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
         obs = np.asarray(obs, dtype=np.float64)
-        frames = obs[:, _FRAME0 : _FRAME0 + 16].reshape(-1, 4, 4)
-        valid = frames[:, :, 3] > 0.5
-        last = np.where(valid.all(axis=1), 3, np.maximum(valid.sum(axis=1) - 1, 0))
-        rows = np.arange(obs.shape[0])
-        old = frames[rows, last]
-        span = old[:, 2] - frames[:, 0, 2]
-        ok = (obs[:, _CATCH] > 0.5) & valid[:, 0] & (last > 0) & (span > 0)
-        v = (frames[:, 0, :2] - old[:, :2]) / np.where(ok, span, 1.0)[:, None]
+        v, ok = frame_velocity(obs[:, _FRAME0 : _FRAME0 + 16].reshape(-1, 4, 4))
+        ok &= obs[:, _CATCH] > 0.5
         out = np.where(ok[:, None], v * self.delay / self.scale, 0.0)
         return np.clip(out, -1.0, 1.0)
+
+
+def frame_velocity(
+    frames: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The ball's velocity ``(B, 2)`` from ``frames (B, 4, 4)`` (the observation's four
+    received frames ``x, z, age, valid``, newest first): the newest and the oldest valid
+    frame's positions over their arrival ages apart; and ``(B,)`` True where it exists
+    (the newest slot holds a frame, another one does, their ages differ); 0 elsewhere."""
+    valid = frames[:, :, 3] > 0.5
+    last = np.where(valid.all(axis=1), 3, np.maximum(valid.sum(axis=1) - 1, 0))
+    old = frames[np.arange(frames.shape[0]), last]
+    span = old[:, 2] - frames[:, 0, 2]
+    ok = valid[:, 0] & (last > 0) & (span > 0)
+    v = (frames[:, 0, :2] - old[:, :2]) / np.where(ok, span, 1.0)[:, None]
+    return np.where(ok[:, None], v, 0.0), ok
 
 
 class _Constant:
@@ -221,11 +234,13 @@ def _kwargs(
     }
 
 
-def _offset_key(offset: float) -> str:
+def offset_key(offset: float) -> str:
+    """A delay offset's key in the validation tables (``"40 ms"``)."""
     return f"{offset * 1000:.0f} ms"
 
 
-def _grid_key(action: tuple[float, float]) -> str:
+def grid_key(action: tuple[float, float]) -> str:
+    """A constant's key in the validation tables (``"+0.5,-0.5"``)."""
     return f"{action[0]:+.1f},{action[1]:+.1f}"
 
 
@@ -240,7 +255,7 @@ def choose_constant(
     for action in CONSTANT_GRID:
         policy = None if action == (0.0, 0.0) else _Constant(action)
         eps = play(policy, ENV_ID_V2, _kwargs(level, config), "val", config.val_episodes)
-        rates[_grid_key(action)] = eps.catch_rate
+        rates[grid_key(action)] = eps.catch_rate
         if eps.catch_rate > best_rate:
             best, best_rate = action, eps.catch_rate
     return best, rates
@@ -258,7 +273,7 @@ def choose_offset(
     for offset in LATE_OFFSETS:
         kw = _kwargs(level, config, "juggler_mean_delay", {"delay_offset": offset})
         eps = play(None, ENV_ID_V2, kw, "val", config.val_episodes)
-        rates[_offset_key(offset)] = eps.catch_rate
+        rates[offset_key(offset)] = eps.catch_rate
         if eps.catch_rate > best_rate:
             best, best_rate = offset, eps.catch_rate
     return best, rates
@@ -308,10 +323,10 @@ def run_v2(
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
         # the grids' plays reused where the choosers made them.
         reuse = {
-            "juggler": (val_rates, _grid_key((0.0, 0.0))),
-            "best_constant": (val_rates, _grid_key(constant)),
-            "juggler_mean_delay": (offset_rates, _offset_key(0.0)),
-            "late_meeting": (offset_rates, _offset_key(offset)),
+            "juggler": (val_rates, grid_key((0.0, 0.0))),
+            "best_constant": (val_rates, grid_key(constant)),
+            "juggler_mean_delay": (offset_rates, offset_key(0.0)),
+            "late_meeting": (offset_rates, offset_key(offset)),
         }
         players = row_players(level, constant, offset)
         val_catch: dict[str, float] = {}

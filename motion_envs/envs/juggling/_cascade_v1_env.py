@@ -98,8 +98,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     its flight its thrower's release state flown ballistically. Reference controllers
     (:data:`~motion_envs.models.juggling.CASCADE_V1_CONTROLLERS`):
     ``juggler_mean_delay`` (frames shifted by the level's mean delay plus
-    `delay_offset`), ``juggler_oracle`` (the true delay and each ball's true drag; a
-    reference, labelled as upper only where measured above the others) and
+    `delay_offset`), ``juggler_delay_estimator`` (the hand-written delay estimator: the
+    delay found from each release, pooled over the episode's releases of every ball;
+    :class:`~motion_envs.models.juggling.PooledReleaseEstimator`), ``juggler_oracle``
+    (the true delay and each ball's true drag; a reference, labelled as upper only where
+    measured above the others) and
     ``fixed_point`` (catches at the nominal point and time, never looking: trivial),
     and Juggling-v2's catch planned for the capture rule on the oracle's and on the
     mean delay's estimates (``juggler_oracle_catch``, ``juggler_mean_delay_catch``:
@@ -202,7 +205,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |

@@ -21,7 +21,8 @@ The public names of small private modules, one concern each:
   fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:class:`V2Controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
-  (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`) and its catch plans
+  (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`; the delay estimator
+  pooled over the balls, :class:`PooledReleaseEstimator`) and its catch plans
   (:data:`CASCADE_CATCH_PLANS`);
   ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`)
   and every Juggling-v2 controller by name (:func:`make_v2_controller`);
@@ -96,6 +97,7 @@ from motion_envs.models.juggling._cascade_v1 import (
     CASCADE_V1_CONTROLLERS,
     CASCADE_V1_LEVELS,
     CascadeBallView,
+    PooledReleaseEstimator,
     catch_height,
     catch_plan,
     equivalent_ballistic,
@@ -279,6 +281,7 @@ __all__ = [
     "PatternSpec",
     "PatternSummary",
     "PhaseFit",
+    "PooledReleaseEstimator",
     "SiteswapController",
     "SiteswapPlan",
     "SiteswapStyle",

@@ -16,8 +16,9 @@ noise, the drag range, the toss scatter, the capture speed); ``drift`` is not of
 * a FLYING ball with at least 3 frames of its current flight: the estimator's state now
   (the flight fitted to its newest frames, each placed at the time the estimator
   believes it was captured: ``"arrival"`` for the analytic juggler, ``"mean_delay"``
-  for the level's mean delay plus an offset, ``"oracle"`` for the episode's true delay
-  and the ball's true drag);
+  for the level's mean delay plus an offset, ``"release"`` for the delay found from the
+  releases (:class:`PooledReleaseEstimator`, below), ``"oracle"`` for the episode's
+  true delay and the ball's true drag);
 * a FLYING ball without 3 frames yet (just thrown, or in flight at the start before
   the first frames arrive): the ballistic flight from its thrower's hand state at the
   release (proprioception: the hand knows where and how fast it let go; the release
@@ -46,6 +47,18 @@ flight comes down through the pattern's catch height, the point the drag flight 
 (:func:`equivalent_ballistic`), as Juggling-v2's oracle is matched at its plan's catch
 time.
 
+**The hand-written delay estimator** (``juggler_delay_estimator``, the estimators' mode
+``"release"``): Juggling-v2's release-anchored estimator
+(:class:`~motion_envs.models.juggling.FlightEstimator`, mode ``"release"``: the hand
+knows when and where it let a ball go, so the delay is the one that makes the ball's
+flight from the release point pass through its first ``ANCHOR_FRAMES`` frames, on a
+5 ms grid) with ONE delay pooled over the episode's releases of EVERY ball (the delay is
+one per episode, the same for every ball: one person), each flight's estimate joining
+the pool once its first frames arrived (:class:`PooledReleaseEstimator`). Before the
+episode's first estimate the frames are placed by the level's mean delay (the prior
+the mean-delay juggler uses throughout). A ball in flight at ``t = 0`` was released by
+no hand of the episode: it is fitted with the pooled delay but tells none.
+
 :data:`CASCADE_V1_CONTROLLERS` maps each controller name to the pattern's juggler
 variant and the estimator's mode; ``fixed_point`` (the juggler that catches at the
 nominal point and time, never looking) is the trivial row.
@@ -71,6 +84,7 @@ __all__ = [
     "CASCADE_V1_CONTROLLERS",
     "CASCADE_V1_LEVELS",
     "CascadeBallView",
+    "PooledReleaseEstimator",
     "catch_height",
     "catch_plan",
     "equivalent_ballistic",
@@ -88,6 +102,7 @@ CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
     "fixed_point": ("fixed_point", "arrival"),
     "juggler_oracle_catch": ("juggler", "oracle"),
     "juggler_mean_delay_catch": ("juggler", "mean_delay"),
+    "juggler_delay_estimator": ("juggler", "release"),
 }
 #: s; the leads tried on training seeds (0-160 ms in 20 ms steps).
 CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9))
@@ -144,6 +159,54 @@ def equivalent_ballistic(
     return np.array(((x_e - p[0]) / s, (z_e - p[1] + 0.5 * gravity * s * s) / s))
 
 
+class PooledReleaseEstimator(FlightEstimator):
+    """One ball's release-anchored estimator (mode ``"release"``) whose delay is pooled
+    with the other balls' (module docstring): every estimator of the episode appends its
+    flights' delays to the one list ``pool`` and places its frames by their mean (the
+    level's mean delay ``prior`` while the list is empty); a fit is redone when the pool
+    grew.
+
+    Parameters
+    ----------
+    gravity:
+        m/s^2.
+    pool:
+        The episode's delays found so far (s), shared by the balls' estimators; cleared
+        by the owner at a new episode.
+    prior:
+        s, the delay before the first estimate (the level's mean).
+    """
+
+    def __init__(self, gravity: float, pool: list[float], prior: float) -> None:
+        self.pool = pool  # before FlightEstimator.__init__, which calls reset()
+        self._pool_seen = 0
+        super().__init__("release", gravity, delay=prior)
+
+    def reset(self, drag: float = 0.0, delay: float = 0.0) -> None:
+        """A new episode (the pool itself is cleared by its owner)."""
+        super().reset(drag, delay)
+        self._delays = self.pool
+        self._pool_seen = 0
+
+    def flying_at_start(self, time: float, x: float, z: float) -> None:
+        """A flight no hand of the episode released (a ball in flight at ``t = 0``): its
+        frames are fitted, its start tells no delay."""
+        self.released(time, x, z)
+        self._anchored = True
+
+    def _times(self, frames: list[CameraFrame]) -> FloatArray | None:
+        if not self.pool:
+            return np.array([f.arrival for f in frames]) - self.fixed_delay
+        return super()._times(frames)
+
+    def fit(self) -> tuple[float, FloatArray, FloatArray] | None:
+        """:meth:`FlightEstimator.fit`, refitted also when the pool grew."""
+        if len(self.pool) != self._pool_seen:
+            self._pool_seen = len(self.pool)
+            self._fitted = False
+        return super().fit()
+
+
 class CascadeBallView:
     """Each ball as the juggler is told it (module docstring).
 
@@ -152,12 +215,12 @@ class CascadeBallView:
     balls:
         Balls of the pattern.
     mode:
-        The estimators' mode (:data:`~motion_envs.models.juggling._camera.ESTIMATORS`
-        but ``"release"``).
+        The estimators' mode (:data:`~motion_envs.models.juggling._camera.ESTIMATORS`;
+        ``"release"``: :class:`PooledReleaseEstimator`, one delay pooled over the balls).
     gravity:
         m/s^2.
     delay:
-        s, ``"mean_delay"``'s fixed delay.
+        s, ``"mean_delay"``'s fixed delay; ``"release"``'s prior.
     height:
         m, the catch height (:func:`catch_height`; the oracle's drag matching).
     lead:
@@ -169,11 +232,13 @@ class CascadeBallView:
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
         lead: float = 0.0,
     ) -> None:  # fmt: skip
-        if mode == "release":
-            raise ValueError(
-                "mode 'release' (one delay pooled over a ball's flights) is not offered"
-            )
-        self.estimators = [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
+        #: the episode's delays found from the releases (mode ``"release"``; s)
+        self.pool: list[float] = []
+        self.estimators: list[FlightEstimator] = (
+            [PooledReleaseEstimator(gravity, self.pool, delay) for _ in range(balls)]
+            if mode == "release"
+            else [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
+        )
         self.gravity = float(gravity)
         self.height = float(height)
         if not (math.isfinite(lead) and lead >= 0):
@@ -186,11 +251,14 @@ class CascadeBallView:
         """A new episode at ``t = 0``: the oracle told each ball's drag and the delay;
         each ball in flight at the start known by its ``nominal`` (unscattered) state."""
         self.priors = []
+        self.pool.clear()
         for i, est in enumerate(self.estimators):
             est.reset(float(drags[i]), delay)
             p, v = nominal.ball_pos[i].copy(), nominal.ball_vel[i].copy()
             self.priors.append((0.0, p, v))
-            if nominal.holder[i] < 0:
+            if nominal.holder[i] < 0 and isinstance(est, PooledReleaseEstimator):
+                est.flying_at_start(0.0, float(p[0]), float(p[1]))
+            elif nominal.holder[i] < 0:
                 est.released(0.0, float(p[0]), float(p[1]))
         self._crossings = [(-1, None)] * len(self.estimators)
 
@@ -204,6 +272,12 @@ class CascadeBallView:
                 self.estimators[b].released(true.time, float(p[0]), float(p[1]))
         for est, new in zip(self.estimators, frames, strict=True):
             est.add(new)
+
+    @property
+    def delay_estimate(self) -> float | None:
+        """s, the pooled delay found from the episode's releases so far (mode
+        ``"release"``), None before the first (and for the other modes)."""
+        return float(np.mean(self.pool)) if self.pool else None
 
     def ball(self, i: int, now: float) -> tuple[FloatArray, FloatArray]:
         """Flying ball ``i``'s ``(position, velocity)`` at ``now`` as the juggler is told:
