@@ -110,7 +110,11 @@ def level_rows(level: str, config: CascadeV1Config) -> tuple[dict[str, Any], dic
     lv = doc["levels"][0]
     misses = play.misses
     played = {
-        name: play(*row_play(level, config, name, lv["late_offset_s"]), "test", config.episodes)
+        name: play(
+            *row_play(level, config, name, lv["late_offset_s"], tuple(lv["constant"])),
+            "test",
+            config.episodes,
+        )
         for name in dict.fromkeys((lv["best_non_oracle"], UPPER_REFERENCE))
     }
     if play.misses != misses:

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1 import (
     CONSTANT_GRID,
     FRESH_FRAME,
@@ -21,6 +22,7 @@ from baselines.juggling_bench.cascade_v1 import (
     choose_late_offset,
     run_cascade_v1,
 )
+from motion_envs.datasets.juggling import episode_seeds
 from motion_envs.envs.juggling import CascadeV1Env, cascade_v1_obs_dim
 from motion_envs.models.juggling import (
     CASCADE_V1_CONTROLLERS,
@@ -182,7 +184,7 @@ class Spy(CascadeSpy):
 
 def test_the_constant_and_the_best_row_are_chosen_on_validation_seeds() -> None:
     spy = Spy()
-    config = CascadeV1Config(levels=("medium", "hard"), episodes=5, val_episodes=4)
+    config = CascadeV1Config(levels=("medium", "hard"), episodes=5, val_episodes=4, ilc=False)
     doc = run_cascade_v1(config, spy.play, spy.chooser(choose_late_offset),
                          spy.chooser(choose_constant))  # fmt: skip
     during = [split for _, split, choosing in spy.calls if choosing]
@@ -211,5 +213,114 @@ def test_the_spy_catches_a_constant_chosen_on_test_seeds() -> None:
 
     spy = Spy()
     with pytest.raises(AssertionError, match="before the choice"):
-        run_cascade_v1(CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4),
+        run_cascade_v1(CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False),
                        spy.play, spy.chooser(choose_late_offset), spy.chooser(leaky))  # fmt: skip
+
+
+# -- the task-error learner ------------------------------------------------------------------
+
+
+class _OneCatchEnv:
+    """A scripted Cascade-v1: the left hand in its catch phase with ball 1 falling toward
+    its plan (the velocity test's frames), then a catch by the left hand with the task
+    error ``(e_x, e_t) = (4 mm, 10 ms)``; the episode ends."""
+
+    def __init__(self) -> None:
+        obs = _obs(3)
+        obs[16 + 7], obs[16 + 13 : 16 + 15] = 1.0, (0.3, 1.3)
+        frames = obs[38:].reshape(3, 4, 4)
+        frames[1, :2] = [(0.31, 1.50, 0.0, 1.0), (0.30, 1.60, 0.03, 1.0)]
+        self.obs, self.actions = obs.astype(np.float32), []
+
+    def reset(self, *, seed: int) -> tuple[np.ndarray, dict[str, Any]]:
+        return self.obs, {}
+
+    def step(self, a: np.ndarray) -> tuple[Any, ...]:
+        self.actions.append(np.asarray(a, dtype=np.float64))
+        err = np.array([[np.nan, np.nan], [0.004, 0.01]])
+        info = {"caught": 1, "task_error": err, "time": 0.5, "tosses": 1, "catches": 1}
+        return self.obs, 0.0, True, False, info
+
+
+def test_the_learner_acts_and_learns_in_each_hands_own_frame_hand_worked() -> None:
+    """Left hand (own frame: x mirrored), ball velocity (1/3, -10/3) m/s, c = (0.02,
+    -0.01) m, d = 15 ms, 0.1 m per unit: the world residual S c + d v = (-0.015, -0.06) m,
+    action (0, 0, -0.15, -0.6). The catch's error (4 mm, 10 ms) asks for r* = r + (e_x,
+    v_z e_t) = (-0.011, -0.09333) m; in the hand's own frame the sample is (v'_x, v_z,
+    r*'_x, r*'_z) = (-1/3, -10/3, 0.011, -0.09333)."""
+    from baselines.juggling_bench.cascade_v1_ilc import CascadeTaskErrorILC
+
+    ilc = CascadeTaskErrorILC("easy", "3", 0.1, 0.015)
+    ilc.c = np.array([0.02, -0.01])
+    env = _OneCatchEnv()
+    assert ilc.play(env, 0, learn=True) == (0.5, 1, 1, True)  # type: ignore[arg-type]
+    np.testing.assert_allclose(env.actions[0], [0.0, 0.0, -0.15, -0.6], atol=1e-6)
+    (sample,) = ilc.samples
+    np.testing.assert_allclose(sample, [-1 / 3, -10 / 3, 0.011, -0.06 - 0.1 / 3], atol=1e-6)
+    ilc.play(env, 0, learn=False)
+    assert len(ilc.samples) == 1
+
+
+def test_the_learner_trains_on_training_seeds_only(monkeypatch: pytest.MonkeyPatch) -> None:
+    from baselines.juggling_bench.cascade_v1_ilc import CascadeTaskErrorILC
+    from baselines.juggling_bench.ilc import ILCConfig
+
+    seeds: list[int] = []
+    make = CascadeTaskErrorILC._env
+
+    def spying_env(self: Any) -> Any:
+        env = make(self)
+        reset = env.reset
+
+        def spy_reset(*, seed: int, **kw: Any) -> Any:
+            seeds.append(seed)
+            return reset(seed=seed, **kw)
+
+        env.reset = spy_reset
+        return env
+
+    monkeypatch.setattr(CascadeTaskErrorILC, "_env", spying_env)
+    ilc = CascadeTaskErrorILC("easy", "3", 0.1, 0.125, ILCConfig(2, 3, max_catches=3))
+    ilc.train()
+    np.testing.assert_array_equal(seeds, episode_seeds("train", 6))
+    assert len(ilc.history) == 2
+
+
+def test_the_learner_is_chosen_on_validation_and_played_on_test_after(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A stand-in learner recording when it trains and plays: per level it trains, then
+    plays validation, before any test seed is played; its validation mean (15) makes it
+    the best row although its test mean (0) is the lowest."""
+    from baselines.juggling_bench import cascade_v1_ilc
+
+    spy = Spy()
+
+    class Fake:
+        c, d, history = np.zeros(2), 0.1, []
+
+        def __init__(self, level: str, *args: Any) -> None:
+            self.level = level
+
+        def train(self) -> None:
+            spy.calls.append((self.level, "train", spy.choosing))
+
+        def evaluate(self, split: str, n: int) -> CascadeEpisodes:
+            spy.calls.append((self.level, split, spy.choosing))
+            c = 15 if split == "val" else 0
+            return CascadeEpisodes(episode_seeds(split, n), np.full(n, c), np.full(n, c + 1),
+                                   np.ones(n, bool), np.ones(n))  # fmt: skip
+
+    monkeypatch.setattr(cascade_v1_ilc, "CascadeTaskErrorILC", Fake)
+    config = CascadeV1Config(levels=("easy",), episodes=5, val_episodes=4)
+    (lv,) = run_cascade_v1(config, spy.play, spy.chooser(choose_late_offset),
+                           spy.chooser(choose_constant))["levels"]  # fmt: skip
+    splits = [s for _, s, _ in spy.calls]
+    first_test = splits.index("test")
+    assert splits.index("train") < first_test and "val" not in splits[first_test:]
+    assert splits[splits.index("train") + 1] == "val"
+    assert (
+        lv["best_non_oracle"] == "task_error_ilc" and lv["val_mean_catches"]["task_error_ilc"] == 15
+    )
+    assert lv["rows"]["task_error_ilc"]["catches_mean"] == 0.0
+    assert lv["ilc"]["budget_train_episodes"] == 60

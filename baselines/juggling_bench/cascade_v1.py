@@ -44,7 +44,13 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
-  seeded by its seed).
+  seeded by its seed);
+* ``task_error_ilc``: Juggling-v2's residual learner from the task-error vector, per
+  hand (:class:`~baselines.juggling_bench.cascade_v1_ilc.CascadeTaskErrorILC`:
+  iterative learning control of ``r = c + d v`` in the catch phase from each catch's
+  ``info["task_error"]``, not RL; starting as ``velocity_x_mean_delay``), trained on a
+  budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10) and
+  then scored on validation like every other row (``ilc=False``: not played).
 
 Every choice (the constant, the late offset; the best non-oracle row, by mean catches
 before the first drop; ties: the first in grid or row order) is made on
@@ -89,6 +95,7 @@ __all__ = [
     "CascadeV1Config",
     "CascadeVelocityTimesDelay",
     "cascade_v1_episodes",
+    "catching_velocities",
     "check_cascade_v1_config",
     "choose_constant",
     "choose_late_offset",
@@ -128,6 +135,7 @@ ROWS = (
     "delay_estimator",
     "fixed_point",
     "random",
+    "task_error_ilc",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -148,6 +156,9 @@ class CascadeV1Config:
     episodes: int = 100
     val_episodes: int = 30
     max_catches: int = 30
+    ilc: bool = True
+    ilc_iterations: int = 6
+    ilc_episodes: int = 10
 
 
 def check_cascade_v1_config(config: CascadeV1Config) -> None:
@@ -160,7 +171,7 @@ def check_cascade_v1_config(config: CascadeV1Config) -> None:
         raise options.ConfigError(
             "levels", f"must be among {list(CASCADE_V1_LEVELS)}; got {list(config.levels)}"
         )
-    for name in ("episodes", "val_episodes"):
+    for name in ("episodes", "val_episodes", "ilc_iterations", "ilc_episodes"):
         if getattr(config, name) < 2:
             raise options.ConfigError(name, f"must be >= 2; got {getattr(config, name)}")
     if config.max_catches < 1:
@@ -238,16 +249,20 @@ def choose_late_offset(
     return float(offset), means
 
 
+@dataclass(frozen=True)
 class _Constant:
     """The constant action ``(x, z)`` for each hand in its own frame (``x`` mirrored for
-    the left hand)."""
+    the left hand); equal constants are equal policies (a replay finds the same play)."""
 
-    def __init__(self, action: tuple[float, float]) -> None:
-        x, z = action
-        self.action = np.array([x, z, -x, z])
+    xz: tuple[float, float]
+
+    @property
+    def action(self) -> NDArray[np.float64]:
+        x, z = self.xz
+        return np.array([x, z, -x, z], dtype=np.float64)
 
     def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
-        return self.action.copy()
+        return self.action
 
 
 def _constant_policy(action: tuple[float, float]) -> Policy:
@@ -270,13 +285,35 @@ def choose_constant(
     return (float(action[0]), float(action[1])), means
 
 
+def catching_velocities(obs: NDArray[np.floating], balls: int) -> list[NDArray[np.float64] | None]:
+    """Per hand, the velocity ``(2,)`` (m/s, world frame) of the ball it is about to
+    catch, read from the observation, or None (the hand is not in its catch phase, or no
+    ball qualifies): of the balls not held, with a velocity
+    (:func:`baselines.juggling_bench.v2.frame_velocity`), falling, and whose newest frame
+    arrived within :data:`FRESH_FRAME` s, the one whose newest frame is nearest to the
+    hand's planned catch point (the observation's plan end)."""
+    o = np.asarray(obs, dtype=np.float64)
+    n, hand = int(balls), _PER_HAND
+    held = o[2 * hand : 2 * hand + 2 * n].reshape(n, 2).max(axis=1) > 0.5
+    frames = o[2 * hand + 2 * n :].reshape(n, 4, 4)
+    v, ok = v2.frame_velocity(frames)
+    ok &= ~held & (v[:, 1] < 0) & (frames[:, 0, 2] <= FRESH_FRAME)
+    out: list[NDArray[np.float64] | None] = [None, None]
+    for h in range(2):
+        row = o[h * hand : (h + 1) * hand]
+        if row[_CATCH] < 0.5 or not ok.any():
+            continue
+        d = np.hypot(*(frames[:, 0, :2] - row[_PLAN_END : _PLAN_END + 2]).T)
+        out[h] = v[int(np.argmin(np.where(ok, d, np.inf)))].copy()
+    return out
+
+
+@dataclass(frozen=True)
 class CascadeVelocityTimesDelay:
     """Juggling-v2's two-line residual per hand (module docstring): in a hand's catch
-    phase, ``v delay / scale`` (clipped to the action box) with ``v`` the velocity
-    (:func:`baselines.juggling_bench.v2.frame_velocity`) of the ball it is about to
-    catch: of the balls not held, with a velocity, falling, and whose newest frame
-    arrived within :data:`FRESH_FRAME` s, the one whose newest frame is nearest to the
-    hand's planned catch point (the observation's plan end); 0 without one.
+    phase, ``v delay / scale`` (clipped to the action box) with ``v`` the velocity of the
+    ball it is about to catch (:func:`catching_velocities`); 0 without one. Stateless:
+    equal arguments are equal policies.
 
     Parameters
     ----------
@@ -288,24 +325,15 @@ class CascadeVelocityTimesDelay:
         m of residual per unit action.
     """
 
-    def __init__(self, balls: int, delay: float, scale: float) -> None:
-        self.balls, self.delay, self.scale = int(balls), float(delay), float(scale)
+    balls: int
+    delay: float
+    scale: float
 
     def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
-        o = np.asarray(obs, dtype=np.float64)
-        n, hand = self.balls, _PER_HAND
-        held = o[2 * hand : 2 * hand + 2 * n].reshape(n, 2).max(axis=1) > 0.5
-        frames = o[2 * hand + 2 * n :].reshape(n, 4, 4)
-        v, ok = v2.frame_velocity(frames)
-        ok &= ~held & (v[:, 1] < 0) & (frames[:, 0, 2] <= FRESH_FRAME)
         out = np.zeros(4)
-        for h in range(2):
-            row = o[h * hand : (h + 1) * hand]
-            if row[_CATCH] < 0.5 or not ok.any():
-                continue
-            d = np.hypot(*(frames[:, 0, :2] - row[_PLAN_END : _PLAN_END + 2]).T)
-            i = int(np.argmin(np.where(ok, d, np.inf)))
-            out[2 * h : 2 * h + 2] = v[i] * self.delay / self.scale
+        for h, v in enumerate(catching_velocities(obs, self.balls)):
+            if v is not None:
+                out[2 * h : 2 * h + 2] = v * self.delay / self.scale
         return np.clip(out, -1.0, 1.0)
 
 
@@ -331,11 +359,20 @@ def _players(
 
 
 def row_play(
-    level: str, config: CascadeV1Config, name: str, offset: float
+    level: str,
+    config: CascadeV1Config,
+    name: str,
+    offset: float,
+    constant: tuple[float, float] = (0.0, 0.0),
 ) -> tuple[Policy, dict[str, Any]]:
     """Row ``name``'s policy and env keywords on ``level`` (``offset``: the late offset
-    :func:`choose_late_offset` chose), as :func:`run_cascade_v1` plays it."""
-    ctl, policy, off = _players(offset)[name]
+    :func:`choose_late_offset` chose; ``constant``: :func:`choose_constant`'s), as
+    :func:`run_cascade_v1` plays it; ``task_error_ilc`` (a trained learner, not a play of
+    :func:`cascade_v1_episodes`) is a one-line ``ValueError``."""
+    players = _players(level, config, offset, constant)
+    if name not in players:
+        raise ValueError(f"row {name!r} is not played by row_play; rows: {list(players)}")
+    ctl, policy, off = players[name]
     return policy, _kwargs(level, config, ctl, off)
 
 
@@ -363,6 +400,20 @@ def _mean_ci(eps: CascadeEpisodes) -> list[float]:
     c = eps.catches.astype(np.float64)
     _, lo, hi = group_bootstrap(lambda rows: float(c[rows].mean()), np.arange(c.size))
     return [lo, hi]
+
+
+def _train_ilc(level: str, config: CascadeV1Config) -> Any:
+    """The task-error learner of ``level`` trained on its budget of TRAINING episodes
+    (:class:`~baselines.juggling_bench.cascade_v1_ilc.CascadeTaskErrorILC`)."""
+    from baselines.juggling_bench import cascade_v1_ilc
+    from baselines.juggling_bench.ilc import ILCConfig
+
+    ilc = cascade_v1_ilc.CascadeTaskErrorILC(
+        level, config.pattern, RESIDUAL_SCALE, V2_LEVELS[level].mean_delay,
+        ILCConfig(config.ilc_iterations, config.ilc_episodes, max_catches=config.max_catches),
+    )  # fmt: skip
+    ilc.train()
+    return ilc
 
 
 def run_cascade_v1(
@@ -397,12 +448,19 @@ def run_cascade_v1(
             else:
                 eps = play(policy, _kwargs(level, config, ctl, off), "val", config.val_episodes)
                 val_means[name] = float(eps.catches.mean())
+        ilc = _train_ilc(level, config) if config.ilc else None
+        if ilc is not None:
+            val_means["task_error_ilc"] = float(
+                ilc.evaluate("val", config.val_episodes).catches.mean()
+            )
         best = max((r for r in ROWS if r in val_means), key=lambda r: val_means[r])
         played = {
             name: play(policy, _kwargs(level, config, ctl, off), "test", config.episodes)
             # fresh players (no state is carried from the validation plays)
             for name, (ctl, policy, off) in _players(level, config, offset, constant).items()
         }
+        if ilc is not None:
+            played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
         rows = {name: row_summary(eps) for name, eps in played.items()}
         room = _paired(played[UPPER_REFERENCE], played[best])
         above = {
@@ -428,6 +486,13 @@ def run_cascade_v1(
                 "best_minus_juggler": _paired(played[best], played["juggler"]),
             }
         )
+        if ilc is not None:
+            levels[-1]["ilc"] = {
+                "budget_train_episodes": config.ilc_iterations * config.ilc_episodes,
+                "c_m": [float(v) for v in ilc.c],
+                "d_s": ilc.d,
+                "history": ilc.history,
+            }
     spec = pattern_spec(config.pattern)
     return {
         "benchmark": f"juggling v2 rows, pattern {config.pattern} ({CASCADE_V1_ENV_ID})",
@@ -483,6 +548,15 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             f"{old['ci'][1]:+.2f}]; oracle_catch is {upper}"
             + (f" (below {', '.join(below)})" if below else "")
         )
+        val = ", ".join(f"{k} {v:.2f}" for k, v in lv.get("val_mean_catches", {}).items())
+        lines.append(f"{lv['level']:7s} validation mean catches: {val}")
+        if "ilc" in lv:
+            ilc = lv["ilc"]
+            lines.append(
+                f"{lv['level']:7s} task_error_ilc learned c = ({ilc['c_m'][0]:+.3f}, "
+                f"{ilc['c_m'][1]:+.3f}) m, d = {ilc['d_s'] * 1000:.0f} ms on "
+                f"{ilc['budget_train_episodes']} training episodes"
+            )
     lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
     return "\n".join(lines)
 

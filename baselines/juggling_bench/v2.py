@@ -182,9 +182,9 @@ class VelocityTimesDelay:
         self.delay, self.scale = float(delay), float(scale)
 
     def __call__(self, obs: NDArray[np.float32]) -> NDArray[np.float64]:
-        obs = np.asarray(obs, dtype=np.float64)
-        v, ok = frame_velocity(obs[:, _FRAME0 : _FRAME0 + 16].reshape(-1, 4, 4))
-        ok &= obs[:, _CATCH] > 0.5
+        o = np.asarray(obs, dtype=np.float64)
+        v, ok = frame_velocity(o[:, _FRAME0 : _FRAME0 + 16].reshape(-1, 4, 4))
+        ok &= o[:, _CATCH] > 0.5
         out = np.where(ok[:, None], v * self.delay / self.scale, 0.0)
         return np.clip(out, -1.0, 1.0)
 
