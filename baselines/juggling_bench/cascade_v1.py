@@ -295,7 +295,8 @@ def catching_velocities(obs: NDArray[np.floating], balls: int) -> list[NDArray[n
     o = np.asarray(obs, dtype=np.float64)
     n, hand = int(balls), _PER_HAND
     held = o[2 * hand : 2 * hand + 2 * n].reshape(n, 2).max(axis=1) > 0.5
-    frames = o[2 * hand + 2 * n :].reshape(n, 4, 4)
+    base = 2 * hand + 2 * n  # the frames (any entries after them are ignored)
+    frames = o[base : base + 16 * n].reshape(n, 4, 4)
     v, ok = v2.frame_velocity(frames)
     ok &= ~held & (v[:, 1] < 0) & (frames[:, 0, 2] <= FRESH_FRAME)
     out: list[NDArray[np.float64] | None] = [None, None]
