@@ -4,6 +4,8 @@
   (keyed by environment id plus ``default``; plain YAML only; shipped in the package as
   ``baselines/configs/agents``), validated;
 * :mod:`~baselines.agents.train`: ``motion-bench train`` (``run(TrainConfig)``);
+* :mod:`~baselines.agents.ars`: sb3-contrib's ARS for ``--algo ars``, with paired
+  episode seeds for the two candidates of a direction;
 * :mod:`~baselines.agents.callbacks`: its SB3 callbacks, one job each (validation, save
   the best, report an evaluation), composed as SB3's ``EvalCallback``;
 * :mod:`~baselines.agents.rundir`: the run folder (SB3 zip, normalisation statistics as
