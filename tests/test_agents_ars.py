@@ -190,7 +190,7 @@ def test_tiny_run_round_trips(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -
     final = load_run(out, "final")
     assert load_run(out).manifest["algo"] == "ars"
     rng = np.random.default_rng(0)
-    obs = rng.normal(0.0, 1.0, (16, 32)).astype(np.float32)
+    obs = rng.normal(0.0, 1.0, (16, trained.observation_space.shape[0])).astype(np.float32)
     normalizer = ObsNormalizer.from_vec_normalize(trained.get_vec_normalize_env())
     expected = trained.predict(normalizer(obs), deterministic=True)[0]
     np.testing.assert_array_equal(final.predict(obs), expected)
