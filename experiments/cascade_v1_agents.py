@@ -45,7 +45,6 @@ The demonstrations (the likeness reward) are SIMULATED.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -64,9 +63,7 @@ from baselines.juggling_bench.cascade_v1 import (
     CASCADE_V1_ENV_ID,
     UPPER_REFERENCE,
     CascadeV1Config,
-    cascade_v1_episodes,
     report_cascade_v1,
-    row_play,
     row_summary,
     run_cascade_v1,
 )
@@ -84,41 +81,14 @@ DEVIATION_NOTE = (
 QUANTITIES = {"mean_catches": "mean catches before the first drop", "catch_rate": "catch rate"}
 
 
-class KeptPlay:
-    """:func:`cascade_v1_episodes`, keeping every play: the rows' test episodes are asked
-    for again after :func:`run_cascade_v1` and given as it played them (``misses`` counts
-    the plays that were not already kept)."""
-
-    def __init__(self) -> None:
-        self.kept: dict[tuple[Any, ...], Any] = {}
-        self.misses = 0
-
-    def __call__(self, policy: Any, kwargs: dict[str, Any], split: str, n: int) -> Any:
-        key = (policy, json.dumps(kwargs, sort_keys=True), split, n)
-        if key not in self.kept:
-            self.misses += 1
-            self.kept[key] = cascade_v1_episodes(policy, kwargs, split, n)
-        return self.kept[key]
-
-
 def level_rows(level: str, config: CascadeV1Config) -> tuple[dict[str, Any], dict[str, Any]]:
     """The bench's document for ``level`` (:func:`run_cascade_v1`) and the test episodes
     of its best non-oracle row and of ``oracle_catch``, as the bench played them."""
     config = replace(config, levels=(level,))
-    play = KeptPlay()
-    doc = run_cascade_v1(config, play=play)
+    kept: dict[str, dict[str, Any]] = {}
+    doc = run_cascade_v1(config, keep=kept)
     lv = doc["levels"][0]
-    misses = play.misses
-    played = {
-        name: play(
-            *row_play(level, config, name, lv["late_offset_s"], tuple(lv["constant"])),
-            "test",
-            config.episodes,
-        )
-        for name in dict.fromkeys((lv["best_non_oracle"], UPPER_REFERENCE))
-    }
-    if play.misses != misses:
-        raise RuntimeError(f"{level}: a row's test episodes were not the bench's")
+    played = {name: kept[level][name] for name in (lv["best_non_oracle"], UPPER_REFERENCE)}
     for name, eps in played.items():
         if not math.isclose(row_summary(eps)["catches_mean"], lv["rows"][name]["catches_mean"]):
             raise RuntimeError(f"{level} {name}: the kept episodes differ from the bench's row")

@@ -100,7 +100,6 @@ __all__ = [
     "choose_constant",
     "choose_late_offset",
     "report_cascade_v1",
-    "row_play",
     "row_summary",
     "run_cascade_v1",
     "write_cascade_v1",
@@ -359,24 +358,6 @@ def _players(
     }
 
 
-def row_play(
-    level: str,
-    config: CascadeV1Config,
-    name: str,
-    offset: float,
-    constant: tuple[float, float] = (0.0, 0.0),
-) -> tuple[Policy, dict[str, Any]]:
-    """Row ``name``'s policy and env keywords on ``level`` (``offset``: the late offset
-    :func:`choose_late_offset` chose; ``constant``: :func:`choose_constant`'s), as
-    :func:`run_cascade_v1` plays it; ``task_error_ilc`` (a trained learner, not a play of
-    :func:`cascade_v1_episodes`) is a one-line ``ValueError``."""
-    players = _players(level, config, offset, constant)
-    if name not in players:
-        raise ValueError(f"row {name!r} is not played by row_play; rows: {list(players)}")
-    ctl, policy, off = players[name]
-    return policy, _kwargs(level, config, ctl, off)
-
-
 def row_summary(eps: Any) -> dict[str, Any]:
     """A row's entry of the results (:func:`~baselines.juggling_bench.cascade.summary`
     and the 95 % interval of the mean catches before the first drop); any episodes with
@@ -422,9 +403,13 @@ def run_cascade_v1(
     play: Play = cascade_v1_episodes,
     offset_chooser: Any = choose_late_offset,
     constant_chooser: Any = choose_constant,
+    keep: dict[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
-    for tests (the spy that proves the choices read no test seed)."""
+    for tests (the spy that proves the choices read no test seed). ``keep``, when given,
+    receives each level's rows' TEST episodes as played (``keep[level][row]``), to pair
+    another policy's episodes with them on the same seeds
+    (``experiments/cascade_v1_agents.py``)."""
     check_cascade_v1_config(config)
     t0 = time.process_time()
     levels = []
@@ -462,6 +447,8 @@ def run_cascade_v1(
         }
         if ilc is not None:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
+        if keep is not None:
+            keep[level] = played
         rows = {name: row_summary(eps) for name, eps in played.items()}
         room = _paired(played[UPPER_REFERENCE], played[best])
         above = {
