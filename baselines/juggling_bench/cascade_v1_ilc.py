@@ -18,7 +18,7 @@ catch): the offset ``e_x`` (m, world ``x``) says the palm should have been that 
 farther; the timing ``e_t`` says it met the ball ``e_t`` late. The residual that would
 have met the ball is ``r* = r + (e_x, v_z e_t)`` (``r`` the hand's last applied residual
 in its catch phase), in the hand's own frame ``S_h r*`` against ``S_h v_h``: the samples
-of :meth:`TaskErrorILC._solve`'s least squares (``r* ~ c + d v``, ``d`` shared by the
+of ``TaskErrorILC._solve``'s least squares (``r* ~ c + d v``, ``d`` shared by the
 axes). A catch without a timing (outside the hand's catch phase) or without a velocity
 read gives no sample. **Within an episode** each catch moves the episode's delay by
 ``gain e_x / v_x`` (``|v_x| > 0.3`` m/s), as Juggling-v2's learner does.
