@@ -13,11 +13,12 @@ but the ROWS' ``max_catches`` (the bench's 30, ``--max-catches``), so its catche
 the first drop are censored where the rows' are.
 
 The rows are ``motion-bench juggling --version v2 --pattern P``'s
-(:func:`baselines.juggling_bench.cascade_v1.run_cascade_v1`: the late offset and the best
-non-oracle row chosen on ``--val-episodes`` VALIDATION episodes by mean catches before
-the first drop, before any test seed is played; ``oracle_catch``, given the true delay
-and drag, the upper reference); their test episodes are kept as the bench plays them
-(the same seeds) and paired with the agent's.
+(:func:`baselines.juggling_bench.cascade_v1.run_cascade_v1`: its grids' choices and the
+best non-oracle row made on ``--val-episodes`` VALIDATION episodes by mean catches before
+the first drop, before any test seed is played, ``task_error_ilc`` trained on TRAINING
+episodes; ``oracle_catch``, given the true delay and drag, the upper reference); their
+test episodes are kept as the bench plays them (``run_cascade_v1(..., keep=)``: the same
+seeds, no replay) and paired with the agent's.
 
 Per run: the agent's mean and median catches before the first drop and catch rate with
 95 % bootstrap intervals; ``agent - best non-oracle row`` and ``oracle_catch - agent``
@@ -251,18 +252,27 @@ def plot(levels: list[dict[str, Any]], algo: str) -> Any:
     """Mean catches before the first drop against catch rate, a panel per level: each row
     a point with its 95 % intervals, each seed's agent a star (the median seed's
     filled)."""
+    import matplotlib.pyplot as plt
+
     from baselines.juggling_bench.cascade_v1 import ROWS
     from baselines.plots import new_figure
 
     n = len(levels)
     fig = new_figure(5.4 * n, 5.6)
     axes = fig.subplots(1, n, squeeze=False)
-    markers = dict(zip(ROWS, "osP^D<>hvxp", strict=False))
+    # a marker and a colour of its own for each row (the default cycle repeats after 10)
+    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
+    tab20 = plt.get_cmap("tab20")  # its dark shades first (tab10), then the light ones
+    colors = {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], levels, strict=True):
         rows = lv["bench"]["rows"]
         points = [
-            (name, rows[name], {"marker": markers.get(name, "o"), "color": f"C{i % 10}"})
-            for i, name in enumerate(rows)
+            (
+                name,
+                rows[name],
+                {"marker": markers.get(name, "o"), "color": colors.get(name, "grey")},
+            )
+            for name in rows
         ]
         median_seed = lv["median"]["mean_catches"]["seed"]
         for r in lv["runs"]:
