@@ -80,6 +80,7 @@ from numpy.typing import NDArray
 from baselines import options
 from baselines.juggling_bench import v2
 from baselines.juggling_bench.cascade import CascadeEpisodes, summary
+from baselines.juggling_bench.cascade_v1_view import FRESH_FRAME, catching_velocities
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, episode_seeds
 from motion_envs.models.juggling import CASCADE_V1_LEVELS, V2_LEVELS, pattern_spec
 
@@ -115,12 +116,6 @@ LATE_OFFSETS: tuple[float, ...] = (0.0, 0.02, 0.04, 0.06, 0.08, 0.10, 0.12)
 #: The constant residuals tried by ``best_constant`` (Juggling-v2's grid, in action units;
 #: ``(x, z)`` in each hand's own frame).
 CONSTANT_GRID: tuple[tuple[float, float], ...] = v2.CONSTANT_GRID
-#: s; ``velocity_x_mean_delay`` reads a ball's frames only while its newest arrived this
-#: recently (older ones are of its previous flight, or it is held), declared before any run.
-FRESH_FRAME = 0.1
-#: Observation entries per hand, and within a hand's the catch phase's one-hot and the
-#: plan's end point (CascadeV1Env's docstring).
-_PER_HAND, _CATCH, _PLAN_END = 16, 7, 13
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
@@ -282,30 +277,6 @@ def choose_constant(
 
     action, means = _best_on_val(CONSTANT_GRID, v2.grid_key, mean)
     return (float(action[0]), float(action[1])), means
-
-
-def catching_velocities(obs: NDArray[np.floating], balls: int) -> list[NDArray[np.float64] | None]:
-    """Per hand, the velocity ``(2,)`` (m/s, world frame) of the ball it is about to
-    catch, read from the observation, or None (the hand is not in its catch phase, or no
-    ball qualifies): of the balls not held, with a velocity
-    (:func:`baselines.juggling_bench.v2.frame_velocity`), falling, and whose newest frame
-    arrived within :data:`FRESH_FRAME` s, the one whose newest frame is nearest to the
-    hand's planned catch point (the observation's plan end)."""
-    o = np.asarray(obs, dtype=np.float64)
-    n, hand = int(balls), _PER_HAND
-    held = o[2 * hand : 2 * hand + 2 * n].reshape(n, 2).max(axis=1) > 0.5
-    base = 2 * hand + 2 * n  # the frames (any entries after them are ignored)
-    frames = o[base : base + 16 * n].reshape(n, 4, 4)
-    v, ok = v2.frame_velocity(frames)
-    ok &= ~held & (v[:, 1] < 0) & (frames[:, 0, 2] <= FRESH_FRAME)
-    out: list[NDArray[np.float64] | None] = [None, None]
-    for h in range(2):
-        row = o[h * hand : (h + 1) * hand]
-        if row[_CATCH] < 0.5 or not ok.any():
-            continue
-        d = np.hypot(*(frames[:, 0, :2] - row[_PLAN_END : _PLAN_END + 2]).T)
-        out[h] = v[int(np.argmin(np.where(ok, d, np.inf)))].copy()
-    return out
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ with ``s = +1`` right, ``-1`` left),
 .. math:: r_h = S_h\,(c + d\,S_h v_h) = S_h c + d\,v_h
 
 with ``v_h`` the velocity of the ball the hand is about to catch, read from the
-observation (:func:`~baselines.juggling_bench.cascade_v1.catching_velocities`, as the
+observation (:func:`~baselines.juggling_bench.cascade_v1_view.catching_velocities`, as the
 ``velocity_x_mean_delay`` row reads it), ``c = (c_x, c_z)`` one constant for both hands
 in their own frames and ``d`` one learned delay (s); 0 in the other phases. Starting
 from ``c = 0`` and the level's mean delay it IS ``velocity_x_mean_delay``.
@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines.juggling_bench.cascade import CascadeEpisodes
-from baselines.juggling_bench.cascade_v1 import catching_velocities
+from baselines.juggling_bench.cascade_v1_view import catching_velocities
 from baselines.juggling_bench.ilc import ILCConfig, TaskErrorILC
 from motion_envs.datasets.juggling import episode_seeds
 from motion_envs.models.juggling import pattern_spec
