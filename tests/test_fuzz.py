@@ -544,6 +544,12 @@ ACTIONS = st.one_of(
 )
 
 
+#: Info entries documented as NaN where they do not apply (Juggling-v2's and Cascade-v1's
+#: per-catch task error: the hand that did not catch, or a timing outside the catch phase;
+#: its catch speed likewise): NaN allowed there, never an infinity.
+NAN_DOCUMENTED = frozenset({"task_error", "catch_speed"})
+
+
 @pytest.mark.parametrize("env_id", FUZZED_IDS)
 @settings(FAST, max_examples=40)
 @given(actions=st.lists(ACTIONS, min_size=1, max_size=5), seed=st.integers(0, 2**63 - 1))
@@ -556,11 +562,13 @@ def test_env_steps_raise_only_value_error_and_stay_finite(made_envs, env_id, act
         except ValueError:
             continue
         assert np.isfinite(obs).all() and math.isfinite(reward)
-        assert all(
-            np.isfinite(v).all()
-            for v in info.values()
+        floats = {
+            k: np.asarray(v)
+            for k, v in info.items()
             if isinstance(v, (float, np.ndarray)) and np.asarray(v).dtype.kind == "f"
-        )
+        }
+        assert all(np.isfinite(v).all() for k, v in floats.items() if k not in NAN_DOCUMENTED)
+        assert not any(np.isinf(v).any() for k, v in floats.items() if k in NAN_DOCUMENTED)
         if terminated or truncated:
             env.reset(seed=seed)
 
