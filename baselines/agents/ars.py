@@ -25,13 +25,14 @@ from __future__ import annotations
 
 import copy
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import torch as th
 from sb3_contrib import ARS as ContribARS
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.evaluation import evaluate_policy
+from stable_baselines3.common.vec_env import VecEnv
 
 __all__ = ["ARS", "PAIR_SEED_STREAM"]
 
@@ -40,7 +41,7 @@ __all__ = ["ARS", "PAIR_SEED_STREAM"]
 PAIR_SEED_STREAM = 0x415253
 
 
-class ARS(ContribARS):  # type: ignore[misc]  # sb3-contrib's classes are untyped here
+class ARS(ContribARS):
     """sb3-contrib's ``ARS`` with ``paired_seeds`` (see the module docstring).
 
     ``seed_bound``: the paired seeds ``s`` satisfy ``s + n_envs <= seed_bound`` (each
@@ -57,10 +58,16 @@ class ARS(ContribARS):  # type: ignore[misc]  # sb3-contrib's classes are untype
 
     def pair_seeds(self) -> list[int]:
         """The reset seeds of one iteration's directions (one per direction)."""
-        high = self.seed_bound - int(self.env.num_envs) + 1  # s + n_envs - 1 < seed_bound
+        high = self.seed_bound - int(self._vec_env().num_envs) + 1  # s + n_envs - 1 < seed_bound
         if high < 1:
             raise ValueError(f"seed_bound {self.seed_bound} leaves no seed for paired episodes")
         return [int(s) for s in self._pair_rng.integers(0, high, size=self.n_delta)]
+
+    def _vec_env(self) -> VecEnv:
+        """The training vector env (set once the model is built with one)."""
+        if self.env is None:
+            raise RuntimeError("ARS has no environment: build it with one before training")
+        return self.env
 
     def evaluate_candidates(
         self, candidate_weights: th.Tensor, callback: BaseCallback, async_eval: Any
@@ -72,24 +79,25 @@ class ARS(ContribARS):  # type: ignore[misc]  # sb3-contrib's classes are untype
             return super().evaluate_candidates(candidate_weights, callback, async_eval)
         if async_eval is not None:
             raise ValueError("paired_seeds needs the single-process evaluation (no async_eval)")
-        seeds = self.pair_seeds()
+        seeds, env = self.pair_seeds(), self._vec_env()
         returns = th.zeros(self.pop_size, device=self.device)
         train_policy = copy.deepcopy(self.policy)
-        self.ep_info_buffer = []  # as sb3-contrib: the logs show this iteration only
+        self.ep_info_buffer = []  # type: ignore[assignment]  # as sb3-contrib: this iteration's logs
         callback.on_rollout_start()
-        step = partial(self._trigger_callback, callback=callback, n_envs=self.env.num_envs)
+        step = partial(self._trigger_callback, callback=callback, n_envs=env.num_envs)
         for k in range(self.pop_size):
-            train_policy.load_from_vector(candidate_weights[k].cpu())
-            self.env.seed(seeds[k % self.n_delta])
+            train_policy.load_from_vector(candidate_weights[k].cpu().numpy())
+            env.seed(seeds[k % self.n_delta])
             rewards, lengths = evaluate_policy(
                 train_policy,
-                self.env,
+                env,
                 n_eval_episodes=self.n_eval_episodes,
                 return_episode_rewards=True,
                 callback=step,
                 warn=False,
             )
+            rewards, lengths = cast(list[float], rewards), cast(list[int], lengths)
             returns[k] = sum(rewards) + self.alive_bonus_offset * sum(lengths)
-            self._mimic_monitor_wrapper(rewards, lengths)
+            self._mimic_monitor_wrapper(cast(Any, rewards), cast(Any, lengths))
         callback.on_rollout_end()
         return returns

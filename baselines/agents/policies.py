@@ -110,7 +110,8 @@ def start_at_nominal(
         head.weight.mul_(scale)
         if head.bias is not None:
             head.bias.zero_()
-        model.weights = torch.nn.utils.parameters_to_vector(policy.parameters()).detach()
+        ars: Any = model  # sb3-contrib's ARS keeps its search point in ``weights``
+        ars.weights = torch.nn.utils.parameters_to_vector(policy.parameters()).detach()
         return
     if algo == "ppo":
         heads = [policy.action_net]
