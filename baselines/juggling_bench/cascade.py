@@ -30,6 +30,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -139,6 +140,20 @@ class CascadeEpisodes:
     dropped: NDArray[np.bool_]
     time: NDArray[np.float64]
 
+    @classmethod
+    def from_rows(
+        cls, seeds: NDArray[np.int64], rows: Sequence[tuple[int, int, bool, float]]
+    ) -> CascadeEpisodes:
+        """The episodes of ``seeds`` from one ``(catches, tosses, dropped, time)`` row
+        each (:func:`cascade_episode`'s order)."""
+        return cls(
+            seeds=seeds,
+            catches=np.array([r[0] for r in rows], dtype=np.int64),
+            tosses=np.array([r[1] for r in rows], dtype=np.int64),
+            dropped=np.array([r[2] for r in rows], dtype=bool),
+            time=np.array([r[3] for r in rows], dtype=np.float64),
+        )
+
 
 def cascade_episode(
     level: str,
@@ -172,13 +187,7 @@ def cascade_episodes(level: str, method: str, config: CascadeConfig) -> CascadeE
         cascade_episode(level, method, int(s), config.max_catches, config.gravity, config.pattern)
         for s in seeds
     ]
-    return CascadeEpisodes(
-        seeds=seeds,
-        catches=np.array([r[0] for r in rows], dtype=np.int64),
-        tosses=np.array([r[1] for r in rows], dtype=np.int64),
-        dropped=np.array([r[2] for r in rows], dtype=bool),
-        time=np.array([r[3] for r in rows], dtype=np.float64),
-    )
+    return CascadeEpisodes.from_rows(seeds, rows)
 
 
 def summary(eps: CascadeEpisodes) -> dict[str, Any]:

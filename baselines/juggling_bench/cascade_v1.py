@@ -195,13 +195,7 @@ def cascade_v1_episodes(
             a = rng.uniform(-1.0, 1.0, 4) if isinstance(policy, str) else policy(obs)
             obs, _, terminated, truncated, info = env.step(a)
         rows.append((info["catches"], info["tosses"], terminated, info["time"]))
-    return CascadeEpisodes(
-        seeds=seeds,
-        catches=np.array([r[0] for r in rows], dtype=np.int64),
-        tosses=np.array([r[1] for r in rows], dtype=np.int64),
-        dropped=np.array([r[2] for r in rows], dtype=bool),
-        time=np.array([r[3] for r in rows], dtype=np.float64),
-    )
+    return CascadeEpisodes.from_rows(seeds, rows)
 
 
 def _kwargs(

@@ -118,10 +118,4 @@ class CascadeTaskErrorILC(TaskErrorILC):
             out = [self.play(env, int(s), learn=False) for s in seeds.tolist()]
         finally:
             env.close()
-        return CascadeEpisodes(
-            seeds=seeds,
-            catches=np.array([o[2] for o in out], dtype=np.int64),
-            tosses=np.array([o[1] for o in out], dtype=np.int64),
-            dropped=np.array([o[3] for o in out], dtype=bool),
-            time=np.array([o[0] for o in out], dtype=np.float64),
-        )
+        return CascadeEpisodes.from_rows(seeds, [(o[2], o[1], o[3], o[0]) for o in out])
