@@ -25,6 +25,7 @@ from baselines.juggling_bench.cascade_v1 import (
     CascadeV1Config,
     check_cascade_v1_config,
     choose_late_offset,
+    report_cascade_v1,
     run_cascade_v1,
     write_cascade_v1,
 )
@@ -283,11 +284,22 @@ def test_a_small_real_run_writes_its_table(tmp_path: Any) -> None:
     (lv,) = doc["levels"]
     assert set(lv["rows"]) == set(ROWS)
     assert "SIMULATED" in doc["demonstrations"]
-    for m in lv["rows"].values():
+    assert "held-out SIMULATED 3-ball" in doc["deviation"]
+    for name, m in lv["rows"].items():
         assert m["catches_median_ci"][0] <= m["catches_median"] <= m["catches_median_ci"][1]
         assert 0 <= m["catches_mean"] <= 2
-    (path,) = write_cascade_v1(doc, tmp_path)
-    assert path.exists()
+        # every row's hand deviation from the held-out demonstrations, with its interval
+        assert m["deviation_segments"] > 0, name
+        lo, hi = m["deviation_ci"]
+        assert 0 < lo <= m["deviation_m"] <= hi < 0.5, name
+        assert len(m["deviation_hand_m"]) == 2
+    # random actions (up to 0.1 m every step) shake the hands far from any demonstration
+    assert lv["rows"]["random"]["deviation_m"] > 3 * lv["rows"]["juggler"]["deviation_m"]
+    text = report_cascade_v1(doc)
+    assert "deviation mm [95% CI]" in text and "not measured" not in text
+    paths = write_cascade_v1(doc, tmp_path)
+    assert [p.name for p in paths] == ["results.json", "cascade_v1_rows.png"]
+    assert all(p.stat().st_size > 0 for p in paths)
 
 
 @pytest.mark.parametrize("pattern", ["3", "5"])

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 
 from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import (
+    PHASES,
     SPLIT_SEEDS,
     departure_from_line,
     episode_seeds,
@@ -62,12 +63,14 @@ from motion_envs.datasets.juggling import (
 
 if TYPE_CHECKING:
     from baselines.stats import Difference
+    from motion_envs.datasets.juggling import JugglingDemos
 
 __all__ = [
     "DEFAULT_EPISODES",
     "JUGGLING_ENV_IDS",
     "N_POINTS",
     "JugglingEpisodes",
+    "SegmentDeviations",
     "TossCounts",
     "catch_rate_comparison",
     "catch_rate_difference",
@@ -78,6 +81,7 @@ __all__ = [
     "episodes_from_paths",
     "is_juggling",
     "juggling_episodes",
+    "phase_departures",
     "play_until_ended",
     "pooled_catch_rate",
     "segment_deviations",
@@ -107,15 +111,25 @@ def is_juggling(env_id: str) -> bool:
 def _demonstration_paths(
     data: str | None, gravity: float | None, split: str
 ) -> dict[str, FloatArray]:
-    from motion_envs.datasets.juggling import PHASES, JugglingTask
+    from motion_envs.datasets.juggling import JugglingTask
     from motion_envs.models.juggling import juggler_demonstrations
 
     task = JugglingTask() if gravity is None else JugglingTask(gravity=float(gravity))
     demos, train, test = juggler_demonstrations(data, task)
-    keep = test if split == "test" else train
+    return phase_departures(demos, test if split == "test" else train)
+
+
+def phase_departures(
+    demos: JugglingDemos, cycles: Collection[tuple[int, int]]
+) -> dict[str, FloatArray]:
+    """Per phase of :data:`~motion_envs.datasets.juggling.PHASES`, the departures from
+    their lines (:func:`departure_from_line`) of the segments ``(m, N_POINTS, 2)`` of
+    ``demos`` whose ``(recording, cycle)`` is in ``cycles``, each resampled to
+    :data:`N_POINTS` points of normalised time: what :func:`segment_deviations` compares
+    a hand's segments with."""
     out: dict[str, FloatArray] = {}
     for phase in PHASES:
-        segs = [s for s in demos.segments(phase) if (s.recording, s.cycle) in keep]
+        segs = [s for s in demos.segments(phase) if (s.recording, s.cycle) in cycles]
         out[phase] = departure_from_line(np.stack([s.resampled(N_POINTS) for s in segs]))
     return out
 
@@ -415,9 +429,21 @@ def catch_rate_comparison(
     )  # fmt: skip
 
 
-def deviation_interval(eps: JugglingEpisodes, seed: int = 0) -> tuple[float, float, float]:
-    """``(deviation, low, high)``: :attr:`JugglingEpisodes.deviation` (m) and its 95 %
-    interval resampling episodes (their segments together)."""
+class SegmentDeviations(Protocol):
+    """Per complete phase segment, its episode's index and its deviation (m): what a
+    deviation's interval needs (one ball's :class:`JugglingEpisodes`, the cascades'
+    :class:`~baselines.agents.cascade_score.CascadeDeviations`)."""
+
+    @property
+    def segment_episode(self) -> NDArray[np.int64]: ...
+    @property
+    def segment_deviation(self) -> FloatArray: ...
+
+
+def deviation_interval(eps: SegmentDeviations, seed: int = 0) -> tuple[float, float, float]:
+    """``(deviation, low, high)``: the median over the segments of their deviations (m;
+    :attr:`JugglingEpisodes.deviation`) and its 95 % interval resampling episodes (their
+    segments together); NaN without segments."""
     from baselines.stats import statistic_interval
 
     if eps.segment_deviation.size == 0:

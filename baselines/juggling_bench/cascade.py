@@ -33,7 +33,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,6 +54,9 @@ from motion_envs.models.juggling import (
     pattern_spec,
     pattern_tempo,
 )
+
+if TYPE_CHECKING:
+    from baselines.agents.cascade_score import CascadeDeviations
 
 __all__ = [
     "CASCADE_ENV_ID",
@@ -132,17 +135,23 @@ def check_cascade_config(config: CascadeConfig) -> None:
 @dataclass(frozen=True)
 class CascadeEpisodes:
     """Per episode: ``catches`` before the first drop, ``tosses``, ``dropped``, ``time``
-    (s, at the drop or at the end)."""
+    (s, at the drop or at the end); ``deviations``: the hands' phase segments scored
+    against demonstrations, when recorded
+    (:class:`~baselines.agents.cascade_score.CascadeDeviations`)."""
 
     seeds: NDArray[np.int64]
     catches: NDArray[np.int64]
     tosses: NDArray[np.int64]
     dropped: NDArray[np.bool_]
     time: NDArray[np.float64]
+    deviations: CascadeDeviations | None = None
 
     @classmethod
     def from_rows(
-        cls, seeds: NDArray[np.int64], rows: Sequence[tuple[int, int, bool, float]]
+        cls,
+        seeds: NDArray[np.int64],
+        rows: Sequence[tuple[int, int, bool, float]],
+        deviations: CascadeDeviations | None = None,
     ) -> CascadeEpisodes:
         """The episodes of ``seeds`` from one ``(catches, tosses, dropped, time)`` row
         each (:func:`cascade_episode`'s order)."""
@@ -152,6 +161,7 @@ class CascadeEpisodes:
             tosses=np.array([r[1] for r in rows], dtype=np.int64),
             dropped=np.array([r[2] for r in rows], dtype=bool),
             time=np.array([r[3] for r in rows], dtype=np.float64),
+            deviations=deviations,
         )
 
 

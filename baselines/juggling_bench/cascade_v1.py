@@ -178,24 +178,35 @@ def cascade_v1_episodes(
     """``n`` episodes of Cascade-v1 made with ``kwargs``, reset with the seeds of
     ``split``: the zero action (``policy`` None; the env's :meth:`play`), uniform random
     actions (``"random"``, a generator per episode seeded with its seed) or the action
-    ``policy(obs)``."""
+    ``policy(obs)``. On the TEST split (the scores) the hands' paths are recorded and
+    scored against the HELD-OUT demonstrations (``deviations``,
+    :class:`~baselines.agents.cascade_score.CascadeDeviations`; None for a pattern
+    without demonstrations): the zero action is then stepped, ``env.step(0)`` until the
+    end, the same episode as :meth:`play` (tested)."""
+    from baselines.agents.cascade_score import record_hand_paths
     from motion_envs.envs.juggling import CascadeV1Env
 
     env = CascadeV1Env(**kwargs)
     seeds = episode_seeds(split, n)
+    recorder = record_hand_paths(env, env.pattern.name) if split == "test" else None
+    stepped = env if recorder is None else recorder
     rows = []
     for seed in seeds.tolist():
-        if policy is None:
+        if policy is None and recorder is None:
             rows.append(env.play(seed))
             continue
         rng = np.random.default_rng(seed)
-        obs, _ = env.reset(seed=seed)
+        obs, _ = stepped.reset(seed=seed)
         terminated = truncated = False
         while not (terminated or truncated):
-            a = rng.uniform(-1.0, 1.0, 4) if isinstance(policy, str) else policy(obs)
-            obs, _, terminated, truncated, info = env.step(a)
+            if policy is None:
+                a = np.zeros(4)
+            else:
+                a = rng.uniform(-1.0, 1.0, 4) if isinstance(policy, str) else policy(obs)
+            obs, _, terminated, truncated, info = stepped.step(a)
         rows.append((info["catches"], info["tosses"], terminated, info["time"]))
-    return CascadeEpisodes.from_rows(seeds, rows)
+    devs = None if recorder is None else recorder.deviations(split)
+    return CascadeEpisodes.from_rows(seeds, rows, devs)
 
 
 def _kwargs(
@@ -325,9 +336,15 @@ def _players(
 
 def row_summary(eps: Any) -> dict[str, Any]:
     """A row's entry of the results (:func:`~baselines.juggling_bench.cascade.summary`
-    and the 95 % interval of the mean catches before the first drop); any episodes with
-    seeds, catches, tosses, dropped and time (an agent's too)."""
-    return {**summary(eps), "catches_mean_ci": _mean_ci(eps)}
+    and the 95 % interval of the mean catches before the first drop; where the episodes
+    carry ``deviations``, the hand deviation from the demonstrations with its interval,
+    :meth:`~baselines.agents.cascade_score.CascadeDeviations.summary`); any episodes
+    with seeds, catches, tosses, dropped and time (an agent's too)."""
+    out = {**summary(eps), "catches_mean_ci": _mean_ci(eps)}
+    deviations = getattr(eps, "deviations", None)
+    if deviations is not None:
+        out.update(deviations.summary())
+    return out
 
 
 def _paired(a: CascadeEpisodes, b: CascadeEpisodes) -> dict[str, Any]:
@@ -451,6 +468,7 @@ def run_cascade_v1(
         "benchmark": f"juggling v2 rows, pattern {config.pattern} ({CASCADE_V1_ENV_ID})",
         "config": asdict(config),
         "demonstrations": SIMULATED_LABEL,
+        "deviation": deviation_note(config.pattern),
         "pattern": {
             "name": spec.name,
             "siteswap": spec.siteswap,
@@ -467,6 +485,33 @@ def run_cascade_v1(
     }
 
 
+def deviation_note(pattern: str) -> str:
+    """What the rows' ``deviation_m`` of ``pattern`` is measured against, or why it is
+    not measured."""
+    from baselines.agents.cascade_score import demonstrations_label, deviation_balls
+
+    balls = deviation_balls(pattern)
+    if balls is None:
+        return (
+            f"not measured: no demonstrations of pattern {pattern!r} (only the 3- and "
+            "5-ball cascades have them)"
+        )
+    return (
+        "hand deviation (m) from the "
+        + demonstrations_label(balls, "test")
+        + ": per hand in its own frame (the left mirrored), per phase segment the distance "
+        "to the nearest demonstration segment after the departure from the line between "
+        "its ends; the median over segments, 95 % interval resampling test episodes"
+    )
+
+
+def _deviation_cell(m: dict[str, Any]) -> str:
+    if "deviation_m" not in m or not np.isfinite(m["deviation_m"]):
+        return "not measured"
+    lo, hi = m["deviation_ci"]
+    return f"{m['deviation_m'] * 1000:5.1f} [{lo * 1000:5.1f}, {hi * 1000:5.1f}]"
+
+
 def report_cascade_v1(doc: dict[str, Any]) -> str:
     """The printed table of :func:`run_cascade_v1`'s document."""
     test, pat = doc["seeds"]["test"], doc["pattern"]
@@ -475,8 +520,10 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         f"{doc['demonstrations']}); {test['count']} test episodes per level and row (seeds "
         f"from {test['first']}), at most {doc['config']['max_catches']} catches; choices on "
         f"{doc['seeds']['choice']['count']} validation episodes",
+        f"hand deviation: {doc.get('deviation', 'not measured')}",
         f"{'level':7s} {'row':21s} {'catches median [95% CI]':24s} "
-        f"{'mean [95% CI]':22s} {'catch rate [95% CI]':22s} {'censored':>8s}",
+        f"{'mean [95% CI]':22s} {'catch rate [95% CI]':22s} {'censored':>8s}  "
+        "deviation mm [95% CI]",
     ]
     for lv in doc["levels"]:
         for name, m in lv["rows"].items():
@@ -487,7 +534,7 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             lines.append(
                 f"{lv['level']:7s} {label[:21]:21s} {c:5.1f} [{clo:5.1f}, {chi:5.1f}]{'':6s} "
                 f"{mean:5.2f} [{mlo:5.2f}, {mhi:5.2f}]{'':3s} {r:.3f} [{rlo:.3f}, {rhi:.3f}]"
-                f"{'':2s} {m['censored']:8d}"
+                f"{'':2s} {m['censored']:8d}  {_deviation_cell(m)}"
             )
         room, old = lv["room"], lv["oracle_minus_best"]
         upper = "the upper reference" if lv["upper_is_upper"] else "NOT an upper reference"
@@ -514,9 +561,75 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def write_cascade_v1(doc: dict[str, Any], out: str | Path) -> list[Path]:
-    """``results.json`` in ``out`` (through :mod:`motion_envs._io`)."""
-    from motion_envs._io import atomic_write_text
+#: The two criteria plotted against the deviation: key of a row, its interval's, axis label.
+_PLOTTED = (
+    ("catches_mean", "catches_mean_ci", "mean catches before the first drop"),
+    ("catch_rate", "catch_rate_ci", "catch rate (catches per toss)"),
+)
 
-    path = Path(out) / "results.json"
-    return [atomic_write_text(path, json.dumps(doc, indent=2) + "\n")]
+
+def plot_cascade_v1(doc: dict[str, Any]) -> Any:
+    """Mean catches before the first drop (top) and catch rate (bottom) against the hand
+    deviation from the held-out demonstrations (log scale), one point per row with its
+    95 % interval bars, a panel per level (matplotlib imported on call); a row not in
+    :data:`ROWS` (an agent's, ``experiments/cascade_v1_agents.py``) is drawn as a star.
+    Rows without a deviation are left out."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import ScalarFormatter
+
+    from baselines.plots import new_figure
+
+    levels = doc["levels"]
+    n = len(levels)
+    fig = new_figure(5.0 * n, 8.4)
+    axes = fig.subplots(2, n, squeeze=False, sharex="col")
+    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
+    tab20 = plt.get_cmap("tab20")  # its dark shades first (tab10), then the light ones
+    colors = {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
+    seen: dict[str, Any] = {}
+    for j, lv in enumerate(levels):
+        for i, (key, ci_key, label) in enumerate(_PLOTTED):
+            ax = axes[i][j]
+            for name, m in lv["rows"].items():
+                if "deviation_m" not in m or not np.isfinite(m["deviation_m"]):
+                    continue
+                x, xlo, xhi = (1000 * v for v in (m["deviation_m"], *m["deviation_ci"]))
+                y, (ylo, yhi) = m[key], m[ci_key]
+                agent = name not in ROWS
+                h = ax.errorbar(x, y, xerr=[[x - xlo], [xhi - x]], yerr=[[y - ylo], [yhi - y]],
+                                capsize=3, linestyle="none", marker=markers.get(name, "*"),
+                                color=colors.get(name, "black"), markersize=12 if agent else 6,
+                                label=_LABELS.get(name, name.replace("_", " ")))  # fmt: skip
+                seen.setdefault(name, h)
+            ax.set_xscale("log")  # the trivial rows lie an order of magnitude away
+            ax.xaxis.set_major_formatter(ScalarFormatter())
+            ax.grid(alpha=0.3, which="both")
+            if j == 0:
+                ax.set_ylabel(label)
+        axes[0][j].set_title(f"Cascade-v1 pattern {doc['pattern']['siteswap']}, {lv['level']}",
+                             fontsize=10)  # fmt: skip
+        axes[1][j].set_xlabel("hand deviation from held-out demonstrations (mm, log scale)")
+    labels = [_LABELS.get(k, k.replace("_", " ")) for k in seen]
+    fig.legend(list(seen.values()), labels, fontsize=8, loc="outside lower center", ncol=4,
+               frameon=False)  # fmt: skip
+    fig.suptitle("demonstrations SIMULATED; bars: 95 % bootstrap intervals over test episodes",
+                 fontsize=9)  # fmt: skip
+    return fig
+
+
+def write_cascade_v1(doc: dict[str, Any], out: str | Path) -> list[Path]:
+    """``results.json`` in ``out`` and, where the rows have a deviation,
+    ``cascade_v1_rows.png`` (:func:`plot_cascade_v1`), through :mod:`motion_envs._io`."""
+    import matplotlib.pyplot as plt
+
+    from motion_envs._io import atomic_write_text, save_figure
+
+    out = Path(out)
+    paths = [atomic_write_text(out / "results.json", json.dumps(doc, indent=2) + "\n")]
+    if any("deviation_m" in m for lv in doc["levels"] for m in lv["rows"].values()):
+        fig = plot_cascade_v1(doc)
+        try:
+            paths.append(save_figure(fig, out / "cascade_v1_rows.png", dpi=150))
+        finally:
+            plt.close(fig)
+    return paths

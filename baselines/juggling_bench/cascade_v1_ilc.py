@@ -36,6 +36,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from baselines.agents.cascade_score import record_hand_paths
 from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1_view import catching_velocities
 from baselines.juggling_bench.ilc import ILCConfig, TaskErrorILC
@@ -111,11 +112,16 @@ class CascadeTaskErrorILC(TaskErrorILC):
 
     def evaluate(self, split: str, n: int) -> CascadeEpisodes:  # type: ignore[override]
         """``n`` episodes of ``split`` with the learned ``(c, d)`` (no learning across
-        them; the within-episode update runs)."""
+        them; the within-episode update runs); on the TEST split with the hands'
+        deviation from the held-out demonstrations, as every row's
+        (:func:`~baselines.juggling_bench.cascade_v1.cascade_v1_episodes`)."""
         seeds = episode_seeds(split, n)
         env = self._env()
+        recorder = record_hand_paths(env, self.pattern) if split == "test" else None
         try:
-            out = [self.play(env, int(s), learn=False) for s in seeds.tolist()]
+            played = env if recorder is None else recorder
+            out = [self.play(played, int(s), learn=False) for s in seeds.tolist()]
         finally:
             env.close()
-        return CascadeEpisodes.from_rows(seeds, [(o[2], o[1], o[3], o[0]) for o in out])
+        devs = None if recorder is None else recorder.deviations(split)
+        return CascadeEpisodes.from_rows(seeds, [(o[2], o[1], o[3], o[0]) for o in out], devs)
