@@ -59,10 +59,20 @@ played; the rows are then played on ``episodes`` TEST episodes. An
 episode ends at the first drop or after ``max_catches`` catches (censored). Reported per
 row (:func:`baselines.juggling_bench.cascade.summary`, 95 % bootstrap intervals resampling
 episodes): the median and the mean catches before the first drop, the catch rate, the
-median time to the first drop; per level the ROOM, the paired difference of mean catches
-of ``oracle_catch`` and of the best non-oracle row, ``oracle_catch`` minus every other
-row (paired), and the old ``oracle`` minus the best row. The demonstrations (the
-likeness reward, the siteswap juggler's style) are SIMULATED.
+median time to the first drop, and the hand deviation from HELD-OUT demonstrations
+(``deviation_m``, the likeness criterion; :mod:`baselines.agents.cascade_score`: each
+hand in its own frame, per phase segment the distance to the nearest segment of the
+same phase of the SIMULATED cascade demonstrations of the pattern's ball count held out
+of the juggler's fit, after the departure from the segment's line; the median over the
+segments of both hands, its interval resampling test episodes; per hand and per phase
+too; recorded on the TEST episodes only, the choices read catches alone; the patterns
+without such demonstrations, all but ``3``, ``3-human`` and ``5``, report none); per
+level the ROOM, the paired difference of mean catches of ``oracle_catch`` and of the
+best non-oracle row, ``oracle_catch`` minus every other row (paired), and the old
+``oracle`` minus the best row. :func:`write_cascade_v1` writes ``results.json`` and
+``cascade_v1_rows.png`` (mean catches and catch rate against the deviation, a point per
+row with its intervals, a panel per level). The demonstrations (the likeness reward,
+the siteswap juggler's style, the deviation's) are SIMULATED.
 """
 
 from __future__ import annotations
