@@ -82,7 +82,10 @@ def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any
     doc = run_v2(config)
     lv = doc["levels"][0]
     best = lv["best_non_oracle"]
-    players = row_players(level, tuple(lv["constant"]), lv.get("late_offset_s", 0.0))
+    trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
+    players = row_players(
+        level, tuple(lv["constant"]), lv.get("late_offset_s", 0.0), (trk["gain"], trk["offset_s"])
+    )
     if best not in players:
         raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
     played = {}

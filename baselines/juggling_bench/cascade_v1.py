@@ -41,6 +41,14 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   Juggling-v2's release-anchored estimator, the delay found from each release, where
   the hand knows when and where it let go, and pooled over the episode's releases of
   every ball; :class:`~motion_envs.models.juggling.PooledReleaseEstimator`);
+* ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
+  catch plan whose one delay ``D`` starts at the level's mean and, after every catch by
+  either hand, moves by that catch's timing error ``e`` relative to the planned meeting,
+  ``D <- clip(D - k (e - offset))`` over the level's delay range, each flight fitted
+  with the ``D + offset`` told at its release;
+  :mod:`motion_envs.models.juggling._delay_tracker`), its gain and offset the pair of
+  Juggling-v2's :data:`~baselines.juggling_bench.v2.TRACKER_GRID` with the most mean
+  catches before the first drop on VALIDATION episodes (:func:`choose_tracker`);
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -52,8 +60,8 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10) and
   then scored on validation like every other row (``ilc=False``: not played).
 
-Every choice (the constant, the late offset; the best non-oracle row, by mean catches
-before the first drop; ties: the first in grid or row order) is made on
+Every choice (the constant, the late offset, the tracker's pair; the best non-oracle
+row, by mean catches before the first drop; ties: the first in grid or row order) is made on
 ``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before any test seed is
 played; the rows are then played on ``episodes`` TEST episodes. An
 episode ends at the first drop or after ``max_catches`` catches (censored). Reported per
@@ -110,6 +118,7 @@ __all__ = [
     "check_cascade_v1_config",
     "choose_constant",
     "choose_late_offset",
+    "choose_tracker",
     "report_cascade_v1",
     "row_summary",
     "run_cascade_v1",
@@ -140,6 +149,7 @@ ROWS = (
     "fixed_point",
     "random",
     "task_error_ilc",
+    "delay_tracker",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -220,7 +230,7 @@ def cascade_v1_episodes(
 
 
 def _kwargs(
-    level: str, config: CascadeV1Config, controller: str, offset: float = 0.0
+    level: str, config: CascadeV1Config, controller: str, offset: float = 0.0, gain: float = 0.0
 ) -> dict[str, Any]:
     out: dict[str, Any] = {
         "level": level,
@@ -231,6 +241,8 @@ def _kwargs(
     }
     if offset:
         out["delay_offset"] = offset
+    if gain:
+        out["tracker_gain"] = gain
     return out
 
 
@@ -256,6 +268,21 @@ def choose_late_offset(
 
     offset, means = _best_on_val(LATE_OFFSETS, v2.offset_key, mean)
     return float(offset), means
+
+
+def choose_tracker(
+    level: str, config: CascadeV1Config, play: Play = cascade_v1_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The ``(gain, offset)`` of :data:`~baselines.juggling_bench.v2.TRACKER_GRID` with
+    the most mean catches before the first drop on ``config.val_episodes`` VALIDATION
+    episodes (ties: the first), and every candidate's validation mean."""
+
+    def mean(choice: tuple[float, float]) -> float:
+        kw = _kwargs(level, config, "juggler_delay_tracker", choice[1], choice[0])
+        return float(play(None, kw, "val", config.val_episodes).catches.mean())
+
+    choice, means = _best_on_val(v2.TRACKER_GRID, v2.tracker_key, mean)
+    return (float(choice[0]), float(choice[1])), means
 
 
 @dataclass(frozen=True)
@@ -324,23 +351,28 @@ class CascadeVelocityTimesDelay:
 
 
 def _players(
-    level: str, config: CascadeV1Config, offset: float, constant: tuple[float, float]
-) -> dict[str, tuple[str, Policy, float]]:
-    """Each row's controller, policy and delay offset."""
+    level: str,
+    config: CascadeV1Config,
+    offset: float,
+    constant: tuple[float, float],
+    tracker: tuple[float, float] = (0.0, 0.0),
+) -> dict[str, tuple[str, Policy, float, float]]:
+    """Each row's controller, policy, delay offset and tracker gain."""
     delay = V2_LEVELS[level].mean_delay
     velocity = CascadeVelocityTimesDelay(pattern_spec(config.pattern).balls, delay, RESIDUAL_SCALE)
     return {
-        "juggler": ("juggler", None, 0.0),
-        "oracle": ("juggler_oracle", None, 0.0),
-        "oracle_catch": ("juggler_oracle_catch", None, 0.0),
-        "best_constant": ("juggler", _constant_policy(constant), 0.0),
-        "velocity_x_mean_delay": ("juggler", velocity, 0.0),
-        "juggler_mean_delay": ("juggler_mean_delay", None, 0.0),
-        "late_meeting": ("juggler_mean_delay", None, offset),
-        "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0),
-        "delay_estimator": ("juggler_delay_estimator", None, 0.0),
-        "fixed_point": ("fixed_point", None, 0.0),
-        "random": ("juggler", "random", 0.0),
+        "juggler": ("juggler", None, 0.0, 0.0),
+        "oracle": ("juggler_oracle", None, 0.0, 0.0),
+        "oracle_catch": ("juggler_oracle_catch", None, 0.0, 0.0),
+        "best_constant": ("juggler", _constant_policy(constant), 0.0, 0.0),
+        "velocity_x_mean_delay": ("juggler", velocity, 0.0, 0.0),
+        "juggler_mean_delay": ("juggler_mean_delay", None, 0.0, 0.0),
+        "late_meeting": ("juggler_mean_delay", None, offset, 0.0),
+        "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0, 0.0),
+        "delay_estimator": ("juggler_delay_estimator", None, 0.0, 0.0),
+        "fixed_point": ("fixed_point", None, 0.0, 0.0),
+        "random": ("juggler", "random", 0.0, 0.0),
+        "delay_tracker": ("juggler_delay_tracker", None, tracker[1], tracker[0]),
     }
 
 
@@ -396,6 +428,7 @@ def run_cascade_v1(
     offset_chooser: Any = choose_late_offset,
     constant_chooser: Any = choose_constant,
     keep: dict[str, dict[str, Any]] | None = None,
+    tracker_chooser: Any = choose_tracker,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed). ``keep``, when given,
@@ -408,23 +441,26 @@ def run_cascade_v1(
     for level in config.levels:
         constant, constant_means = constant_chooser(level, config, play)
         offset, offset_means = offset_chooser(level, config, play)
-        players = _players(level, config, offset, constant)
+        tracker, tracker_means = tracker_chooser(level, config, play)
+        players = _players(level, config, offset, constant, tracker)
         # the grids' validation plays reused where the choosers made them
         reuse = {
             "juggler": (constant_means, v2.grid_key((0.0, 0.0))),
             "best_constant": (constant_means, v2.grid_key(constant)),
             "juggler_mean_delay": (offset_means, v2.offset_key(0.0)),
             "late_meeting": (offset_means, v2.offset_key(offset)),
+            "delay_tracker": (tracker_means, v2.tracker_key(tracker)),
         }
         val_means: dict[str, float] = {}
-        for name, (ctl, policy, off) in players.items():
+        for name, (ctl, policy, off, gain) in players.items():
             if name in REFERENCES:
                 continue
             means, key = reuse.get(name, ({}, ""))
             if key in means:
                 val_means[name] = means[key]
             else:
-                eps = play(policy, _kwargs(level, config, ctl, off), "val", config.val_episodes)
+                kw = _kwargs(level, config, ctl, off, gain)
+                eps = play(policy, kw, "val", config.val_episodes)
                 val_means[name] = float(eps.catches.mean())
         ilc = _train_ilc(level, config) if config.ilc else None
         if ilc is not None:
@@ -433,9 +469,11 @@ def run_cascade_v1(
             )
         best = max((r for r in ROWS if r in val_means), key=lambda r: val_means[r])
         played = {
-            name: play(policy, _kwargs(level, config, ctl, off), "test", config.episodes)
+            name: play(policy, _kwargs(level, config, ctl, off, gain), "test", config.episodes)
             # fresh players (no state is carried from the validation plays)
-            for name, (ctl, policy, off) in _players(level, config, offset, constant).items()
+            for name, (ctl, policy, off, gain) in _players(
+                level, config, offset, constant, tracker
+            ).items()
         }
         if ilc is not None:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -456,6 +494,8 @@ def run_cascade_v1(
                 "constant_val_mean_catches": constant_means,
                 "late_offset_s": offset,
                 "late_offset_val_mean_catches": offset_means,
+                "tracker": {"gain": tracker[0], "offset_s": tracker[1]},
+                "tracker_val_mean_catches": tracker_means,
                 "val_mean_catches": val_means,
                 "best_non_oracle": best,
                 "rows": rows,
@@ -549,9 +589,13 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         room, old = lv["room"], lv["oracle_minus_best"]
         upper = "the upper reference" if lv["upper_is_upper"] else "NOT an upper reference"
         below = [k for k, d in lv["upper_minus_rows"].items() if d["ci"][1] < 0]
+        trk = lv.get("tracker")
+        trk_text = (
+            "" if trk is None else f"tracker {v2.tracker_key((trk['gain'], trk['offset_s']))}; "
+        )
         lines.append(
             f"{lv['level']:7s} best constant {tuple(lv.get('constant', (0.0, 0.0)))}; late "
-            f"offset {lv['late_offset_s'] * 1000:.0f} ms; best non-oracle "
+            f"offset {lv['late_offset_s'] * 1000:.0f} ms; {trk_text}best non-oracle "
             f"row {lv['best_non_oracle']} (chosen on validation); ROOM oracle_catch - best "
             f"(paired mean catches): {room['value']:+.2f} [{room['ci'][0]:+.2f}, "
             f"{room['ci'][1]:+.2f}]; oracle - best {old['value']:+.2f} [{old['ci'][0]:+.2f}, "

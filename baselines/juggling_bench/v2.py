@@ -44,6 +44,13 @@ unit action, the scale an agent is given):
   its lead and descent chosen on TRAINING seeds; no hidden information: a competitor);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
   delay found from the release, per episode);
+* ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
+  catch plan whose delay ``D`` starts at the level's mean and, after every catch, moves
+  by the catch's timing error ``e`` relative to the planned meeting, ``D <- clip(D - k
+  (e - offset))`` over the level's delay range, the flight fitted with ``D + offset``;
+  :mod:`motion_envs.models.juggling._delay_tracker`), its gain ``k`` and offset the pair
+  of :data:`TRACKER_GRID` with the highest catch rate on the VALIDATION seeds
+  (:func:`choose_tracker`; ``k = 0``, offset 0 is ``mean_delay_catch`` itself);
 * ``random``: uniform random actions (seeded);
 * ``task_error_ilc``: the residual learner from the task-error vector
   (:class:`~baselines.juggling_bench.ilc.TaskErrorILC`: iterative learning control, a
@@ -51,10 +58,12 @@ unit action, the scale an agent is given):
   on a budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10).
 
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
-seed is played (tested with a spy): the constant, the late offset, and then the best
+seed is played (tested with a spy): the constant, the late offset, the tracker's gain and
+offset, and then the best
 non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; the
 constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
-grid's for ``juggler_mean_delay`` and ``late_meeting``, the ILC row is scored on
+grid's for ``juggler_mean_delay`` and ``late_meeting``, the tracker grid's for
+``delay_tracker``, the ILC row is scored on
 validation after its training). Every row is then played on the TEST seeds
 (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
@@ -96,17 +105,21 @@ __all__ = [
     "LATE_OFFSETS",
     "RESIDUAL_SCALE",
     "ROWS",
+    "TRACKER_GRID",
     "V2Config",
     "VelocityTimesDelay",
     "check_v2_config",
     "choose_constant",
     "choose_offset",
+    "choose_tracker",
     "frame_velocity",
     "grid_key",
     "offset_key",
     "report_v2",
     "row_players",
     "run_v2",
+    "tracker_key",
+    "tracker_kwargs",
     "write_v2",
 ]
 
@@ -121,6 +134,14 @@ CONSTANT_GRID: tuple[tuple[float, float], ...] = tuple(
 #: 0 to 200 ms in steps of 20 ms, declared before the run that measured it (the first
 #: grid, 0-80 ms, chose its largest value on medium and hard).
 LATE_OFFSETS: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(11))
+#: ``delay_tracker``'s ``(gain k, offset s)`` pairs tried on VALIDATION seeds, declared
+#: before any bench run (offset first, then gain; ties: the first, ``(0, 0)`` being
+#: ``mean_delay_catch``): gains 0 to 1 (``k s`` below 2 for the timing slopes ``s``
+#: 0.85-1 measured on training seeds; 0.1 for the five-ball juggler's ``s = 2.3``),
+#: offsets 0-40 ms (the late meeting's first steps).
+TRACKER_GRID: tuple[tuple[float, float], ...] = tuple(
+    (k, o) for o in (0.0, 0.02, 0.04) for k in (0.0, 0.1, 0.25, 0.5, 1.0)
+)
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
@@ -134,6 +155,7 @@ ROWS = (
     "delay_estimator",
     "random",
     "task_error_ilc",
+    "delay_tracker",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -244,6 +266,33 @@ def grid_key(action: tuple[float, float]) -> str:
     return f"{action[0]:+.1f},{action[1]:+.1f}"
 
 
+def tracker_key(choice: tuple[float, float]) -> str:
+    """A tracker pair's key in the validation tables (``"k=0.5, +20 ms"``)."""
+    return f"k={choice[0]:g}, +{choice[1] * 1000:.0f} ms"
+
+
+def tracker_kwargs(choice: tuple[float, float]) -> dict[str, Any]:
+    """The env keywords of ``juggler_delay_tracker`` with the pair ``(gain, offset)``."""
+    return {"tracker_gain": float(choice[0]), "delay_offset": float(choice[1])}
+
+
+def choose_tracker(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The pair of :data:`TRACKER_GRID` with the highest catch rate on
+    ``config.val_episodes`` VALIDATION episodes (ties: the first), and every candidate's
+    validation catch rate."""
+    rates: dict[str, float] = {}
+    best, best_rate = TRACKER_GRID[0], -1.0
+    for choice in TRACKER_GRID:
+        kw = _kwargs(level, config, "juggler_delay_tracker", tracker_kwargs(choice))
+        eps = play(None, ENV_ID_V2, kw, "val", config.val_episodes)
+        rates[tracker_key(choice)] = eps.catch_rate
+        if eps.catch_rate > best_rate:
+            best, best_rate = choice, eps.catch_rate
+    return best, rates
+
+
 def choose_constant(
     level: str, config: V2Config, play: Play = juggling_episodes
 ) -> tuple[tuple[float, float], dict[str, float]]:
@@ -280,12 +329,15 @@ def choose_offset(
 
 
 def row_players(
-    level: str, constant: tuple[float, float], offset: float = 0.0
+    level: str,
+    constant: tuple[float, float],
+    offset: float = 0.0,
+    tracker: tuple[float, float] = (0.0, 0.0),
 ) -> dict[str, tuple[str, Policy | None, dict[str, Any]]]:
     """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller,
     residual policy (None: the zero action) and extra env keywords, played with
-    :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice and
-    ``offset`` :func:`choose_offset`'s."""
+    :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice,
+    ``offset`` :func:`choose_offset`'s and ``tracker`` :func:`choose_tracker`'s."""
     delay = V2_LEVELS[level].mean_delay
     return {
         "juggler": ("juggler", None, {}),
@@ -302,6 +354,7 @@ def row_players(
         "mean_delay_catch": ("juggler_mean_delay_catch", None, {}),
         "delay_estimator": ("juggler_delay_estimator", None, {}),
         "random": ("juggler", _Random(0), {}),
+        "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
     }
 
 
@@ -310,15 +363,17 @@ def run_v2(
     play: Play = juggling_episodes,
     chooser: Any = choose_constant,
     offset_chooser: Any = choose_offset,
+    tracker_chooser: Any = choose_tracker,
 ) -> dict[str, Any]:
-    """Every level's rows (module docstring); JSON-ready. ``play``, ``chooser`` and
-    ``offset_chooser`` are for tests (the spy that proves the choices read no test seed)."""
+    """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
+    for tests (the spy that proves the choices read no test seed)."""
     check_v2_config(config)
     t0 = time.process_time()
     levels = []
     for level in config.levels:
         constant, val_rates = chooser(level, config, play)
         offset, offset_rates = offset_chooser(level, config, play)
+        tracker, tracker_rates = tracker_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
         # the grids' plays reused where the choosers made them.
@@ -327,8 +382,9 @@ def run_v2(
             "best_constant": (val_rates, grid_key(constant)),
             "juggler_mean_delay": (offset_rates, offset_key(0.0)),
             "late_meeting": (offset_rates, offset_key(offset)),
+            "delay_tracker": (tracker_rates, tracker_key(tracker)),
         }
-        players = row_players(level, constant, offset)
+        players = row_players(level, constant, offset, tracker)
         val_catch: dict[str, float] = {}
         for name, (ctl, policy, extra) in players.items():
             rates, key = reuse.get(name, ({}, ""))
@@ -352,7 +408,7 @@ def run_v2(
                 policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
             )
             # fresh players: the random row's generator restarts for the test seeds
-            for name, (ctl, policy, extra) in row_players(level, constant, offset).items()
+            for name, (ctl, policy, extra) in row_players(level, constant, offset, tracker).items()
         }
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -373,6 +429,8 @@ def run_v2(
                 "constant_val_catch_rates": val_rates,
                 "late_offset_s": offset,
                 "late_offset_val_catch_rates": offset_rates,
+                "tracker": {"gain": tracker[0], "offset_s": tracker[1]},
+                "tracker_val_catch_rates": tracker_rates,
                 "rows": entries,
                 "best_non_oracle": best,
                 "val_catch_rates": val_catch,
@@ -433,9 +491,11 @@ def report_v2(doc: dict[str, Any]) -> str:
         key = "room_below_oracle_catch" if "room_below_oracle_catch" in lv else "room_below_oracle"
         room = lv[key]
         ref = UPPER_REFERENCE if key == "room_below_oracle_catch" else "oracle"
+        trk = lv.get("tracker")
+        trk_text = "" if trk is None else f"tracker {tracker_key((trk['gain'], trk['offset_s']))}; "
         lines.append(
             f"{lv['level']:7s} best constant {tuple(lv['constant'])}; late offset "
-            f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; best non-oracle row "
+            f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; {trk_text}best non-oracle row "
             f"{lv['best_non_oracle']} (chosen on validation: {_val(lv)}); room below the "
             f"upper reference ({ref} - {lv['best_non_oracle']}, paired): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
@@ -476,9 +536,9 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hvxp", strict=True))
-    # one colour per row (the default cycle has 10; the 11th row is black)
-    colors = {name: f"C{i}" if i < 10 else "black" for i, name in enumerate(ROWS)}
+    markers = dict(zip(ROWS, "osP^D<>hvxp8", strict=True))
+    # one colour per row (the default cycle has 10; the 11th row is black, the 12th grey)
+    colors = {name: f"C{i}" if i < 10 else ("black", "0.5")[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
             dev, rate = m["deviation_m"] * 1000, m["catch_rate"]

@@ -28,7 +28,11 @@ from motion_envs.envs.juggling._cascade_v1_errors import (
     check_observe_task_error,
 )
 from motion_envs.envs.juggling._likeness import LikenessQuery
-from motion_envs.envs.juggling._shared import LevelsEnvMixin, check_delay_offset
+from motion_envs.envs.juggling._shared import (
+    LevelsEnvMixin,
+    check_delay_offset,
+    check_tracker_gain,
+)
 from motion_envs.envs.juggling._world_spec import (
     AIR_DENSITY,
     IMPACT_CONTACT_DAMPING,
@@ -43,6 +47,7 @@ from motion_envs.models.juggling import (
     CascadeBallView,
     CascadeController,
     CascadeState,
+    DelayTracker,
     SiteswapController,
     catch_height,
     catch_plan,
@@ -108,7 +113,12 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     mean delay's estimates (``juggler_oracle_catch``, ``juggler_mean_delay_catch``:
     each flying ball told as it will be the plan's ``lead`` later, so the catch reach
     ends ``lead`` early at the meeting point and the hand waits there;
-    :data:`~motion_envs.models.juggling.CASCADE_CATCH_PLANS`, chosen on training seeds).
+    :data:`~motion_envs.models.juggling.CASCADE_CATCH_PLANS`, chosen on training seeds),
+    and ``juggler_delay_tracker``: the mean-delay catch plan whose one delay (one
+    person) is corrected after every catch from that catch's timing error,
+    ``D <- clip(D - k (e - delay_offset))`` over the level's delay range, told ``D +
+    delay_offset`` (:mod:`~motion_envs.models.juggling._delay_tracker`; ``k`` is
+    ``tracker_gain``; the env hands the view each catch's timing error, never the delay).
     The agent adds a residual to each hand's command.
 
     Levels (Juggling-v2's; :data:`~motion_envs.models.juggling.V2_LEVELS`):
@@ -205,8 +215,9 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker` |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
+    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
@@ -241,12 +252,14 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         width: int = 480,
         height: int = 480,
         observe_task_error: bool = False,
+        tracker_gain: float = 0.0,
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
         #: Whether the observation ends with each hand's last catch's task error.
         self.observe_task_error = check_observe_task_error(observe_task_error)
         self.controller_name = check_choice(controller, "controller", tuple(CASCADE_V1_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
+        self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -265,9 +278,12 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         #: the controller's catch plan (``*_catch`` controllers), else None
         self.catch_plan = catch_plan(self.controller_name, self.pattern.fitted)
         lead = 0.0 if self.catch_plan is None else self.catch_plan.lead
+        tracker = None
+        if self.controller_name == "juggler_delay_tracker":
+            tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
         self.view = CascadeBallView(
             self.balls, mode, self.gravity, lv.mean_delay + self.delay_offset, catch_height(self.controller),
-            lead,
+            lead, tracker,
         )  # fmt: skip
         self.likeness = pattern_likeness(self.pattern, self.gravity)
         self._likeness = LikenessQuery(self.likeness)
@@ -437,6 +453,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         if any(b >= 0 for b in true.caught):
             self._errors = catch_errors(before, true, planned, self.task.dt)
             self._held.record(self._errors[0])
+            self.view.felt(self._errors[0][:, 1])  # what the palms felt (the tracker's)
         self._misses.update(true, phases, planned)
         k = int(self.world.k[0])
         frames = []

@@ -21,25 +21,59 @@ from motion_envs.envs._common import (
     check_reward_weights,
     check_scale,
 )
-from motion_envs.models.juggling import LEVELS, check_gravity
+from motion_envs.models.juggling import LEVELS, TRACKER_MAX_GAIN, check_gravity
 
-__all__ = ["LevelsEnvMixin", "check_delay_offset", "check_phases"]
+__all__ = [
+    "OFFSET_CONTROLLERS",
+    "LevelsEnvMixin",
+    "check_delay_offset",
+    "check_phases",
+    "check_tracker_gain",
+]
+
+
+#: The controllers told a ``delay_offset`` (a later delay than the level's mean).
+OFFSET_CONTROLLERS = ("juggler_mean_delay", "juggler_delay_tracker")
+
+
+def _real(value: Any, lo: float, hi: float) -> float:
+    """``value`` as a float if it is a real number in ``[lo, hi]``, else NaN."""
+    real = isinstance(value, (int, float, np.integer, np.floating))
+    try:  # bools, None, text, an int beyond float64's range: refused as out of range
+        out = float(value) if real and not isinstance(value, bool) else math.nan
+    except OverflowError:
+        out = math.nan
+    return out if lo <= out <= hi else math.nan  # also rejects NaN
 
 
 def check_delay_offset(delay_offset: float, controller: str) -> float:
     """``delay_offset`` (s) as a float in [0, 0.25], given only to the
-    ``juggler_mean_delay`` controller (the later delay it is told); else one-line
-    ValueError naming the argument."""
-    real = isinstance(delay_offset, (int, float, np.integer, np.floating))
-    try:  # bools, None, text, an int beyond float64's range: refused as out of range
-        offset = float(delay_offset) if real and not isinstance(delay_offset, bool) else math.nan
-    except OverflowError:
-        offset = math.nan
-    if not 0.0 <= offset <= 0.25:  # also rejects NaN
+    :data:`OFFSET_CONTROLLERS` (the later delay they are told); else one-line ValueError
+    naming the argument."""
+    offset = _real(delay_offset, 0.0, 0.25)
+    if math.isnan(offset):
         raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r:.80}")
-    if offset and controller != "juggler_mean_delay":
-        raise ValueError(f"delay_offset is for controller='juggler_mean_delay'; got {controller!r}")
+    if offset and controller not in OFFSET_CONTROLLERS:
+        raise ValueError(
+            f"delay_offset is for controller={' or '.join(map(repr, OFFSET_CONTROLLERS))}; "
+            f"got {controller!r}"
+        )
     return offset
+
+
+def check_tracker_gain(tracker_gain: float, controller: str) -> float:
+    """``tracker_gain`` as a float in ``[0, TRACKER_MAX_GAIN]``, given only to the
+    ``juggler_delay_tracker`` controller; else one-line ValueError naming the argument."""
+    gain = _real(tracker_gain, 0.0, TRACKER_MAX_GAIN)
+    if math.isnan(gain):
+        raise ValueError(
+            f"tracker_gain must be in [0, {TRACKER_MAX_GAIN}]; got {tracker_gain!r:.80}"
+        )
+    if gain and controller != "juggler_delay_tracker":
+        raise ValueError(
+            f"tracker_gain is for controller='juggler_delay_tracker'; got {controller!r}"
+        )
+    return gain
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from motion_envs.datasets.juggling import JugglingState, JugglingTask
 from motion_envs.envs._common import check_choice
 from motion_envs.envs.juggling._cascade_v1_errors import HeldTaskErrors, check_observe_task_error
-from motion_envs.envs.juggling._shared import check_delay_offset
+from motion_envs.envs.juggling._shared import check_delay_offset, check_tracker_gain
 from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_env import OBS_HEAD, V1_CYCLE_TIME, OneBallEnv
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
@@ -30,6 +30,7 @@ from motion_envs.models.juggling import (
     V2_LEVELS,
     CameraFrame,
     CameraSensor,
+    DelayTracker,
     V2Controller,
     make_v2_controller,
     v1_juggler,
@@ -95,7 +96,13 @@ class JugglingV2Env(OneBallEnv):
     catch planned for the capture rule (the palm arrives early and meets the ball
     descending slower than it; :mod:`~motion_envs.models.juggling._v2_catch`):
     ``juggler_oracle_catch`` (the oracle's information, the UPPER REFERENCE) and
-    ``juggler_mean_delay_catch`` (the level's mean delay, a competitor).
+    ``juggler_mean_delay_catch`` (the level's mean delay, a competitor), and
+    ``juggler_delay_tracker``: that catch plan with its delay corrected after every
+    catch from the catch's timing error, ``D <- clip(D - k (e - delay_offset))`` over
+    the level's delay range, told ``D + delay_offset``
+    (:mod:`~motion_envs.models.juggling._delay_tracker`; the gain ``k`` is
+    ``tracker_gain``; the env hands the controller the catch's task error, never the
+    delay).
 
     A step is Juggling-v1's, in its batch of one (``V2Batch``, a
     :class:`~motion_envs.envs.juggling._v1_batch.V1Batch`: the command with the
@@ -197,8 +204,9 @@ class JugglingV2Env(OneBallEnv):
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` assumes (0-0.25; a later meeting) |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_tracker` |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
+    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
@@ -239,12 +247,14 @@ class JugglingV2Env(OneBallEnv):
         width: int = 480,
         height: int = 480,
         observe_task_error: bool = False,
+        tracker_gain: float = 0.0,
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
         #: Whether the observation holds the last catch's task error (entries 32-35).
         self.observe_task_error = check_observe_task_error(observe_task_error)
         self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
+        self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -254,9 +264,13 @@ class JugglingV2Env(OneBallEnv):
         self.task = JugglingTask(gravity=self.gravity)
         juggler = v1_juggler(self.gravity)
         self.home = np.asarray(juggler.home_, dtype=np.float64)
+        tracker = None
+        if self.controller_name == "juggler_delay_tracker":
+            tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
         self.controller = make_v2_controller(
-            self.controller_name, juggler, self.gravity, lv.mean_delay + self.delay_offset
-        )
+            self.controller_name, juggler, self.gravity, lv.mean_delay + self.delay_offset,
+            tracker,
+        )  # fmt: skip
         self.likeness = v1_likeness(self.gravity, "train")
         spec = WorldSpec.of(
             self.task,
@@ -341,6 +355,7 @@ class JugglingV2Env(OneBallEnv):
             self._caught = self._task_error(before, true.time - self.task.dt, planned)
             self._task_errors.append(self._caught[0])
             self._held.record(self._caught[0])
+            controller.felt(self._caught[0])  # what the palm felt (the delay tracker's)
         hand = (float(true.hand_pos[0]), float(true.hand_pos[1]))
         ball = (float(true.ball_pos[0]), float(true.ball_pos[1]))
         frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)

@@ -26,6 +26,9 @@ The public names of small private modules, one concern each:
   (:data:`CASCADE_CATCH_PLANS`);
   ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`)
   and every Juggling-v2 controller by name (:func:`make_v2_controller`);
+  ``_delay_tracker``: the online delay tracker driven by each catch's timing error
+  (:class:`DelayTracker`; Juggling-v2's :class:`DelayTrackerController`, Cascade-v1's
+  through :meth:`CascadeBallView.felt`);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -112,6 +115,7 @@ from motion_envs.models.juggling._controller import (
     eq10_rows,
     replan_many,
 )
+from motion_envs.models.juggling._delay_tracker import TRACKER_MAX_GAIN, DelayTracker
 from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
     FIT_SEED,
@@ -203,6 +207,7 @@ from motion_envs.models.juggling._v2_catch import (
     CATCH_PLANS,
     CatchPlan,
     CatchPlanController,
+    DelayTrackerController,
     make_v2_controller,
 )
 from motion_envs.models.juggling._v2_levels import (
@@ -241,6 +246,7 @@ __all__ = [
     "PAPER_GRAVITY",
     "PATTERNS",
     "TIMING_AT_PAPER_GRAVITY",
+    "TRACKER_MAX_GAIN",
     "TRACKING_NOISE",
     "TRACKING_ROWS",
     "V1_N_SINES",
@@ -266,6 +272,8 @@ __all__ = [
     "ControlOptions",
     "CycleResult",
     "DefaultFit",
+    "DelayTracker",
+    "DelayTrackerController",
     "Eq10Rows",
     "Flight",
     "FlightAnalysis",

@@ -76,6 +76,7 @@ from motion_envs.models.juggling._camera import CameraFrame, FlightEstimator, dr
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_control import CascadeController, CascadeStart
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
+from motion_envs.models.juggling._delay_tracker import DelayTracker
 from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = [
@@ -103,6 +104,7 @@ CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
     "juggler_oracle_catch": ("juggler", "oracle"),
     "juggler_mean_delay_catch": ("juggler", "mean_delay"),
     "juggler_delay_estimator": ("juggler", "release"),
+    "juggler_delay_tracker": ("juggler", "mean_delay"),
 }
 #: s; the leads tried on training seeds (0-160 ms in 20 ms steps).
 CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9))
@@ -129,7 +131,9 @@ _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
 def catch_plan(name: str, fitted: bool) -> CatchPlan | None:
     """Controller ``name``'s catch plan for the fitted cascade juggler (``fitted``) or the
     siteswap juggler (:data:`CASCADE_CATCH_PLANS`), None for a controller without one."""
-    plans = CASCADE_CATCH_PLANS.get(name)
+    # the delay tracker is the mean-delay catch plan with its delay corrected per catch
+    base = "juggler_mean_delay_catch" if name == "juggler_delay_tracker" else name
+    plans = CASCADE_CATCH_PLANS.get(base)
     if plans is None:
         return None
     return plans["fitted" if fitted else "siteswap"]
@@ -226,12 +230,20 @@ class CascadeBallView:
     lead:
         s (>= 0), the catch plan's lead: each flying ball told as it will be ``lead``
         s later (module docstring); 0 for the controllers without the plan.
+    tracker:
+        ``juggler_delay_tracker``'s :class:`~motion_envs.models.juggling.DelayTracker`
+        (mode ``"mean_delay"``): the estimators' delay is its told delay, reset at every
+        episode and corrected at every catch (:meth:`felt`), each flight fitted with the
+        delay told at its release; None: the fixed ``delay``.
     """
 
     def __init__(
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
-        lead: float = 0.0,
+        lead: float = 0.0, tracker: DelayTracker | None = None,
     ) -> None:  # fmt: skip
+        if tracker is not None and mode != "mean_delay":
+            raise ValueError(f"a tracker needs the estimators' mode 'mean_delay'; got {mode!r}")
+        self.tracker = tracker
         #: the episode's delays found from the releases (mode ``"release"``; s)
         self.pool: list[float] = []
         self.estimators: list[FlightEstimator] = (
@@ -261,6 +273,27 @@ class CascadeBallView:
             elif nominal.holder[i] < 0:
                 est.released(0.0, float(p[0]), float(p[1]))
         self._crossings = [(-1, None)] * len(self.estimators)
+        if self.tracker is not None:
+            self.tracker.reset()
+            self._tell()
+
+    def felt(self, timings: FloatArray) -> None:
+        """The step's catches' timing errors (s, the catch time minus the planned
+        meeting; one per hand, NaN for a hand that did not catch): each corrects the
+        tracker's delay, in hand order. A flight keeps the delay it was released with
+        (a ball in the air is not moved under the reaching hand); every flight released
+        from now on is fitted with the delay the tracker tells (:meth:`record`). Without a
+        tracker nothing changes."""
+        if self.tracker is not None:
+            for timing in np.asarray(timings, dtype=np.float64).tolist():
+                self.tracker.update(timing)
+
+    def _tell(self, balls: list[int] | None = None) -> None:
+        """The tracker's told delay to the estimators of ``balls`` (None: all)."""
+        assert self.tracker is not None
+        for i in range(len(self.estimators)) if balls is None else balls:
+            self.estimators[i].fixed_delay = self.tracker.told
+            self.estimators[i]._fitted = False
 
     def record(self, true: CascadeState, frames: list[list[CameraFrame]]) -> None:
         """After a control period: each ball released in it starts a new flight (from its
@@ -270,6 +303,8 @@ class CascadeBallView:
                 p, v = true.hand_pos[h].copy(), true.hand_vel[h].copy()
                 self.priors[b] = (true.time, p, v)
                 self.estimators[b].released(true.time, float(p[0]), float(p[1]))
+                if self.tracker is not None:  # the new flight fitted with the told delay
+                    self._tell([b])
         for est, new in zip(self.estimators, frames, strict=True):
             est.add(new)
 

@@ -43,6 +43,7 @@ import numpy as np
 from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingState
 from motion_envs.models.juggling._camera import FlightEstimator
+from motion_envs.models.juggling._delay_tracker import DelayTracker
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._v2_levels import V2_CONTROLLERS, V2Controller
 
@@ -52,6 +53,7 @@ __all__ = [
     "LEAD_GRID",
     "CatchPlan",
     "CatchPlanController",
+    "DelayTrackerController",
     "make_v2_controller",
 ]
 
@@ -184,14 +186,54 @@ class CatchPlanController(V2Controller):
         return end
 
 
+class DelayTrackerController(CatchPlanController):
+    """``juggler_mean_delay_catch`` whose estimator's delay is the tracker's
+    (:class:`~motion_envs.models.juggling.DelayTracker`): reset to its prior at every
+    episode, corrected after every catch from the catch's timing error (:meth:`felt`)."""
+
+    def __init__(
+        self, juggler: AnalyticJuggler, estimator: FlightEstimator, plan: CatchPlan,
+        tracker: DelayTracker,
+    ) -> None:  # fmt: skip
+        super().__init__(juggler, estimator, plan)
+        self.tracker = tracker
+        self._tell()
+
+    def _tell(self) -> None:
+        self.estimator.fixed_delay = self.tracker.told
+        self.estimator._fitted = False
+
+    def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
+        """A new episode: the tracker back to its prior."""
+        super().reset(state, rng)
+        self.tracker.reset()
+        self._tell()
+
+    def felt(self, task_error: FloatArray) -> None:
+        """The catch's timing error, made relative to the planned MEETING (the env's is
+        relative to the reach's end, ``lead`` earlier), corrects the delay told."""
+        self.tracker.update(float(task_error[1]) - self.plan.lead)
+        self._tell()
+
+
 def make_v2_controller(
-    name: str, juggler: AnalyticJuggler, gravity: float, mean_delay: float
+    name: str,
+    juggler: AnalyticJuggler,
+    gravity: float,
+    mean_delay: float,
+    tracker: DelayTracker | None = None,
 ) -> V2Controller:
     """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
-    ``juggler`` (its episodes never touch ``juggler``)."""
+    ``juggler`` (its episodes never touch ``juggler``); ``juggler_delay_tracker`` needs
+    its ``tracker`` (the other controllers take none)."""
     if name not in V2_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
+    if (tracker is not None) != (name == "juggler_delay_tracker"):
+        raise ValueError(f"tracker is for controller='juggler_delay_tracker' only; got {name!r}")
     estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
+    if tracker is not None:
+        plan = CATCH_PLANS["juggler_mean_delay_catch"]
+        return DelayTrackerController(juggler.variant(), estimator, plan, tracker)
     if name in CATCH_PLANS:
         return CatchPlanController(juggler.variant(), estimator, CATCH_PLANS[name])
     return V2Controller(juggler.variant(), estimator)

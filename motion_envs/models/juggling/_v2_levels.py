@@ -48,7 +48,10 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
   capture rule (:mod:`~motion_envs.models.juggling._v2_catch`: the palm arrives early
   and meets the ball descending slower than it): the UPPER REFERENCE;
 * ``"juggler_mean_delay_catch"``: the same catch plan on the level's mean delay (no
-  hidden information: a competitor).
+  hidden information: a competitor);
+* ``"juggler_delay_tracker"``: the mean-delay catch plan whose delay is corrected after
+  every catch from the catch's timing error (:mod:`~motion_envs.models.juggling._delay_tracker`;
+  the env hands the error to :meth:`V2Controller.felt`; a competitor).
 
 Without a state estimate (fewer than 3 frames of the flight) the juggler does not
 correct; the controller never sees the true ball in flight.
@@ -172,6 +175,7 @@ V2_CONTROLLERS: dict[str, str] = {
     "juggler_oracle": "oracle",
     "juggler_oracle_catch": "oracle",
     "juggler_mean_delay_catch": "mean_delay",
+    "juggler_delay_tracker": "mean_delay",
 }
 
 
@@ -186,6 +190,10 @@ class V2Controller(JugglerController):
         """Start a toss from the state (ball in hand); the estimator keeps its drag (set
         by :meth:`FlightEstimator.reset` before)."""
         super().reset(state, rng)
+
+    def felt(self, task_error: FloatArray) -> None:
+        """A catch's task error ``(offset, timing)`` (the env's ``info["task_error"]``:
+        what the palm feels); ignored here (the delay tracker uses it)."""
 
     def command(self, state: JugglingState) -> tuple[FloatArray, bool]:
         """Next hand target and release arming; in the catch phase the state's ball is
