@@ -157,6 +157,7 @@ _JUGGLING_RESIDUAL = {
 _JUGGLING_V2 = {
     "level": "name",
     "delay_offset": "fraction",
+    "tracker_gain": "fraction",
     "observe_task_error": "flag",
     **_JUGGLING_RESIDUAL,
 }
