@@ -16,7 +16,12 @@ import pytest
 
 import motion_envs  # noqa: F401  (registers the ids)
 from baselines.juggling_bench import v2
-from baselines.juggling_bench.cascade_v1 import CascadeV1Config, choose_late_offset, run_cascade_v1
+from baselines.juggling_bench.cascade_v1 import (
+    CascadeV1Config,
+    choose_late_offset,
+    report_cascade_v1,
+    run_cascade_v1,
+)
 from baselines.juggling_bench.cascade_v1 import choose_constant as cascade_constant
 from baselines.juggling_bench.cascade_v1 import choose_tracker as cascade_tracker
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
@@ -291,12 +296,37 @@ class CascadeTrackerSpy(CascadeSpy):
 def test_cascade_v1_chooses_the_tracker_on_validation_seeds() -> None:
     spy = CascadeTrackerSpy()
     config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    (lv,) = run_cascade_v1(config, spy.play, spy.chooser(choose_late_offset),
-                           spy.chooser(cascade_constant),
-                           tracker_chooser=spy.chooser(cascade_tracker))["levels"]  # fmt: skip
+    doc = run_cascade_v1(config, spy.play, spy.chooser(choose_late_offset),
+                         spy.chooser(cascade_constant),
+                         tracker_chooser=spy.chooser(cascade_tracker))  # fmt: skip
+    (lv,) = doc["levels"]
+    # its rival is the best OTHER row on validation (the late meeting, 12 catches)
+    assert lv["delay_tracker_minus"]["rival"] == "late_meeting"
+    assert lv["delay_tracker_minus"]["minus_rival"]["value"] == 0.0 - 2.0
+    assert "delay_tracker - late_meeting (the best other row, paired): -2.00" in (
+        report_cascade_v1(doc)
+    )
     during = [split for _, split, choosing in spy.calls if choosing]
     assert during == ["val"] * (len(v2.CONSTANT_GRID) + 7 + len(v2.TRACKER_GRID))
     assert lv["tracker"] == {"gain": 0.25, "offset_s": 0.04}
     assert lv["val_mean_catches"]["delay_tracker"] == 20.0
     assert lv["best_non_oracle"] == "delay_tracker"
     assert lv["rows"]["delay_tracker"]["catches_mean"] == 0.0  # the validation pair on test
+
+
+def test_the_reports_pair_the_tracker_with_its_rival() -> None:
+    spy = TrackerSpy()
+    config = v2.V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = v2.run_v2(config, spy.play, spy.chooser(v2.choose_constant),
+                    spy.chooser(v2.choose_offset), spy.chooser(v2.choose_tracker))  # fmt: skip
+    (lv,) = doc["levels"]
+    d = lv["delay_tracker_minus"]
+    # on validation the tracker and the delay estimator catch every toss; its rival is
+    # the best OTHER row (the delay estimator), which on test catches none
+    assert d["rival"] == "delay_estimator"
+    assert d["minus_rival"]["value"] == 0.0  # both catch nothing on test
+    mdc = lv["rows"]["mean_delay_catch"]["catch_rate"]
+    assert d["minus_mean_delay_catch"]["value"] == pytest.approx(0.0 - mdc)
+    assert "delay_tracker - delay_estimator (the best other row, paired): +0.000" in (
+        v2.report_v2(doc)
+    )

@@ -468,6 +468,9 @@ def run_cascade_v1(
                 ilc.evaluate("val", config.val_episodes).catches.mean()
             )
         best = max((r for r in ROWS if r in val_means), key=lambda r: val_means[r])
+        # the tracker's rival: the best other non-oracle row, chosen on validation too
+        rival = max((r for r in ROWS if r in val_means and r != "delay_tracker"),
+                    key=lambda r: val_means[r])  # fmt: skip
         played = {
             name: play(policy, _kwargs(level, config, ctl, off, gain), "test", config.episodes)
             # fresh players (no state is carried from the validation plays)
@@ -504,6 +507,13 @@ def run_cascade_v1(
                 "upper_is_upper": all(d["value"] >= 0 for d in above.values()),
                 "oracle_minus_best": _paired(played["oracle"], played[best]),
                 "best_minus_juggler": _paired(played[best], played["juggler"]),
+                "delay_tracker_minus": {
+                    "rival": rival,
+                    "minus_rival": _paired(played["delay_tracker"], played[rival]),
+                    "minus_mean_delay_catch": _paired(
+                        played["delay_tracker"], played["mean_delay_catch"]
+                    ),
+                },
             }
         )
         if ilc is not None:
@@ -604,6 +614,9 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         )
         val = ", ".join(f"{k} {v:.2f}" for k, v in lv.get("val_mean_catches", {}).items())
         lines.append(f"{lv['level']:7s} validation mean catches: {val}")
+        if "delay_tracker_minus" in lv:
+            trk_line = v2.tracker_line(lv["delay_tracker_minus"], "+.2f")
+            lines.append(f"{lv['level']:7s} {trk_line} (mean catches)")
         if "ilc" in lv:
             ilc = lv["ilc"]
             lines.append(

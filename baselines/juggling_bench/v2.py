@@ -120,6 +120,7 @@ __all__ = [
     "run_v2",
     "tracker_key",
     "tracker_kwargs",
+    "tracker_line",
     "write_v2",
 ]
 
@@ -403,6 +404,9 @@ def run_v2(
             ilc.train()
             val_catch["task_error_ilc"] = ilc.evaluate("val", config.val_episodes).catch_rate
         best = max((r for r in ROWS if r in val_catch), key=lambda r: val_catch[r])
+        # the tracker's rival: the best other non-oracle row, chosen on validation too
+        rival = max((r for r in ROWS if r in val_catch and r != "delay_tracker"),
+                    key=lambda r: val_catch[r])  # fmt: skip
         played = {
             name: play(
                 policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
@@ -444,6 +448,13 @@ def run_v2(
                 "oracle_catch_minus_rows": above,
                 "room_below_oracle": {"value": old[0], "ci": [old[1], old[2]]},
                 "oracle_minus_delay_estimator": {"value": est[0], "ci": [est[1], est[2]]},
+                "delay_tracker_minus": {
+                    "rival": rival,
+                    "minus_rival": _difference(played["delay_tracker"], played[rival]),
+                    "minus_mean_delay_catch": _difference(
+                        played["delay_tracker"], played["mean_delay_catch"]
+                    ),
+                },
             }
         )
     return {
@@ -511,6 +522,8 @@ def report_v2(doc: dict[str, Any]) -> str:
                 "interval above 0): "
                 + ("yes" if not below else f"no, not above {', '.join(below)}")
             )
+        if "delay_tracker_minus" in lv:
+            lines.append(f"{lv['level']:7s} {tracker_line(lv['delay_tracker_minus'])}")
         if "oracle_minus_delay_estimator" in lv:
             est = lv["oracle_minus_delay_estimator"]
             lines.append(
@@ -519,6 +532,21 @@ def report_v2(doc: dict[str, Any]) -> str:
             )
     lines.append(f"CPU {doc['timing']['cpu_s']:.1f} s")
     return "\n".join(lines)
+
+
+def tracker_line(d: dict[str, Any], fmt: str = "+.3f") -> str:
+    """The report's line of the tracker against its rival (the best other non-oracle row,
+    chosen on validation) and its base ``mean_delay_catch``, paired; ``fmt`` formats the
+    differences (catch rates here, mean catches on the cascades)."""
+    r, b = d["minus_rival"], d["minus_mean_delay_catch"]
+
+    def f(m: dict[str, Any]) -> str:
+        return f"{m['value']:{fmt}} [{m['ci'][0]:{fmt}}, {m['ci'][1]:{fmt}}]"
+
+    return (
+        f"delay_tracker - {d['rival']} (the best other row, paired): {f(r)}; "
+        f"delay_tracker - mean_delay_catch: {f(b)}"
+    )
 
 
 _LABELS = {
