@@ -29,18 +29,25 @@ Per level: the run at the median over the seeds of each difference and the valid
 pick (the lowest validation drops per catch), and the issue's targets in words: catch
 rate ``agent - best row >= +0.05`` with the interval above 0; mean catches, the interval
 of ``agent - best row`` above 0 (the issue gives its margin in catch rate only); the
-oracle above the agent (the room left reported). The hand deviation from held-out
-demonstrations is NOT measured for the cascades (:data:`DEVIATION_NOTE`), so the
-likeness target (deviation <= the juggler's + 5 mm) is reported as not measured.
+oracle above the agent (the room left reported); and the likeness target: the agent's
+hand deviation from the HELD-OUT SIMULATED cascade demonstrations
+(:func:`baselines.agents.cascade_score.cascade_agent_episodes` with ``deviation=True``:
+each hand in its own frame, per phase segment, the median over segments with a 95 %
+interval resampling test episodes; the bench rows' criterion,
+:func:`baselines.juggling_bench.cascade_v1.deviation_note`) at most the ``juggler`` row's
+plus :data:`~baselines.agents.against_rows.DEVIATION_SLACK_MM` (5 mm), per run and for
+the median of the seeds' deviations.
 
     python experiments/cascade_v1_agents.py [--levels medium hard] [--seeds 0 1 2]
         [--algo ppo] [--timesteps N] [--test-episodes 100] [--runs DIR] [--reuse-only]
         [--out results.json]
 
 Writes ``results.json`` (the rows, every run with its per-episode catches and seeds, the
-verdicts) and ``cascade_v1_agents.png`` (mean catches before the first drop against
-catch rate: the rows' points with their intervals, each seed's agent a star) beside it.
-The demonstrations (the likeness reward) are SIMULATED.
+verdicts), ``cascade_v1_agents.png`` (mean catches before the first drop against catch
+rate: the rows' points with their intervals, each seed's agent a star) and
+``cascade_v1_agents_deviation.png`` (the bench's plot, mean catches and catch rate
+against the hand deviation, with each seed's agent a star) beside it. The
+demonstrations (the likeness reward, the deviation's) are SIMULATED.
 """
 
 from __future__ import annotations
@@ -64,20 +71,14 @@ from baselines.juggling_bench.cascade_v1 import (
     CASCADE_V1_ENV_ID,
     UPPER_REFERENCE,
     CascadeV1Config,
+    deviation_note,
+    plot_cascade_v1,
     report_cascade_v1,
     row_summary,
     run_cascade_v1,
 )
 
 ENV = CASCADE_V1_ENV_ID
-#: Why the likeness target is not scored here.
-DEVIATION_NOTE = (
-    "not measured: neither the Cascade-v1 rows (baselines/juggling_bench/cascade_v1.py) nor "
-    "the agents' cascade scorer (baselines/agents/cascade_score.py) compute a hand deviation "
-    "from held-out demonstrations for the cascades (the env's likeness is a reward term "
-    "against the TRAINING demonstrations); the target deviation <= the juggler's + 5 mm is "
-    "not measured"
-)
 #: The two quantities compared: key in a run, words.
 QUANTITIES = {"mean_catches": "mean catches before the first drop", "catch_rate": "catch rate"}
 
@@ -125,8 +126,11 @@ def score_run(
     config: CascadeV1Config,
     args: argparse.Namespace,
     job: tuple[str, int],
+    juggler_mm: float = math.nan,
 ) -> dict[str, Any]:
-    """The kept policy of ``run_dir`` on the test seeds against the rows' episodes."""
+    """The kept policy of ``run_dir`` on the test seeds against the rows' episodes;
+    ``juggler_mm``: the ``juggler`` row's hand deviation (mm) on the same test seeds,
+    the likeness target's reference (NaN: not measured)."""
     from baselines.agents.cascade_score import cascade_agent_episodes, catch_rate_comparison
     from baselines.agents.rundir import load_run
     from baselines.stats import paired_mean_difference
@@ -134,7 +138,9 @@ def score_run(
     loaded = load_run(run_dir)
     shared.check_run(loaded, ENV, args.algo, *job)
     kwargs = scoring_kwargs(loaded, config)
-    eps = cascade_agent_episodes(loaded.policy(), ENV, kwargs, "test", config.episodes)
+    eps = cascade_agent_episodes(
+        loaded.policy(), ENV, kwargs, "test", config.episodes, deviation=True
+    )
     if eps.max_catches != config.max_catches:
         raise RuntimeError(f"the agent was scored with max_catches {eps.max_catches}")
     upper = played[UPPER_REFERENCE]
@@ -159,20 +165,24 @@ def score_run(
         out[key] = d.difference
         out[f"{key}_ci"] = list(d.ci95)
     out["differences"] = {key: d.to_dict() for key, d in diffs.items()}
+    agent = out["agent"]
+    out["deviation_mm"] = 1000 * agent.get("deviation_m", math.nan)
+    out["deviation_ci_mm"] = [1000 * v for v in agent.get("deviation_ci", [math.nan] * 2)]
+    out["juggler_deviation_mm"] = juggler_mm
     out["targets"] = targets(out)
     out["episodes"] = _episodes(eps)
     return out
 
 
 def targets(run: dict[str, Any]) -> dict[str, bool | None]:
-    """The issue's targets for one run (``likeness``: None, not measured)."""
+    """The issue's targets for one run (``likeness``: None when not measured)."""
     return {
         "catch_rate": shared.margin_met(
             run["minus_best_catch_rate"], run["minus_best_catch_rate_ci"]
         ),
         "mean_catches": run["minus_best_mean_catches_ci"][0] > 0,
         "oracle_above": run["oracle_minus_mean_catches"] > 0,
-        "likeness": None,
+        "likeness": shared.likeness_met(run["deviation_mm"], run["juggler_deviation_mm"]),
     }
 
 
@@ -182,6 +192,8 @@ def _pick(run: dict[str, Any]) -> dict[str, Any]:
         "seed": run["seed"],
         **{k: run[k] for k in keys},
         **{f"{k}_ci": run[f"{k}_ci"] for k in keys},
+        "deviation_mm": run["deviation_mm"],
+        "deviation_ci_mm": run["deviation_ci_mm"],
         "targets": run["targets"],
     }
 
@@ -191,8 +203,12 @@ def summarise_level(doc: dict[str, Any], runs: list[dict[str, Any]]) -> dict[str
     over the seeds and the validation pick."""
     lv = doc["levels"][0]
     median = {q: _pick(shared.median_run(runs, f"minus_best_{q}")) for q in QUANTITIES}
+    juggler = lv["rows"]["juggler"]
+    juggler_mm = 1000 * juggler.get("deviation_m", math.nan)
+    deviation_mm = float(np.median([r["deviation_mm"] for r in runs]))
     return {
         "level": lv["level"],
+        "pattern": doc["pattern"],
         "bench": lv,
         "best_non_oracle": lv["best_non_oracle"],
         "runs": runs,
@@ -207,7 +223,14 @@ def summarise_level(doc: dict[str, Any], runs: list[dict[str, Any]]) -> dict[str
             )
         },
         "validation_pick": _pick(shared.validation_pick(runs, "val_drops_per_catch")),
-        "deviation": DEVIATION_NOTE,
+        "deviation": {
+            "juggler_mm": juggler_mm,
+            "juggler_ci_mm": [1000 * v for v in juggler.get("deviation_ci", [math.nan] * 2)],
+            "median_over_seeds_mm": deviation_mm,
+            "target_mm": juggler_mm + shared.DEVIATION_SLACK_MM,
+            "median_met": shared.likeness_met(deviation_mm, juggler_mm),
+            "what": deviation_note(doc["pattern"]["name"]),
+        },
     }
 
 
@@ -220,9 +243,6 @@ def words(lv: dict[str, Any], n_seeds: int) -> str:
     each quantity, then the validation pick."""
     best = lv["best_non_oracle"]
 
-    def met(ok: bool) -> str:
-        return "met" if ok else "NOT met"
-
     def verdict(p: dict[str, Any], q: str) -> str:
         if q == "catch_rate":
             rule = f"target >= +{shared.MARGIN:.2f} with the interval above 0"
@@ -231,7 +251,7 @@ def words(lv: dict[str, Any], n_seeds: int) -> str:
             rule = "target: interval above 0; the issue's margin is in catch rate"
             digits = 2
         diff = _fmt(p, f"minus_best_{q}", digits)
-        return f"{QUANTITIES[q]} agent - {best} {diff} ({rule}: {met(p['targets'][q])})"
+        return f"{QUANTITIES[q]} agent - {best} {diff} ({rule}: {_met(p['targets'][q])})"
 
     med = lv["median"]
     room = med["mean_catches"]
@@ -243,8 +263,33 @@ def words(lv: dict[str, Any], n_seeds: int) -> str:
         f"{med['catch_rate']['seed']}]; {verdict(room, 'mean_catches')} [seed "
         f"{room['seed']}]; {above} (room in mean catches "
         f"{_fmt(room, 'oracle_minus_mean_catches', 2)}"
-        f"); hand deviation: {DEVIATION_NOTE}. Validation pick (seed {pick['seed']}): "
-        f"{verdict(pick, 'catch_rate')}; {verdict(pick, 'mean_catches')}"
+        f"); {likeness(lv)}. Validation pick (seed {pick['seed']}): "
+        f"{verdict(pick, 'catch_rate')}; {verdict(pick, 'mean_catches')}; hand deviation "
+        f"{_deviation(pick)} ({_met(pick['targets']['likeness'])})"
+    )
+
+
+def _met(ok: bool | None) -> str:
+    return "not measured" if ok is None else ("met" if ok else "NOT met")
+
+
+def _deviation(run: dict[str, Any]) -> str:
+    lo, hi = run["deviation_ci_mm"]
+    return f"{run['deviation_mm']:.1f} mm [{lo:.1f}, {hi:.1f}]"
+
+
+def likeness(lv: dict[str, Any]) -> str:
+    """The likeness target in words: the median over the seeds of the agents' hand
+    deviation against the juggler's plus the slack."""
+    d = lv["deviation"]
+    if d["median_met"] is None:
+        return f"hand deviation: {d['what']}"
+    lo, hi = d["juggler_ci_mm"]
+    return (
+        f"hand deviation from held-out demonstrations, median of the seeds "
+        f"{d['median_over_seeds_mm']:.1f} mm against the juggler's {d['juggler_mm']:.1f} mm "
+        f"[{lo:.1f}, {hi:.1f}] + {shared.DEVIATION_SLACK_MM:.0f} mm = {d['target_mm']:.1f} mm "
+        f"(target agent <= juggler + {shared.DEVIATION_SLACK_MM:.0f} mm: {_met(d['median_met'])})"
     )
 
 
@@ -252,18 +297,13 @@ def plot(levels: list[dict[str, Any]], algo: str) -> Any:
     """Mean catches before the first drop against catch rate, a panel per level: each row
     a point with its 95 % intervals, each seed's agent a star (the median seed's
     filled)."""
-    import matplotlib.pyplot as plt
-
-    from baselines.juggling_bench.cascade_v1 import ROWS
+    from baselines.juggling_bench.cascade_v1 import row_styles
     from baselines.plots import new_figure
 
     n = len(levels)
     fig = new_figure(5.4 * n, 5.6)
     axes = fig.subplots(1, n, squeeze=False)
-    # a marker and a colour of its own for each row (the default cycle repeats after 10)
-    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
-    tab20 = plt.get_cmap("tab20")  # its dark shades first (tab10), then the light ones
-    colors = {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
+    markers, colors = row_styles()
     for ax, lv in zip(axes[0], levels, strict=True):
         rows = lv["bench"]["rows"]
         points = [
@@ -299,6 +339,18 @@ def plot(levels: list[dict[str, Any]], algo: str) -> Any:
     return fig
 
 
+def deviation_plot(levels: list[dict[str, Any]], algo: str) -> Any:
+    """The bench's plot (:func:`plot_cascade_v1`: mean catches and catch rate against
+    the hand deviation, a point per row) with each seed's agent as a star."""
+    panels = []
+    for lv in levels:
+        rows = dict(lv["bench"]["rows"])
+        for r in lv["runs"]:
+            rows[f"{algo.upper()} agent, seed {r['seed']}"] = r["agent"]
+        panels.append({"level": lv["level"], "rows": rows})
+    return plot_cascade_v1({"pattern": levels[0]["pattern"], "levels": panels})
+
+
 def _print_level(lv: dict[str, Any], n_seeds: int) -> None:
     best = lv["best_non_oracle"]
     for r in lv["runs"]:
@@ -315,7 +367,8 @@ def _print_level(lv: dict[str, Any], n_seeds: int) -> None:
             f"{_fmt(r, 'minus_best_catch_rate')}"
             f" rate; oracle_catch - agent "
             f"{_fmt(r, 'oracle_minus_mean_catches', 2)}"
-            f" catches"
+            f" catches; hand deviation {_deviation(r)} (juggler "
+            f"{r['juggler_deviation_mm']:.1f} mm; {_met(r['targets']['likeness'])})"
         )
         for d in r["differences"].values():
             print(f"    {d['sentence']}; {d['power_line']}")
@@ -365,8 +418,9 @@ def main(argv: list[str] | None = None) -> int:
         doc, played = level_rows(level, config)
         print(report_cascade_v1(doc))
         best = doc["levels"][0]["best_non_oracle"]
+        juggler_mm = 1000 * doc["levels"][0]["rows"]["juggler"].get("deviation_m", math.nan)
         runs = [
-            score_run(runs_dirs[level, s], played, best, config, args, (level, s))
+            score_run(runs_dirs[level, s], played, best, config, args, (level, s), juggler_mm)
             for s in args.seeds
         ]
         lv = summarise_level(doc, runs)
@@ -382,7 +436,7 @@ def main(argv: list[str] | None = None) -> int:
         "max_catches": args.max_catches,
         "seeds": args.seeds,
         "timesteps": args.timesteps,
-        "deviation": DEVIATION_NOTE,
+        "deviation": deviation_note(args.pattern),
         "levels": levels,
         "machine": machine(),
         "cpu_s_scoring_and_training_in_process": time.process_time() - t0,
@@ -391,6 +445,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"wrote {shared.write_results(out_doc, out)}")
     figure = out.with_name("cascade_v1_agents.png")
     print(f"wrote {shared.save_plot(plot(levels, args.algo), figure)}")
+    if any(np.isfinite(r["deviation_mm"]) for lv in levels for r in lv["runs"]):
+        figure = out.with_name("cascade_v1_agents_deviation.png")
+        print(f"wrote {shared.save_plot(deviation_plot(levels, args.algo), figure)}")
     print_json(out_doc)
     return 0
 

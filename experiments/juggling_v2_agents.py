@@ -53,6 +53,7 @@ from baselines.agents.against_rows import (
     check_run,
     check_same_seeds,
     format_difference,
+    likeness_met,
     margin_met,
     median_run,
     run_fields,
@@ -144,7 +145,7 @@ def verdict(run: dict[str, Any], juggler_mm: float) -> dict[str, bool]:
     """The issue's three targets for one run."""
     return {
         "margin": margin_met(run["minus_best_row"], run["minus_best_row_ci"]),
-        "likeness": run["deviation_mm"] <= juggler_mm + DEVIATION_SLACK_MM,
+        "likeness": bool(likeness_met(run["deviation_mm"], juggler_mm)),
         "oracle_above": run["oracle_minus_agent"] > 0,
     }
 

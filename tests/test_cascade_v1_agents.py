@@ -62,18 +62,30 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root
 
 
-def _agent_episode(loaded: Any, kwargs: dict[str, Any], seed: int) -> tuple[int, int]:
+def _agent_episode(loaded: Any, kwargs: dict[str, Any], seed: int) -> tuple[int, int, list[float]]:
     """One episode of the kept policy through Gymnasium's FrameStackObservation (what
-    training saw), alone: (catches, tosses)."""
+    training saw), alone: (catches, tosses, the hands' segment deviations from the
+    held-out three-ball demonstrations)."""
+    from baselines.agents.cascade_score import (
+        cascade_demonstration_paths,
+        hand_segment_deviations,
+    )
+
     env = gym.wrappers.FlattenObservation(
         gym.wrappers.FrameStackObservation(gym.make(ENV, **kwargs), loaded.frame_stack)
     )
-    obs, _ = env.reset(seed=seed)
+    obs, info = env.reset(seed=seed)
+    infos = [info]
     while True:
         obs, _, terminated, truncated, info = env.step(loaded.predict(obs[None])[0])
+        infos.append(info)
         if terminated or truncated:
             env.close()
-            return int(info["catches"]), int(info["tosses"])
+            devs = hand_segment_deviations(
+                np.array([i["time"] for i in infos]), np.array([i["hands"] for i in infos]),
+                [i["phases"] for i in infos], cascade_demonstration_paths(3, "test"),
+            )  # fmt: skip
+            return int(info["catches"]), int(info["tosses"]), [d for *_, d in devs]
 
 
 #: The zero-action rows' controllers (the bench's module docstring), written out here.
@@ -129,8 +141,13 @@ def test_pipeline_pairs_the_agent_with_the_rows_on_the_test_seeds(
     loaded = load_run(runs / "medium-seed0")
     kwargs = {**loaded.env_kwargs, "max_catches": 3}
     alone = [_agent_episode(loaded, kwargs, s) for s in test_seeds]
-    assert [c for c, _ in alone] == run["episodes"]["catches"]
-    assert [t for _, t in alone] == run["episodes"]["tosses"]
+    assert [c for c, _, _ in alone] == run["episodes"]["catches"]
+    assert [t for _, t, _ in alone] == run["episodes"]["tosses"]
+    # its hand deviation: the median of these episodes' segments of both hands
+    segments = [d for *_, devs in alone for d in devs]
+    assert run["deviation_mm"] == pytest.approx(1000 * float(np.median(segments)))
+    lo, hi = run["deviation_ci_mm"]
+    assert lo <= run["deviation_mm"] <= hi
     # every difference is the paired one over these episodes
     a = np.array(run["episodes"]["catches"]), np.array(run["episodes"]["tosses"])
     b = np.array(lv["row_episodes"][best]["catches"]), np.array(lv["row_episodes"][best]["tosses"])
@@ -150,12 +167,18 @@ def test_pipeline_pairs_the_agent_with_the_rows_on_the_test_seeds(
         assert lo <= run[key] <= hi
     # the bench's own paired room (oracle_catch - best) from the same episodes
     assert lv["bench"]["room"]["value"] == pytest.approx(float(np.mean(o[0] - b[0])))
-    # the targets follow from the numbers; the likeness one is not measured, and says so
+    # the targets follow from the numbers; the likeness one against the juggler row's
+    # deviation on the same test episodes
     t = run["targets"]
     assert t["catch_rate"] == (run["minus_best_catch_rate"] >= 0.05
                                and run["minus_best_catch_rate_ci"][0] > 0)  # fmt: skip
     assert t["mean_catches"] == (run["minus_best_mean_catches_ci"][0] > 0)
-    assert t["likeness"] is None and "not measured" in doc["deviation"]
+    juggler_mm = 1000 * lv["bench"]["rows"]["juggler"]["deviation_m"]
+    assert run["juggler_deviation_mm"] == pytest.approx(juggler_mm)
+    assert t["likeness"] == (run["deviation_mm"] <= juggler_mm + 5.0)
+    assert lv["deviation"]["median_met"] == t["likeness"]  # one seed: its own
+    assert "held-out SIMULATED 3-ball" in doc["deviation"]
+    assert (tmp_path / "cascade_v1_agents_deviation.png").stat().st_size > 0
     assert lv["median"]["mean_catches"]["seed"] == lv["validation_pick"]["seed"] == 0
 
 

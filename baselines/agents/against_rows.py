@@ -17,13 +17,16 @@ same TEST seeds: what ``experiments/juggling_v2_agents.py`` (Juggling-v2) and
   verdict is on (the median over the seeds of a difference) and the run validation would
   pick (the lowest validation criterion);
 * :func:`margin_met`: the issue's target ``agent - best non-oracle row >=`` :data:`MARGIN`
-  with its 95 % interval above 0.
+  with its 95 % interval above 0; :func:`likeness_met`: its likeness target, the agent's
+  hand deviation from held-out demonstrations at most the juggler's plus
+  :data:`DEVIATION_SLACK_MM`.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -39,6 +42,7 @@ __all__ = [
     "check_run",
     "check_same_seeds",
     "format_difference",
+    "likeness_met",
     "margin_met",
     "median_run",
     "run_fields",
@@ -203,6 +207,16 @@ def validation_pick(runs: Sequence[dict[str, Any]], key: str) -> dict[str, Any]:
 def margin_met(difference: float, ci: Sequence[float], margin: float = MARGIN) -> bool:
     """The issue's target: ``difference >= margin`` and the interval's low end above 0."""
     return bool(difference >= margin and ci[0] > 0)
+
+
+def likeness_met(
+    deviation_mm: float, juggler_mm: float, slack_mm: float = DEVIATION_SLACK_MM
+) -> bool | None:
+    """The issue's likeness target: the agent's hand deviation (mm) at most the juggler's
+    plus ``slack_mm``; None when either is not measured (NaN)."""
+    if math.isnan(deviation_mm) or math.isnan(juggler_mm):
+        return None
+    return bool(deviation_mm <= juggler_mm + slack_mm)
 
 
 def format_difference(value: float, ci: Sequence[float], digits: int = 3) -> str:

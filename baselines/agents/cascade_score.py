@@ -238,13 +238,13 @@ class CascadeDeviations:
     def summary(self) -> dict[str, Any]:
         """The results' entry: ``deviation_m`` and its 95 % interval resampling episodes
         ``deviation_ci`` (seed 0), per hand ``deviation_hand_m`` (right, left), per
-        phase ``deviation_phase_m`` (medians; NaN for a phase without segments), the
+        phase ``deviation_phase_m`` (medians; None for a phase without segments), the
         segments scored and the demonstrations they were compared with."""
         dev, lo, hi = deviation_interval(self)
-        phases = dict.fromkeys(PHASES, math.nan)
-        for phase in phases:
+        phases: dict[str, float | None] = {}
+        for phase in PHASES:
             d = self.segment_deviation[self.segment_phase == phase]
-            phases[phase] = float(np.median(d)) if d.size else math.nan
+            phases[phase] = float(np.median(d)) if d.size else None
         return {
             "deviation_m": dev,
             "deviation_ci": [lo, hi],

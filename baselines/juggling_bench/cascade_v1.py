@@ -119,7 +119,10 @@ __all__ = [
     "choose_constant",
     "choose_late_offset",
     "choose_tracker",
+    "deviation_note",
+    "plot_cascade_v1",
     "report_cascade_v1",
+    "row_styles",
     "row_summary",
     "run_cascade_v1",
     "write_cascade_v1",
@@ -635,24 +638,31 @@ _PLOTTED = (
 )
 
 
+def row_styles() -> tuple[dict[str, str], dict[str, Any]]:
+    """A marker and a colour of its own for each row of :data:`ROWS` (the default
+    colour cycle repeats after 10: tab20's dark shades first, then its light ones)."""
+    import matplotlib.pyplot as plt
+
+    tab20 = plt.get_cmap("tab20")
+    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
+    return markers, {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
+
+
 def plot_cascade_v1(doc: dict[str, Any]) -> Any:
     """Mean catches before the first drop (top) and catch rate (bottom) against the hand
     deviation from the held-out demonstrations (log scale), one point per row with its
     95 % interval bars, a panel per level (matplotlib imported on call); a row not in
     :data:`ROWS` (an agent's, ``experiments/cascade_v1_agents.py``) is drawn as a star.
     Rows without a deviation are left out."""
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import ScalarFormatter
+    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
 
     from baselines.plots import new_figure
 
     levels = doc["levels"]
     n = len(levels)
-    fig = new_figure(5.0 * n, 8.4)
+    fig = new_figure(max(5.0 * n, 7.5), 8.6)
     axes = fig.subplots(2, n, squeeze=False, sharex="col")
-    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
-    tab20 = plt.get_cmap("tab20")  # its dark shades first (tab10), then the light ones
-    colors = {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
+    markers, colors = row_styles()
     seen: dict[str, Any] = {}
     for j, lv in enumerate(levels):
         for i, (key, ci_key, label) in enumerate(_PLOTTED):
@@ -669,7 +679,9 @@ def plot_cascade_v1(doc: dict[str, Any]) -> Any:
                                 label=_LABELS.get(name, name.replace("_", " ")))  # fmt: skip
                 seen.setdefault(name, h)
             ax.set_xscale("log")  # the trivial rows lie an order of magnitude away
+            ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
             ax.xaxis.set_major_formatter(ScalarFormatter())
+            ax.xaxis.set_minor_formatter(NullFormatter())
             ax.grid(alpha=0.3, which="both")
             if j == 0:
                 ax.set_ylabel(label)
@@ -677,8 +689,8 @@ def plot_cascade_v1(doc: dict[str, Any]) -> Any:
                              fontsize=10)  # fmt: skip
         axes[1][j].set_xlabel("hand deviation from held-out demonstrations (mm, log scale)")
     labels = [_LABELS.get(k, k.replace("_", " ")) for k in seen]
-    fig.legend(list(seen.values()), labels, fontsize=8, loc="outside lower center", ncol=4,
-               frameon=False)  # fmt: skip
+    fig.legend(list(seen.values()), labels, fontsize=8, loc="outside lower center",
+               ncol=4 if n > 1 else 3, frameon=False)  # fmt: skip
     fig.suptitle("demonstrations SIMULATED; bars: 95 % bootstrap intervals over test episodes",
                  fontsize=9)  # fmt: skip
     return fig
