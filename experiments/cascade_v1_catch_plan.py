@@ -1,24 +1,34 @@
-"""Choose Cascade-v1's catch-plan leads on TRAINING seeds only.
+"""Choose Cascade-v1's catch plans on TRAINING seeds only.
 
 For each catch-plan controller (``juggler_oracle_catch``, ``juggler_mean_delay_catch``;
-:data:`motion_envs.models.juggling.CASCADE_CATCH_PLANS`), each juggler (the fitted
-cascade juggler on pattern ``"3"``, the siteswap juggler on ``"5"``) and each lead of
-``CASCADE_LEAD_GRID`` (no descent: the view tells the ball ``lead`` s ahead, the
-hand waits), the controller alone (the zero action) plays ``--episodes`` TRAINING
-episodes (seeds ``SPLIT_SEEDS["train"] + i``; never a validation or test seed) of
-``MotionEnvs/Cascade-v1`` on each level, ``--max-catches`` catches at most. The lead with
-the most mean catches before the first drop pooled over the levels is the choice (ties:
-the smaller lead); ``CASCADE_CATCH_PLANS`` quotes it. Prints a table per controller and
-pattern and, as its last line, one JSON object (``--out FILE`` also writes it). The
-demonstrations are SIMULATED.
+:data:`motion_envs.models.juggling.CASCADE_CATCH_PLANS`) and each juggler, the
+controller alone (the zero action) plays ``--episodes`` TRAINING episodes (seeds
+``SPLIT_SEEDS["train"] + i``; never a validation or test seed) of ``MotionEnvs/Cascade-v1``
+on each level, ``--max-catches`` catches at most, for every candidate plan:
+
+* the fitted cascade juggler (pattern ``"3"``): each lead of ``CASCADE_LEAD_GRID``, no
+  descent (the view tells the ball ``lead`` s ahead, the hand waits);
+* the siteswap juggler (pattern ``"5"``): its own catch
+  (:class:`~motion_envs.models.juggling.SiteswapCatchController`), each pair of
+  ``CASCADE_LEAD_GRID`` x ``SITESWAP_DESCENT_GRID`` (the reach ends ``lead`` before the
+  meeting, the palm then descends at ``descent``).
+
+The plan with the most mean catches before the first drop pooled over the levels is the
+choice (ties: the first in grid order, the smaller lead, then the smaller descent);
+``CASCADE_CATCH_PLANS`` quotes it. On pattern ``"5"`` only ``juggler_oracle_catch``
+takes its choice (the competitor rows' rollouts stay as they were); the mean delay's
+grid is reported as a measurement of what the plan gives without the oracle's
+information. Prints a table per controller and pattern and, as its last line, one JSON
+object (``--out FILE`` also writes it). The demonstrations are SIMULATED.
 
     python experiments/cascade_v1_catch_plan.py [--episodes 12] [--max-catches 10]
-        [--patterns 3,5] [--out FILE]
+        [--patterns 3,5] [--controllers juggler_oracle_catch,...] [--out FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import time
 from dataclasses import replace
@@ -28,22 +38,44 @@ from tqdm import tqdm
 from motion_envs._io import atomic_write_text
 from motion_envs.datasets.juggling import SIMULATED_LABEL, episode_seeds
 from motion_envs.envs.juggling import CascadeV1Env
-from motion_envs.models.juggling import CASCADE_CATCH_PLANS, CASCADE_V1_LEVELS
+from motion_envs.models.juggling import (
+    CASCADE_CATCH_PLANS,
+    CASCADE_V1_LEVELS,
+    CatchPlan,
+    SiteswapCatchController,
+    SiteswapController,
+    pattern_spec,
+)
 from motion_envs.models.juggling._cascade_v1 import CASCADE_LEAD_GRID as LEAD_GRID
+from motion_envs.models.juggling._cascade_v1 import SITESWAP_DESCENT_GRID
+
+
+def candidates(pattern: str) -> list[CatchPlan]:
+    """The plans tried for ``pattern``'s juggler (module docstring), in grid order."""
+    if pattern_spec(pattern).fitted:
+        return [CatchPlan(lead, 0.0) for lead in LEAD_GRID]
+    return [CatchPlan(a, d) for a, d in itertools.product(LEAD_GRID, SITESWAP_DESCENT_GRID)]
 
 
 def score(
-    controller: str, pattern: str, lead: float, episodes: int, max_catches: int
+    controller: str, pattern: str, plan: CatchPlan, episodes: int, max_catches: int
 ) -> dict[str, float]:
     """Per level the mean catches before the first drop of ``episodes`` TRAINING episodes
-    with the catch plan's lead set to ``lead``."""
+    with the catch plan ``plan``."""
     out = {}
     for level in CASCADE_V1_LEVELS:
         env = CascadeV1Env(level=level, pattern=pattern, controller=controller,
                            max_catches=max_catches)  # fmt: skip
-        assert env.catch_plan is not None
-        env.catch_plan = replace(env.catch_plan, lead=lead)  # the candidate
-        env.view.lead = lead
+        if env.pattern.fitted:
+            assert env.catch_plan is not None
+            env.catch_plan = replace(env.catch_plan, lead=plan.lead)  # the candidate
+            env.view.lead = plan.lead
+        else:  # the siteswap juggler's own catch, the view untouched
+            assert isinstance(env.controller, SiteswapController)
+            env.controller = SiteswapCatchController(
+                env.controller.plan, plan, env.controller.variant
+            )
+            env.catch_plan = plan
         catches = [env.play(int(seed))[0] for seed in episode_seeds("train", episodes).tolist()]
         out[level] = sum(catches) / len(catches)
     return out
@@ -54,6 +86,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=12)
     parser.add_argument("--max-catches", type=int, default=10)
     parser.add_argument("--patterns", default="3,5")
+    parser.add_argument("--controllers", default=",".join(CASCADE_CATCH_PLANS))
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     if args.episodes < 1 or args.max_catches < 1:
@@ -62,29 +95,35 @@ def main() -> None:
     patterns = args.patterns.split(",")
     doc: dict[str, object] = {"demonstrations": SIMULATED_LABEL, "split": "train",
                               "patterns": patterns, "leads_s": list(LEAD_GRID),
+                              "siteswap_descents_m_s": list(SITESWAP_DESCENT_GRID),
                               "episodes_per_level": args.episodes,
                               "max_catches": args.max_catches, "results": {}}  # fmt: skip
-    for controller in CASCADE_CATCH_PLANS:
+    for controller in args.controllers.split(","):
+        if controller not in CASCADE_CATCH_PLANS:
+            parser.error(f"--controllers: {controller!r} has no catch plan")
         for pattern in patterns:
             rows = []
-            best, best_mean = LEAD_GRID[0], -1.0
-            for lead in tqdm(LEAD_GRID, desc=f"{controller} {pattern}"):
-                levels = score(controller, pattern, lead, args.episodes, args.max_catches)
+            best, best_mean = candidates(pattern)[0], -1.0
+            for plan in tqdm(candidates(pattern), desc=f"{controller} {pattern}"):
+                levels = score(controller, pattern, plan, args.episodes, args.max_catches)
                 pooled = sum(levels.values()) / len(levels)
-                rows.append({"lead_s": lead, "pooled": pooled, "levels": levels})
+                rows.append({"lead_s": plan.lead, "descent_m_s": plan.descent,
+                             "pooled": pooled, "levels": levels})  # fmt: skip
                 if pooled > best_mean:
-                    best, best_mean = lead, pooled
+                    best, best_mean = plan, pooled
             print(f"\n{controller}, pattern {pattern} (TRAINING seeds, {args.episodes} per level;"
                   " mean catches before the first drop)")  # fmt: skip
-            print(
-                f"{'lead s':>7s} {'pooled':>7s} " + " ".join(f"{k:>7s}" for k in CASCADE_V1_LEVELS)
-            )
+            head = " ".join(f"{k:>7s}" for k in CASCADE_V1_LEVELS)
+            print(f"{'lead s':>7s} {'descent':>7s} {'pooled':>7s} {head}")
             for r in rows:
                 lv = " ".join(f"{r['levels'][k]:7.2f}" for k in CASCADE_V1_LEVELS)
-                print(f"{r['lead_s']:7.2f} {r['pooled']:7.2f} {lv}")
-            print(f"choice: lead {best} s (pooled {best_mean:.2f})")
+                print(f"{r['lead_s']:7.2f} {r['descent_m_s']:7.2f} {r['pooled']:7.2f} {lv}")
+            print(
+                f"choice: lead {best.lead} s, descent {best.descent} m/s (pooled {best_mean:.2f})"
+            )
             key = f"{controller} {pattern}"
-            doc["results"][key] = {"grid": rows, "choice": {"lead_s": best, "pooled": best_mean}}  # type: ignore[index]
+            choice = {"lead_s": best.lead, "descent_m_s": best.descent, "pooled": best_mean}
+            doc["results"][key] = {"grid": rows, "choice": choice}  # type: ignore[index]
     doc["cpu_s"] = time.process_time() - t0
     if args.out:
         atomic_write_text(args.out, json.dumps(doc, indent=2) + "\n")

@@ -1,8 +1,9 @@
 """Cascade-v1's catch plan (``juggler_oracle_catch``, ``juggler_mean_delay_catch``): the
 view tells each flying ball ``lead`` s ahead, so the juggler's reach ends ``lead`` early
 at the meeting point (hand-worked flights; scipy's drag flight for the oracle's
-matching); the controllers' leads are the declared ones; the choice of the leads plays
-TRAINING seeds only (a spy on the experiment)."""
+matching); the controllers' leads are the declared ones; the choice of the plans plays
+TRAINING seeds only (a spy on the experiment; the siteswap juggler's own catch in
+``tests/test_cascade_v1_siteswap_catch.py``)."""
 
 from __future__ import annotations
 
@@ -23,9 +24,10 @@ from motion_envs.models.juggling import (
     CameraFrame,
     CascadeBallView,
     CatchPlan,
+    SiteswapCatchController,
     catch_plan,
 )
-from motion_envs.models.juggling._cascade_v1 import CASCADE_LEAD_GRID
+from motion_envs.models.juggling._cascade_v1 import CASCADE_LEAD_GRID, SITESWAP_DESCENT_GRID
 
 
 def test_a_just_thrown_ball_is_told_lead_ahead_hand_worked() -> None:
@@ -113,16 +115,19 @@ def test_the_oracle_plan_reaches_the_drag_crossing_lead_early() -> None:
 
 @pytest.mark.parametrize("pattern", ["3", "5"])
 def test_the_controllers_carry_their_declared_leads(pattern: str) -> None:
+    """The fitted juggler's plans are told through the view (``lead``, no descent); the
+    siteswap juggler's are its controller's own (the view's lead 0;
+    ``tests/test_cascade_v1_siteswap_catch.py``)."""
     fitted = pattern == "3"
     for name in CASCADE_V1_CONTROLLERS:
         env = CascadeV1Env(level="easy", pattern=pattern, controller=name, max_catches=2)
         plan = catch_plan(name, fitted)
         # the delay tracker is the mean-delay catch plan with its delay corrected
         base = "juggler_mean_delay_catch" if name == "juggler_delay_tracker" else name
-        if base in CASCADE_CATCH_PLANS:
+        if base in CASCADE_CATCH_PLANS and plan is not None:
             assert plan is CASCADE_CATCH_PLANS[base]["fitted" if fitted else "siteswap"]
-            assert env.view.lead == plan.lead and plan.descent == 0.0
-            assert plan.lead in CASCADE_LEAD_GRID
+            assert env.view.lead == (plan.lead if fitted else 0.0)
+            assert plan.lead in CASCADE_LEAD_GRID and (plan.descent == 0.0 or not fitted)
             assert env.view.estimators[0].mode == CASCADE_V1_CONTROLLERS[name][1]
         else:
             assert plan is None and env.view.lead == 0.0
@@ -152,21 +157,35 @@ def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyP
         asked.append(split)
         return episode_seeds(split, n)
 
-    played: list[tuple[int, float]] = []
+    played: list[tuple[int, Any]] = []
 
     def play(self: CascadeV1Env, seed: int) -> tuple[int, int, bool, float]:
-        played.append((seed, self.view.lead))
+        if self.pattern.fitted:
+            played.append((seed, self.view.lead))
+        else:  # the siteswap juggler's own catch, the view untouched
+            assert isinstance(self.controller, SiteswapCatchController)
+            assert self.view.lead == 0.0
+            played.append((seed, self.controller.catch))
         return 1, 2, True, 1.0
 
     monkeypatch.setattr(module, "episode_seeds", seeds)
     monkeypatch.setattr(CascadeV1Env, "play", play)
-    got = module.score("juggler_oracle_catch", "3", 0.06, 3, 2)
-    assert asked == ["train"] * 3 and got == {"easy": 1.0, "medium": 1.0, "hard": 1.0}
     train = SPLIT_SEEDS["train"]
-    assert {s for s, _ in played} == {train, train + 1, train + 2}
-    assert {lead for _, lead in played} == {0.06}
     others = [SPLIT_SEEDS[k] for k in SPLIT_SEEDS if k != "train"]
-    assert all(not (o <= s < o + 3) for s, _ in played for o in others)
+    for pattern, plan, told in (
+        ("3", CatchPlan(0.06, 0.0), 0.06),
+        ("5", CatchPlan(0.1, 1.5), CatchPlan(0.1, 1.5)),
+    ):
+        asked.clear()
+        played.clear()
+        got = module.score("juggler_oracle_catch", pattern, plan, 3, 2)
+        assert asked == ["train"] * 3 and got == {"easy": 1.0, "medium": 1.0, "hard": 1.0}
+        assert {s for s, _ in played} == {train, train + 1, train + 2}
+        assert {t for _, t in played} == {told}
+        assert all(not (o <= s < o + 3) for s, _ in played for o in others)
+    grid = module.candidates("5")
+    assert len(grid) == len(CASCADE_LEAD_GRID) * len(SITESWAP_DESCENT_GRID)
+    assert module.candidates("3") == [CatchPlan(a, 0.0) for a in CASCADE_LEAD_GRID]
 
 
 @pytest.mark.parametrize("pattern", ["3", "5"])

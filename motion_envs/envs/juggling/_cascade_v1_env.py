@@ -109,11 +109,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     (the true delay and each ball's true drag; a reference, labelled as upper only where
     measured above the others) and
     ``fixed_point`` (catches at the nominal point and time, never looking: trivial),
-    and Juggling-v2's catch planned for the capture rule on the oracle's and on the
-    mean delay's estimates (``juggler_oracle_catch``, ``juggler_mean_delay_catch``:
-    each flying ball told as it will be the plan's ``lead`` later, so the catch reach
-    ends ``lead`` early at the meeting point and the hand waits there;
-    :data:`~motion_envs.models.juggling.CASCADE_CATCH_PLANS`, chosen on training seeds),
+    and Juggling-v2's catch planned for the capture rule (``juggler_oracle_catch``,
+    ``juggler_mean_delay_catch``; fitted juggler: each ball told ``lead`` ahead, so the
+    reach ends early and the hand waits; siteswap juggler: the oracle's own reach
+    ending ``lead`` early, :class:`~motion_envs.models.juggling.SiteswapCatchController`,
+    the mean delay's none; :data:`~motion_envs.models.juggling.CASCADE_CATCH_PLANS`),
     and ``juggler_delay_tracker``: the mean-delay catch plan whose one delay (one
     person) is corrected after every catch from that catch's timing error,
     ``D <- clip(D - k (e - delay_offset))`` over the level's delay range, told ``D +
@@ -271,13 +271,14 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.gravity = 9.81
         self.task = JugglingTask(gravity=self.gravity)
         variant, mode = CASCADE_V1_CONTROLLERS[self.controller_name]
+        #: the controller's catch plan (``*_catch`` controllers), else None
+        plan = self.catch_plan = catch_plan(self.controller_name, self.pattern.fitted)
+        own = None if self.pattern.fitted else plan  # the siteswap juggler's own catch
         self.controller: CascadeController | SiteswapController = pattern_controller(
-            self.pattern, variant, self.gravity
+            self.pattern, variant, self.gravity, catch=own
         )
         self.home = self.controller.home
-        #: the controller's catch plan (``*_catch`` controllers), else None
-        self.catch_plan = catch_plan(self.controller_name, self.pattern.fitted)
-        lead = 0.0 if self.catch_plan is None else self.catch_plan.lead
+        lead = plan.lead if plan is not None and own is None else 0.0  # told ahead
         tracker = None
         if self.controller_name == "juggler_delay_tracker":
             tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)

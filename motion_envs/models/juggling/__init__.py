@@ -94,6 +94,7 @@ from motion_envs.models.juggling._cascade_siteswap import (
     siteswap_demonstrations,
     siteswap_reasons,
 )
+from motion_envs.models.juggling._cascade_siteswap_catch import SiteswapCatchController
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
 from motion_envs.models.juggling._cascade_v1 import (
     CASCADE_CATCH_PLANS,
@@ -290,6 +291,7 @@ __all__ = [
     "PatternSummary",
     "PhaseFit",
     "PooledReleaseEstimator",
+    "SiteswapCatchController",
     "SiteswapController",
     "SiteswapPlan",
     "SiteswapStyle",

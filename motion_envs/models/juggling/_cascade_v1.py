@@ -27,19 +27,34 @@ noise, the drag range, the toss scatter, the capture speed); ``drift`` is not of
 
 **The catch plan** (``juggler_oracle_catch``, ``juggler_mean_delay_catch``;
 :data:`CASCADE_CATCH_PLANS`): Juggling-v2's catch planned for the capture rule
-(:class:`~motion_envs.models.juggling.CatchPlan`; its lead only, ``descent = 0``: the
-hand arrives early and waits), given to the pattern's juggler through the view: each
-flying ball is told as it will be ``lead`` s later (its estimated state at ``now +
-lead``; before 3 frames its release flight at ``now + lead``). The juggler, which
-plans its palm AT the told ball at its catch time ``t_c``, so ends its catch reach at
-the point the ball reaches at ``t_c + lead``: ``lead`` early, where it waits while the
-ball falls in (the planned meeting at the ball's own speed,
-:meth:`~motion_envs.models.juggling.CatchPlan.meeting_speed` with no descent, instead
-of the palm rushing up into the ball). The lead is chosen per juggler (the fitted
-cascade juggler's on pattern ``"3"``, the siteswap juggler's on ``"5"``) on TRAINING
-seeds by ``experiments/cascade_v1_catch_plan.py`` from :data:`CASCADE_LEAD_GRID`
-(Juggling-v2's grid in the 20 ms steps of Cascade-v1's late-meeting offsets, declared
-before the run).
+(:class:`~motion_envs.models.juggling.CatchPlan`), per juggler:
+
+* **the fitted cascade juggler** (pattern ``"3"``; its lead only, ``descent = 0``: the
+  hand arrives early and waits), given through the view: each flying ball is told as it
+  will be ``lead`` s later (its estimated state at ``now + lead``; before 3 frames its
+  release flight at ``now + lead``). The juggler, which plans its palm AT the told ball
+  at its catch time ``t_c``, so ends its catch reach at the point the ball reaches at
+  ``t_c + lead``: ``lead`` early, where it waits while the ball falls in (the planned
+  meeting at the ball's own speed,
+  :meth:`~motion_envs.models.juggling.CatchPlan.meeting_speed` with no descent, instead
+  of the palm rushing up into the ball);
+* **the siteswap juggler** (pattern ``"5"``): its own catch,
+  :class:`~motion_envs.models.juggling.SiteswapCatchController` (the view tells the
+  ball as it is): the meeting time chosen on the ball's flight, the reach ending
+  ``lead`` before it ``descent lead`` above the meeting point, never re-planned in its
+  last periods, then the palm descending at ``descent`` (at rest for 0) while the ball
+  falls in. Telling the siteswap juggler the ball ``lead`` ahead does not make it wait
+  (it moves the whole intercept, and past it the hand follows the told ball down,
+  ``lead`` below it): no lead helped it on training seeds (2026-12-06). Only
+  ``juggler_oracle_catch`` has this plan; ``juggler_mean_delay_catch`` on the siteswap
+  juggler has none (None in :data:`CASCADE_CATCH_PLANS`: it IS
+  ``juggler_mean_delay``, as before).
+
+The plans are chosen per juggler on TRAINING seeds by
+``experiments/cascade_v1_catch_plan.py``: the fitted juggler's lead from
+:data:`CASCADE_LEAD_GRID` (Juggling-v2's grid in the 20 ms steps of Cascade-v1's
+late-meeting offsets, declared before the run), the siteswap juggler's lead and descent
+from :data:`CASCADE_LEAD_GRID` x :data:`SITESWAP_DESCENT_GRID` (declared before its run).
 
 The oracle knows the drag: the juggler predicts ballistically, so it is handed the
 EQUIVALENT ballistic state, the velocity whose ballistic flight reaches, when the drag
@@ -84,6 +99,7 @@ __all__ = [
     "CASCADE_LEAD_GRID",
     "CASCADE_V1_CONTROLLERS",
     "CASCADE_V1_LEVELS",
+    "SITESWAP_DESCENT_GRID",
     "CascadeBallView",
     "PooledReleaseEstimator",
     "catch_height",
@@ -108,6 +124,9 @@ CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
 }
 #: s; the leads tried on training seeds (0-160 ms in 20 ms steps).
 CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9))
+#: m/s; the descents tried with each lead for the siteswap juggler's own catch
+#: (Juggling-v2's ``DESCENT_GRID``, declared before the run).
+SITESWAP_DESCENT_GRID: tuple[float, ...] = (0.0, 0.5, 1.0, 1.5)
 #: The catch-plan controllers' plans per juggler (``"fitted"``: the fitted cascade
 #: juggler, pattern ``"3"``; ``"siteswap"``: the siteswap juggler), chosen on TRAINING
 #: seeds (module docstring; 12 training episodes per level, at most 10 catches, mean
@@ -117,12 +136,9 @@ CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9
 #: (oracle 3.64, then 2.92 at 20 ms and at most 1.19 beyond; mean delay 4.19, then 2.86):
 #: no lead helps it, so on pattern ``"5"`` the catch-plan controllers ARE
 #: ``juggler_oracle`` and ``juggler_mean_delay``.
-CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan]] = {
+CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan | None]] = {
     "juggler_oracle_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": CatchPlan(0.0, 0.0)},
-    "juggler_mean_delay_catch": {
-        "fitted": CatchPlan(0.02, 0.0),
-        "siteswap": CatchPlan(0.0, 0.0),
-    },
+    "juggler_mean_delay_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": None},
 }
 #: s, the step and the horizon of the oracle's search for the catch-height crossing.
 _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
@@ -130,7 +146,8 @@ _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
 
 def catch_plan(name: str, fitted: bool) -> CatchPlan | None:
     """Controller ``name``'s catch plan for the fitted cascade juggler (``fitted``) or the
-    siteswap juggler (:data:`CASCADE_CATCH_PLANS`), None for a controller without one."""
+    siteswap juggler (:data:`CASCADE_CATCH_PLANS`), None for a controller without one
+    (on that juggler)."""
     # the delay tracker is the mean-delay catch plan with its delay corrected per catch
     base = "juggler_mean_delay_catch" if name == "juggler_delay_tracker" else name
     plans = CASCADE_CATCH_PLANS.get(base)

@@ -63,9 +63,11 @@ from motion_envs.models.juggling._cascade_siteswap import (
     siteswap_demonstrations,
     siteswap_reasons,
 )
+from motion_envs.models.juggling._cascade_siteswap_catch import SiteswapCatchController
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
 from motion_envs.models.juggling._fit import FIT_SEED, FIT_TEST_FRACTION
 from motion_envs.models.juggling._levels import CONTROLLERS, HumanLikeness
+from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = [
     "PATTERNS",
@@ -300,10 +302,13 @@ def pattern_controller(
     latency: float = 0.0,
     dwell_ratio: float | None = None,
     tunables: CascadeTunables | SiteswapStyle | None = None,
+    catch: CatchPlan | None = None,
 ) -> CascadeController | SiteswapController:
     """The reference controller ``name`` (one of ``CONTROLLERS``) playing ``spec`` at
     ``gravity`` with the sensor's ``latency`` (s), at ``dwell_ratio`` (None: the spec's)
-    with ``tunables`` (None: the spec's; of the spec's juggler's kind)."""
+    with ``tunables`` (None: the spec's; of the spec's juggler's kind); ``catch``: the
+    siteswap juggler's catch plan (:class:`SiteswapCatchController`; None: the juggler's
+    own catch; refused for the fitted juggler, whose plan the view carries)."""
     if name not in CONTROLLERS:
         raise ValueError(f"controller must be one of {list(CONTROLLERS)}; got {name!r}")
     t = spec.tunables if tunables is None else tunables
@@ -314,8 +319,12 @@ def pattern_controller(
         )
     r = spec.dwell_ratio if dwell_ratio is None else float(dwell_ratio)
     if isinstance(t, CascadeTunables):
+        if catch is not None:
+            raise ValueError(f"catch must be None for the fitted juggler (pattern {spec.name!r})")
         return make_cascade_controller(name, cascade_fit(gravity, spec.balls), latency, r, t)
     own = PatternSpec(spec.name, spec.siteswap, r, spec.note, t)
+    if catch is not None:
+        return SiteswapCatchController(pattern_plan(own, gravity), catch, name, latency)
     return SiteswapController(pattern_plan(own, gravity), name, latency)
 
 
