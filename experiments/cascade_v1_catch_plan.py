@@ -22,7 +22,11 @@ information. Prints a table per controller and pattern and, as its last line, on
 object (``--out FILE`` also writes it). The demonstrations are SIMULATED.
 
     python experiments/cascade_v1_catch_plan.py [--episodes 12] [--max-catches 10]
-        [--patterns 3,5] [--controllers juggler_oracle_catch,...] [--out FILE]
+        [--patterns 3,5] [--controllers juggler_oracle_catch,...] [--leads 0.1,0.12]
+        [--out FILE]
+
+``--leads`` plays a part of the lead grid (a run split over processes; the choice is
+then the best of the parts' JSON, ``choose_from`` below).
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ import itertools
 import json
 import time
 from dataclasses import replace
+from typing import Any
 
 from tqdm import tqdm
 
@@ -50,11 +55,12 @@ from motion_envs.models.juggling._cascade_v1 import CASCADE_LEAD_GRID as LEAD_GR
 from motion_envs.models.juggling._cascade_v1 import SITESWAP_DESCENT_GRID
 
 
-def candidates(pattern: str) -> list[CatchPlan]:
-    """The plans tried for ``pattern``'s juggler (module docstring), in grid order."""
+def candidates(pattern: str, leads: tuple[float, ...] = LEAD_GRID) -> list[CatchPlan]:
+    """The plans tried for ``pattern``'s juggler (module docstring), in grid order, with
+    the leads ``leads`` (a part of the grid: a run split over processes)."""
     if pattern_spec(pattern).fitted:
-        return [CatchPlan(lead, 0.0) for lead in LEAD_GRID]
-    return [CatchPlan(a, d) for a, d in itertools.product(LEAD_GRID, SITESWAP_DESCENT_GRID)]
+        return [CatchPlan(lead, 0.0) for lead in leads]
+    return [CatchPlan(a, d) for a, d in itertools.product(leads, SITESWAP_DESCENT_GRID)]
 
 
 def score(
@@ -81,20 +87,40 @@ def score(
     return out
 
 
+def choose_from(parts: list[dict[str, Any]], key: str) -> dict[str, Any]:
+    """The choice over the parts of a split run (their JSON documents; ``key`` e.g.
+    ``"juggler_oracle_catch 5"``): the grid rows of every part in grid order (smaller
+    lead, then smaller descent), the one with the most pooled mean catches the choice
+    (ties: the first)."""
+    rows = sorted(
+        (r for doc in parts for r in doc["results"][key]["grid"]),
+        key=lambda r: (r["lead_s"], r.get("descent_m_s", 0.0)),
+    )
+    best = rows[0]
+    for r in rows[1:]:
+        if r["pooled"] > best["pooled"]:
+            best = r
+    return {"grid": rows, "choice": best}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=12)
     parser.add_argument("--max-catches", type=int, default=10)
     parser.add_argument("--patterns", default="3,5")
     parser.add_argument("--controllers", default=",".join(CASCADE_CATCH_PLANS))
+    parser.add_argument("--leads", default=None, help="a part of the lead grid (s, comma list)")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     if args.episodes < 1 or args.max_catches < 1:
         parser.error("--episodes and --max-catches must be >= 1")
     t0 = time.process_time()
     patterns = args.patterns.split(",")
+    leads = LEAD_GRID if args.leads is None else tuple(float(x) for x in args.leads.split(","))
+    if not set(leads) <= set(LEAD_GRID):
+        parser.error(f"--leads must be among {list(LEAD_GRID)}; got {list(leads)}")
     doc: dict[str, object] = {"demonstrations": SIMULATED_LABEL, "split": "train",
-                              "patterns": patterns, "leads_s": list(LEAD_GRID),
+                              "patterns": patterns, "leads_s": list(leads),
                               "siteswap_descents_m_s": list(SITESWAP_DESCENT_GRID),
                               "episodes_per_level": args.episodes,
                               "max_catches": args.max_catches, "results": {}}  # fmt: skip
@@ -103,8 +129,9 @@ def main() -> None:
             parser.error(f"--controllers: {controller!r} has no catch plan")
         for pattern in patterns:
             rows = []
-            best, best_mean = candidates(pattern)[0], -1.0
-            for plan in tqdm(candidates(pattern), desc=f"{controller} {pattern}"):
+            grid = candidates(pattern, leads)
+            best, best_mean = grid[0], -1.0
+            for plan in tqdm(grid, desc=f"{controller} {pattern}"):
                 levels = score(controller, pattern, plan, args.episodes, args.max_catches)
                 pooled = sum(levels.values()) / len(levels)
                 rows.append({"lead_s": plan.lead, "descent_m_s": plan.descent,

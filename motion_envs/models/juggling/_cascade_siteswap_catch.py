@@ -35,21 +35,13 @@ ball's point, not moving with ``catch_follow`` of its velocity.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from motion_envs._typing import FloatArray
 from motion_envs.geometry.minimum_jerk import quintic
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_siteswap import SiteswapPlan, peak
-from motion_envs.models.juggling._cascade_siteswap_control import (
-    INTERCEPT_CANDIDATES,
-    MIN_CARRY,
-    MIN_CATCH_HEIGHT,
-    SiteswapController,
-    _Hand,
-)
+from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController, _Hand
 from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = ["FREEZE", "SiteswapCatchController", "meeting_point"]
@@ -96,42 +88,30 @@ class SiteswapCatchController(SiteswapController):
         d, lead = self.catch.descent, self.catch.lead
         return m + np.array((0.0, d * lead)), np.array((0.0, -d)), m
 
-    def _choose(self, hand: _Hand, ball: tuple[float, FloatArray, FloatArray], t: float) -> float:
-        """The meeting time: the juggler's choice (:meth:`SiteswapController._choose`,
-        falling, within its height band and window) with the reach ending ``lead``
-        before it, at least 4 periods from now."""
-        plan, tm = self.plan, self.plan.timing
-        lead, dt = self.catch.lead, self.task.dt
-        h = tm.value(tm.source(hand.landing))
-        t_nom = plan.time(hand.landing) - tm.hold(h)
-        vacant = 2.0 * plan.beat - tm.hold(h)
-        nxt = self._next_release(hand.landing)
-        t_rel = plan.time(nxt)
-        lo = max(t + 4 * dt + lead, t_nom - 0.5 * vacant)
-        hi = min(t_nom + 0.5 * tm.hold(h), t_rel - MIN_CARRY * tm.hold(h))
-        g, floor = self.task.gravity, self.task.floor_z + MIN_CATCH_HEIGHT
-        z_c = plan.catch_point(h)[1]
-        low = max(floor, z_c - plan.style.catch_below)
-        high = z_c + plan.style.catch_above
-        p0, v0, a0 = hand.state(t)
-        rel = plan.release_state(tm.value(nxt))
-        best, best_t = math.inf, math.nan
-        for ts in np.linspace(lo, hi, INTERCEPT_CANDIDATES) if hi > lo else []:
-            m, vm = meeting_point(ball, float(ts), g)
-            if vm[1] >= 0 or not low <= m[1] <= high:
-                continue
-            e, ve, _ = self._reach(hand, ball, float(ts))
-            d1, d2 = float(ts) - lead - t, t_rel - float(ts)
-            cost = peak(quintic(p0, v0, a0, e, ve, np.zeros(2), d1), d1, 2)
-            cost += peak(quintic(m, ve, np.zeros(2), *rel, d2), d2, 2)
-            if cost < best:
-                best, best_t = cost, float(ts)
-        if math.isnan(best_t):  # no candidate: where it falls through the catch height
-            t_b, p_b, v_b = ball
-            disc = v_b[1] ** 2 + 2.0 * g * (p_b[1] - z_c)
-            best_t = t_b + (v_b[1] + math.sqrt(max(disc, 0.0))) / g
-            best_t = max(best_t, t + 4 * dt + lead)
-        return best_t
+    @property
+    def reach_lead(self) -> float:  # type: ignore[override]
+        """s, the reach ends the plan's ``lead`` before the meeting it chooses."""
+        return self.catch.lead
+
+    def _cost(
+        self,
+        hand: _Hand,
+        ball: tuple[float, FloatArray, FloatArray],
+        ts: float,
+        t: float,
+        now: tuple[FloatArray, FloatArray, FloatArray],
+        rel: tuple[FloatArray, FloatArray, FloatArray],
+        t_rel: float,
+    ) -> float:
+        """A meeting at ``ts``'s cost (:meth:`SiteswapController._choose`'s, the juggler's
+        window, height band and fallback, the reach ending ``lead`` early): the reach's
+        (to ``E`` at ``ts - lead``) and the carry's (from ``M`` moving at ``(0,
+        -descent)``) peak accelerations summed."""
+        e, ve, m = self._reach(hand, ball, ts)
+        d1, d2 = ts - self.catch.lead - t, t_rel - ts
+        cost = peak(quintic(*now, e, ve, np.zeros(2), d1), d1, 2)
+        cost += peak(quintic(m, ve, np.zeros(2), *rel, d2), d2, 2)
+        return cost
 
     def _vacant(self, hand: _Hand, state: CascadeState) -> None:
         """The reach to ``E`` by ``t_e``, re-planned until :data:`FREEZE` periods before

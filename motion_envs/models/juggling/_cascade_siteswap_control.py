@@ -121,6 +121,9 @@ class SiteswapController:
     #: The native vector env runs this controller in Python (its compiled events are the
     #: fitted cascade juggler's).
     compiled_events = False
+    #: s the reach ends before the intercept it chooses (0; a catch plan's lead,
+    #: :class:`~motion_envs.models.juggling.SiteswapCatchController`).
+    reach_lead = 0.0
 
     def __init__(self, plan: SiteswapPlan, variant: str = "juggler", latency: float = 0.0) -> None:
         self.plan = plan
@@ -315,7 +318,7 @@ class SiteswapController:
         vacant = 2.0 * plan.beat - tm.hold(h)
         nxt = self._next_release(hand.landing)
         t_rel = plan.time(nxt)
-        lo = max(t + 4 * self.task.dt, t_nom - 0.5 * vacant)
+        lo = max(t + 4 * self.task.dt + self.reach_lead, t_nom - 0.5 * vacant)
         hi = min(t_nom + 0.5 * tm.hold(h), t_rel - MIN_CARRY * tm.hold(h))
         t_b, p_b, v_b = ball
         g, floor = self.task.gravity, self.task.floor_z + MIN_CATCH_HEIGHT
@@ -330,18 +333,34 @@ class SiteswapController:
             z = p_b[1] + v_b[1] * s - 0.5 * g * s * s
             if v_b[1] - g * s >= 0 or not low <= z <= high:
                 continue
-            p, v = self._target(hand, ball, float(ts))
-            d1, d2 = float(ts) - t, t_rel - float(ts)
-            cost = peak(quintic(p0, v0, a0, p, v, np.zeros(2), d1), d1, 2)
-            cost += peak(quintic(p, v, np.zeros(2), *rel, d2), d2, 2)
+            cost = self._cost(hand, ball, float(ts), t, (p0, v0, a0), rel, t_rel)
             if cost < best:
                 best, best_t = cost, float(ts)
         if math.isnan(best_t):  # no candidate: where it falls through the catch height
             z = plan.catch_point(h)[1]
             disc = v_b[1] ** 2 + 2.0 * g * (p_b[1] - z)
             best_t = t_b + (v_b[1] + math.sqrt(max(disc, 0.0))) / g
-            best_t = max(best_t, t + 4 * self.task.dt)
+            best_t = max(best_t, t + 4 * self.task.dt + self.reach_lead)
         return best_t
+
+    def _cost(
+        self,
+        hand: _Hand,
+        ball: tuple[float, FloatArray, FloatArray],
+        ts: float,
+        t: float,
+        now: tuple[FloatArray, FloatArray, FloatArray],
+        rel: tuple[FloatArray, FloatArray, FloatArray],
+        t_rel: float,
+    ) -> float:
+        """An intercept at ``ts``'s cost: the vacant quintic's (from the commanded state
+        ``now`` at ``t``) and the following carry's (to the release state ``rel`` at
+        ``t_rel``) peak accelerations summed."""
+        p, v = self._target(hand, ball, ts)
+        d1, d2 = ts - t, t_rel - ts
+        cost = peak(quintic(*now, p, v, np.zeros(2), d1), d1, 2)
+        cost += peak(quintic(p, v, np.zeros(2), *rel, d2), d2, 2)
+        return cost
 
     def _vacant(self, hand: _Hand, state: CascadeState) -> None:
         """Re-plan the vacant movement (module docstring)."""
