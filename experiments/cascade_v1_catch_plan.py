@@ -25,8 +25,8 @@ object (``--out FILE`` also writes it). The demonstrations are SIMULATED.
         [--patterns 3,5] [--controllers juggler_oracle_catch,...] [--leads 0.1,0.12]
         [--out FILE]
 
-``--leads`` plays a part of the lead grid (a run split over processes; the choice is
-then the best of the parts' JSON, ``choose_from`` below).
+``--leads`` plays a part of the lead grid (a run split over processes; ``--merge
+A.json,B.json`` then prints the choice over the parts, :func:`choose_from`).
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ import itertools
 import json
 import time
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
@@ -111,7 +112,17 @@ def main() -> None:
     parser.add_argument("--controllers", default=",".join(CASCADE_CATCH_PLANS))
     parser.add_argument("--leads", default=None, help="a part of the lead grid (s, comma list)")
     parser.add_argument("--out", default=None)
+    parser.add_argument("--merge", default=None, help="the parts' JSON files (comma list)")
     args = parser.parse_args()
+    if args.merge is not None:  # a split run's choice
+        parts = [json.loads(Path(f).read_text(encoding="utf-8")) for f in args.merge.split(",")]
+        for key in parts[0]["results"]:
+            got = choose_from(parts, key)
+            for r in got["grid"]:
+                print(key, r["lead_s"], r.get("descent_m_s", 0.0), round(r["pooled"], 2),
+                      {k: round(v, 2) for k, v in r["levels"].items()})  # fmt: skip
+            print(f"{key} choice: {json.dumps(got['choice'])}")
+        return
     if args.episodes < 1 or args.max_catches < 1:
         parser.error("--episodes and --max-catches must be >= 1")
     t0 = time.process_time()

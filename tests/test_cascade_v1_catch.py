@@ -234,3 +234,21 @@ def _planned(env: CascadeV1Env, h: int) -> float:
     from motion_envs.models.juggling import planned_catch
 
     return planned_catch(env.controller, h) + env.view.lead
+
+
+def test_a_split_run_is_chosen_from_its_parts_in_grid_order() -> None:
+    """``choose_from``: the parts' grid rows merged in grid order (lead, then descent);
+    the most pooled catches wins, a tie goes to the first in grid order."""
+    module = _experiment()
+    key = "juggler_oracle_catch 5"
+
+    def part(*rows: tuple[float, float, float]) -> dict[str, Any]:
+        grid = [{"lead_s": a, "descent_m_s": d, "pooled": p, "levels": {}} for a, d, p in rows]
+        return {"results": {key: {"grid": grid}}}
+
+    parts = [part((0.14, 0.5, 7.0), (0.14, 0.0, 9.0)), part((0.12, 1.0, 9.0), (0.12, 0.0, 3.0))]
+    got = module.choose_from(parts, key)
+    assert [(r["lead_s"], r["descent_m_s"]) for r in got["grid"]] == [
+        (0.12, 0.0), (0.12, 1.0), (0.14, 0.0), (0.14, 0.5)
+    ]  # fmt: skip
+    assert (got["choice"]["lead_s"], got["choice"]["descent_m_s"]) == (0.12, 1.0)

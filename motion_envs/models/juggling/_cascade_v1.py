@@ -128,16 +128,20 @@ CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9
 #: (Juggling-v2's ``DESCENT_GRID``, declared before the run).
 SITESWAP_DESCENT_GRID: tuple[float, ...] = (0.0, 0.5, 1.0, 1.5)
 #: The catch-plan controllers' plans per juggler (``"fitted"``: the fitted cascade
-#: juggler, pattern ``"3"``; ``"siteswap"``: the siteswap juggler), chosen on TRAINING
-#: seeds (module docstring; 12 training episodes per level, at most 10 catches, mean
-#: catches before the first drop pooled over the levels, 2026-12-06). Fitted juggler:
-#: lead 20 ms for both (oracle 5.94 against 3.19 at 0 ms and 1.9-4.1 at 40-160 ms; mean
-#: delay 4.36 against 3.44 at 0 ms, 4.06 at 40 ms). Siteswap juggler: lead 0 for both
-#: (oracle 3.64, then 2.92 at 20 ms and at most 1.19 beyond; mean delay 4.19, then 2.86):
-#: no lead helps it, so on pattern ``"5"`` the catch-plan controllers ARE
-#: ``juggler_oracle`` and ``juggler_mean_delay``.
+#: juggler, pattern ``"3"``, told through the view; ``"siteswap"``: the siteswap
+#: juggler's own catch, :class:`~motion_envs.models.juggling.SiteswapCatchController`;
+#: None: no plan), chosen on TRAINING seeds (module docstring; mean catches before the
+#: first drop pooled over the levels, 2026-12-06). Fitted juggler (12 episodes per level,
+#: at most 10 catches): lead 20 ms for both (oracle 5.94 against 3.19 at 0 ms and 1.9-4.1
+#: at 40-160 ms; mean delay 4.36 against 3.44 at 0 ms, 4.06 at 40 ms). Siteswap juggler,
+#: the oracle (20 episodes per level, at most 30 catches, leads 80-160 ms x descents 0,
+#: 0.5, 1.0, 1.5 m/s): lead 140 ms, descent 0, pooled 13.10 (easy / medium / hard 27.40
+#: / 11.00 / 0.90), next 12.40 (100 ms, 0.5 m/s) and 12.35 (100 ms, 1.0 m/s). The mean
+#: delay on the siteswap juggler keeps no plan (it is ``juggler_mean_delay``; the
+#: competitor rows' episodes unchanged), although the same plan on it catches as much
+#: on training seeds (lead 140 ms, descent 0: 13.92 pooled over 12 episodes per level).
 CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan | None]] = {
-    "juggler_oracle_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": CatchPlan(0.0, 0.0)},
+    "juggler_oracle_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": CatchPlan(0.14, 0.0)},
     "juggler_mean_delay_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": None},
 }
 #: s, the step and the horizon of the oracle's search for the catch-height crossing.
