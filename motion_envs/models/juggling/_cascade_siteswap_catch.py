@@ -41,7 +41,10 @@ from motion_envs._typing import FloatArray
 from motion_envs.geometry.minimum_jerk import quintic
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_siteswap import SiteswapPlan, peak
-from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController, _Hand
+from motion_envs.models.juggling._cascade_siteswap_control import (
+    SiteswapController,
+    SiteswapHand,
+)
 from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = ["FREEZE", "SiteswapCatchController", "meeting_point"]
@@ -80,7 +83,7 @@ class SiteswapCatchController(SiteswapController):
         self._meet = [None, None]
         super().reset(state, rng)
 
-    def _reach(self, hand: _Hand, ball: tuple[float, FloatArray, FloatArray], t_m: float
+    def _reach(self, hand: SiteswapHand, ball: tuple[float, FloatArray, FloatArray], t_m: float
                ) -> tuple[FloatArray, FloatArray, FloatArray]:  # fmt: skip
         """Own frame ``(E, (0, -descent), M)``: the reach's end state and the meeting
         point for a meeting at ``t_m``."""
@@ -95,7 +98,7 @@ class SiteswapCatchController(SiteswapController):
 
     def _cost(
         self,
-        hand: _Hand,
+        hand: SiteswapHand,
         ball: tuple[float, FloatArray, FloatArray],
         ts: float,
         t: float,
@@ -113,7 +116,7 @@ class SiteswapCatchController(SiteswapController):
         cost += peak(quintic(m, ve, np.zeros(2), *rel, d2), d2, 2)
         return cost
 
-    def _vacant(self, hand: _Hand, state: CascadeState) -> None:
+    def _vacant(self, hand: SiteswapHand, state: CascadeState) -> None:
         """The reach to ``E`` by ``t_e``, re-planned until :data:`FREEZE` periods before
         it; then the wait (or descent) until ``t_m + lead``; then the juggler's (module
         docstring). Before its ball is known: the juggler's."""

@@ -60,6 +60,7 @@ __all__ = [
     "MIN_CATCH_HEIGHT",
     "MIN_RELEASE_X",
     "SiteswapController",
+    "SiteswapHand",
 ]
 
 #: Intercept times a hand compares.
@@ -111,6 +112,10 @@ class _Hand:
     def set(self, c: FloatArray, t0: float, duration: float) -> None:
         self.c, self.t0, self.T = c, t0, duration
         self.before = None
+
+
+#: One hand's plan (the type a controller's hands have; for subclasses' signatures).
+SiteswapHand = _Hand
 
 
 class SiteswapController:
