@@ -31,6 +31,7 @@ from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import (
     LevelsEnvMixin,
     check_delay_offset,
+    check_timing_scale,
     check_tracker_gain,
 )
 from motion_envs.envs.juggling._world_spec import (
@@ -139,6 +140,14 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``[-1, 1]`` are clipped, NaN counts as 0 (``info["action_invalid"]``); a wrong shape
     raises ``ValueError``.
 
+    With ``timing_scale > 0`` (controller ``juggler_delay_tracker`` only)
+    ``Box(-1, 1, (5,), float32)``: the residuals, then a **timing** entry ``u``: the
+    delay the juggler is told is the tracker's plus ``timing_scale * u`` s (at least 0),
+    and each ball released in a step is fitted with the delay told in that step (every
+    flight keeps the delay of its release), so the agent RE-TIMES the catches instead of
+    moving the hands. ``u = 0`` is the tracker. The action cost ``|a|^2`` is the
+    residuals'.
+
     ## Observation Space
     ``Box(low, high, (32 + 18 N,), float32)`` (86 for three balls, 122 for five; 8 more
     at the end with ``observe_task_error=True``);
@@ -223,6 +232,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
     | `observe_task_error` | **bool** | `False`  | 8 last entries: each hand's last catch's task error (table above) |
     | `reward_weights`  | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
+    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
     | `render_mode`     | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`           | **int**   | `480`       | frame width in pixels |
     | `height`          | **int**   | `480`       | frame height in pixels |
@@ -231,7 +241,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     * v1: Juggling-v2's human levels (a hidden per-episode delay with jitter, a
       position-only camera per ball with drops and occlusion near either palm, drag per
       ball, the capture at impact; ``observe_task_error`` added later, its default,
-      False, leaves every rollout unchanged).
+      False, leaves every rollout unchanged; ``timing_scale`` later still, its default
+      0 likewise).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -253,6 +264,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         height: int = 480,
         observe_task_error: bool = False,
         tracker_gain: float = 0.0,
+        timing_scale: float = 0.0,
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
         #: Whether the observation ends with each hand's last catch's task error.
@@ -260,6 +272,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.controller_name = check_choice(controller, "controller", tuple(CASCADE_V1_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
+        #: s of told delay per unit of the action's timing entry (0: no timing entry)
+        self.timing_scale = check_timing_scale(timing_scale, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -318,7 +332,10 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.model, self.data = self.world.model, self.world.data
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.task.dt)}
         self._time_limit = self.max_catches * CASCADE_TIME_PER_CATCH
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (2 * CASCADE_HANDS,), dtype=np.float32)
+        timing = 1 if self.timing_scale else 0
+        self.action_space = gym.spaces.Box(
+            -1.0, 1.0, (2 * CASCADE_HANDS + timing,), dtype=np.float32
+        )
         self._held = HeldTaskErrors(CASCADE_HANDS, self.max_catches)
         low, high = self._bounds()
         self.observation_space = gym.spaces.Box(low, high, dtype=np.float32)
@@ -407,9 +424,13 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
         if self._done or self._state is None:
             raise RuntimeError("the episode has ended (or never started); call reset() first")
-        a = as_action(action, (2 * CASCADE_HANDS,))
+        a = as_action(action, self.action_space.shape or ())
         invalid = not bool(np.isfinite(a).all())
         a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
+        if self.timing_scale:  # told from this step's releases on (CascadeBallView.record)
+            assert self.view.tracker is not None
+            self.view.tracker.adjust = self.timing_scale * float(a[-1])
+            a = a[: 2 * CASCADE_HANDS]
         true = self._advance(self.residual_scale * a.reshape(2, 2))
         caught = sum(int(c >= 0) for c in true.caught)
         events: dict[str, Any] = {}

@@ -24,10 +24,12 @@ from motion_envs.envs._common import (
 from motion_envs.models.juggling import LEVELS, TRACKER_MAX_GAIN, check_gravity
 
 __all__ = [
+    "MAX_TIMING_SCALE",
     "OFFSET_CONTROLLERS",
     "LevelsEnvMixin",
     "check_delay_offset",
     "check_phases",
+    "check_timing_scale",
     "check_tracker_gain",
 ]
 
@@ -74,6 +76,26 @@ def check_tracker_gain(tracker_gain: float, controller: str) -> float:
             f"tracker_gain is for controller='juggler_delay_tracker'; got {controller!r}"
         )
     return gain
+
+
+#: s, the largest ``timing_scale`` accepted (the human delay range's width, 150 ms).
+MAX_TIMING_SCALE = 0.15
+
+
+def check_timing_scale(timing_scale: float, controller: str) -> float:
+    """``timing_scale`` (s told later per unit of the action's timing entry) as a float in
+    ``[0, MAX_TIMING_SCALE]``, nonzero only with the ``juggler_delay_tracker`` controller
+    (whose told delay it adjusts); else one-line ValueError naming the argument."""
+    scale = _real(timing_scale, 0.0, MAX_TIMING_SCALE)
+    if math.isnan(scale):
+        raise ValueError(
+            f"timing_scale must be in [0, {MAX_TIMING_SCALE}] s; got {timing_scale!r:.80}"
+        )
+    if scale and controller != "juggler_delay_tracker":
+        raise ValueError(
+            f"timing_scale is for controller='juggler_delay_tracker'; got {controller!r}"
+        )
+    return scale
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

@@ -10,13 +10,18 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
 from motion_envs.datasets.juggling import JugglingState, JugglingTask
-from motion_envs.envs._common import check_choice
+from motion_envs.envs._common import as_action, check_choice
 from motion_envs.envs.juggling._cascade_v1_errors import HeldTaskErrors, check_observe_task_error
-from motion_envs.envs.juggling._shared import check_delay_offset, check_tracker_gain
+from motion_envs.envs.juggling._shared import (
+    check_delay_offset,
+    check_timing_scale,
+    check_tracker_gain,
+)
 from motion_envs.envs.juggling._v1_batch import V1Batch
 from motion_envs.envs.juggling._v1_env import OBS_HEAD, V1_CYCLE_TIME, OneBallEnv
 from motion_envs.envs.juggling._v1_scene import JugglingV1World
@@ -31,6 +36,7 @@ from motion_envs.models.juggling import (
     CameraFrame,
     CameraSensor,
     DelayTracker,
+    DelayTrackerController,
     V2Controller,
     make_v2_controller,
     v1_juggler,
@@ -131,6 +137,15 @@ class JugglingV2Env(OneBallEnv):
     ``Box(-1, 1, (2,), float32)``: the residual ``(dx, dz)`` added to the controller's
     next hand target, times `residual_scale` (m), in the phases of `residual_phases`.
 
+    With ``timing_scale > 0`` (controller ``juggler_delay_tracker`` only)
+    ``Box(-1, 1, (3,), float32)``: the residual, then a **timing** entry ``u``: the
+    delay the juggler is told is the tracker's plus ``timing_scale * u`` s (at least 0),
+    and the flight released in a step is fitted with the delay told in that step, so the
+    agent RE-TIMES the catch (a later told delay, a later meeting, the hand waiting
+    lower) instead of moving the hand. ``u = 0`` is the tracker. The action cost
+    ``|a|^2`` is the residual's; a non-finite ``u`` counts as 0 and sets
+    ``action_invalid``.
+
     ## Observation Space
     ``Box(low, high, (32,), float32)``, ``(36,)`` with ``observe_task_error=True``
     (positions within 10 m of the home, speeds within 30 m/s):
@@ -207,6 +222,7 @@ class JugglingV2Env(OneBallEnv):
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_tracker` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
+    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
@@ -220,7 +236,7 @@ class JugglingV2Env(OneBallEnv):
     * v2: a hidden per-episode human delay with jitter, a position-only camera with
       drops and occlusion, air drag, the capture at impact, the task-error vector
       (``observe_task_error`` added later; its default, False, leaves every rollout
-      unchanged).
+      unchanged; ``timing_scale`` later still, its default 0 likewise).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -248,6 +264,7 @@ class JugglingV2Env(OneBallEnv):
         height: int = 480,
         observe_task_error: bool = False,
         tracker_gain: float = 0.0,
+        timing_scale: float = 0.0,
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
         #: Whether the observation holds the last catch's task error (entries 32-35).
@@ -255,6 +272,8 @@ class JugglingV2Env(OneBallEnv):
         self.controller_name = check_choice(controller, "controller", tuple(V2_CONTROLLERS))
         self.delay_offset = check_delay_offset(delay_offset, self.controller_name)
         self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
+        #: s of told delay per unit of the action's timing entry (0: no timing entry)
+        self.timing_scale = check_timing_scale(timing_scale, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -292,6 +311,8 @@ class JugglingV2Env(OneBallEnv):
         )
         self._held = HeldTaskErrors(1, self.max_catches)
         self._init_spaces(self.max_catches * V1_CYCLE_TIME)
+        if self.timing_scale:
+            self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         self._frames: deque[CameraFrame] = deque(maxlen=FRAMES)
         #: this step's catch: its task error and meeting speed (None: no catch)
         self._caught: tuple[NDArray[np.float64], float] | None = None
@@ -335,6 +356,20 @@ class JugglingV2Env(OneBallEnv):
         self._observe_frames(obs, true.time)
         return obs, info
 
+    def step(self, action: Any) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        if not self.timing_scale:
+            return super().step(action)
+        a = as_action(action, (3,))
+        u = float(a[2])
+        controller = self.controller
+        assert isinstance(controller, DelayTrackerController)
+        finite = math.isfinite(u)
+        controller.tracker.adjust = self.timing_scale * (min(max(u, -1.0), 1.0) if finite else 0.0)
+        obs, reward, terminated, truncated, info = super().step(a[:2])
+        if not finite:
+            info["action_invalid"] = True
+        return obs, reward, terminated, truncated, info
+
     def _step_batch(
         self, action: NDArray[np.float64]
     ) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
@@ -361,6 +396,9 @@ class JugglingV2Env(OneBallEnv):
         frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)
         if true.released:
             controller.estimator.released(true.time, *hand)
+            if self.timing_scale:  # the new flight fitted with the delay told now
+                assert isinstance(controller, DelayTrackerController)
+                controller.retell()
             self._release_time = true.time
             self._closest = None
         elif not true.held and controller.phase == "catch" and true.ball_vel[1] < 0:

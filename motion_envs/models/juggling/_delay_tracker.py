@@ -33,6 +33,12 @@ inside the range (the clip only stops it at the ends); ``k = 0`` is the base con
 (the mean-delay catch plan told ``offset``) exactly. The gain and the offset are chosen
 on VALIDATION seeds from declared grids by the benches (``delay_tracker`` rows).
 
+**An agent's timing action** (the envs' ``timing_scale``): :attr:`DelayTracker.adjust`
+is added to the told delay, ``D + offset + adjust`` (at least 0), and the envs set it
+from the action's last entry; a flight is fitted with the delay told at its release, so
+an agent re-times a catch by the delay it tells at the ball's release (a later told
+delay plans a later meeting, the hand waiting lower). ``adjust = 0`` is the tracker.
+
 **What it reads**: only the catch's timing error, which the env hands the controller
 (the palm feels when the ball landed); never the hidden delay (the estimators'
 ``reset``/``retell`` tell only the oracle; the tracker is reset with nothing but its
@@ -72,6 +78,9 @@ class DelayTracker:
     offset: float
     delay_range: tuple[float, float]
     estimate: float = field(init=False)
+    #: s, added to the told delay by an agent's timing action (the envs' ``timing_scale``;
+    #: 0 at every reset, the tracker alone).
+    adjust: float = field(init=False, default=0.0)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.gain) and 0.0 <= self.gain <= TRACKER_MAX_GAIN):
@@ -94,12 +103,13 @@ class DelayTracker:
 
     @property
     def told(self) -> float:
-        """s, the delay told to the estimator: ``estimate + offset``."""
-        return self.estimate + self.offset
+        """s, the delay told to the estimator: ``estimate + offset + adjust`` (at least 0)."""
+        return max(self.estimate + self.offset + self.adjust, 0.0)
 
     def reset(self) -> None:
-        """A new episode: the estimate back to the prior."""
+        """A new episode: the estimate back to the prior, no adjustment."""
         self.estimate = self.prior
+        self.adjust = 0.0
 
     def update(self, timing: float) -> float:
         """One catch's timing error ``timing`` (s, the catch time minus the planned

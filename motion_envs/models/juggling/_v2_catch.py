@@ -203,6 +203,12 @@ class DelayTrackerController(CatchPlanController):
         self.estimator.fixed_delay = self.tracker.told
         self.estimator._fitted = False
 
+    def retell(self) -> None:
+        """The tracker's told delay (its estimate, offset and an agent's ``adjust``) to
+        the estimator, now: the envs call it at a release, so each flight is fitted with
+        the delay told at its release."""
+        self._tell()
+
     def reset(self, state: JugglingState, rng: np.random.Generator | None = None) -> None:
         """A new episode: the tracker back to its prior."""
         super().reset(state, rng)
