@@ -167,3 +167,13 @@ def test_tracker_told_adds_the_adjustment() -> None:
     tracker.reset()
     assert tracker.adjust == 0.0
     assert tracker.told == pytest.approx(0.17)
+
+
+def test_nominal_episode_with_a_timing_entry() -> None:
+    """``nominal_episode`` (the zero action, what the benches score) plays the same
+    episode with the timing entry as without it."""
+    kw = {"level": "medium", "controller": "juggler_delay_tracker", "tracker_gain": 0.25}
+    plain = gym.make(V2, **kw).unwrapped.nominal_episode(1005)
+    timed = gym.make(V2, **kw, timing_scale=0.1).unwrapped.nominal_episode(1005)
+    np.testing.assert_array_equal(plain["hand"], timed["hand"])
+    assert plain["catches"] == timed["catches"]

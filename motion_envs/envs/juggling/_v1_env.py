@@ -177,7 +177,7 @@ class OneBallEnv(SideCameraMixin, LevelsEnvMixin, gym.Env):
         times = [float(info["time"])]
         hands = [info["hand"].tolist()]
         phases = [str(info["phase"])]
-        zero = np.zeros(2)
+        zero = np.zeros(self.action_space.shape or (2,))  # Juggling-v2: with its timing entry
         terminated = truncated = False
         while not (terminated or truncated):
             _, _, terminated, truncated, info = self.step(zero)
