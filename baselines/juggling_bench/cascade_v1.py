@@ -99,6 +99,7 @@ from baselines import options
 from baselines.juggling_bench import v2
 from baselines.juggling_bench.cascade import CascadeEpisodes, summary
 from baselines.juggling_bench.cascade_v1_view import FRESH_FRAME, catching_velocities
+from baselines.juggling_bench.grid_choice import best_on_grid
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, episode_seeds
 from motion_envs.models.juggling import CASCADE_V1_LEVELS, V2_LEVELS, pattern_spec
 
@@ -249,13 +250,10 @@ def _kwargs(
     return out
 
 
-def _best_on_val(
-    grid: tuple[Any, ...], key: Callable[[Any], str], mean: Callable[[Any], float]
-) -> tuple[Any, dict[str, float]]:
-    """The candidate of ``grid`` with the highest ``mean`` (ties: the first) and every
-    candidate's, keyed by ``key``."""
-    means = {key(c): mean(c) for c in grid}
-    return max(grid, key=lambda c: means[key(c)]), means
+def _val_mean(play: Play, policy: Policy, kwargs: dict[str, Any], config: CascadeV1Config) -> float:
+    """The mean catches before the first drop of ``config.val_episodes`` VALIDATION
+    episodes played with ``kwargs``."""
+    return float(play(policy, kwargs, "val", config.val_episodes).catches.mean())
 
 
 def choose_late_offset(
@@ -263,13 +261,12 @@ def choose_late_offset(
 ) -> tuple[float, dict[str, float]]:
     """The offset of :data:`LATE_OFFSETS` with the most mean catches before the first
     drop on ``config.val_episodes`` VALIDATION episodes (ties: the smallest), and every
-    candidate's validation mean."""
+    candidate's validation mean (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
 
     def mean(offset: float) -> float:
-        kw = _kwargs(level, config, "juggler_mean_delay", offset)
-        return float(play(None, kw, "val", config.val_episodes).catches.mean())
+        return _val_mean(play, None, _kwargs(level, config, "juggler_mean_delay", offset), config)
 
-    offset, means = _best_on_val(LATE_OFFSETS, v2.offset_key, mean)
+    offset, means = best_on_grid(LATE_OFFSETS, mean, v2.offset_key)
     return float(offset), means
 
 
@@ -278,13 +275,14 @@ def choose_tracker(
 ) -> tuple[tuple[float, float], dict[str, float]]:
     """The ``(gain, offset)`` of :data:`~baselines.juggling_bench.v2.TRACKER_GRID` with
     the most mean catches before the first drop on ``config.val_episodes`` VALIDATION
-    episodes (ties: the first), and every candidate's validation mean."""
+    episodes (ties: the first), and every candidate's validation mean
+    (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
 
     def mean(choice: tuple[float, float]) -> float:
         kw = _kwargs(level, config, "juggler_delay_tracker", choice[1], choice[0])
-        return float(play(None, kw, "val", config.val_episodes).catches.mean())
+        return _val_mean(play, None, kw, config)
 
-    choice, means = _best_on_val(v2.TRACKER_GRID, v2.tracker_key, mean)
+    choice, means = best_on_grid(v2.TRACKER_GRID, mean, v2.tracker_key)
     return (float(choice[0]), float(choice[1])), means
 
 
@@ -313,14 +311,12 @@ def choose_constant(
 ) -> tuple[tuple[float, float], dict[str, float]]:
     """The constant of :data:`CONSTANT_GRID` with the most mean catches before the first
     drop on ``config.val_episodes`` VALIDATION episodes (ties: the first), and every
-    candidate's validation mean."""
+    candidate's validation mean (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
 
     def mean(action: tuple[float, float]) -> float:
-        eps = play(_constant_policy(action), _kwargs(level, config, "juggler"), "val",
-                   config.val_episodes)  # fmt: skip
-        return float(eps.catches.mean())
+        return _val_mean(play, _constant_policy(action), _kwargs(level, config, "juggler"), config)
 
-    action, means = _best_on_val(CONSTANT_GRID, v2.grid_key, mean)
+    action, means = best_on_grid(CONSTANT_GRID, mean, v2.grid_key)
     return (float(action[0]), float(action[1])), means
 
 
@@ -462,9 +458,9 @@ def run_cascade_v1(
             if key in means:
                 val_means[name] = means[key]
             else:
-                kw = _kwargs(level, config, ctl, off, gain)
-                eps = play(policy, kw, "val", config.val_episodes)
-                val_means[name] = float(eps.catches.mean())
+                val_means[name] = _val_mean(
+                    play, policy, _kwargs(level, config, ctl, off, gain), config
+                )
         ilc = _train_ilc(level, config) if config.ilc else None
         if ilc is not None:
             val_means["task_error_ilc"] = float(

@@ -94,6 +94,7 @@ from baselines.agents.juggling_score import (
     catch_rate_difference,
     juggling_episodes,
 )
+from baselines.juggling_bench.grid_choice import best_on_grid
 from baselines.juggling_bench.ilc import ILCConfig, TaskErrorILC
 from baselines.juggling_bench.levels import summary
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
@@ -277,21 +278,26 @@ def tracker_kwargs(choice: tuple[float, float]) -> dict[str, Any]:
     return {"tracker_gain": float(choice[0]), "delay_offset": float(choice[1])}
 
 
+def _val_catch_rate(
+    play: Play, policy: Policy | None, kwargs: dict[str, Any], config: V2Config
+) -> float:
+    """The catch rate of ``config.val_episodes`` VALIDATION episodes played with
+    ``kwargs``."""
+    return play(policy, ENV_ID_V2, kwargs, "val", config.val_episodes).catch_rate
+
+
 def choose_tracker(
     level: str, config: V2Config, play: Play = juggling_episodes
 ) -> tuple[tuple[float, float], dict[str, float]]:
     """The pair of :data:`TRACKER_GRID` with the highest catch rate on
     ``config.val_episodes`` VALIDATION episodes (ties: the first), and every candidate's
-    validation catch rate."""
-    rates: dict[str, float] = {}
-    best, best_rate = TRACKER_GRID[0], -1.0
-    for choice in TRACKER_GRID:
+    validation catch rate (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(choice: tuple[float, float]) -> float:
         kw = _kwargs(level, config, "juggler_delay_tracker", tracker_kwargs(choice))
-        eps = play(None, ENV_ID_V2, kw, "val", config.val_episodes)
-        rates[tracker_key(choice)] = eps.catch_rate
-        if eps.catch_rate > best_rate:
-            best, best_rate = choice, eps.catch_rate
-    return best, rates
+        return _val_catch_rate(play, None, kw, config)
+
+    return best_on_grid(TRACKER_GRID, rate, tracker_key)
 
 
 def choose_constant(
@@ -299,16 +305,13 @@ def choose_constant(
 ) -> tuple[tuple[float, float], dict[str, float]]:
     """The constant of :data:`CONSTANT_GRID` with the highest catch rate on
     ``config.val_episodes`` VALIDATION episodes (ties: the first), and every candidate's
-    validation catch rate."""
-    rates: dict[str, float] = {}
-    best, best_rate = CONSTANT_GRID[0], -1.0
-    for action in CONSTANT_GRID:
+    validation catch rate (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(action: tuple[float, float]) -> float:
         policy = None if action == (0.0, 0.0) else _Constant(action)
-        eps = play(policy, ENV_ID_V2, _kwargs(level, config), "val", config.val_episodes)
-        rates[grid_key(action)] = eps.catch_rate
-        if eps.catch_rate > best_rate:
-            best, best_rate = action, eps.catch_rate
-    return best, rates
+        return _val_catch_rate(play, policy, _kwargs(level, config), config)
+
+    return best_on_grid(CONSTANT_GRID, rate, grid_key)
 
 
 def choose_offset(
@@ -317,16 +320,13 @@ def choose_offset(
     """The offset of :data:`LATE_OFFSETS` (s added to the level's mean delay by
     ``juggler_mean_delay``) with the highest catch rate on ``config.val_episodes``
     VALIDATION episodes (ties: the first, the smallest), and every candidate's validation
-    catch rate."""
-    rates: dict[str, float] = {}
-    best, best_rate = LATE_OFFSETS[0], -1.0
-    for offset in LATE_OFFSETS:
+    catch rate (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(offset: float) -> float:
         kw = _kwargs(level, config, "juggler_mean_delay", {"delay_offset": offset})
-        eps = play(None, ENV_ID_V2, kw, "val", config.val_episodes)
-        rates[offset_key(offset)] = eps.catch_rate
-        if eps.catch_rate > best_rate:
-            best, best_rate = offset, eps.catch_rate
-    return best, rates
+        return _val_catch_rate(play, None, kw, config)
+
+    return best_on_grid(LATE_OFFSETS, rate, offset_key)
 
 
 def row_players(
@@ -394,8 +394,9 @@ def run_v2(
             if key in rates:
                 val_catch[name] = rates[key]
             else:
-                kw = _kwargs(level, config, ctl, extra)
-                val_catch[name] = play(policy, ENV_ID_V2, kw, "val", config.val_episodes).catch_rate
+                val_catch[name] = _val_catch_rate(
+                    play, policy, _kwargs(level, config, ctl, extra), config
+                )
         ilc = TaskErrorILC(
             level, RESIDUAL_SCALE, delay,
             ILCConfig(config.ilc_iterations, config.ilc_episodes, max_catches=config.max_catches),
