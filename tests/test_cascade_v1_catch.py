@@ -8,6 +8,7 @@ TRAINING seeds only (a spy on the experiment; the siteswap juggler's own catch i
 from __future__ import annotations
 
 import importlib.util
+import itertools
 import math
 import sys
 from pathlib import Path
@@ -147,7 +148,9 @@ def _experiment() -> Any:
 
 def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyPatch) -> None:
     """A spy on the experiment's seeds: every episode it plays is a TRAINING seed, and the
-    candidate lead is the one the view uses."""
+    candidate lead is the one the view uses (the fitted juggler) or the candidate plan the
+    one the controller carries (the siteswap juggler), for each controller with a plan
+    (the mean delay's five-ball plan was chosen by the same run)."""
     module = _experiment()
     from motion_envs.datasets.juggling import SPLIT_SEEDS, episode_seeds
 
@@ -172,13 +175,13 @@ def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyP
     monkeypatch.setattr(CascadeV1Env, "play", play)
     train = SPLIT_SEEDS["train"]
     others = [SPLIT_SEEDS[k] for k in SPLIT_SEEDS if k != "train"]
-    for pattern, plan, told in (
-        ("3", CatchPlan(0.06, 0.0), 0.06),
-        ("5", CatchPlan(0.1, 1.5), CatchPlan(0.1, 1.5)),
+    for controller, (pattern, plan, told) in itertools.product(
+        CASCADE_CATCH_PLANS,
+        (("3", CatchPlan(0.06, 0.0), 0.06), ("5", CatchPlan(0.1, 1.5), CatchPlan(0.1, 1.5))),
     ):
         asked.clear()
         played.clear()
-        got = module.score("juggler_oracle_catch", pattern, plan, 3, 2)
+        got = module.score(controller, pattern, plan, 3, 2)
         assert asked == ["train"] * 3 and got == {"easy": 1.0, "medium": 1.0, "hard": 1.0}
         assert {s for s, _ in played} == {train, train + 1, train + 2}
         assert {t for _, t in played} == {told}

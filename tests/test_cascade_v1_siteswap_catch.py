@@ -1,8 +1,10 @@
 """The siteswap juggler's catch plan (``SiteswapCatchController``, Cascade-v1's
-``juggler_oracle_catch`` on five balls): the meeting point of a ballistic ball
-(hand-worked), the reach ending ``lead`` early ``descent lead`` above it and the palm
-passing through it at ``t_m`` (closed form), no re-plan in the reach's last periods, a
-palm that is not rising at the catches, determinism, and which controllers carry it."""
+``juggler_oracle_catch``, ``juggler_mean_delay_catch`` and ``juggler_delay_tracker`` on five
+balls): the meeting point of a ballistic ball (hand-worked), the reach ending ``lead``
+early ``descent lead`` above it and the palm passing through it at ``t_m`` (closed form),
+no re-plan in the reach's last periods, a palm that is not rising at the catches,
+determinism, which controllers carry it, and that the mean-delay plan changes five balls
+only."""
 
 from __future__ import annotations
 
@@ -155,18 +157,42 @@ def test_deterministic() -> None:
 
 
 def test_which_controllers_carry_the_siteswap_plan() -> None:
-    """``juggler_oracle_catch`` on the siteswap juggler: its declared plan, from the
-    declared grids, the view telling the ball as it is; ``juggler_mean_delay_catch``:
-    none (the plain juggler, as ``juggler_mean_delay``); the fitted juggler refuses a
-    controller-side plan."""
-    plan = CASCADE_CATCH_PLANS["juggler_oracle_catch"]["siteswap"]
-    assert plan is not None and plan.lead in CASCADE_LEAD_GRID
-    assert plan.descent in SITESWAP_DESCENT_GRID
-    env = CascadeV1Env(level="easy", pattern="5", controller="juggler_oracle_catch")
-    assert isinstance(env.controller, SiteswapCatchController)
-    assert env.controller.catch is plan and env.view.lead == 0.0
-    assert catch_plan("juggler_mean_delay_catch", False) is None
-    env = CascadeV1Env(level="easy", pattern="5", controller="juggler_mean_delay_catch")
-    assert type(env.controller) is SiteswapController and env.view.lead == 0.0
+    """``juggler_oracle_catch`` and ``juggler_mean_delay_catch`` on the siteswap juggler:
+    each its declared plan, from the declared grids, the view telling the ball as it is;
+    ``juggler_delay_tracker``: the mean-delay one (the same object); the other
+    controllers: none (the plain juggler); the fitted juggler refuses a controller-side
+    plan."""
+    for name in ("juggler_oracle_catch", "juggler_mean_delay_catch", "juggler_delay_tracker"):
+        base = "juggler_mean_delay_catch" if name == "juggler_delay_tracker" else name
+        plan = CASCADE_CATCH_PLANS[base]["siteswap"]
+        assert plan is not None and plan.lead in CASCADE_LEAD_GRID
+        assert plan.descent in SITESWAP_DESCENT_GRID
+        assert catch_plan(name, False) is plan
+        env = CascadeV1Env(level="easy", pattern="5", controller=name)
+        assert isinstance(env.controller, SiteswapCatchController)
+        assert env.controller.catch is plan and env.view.lead == 0.0
+    for name in ("juggler", "juggler_mean_delay", "juggler_oracle", "juggler_delay_estimator"):
+        assert catch_plan(name, False) is None
+        env = CascadeV1Env(level="easy", pattern="5", controller=name)
+        assert type(env.controller) is SiteswapController and env.view.lead == 0.0
     with pytest.raises(ValueError, match="catch must be None"):
         pattern_controller(pattern_spec("3"), "juggler", 9.81, catch=CatchPlan(0.02, 0.0))
+
+
+def test_the_mean_delay_plan_changes_five_balls_only() -> None:
+    """On five balls ``juggler_mean_delay_catch`` (and the delay tracker built on it) is no
+    longer ``juggler_mean_delay``: the same seeds give other episodes (each controller
+    deterministic, so a difference is the plan's). On three balls the catch-plan
+    controllers keep the fitted juggler's plan told through the view (lead 20 ms, no
+    controller-side plan)."""
+    for seed in (11, 12):
+        plain = _digest("juggler_mean_delay", seed)
+        assert plain == _digest("juggler_mean_delay", seed)
+        assert _digest("juggler_mean_delay_catch", seed) != plain
+        assert _digest("juggler_delay_tracker", seed) != plain
+    fitted = CASCADE_CATCH_PLANS["juggler_mean_delay_catch"]["fitted"]
+    assert fitted == CatchPlan(0.02, 0.0)
+    for name in ("juggler_mean_delay_catch", "juggler_delay_tracker"):
+        env = CascadeV1Env(level="easy", pattern="3", controller=name)
+        assert not isinstance(env.controller, SiteswapController)
+        assert catch_plan(name, True) is fitted and env.view.lead == fitted.lead

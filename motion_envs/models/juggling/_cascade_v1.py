@@ -45,10 +45,10 @@ noise, the drag range, the toss scatter, the capture speed); ``drift`` is not of
   last periods, then the palm descending at ``descent`` (at rest for 0) while the ball
   falls in. Telling the siteswap juggler the ball ``lead`` ahead does not make it wait
   (it moves the whole intercept, and past it the hand follows the told ball down,
-  ``lead`` below it): no lead helped it on training seeds (2026-12-06). Only
-  ``juggler_oracle_catch`` has this plan; ``juggler_mean_delay_catch`` on the siteswap
-  juggler has none (None in :data:`CASCADE_CATCH_PLANS`: it IS
-  ``juggler_mean_delay``, as before).
+  ``lead`` below it): no lead helped it on training seeds (2026-12-06). Both
+  ``juggler_oracle_catch`` and ``juggler_mean_delay_catch`` have this plan (each its own
+  choice; the same cell, lead 140 ms, descent 0), and so ``juggler_delay_tracker``,
+  which is the mean-delay catch plan with its delay corrected per catch.
 
 The plans are chosen per juggler on TRAINING seeds by
 ``experiments/cascade_v1_catch_plan.py``: the fitted juggler's lead from
@@ -136,13 +136,19 @@ SITESWAP_DESCENT_GRID: tuple[float, ...] = (0.0, 0.5, 1.0, 1.5)
 #: at 40-160 ms; mean delay 4.36 against 3.44 at 0 ms, 4.06 at 40 ms). Siteswap juggler,
 #: the oracle (20 episodes per level, at most 30 catches, leads 80-160 ms x descents 0,
 #: 0.5, 1.0, 1.5 m/s): lead 140 ms, descent 0, pooled 13.10 (easy / medium / hard 27.40
-#: / 11.00 / 0.90), next 12.40 (100 ms, 0.5 m/s) and 12.35 (100 ms, 1.0 m/s). The mean
-#: delay on the siteswap juggler keeps no plan (it is ``juggler_mean_delay``; the
-#: competitor rows' episodes unchanged), although the same plan on it catches as much
-#: on training seeds (lead 140 ms, descent 0: 13.92 pooled over 12 episodes per level).
+#: / 11.00 / 0.90), next 12.40 (100 ms, 0.5 m/s) and 12.35 (100 ms, 1.0 m/s). Siteswap
+#: juggler, the mean delay (the same procedure and grid: 20 episodes per level, at most
+#: 30 catches, leads 80-160 ms x the 4 descents; 224 s CPU, 2026-12-06 21:47-21:52 UTC):
+#: lead 140 ms, descent 0, pooled 12.48 (26.40 / 10.10 / 0.95), next 12.25 (140 ms,
+#: 0.5 m/s) and 12.02 (120 ms, 0.5 m/s); leads 0-60 ms caught 2.6-8.8 pooled in the
+#: 12-episode full-grid run that set the grid's floor (BENCHMARKS). The delay tracker on
+#: the siteswap juggler is this plan with its delay corrected (:func:`catch_plan`).
 CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan | None]] = {
     "juggler_oracle_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": CatchPlan(0.14, 0.0)},
-    "juggler_mean_delay_catch": {"fitted": CatchPlan(0.02, 0.0), "siteswap": None},
+    "juggler_mean_delay_catch": {
+        "fitted": CatchPlan(0.02, 0.0),
+        "siteswap": CatchPlan(0.14, 0.0),
+    },
 }
 #: s, the step and the horizon of the oracle's search for the catch-height crossing.
 _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
