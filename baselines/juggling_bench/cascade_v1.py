@@ -36,7 +36,10 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   information: a competitor). Without drag in its estimate, telling a ball ``lead``
   ahead is what ``late_meeting``'s offset does (a later placed fit, predicted further);
   the rows differ in the seeds the number is chosen on (one lead for all levels) and in
-  the flight told before a ball's first three frames (advanced by the lead only);
+  the flight told before a ball's first three frames (advanced by the lead only). On
+  the siteswap juggler (pattern ``"5"``) it, as ``oracle_catch``, is the juggler's own
+  catch (:class:`~motion_envs.models.juggling.SiteswapCatchController`, the palm
+  arriving ``lead`` early and waiting; the plan chosen on TRAINING seeds);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``:
   Juggling-v2's release-anchored estimator, the delay found from each release, where
   the hand knows when and where it let go, and pooled over the episode's releases of

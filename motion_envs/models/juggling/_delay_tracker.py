@@ -13,7 +13,8 @@ point. Measured on the first catches of ``juggler_mean_delay_catch`` on TRAINING
 from 1000; 2026-12-06): Juggling-v2 medium ``s = 0.92``, hard ``0.99`` (40 episodes),
 residual std 8 and 12 ms; Cascade-v1 three balls medium ``s = 0.85`` (13 ms), five balls
 medium ``s = 2.3`` with a residual std of 93 ms (15 episodes, every catch; the siteswap
-juggler's timing tells its delay poorly).
+juggler's timing tells its delay poorly; measured on the plain siteswap juggler, before
+``juggler_mean_delay_catch`` got its catch plan on five balls, not re-measured since).
 
 **The tracker** (:class:`DelayTracker`): an estimate ``D`` of the delay, starting at the
 level's mean, and a declared ``offset`` (the late meeting's: the delay told is ``D +

@@ -20,8 +20,16 @@ limit (a ball leaves the palm at the palm's speed); and every pattern is a casca
 throw the same odd value, the ball count: the juggler's hands each catch the other hand's
 ball in turn; self-throws, holds, passes and empty beats are not modelled). At the
 three-ball juggler's tempo only ``"3"`` fits: ``"5"`` needs a release above the hand's
-limit and ``"441"``'s throw of 1 a dwell shorter than a beat; ``"5"`` is played at its
-own juggler's tempo (fitted on five-ball demonstrations).
+limit and ``"441"``'s throw of 1 a dwell shorter than a beat. ``"5"`` is played by the
+siteswap juggler at its own tempo, a nominal pattern DESIGNED, not fitted: the release
+and catch points of :class:`~motion_envs.models.juggling.SiteswapStyle`, a dwell ratio
+of 2/3 (Kalvan's, below), the beat :func:`~motion_envs.models.juggling.choose_beat`
+finds (0.22 s at 9.81 m/s^2) and the flight Shannon's theorem gives it (0.81 s). Its
+likeness reference is its own SIMULATED demonstrations
+(:func:`~motion_envs.models.juggling.siteswap_demonstrations`: that nominal pattern
+played by seeded persons); it was not fitted on the five-ball cascade demonstrations
+(:data:`~motion_envs.datasets.juggling.CASCADE_STYLES`), from which its hand deviates
+by about 48 mm (Cascade-v1's likeness score, the juggler row: 47.9 mm; BENCHMARKS).
 
 :class:`PatternSpec` and :func:`register_pattern`: a pattern Cascade-v0 plays is a spec
 (name, siteswap, dwell ratio, the controller's tunables) plus a registration
