@@ -1,0 +1,242 @@
+r"""A learned catch-timing policy: the felt task error in, the told delay out, on top of
+the delay tracker (Juggling-v2 and Cascade-v1 with ``timing_scale``).
+
+Why this action. The learners on the position residual found no repeatable gradient at
+their base (``experiments/ars_gradient_signal.py``): the room the oracle leaves is in
+WHEN the hand meets the ball, and a residual on the hand target turns a felt timing
+error into a position only through a product of observations. The envs' timing entry
+(``timing_scale``) re-times the catch directly: the delay the juggler is told is the
+tracker's plus ``timing_scale * u``, latched at each release
+(:mod:`motion_envs.models.juggling._delay_tracker`).
+
+The policy (:class:`TimingPolicy`) reads only the task-error entries of the observation
+(``observe_task_error=True``; per hand its last catch's ``(offset, timing, timed,
+catches)``, held until its next catch), so its action is constant between catches: one
+decision per catch, as a person adjusts after feeling a catch. Per hand the features are
+
+.. math:: \phi_h = (\mathrm{offset}/0.05\,\mathrm{m},\ \mathrm{timing}/0.05\,\mathrm{s},\
+          \mathrm{timed},\ [\mathrm{catches} > 0]),
+
+then a constant 1, and ``u = clip(w . phi, -1, 1)``; the residual entries are 0 (the
+hand follows the juggler; its likeness is the controller's). ``w = 0`` is the base (the
+tracker with its validated gain and offset). The tracker itself is in the family only
+through its own state; the policy adds a correction per catch on top of it, the residual
+on an analytic prior of Ploeger & Peters.
+
+The learner (:func:`train_timing_cem`) is the cross-entropy method (diagonal Gaussian
+over ``w``, mean 0 and standard deviation ``sigma`` at the start): each generation
+draws ``population`` candidates, plays each on the SAME ``batch`` TRAINING episodes
+(common random numbers; seeds ``SPLIT_SEEDS["train"] + seed * 10**6 + g * batch + i``,
+new ones every generation), keeps the ``elite`` best by the block's score (one ball: the
+catch rate pooled over the episodes; cascades: mean catches before the first drop) and
+moves the mean and standard deviation to theirs (smoothed, never below ``min_sigma``).
+The mean after every generation is scored on ``val_episodes`` VALIDATION episodes; the
+generation with the best validation score is kept (the earliest on ties), as a
+checkpoint is chosen; test seeds are never played here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from motion_envs._typing import FloatArray
+
+__all__ = [
+    "TIMING_ENTRIES",
+    "CEMSettings",
+    "TimingPolicy",
+    "TimingTraining",
+    "play_scores",
+    "timing_features",
+    "train_timing_cem",
+]
+
+#: Task-error entries per hand at the end of the observation (``observe_task_error``).
+TIMING_ENTRIES = 4
+#: Scales of the features (m, s): a 5 cm offset, a 50 ms timing error -> 1.
+_OFFSET_SCALE, _TIMING_SCALE = 0.05, 0.05
+
+
+def timing_features(obs: NDArray[Any], hands: int) -> FloatArray:
+    """The policy's features ``(N, 4 hands + 1)`` from observations ``(N, d)`` ending
+    with the hands' task-error entries (module docstring)."""
+    obs = np.asarray(obs, dtype=np.float64)
+    tail = obs[:, -TIMING_ENTRIES * hands :].reshape(len(obs), hands, TIMING_ENTRIES)
+    phi = np.stack(
+        [
+            tail[..., 0] / _OFFSET_SCALE,
+            tail[..., 1] / _TIMING_SCALE,
+            tail[..., 2],
+            (tail[..., 3] > 0).astype(np.float64),
+        ],
+        axis=-1,
+    ).reshape(len(obs), -1)
+    return np.hstack([phi, np.ones((len(obs), 1))])
+
+
+@dataclass
+class TimingPolicy:
+    """``u = clip(phi . w, -1, 1)`` per row (module docstring).
+
+    ``weights`` ``(p,)`` for every row, or ``(N, p)``: one candidate per row of the
+    observations (CEM plays its candidates side by side). Called on observations ``(N,
+    d)``, returns actions ``(N, action_dim)``: zeros but the last entry, ``u``."""
+
+    weights: FloatArray
+    hands: int
+    action_dim: int
+
+    def __call__(self, obs: NDArray[Any]) -> NDArray[np.float32]:
+        phi = timing_features(obs, self.hands)
+        w = np.asarray(self.weights, dtype=np.float64)
+        u = phi @ w if w.ndim == 1 else np.einsum("np,np->n", phi, w[: len(phi)])
+        out = np.zeros((len(phi), self.action_dim), dtype=np.float32)
+        out[:, -1] = np.clip(u, -1.0, 1.0)
+        return out
+
+
+@dataclass(frozen=True)
+class CEMSettings:
+    """The learner's settings (declared before any run; module docstring)."""
+
+    generations: int = 12
+    population: int = 10
+    elite: int = 3
+    batch: int = 16
+    sigma: float = 0.3
+    min_sigma: float = 0.02
+    smoothing: float = 0.3
+    val_episodes: int = 50
+
+    def __post_init__(self) -> None:
+        for name in ("generations", "population", "elite", "batch", "val_episodes"):
+            if int(getattr(self, name)) < 1:
+                raise ValueError(f"{name} must be >= 1; got {getattr(self, name)!r}")
+        if self.elite > self.population:
+            raise ValueError(f"elite must be <= population; got {self.elite} > {self.population}")
+        if not (self.sigma > 0 and 0 < self.min_sigma <= self.sigma and 0 <= self.smoothing < 1):
+            raise ValueError(
+                "need sigma > 0, 0 < min_sigma <= sigma and 0 <= smoothing < 1; got "
+                f"{self.sigma}, {self.min_sigma}, {self.smoothing}"
+            )
+
+    @property
+    def episodes(self) -> int:
+        """Training episodes used by the whole run."""
+        return self.generations * self.population * self.batch
+
+
+#: ``score(policy, seeds) -> per-policy-row score`` (higher is better).
+Scorer = Callable[[TimingPolicy, NDArray[np.int64]], float]
+
+
+def play_scores(
+    env_id: str,
+    kwargs: Mapping[str, Any],
+    policy: TimingPolicy,
+    seeds: NDArray[np.int64],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """``(catches, tosses)`` per episode of ``env_id`` reset with ``seeds`` (row ``i`` of
+    a per-row policy plays ``seeds[i]``), each stepped until it ends."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401  (registers the ids)
+    from baselines.agents.juggling_score import play_until_ended
+
+    n = len(seeds)
+    catches = np.zeros(n, dtype=np.int64)
+    tosses = np.zeros(n, dtype=np.int64)
+    toss_key = "tosses" if env_id.startswith("MotionEnvs/Cascade") else "cycles"
+
+    def record(i: int, info: dict[str, Any], ended: bool, terminated: bool) -> None:
+        if ended:
+            catches[i] = int(info["catches"])
+            tosses[i] = int(info[toss_key])
+
+    envs = [gym.make(env_id, **kwargs) for _ in range(n)]
+    play_until_ended(envs, np.asarray(seeds, dtype=np.int64), policy, record)
+    return catches, tosses
+
+
+def block_score(catches: NDArray[np.int64], tosses: NDArray[np.int64], cascade: bool) -> float:
+    """The block's score of a set of episodes: mean catches before the first drop on a
+    cascade, else the catch rate pooled (catches over tosses)."""
+    if cascade:
+        return float(np.mean(catches))
+    return float(catches.sum() / max(int(tosses.sum()), 1))
+
+
+@dataclass
+class TimingTraining:
+    """One learner's run: the mean ``w`` after every generation, its validation score,
+    the elite's mean training score, and the kept generation (best on validation)."""
+
+    means: list[FloatArray] = field(default_factory=list)
+    val_scores: list[float] = field(default_factory=list)
+    train_scores: list[float] = field(default_factory=list)
+    kept: int = 0
+
+    @property
+    def weights(self) -> FloatArray:
+        """The kept ``w``."""
+        return self.means[self.kept]
+
+
+def train_timing_cem(
+    env_id: str,
+    kwargs: Mapping[str, Any],
+    settings: CEMSettings,
+    seed: int,
+    progress: Callable[[int, float, float], None] | None = None,
+) -> TimingTraining:
+    """CEM over the timing policy's weights on TRAINING episodes, the generation kept on
+    VALIDATION episodes (module docstring). ``kwargs`` are the env's (with
+    ``controller="juggler_delay_tracker"``, ``timing_scale > 0`` and
+    ``observe_task_error=True``); ``progress(g, train, val)`` after each generation."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401
+    from motion_envs.datasets.juggling import SPLIT_SEEDS
+
+    probe = gym.make(env_id, **kwargs).unwrapped
+    if not getattr(probe, "timing_scale", 0.0) or not getattr(probe, "observe_task_error", False):
+        raise ValueError("kwargs need timing_scale > 0 and observe_task_error=True")
+    cascade = env_id.startswith("MotionEnvs/Cascade")
+    hands = 2 if cascade else 1
+    action_dim = int(probe.action_space.shape[0])
+    probe.close()
+    p = TIMING_ENTRIES * hands + 1
+    rng = np.random.default_rng(seed)
+    mean, std = np.zeros(p), np.full(p, settings.sigma)
+    out = TimingTraining()
+    val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
+    s = settings
+    for g in range(s.generations):
+        cand = mean + std * rng.standard_normal((s.population, p))
+        base = SPLIT_SEEDS["train"] + seed * 10**6 + g * s.batch
+        seeds = base + np.arange(s.batch, dtype=np.int64)
+        rows = np.repeat(cand, s.batch, axis=0)
+        catches, tosses = play_scores(
+            env_id, kwargs, TimingPolicy(rows, hands, action_dim), np.tile(seeds, s.population)
+        )
+        per = catches.reshape(s.population, s.batch), tosses.reshape(s.population, s.batch)
+        scores = np.array([block_score(c, t, cascade) for c, t in zip(*per, strict=True)])
+        elite = cand[np.argsort(-scores, kind="stable")[: s.elite]]
+        mean = s.smoothing * mean + (1 - s.smoothing) * elite.mean(axis=0)
+        std = np.maximum(s.smoothing * std + (1 - s.smoothing) * elite.std(axis=0), s.min_sigma)
+        val = block_score(
+            *play_scores(env_id, kwargs, TimingPolicy(mean.copy(), hands, action_dim), val_seeds),
+            cascade,
+        )
+        out.means.append(mean.copy())
+        out.val_scores.append(val)
+        out.train_scores.append(float(np.sort(scores)[::-1][: s.elite].mean()))
+        if progress is not None:
+            progress(g, out.train_scores[-1], val)
+    out.kept = int(np.argmax(out.val_scores))  # the first of the best
+    return out

@@ -1,0 +1,296 @@
+"""A learned catch-timing policy (the felt task error in, the told delay out) against the
+reference rows, on Juggling-v2 and Cascade-v1 (issue 34: an agent whose action can
+re-time the catch).
+
+For each block and learner seed: :func:`baselines.agents.catch_timing.train_timing_cem`
+trains the linear timing policy by CEM on TRAINING episodes on top of the delay tracker
+the rows' bench chose on VALIDATION seeds (its gain and offset), keeps the generation
+best on VALIDATION episodes, and only then plays the TEST seeds, the same seeds the
+rows' bench played (``motion-bench juggling --version v2 [--pattern 3]``, replayed by
+``experiments/juggling_v2_agents.py`` / ``cascade_v1_agents.py``'s ``level_rows``: every
+grid choice and the best non-oracle row made on validation, ``oracle_catch`` the upper
+reference). Blocks: ``v2-LEVEL`` (Juggling-v2, catch rate; ``drift`` by default) and
+``cascade3-LEVEL`` (Cascade-v1 three balls, trained with at most 10 catches per
+episode, scored with the rows' 30: mean catches before the first drop and catch rate).
+
+Per seed: the agent's score, ``agent - best non-oracle row``, ``agent - its base`` (the
+tracker, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over test episodes,
+with power lines), its hand deviation from the held-out SIMULATED demonstrations against
+the juggler's + 5 mm; per block the median seed (by ``agent - best row``) and the
+validation pick (the best validation score), and the issue's targets in words.
+
+    python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
+        [--seeds 0 1 2] [--generations 10] [--test-episodes 100] [--out DIR]
+
+Writes ``DIR/catch_timing_agents.json`` and ``DIR/catch_timing_agents.png`` (each seed's
+validation score per generation, the base's as a line).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing
+from _timing import machine, print_json
+
+from baselines.agents.against_rows import DEVIATION_SLACK_MM, MARGIN, likeness_met, margin_met
+from baselines.agents.catch_timing import CEMSettings, TimingPolicy, train_timing_cem
+
+HERE = Path(__file__).resolve().parent
+TIMING_SCALE = 0.1
+
+
+def _script(name: str) -> Any:
+    """A sibling experiment script as a module (its ``level_rows``)."""
+    spec = importlib.util.spec_from_file_location(name, HERE / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def block_rows(block: str, test_episodes: int, val_rows: int = 30) -> dict[str, Any]:
+    """The rows of ``block``: its env, the agent's training and scoring keywords (the
+    tracker's validated gain and offset), the played test episodes of the best
+    non-oracle row, ``oracle_catch`` and the juggler's deviation (``val_rows``: the
+    cascade bench's validation episodes, its default 30)."""
+    kind, level = block.split("-", 1)
+    if kind == "v2":
+        from baselines.juggling_bench.v2 import RESIDUAL_SCALE, UPPER_REFERENCE, V2Config
+
+        lv, played = _script("juggling_v2_agents").level_rows(level, test_episodes)
+        trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
+        base = {
+            "level": level,
+            "controller": "juggler_delay_tracker",
+            "tracker_gain": trk["gain"],
+            "delay_offset": trk["offset_s"],
+            "max_catches": V2Config().max_catches,
+            "residual_scale": RESIDUAL_SCALE,
+            "observe_task_error": True,
+            "timing_scale": TIMING_SCALE,
+        }
+        juggler_mm = 1000 * played["juggler"].deviation
+        return {"env": "MotionEnvs/Juggling-v2", "train_kwargs": base, "test_kwargs": base,
+                "lv": lv, "played": played, "upper": UPPER_REFERENCE, "cascade": False,
+                "juggler_mm": juggler_mm}  # fmt: skip
+    if kind == "cascade3":
+        from baselines.juggling_bench.cascade_v1 import UPPER_REFERENCE, CascadeV1Config
+
+        config = CascadeV1Config(pattern="3", episodes=test_episodes, val_episodes=val_rows)
+        doc, played = _script("cascade_v1_agents").level_rows(level, config)
+        lv = doc["levels"][0]
+        trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
+        base = {
+            "level": level,
+            "pattern": "3",
+            "controller": "juggler_delay_tracker",
+            "tracker_gain": trk["gain"],
+            "delay_offset": trk["offset_s"],
+            "max_catches": 10,
+            "observe_task_error": True,
+            "timing_scale": TIMING_SCALE,
+        }
+        juggler_mm = 1000 * lv["rows"]["juggler"].get("deviation_m", math.nan)
+        return {"env": "MotionEnvs/Cascade-v1", "train_kwargs": base,
+                "test_kwargs": {**base, "max_catches": config.max_catches}, "lv": lv,
+                "played": played, "upper": UPPER_REFERENCE, "cascade": True,
+                "juggler_mm": juggler_mm}  # fmt: skip
+    raise ValueError(f"--blocks: unknown block {block!r} (v2-LEVEL or cascade3-LEVEL)")
+
+
+def _diff(d: Any) -> dict[str, Any]:
+    return {"value": d.difference, "ci": list(d.ci95), "detail": d.to_dict()}
+
+
+def score_test(rows: dict[str, Any], weights: Any, n: int) -> dict[str, Any]:
+    """The policy ``weights`` (and its base, ``w = 0``) on the TEST seeds against the
+    rows' played episodes."""
+    from baselines.agents.juggling_score import catch_rate_comparison, juggling_episodes
+
+    env, kw = rows["env"], rows["test_kwargs"]
+    hands = 2 if rows["cascade"] else 1
+    dim = 5 if rows["cascade"] else 3
+    best, upper = rows["lv"]["best_non_oracle"], rows["upper"]
+    out: dict[str, Any] = {}
+    for who, w in (("agent", np.asarray(weights)), ("base", np.zeros(4 * hands + 1))):
+        policy = TimingPolicy(w, hands, dim)
+        if rows["cascade"]:
+            from baselines.agents.cascade_score import cascade_agent_episodes
+
+            eps = cascade_agent_episodes(policy, env, kw, "test", n, deviation=True)
+            dev = (
+                eps.deviations.summary().get("deviation_m", math.nan)
+                if eps.deviations
+                else math.nan
+            )
+        else:
+            eps = juggling_episodes(policy, env, kw, "test", n)
+            dev = eps.deviation
+        out[who] = eps
+        out[f"{who}_deviation_mm"] = 1000 * dev
+    agent, played = out.pop("agent"), rows["played"]
+    base = out.pop("base")
+    res: dict[str, Any] = {
+        "catch_rate": float(agent.catches.sum() / max(int(agent.tosses.sum()), 1)),
+        "mean_catches": float(agent.catches.mean()),
+        "deviation_mm": out["agent_deviation_mm"],
+        "base_deviation_mm": out["base_deviation_mm"],
+    }
+    pairs = {
+        "minus_best_catch_rate": (agent, played[best], ("agent", best)),
+        "minus_base_catch_rate": (agent, base, ("agent", "base")),
+        "oracle_minus_catch_rate": (played[upper], agent, (upper, "agent")),
+    }
+    for key, (a, b, names) in pairs.items():
+        res[key] = _diff(catch_rate_comparison(a, b, 0, names))
+    if rows["cascade"]:
+        from baselines.stats import paired_mean_difference
+
+        res["minus_best_mean_catches"] = _diff(
+            paired_mean_difference(agent.catches, played[best].catches, "agent", best)
+        )
+        res["minus_base_mean_catches"] = _diff(
+            paired_mean_difference(agent.catches, base.catches, "agent", "base")
+        )
+        res["oracle_minus_mean_catches"] = _diff(
+            paired_mean_difference(played[upper].catches, agent.catches, upper, "agent")
+        )
+    d = res["minus_best_catch_rate"]
+    res["targets"] = {
+        "margin": bool(margin_met(d["value"], d["ci"])),
+        "likeness": likeness_met(res["deviation_mm"], rows["juggler_mm"]),
+        "oracle_above": res["oracle_minus_catch_rate"]["value"] > 0,
+    }
+    return res
+
+
+def words(block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: str) -> str:
+    d, b, o = (run[k] for k in ("minus_best_catch_rate", "minus_base_catch_rate",
+                                "oracle_minus_catch_rate"))  # fmt: skip
+    t = run["targets"]
+
+    def f(x: dict[str, Any]) -> str:
+        return f"{x['value']:+.3f} [{x['ci'][0]:+.3f}, {x['ci'][1]:+.3f}]"
+
+    return (
+        f"{block}, {tag} (seed {run['seed']}): agent - {best} {f(d)} catch rate (target >= "
+        f"+{MARGIN:.2f} with the interval above 0: {'met' if t['margin'] else 'NOT met'}); "
+        f"agent - its base (the tracker) {f(b)}; oracle_catch - agent {f(o)}; deviation "
+        f"{run['deviation_mm']:.1f} mm against the juggler's {juggler_mm:.1f} + "
+        f"{DEVIATION_SLACK_MM:.0f} mm ({'met' if t['likeness'] else 'NOT met'})"
+    )
+
+
+def plot(blocks: list[dict[str, Any]], path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from motion_envs._io import save_figure
+
+    fig, axes = plt.subplots(1, len(blocks), figsize=(5 * len(blocks), 3.6), squeeze=False)
+    for ax, blk in zip(axes[0], blocks, strict=True):
+        for run in blk["runs"]:
+            g = np.arange(1, len(run["val_scores"]) + 1)
+            ax.plot(g, run["val_scores"], marker="o", ms=3, label=f"seed {run['seed']}")
+            ax.plot(run["kept"] + 1, run["val_scores"][run["kept"]], "k*", ms=10)
+        ax.axhline(blk["base_val_score"], color="grey", ls="--", label="base (w = 0)")
+        ax.set_xlabel("CEM generation")
+        ax.set_ylabel("mean catches" if blk["cascade"] else "catch rate")
+        ax.set_title(f"{blk['block']}: validation score (* kept)")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--blocks", nargs="+", default=["v2-drift", "cascade3-medium"])
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--generations", type=int, default=10)
+    ap.add_argument("--population", type=int, default=10)
+    ap.add_argument("--batch", type=int, default=16)
+    ap.add_argument("--val-episodes", type=int, default=50)
+    ap.add_argument("--test-episodes", type=int, default=100)
+    ap.add_argument("--out", type=Path, default=Path("catch_timing_agents"))
+    args = ap.parse_args(argv)
+    from tqdm import tqdm
+
+    from motion_envs._io import atomic_write_text
+
+    settings = CEMSettings(generations=args.generations, population=args.population,
+                           batch=args.batch, val_episodes=args.val_episodes)  # fmt: skip
+    args.out.mkdir(parents=True, exist_ok=True)
+    doc: dict[str, Any] = {"machine": machine(), "settings": vars(settings),
+                           "timing_scale": TIMING_SCALE, "blocks": []}  # fmt: skip
+    for block in args.blocks:
+        t0 = time.process_time()
+        rows = block_rows(block, args.test_episodes)
+        rows_cpu = time.process_time() - t0
+        best = rows["lv"]["best_non_oracle"]
+        blk: dict[str, Any] = {"block": block, "cascade": rows["cascade"], "best_non_oracle": best,
+                               "base_kwargs": rows["train_kwargs"], "rows_cpu_s": rows_cpu,
+                               "juggler_deviation_mm": rows["juggler_mm"], "runs": []}  # fmt: skip
+        for seed in args.seeds:
+            t0 = time.process_time()
+            bar = tqdm(total=settings.generations, desc=f"{block} seed {seed}", leave=False)
+
+            def tick(g: int, train: float, val: float, bar: Any = bar) -> None:
+                bar.set_postfix(train=f"{train:.3f}", val=f"{val:.3f}")
+                bar.update(1)
+
+            tr = train_timing_cem(rows["env"], rows["train_kwargs"], settings, seed, tick)
+            bar.close()
+            train_cpu = time.process_time() - t0
+            t0 = time.process_time()
+            run = score_test(rows, tr.weights, args.test_episodes)
+            run.update(seed=seed, kept=tr.kept, weights=tr.weights.tolist(),
+                       val_scores=tr.val_scores, train_scores=tr.train_scores,
+                       train_cpu_s=train_cpu, test_cpu_s=time.process_time() - t0)  # fmt: skip
+            blk["runs"].append(run)
+            print(words(block, best, run, rows["juggler_mm"], "this seed"), flush=True)
+        from baselines.agents.catch_timing import block_score, play_scores
+        from motion_envs.datasets.juggling import SPLIT_SEEDS
+
+        val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
+        hands, dim = (2, 5) if rows["cascade"] else (1, 3)
+        zero = TimingPolicy(np.zeros(4 * hands + 1), hands, dim)
+        blk["base_val_score"] = block_score(
+            *play_scores(rows["env"], rows["train_kwargs"], zero, val_seeds), rows["cascade"]
+        )
+        runs = sorted(blk["runs"], key=lambda r: r["minus_best_catch_rate"]["value"])
+        median = runs[len(runs) // 2]
+        pick = max(blk["runs"], key=lambda r: r["val_scores"][r["kept"]])
+        blk["median_seed"], blk["validation_pick"] = median["seed"], pick["seed"]
+        jmm = rows["juggler_mm"]
+        blk["words"] = [
+            words(block, best, median, jmm, "median seed"),
+            words(block, best, pick, jmm, "validation pick"),
+        ]
+        for line in blk["words"]:
+            print(line, flush=True)
+        doc["blocks"].append(blk)
+        atomic_write_text(
+            args.out / "catch_timing_agents.json", json.dumps(doc, indent=1, default=float)
+        )
+    plot(doc["blocks"], args.out / "catch_timing_agents.png")
+    print_json({"blocks": [{k: b[k] for k in ("block", "median_seed", "validation_pick", "words")}
+                           for b in doc["blocks"]]})  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
