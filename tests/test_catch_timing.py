@@ -1,0 +1,99 @@
+"""The learned catch-timing policy and its CEM learner (baselines/agents/catch_timing.py)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from baselines.agents import catch_timing as ct
+from motion_envs.datasets.juggling import SPLIT_SEEDS
+
+V2_KW = {
+    "level": "easy",
+    "controller": "juggler_delay_tracker",
+    "timing_scale": 0.1,
+    "observe_task_error": True,
+    "max_catches": 2,
+}
+
+
+def test_features_hand_worked() -> None:
+    """offset 5 cm -> 1, timing -25 ms -> -0.5, timed 1, caught 3 -> 1, then the bias;
+    a hand with no catch yet: zeros and the bias."""
+    obs = np.array([[9.0, 9.0, 0.05, -0.025, 1.0, 3.0], [9.0, 9.0, 0.0, 0.0, 0.0, 0.0]])
+    np.testing.assert_allclose(
+        ct.timing_features(obs, 1), [[1.0, -0.5, 1.0, 1.0, 1.0], [0.0, 0.0, 0.0, 0.0, 1.0]]
+    )
+    two = np.array([[7.0, 0.0, 0.05, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0]])
+    np.testing.assert_allclose(ct.timing_features(two, 2)[0], [0, 1, 1, 1, 0, 0, 0, 0, 1])
+
+
+def test_policy_rows_clip_and_zero() -> None:
+    obs = np.array([[0.0, 0.05, 0.0, 1.0, 1.0]] * 2)  # one hand: features (1, 0, 1, 1, 1)
+    assert not ct.TimingPolicy(np.zeros(5), 1, 3)(obs).any()
+    per_row = ct.TimingPolicy(np.array([[0.2, 0, 0, 0, 0.1], [5.0, 0, 0, 0, 0]]), 1, 3)(obs)
+    np.testing.assert_allclose(per_row, [[0, 0, 0.3], [0, 0, 1.0]], atol=1e-7)
+
+
+def test_zero_policy_is_the_tracker() -> None:
+    """``w = 0`` plays the base controller's episodes (the zero action)."""
+    seeds = np.array([11, 12], dtype=np.int64)
+    zero = ct.play_scores(
+        "MotionEnvs/Juggling-v2", V2_KW, ct.TimingPolicy(np.zeros(5), 1, 3), seeds
+    )
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401
+
+    env = gym.make("MotionEnvs/Juggling-v2", **V2_KW).unwrapped
+    nominal = [env.nominal_episode(int(s)) for s in seeds]
+    assert zero[0].tolist() == [p["catches"] for p in nominal]
+    assert zero[1].tolist() == [p["tosses"] for p in nominal]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"elite": 11}, "elite must be"), ({"batch": 0}, "batch must be"), ({"sigma": 0.0}, "sigma")],
+)
+def test_settings_errors(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        ct.CEMSettings(**kwargs)
+
+
+def test_cem_climbs_and_keeps_on_validation(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With a known score (catch rate 1 - |w - w*|^2 / 10 per episode), CEM moves its
+    mean towards ``w*``; training plays only TRAINING seeds (new ones each generation,
+    the same for every candidate), validation only VALIDATION seeds, never a test seed;
+    the kept generation is the best on validation."""
+    target = np.array([0.5, -0.3, 0.0, 0.2, 0.4])
+    played: list[tuple[str, np.ndarray]] = []
+
+    def fake(env_id: str, kwargs: Any, policy: ct.TimingPolicy, seeds: np.ndarray) -> Any:
+        w = np.atleast_2d(policy.weights)
+        w = np.broadcast_to(w, (len(seeds), w.shape[1]))
+        split = "val" if seeds.min() >= SPLIT_SEEDS["val"] else "train"
+        assert seeds.max() < SPLIT_SEEDS["test"]
+        played.append((split, seeds.copy()))
+        loss = ((w - target) ** 2).sum(axis=1)
+        return np.round(1000 * (1 - loss / 10)).astype(np.int64), np.full(len(seeds), 1000)
+
+    monkeypatch.setattr(ct, "play_scores", fake)
+    settings = ct.CEMSettings(generations=15, population=12, elite=3, batch=2, val_episodes=3)
+    out = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, settings, seed=4)
+    assert np.abs(out.weights - target).max() < 0.15
+    assert out.kept == int(np.argmax(out.val_scores))
+    train = [s for split, s in played if split == "train"]
+    assert all((s < SPLIT_SEEDS["val"]).all() for s in train)
+    assert len({tuple(np.unique(s)) for s in train}) == settings.generations  # new each time
+    assert all(len(np.unique(s)) == settings.batch for s in train)  # shared by candidates
+    again = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, settings, seed=4)
+    np.testing.assert_array_equal(again.weights, out.weights)
+
+
+def test_cem_refuses_an_env_without_the_timing_entry() -> None:
+    with pytest.raises(ValueError, match="timing_scale > 0"):
+        ct.train_timing_cem(
+            "MotionEnvs/Juggling-v2", {"level": "easy"}, ct.CEMSettings(generations=1), 0
+        )
