@@ -81,7 +81,7 @@ class DelayTracker:
     estimate: float = field(init=False)
     #: s, added to the told delay by an agent's timing action (the envs' ``timing_scale``;
     #: 0 at every reset, the tracker alone).
-    adjust: float = field(init=False, default=0.0)
+    adjust: float = field(init=False)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.gain) and 0.0 <= self.gain <= TRACKER_MAX_GAIN):
