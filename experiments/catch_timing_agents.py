@@ -10,8 +10,9 @@ rows' bench played (``motion-bench juggling --version v2 [--pattern 3]``, replay
 ``experiments/juggling_v2_agents.py`` / ``cascade_v1_agents.py``'s ``level_rows``: every
 grid choice and the best non-oracle row made on validation, ``oracle_catch`` the upper
 reference). Blocks: ``v2-LEVEL`` (Juggling-v2, catch rate; ``drift`` by default) and
-``cascade3-LEVEL`` (Cascade-v1 three balls, trained with at most 10 catches per
-episode, scored with the rows' 30: mean catches before the first drop and catch rate).
+``cascade3-LEVEL`` / ``cascade5-LEVEL`` (Cascade-v1 three or five balls, trained with at
+most 10 catches per episode, scored with the rows' 30: mean catches before the first
+drop and catch rate).
 
 Per seed: the agent's score, ``agent - best non-oracle row``, ``agent - its base`` (the
 tracker, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over test episodes,
@@ -83,16 +84,17 @@ def block_rows(block: str, test_episodes: int, val_rows: int = 30) -> dict[str, 
         return {"env": "MotionEnvs/Juggling-v2", "train_kwargs": base, "test_kwargs": base,
                 "lv": lv, "played": played, "upper": UPPER_REFERENCE, "cascade": False,
                 "juggler_mm": juggler_mm}  # fmt: skip
-    if kind == "cascade3":
+    if kind in ("cascade3", "cascade5"):
+        pattern = kind[-1]
         from baselines.juggling_bench.cascade_v1 import UPPER_REFERENCE, CascadeV1Config
 
-        config = CascadeV1Config(pattern="3", episodes=test_episodes, val_episodes=val_rows)
+        config = CascadeV1Config(pattern=pattern, episodes=test_episodes, val_episodes=val_rows)
         doc, played = _script("cascade_v1_agents").level_rows(level, config)
         lv = doc["levels"][0]
         trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
         base = {
             "level": level,
-            "pattern": "3",
+            "pattern": pattern,
             "controller": "juggler_delay_tracker",
             "tracker_gain": trk["gain"],
             "delay_offset": trk["offset_s"],
@@ -105,7 +107,7 @@ def block_rows(block: str, test_episodes: int, val_rows: int = 30) -> dict[str, 
                 "test_kwargs": {**base, "max_catches": config.max_catches}, "lv": lv,
                 "played": played, "upper": UPPER_REFERENCE, "cascade": True,
                 "juggler_mm": juggler_mm}  # fmt: skip
-    raise ValueError(f"--blocks: unknown block {block!r} (v2-LEVEL or cascade3-LEVEL)")
+    raise ValueError(f"--blocks: unknown block {block!r} (v2-, cascade3- or cascade5-LEVEL)")
 
 
 def _diff(d: Any) -> dict[str, Any]:
