@@ -208,7 +208,7 @@ def train_timing_cem(
         raise ValueError("kwargs need timing_scale > 0 and observe_task_error=True")
     cascade = env_id.startswith("MotionEnvs/Cascade")
     hands = 2 if cascade else 1
-    action_dim = int(probe.action_space.shape[0])
+    action_dim = int(np.prod(probe.action_space.shape or (1,)))
     probe.close()
     p = TIMING_ENTRIES * hands + 1
     rng = np.random.default_rng(seed)
