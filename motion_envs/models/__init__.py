@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from motion_envs._lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from motion_envs.datasets.ragged import RaggedTrajectories
     from motion_envs.models import person_calibration
     from motion_envs.models.bezier_models import (
         BezierResidualModel,
@@ -140,7 +141,6 @@ if TYPE_CHECKING:
     )
     from motion_envs.models.slerp_residual import (
         DEFAULT_N_POINTS,
-        RaggedTrajectories,
         interpolate_on_grid,
         normalised_grid,
         resample_orientations,

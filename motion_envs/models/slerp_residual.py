@@ -38,10 +38,13 @@ from motion_envs.geometry import quaternion as quat
 
 # The container, the grid and the resampling live in the datasets layer; they are
 # re-exported here because the residual pipeline is where users meet them.
+#: ``RaggedTrajectories`` is used here and importable from here, but its public homes are
+#: ``motion_envs.datasets.ragged`` and ``motion_envs.models``: a class re-exported by two
+#: pages of the API reference is described twice as an alias, which Sphinx's parallel
+#: build reports as a duplicate when both land in one worker.
 __all__ = [
     "DEFAULT_N_POINTS",
     "MIN_SAMPLES",
-    "RaggedTrajectories",
     "interpolate_on_grid",
     "normalised_grid",
     "resample_orientations",
