@@ -158,6 +158,7 @@ _JUGGLING_V2 = {
     "level": "name",
     "delay_offset": "fraction",
     "tracker_gain": "fraction",
+    "timing_scale": "fraction",
     "observe_task_error": "flag",
     **_JUGGLING_RESIDUAL,
 }
