@@ -63,19 +63,23 @@ def check_delay_offset(delay_offset: float, controller: str) -> float:
     return offset
 
 
-def check_tracker_gain(tracker_gain: float, controller: str) -> float:
-    """``tracker_gain`` as a float in ``[0, TRACKER_MAX_GAIN]``, given only to the
+def _tracker_argument(
+    name: str, value: float, high: float, controller: str, unit: str = ""
+) -> float:
+    """The argument ``name``'s ``value`` as a float in ``[0, high]``, nonzero only with the
     ``juggler_delay_tracker`` controller; else one-line ValueError naming the argument."""
-    gain = _real(tracker_gain, 0.0, TRACKER_MAX_GAIN)
-    if math.isnan(gain):
-        raise ValueError(
-            f"tracker_gain must be in [0, {TRACKER_MAX_GAIN}]; got {tracker_gain!r:.80}"
-        )
-    if gain and controller != "juggler_delay_tracker":
-        raise ValueError(
-            f"tracker_gain is for controller='juggler_delay_tracker'; got {controller!r}"
-        )
-    return gain
+    out = _real(value, 0.0, high)
+    if math.isnan(out):
+        raise ValueError(f"{name} must be in [0, {high}]{unit}; got {value!r:.80}")
+    if out and controller != "juggler_delay_tracker":
+        raise ValueError(f"{name} is for controller='juggler_delay_tracker'; got {controller!r}")
+    return out
+
+
+def check_tracker_gain(tracker_gain: float, controller: str) -> float:
+    """``tracker_gain`` (the tracker's gain ``k``) in ``[0, TRACKER_MAX_GAIN]``
+    (:func:`_tracker_argument`)."""
+    return _tracker_argument("tracker_gain", tracker_gain, TRACKER_MAX_GAIN, controller)
 
 
 #: s, the largest ``timing_scale`` accepted (the human delay range's width, 150 ms).
@@ -83,19 +87,10 @@ MAX_TIMING_SCALE = 0.15
 
 
 def check_timing_scale(timing_scale: float, controller: str) -> float:
-    """``timing_scale`` (s told later per unit of the action's timing entry) as a float in
-    ``[0, MAX_TIMING_SCALE]``, nonzero only with the ``juggler_delay_tracker`` controller
-    (whose told delay it adjusts); else one-line ValueError naming the argument."""
-    scale = _real(timing_scale, 0.0, MAX_TIMING_SCALE)
-    if math.isnan(scale):
-        raise ValueError(
-            f"timing_scale must be in [0, {MAX_TIMING_SCALE}] s; got {timing_scale!r:.80}"
-        )
-    if scale and controller != "juggler_delay_tracker":
-        raise ValueError(
-            f"timing_scale is for controller='juggler_delay_tracker'; got {controller!r}"
-        )
-    return scale
+    """``timing_scale`` (s told later per unit of the action's timing entry) in ``[0,
+    MAX_TIMING_SCALE]``, for the tracker whose told delay it adjusts
+    (:func:`_tracker_argument`)."""
+    return _tracker_argument("timing_scale", timing_scale, MAX_TIMING_SCALE, controller, " s")
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:
