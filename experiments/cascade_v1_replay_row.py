@@ -11,15 +11,22 @@ can be replayed alone and paired with them on the same test seeds.
   catches, tosses, drops and times) in ``DIR``;
 * ``--replay DIR``: plays ``--row`` (default ``oracle_catch``, a zero-action row without
   a tracker) with the code as it is now on the test seeds of ``DIR``'s episodes and
-  prints, per level, its summary and its paired differences (mean catches, 95 %
-  bootstrap over the seeds) from every other row of ``DIR``, the best non-oracle row
-  (chosen on validation in ``DIR``) and the row with the highest test mean among the
-  non-oracle ones; ``--out FILE`` writes them.
+  prints, per level, its summary and its paired differences (mean catches and catch
+  rate, 95 % bootstrap over the seeds) from every other row of ``DIR``, the best
+  non-oracle row (chosen on validation in ``DIR``) and the row with the highest test
+  mean among the non-oracle ones; ``--out FILE`` writes them. A competitor row that
+  ``DIR``'s bench did not choose among (a row added since) is also played on the
+  validation seeds, and the best non-oracle row is chosen again with it
+  (``best_non_oracle_with_row``). A row ``DIR`` holds is compared with its kept
+  episodes (``equals_kept``: the replay plays what the bench played);
+* ``--replay DIR --kept``: the same pairing of ``DIR``'s own episodes of ``--row``,
+  nothing played (a bench run with the row in it).
 
 The demonstrations are SIMULATED.
 
     python experiments/cascade_v1_replay_row.py --bench DIR --pattern 5 --levels easy
     python experiments/cascade_v1_replay_row.py --replay DIR [--row oracle_catch] [--out F]
+    python experiments/cascade_v1_replay_row.py --replay DIR --kept --row delay_estimator_catch
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ import numpy as np
 from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1 import (
     REFERENCES,
+    ROWS,
     CascadeV1Config,
     _kwargs,
     _paired,
@@ -70,41 +78,86 @@ def bench(out: Path, pattern: str, levels: tuple[str, ...]) -> None:
     atomic_write_text(out / "episodes.json", json.dumps(eps) + "\n")
 
 
-def replay(folder: Path, row: str) -> dict[str, Any]:
-    """``row`` replayed on ``folder``'s test seeds and paired with its other rows."""
+def _rate_difference(a: CascadeEpisodes, b: CascadeEpisodes, names: tuple[str, str]) -> Any:
+    """The paired catch-rate difference ``a - b`` (catches per toss pooled over the
+    episodes; 95 % bootstrap over the shared seeds)."""
+    from baselines.agents.cascade_score import catch_rate_comparison
+
+    d = catch_rate_comparison(a, b, names=names)
+    return {"value": d.difference, "ci": list(d.ci95)}
+
+
+def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
+    """``row`` replayed on ``folder``'s test seeds (or, ``kept_row``, its kept episodes)
+    and paired with its other rows (module docstring)."""
     doc = json.loads((folder / "results.json").read_text(encoding="utf-8"))
     kept = json.loads((folder / "episodes.json").read_text(encoding="utf-8"))
     config = CascadeV1Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
     out: dict[str, Any] = {}
     for lv in doc["levels"]:
         level = lv["level"]
-        players = _players(level, config, lv["late_offset_s"], tuple(lv["constant"]))
-        ctl, policy, off, gain = players[row]
         others = {name: _episodes(e) for name, e in kept[level].items() if name != row}
         seeds = next(iter(others.values())).seeds
-        kwargs = _kwargs(level, config, ctl, off, gain)
-        new = cascade_v1_episodes(policy, kwargs, "test", seeds.size)
-        if not np.array_equal(new.seeds, seeds):
-            raise ValueError(f"{folder}: the kept test seeds differ from the replayed ones")
+        val_means = dict(lv["val_mean_catches"])
+        equals_kept = None
+        if kept_row:
+            if row not in kept[level]:
+                raise ValueError(f"{folder}: no kept episodes of row {row!r} on {level}")
+            new = _episodes(kept[level][row])
+        else:
+            players = _players(level, config, lv["late_offset_s"], tuple(lv["constant"]))
+            ctl, policy, off, gain = players[row]
+            kwargs = _kwargs(level, config, ctl, off, gain)
+            new = cascade_v1_episodes(policy, kwargs, "test", seeds.size)
+            if not np.array_equal(new.seeds, seeds):
+                raise ValueError(f"{folder}: the kept test seeds differ from the replayed ones")
+            if row in kept[level]:
+                equals_kept = _episodes_doc(new) == kept[level][row]
+            if row not in REFERENCES and row not in val_means:
+                val_means[row] = float(
+                    cascade_v1_episodes(policy, kwargs, "val", config.val_episodes).catches.mean()
+                )
         rivals = [name for name in others if name not in REFERENCES]
         top = max(rivals, key=lambda name: float(others[name].catches.mean()))
+        # the bench's rule (the first in ROWS order on a tie), the row among the candidates
+        order = [r for r in ROWS if r in val_means] + [r for r in val_means if r not in ROWS]
         out[level] = {
             "row": row_summary(new),
             "minus": {name: _paired(new, e) for name, e in others.items()},
+            "minus_catch_rate": {
+                name: _rate_difference(new, e, (row, name)) for name, e in others.items()
+            },
             "best_non_oracle": lv["best_non_oracle"],
+            "best_non_oracle_with_row": max(order, key=lambda r: val_means[r]),
+            "val_mean_catches": val_means,
             "top_test_mean_non_oracle": top,
             "means": {name: float(e.catches.mean()) for name, e in others.items()},
+            "rates": {name: row_summary(e)["catch_rate"] for name, e in others.items()},
+            "equals_kept": equals_kept,
         }
-        m = out[level]["row"]
-        print(f"{level}: {row} mean {m['catches_mean']:.2f} {m['catches_mean_ci']}, median "
-              f"{m['catches_median']} {m['catches_median_ci']}, catch rate {m['catch_rate']:.3f}, "
-              f"censored {m['censored']}")  # fmt: skip
-        for name in sorted(others, key=lambda n: -out[level]["means"][n]):
-            d = out[level]["minus"][name]
-            print(f"  {row} - {name:24s} {d['value']:+6.2f} [{d['ci'][0]:+.2f}, {d['ci'][1]:+.2f}]"
-                  f"  ({name} mean {out[level]['means'][name]:.2f})")  # fmt: skip
-        print(f"  best non-oracle (validation): {lv['best_non_oracle']}; highest test mean: {top}")
+        _print_level(level, row, out[level])
     return out
+
+
+def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
+    m = got["row"]
+    print(f"{level}: {row} mean {m['catches_mean']:.2f} {m['catches_mean_ci']}, median "
+          f"{m['catches_median']} {m['catches_median_ci']}, catch rate {m['catch_rate']:.3f} "
+          f"{m['catch_rate_ci']}, censored {m['censored']}, deviation "
+          f"{m.get('deviation_m', float('nan')) * 1000:.1f} mm")  # fmt: skip
+    for name in sorted(got["minus"], key=lambda n: -got["means"][n]):
+        d, r = got["minus"][name], got["minus_catch_rate"][name]
+        mean, rate = got["means"][name], got["rates"][name]
+        print(f"  {row} - {name:24s} {d['value']:+6.2f} [{d['ci'][0]:+.2f}, {d['ci'][1]:+.2f}]"
+              f" catches, {r['value']:+.3f} [{r['ci'][0]:+.3f}, {r['ci'][1]:+.3f}] rate"
+              f"  ({name} mean {mean:.2f}, rate {rate:.3f})")  # fmt: skip
+    print(
+        f"  best non-oracle (validation): {got['best_non_oracle']}; with {row}: "
+        f"{got['best_non_oracle_with_row']} (validation means "
+        f"{ {k: round(v, 2) for k, v in got['val_mean_catches'].items()} }); highest test "
+        f"mean: {got['top_test_mean_non_oracle']}"
+        + ("" if got["equals_kept"] is None else f"; equals the kept: {got['equals_kept']}")
+    )
 
 
 def main() -> None:
@@ -114,6 +167,7 @@ def main() -> None:
     ap.add_argument("--pattern", default="5")
     ap.add_argument("--levels", default="easy,medium,hard")
     ap.add_argument("--row", default="oracle_catch")
+    ap.add_argument("--kept", action="store_true", help="pair DIR's own episodes of --row")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     if (args.bench is None) == (args.replay is None):
@@ -121,7 +175,7 @@ def main() -> None:
     if args.bench is not None:
         bench(args.bench, args.pattern, tuple(args.levels.split(",")))
         return
-    got = replay(args.replay, args.row)
+    got = replay(args.replay, args.row, args.kept)
     if args.out:
         atomic_write_text(args.out, json.dumps(got, indent=2) + "\n")
 

@@ -96,6 +96,7 @@ CONTROLLERS = {
     "late_meeting": "juggler_mean_delay",
     "mean_delay_catch": "juggler_mean_delay_catch",
     "delay_estimator": "juggler_delay_estimator",
+    "delay_estimator_catch": "juggler_delay_estimator_catch",
     "fixed_point": "fixed_point",
 }
 

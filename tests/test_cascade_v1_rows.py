@@ -1,11 +1,14 @@
 """Cascade-v1's rows taken from Juggling-v2's bench: the hand-written delay estimator
 (``juggler_delay_estimator``: a known delay recovered from hand-worked frames and pooled
 over the balls; on real episodes near the true delay), the best constant and
-``velocity x mean delay`` (hand-worked observations), and every new choice made on
-validation seeds only (a spy that can fail)."""
+``velocity x mean delay`` (hand-worked observations), the estimator with the mean-delay
+catch plan (``juggler_delay_estimator_catch``: its parts, determinism, and with the pool
+pinned the mean-delay catch plan told that delay, episode for episode), and every new
+choice made on validation seeds only (a spy that can fail)."""
 
 from __future__ import annotations
 
+import hashlib
 from typing import Any
 
 import numpy as np
@@ -15,6 +18,8 @@ from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1 import (
     CONSTANT_GRID,
     FRESH_FRAME,
+    REFERENCES,
+    ROWS,
     CascadeV1Config,
     CascadeVelocityTimesDelay,
     _Constant,
@@ -25,10 +30,13 @@ from baselines.juggling_bench.cascade_v1 import (
 from motion_envs.datasets.juggling import episode_seeds
 from motion_envs.envs.juggling import CascadeV1Env, cascade_v1_obs_dim
 from motion_envs.models.juggling import (
+    CASCADE_CATCH_PLANS,
     CASCADE_V1_CONTROLLERS,
     CameraFrame,
     CascadeBallView,
     PooledReleaseEstimator,
+    SiteswapCatchController,
+    catch_plan,
 )
 from tests.test_cascade_v1 import Spy as CascadeSpy
 
@@ -324,3 +332,133 @@ def test_the_learner_is_chosen_on_validation_and_played_on_test_after(
     )
     assert lv["rows"]["task_error_ilc"]["catches_mean"] == 0.0
     assert lv["ilc"]["budget_train_episodes"] == 60
+
+
+# -- the two hand-written fixes together: juggler_delay_estimator_catch --------------------
+
+ESTCATCH = "juggler_delay_estimator_catch"
+
+
+def test_the_estimator_with_the_catch_plan_is_the_two_fixes_together() -> None:
+    """The delay estimator's mode (``"release"``, one pool per episode) and the mean-delay
+    catch plan on either juggler (the same declared objects): on three balls each ball
+    told ``lead`` ahead, on five the siteswap juggler's own catch; no ``delay_offset`` or
+    ``tracker_gain``."""
+    assert CASCADE_V1_CONTROLLERS[ESTCATCH] == CASCADE_V1_CONTROLLERS["juggler_delay_estimator"]
+    plans = CASCADE_CATCH_PLANS["juggler_mean_delay_catch"]
+    for pattern, fitted in (("3", True), ("5", False)):
+        plan = plans["fitted" if fitted else "siteswap"]
+        assert plan is not None and catch_plan(ESTCATCH, fitted) is plan
+        env = CascadeV1Env(level="medium", pattern=pattern, controller=ESTCATCH)
+        assert all(isinstance(e, PooledReleaseEstimator) for e in env.view.estimators)
+        assert all(e.pool is env.view.pool for e in env.view.estimators)  # type: ignore[attr-defined]
+        assert env.catch_plan is plan
+        if fitted:
+            assert not isinstance(env.controller, SiteswapCatchController)
+            assert env.view.lead == plan.lead == 0.02
+        else:
+            assert isinstance(env.controller, SiteswapCatchController)
+            assert env.controller.catch is plan and env.view.lead == 0.0
+    for bad in ({"delay_offset": 0.02}, {"tracker_gain": 0.5}):
+        with pytest.raises(ValueError, match="is for"):
+            CascadeV1Env(controller=ESTCATCH, **bad)  # type: ignore[arg-type]
+
+
+def _digest(controller: str, pattern: str, seed: int, max_catches: int = 6) -> str:
+    """The zero-action episode's observations, rewards and true balls, hashed."""
+    env = CascadeV1Env(level="medium", pattern=pattern, controller=controller,
+                       max_catches=max_catches)  # fmt: skip
+    return _digest_env(env, seed)
+
+
+def _digest_env(env: CascadeV1Env, seed: int) -> str:
+    h = hashlib.sha256()
+    obs, _ = env.reset(seed=seed)
+    h.update(obs.tobytes())
+    done = False
+    while not done:
+        obs, reward, te, tr, info = env.step(np.zeros(4, np.float32))
+        done = te or tr
+        h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
+    return h.hexdigest()
+
+
+@pytest.mark.parametrize("pattern", ["3", "5"])
+def test_the_estimator_with_the_catch_plan_is_deterministic_and_its_own_row(
+    pattern: str,
+) -> None:
+    """The same seed gives the same episode (fresh envs), another seed another one; and
+    on these seeds it is neither of the two rows it combines."""
+    a = _digest(ESTCATCH, pattern, 11)
+    assert a == _digest(ESTCATCH, pattern, 11)
+    assert a != _digest(ESTCATCH, pattern, 12)
+    for seed in (11, 12):
+        mine = _digest(ESTCATCH, pattern, seed)
+        assert mine != _digest("juggler_delay_estimator", pattern, seed)
+        assert mine != _digest("juggler_mean_delay_catch", pattern, seed)
+
+
+def _pinned(pattern: str, delay: float, monkeypatch: pytest.MonkeyPatch) -> CascadeV1Env:
+    """``juggler_delay_estimator_catch`` whose pool holds ``delay`` alone from every
+    reset on (the releases tell nothing: their anchor adds no delay)."""
+    env = CascadeV1Env(level="medium", pattern=pattern, controller=ESTCATCH, max_catches=6)
+    reset = env.view.reset
+
+    def pinned_reset(*args: Any) -> None:
+        reset(*args)
+        env.view.pool.append(delay)
+
+    monkeypatch.setattr(env.view, "reset", pinned_reset)
+    for est in env.view.estimators:
+        monkeypatch.setattr(est, "_anchor", lambda: None)
+    return env
+
+
+@pytest.mark.parametrize("pattern", ["3", "5"])
+def test_with_the_pool_pinned_it_is_the_mean_delay_catch_plan_told_that_delay(
+    pattern: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With the pool pinned at 185 ms the row is ``juggler_mean_delay_catch`` whose fixed
+    delay is 185 ms (not the level's mean, 150 ms) exactly, episode for episode: the row
+    is the mean-delay catch plan on the estimator's delay, nothing else. The pinning
+    matters (unpinned, or the mean delay's own 150 ms, other episodes on some seed)."""
+    delay = 0.185
+    pinned = _pinned(pattern, delay, monkeypatch)
+    told = CascadeV1Env(level="medium", pattern=pattern, controller="juggler_mean_delay_catch",
+                        max_catches=6)  # fmt: skip
+    for est in told.view.estimators:
+        est.fixed_delay = delay
+    same = [_digest_env(pinned, s) == _digest_env(told, s) for s in range(3)]
+    assert all(same)
+    assert pinned.view.pool == [delay]
+    differ = [
+        _digest_env(pinned, s) != _digest(name, pattern, s)
+        for s in range(3)
+        for name in (ESTCATCH, "juggler_mean_delay_catch")
+    ]
+    assert any(differ[0::2]) and any(differ[1::2])
+
+
+class EstimatorCatchSpy(Spy):
+    """:class:`Spy` whose ``juggler_delay_estimator_catch`` is the best row on validation
+    (15 catches) and the worst on test (0)."""
+
+    def catches(self, policy: Any, kwargs: dict[str, Any], split: str) -> int:
+        if kwargs["controller"] == ESTCATCH:
+            return 15 if split == "val" else 0
+        return super().catches(policy, kwargs, split)
+
+
+def test_the_estimator_with_the_catch_plan_is_a_competitor_chosen_on_validation() -> None:
+    spy = EstimatorCatchSpy()
+    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = run_cascade_v1(config, spy.play, spy.chooser(choose_late_offset),
+                         spy.chooser(choose_constant))  # fmt: skip
+    assert [s for _, s, choosing in spy.calls if choosing] == ["val"] * (len(CONSTANT_GRID) + 7)
+    (lv,) = doc["levels"]
+    assert "delay_estimator_catch" in ROWS and "delay_estimator_catch" not in REFERENCES
+    assert lv["val_mean_catches"]["delay_estimator_catch"] == 15.0
+    assert lv["best_non_oracle"] == "delay_estimator_catch"  # 0 on test: not read there
+    assert lv["rows"]["delay_estimator_catch"]["catches_mean"] == 0.0
+    assert lv["room"]["value"] == 1.0 - 0.0  # oracle_catch 1 on test
+    assert lv["delay_tracker_minus"]["rival"] == "delay_estimator_catch"

@@ -159,11 +159,12 @@ def test_deterministic() -> None:
 def test_which_controllers_carry_the_siteswap_plan() -> None:
     """``juggler_oracle_catch`` and ``juggler_mean_delay_catch`` on the siteswap juggler:
     each its declared plan, from the declared grids, the view telling the ball as it is;
-    ``juggler_delay_tracker``: the mean-delay one (the same object); the other
-    controllers: none (the plain juggler); the fitted juggler refuses a controller-side
-    plan."""
-    for name in ("juggler_oracle_catch", "juggler_mean_delay_catch", "juggler_delay_tracker"):
-        base = "juggler_mean_delay_catch" if name == "juggler_delay_tracker" else name
+    ``juggler_delay_tracker`` and ``juggler_delay_estimator_catch``: the mean-delay one
+    (the same object); the other controllers: none (the plain juggler); the fitted
+    juggler refuses a controller-side plan."""
+    carriers = ("juggler_delay_tracker", "juggler_delay_estimator_catch")
+    for name in ("juggler_oracle_catch", "juggler_mean_delay_catch", *carriers):
+        base = "juggler_mean_delay_catch" if name in carriers else name
         plan = CASCADE_CATCH_PLANS[base]["siteswap"]
         assert plan is not None and plan.lead in CASCADE_LEAD_GRID
         assert plan.descent in SITESWAP_DESCENT_GRID

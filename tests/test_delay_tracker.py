@@ -226,13 +226,10 @@ def test_the_tracker_never_reads_the_hidden_delay(monkeypatch: pytest.MonkeyPatc
         pass
 
 
-def test_cascade_v1_tracker_never_reads_the_hidden_delay(monkeypatch: pytest.MonkeyPatch) -> None:
-    kw = {"controller": "juggler_delay_tracker", "tracker_gain": 0.5, "max_catches": 8}
-    honest = [CascadeV1Env(level="medium", **kw).play(s) for s in range(3)]
-    reset = FlightEstimator.reset
-    monkeypatch.setattr(FlightEstimator, "reset", lambda self, drag=0.0, delay=0.0: reset(
-        self, math.nan, math.nan))  # fmt: skip
-    env = CascadeV1Env(level="medium", **kw)
+def _poisoned_cascade(kw: dict[str, Any], cls: type[CascadeV1Env] = CascadeV1Env) -> CascadeV1Env:
+    """A Cascade-v1 env whose own ``delay`` and ``drags`` are NaN after every reset (the
+    cameras and the world already hold the true ones)."""
+    env = cls(level="medium", **kw)
     real_reset = env.reset
 
     def poisoned_reset(**k: Any) -> Any:
@@ -241,8 +238,49 @@ def test_cascade_v1_tracker_never_reads_the_hidden_delay(monkeypatch: pytest.Mon
         env.drags = np.full(env.balls, math.nan)
         return out
 
-    monkeypatch.setattr(env, "reset", poisoned_reset)
-    assert honest == [env.play(s) for s in range(3)]
+    env.reset = poisoned_reset  # type: ignore[method-assign]
+    return env
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"controller": "juggler_delay_tracker", "tracker_gain": 0.5, "max_catches": 8},
+        {"controller": "juggler_delay_estimator_catch", "max_catches": 8},
+        {"controller": "juggler_delay_estimator_catch", "max_catches": 8, "pattern": "5"},
+    ],
+)
+def test_cascade_v1_tracker_never_reads_the_hidden_delay(
+    kw: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The delay tracker and the delay estimator with the catch plan: with the hidden
+    delay and drags poisoned wherever the controller could be told them (the estimators'
+    ``reset`` gets NaN, the env's own attributes are NaN after the reset) the episodes
+    are unchanged."""
+    honest = [CascadeV1Env(level="medium", **kw).play(s) for s in range(3)]
+    reset = FlightEstimator.reset
+    monkeypatch.setattr(FlightEstimator, "reset", lambda self, drag=0.0, delay=0.0: reset(
+        self, math.nan, math.nan))  # fmt: skip
+    assert honest == [_poisoned_cascade(kw).play(s) for s in range(3)]
+
+
+class _CheatingEstimatorCatch(CascadeV1Env):
+    """``juggler_delay_estimator_catch`` whose pool is the env's hidden delay at every
+    period: under the poisoning, NaN."""
+
+    def _advance(self, residual: Any) -> Any:
+        self.view.pool[:] = [self.delay]
+        return super()._advance(residual)
+
+
+def test_the_poisoning_tells_a_cheating_estimator_apart() -> None:
+    kw = {"controller": "juggler_delay_estimator_catch", "max_catches": 8}
+    honest = [CascadeV1Env(level="medium", **kw).play(s) for s in range(3)]
+    cheat = _poisoned_cascade(kw, _CheatingEstimatorCatch)
+    try:  # the cheat's NaN delay either changes the episodes or breaks the fit
+        assert honest != [cheat.play(s) for s in range(3)]
+    except (np.linalg.LinAlgError, ValueError):
+        pass
 
 
 # -- the benches' choice ---------------------------------------------------------------------

@@ -391,6 +391,7 @@ CASES: dict[str, Case] = {
             {"level": "medium", "controller": "fixed_point", "residual_phases": ["catch"]},
             {"level": "easy", "controller": "juggler_mean_delay_catch", "observe_task_error": True},
             {"level": "easy", "pattern": "5", "controller": "juggler_delay_estimator"},
+            {"level": "medium", "controller": "juggler_delay_estimator_catch", "max_catches": 2},
         ),
     ),
     "MotionEnvs/Cascade": Case(

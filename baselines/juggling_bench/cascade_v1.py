@@ -44,6 +44,11 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   Juggling-v2's release-anchored estimator, the delay found from each release, where
   the hand knows when and where it let go, and pooled over the episode's releases of
   every ball; :class:`~motion_envs.models.juggling.PooledReleaseEstimator`);
+* ``delay_estimator_catch``: the two hand-written fixes together
+  (``juggler_delay_estimator_catch``): the delay estimator's pooled delay with
+  ``mean_delay_catch``'s catch plan on either juggler (the same plan, declared, not
+  re-tuned; no hidden information: a competitor, the strongest simple fix a reviewer
+  would write in a few lines);
 * ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
   catch plan whose one delay ``D`` starts at the level's mean and, after every catch by
   either hand, moves by that catch's timing error ``e`` relative to the planned meeting,
@@ -153,6 +158,7 @@ ROWS = (
     "late_meeting",
     "mean_delay_catch",
     "delay_estimator",
+    "delay_estimator_catch",
     "fixed_point",
     "random",
     "task_error_ilc",
@@ -372,6 +378,7 @@ def _players(
         "late_meeting": ("juggler_mean_delay", None, offset, 0.0),
         "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0, 0.0),
         "delay_estimator": ("juggler_delay_estimator", None, 0.0, 0.0),
+        "delay_estimator_catch": ("juggler_delay_estimator_catch", None, 0.0, 0.0),
         "fixed_point": ("fixed_point", None, 0.0, 0.0),
         "random": ("juggler", "random", 0.0, 0.0),
         "delay_tracker": ("juggler_delay_tracker", None, tracker[1], tracker[0]),

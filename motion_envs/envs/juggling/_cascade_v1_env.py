@@ -119,8 +119,10 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     person) is corrected after every catch from that catch's timing error,
     ``D <- clip(D - k (e - delay_offset))`` over the level's delay range, told ``D +
     delay_offset`` (:mod:`~motion_envs.models.juggling._delay_tracker`; ``k`` is
-    ``tracker_gain``; the env hands the view each catch's timing error, never the delay).
-    The agent adds a residual to each hand's command.
+    ``tracker_gain``; the env hands the view each catch's timing error, never the delay),
+    and ``juggler_delay_estimator_catch``: the two hand-written fixes together, the
+    delay estimator's pooled delay with the mean-delay catch plan (declared, not
+    re-tuned). The agent adds a residual to each hand's command.
 
     Levels (Juggling-v2's; :data:`~motion_envs.models.juggling.V2_LEVELS`):
 
@@ -224,7 +226,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
@@ -242,7 +244,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       position-only camera per ball with drops and occlusion near either palm, drag per
       ball, the capture at impact; ``observe_task_error`` added later, its default,
       False, leaves every rollout unchanged; ``timing_scale`` later still, its default
-      0 likewise).
+      0 likewise; the controller ``juggler_delay_estimator_catch`` later, every other
+      controller's rollout unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
