@@ -44,6 +44,9 @@ unit action, the scale an agent is given):
   its lead and descent chosen on TRAINING seeds; no hidden information: a competitor);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
   delay found from the release, per episode);
+* ``estimator_catch``: the two hand-written fixes together
+  (``juggler_delay_estimator_catch``: the catch plan on the delay estimator's delay,
+  with the mean delay's plan, not re-tuned), the strongest simple fix without learning;
 * ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
   catch plan whose delay ``D`` starts at the level's mean and, after every catch, moves
   by the catch's timing error ``e`` relative to the planned meeting, ``D <- clip(D - k
@@ -155,6 +158,7 @@ ROWS = (
     "late_meeting",
     "mean_delay_catch",
     "delay_estimator",
+    "estimator_catch",
     "random",
     "task_error_ilc",
     "delay_tracker",
@@ -354,6 +358,7 @@ def row_players(
         "late_meeting": ("juggler_mean_delay", None, {"delay_offset": offset}),
         "mean_delay_catch": ("juggler_mean_delay_catch", None, {}),
         "delay_estimator": ("juggler_delay_estimator", None, {}),
+        "estimator_catch": ("juggler_delay_estimator_catch", None, {}),
         "random": ("juggler", _Random(0), {}),
         "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
     }
@@ -565,9 +570,10 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hvxp8", strict=True))
-    # one colour per row (the default cycle has 10; the 11th row is black, the 12th grey)
-    colors = {name: f"C{i}" if i < 10 else ("black", "0.5")[i - 10] for i, name in enumerate(ROWS)}
+    markers = dict(zip(ROWS, "osP^D<>hHvxp8", strict=True))
+    # one colour per row (the default cycle has 10; then black, grey, brown)
+    extra = ("black", "0.5", "saddlebrown")
+    colors = {name: f"C{i}" if i < 10 else extra[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():
             dev, rate = m["deviation_m"] * 1000, m["catch_rate"]

@@ -102,7 +102,9 @@ class JugglingV2Env(OneBallEnv):
     catch planned for the capture rule (the palm arrives early and meets the ball
     descending slower than it; :mod:`~motion_envs.models.juggling._v2_catch`):
     ``juggler_oracle_catch`` (the oracle's information, the UPPER REFERENCE) and
-    ``juggler_mean_delay_catch`` (the level's mean delay, a competitor), and
+    ``juggler_mean_delay_catch`` (the level's mean delay, a competitor),
+    ``juggler_delay_estimator_catch`` (the hand-written delay estimator's delay with the
+    mean delay's plan: the two hand-written fixes together, a competitor), and
     ``juggler_delay_tracker``: that catch plan with its delay corrected after every
     catch from the catch's timing error, ``D <- clip(D - k (e - delay_offset))`` over
     the level's delay range, told ``D + delay_offset``
@@ -219,7 +221,7 @@ class JugglingV2Env(OneBallEnv):
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_tracker` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
@@ -236,7 +238,8 @@ class JugglingV2Env(OneBallEnv):
     * v2: a hidden per-episode human delay with jitter, a position-only camera with
       drops and occlusion, air drag, the capture at impact, the task-error vector
       (``observe_task_error`` added later; its default, False, leaves every rollout
-      unchanged; ``timing_scale`` later still, its default 0 likewise).
+      unchanged; ``timing_scale`` later still, its default 0 likewise; the controller
+      ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).

@@ -49,6 +49,9 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
   and meets the ball descending slower than it): the UPPER REFERENCE;
 * ``"juggler_mean_delay_catch"``: the same catch plan on the level's mean delay (no
   hidden information: a competitor);
+* ``"juggler_delay_estimator_catch"``: the same catch plan on the hand-written delay
+  estimator's delay (``"release"``; the mean-delay plan, not re-tuned: the two
+  hand-written fixes combined, a competitor);
 * ``"juggler_delay_tracker"``: the mean-delay catch plan whose delay is corrected after
   every catch from the catch's timing error (:mod:`~motion_envs.models.juggling._delay_tracker`;
   the env hands the error to :meth:`V2Controller.felt`; a competitor).
@@ -176,6 +179,7 @@ V2_CONTROLLERS: dict[str, str] = {
     "juggler_oracle_catch": "oracle",
     "juggler_mean_delay_catch": "mean_delay",
     "juggler_delay_tracker": "mean_delay",
+    "juggler_delay_estimator_catch": "release",
 }
 
 
