@@ -44,7 +44,7 @@ unit action, the scale an agent is given):
   its lead and descent chosen on TRAINING seeds; no hidden information: a competitor);
 * ``delay_estimator``: the hand-written delay estimator (``juggler_delay_estimator``: the
   delay found from the release, per episode);
-* ``estimator_catch``: the two hand-written fixes together
+* ``delay_estimator_catch``: the two hand-written fixes together
   (``juggler_delay_estimator_catch``: the catch plan on the delay estimator's delay,
   with the mean delay's plan, not re-tuned), the strongest simple fix without learning;
 * ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
@@ -158,7 +158,7 @@ ROWS = (
     "late_meeting",
     "mean_delay_catch",
     "delay_estimator",
-    "estimator_catch",
+    "delay_estimator_catch",
     "random",
     "task_error_ilc",
     "delay_tracker",
@@ -358,7 +358,7 @@ def row_players(
         "late_meeting": ("juggler_mean_delay", None, {"delay_offset": offset}),
         "mean_delay_catch": ("juggler_mean_delay_catch", None, {}),
         "delay_estimator": ("juggler_delay_estimator", None, {}),
-        "estimator_catch": ("juggler_delay_estimator_catch", None, {}),
+        "delay_estimator_catch": ("juggler_delay_estimator_catch", None, {}),
         "random": ("juggler", _Random(0), {}),
         "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
     }
