@@ -12,7 +12,8 @@ grid choice and the best non-oracle row made on validation, ``oracle_catch`` the
 reference). Blocks: ``v2-LEVEL`` (Juggling-v2, catch rate; ``drift`` by default) and
 ``cascade3-LEVEL`` / ``cascade5-LEVEL`` (Cascade-v1 three or five balls, trained with at
 most 10 catches per episode, scored with the rows' 30: mean catches before the first
-drop and catch rate).
+drop and catch rate). With ``--memory`` the policy also keeps the sum and the mean of the
+timing errors it felt in the episode (:class:`baselines.agents.catch_timing.FeltErrors`).
 
 Per seed: the agent's score, ``agent - best non-oracle row``, ``agent - its base`` (the
 tracker, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over test episodes,
@@ -21,7 +22,8 @@ the juggler's + 5 mm; per block the median seed (by ``agent - best row``) and th
 validation pick (the best validation score), and the issue's targets in words.
 
     python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
-        [--seeds 0 1 2] [--generations 10] [--test-episodes 100] [--out DIR]
+        [--seeds 0 1 2] [--generations 10] [--population 10] [--batch 16]
+        [--memory] [--test-episodes 100] [--out DIR]
 
 Writes ``DIR/catch_timing_agents.json`` and ``DIR/catch_timing_agents.png`` (each seed's
 validation score per generation, the base's as a line).
@@ -44,7 +46,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _
 from _timing import machine, print_json
 
 from baselines.agents.against_rows import DEVIATION_SLACK_MM, MARGIN, likeness_met, margin_met
-from baselines.agents.catch_timing import CEMSettings, TimingPolicy, train_timing_cem
+from baselines.agents.catch_timing import CEMSettings, TimingPolicy, n_features, train_timing_cem
 
 HERE = Path(__file__).resolve().parent
 TIMING_SCALE = 0.1
@@ -114,9 +116,9 @@ def _diff(d: Any) -> dict[str, Any]:
     return {"value": d.difference, "ci": list(d.ci95), "detail": d.to_dict()}
 
 
-def score_test(rows: dict[str, Any], weights: Any, n: int) -> dict[str, Any]:
+def score_test(rows: dict[str, Any], weights: Any, n: int, memory: bool = False) -> dict[str, Any]:
     """The policy ``weights`` (and its base, ``w = 0``) on the TEST seeds against the
-    rows' played episodes."""
+    rows' played episodes (``memory``: the policy keeps the felt errors)."""
     from baselines.agents.juggling_score import catch_rate_comparison, juggling_episodes
 
     env, kw = rows["env"], rows["test_kwargs"]
@@ -124,8 +126,8 @@ def score_test(rows: dict[str, Any], weights: Any, n: int) -> dict[str, Any]:
     dim = 5 if rows["cascade"] else 3
     best, upper = rows["lv"]["best_non_oracle"], rows["upper"]
     out: dict[str, Any] = {}
-    for who, w in (("agent", np.asarray(weights)), ("base", np.zeros(4 * hands + 1))):
-        policy = TimingPolicy(w, hands, dim)
+    for who, w in (("agent", np.asarray(weights)), ("base", np.zeros(n_features(hands, memory)))):
+        policy = TimingPolicy(w, hands, dim, memory)
         if rows["cascade"]:
             from baselines.agents.cascade_score import cascade_agent_episodes
 
@@ -227,6 +229,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--batch", type=int, default=16)
     ap.add_argument("--val-episodes", type=int, default=50)
     ap.add_argument("--test-episodes", type=int, default=100)
+    ap.add_argument(
+        "--memory",
+        action="store_true",
+        help="the policy also keeps the sum and mean of the felt timing errors",
+    )
     ap.add_argument("--out", type=Path, default=Path("catch_timing_agents"))
     args = ap.parse_args(argv)
     from tqdm import tqdm
@@ -234,7 +241,8 @@ def main(argv: list[str] | None = None) -> int:
     from motion_envs._io import atomic_write_text
 
     settings = CEMSettings(generations=args.generations, population=args.population,
-                           batch=args.batch, val_episodes=args.val_episodes)  # fmt: skip
+                           batch=args.batch, val_episodes=args.val_episodes,
+                           memory=args.memory)  # fmt: skip
     args.out.mkdir(parents=True, exist_ok=True)
     doc: dict[str, Any] = {"machine": machine(), "settings": vars(settings),
                            "timing_scale": TIMING_SCALE, "blocks": []}  # fmt: skip
@@ -258,7 +266,7 @@ def main(argv: list[str] | None = None) -> int:
             bar.close()
             train_cpu = time.process_time() - t0
             t0 = time.process_time()
-            run = score_test(rows, tr.weights, args.test_episodes)
+            run = score_test(rows, tr.weights, args.test_episodes, args.memory)
             run.update(seed=seed, kept=tr.kept, weights=tr.weights.tolist(),
                        val_scores=tr.val_scores, train_scores=tr.train_scores,
                        train_cpu_s=train_cpu, test_cpu_s=time.process_time() - t0)  # fmt: skip
@@ -269,7 +277,7 @@ def main(argv: list[str] | None = None) -> int:
 
         val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
         hands, dim = (2, 5) if rows["cascade"] else (1, 3)
-        zero = TimingPolicy(np.zeros(4 * hands + 1), hands, dim)
+        zero = TimingPolicy(np.zeros(n_features(hands, args.memory)), hands, dim, args.memory)
         blk["base_val_score"] = block_score(
             *play_scores(rows["env"], rows["train_kwargs"], zero, val_seeds), rows["cascade"]
         )

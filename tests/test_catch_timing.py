@@ -97,3 +97,70 @@ def test_cem_refuses_an_env_without_the_timing_entry() -> None:
         ct.train_timing_cem(
             "MotionEnvs/Juggling-v2", {"level": "easy"}, ct.CEMSettings(generations=1), 0
         )
+
+
+def test_felt_errors_hand_worked() -> None:
+    """One hand, two rows: a timed catch of -20 ms, the held entries repeated, an untimed
+    catch, a timed +40 ms (S = +20 ms, n = 2, mean +10 ms), then a new episode (the count
+    falls): cleared. Features (S / 50 ms, mean / 50 ms)."""
+    felt = ct.FeltErrors()
+
+    def obs(*rows: tuple[float, float, float]) -> np.ndarray:
+        return np.array([[7.0, 0.01, timing, timed, count] for timing, timed, count in rows])
+
+    got = [
+        felt.update(obs((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), 1),
+        felt.update(obs((-0.02, 1.0, 1.0), (0.0, 0.0, 0.0)), 1),
+        felt.update(obs((-0.02, 1.0, 1.0), (0.03, 1.0, 1.0)), 1),
+        felt.update(obs((0.0, 0.0, 2.0), (0.03, 1.0, 1.0)), 1),
+        felt.update(obs((0.04, 1.0, 3.0), (0.03, 1.0, 1.0)), 1),
+        felt.update(obs((0.0, 0.0, 0.0), (0.03, 1.0, 1.0)), 1),
+    ]
+    want = [
+        [[0, 0], [0, 0]],
+        [[-0.4, -0.4], [0, 0]],
+        [[-0.4, -0.4], [0.6, 0.6]],
+        [[-0.4, -0.4], [0.6, 0.6]],
+        [[0.4, 0.2], [0.6, 0.6]],
+        [[0, 0], [0.6, 0.6]],
+    ]
+    for g, w in zip(got, want, strict=True):
+        np.testing.assert_allclose(g, w, atol=1e-12)
+    # a batch of another size starts afresh
+    np.testing.assert_allclose(felt.update(obs((0.01, 1.0, 1.0)), 1), [[0.2, 0.2]], atol=1e-12)
+
+
+def test_memory_policy_features_and_zero_weights() -> None:
+    assert ct.n_features(1) == 5 and ct.n_features(1, memory=True) == 7
+    assert ct.n_features(2, memory=True) == 13
+    policy = ct.TimingPolicy(np.array([0, 0, 0, 0, 0.5, 0, 0.1]), 1, 3, memory=True)
+    first = policy(np.array([[9.0, 0.0, 0.0, 0.0, 0.0]]))
+    np.testing.assert_allclose(first, [[0, 0, 0.1]], atol=1e-7)  # nothing felt: the bias
+    after = policy(np.array([[9.0, 0.0, -0.02, 1.0, 1.0]]))  # S = -20 ms -> -0.4
+    np.testing.assert_allclose(after, [[0, 0, 0.5 * -0.4 + 0.1]], atol=1e-7)
+
+
+def test_the_memory_sums_the_felt_timings_of_a_real_episode() -> None:
+    """Called on every step of real Juggling-v2 episodes, the memory's sum is the sum of
+    ``info["task_error"]``'s timings over the catches that had one (the env's own record,
+    an independent count)."""
+    import gymnasium as gym
+
+    import motion_envs  # noqa: F401
+
+    kw = {**V2_KW, "level": "medium", "max_catches": 4}
+    policy = ct.TimingPolicy(np.zeros(ct.n_features(1, True)), 1, 3, memory=True)
+    env = gym.make("MotionEnvs/Juggling-v2", **kw)
+    checked = 0
+    for seed in (3, 4, 5):
+        obs, _ = env.reset(seed=seed)
+        total, done = 0.0, False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy(obs[None])[0])
+            done = terminated or truncated
+            if "task_error" in info and np.isfinite(info["task_error"][1]):
+                total += float(info["task_error"][1])
+                checked += 1
+        policy(obs[None])  # the last observation: its catch is counted too
+        assert policy.felt.total[0, 0] == pytest.approx(total, abs=1e-6)
+    assert checked >= 3

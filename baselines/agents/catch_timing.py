@@ -17,7 +17,14 @@ decision per catch, as a person adjusts after feeling a catch. Per hand the feat
 .. math:: \phi_h = (\mathrm{offset}/0.05\,\mathrm{m},\ \mathrm{timing}/0.05\,\mathrm{s},\
           \mathrm{timed},\ [\mathrm{catches} > 0]),
 
-then a constant 1, and ``u = clip(w . phi, -1, 1)``; the residual entries are 0 (the
+then a constant 1, and ``u = clip(w . phi, -1, 1)``. With ``memory=True`` the policy
+also keeps, per row of the batch and per hand, what it has felt in the episode: the sum
+``S`` of its timed catches' timing errors and their count ``n``, and adds per hand
+``(S / 0.05 s, S / (n 0.05 s))`` (0 while ``n = 0``): an integrator (the tracker's own
+state, with a learned gain) and the running mean (the estimate of a constant delay
+error a Kalman filter converges to), so the learned correction can use every catch of
+the episode, not the last one only. A row's memory is cleared when its catch count
+falls (a new episode in that row) or the batch changes size. The residual entries are 0 (the
 hand follows the juggler; its likeness is the controller's). ``w = 0`` is the base (the
 tracker with its validated gain and offset). The tracker itself is in the family only
 through its own state; the policy adds a correction per catch on top of it, the residual
@@ -47,10 +54,13 @@ from numpy.typing import NDArray
 from motion_envs._typing import FloatArray
 
 __all__ = [
+    "MEMORY_ENTRIES",
     "TIMING_ENTRIES",
     "CEMSettings",
+    "FeltErrors",
     "TimingPolicy",
     "TimingTraining",
+    "n_features",
     "play_scores",
     "timing_features",
     "train_timing_cem",
@@ -58,6 +68,9 @@ __all__ = [
 
 #: Task-error entries per hand at the end of the observation (``observe_task_error``).
 TIMING_ENTRIES = 4
+#: The memory's features per hand (``memory=True``): the sum and the mean of the felt
+#: timing errors.
+MEMORY_ENTRIES = 2
 #: Scales of the features (m, s): a 5 cm offset, a 50 ms timing error -> 1.
 _OFFSET_SCALE, _TIMING_SCALE = 0.05, 0.05
 
@@ -79,20 +92,64 @@ def timing_features(obs: NDArray[Any], hands: int) -> FloatArray:
     return np.hstack([phi, np.ones((len(obs), 1))])
 
 
+def n_features(hands: int, memory: bool = False) -> int:
+    """The length of ``w``: per hand the task-error features (and the memory's), then
+    the constant."""
+    return (TIMING_ENTRIES + (MEMORY_ENTRIES if memory else 0)) * hands + 1
+
+
+class FeltErrors:
+    """Per row and hand, the sum and count of the timed catches' timing errors felt in
+    the episode (module docstring), updated from the held task-error entries: a catch is
+    new when the hand's catch count grows."""
+
+    def __init__(self) -> None:
+        self.total = np.zeros((0, 0))
+        self.count = np.zeros((0, 0))
+        self.seen = np.zeros((0, 0))
+
+    def update(self, obs: NDArray[Any], hands: int) -> FloatArray:
+        """Take this step's observations ``(N, d)``; return the memory's features ``(N,
+        2 hands)``: per hand ``(S / 0.05, S / (n 0.05))``."""
+        obs = np.asarray(obs, dtype=np.float64)
+        tail = obs[:, -TIMING_ENTRIES * hands :].reshape(len(obs), hands, TIMING_ENTRIES)
+        caught = tail[..., 3]
+        if self.seen.shape != caught.shape:
+            self.total, self.count = np.zeros(caught.shape), np.zeros(caught.shape)
+            self.seen = np.zeros(caught.shape)
+        fresh = caught < self.seen  # a new episode in that row
+        self.total[fresh], self.count[fresh] = 0.0, 0.0
+        new = (caught > self.seen) & (tail[..., 2] > 0.5)
+        self.total += np.where(new, tail[..., 1], 0.0)
+        self.count += new
+        self.seen = caught.copy()
+        mean = np.divide(
+            self.total, self.count, out=np.zeros_like(self.total), where=self.count > 0
+        )
+        return np.stack([self.total, mean], axis=-1).reshape(len(obs), -1) / _TIMING_SCALE
+
+
 @dataclass
 class TimingPolicy:
     """``u = clip(phi . w, -1, 1)`` per row (module docstring).
 
     ``weights`` ``(p,)`` for every row, or ``(N, p)``: one candidate per row of the
-    observations (CEM plays its candidates side by side). Called on observations ``(N,
-    d)``, returns actions ``(N, action_dim)``: zeros but the last entry, ``u``."""
+    observations (CEM plays its candidates side by side); ``p`` is :func:`n_features`.
+    With ``memory`` the features of the felt errors come before the constant; call a
+    memory policy on every step of its episodes (it counts the catches). Called on
+    observations ``(N, d)``, returns actions ``(N, action_dim)``: zeros but the last
+    entry, ``u``."""
 
     weights: FloatArray
     hands: int
     action_dim: int
+    memory: bool = False
+    felt: FeltErrors = field(default_factory=FeltErrors, repr=False)
 
     def __call__(self, obs: NDArray[Any]) -> NDArray[np.float32]:
         phi = timing_features(obs, self.hands)
+        if self.memory:
+            phi = np.hstack([phi[:, :-1], self.felt.update(obs, self.hands), phi[:, -1:]])
         w = np.asarray(self.weights, dtype=np.float64)
         u = phi @ w if w.ndim == 1 else np.einsum("np,np->n", phi, w[: len(phi)])
         out = np.zeros((len(phi), self.action_dim), dtype=np.float32)
@@ -112,6 +169,7 @@ class CEMSettings:
     min_sigma: float = 0.02
     smoothing: float = 0.3
     val_episodes: int = 50
+    memory: bool = False
 
     def __post_init__(self) -> None:
         for name in ("generations", "population", "elite", "batch", "val_episodes"):
@@ -210,7 +268,8 @@ def train_timing_cem(
     hands = 2 if cascade else 1
     action_dim = int(np.prod(probe.action_space.shape or (1,)))
     probe.close()
-    p = TIMING_ENTRIES * hands + 1
+    p = n_features(hands, settings.memory)
+    mem = settings.memory
     rng = np.random.default_rng(seed)
     mean, std = np.zeros(p), np.full(p, settings.sigma)
     out = TimingTraining()
@@ -222,7 +281,7 @@ def train_timing_cem(
         seeds = base + np.arange(s.batch, dtype=np.int64)
         rows = np.repeat(cand, s.batch, axis=0)
         catches, tosses = play_scores(
-            env_id, kwargs, TimingPolicy(rows, hands, action_dim), np.tile(seeds, s.population)
+            env_id, kwargs, TimingPolicy(rows, hands, action_dim, mem), np.tile(seeds, s.population)
         )
         per = catches.reshape(s.population, s.batch), tosses.reshape(s.population, s.batch)
         scores = np.array([block_score(c, t, cascade) for c, t in zip(*per, strict=True)])
@@ -230,7 +289,9 @@ def train_timing_cem(
         mean = s.smoothing * mean + (1 - s.smoothing) * elite.mean(axis=0)
         std = np.maximum(s.smoothing * std + (1 - s.smoothing) * elite.std(axis=0), s.min_sigma)
         val = block_score(
-            *play_scores(env_id, kwargs, TimingPolicy(mean.copy(), hands, action_dim), val_seeds),
+            *play_scores(
+                env_id, kwargs, TimingPolicy(mean.copy(), hands, action_dim, mem), val_seeds
+            ),
             cascade,
         )
         out.means.append(mean.copy())
