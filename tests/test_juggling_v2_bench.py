@@ -20,6 +20,7 @@ from baselines.juggling_bench.v2 import (
     VelocityTimesDelay,
     choose_constant,
     choose_offset,
+    report_v2,
     run_v2,
     write_v2,
 )
@@ -218,6 +219,8 @@ def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
     assert set(level["oracle_catch_minus_rows"]) == set(level["rows"]) - {"oracle_catch"}
     room = level["room_below_oracle_catch"]
     assert room == level["oracle_catch_minus_rows"][level["best_non_oracle"]]
+    assert level["target_room"]["room"] == room["value"]
+    assert level["target_room"]["sentence"] in report_v2(doc)
     assert level["best_non_oracle"] == max(
         level["val_catch_rates"], key=lambda r: level["val_catch_rates"][r]
     )
@@ -287,3 +290,15 @@ def test_the_random_row_restarts_its_generator_for_the_test_seeds() -> None:
     fresh = np.random.default_rng(0).bit_generator.state["state"]
     assert [s for s, _ in states] == ["val", "test"]
     assert all(state == fresh for _, state in states)
+
+
+def test_the_target_room_says_whether_the_level_can_decide() -> None:
+    from baselines.agents.against_rows import room_for_target
+
+    shut = room_for_target("delay_estimator_catch", "oracle_catch", 0.010, [-0.011, 0.032])
+    assert not shut["open"]
+    assert "NO room" in shut["sentence"] and "by at least +0.018" in shut["sentence"]
+    wide = room_for_target("late_meeting", "oracle_catch", 0.122, [0.079, 0.169])
+    assert wide["open"] and "room for the target" in wide["sentence"]
+    edge = room_for_target("a", "b", 0.02, [-0.01, 0.05])  # the high end at the margin: open
+    assert edge["open"]

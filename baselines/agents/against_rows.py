@@ -45,6 +45,7 @@ __all__ = [
     "likeness_met",
     "margin_met",
     "median_run",
+    "room_for_target",
     "run_fields",
     "save_plot",
     "train_all",
@@ -207,6 +208,33 @@ def validation_pick(runs: Sequence[dict[str, Any]], key: str) -> dict[str, Any]:
 def margin_met(difference: float, ci: Sequence[float], margin: float = MARGIN) -> bool:
     """The issue's target: ``difference >= margin`` and the interval's low end above 0."""
     return bool(difference >= margin and ci[0] > 0)
+
+
+def room_for_target(
+    best: str, upper: str, value: float, ci: Sequence[float], margin: float = MARGIN
+) -> dict[str, Any]:
+    """Whether a level can show an agent meeting the target ``agent - best >= margin``:
+    the room the upper reference leaves above the best non-oracle row (``upper - best``,
+    paired, ``value`` and ``ci``). When even the interval's high end is below ``margin``
+    an agent would have to beat the upper reference itself (given the hidden values) by
+    ``margin - high``: the level cannot decide for a learner that only reaches the
+    reference. Returns ``{"margin", "room", "room_ci", "open", "sentence"}``."""
+    hi = float(ci[1])
+    open_ = bool(hi >= margin)
+    room = format_difference(value, ci)
+    if open_:
+        sentence = (
+            f"room for the target: {upper} - {best} = {room}, its interval reaches "
+            f"+{margin:.2f}: an agent could meet the target without beating {upper}"
+        )
+    else:
+        sentence = (
+            f"NO room for the target: {upper} - {best} = {room}, below +{margin:.2f} even "
+            f"at the interval's high end: an agent would have to beat the upper reference "
+            f"({upper}, given the hidden values) by at least {margin - hi:+.3f}"
+        )
+    return {"margin": margin, "room": float(value), "room_ci": [float(c) for c in ci],
+            "open": open_, "sentence": sentence}  # fmt: skip
 
 
 def likeness_met(

@@ -74,7 +74,10 @@ pooled) and the hand's deviation from the held-out SIMULATED demonstrations
 bootstrap interval over episodes, and the ROOM left below the upper reference by the
 best non-oracle row (``oracle_catch`` minus it, a paired interval), with
 ``oracle_catch`` minus every other row (paired) to tell whether it is above them all;
-``room_below_oracle`` keeps the old ``oracle`` minus the best row. :func:`write_v2`
+``room_below_oracle`` keeps the old ``oracle`` minus the best row. ``target_room`` says
+in words whether that room can decide the agents' target (``agent - best >= +0.05``;
+:func:`baselines.agents.against_rows.room_for_target`): when the room's interval stays
+below +0.05 an agent would have to beat the upper reference itself. :func:`write_v2`
 writes ``results.json`` and ``juggling_v2_rows.png`` (catch rate against deviation, one
 point per row with its interval bars, a panel per level).
 """
@@ -91,6 +94,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines import options
+from baselines.agents.against_rows import room_for_target
 from baselines.agents.juggling_score import (
     JugglingEpisodes,
     Policy,
@@ -451,6 +455,7 @@ def run_v2(
                     "history": ilc.history,
                 },
                 "room_below_oracle_catch": {"value": room, "ci": [lo, hi]},
+                "target_room": room_for_target(best, UPPER_REFERENCE, room, [lo, hi]),
                 "oracle_catch_minus_rows": above,
                 "room_below_oracle": {"value": old[0], "ci": [old[1], old[2]]},
                 "oracle_minus_delay_estimator": {"value": est[0], "ci": [est[1], est[2]]},
@@ -517,6 +522,8 @@ def report_v2(doc: dict[str, Any]) -> str:
             f"upper reference ({ref} - {lv['best_non_oracle']}, paired): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
         )
+        if "target_room" in lv:
+            lines.append(f"{lv['level']:7s} {lv['target_room']['sentence']}")
         below = [
             name
             for name, d in lv.get("oracle_catch_minus_rows", {}).items()
