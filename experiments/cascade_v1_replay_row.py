@@ -20,7 +20,8 @@ can be replayed alone and paired with them on the same test seeds.
   (``best_non_oracle_with_row``). A row ``DIR`` holds is compared with its kept
   episodes (``equals_kept``: the replay plays what the bench played);
 * ``--replay DIR --kept``: the same pairing of ``DIR``'s own episodes of ``--row``,
-  nothing played (a bench run with the row in it).
+  nothing played (a bench run with the row in it; its summary, with the hand
+  deviation, as the bench wrote it).
 
 The demonstrations are SIMULATED.
 
@@ -122,7 +123,8 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
         # the bench's rule (the first in ROWS order on a tie), the row among the candidates
         order = [r for r in ROWS if r in val_means] + [r for r in val_means if r not in ROWS]
         out[level] = {
-            "row": row_summary(new),
+            # a kept row's entry as the bench wrote it (with its hand deviation)
+            "row": lv["rows"][row] if kept_row else row_summary(new),
             "minus": {name: _paired(new, e) for name, e in others.items()},
             "minus_catch_rate": {
                 name: _rate_difference(new, e, (row, name)) for name, e in others.items()
@@ -141,9 +143,10 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
 
 def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
     m = got["row"]
-    print(f"{level}: {row} mean {m['catches_mean']:.2f} {m['catches_mean_ci']}, median "
+    (mlo, mhi), (rlo, rhi) = m["catches_mean_ci"], m["catch_rate_ci"]
+    print(f"{level}: {row} mean {m['catches_mean']:.2f} [{mlo:.2f}, {mhi:.2f}], median "
           f"{m['catches_median']} {m['catches_median_ci']}, catch rate {m['catch_rate']:.3f} "
-          f"{m['catch_rate_ci']}, censored {m['censored']}, deviation "
+          f"[{rlo:.3f}, {rhi:.3f}], censored {m['censored']}, deviation "
           f"{m.get('deviation_m', float('nan')) * 1000:.1f} mm")  # fmt: skip
     for name in sorted(got["minus"], key=lambda n: -got["means"][n]):
         d, r = got["minus"][name], got["minus_catch_rate"][name]
