@@ -23,7 +23,8 @@ The public names of small private modules, one concern each:
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
   (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`; the delay estimator
   pooled over the balls, :class:`PooledReleaseEstimator`) and its catch plans
-  (:data:`CASCADE_CATCH_PLANS`);
+  (:data:`CASCADE_CATCH_PLANS`; :func:`catch_plan`: also the controllers carrying the
+  mean delay's, the delay tracker and the delay estimator with the catch plan);
   ``_v2_catch``: the catch planned for Juggling-v2's capture rule (:class:`CatchPlan`)
   and every Juggling-v2 controller by name (:func:`make_v2_controller`);
   ``_delay_tracker``: the online delay tracker driven by each catch's timing error
