@@ -297,6 +297,11 @@ def test_a_small_real_run_writes_its_table(tmp_path: Any) -> None:
     assert lv["rows"]["random"]["deviation_m"] > 3 * lv["rows"]["juggler"]["deviation_m"]
     text = report_cascade_v1(doc)
     assert "deviation mm [95% CI]" in text and "not measured" not in text
+    # the room in catch rate, the agents' target's unit, decides the target's words
+    best, rows = lv["best_non_oracle"], lv["rows"]
+    rate = lv["room_catch_rate"]["value"]
+    assert rate == pytest.approx(rows["oracle_catch"]["catch_rate"] - rows[best]["catch_rate"])
+    assert lv["target_room"]["room"] == rate and lv["target_room"]["sentence"] in text
     paths = write_cascade_v1(doc, tmp_path)
     assert [p.name for p in paths] == ["results.json", "cascade_v1_rows.png"]
     assert all(p.stat().st_size > 0 for p in paths)

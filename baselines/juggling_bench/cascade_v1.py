@@ -85,9 +85,12 @@ too; recorded on the TEST episodes only, the choices read catches alone; the pat
 without such demonstrations, all but ``3``, ``3-human`` and ``5``, report none); per
 level the ROOM, the paired difference of mean catches of ``oracle_catch`` and of the
 best non-oracle row, ``oracle_catch`` minus every other row (paired), and the old
-``oracle`` minus the best row. :func:`write_cascade_v1` writes ``results.json`` and
-``cascade_v1_rows.png`` (mean catches and catch rate against the deviation, a point per
-row with its intervals, a panel per level). The demonstrations (the likeness reward,
+``oracle`` minus the best row; ``room_catch_rate``, the same room in catch rate, and
+``target_room``, whether it can decide the agents' target (+0.05 catch rate above the
+best row; :func:`baselines.agents.against_rows.room_for_target`).
+:func:`write_cascade_v1` writes ``results.json`` and ``cascade_v1_rows.png`` (mean
+catches and catch rate against the deviation, a point per row with its intervals, a
+panel per level). The demonstrations (the likeness reward,
 the siteswap juggler's style, the deviation's) are SIMULATED.
 """
 
@@ -104,6 +107,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from baselines import options
+from baselines.agents.against_rows import room_for_target
+from baselines.agents.juggling_score import catch_rate_difference
 from baselines.juggling_bench import v2
 from baselines.juggling_bench.cascade import CascadeEpisodes, summary
 from baselines.juggling_bench.cascade_v1_view import FRESH_FRAME, catching_velocities
@@ -493,6 +498,7 @@ def run_cascade_v1(
             keep[level] = played
         rows = {name: row_summary(eps) for name, eps in played.items()}
         room = _paired(played[UPPER_REFERENCE], played[best])
+        rate, rlo, rhi = catch_rate_difference(played[UPPER_REFERENCE], played[best])
         above = {
             name: _paired(played[UPPER_REFERENCE], eps)
             for name, eps in played.items()
@@ -512,6 +518,8 @@ def run_cascade_v1(
                 "best_non_oracle": best,
                 "rows": rows,
                 "room": room,
+                "room_catch_rate": {"value": rate, "ci": [rlo, rhi]},
+                "target_room": room_for_target(best, UPPER_REFERENCE, rate, [rlo, rhi]),
                 "upper_minus_rows": above,
                 "upper_is_upper": all(d["value"] >= 0 for d in above.values()),
                 "oracle_minus_best": _paired(played["oracle"], played[best]),
@@ -621,6 +629,8 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
             f"{old['ci'][1]:+.2f}]; oracle_catch is {upper}"
             + (f" (below {', '.join(below)})" if below else "")
         )
+        if "target_room" in lv:
+            lines.append(f"{lv['level']:7s} {lv['target_room']['sentence']} (catch rate)")
         val = ", ".join(f"{k} {v:.2f}" for k, v in lv.get("val_mean_catches", {}).items())
         lines.append(f"{lv['level']:7s} validation mean catches: {val}")
         if "delay_tracker_minus" in lv:
