@@ -1,0 +1,114 @@
+"""What of the room above the hand-written fixes on Cascade-v1 is the drag, what the delay
+(issue 34): ``oracle_catch`` (told the true delay and every ball's drag) against the same
+controller told the true delay but NO drag (its estimators reset with drag 0), the
+hand-written fixes together (``juggler_delay_estimator_catch``) and the mean-delay catch
+plan, all with the zero action on the same VALIDATION seeds (``SPLIT_SEEDS["val"] + i``;
+no test seed is played). Mean catches before the first drop (at most ``--max-catches``),
+each row minus ``oracle_catch`` paired over the seeds with a 95 % bootstrap interval.
+
+    python experiments/cascade_v1_room_source.py [--pattern 3] [--levels medium hard]
+        [--episodes 40] [--max-catches 30]
+
+Prints a table and one JSON object. A diagnosis (no row is chosen from it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing
+from _timing import machine, print_json
+
+from baselines.stats import paired_mean_difference
+from motion_envs.datasets.juggling import SPLIT_SEEDS
+from motion_envs.envs.juggling import CascadeV1Env
+from motion_envs.models.juggling import FlightEstimator
+
+#: Row -> (controller, the oracle's drag withheld).
+ROWS: dict[str, tuple[str, bool]] = {
+    "oracle_catch": ("juggler_oracle_catch", False),
+    "oracle_catch_no_drag": ("juggler_oracle_catch", True),
+    "delay_estimator_catch": ("juggler_delay_estimator_catch", False),
+    "mean_delay_catch": ("juggler_mean_delay_catch", False),
+}
+
+
+@contextmanager
+def drag_withheld() -> Iterator[None]:
+    """Every estimator reset in the block is told drag 0 (the delay as given)."""
+    reset = FlightEstimator.reset
+
+    def no_drag(self: FlightEstimator, drag: float = 0.0, delay: float = 0.0) -> None:
+        reset(self, 0.0, delay)
+
+    FlightEstimator.reset = no_drag  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        FlightEstimator.reset = reset  # type: ignore[method-assign]
+
+
+def catches(controller: str, no_drag: bool, level: str, pattern: str, seeds: list[int],
+            max_catches: int) -> np.ndarray:  # fmt: skip
+    """Mean catches before the first drop of the zero-action episodes of ``seeds``."""
+    env = CascadeV1Env(level=level, pattern=pattern, controller=controller,
+                       max_catches=max_catches)  # fmt: skip
+    if no_drag:
+        with drag_withheld():
+            return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
+    return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
+
+
+def run(pattern: str, levels: list[str], episodes: int, max_catches: int) -> dict[str, Any]:
+    seeds = [SPLIT_SEEDS["val"] + i for i in range(episodes)]
+    out: dict[str, Any] = {"pattern": pattern, "split": "val", "episodes": episodes,
+                           "max_catches": max_catches, "levels": {}}  # fmt: skip
+    for level in levels:
+        t0 = time.process_time()
+        got = {name: catches(c, nd, level, pattern, seeds, max_catches)
+               for name, (c, nd) in ROWS.items()}  # fmt: skip
+        lv: dict[str, Any] = {"mean_catches": {k: float(v.mean()) for k, v in got.items()}}
+        for name, v in got.items():
+            if name != "oracle_catch":
+                d = paired_mean_difference(v, got["oracle_catch"], name, "oracle_catch")
+                lv[f"{name}_minus_oracle_catch"] = {"value": d.difference, "ci": list(d.ci95)}
+        lv["cpu_s"] = time.process_time() - t0
+        out["levels"][level] = lv
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--pattern", default="3")
+    ap.add_argument("--levels", nargs="+", default=["medium", "hard"])
+    ap.add_argument("--episodes", type=int, default=40)
+    ap.add_argument("--max-catches", type=int, default=30)
+    args = ap.parse_args(argv)
+    doc = run(args.pattern, args.levels, args.episodes, args.max_catches)
+    for level, lv in doc["levels"].items():
+        for name, mean in lv["mean_catches"].items():
+            d = lv.get(f"{name}_minus_oracle_catch")
+            diff = (
+                ""
+                if d is None
+                else (
+                    f"  minus oracle_catch {d['value']:+.2f} [{d['ci'][0]:+.2f}, {d['ci'][1]:+.2f}]"
+                )
+            )
+            print(f"{args.pattern} {level:7s} {name:24s} {mean:6.2f}{diff}")
+        print(f"{args.pattern} {level:7s} CPU {lv['cpu_s']:.1f} s")
+    doc["machine"] = machine()
+    print_json(doc)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
