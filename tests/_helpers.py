@@ -69,3 +69,19 @@ def reset_poisoned(env: Any, clean: np.ndarray, subjects: np.ndarray, l: int) ->
     poisoned[subjects != subjects[l]] = np.nan
     env._calibration.features = poisoned
     return env.reset(options={"trajectory": l})
+
+
+def rollout_digest(env: Any, seed: int) -> str:
+    """A SHA-256 of a zero-action Cascade-v1 episode reset with ``seed``: every
+    observation, reward and the balls' states in ``info``, step by step."""
+    import hashlib
+
+    h = hashlib.sha256()
+    obs, _ = env.reset(seed=seed)
+    h.update(obs.tobytes())
+    done = False
+    while not done:
+        obs, reward, te, tr, info = env.step(np.zeros(4, np.float32))
+        done = te or tr
+        h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
+    return h.hexdigest()

@@ -8,11 +8,11 @@ choice made on validation seeds only (a spy that can fail)."""
 
 from __future__ import annotations
 
-import hashlib
 from typing import Any
 
 import numpy as np
 import pytest
+from _helpers import rollout_digest
 
 from baselines.juggling_bench.cascade import CascadeEpisodes
 from baselines.juggling_bench.cascade_v1 import (
@@ -368,19 +368,7 @@ def _digest(controller: str, pattern: str, seed: int, max_catches: int = 6) -> s
     """The zero-action episode's observations, rewards and true balls, hashed."""
     env = CascadeV1Env(level="medium", pattern=pattern, controller=controller,
                        max_catches=max_catches)  # fmt: skip
-    return _digest_env(env, seed)
-
-
-def _digest_env(env: CascadeV1Env, seed: int) -> str:
-    h = hashlib.sha256()
-    obs, _ = env.reset(seed=seed)
-    h.update(obs.tobytes())
-    done = False
-    while not done:
-        obs, reward, te, tr, info = env.step(np.zeros(4, np.float32))
-        done = te or tr
-        h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
-    return h.hexdigest()
+    return rollout_digest(env, seed)
 
 
 @pytest.mark.parametrize("pattern", ["3", "5"])
@@ -428,11 +416,11 @@ def test_with_the_pool_pinned_it_is_the_mean_delay_catch_plan_told_that_delay(
                         max_catches=6)  # fmt: skip
     for est in told.view.estimators:
         est.fixed_delay = delay
-    same = [_digest_env(pinned, s) == _digest_env(told, s) for s in range(3)]
+    same = [rollout_digest(pinned, s) == rollout_digest(told, s) for s in range(3)]
     assert all(same)
     assert pinned.view.pool == [delay]
     differ = [
-        _digest_env(pinned, s) != _digest(name, pattern, s)
+        rollout_digest(pinned, s) != _digest(name, pattern, s)
         for s in range(3)
         for name in (ESTCATCH, "juggler_mean_delay_catch")
     ]

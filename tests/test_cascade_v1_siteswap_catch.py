@@ -8,11 +8,11 @@ only."""
 
 from __future__ import annotations
 
-import hashlib
 import math
 
 import numpy as np
 import pytest
+from _helpers import rollout_digest
 
 from motion_envs.envs.juggling import CascadeV1Env
 from motion_envs.geometry.minimum_jerk import quintic_evaluate
@@ -138,15 +138,7 @@ def test_the_palm_is_not_rising_at_the_catches() -> None:
 
 def _digest(controller: str, seed: int) -> str:
     env = CascadeV1Env(level="hard", pattern="5", controller=controller, max_catches=6)
-    h = hashlib.sha256()
-    obs, _ = env.reset(seed=seed)
-    h.update(obs.tobytes())
-    done = False
-    while not done:
-        obs, reward, te, tr, info = env.step(np.zeros(4, np.float32))
-        done = te or tr
-        h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
-    return h.hexdigest()
+    return rollout_digest(env, seed)
 
 
 def test_deterministic() -> None:
