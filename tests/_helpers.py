@@ -85,3 +85,20 @@ def rollout_digest(env: Any, seed: int) -> str:
         done = te or tr
         h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
     return h.hexdigest()
+
+
+def load_experiment(name: str) -> Any:
+    """``experiments/NAME.py`` as a module, registered in ``sys.modules`` under ``name`` (so
+    its dataclasses resolve their module); a script that needs ``benchmarks/``'s
+    ``_timing`` puts it on ``sys.path`` itself."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "experiments" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module

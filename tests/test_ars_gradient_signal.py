@@ -9,25 +9,17 @@ the normaliser is the observations' mean and std, checked by numpy on the same e
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from _helpers import load_experiment
 
 import motion_envs  # noqa: F401
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _script() -> Any:
-    path = ROOT / "experiments" / "ars_gradient_signal.py"
-    spec = importlib.util.spec_from_file_location("ars_gradient_signal", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_experiment("ars_gradient_signal")
 
 
 def test_zero_perturbation_gives_zero_differences() -> None:

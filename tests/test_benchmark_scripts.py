@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _helpers import load_experiment
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCHMARKS = ROOT / "benchmarks"
@@ -92,15 +93,11 @@ def test_cascade_oracle_residual_is_the_latency_aware_juggler():
     hands move as the latency-aware juggler's, period by period; clipped to almost nothing
     it plays the juggler's; outside its phases it does nothing; episodes repeat exactly.
     Training seeds only."""
-    import importlib.util
 
     import gymnasium as gym
     import numpy as np
 
-    path = EXPERIMENTS / "cascade_oracle_residual.py"
-    spec = importlib.util.spec_from_file_location("cascade_oracle_residual", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)  # puts benchmarks/ (its _timing) on sys.path itself
+    mod = load_experiment("cascade_oracle_residual")  # puts benchmarks/ on sys.path itself
     phases = mod.PHASES
 
     def hands(controller: str, oracle: bool, seed: int) -> list:

@@ -5,14 +5,13 @@ recordings refused in one line naming the file."""
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from _helpers import load_experiment
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -25,7 +24,6 @@ from motion_envs.models.juggling.timing import (
 )
 from tests.test_mocap import write_c3d, write_tsv
 
-ROOT = Path(__file__).resolve().parents[1]
 G = 9.81
 
 # The hand-worked oracle: a three-ball cascade at beat b = 0.25 s and dwell ratio 0.7.
@@ -264,13 +262,7 @@ def test_a_carried_ball_is_no_flight():
 
 @pytest.fixture(scope="module")
 def experiment():
-    path = ROOT / "experiments" / "cascade_human_timing.py"
-    spec = importlib.util.spec_from_file_location("cascade_human_timing", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["cascade_human_timing"] = mod
-    spec.loader.exec_module(mod)
-    return mod
+    return load_experiment("cascade_human_timing")
 
 
 def world_beat(events) -> float:

@@ -14,7 +14,6 @@ one fails.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from typing import Any
@@ -22,25 +21,20 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import load_experiment
 
 import motion_envs  # noqa: F401
 from motion_envs.datasets.juggling import episode_seeds
 
 pytest.importorskip("stable_baselines3")
 
-ROOT = Path(__file__).resolve().parents[1]
 ENV = "MotionEnvs/Cascade-v1"
 ARGS = ["--levels", "medium", "--seeds", "0", "--test-episodes", "2", "--val-episodes", "2",
         "--max-catches", "3", "--reuse-only"]  # fmt: skip
 
 
 def _script() -> Any:
-    path = ROOT / "experiments" / "cascade_v1_agents.py"
-    spec = importlib.util.spec_from_file_location("cascade_v1_agents", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)  # puts benchmarks/ (its _timing) on sys.path itself
-    return mod
+    return load_experiment("cascade_v1_agents")
 
 
 @pytest.fixture(scope="module")

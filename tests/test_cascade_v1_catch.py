@@ -7,15 +7,13 @@ TRAINING seeds only (a spy on the experiment; the siteswap juggler's own catch i
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import math
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from _helpers import load_experiment
 from scipy.integrate import solve_ivp
 
 from motion_envs.envs.juggling import CascadeV1Env
@@ -139,13 +137,7 @@ def test_the_controllers_carry_their_declared_leads(pattern: str) -> None:
 
 
 def _experiment() -> Any:
-    path = Path(__file__).resolve().parents[1] / "experiments" / "cascade_v1_catch_plan.py"
-    spec = importlib.util.spec_from_file_location("cascade_v1_catch_plan", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_experiment("cascade_v1_catch_plan")
 
 
 def test_the_leads_are_chosen_on_training_seeds_only(monkeypatch: pytest.MonkeyPatch) -> None:

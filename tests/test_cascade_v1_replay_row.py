@@ -5,17 +5,16 @@ highest, ties to the first in ``ROWS`` order), and a clear error for a row not k
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 from typing import Any
 
 import pytest
+from _helpers import load_experiment
 
 from baselines.juggling_bench.cascade_v1 import CascadeV1Config
 from motion_envs.datasets.juggling import episode_seeds
 
-ROOT = Path(__file__).resolve().parents[1]
 #: The bench's entry of the kept row (a deviation the kept episodes do not carry).
 ROW = {"catches_mean": 3.0, "catches_mean_ci": [0.5, 5.5], "catches_median": 3.0,
        "catches_median_ci": [0.0, 6.0], "catch_rate": 0.75, "catch_rate_ci": [0.5, 0.9],
@@ -23,12 +22,7 @@ ROW = {"catches_mean": 3.0, "catches_mean_ci": [0.5, 5.5], "catches_median": 3.0
 
 
 def _script() -> Any:
-    path = ROOT / "experiments" / "cascade_v1_replay_row.py"
-    spec = importlib.util.spec_from_file_location("cascade_v1_replay_row", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_experiment("cascade_v1_replay_row")
 
 
 def _kept(catches: list[int], tosses: list[int]) -> dict[str, list[Any]]:

@@ -13,6 +13,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
+from _helpers import load_experiment
 
 import motion_envs  # noqa: F401
 from baselines.juggling_bench.cascade import (
@@ -438,13 +439,7 @@ def test_near_vertical_tosses_do_not_end_easy_episodes(seed):
 
 def test_cascade_paired_plays_no_test_seeds_and_pairs_by_seed():
     """``experiments/cascade_paired.py`` refuses the test split; ``compare`` pairs by seed."""
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "experiments" / "cascade_paired.py"
-    spec = importlib.util.spec_from_file_location("cascade_paired", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = load_experiment("cascade_paired")
     with pytest.raises(ValueError, match="split"):
         mod.play("test", 2, 1)
     a = {"split": "train", "first_seed": 0, "max_catches": 10, "catches": {"r": [1, 10, 4]}}

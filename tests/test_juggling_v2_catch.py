@@ -4,13 +4,12 @@ tunables chosen on training seeds, and the old controllers untouched."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from _helpers import load_experiment
 
 from motion_envs.datasets.juggling import SPLIT_SEEDS
 from motion_envs.envs.juggling import JugglingV2Env
@@ -23,8 +22,6 @@ from motion_envs.models.juggling import (
     V2Controller,
 )
 from motion_envs.models.juggling._v2_catch import DESCENT_GRID, LEAD_GRID
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_meeting_speed_is_the_hand_worked_relative_speed() -> None:
@@ -170,12 +167,7 @@ def test_the_declared_plan_waits_at_rest_where_the_oracle_s_hand_still_moves() -
 
 
 def test_the_tuning_plays_only_training_seeds(monkeypatch: Any) -> None:
-    spec = importlib.util.spec_from_file_location(
-        "catch_plan_tuning", ROOT / "experiments" / "juggling_v2_catch_plan.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_experiment("juggling_v2_catch_plan")
     seen: list[tuple[int, CatchPlan]] = []
 
     def spy(self: JugglingV2Env, seed: int) -> dict[str, Any]:
