@@ -83,14 +83,18 @@ ENV = CASCADE_V1_ENV_ID
 QUANTITIES = {"mean_catches": "mean catches before the first drop", "catch_rate": "catch rate"}
 
 
-def level_rows(level: str, config: CascadeV1Config) -> tuple[dict[str, Any], dict[str, Any]]:
+def level_rows(
+    level: str, config: CascadeV1Config, every_row: bool = False
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The bench's document for ``level`` (:func:`run_cascade_v1`) and the test episodes
-    of its best non-oracle row and of ``oracle_catch``, as the bench played them."""
+    of its best non-oracle row and of ``oracle_catch``, as the bench played them
+    (``every_row``: of every row it kept)."""
     config = replace(config, levels=(level,))
     kept: dict[str, dict[str, Any]] = {}
     doc = run_cascade_v1(config, keep=kept)
     lv = doc["levels"][0]
-    played = {name: kept[level][name] for name in (lv["best_non_oracle"], UPPER_REFERENCE)}
+    names = (lv["best_non_oracle"], UPPER_REFERENCE, *(kept[level] if every_row else ()))
+    played = {name: kept[level][name] for name in dict.fromkeys(names)}
     for name, eps in played.items():
         if not math.isclose(row_summary(eps)["catches_mean"], lv["rows"][name]["catches_mean"]):
             raise RuntimeError(f"{level} {name}: the kept episodes differ from the bench's row")

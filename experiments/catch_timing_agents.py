@@ -19,11 +19,14 @@ Per seed: the agent's score, ``agent - best non-oracle row``, ``agent - its base
 tracker, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over test episodes,
 with power lines), its hand deviation from the held-out SIMULATED demonstrations against
 the juggler's + 5 mm; per block the median seed (by ``agent - best row``) and the
-validation pick (the best validation score), and the issue's targets in words.
+validation pick (the best validation score), and the issue's targets in words. With
+``--every-row`` the agent is also paired with EVERY non-oracle row, the issue's last
+target (each simple hand-written row below the agent), not only with the row validation
+chose; ``--rescore JSON ...`` scores the kept policies of earlier runs without training.
 
     python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
         [--seeds 0 1 2] [--generations 10] [--population 10] [--batch 16]
-        [--memory] [--test-episodes 100] [--out DIR]
+        [--memory] [--test-episodes 100] [--every-row] [--rescore JSON ...] [--out DIR]
 
 Writes ``DIR/catch_timing_agents.json`` and ``DIR/catch_timing_agents.png`` (each seed's
 validation score per generation, the base's as a line).
@@ -45,7 +48,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # _timing
 from _timing import machine, print_json
 
-from baselines.agents.against_rows import DEVIATION_SLACK_MM, MARGIN, likeness_met, margin_met
+from baselines.agents.against_rows import (
+    DEVIATION_SLACK_MM,
+    MARGIN,
+    likeness_met,
+    margin_met,
+    rows_not_beaten,
+)
 from baselines.agents.catch_timing import CEMSettings, TimingPolicy, n_features, train_timing_cem
 
 HERE = Path(__file__).resolve().parent
@@ -61,16 +70,18 @@ def _script(name: str) -> Any:
     return module
 
 
-def block_rows(block: str, test_episodes: int, val_rows: int = 30) -> dict[str, Any]:
+def block_rows(
+    block: str, test_episodes: int, val_rows: int = 30, every_row: bool = False
+) -> dict[str, Any]:
     """The rows of ``block``: its env, the agent's training and scoring keywords (the
     tracker's validated gain and offset), the played test episodes of the best
-    non-oracle row, ``oracle_catch`` and the juggler's deviation (``val_rows``: the
-    cascade bench's validation episodes, its default 30)."""
+    non-oracle row (``every_row``: of every row), ``oracle_catch`` and the juggler's
+    deviation (``val_rows``: the cascade bench's validation episodes, its default 30)."""
     kind, level = block.split("-", 1)
     if kind == "v2":
         from baselines.juggling_bench.v2 import RESIDUAL_SCALE, UPPER_REFERENCE, V2Config
 
-        lv, played = _script("juggling_v2_agents").level_rows(level, test_episodes)
+        lv, played = _script("juggling_v2_agents").level_rows(level, test_episodes, every_row)
         trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
         base = {
             "level": level,
@@ -91,7 +102,7 @@ def block_rows(block: str, test_episodes: int, val_rows: int = 30) -> dict[str, 
         from baselines.juggling_bench.cascade_v1 import UPPER_REFERENCE, CascadeV1Config
 
         config = CascadeV1Config(pattern=pattern, episodes=test_episodes, val_episodes=val_rows)
-        doc, played = _script("cascade_v1_agents").level_rows(level, config)
+        doc, played = _script("cascade_v1_agents").level_rows(level, config, every_row)
         lv = doc["levels"][0]
         trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
         base = {
@@ -157,6 +168,10 @@ def score_test(rows: dict[str, Any], weights: Any, n: int, memory: bool = False)
     }
     for key, (a, b, names) in pairs.items():
         res[key] = _diff(catch_rate_comparison(a, b, 0, names))
+    others = [r for r in played if not r.startswith("oracle")]  # the upper references out
+    each = {r: _diff(catch_rate_comparison(agent, played[r], 0, ("agent", r))) for r in others}
+    res["minus_each_row_catch_rate"] = each
+    res["every_row"] = rows_not_beaten({r: (d["value"], d["ci"]) for r, d in each.items()})
     if rows["cascade"]:
         from baselines.stats import paired_mean_difference
 
@@ -178,6 +193,56 @@ def score_test(rows: dict[str, Any], weights: Any, n: int, memory: bool = False)
     return res
 
 
+def load_earlier(paths: list[Path]) -> dict[str, Any]:
+    """Earlier runs' ``catch_timing_agents.json`` files (``--rescore``), their blocks'
+    runs pooled by block (one seed per file, as the runs were made); a missing or
+    unreadable file is a one-line ``ValueError`` naming it."""
+    pooled: dict[str, dict[str, Any]] = {}
+    for path in paths:
+        try:
+            doc = json.loads(path.read_text())
+        except (OSError, ValueError) as err:
+            raise ValueError(f"--rescore {path}: not a readable results file ({err})") from None
+        if not isinstance(doc, dict) or not isinstance(doc.get("blocks"), list):
+            raise ValueError(f"--rescore {path}: no 'blocks' list; not a catch_timing_agents.json")
+        for blk in doc["blocks"]:
+            into = pooled.setdefault(blk["block"], {**blk, "runs": []})
+            into["runs"] += blk["runs"]
+    return {"blocks": list(pooled.values())}
+
+
+def _names(paths: list[Path]) -> str:
+    return " ".join(map(str, paths))
+
+
+def earlier_block(doc: dict[str, Any], path: Any, block: str) -> dict[str, Any]:
+    """The block ``block`` of an earlier run; one-line ``ValueError`` if it has none."""
+    for blk in doc["blocks"]:
+        if blk.get("block") == block:
+            return dict(blk)
+    raise ValueError(f"--rescore {path}: no block {block!r}")
+
+
+def earlier_run(
+    doc: dict[str, Any], path: Any, block: str, seed: int, memory: bool
+) -> dict[str, Any]:
+    """The kept policy of ``block``'s ``seed`` in an earlier run (its weights, kept
+    generation, validation and training scores and training CPU), checked to have the
+    number of weights a policy with (or without) ``memory`` takes."""
+    for run in earlier_block(doc, path, block)["runs"]:
+        if run.get("seed") == seed:
+            hands = 2 if block.startswith("cascade") else 1
+            if len(run["weights"]) != n_features(hands, memory):
+                raise ValueError(
+                    f"--rescore {path}: {block} seed {seed} has {len(run['weights'])} weights; "
+                    f"a policy {'with' if memory else 'without'} --memory takes "
+                    f"{n_features(hands, memory)}"
+                )
+            keys = ("kept", "weights", "val_scores", "train_scores", "train_cpu_s")
+            return {k: run[k] for k in keys}
+    raise ValueError(f"--rescore {path}: {block} has no seed {seed}")
+
+
 def words(block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: str) -> str:
     d, b, o = (run[k] for k in ("minus_best_catch_rate", "minus_base_catch_rate",
                                 "oracle_minus_catch_rate"))  # fmt: skip
@@ -186,13 +251,16 @@ def words(block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: st
     def f(x: dict[str, Any]) -> str:
         return f"{x['value']:+.3f} [{x['ci'][0]:+.3f}, {x['ci'][1]:+.3f}]"
 
-    return (
+    text = (
         f"{block}, {tag} (seed {run['seed']}): agent - {best} {f(d)} catch rate (target >= "
         f"+{MARGIN:.2f} with the interval above 0: {'met' if t['margin'] else 'NOT met'}); "
         f"agent - its base (the tracker) {f(b)}; oracle_catch - agent {f(o)}; deviation "
         f"{run['deviation_mm']:.1f} mm against the juggler's {juggler_mm:.1f} + "
         f"{DEVIATION_SLACK_MM:.0f} mm ({'met' if t['likeness'] else 'NOT met'})"
     )
+    if len(run["minus_each_row_catch_rate"]) > 1:  # --every-row: each row in turn
+        text += f"; {run['every_row']['sentence']}"
+    return text
 
 
 def plot(blocks: list[dict[str, Any]], path: Path) -> Path:
@@ -234,8 +302,25 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="the policy also keeps the sum and mean of the felt timing errors",
     )
+    ap.add_argument(
+        "--every-row",
+        action="store_true",
+        help="also pair the agent with every non-oracle row (Juggling-v2 replays them all)",
+    )
+    ap.add_argument(
+        "--rescore",
+        type=Path,
+        nargs="+",
+        default=None,
+        metavar="JSON",
+        help="no training: score the kept policies of earlier runs' catch_timing_agents.json",
+    )
     ap.add_argument("--out", type=Path, default=Path("catch_timing_agents"))
     args = ap.parse_args(argv)
+    try:
+        earlier = None if args.rescore is None else load_earlier(args.rescore)
+    except ValueError as err:
+        ap.error(str(err))
     from tqdm import tqdm
 
     from motion_envs._io import atomic_write_text
@@ -248,28 +333,31 @@ def main(argv: list[str] | None = None) -> int:
                            "timing_scale": TIMING_SCALE, "blocks": []}  # fmt: skip
     for block in args.blocks:
         t0 = time.process_time()
-        rows = block_rows(block, args.test_episodes)
+        rows = block_rows(block, args.test_episodes, every_row=args.every_row)
         rows_cpu = time.process_time() - t0
         best = rows["lv"]["best_non_oracle"]
         blk: dict[str, Any] = {"block": block, "cascade": rows["cascade"], "best_non_oracle": best,
                                "base_kwargs": rows["train_kwargs"], "rows_cpu_s": rows_cpu,
                                "juggler_deviation_mm": rows["juggler_mm"], "runs": []}  # fmt: skip
         for seed in args.seeds:
-            t0 = time.process_time()
-            bar = tqdm(total=settings.generations, desc=f"{block} seed {seed}", leave=False)
+            if earlier is not None:
+                trained = earlier_run(earlier, _names(args.rescore), block, seed, args.memory)
+            else:
+                t0 = time.process_time()
+                bar = tqdm(total=settings.generations, desc=f"{block} seed {seed}", leave=False)
 
-            def tick(g: int, train: float, val: float, bar: Any = bar) -> None:
-                bar.set_postfix(train=f"{train:.3f}", val=f"{val:.3f}")
-                bar.update(1)
+                def tick(g: int, train: float, val: float, bar: Any = bar) -> None:
+                    bar.set_postfix(train=f"{train:.3f}", val=f"{val:.3f}")
+                    bar.update(1)
 
-            tr = train_timing_cem(rows["env"], rows["train_kwargs"], settings, seed, tick)
-            bar.close()
-            train_cpu = time.process_time() - t0
+                tr = train_timing_cem(rows["env"], rows["train_kwargs"], settings, seed, tick)
+                bar.close()
+                trained = {"kept": tr.kept, "weights": tr.weights.tolist(),
+                           "val_scores": tr.val_scores, "train_scores": tr.train_scores,
+                           "train_cpu_s": time.process_time() - t0}  # fmt: skip
             t0 = time.process_time()
-            run = score_test(rows, tr.weights, args.test_episodes, args.memory)
-            run.update(seed=seed, kept=tr.kept, weights=tr.weights.tolist(),
-                       val_scores=tr.val_scores, train_scores=tr.train_scores,
-                       train_cpu_s=train_cpu, test_cpu_s=time.process_time() - t0)  # fmt: skip
+            run = score_test(rows, trained["weights"], args.test_episodes, args.memory)
+            run.update(seed=seed, **trained, test_cpu_s=time.process_time() - t0)
             blk["runs"].append(run)
             print(words(block, best, run, rows["juggler_mm"], "this seed"), flush=True)
         from baselines.agents.catch_timing import block_score, play_scores
@@ -278,8 +366,12 @@ def main(argv: list[str] | None = None) -> int:
         val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
         hands, dim = (2, 5) if rows["cascade"] else (1, 3)
         zero = TimingPolicy(np.zeros(n_features(hands, args.memory)), hands, dim, args.memory)
-        blk["base_val_score"] = block_score(
-            *play_scores(rows["env"], rows["train_kwargs"], zero, val_seeds), rows["cascade"]
+        blk["base_val_score"] = (
+            earlier_block(earlier, _names(args.rescore), block)["base_val_score"]
+            if earlier is not None
+            else block_score(
+                *play_scores(rows["env"], rows["train_kwargs"], zero, val_seeds), rows["cascade"]
+            )
         )
         runs = sorted(blk["runs"], key=lambda r: r["minus_best_catch_rate"]["value"])
         median = runs[len(runs) // 2]

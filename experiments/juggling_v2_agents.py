@@ -66,9 +66,12 @@ from baselines.agents.against_rows import (
 ENV = "MotionEnvs/Juggling-v2"
 
 
-def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any]]:
+def level_rows(
+    level: str, episodes: int, every_row: bool = False
+) -> tuple[dict[str, Any], dict[str, Any]]:
     """The rows' document of ``level`` (:func:`run_v2`) and the test episodes of its best
-    non-oracle row, its juggler and its upper reference, replayed on the same seeds."""
+    non-oracle row, its juggler and its upper reference, replayed on the same seeds
+    (``every_row``: every row :func:`row_players` can replay)."""
     from baselines.agents.juggling_score import juggling_episodes
     from baselines.juggling_bench.v2 import (
         ENV_ID_V2,
@@ -90,7 +93,8 @@ def level_rows(level: str, episodes: int) -> tuple[dict[str, Any], dict[str, Any
     if best not in players:
         raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
     played = {}
-    for name in dict.fromkeys(("juggler", UPPER_REFERENCE, best)):
+    names = ("juggler", UPPER_REFERENCE, best, *(players if every_row else ()))
+    for name in dict.fromkeys(names):
         controller, policy, extra = players[name]
         kwargs = {
             "level": level,

@@ -19,7 +19,9 @@ same TEST seeds: what ``experiments/juggling_v2_agents.py`` (Juggling-v2) and
 * :func:`margin_met`: the issue's target ``agent - best non-oracle row >=`` :data:`MARGIN`
   with its 95 % interval above 0; :func:`likeness_met`: its likeness target, the agent's
   hand deviation from held-out demonstrations at most the juggler's plus
-  :data:`DEVIATION_SLACK_MM`.
+  :data:`DEVIATION_SLACK_MM`;
+* :func:`rows_not_beaten`: the issue's last target, every simple hand-written row below
+  the agent, checked row by row (not only against the best row validation chose).
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ __all__ = [
     "margin_met",
     "median_run",
     "room_for_target",
+    "rows_not_beaten",
     "run_fields",
     "save_plot",
     "train_all",
@@ -235,6 +238,30 @@ def room_for_target(
         )
     return {"margin": margin, "room": float(value), "room_ci": [float(c) for c in ci],
             "open": open_, "sentence": sentence}  # fmt: skip
+
+
+def rows_not_beaten(
+    differences: Mapping[str, tuple[float, Sequence[float]]], unit: str = "catch rate"
+) -> dict[str, Any]:
+    """Whether the agent stays above EVERY row it is compared with, not only the best
+    row validation chose: ``differences`` maps each row to ``agent - row`` (paired,
+    ``(value, ci)``). A row is beaten when the interval's low end is above 0. Returns
+    ``{"beaten", "not_beaten", "every_row_beaten", "sentence"}``; the rows not beaten in
+    the sentence come lowest difference first."""
+    if not differences:
+        raise ValueError("differences: no rows to compare the agent with")
+    beaten = [r for r, (_, ci) in differences.items() if float(ci[0]) > 0]
+    missed = sorted((r for r in differences if r not in beaten), key=lambda r: differences[r][0])
+    if not missed:
+        sentence = f"the agent is above every one of the {len(differences)} rows ({unit})"
+    else:
+        shown = "; ".join(f"{r} {format_difference(*differences[r])}" for r in missed)
+        sentence = (
+            f"the agent is NOT above {len(missed)} of the {len(differences)} rows "
+            f"(agent - row, {unit}): {shown}"
+        )
+    return {"beaten": beaten, "not_beaten": missed, "every_row_beaten": not missed,
+            "sentence": sentence}  # fmt: skip
 
 
 def likeness_met(
