@@ -17,7 +17,12 @@ can be replayed alone and paired with them on the same test seeds.
   mean among the non-oracle ones; ``--out FILE`` writes them. A competitor row that
   ``DIR``'s bench did not choose among (a row added since) is also played on the
   validation seeds, and the best non-oracle row is chosen again with it
-  (``best_non_oracle_with_row``). A row ``DIR`` holds is compared with its kept
+  (``best_non_oracle_with_row``). ``estimator_offset_catch`` in a ``DIR`` made before
+  it existed first gets its offset chosen on the validation seeds as the bench chooses
+  it (:func:`~baselines.juggling_bench.cascade_v1.choose_estimator_offset`; its table
+  in ``estimator_offset_val_mean_catches``; the 0 ms candidate, ``delay_estimator_catch``
+  itself, is checked against ``DIR``'s validation mean of that row,
+  ``zero_offset_equals_kept_val``). A row ``DIR`` holds is compared with its kept
   episodes (``equals_kept``: the replay plays what the bench played);
 * ``--replay DIR --kept``: the same pairing of ``DIR``'s own episodes of ``--row``,
   nothing played (a bench run with the row in it; its summary, with the hand
@@ -48,9 +53,11 @@ from baselines.juggling_bench.cascade_v1 import (
     _paired,
     _players,
     cascade_v1_episodes,
+    choose_estimator_offset,
     row_summary,
     run_cascade_v1,
 )
+from baselines.juggling_bench.v2 import offset_key
 from motion_envs._io import atomic_write_text
 
 
@@ -101,12 +108,28 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
         seeds = next(iter(others.values())).seeds
         val_means = dict(lv["val_mean_catches"])
         equals_kept = None
+        chosen: dict[str, Any] = {}
+        est_offset = lv.get("estimator_offset_s", 0.0)
+        if row == "estimator_offset_catch" and "estimator_offset_s" not in lv and not kept_row:
+            est_offset, est_means = choose_estimator_offset(level, config)
+            val_means[row] = est_means[offset_key(est_offset)]
+            zero = val_means.get("delay_estimator_catch")
+            chosen = {
+                "estimator_offset_s": est_offset,
+                "estimator_offset_val_mean_catches": est_means,
+                "zero_offset_equals_kept_val": None
+                if zero is None
+                else est_means[offset_key(0.0)] == zero,
+            }
         if kept_row:
             if row not in kept[level]:
                 raise ValueError(f"{folder}: no kept episodes of row {row!r} on {level}")
             new = _episodes(kept[level][row])
         else:
-            players = _players(level, config, lv["late_offset_s"], tuple(lv["constant"]))
+            players = _players(
+                level, config, lv["late_offset_s"], tuple(lv["constant"]),
+                estimator_offset=est_offset,
+            )  # fmt: skip
             ctl, policy, off, gain = players[row]
             kwargs = _kwargs(level, config, ctl, off, gain)
             new = cascade_v1_episodes(policy, kwargs, "test", seeds.size)
@@ -136,6 +159,7 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
             "means": {name: float(e.catches.mean()) for name, e in others.items()},
             "rates": {name: row_summary(e)["catch_rate"] for name, e in others.items()},
             "equals_kept": equals_kept,
+            **chosen,
         }
         _print_level(level, row, out[level])
     return out
@@ -161,6 +185,11 @@ def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
         f"mean: {got['top_test_mean_non_oracle']}"
         + ("" if got["equals_kept"] is None else f"; equals the kept: {got['equals_kept']}")
     )
+    if "estimator_offset_s" in got:
+        means = {k: round(v, 2) for k, v in got["estimator_offset_val_mean_catches"].items()}
+        print(f"  estimate's offset chosen on validation: {got['estimator_offset_s'] * 1000:+.0f}"
+              f" ms (validation means {means}; the 0 ms candidate equals the kept "
+              f"delay_estimator_catch's: {got['zero_offset_equals_kept_val']})")  # fmt: skip
 
 
 def main() -> None:

@@ -88,8 +88,9 @@ def level_rows(
     best = lv["best_non_oracle"]
     trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
     players = row_players(
-        level, tuple(lv["constant"]), lv.get("late_offset_s", 0.0), (trk["gain"], trk["offset_s"])
-    )
+        level, tuple(lv["constant"]), lv.get("late_offset_s", 0.0), (trk["gain"], trk["offset_s"]),
+        lv.get("estimator_offset_s", 0.0),
+    )  # fmt: skip
     if best not in players:
         raise RuntimeError(f"the best non-oracle row {best!r} cannot be replayed")
     played = {}

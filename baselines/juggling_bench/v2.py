@@ -47,6 +47,11 @@ unit action, the scale an agent is given):
 * ``delay_estimator_catch``: the two hand-written fixes together
   (``juggler_delay_estimator_catch``: the catch plan on the delay estimator's delay,
   with the mean delay's plan, not re-tuned), the strongest simple fix without learning;
+* ``estimator_offset_catch``: the same told the estimate plus an offset (the env's
+  ``delay_offset`` on that controller, a correction of the estimate's bias; may be
+  negative) from :data:`ESTIMATOR_OFFSETS` (declared here before any run), the offset
+  with the highest catch rate on the VALIDATION seeds (:func:`choose_estimator_offset`;
+  offset 0 is ``delay_estimator_catch`` itself);
 * ``delay_tracker``: the online delay tracker (``juggler_delay_tracker``: the mean-delay
   catch plan whose delay ``D`` starts at the level's mean and, after every catch, moves
   by the catch's timing error ``e`` relative to the planned meeting, ``D <- clip(D - k
@@ -62,11 +67,13 @@ unit action, the scale an agent is given):
 
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
 seed is played (tested with a spy): the constant, the late offset, the tracker's gain and
-offset, and then the best
-non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; the
+offset, the estimate's offset, and then the best
+non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; ties: the
+first in :data:`ROWS`; the
 constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
 grid's for ``juggler_mean_delay`` and ``late_meeting``, the tracker grid's for
-``delay_tracker``, the ILC row is scored on
+``delay_tracker``, the estimate's offset grid's for ``delay_estimator_catch`` and
+``estimator_offset_catch``, the ILC row is scored on
 validation after its training). Every row is then played on the TEST seeds
 (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
@@ -110,6 +117,7 @@ from motion_envs.models.juggling import V2_LEVELS
 __all__ = [
     "CONSTANT_GRID",
     "ENV_ID_V2",
+    "ESTIMATOR_OFFSETS",
     "LATE_OFFSETS",
     "RESIDUAL_SCALE",
     "ROWS",
@@ -118,11 +126,14 @@ __all__ = [
     "VelocityTimesDelay",
     "check_v2_config",
     "choose_constant",
+    "choose_estimator_offset",
     "choose_offset",
     "choose_tracker",
     "frame_velocity",
     "grid_key",
     "offset_key",
+    "offset_row_line",
+    "offset_row_minus",
     "report_v2",
     "row_players",
     "run_v2",
@@ -143,6 +154,13 @@ CONSTANT_GRID: tuple[tuple[float, float], ...] = tuple(
 #: 0 to 200 ms in steps of 20 ms, declared before the run that measured it (the first
 #: grid, 0-80 ms, chose its largest value on medium and hard).
 LATE_OFFSETS: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(11))
+#: s added to the delay estimator's estimate by ``estimator_offset_catch`` (the env's
+#: ``delay_offset`` on ``juggler_delay_estimator_catch``), declared before any run: -20 to
+#: +40 ms in 10 ms steps, ordered by distance from 0, the later first (ties: the smallest
+#: correction; on Cascade-v1 the pooled estimate was found 0.3-7.0 ms EARLY on average on
+#: three balls, docs/models.md, so a later told delay is the expected correction, and
+#: late meeting's offsets show that a later meeting helps by itself).
+ESTIMATOR_OFFSETS: tuple[float, ...] = (0.0, 0.01, -0.01, 0.02, -0.02, 0.03, 0.04)
 #: ``delay_tracker``'s ``(gain k, offset s)`` pairs tried on VALIDATION seeds, declared
 #: before any bench run (offset first, then gain; ties: the first, ``(0, 0)`` being
 #: ``mean_delay_catch``): gains 0 to 1 (``k s`` below 2 for the timing slopes ``s``
@@ -163,6 +181,7 @@ ROWS = (
     "mean_delay_catch",
     "delay_estimator",
     "delay_estimator_catch",
+    "estimator_offset_catch",
     "random",
     "task_error_ilc",
     "delay_tracker",
@@ -337,16 +356,43 @@ def choose_offset(
     return best_on_grid(LATE_OFFSETS, rate, offset_key)
 
 
+def choose_estimator_offset(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[float, dict[str, float]]:
+    """The offset of :data:`ESTIMATOR_OFFSETS` (s added to the delay estimator's estimate
+    by ``juggler_delay_estimator_catch``) with the highest catch rate on
+    ``config.val_episodes`` VALIDATION episodes (ties: the first, the smallest
+    correction), and every candidate's validation catch rate
+    (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(offset: float) -> float:
+        kw = _kwargs(level, config, ESTIMATOR_CONTROLLER, _estimate_offset(offset))
+        return _val_catch_rate(play, None, kw, config)
+
+    return best_on_grid(ESTIMATOR_OFFSETS, rate, offset_key)
+
+
+#: The controller ``estimator_offset_catch`` tells the offset.
+ESTIMATOR_CONTROLLER = "juggler_delay_estimator_catch"
+
+
+def _estimate_offset(offset: float) -> dict[str, Any]:
+    """The env keywords of the estimate's ``offset`` (none for 0: the row's own keywords)."""
+    return {"delay_offset": float(offset)} if offset else {}
+
+
 def row_players(
     level: str,
     constant: tuple[float, float],
     offset: float = 0.0,
     tracker: tuple[float, float] = (0.0, 0.0),
+    estimator_offset: float = 0.0,
 ) -> dict[str, tuple[str, Policy | None, dict[str, Any]]]:
     """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller,
     residual policy (None: the zero action) and extra env keywords, played with
     :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice,
-    ``offset`` :func:`choose_offset`'s and ``tracker`` :func:`choose_tracker`'s."""
+    ``offset`` :func:`choose_offset`'s, ``tracker`` :func:`choose_tracker`'s and
+    ``estimator_offset`` :func:`choose_estimator_offset`'s."""
     delay = V2_LEVELS[level].mean_delay
     return {
         "juggler": ("juggler", None, {}),
@@ -362,7 +408,12 @@ def row_players(
         "late_meeting": ("juggler_mean_delay", None, {"delay_offset": offset}),
         "mean_delay_catch": ("juggler_mean_delay_catch", None, {}),
         "delay_estimator": ("juggler_delay_estimator", None, {}),
-        "delay_estimator_catch": ("juggler_delay_estimator_catch", None, {}),
+        "delay_estimator_catch": (ESTIMATOR_CONTROLLER, None, {}),
+        "estimator_offset_catch": (
+            ESTIMATOR_CONTROLLER,
+            None,
+            _estimate_offset(estimator_offset),
+        ),
         "random": ("juggler", _Random(0), {}),
         "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
     }
@@ -374,6 +425,7 @@ def run_v2(
     chooser: Any = choose_constant,
     offset_chooser: Any = choose_offset,
     tracker_chooser: Any = choose_tracker,
+    estimator_offset_chooser: Any = choose_estimator_offset,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed)."""
@@ -384,6 +436,7 @@ def run_v2(
         constant, val_rates = chooser(level, config, play)
         offset, offset_rates = offset_chooser(level, config, play)
         tracker, tracker_rates = tracker_chooser(level, config, play)
+        est_offset, est_rates = estimator_offset_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
         # the grids' plays reused where the choosers made them.
@@ -393,8 +446,10 @@ def run_v2(
             "juggler_mean_delay": (offset_rates, offset_key(0.0)),
             "late_meeting": (offset_rates, offset_key(offset)),
             "delay_tracker": (tracker_rates, tracker_key(tracker)),
+            "delay_estimator_catch": (est_rates, offset_key(0.0)),
+            "estimator_offset_catch": (est_rates, offset_key(est_offset)),
         }
-        players = row_players(level, constant, offset, tracker)
+        players = row_players(level, constant, offset, tracker, est_offset)
         val_catch: dict[str, float] = {}
         for name, (ctl, policy, extra) in players.items():
             rates, key = reuse.get(name, ({}, ""))
@@ -422,7 +477,9 @@ def run_v2(
                 policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
             )
             # fresh players: the random row's generator restarts for the test seeds
-            for name, (ctl, policy, extra) in row_players(level, constant, offset, tracker).items()
+            for name, (ctl, policy, extra) in row_players(
+                level, constant, offset, tracker, est_offset
+            ).items()
         }
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -445,6 +502,8 @@ def run_v2(
                 "late_offset_val_catch_rates": offset_rates,
                 "tracker": {"gain": tracker[0], "offset_s": tracker[1]},
                 "tracker_val_catch_rates": tracker_rates,
+                "estimator_offset_s": est_offset,
+                "estimator_offset_val_catch_rates": est_rates,
                 "rows": entries,
                 "best_non_oracle": best,
                 "val_catch_rates": val_catch,
@@ -466,6 +525,7 @@ def run_v2(
                         played["delay_tracker"], played["mean_delay_catch"]
                     ),
                 },
+                "estimator_offset_catch_minus": offset_row_minus(played, best, _difference),
             }
         )
     return {
@@ -480,6 +540,30 @@ def run_v2(
         "levels": levels,
         "timing": {"cpu_s": time.process_time() - t0},
     }
+
+
+def offset_row_minus(played: dict[str, Any], best: str, diff: Any) -> dict[str, Any]:
+    """``estimator_offset_catch`` minus its base ``delay_estimator_catch`` and minus the
+    best non-oracle row ``best`` (chosen on validation), paired by ``diff``."""
+    row = played["estimator_offset_catch"]
+    return {
+        "best": best,
+        "minus_delay_estimator_catch": diff(row, played["delay_estimator_catch"]),
+        "minus_best": diff(row, played[best]),
+    }
+
+
+def offset_row_line(d: dict[str, Any], fmt: str = "+.3f") -> str:
+    """The report's line of :func:`offset_row_minus` (``fmt`` as :func:`tracker_line`'s)."""
+
+    def f(m: dict[str, Any]) -> str:
+        return f"{m['value']:{fmt}} [{m['ci'][0]:{fmt}}, {m['ci'][1]:{fmt}}]"
+
+    return (
+        f"estimator_offset_catch - delay_estimator_catch (paired): "
+        f"{f(d['minus_delay_estimator_catch'])}; - {d['best']} (the best non-oracle row): "
+        f"{f(d['minus_best'])}"
+    )
 
 
 def _difference(a: JugglingEpisodes, b: JugglingEpisodes) -> dict[str, Any]:
@@ -515,9 +599,12 @@ def report_v2(doc: dict[str, Any]) -> str:
         ref = UPPER_REFERENCE if key == "room_below_oracle_catch" else "oracle"
         trk = lv.get("tracker")
         trk_text = "" if trk is None else f"tracker {tracker_key((trk['gain'], trk['offset_s']))}; "
+        est = lv.get("estimator_offset_s")
+        est_text = "" if est is None else f"estimate's offset {offset_key(est)}; "
         lines.append(
             f"{lv['level']:7s} best constant {tuple(lv['constant'])}; late offset "
-            f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; {trk_text}best non-oracle row "
+            f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; {trk_text}{est_text}best "
+            "non-oracle row "
             f"{lv['best_non_oracle']} (chosen on validation: {_val(lv)}); room below the "
             f"upper reference ({ref} - {lv['best_non_oracle']}, paired): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
@@ -537,6 +624,8 @@ def report_v2(doc: dict[str, Any]) -> str:
             )
         if "delay_tracker_minus" in lv:
             lines.append(f"{lv['level']:7s} {tracker_line(lv['delay_tracker_minus'])}")
+        if "estimator_offset_catch_minus" in lv:
+            lines.append(f"{lv['level']:7s} {offset_row_line(lv['estimator_offset_catch_minus'])}")
         if "oracle_minus_delay_estimator" in lv:
             est = lv["oracle_minus_delay_estimator"]
             lines.append(
@@ -577,9 +666,9 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hHvxp8", strict=True))
-    # one colour per row (the default cycle has 10; then black, grey, brown)
-    extra = ("black", "0.5", "saddlebrown")
+    markers = dict(zip(ROWS, "osP^D<>hHvdxp8", strict=True))
+    # one colour per row (the default cycle has 10; then black, grey, brown, navy)
+    extra = ("black", "0.5", "saddlebrown", "navy")
     colors = {name: f"C{i}" if i < 10 else extra[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():

@@ -122,7 +122,10 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``tracker_gain``; the env hands the view each catch's timing error, never the delay),
     and ``juggler_delay_estimator_catch``: the two hand-written fixes together, the
     delay estimator's pooled delay with the mean-delay catch plan (declared, not
-    re-tuned). The agent adds a residual to each hand's command.
+    re-tuned; with `delay_offset` the frames are placed by the pooled delay plus the
+    offset, before the first estimate by the level's mean plus it: a correction of the
+    estimate's bias, which may be negative). The agent adds a residual to each hand's
+    command.
 
     Levels (Juggling-v2's; :data:`~motion_envs.models.juggling.V2_LEVELS`):
 
@@ -227,7 +230,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
@@ -245,7 +248,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       ball, the capture at impact; ``observe_task_error`` added later, its default,
       False, leaves every rollout unchanged; ``timing_scale`` later still, its default
       0 likewise; the controller ``juggler_delay_estimator_catch`` later, every other
-      controller's rollout unchanged).
+      controller's rollout unchanged; its ``delay_offset`` later still, the default 0
+      leaving its rollouts unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -299,9 +303,10 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         tracker = None
         if self.controller_name == "juggler_delay_tracker":
             tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
+        estimate = self.delay_offset if mode == "release" else 0.0  # on the pooled estimate
         self.view = CascadeBallView(
             self.balls, mode, self.gravity, lv.mean_delay + self.delay_offset, catch_height(self.controller),
-            lead, tracker,
+            lead, tracker, estimate,
         )  # fmt: skip
         self.likeness = pattern_likeness(self.pattern, self.gravity)
         self._likeness = LikenessQuery(self.likeness)

@@ -24,6 +24,7 @@ from motion_envs.envs._common import (
 from motion_envs.models.juggling import LEVELS, TRACKER_MAX_GAIN, check_gravity
 
 __all__ = [
+    "ESTIMATE_OFFSET",
     "MAX_TIMING_SCALE",
     "OFFSET_CONTROLLERS",
     "LevelsEnvMixin",
@@ -34,8 +35,21 @@ __all__ = [
 ]
 
 
-#: The controllers told a ``delay_offset`` (a later delay than the level's mean).
-OFFSET_CONTROLLERS = ("juggler_mean_delay", "juggler_delay_tracker")
+#: The controllers told a ``delay_offset``: a later delay than the level's mean
+#: (``juggler_mean_delay``, ``juggler_delay_tracker``), or a correction of the
+#: release-anchored estimate (``juggler_delay_estimator_catch``, :data:`ESTIMATE_OFFSET`).
+OFFSET_CONTROLLERS = (
+    "juggler_mean_delay",
+    "juggler_delay_tracker",
+    "juggler_delay_estimator_catch",
+)
+#: The controller whose ``delay_offset`` corrects an ESTIMATE, so may be negative, and
+#: its range (s). The estimate's measured bias has either sign (Cascade-v1, the pooled
+#: estimate minus the true delay: -7.0 to +2.2 ms mean by level and pattern, sd up to
+#: 15 ms; docs/models.md), so a correction must reach below 0; 50 ms is half the
+#: lowest human delay, far beyond any measured bias. The mean delay's offset stays >= 0
+#: (a later meeting; the tracker's clip assumes it).
+ESTIMATE_OFFSET: tuple[str, tuple[float, float]] = ("juggler_delay_estimator_catch", (-0.05, 0.25))
 
 
 def _real(value: Any, lo: float, hi: float) -> float:
@@ -49,12 +63,19 @@ def _real(value: Any, lo: float, hi: float) -> float:
 
 
 def check_delay_offset(delay_offset: float, controller: str) -> float:
-    """``delay_offset`` (s) as a float in [0, 0.25], given only to the
-    :data:`OFFSET_CONTROLLERS` (the later delay they are told); else one-line ValueError
-    naming the argument."""
-    offset = _real(delay_offset, 0.0, 0.25)
+    """``delay_offset`` (s) as a float in [0, 0.25] ([-0.05, 0.25] for the estimate's
+    controller, :data:`ESTIMATE_OFFSET`), nonzero only for the :data:`OFFSET_CONTROLLERS`
+    (the delay they are told); else one-line ValueError naming the argument."""
+    name, (low, high) = ESTIMATE_OFFSET
+    if controller != name:
+        low = 0.0
+    offset = _real(delay_offset, low, high)
     if math.isnan(offset):
-        raise ValueError(f"delay_offset must be in [0, 0.25] s; got {delay_offset!r:.80}")
+        extra = "" if controller == name else f"; [{ESTIMATE_OFFSET[1][0]}, {high}] s for {name!r}"
+        raise ValueError(
+            f"delay_offset must be in [{low:g}, {high}] s for controller={controller!r}{extra}; "
+            f"got {delay_offset!r:.80}"
+        )
     if offset and controller not in OFFSET_CONTROLLERS:
         raise ValueError(
             f"delay_offset is for controller={' or '.join(map(repr, OFFSET_CONTROLLERS))}; "

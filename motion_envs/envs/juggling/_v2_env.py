@@ -18,6 +18,7 @@ from motion_envs.datasets.juggling import JugglingState, JugglingTask
 from motion_envs.envs._common import as_action, check_choice
 from motion_envs.envs.juggling._cascade_v1_errors import HeldTaskErrors, check_observe_task_error
 from motion_envs.envs.juggling._shared import (
+    ESTIMATE_OFFSET,
     check_delay_offset,
     check_timing_scale,
     check_tracker_gain,
@@ -104,7 +105,9 @@ class JugglingV2Env(OneBallEnv):
     ``juggler_oracle_catch`` (the oracle's information, the UPPER REFERENCE) and
     ``juggler_mean_delay_catch`` (the level's mean delay, a competitor),
     ``juggler_delay_estimator_catch`` (the hand-written delay estimator's delay with the
-    mean delay's plan: the two hand-written fixes together, a competitor), and
+    mean delay's plan: the two hand-written fixes together, a competitor; with
+    `delay_offset` the frames are placed by the estimate plus the offset, a correction
+    of the estimate's bias that may be negative), and
     ``juggler_delay_tracker``: that catch plan with its delay corrected after every
     catch from the catch's timing error, ``D <- clip(D - k (e - delay_offset))`` over
     the level's delay range, told ``D + delay_offset``
@@ -222,7 +225,7 @@ class JugglingV2Env(OneBallEnv):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting) |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
@@ -239,7 +242,8 @@ class JugglingV2Env(OneBallEnv):
       drops and occlusion, air drag, the capture at impact, the task-error vector
       (``observe_task_error`` added later; its default, False, leaves every rollout
       unchanged; ``timing_scale`` later still, its default 0 likewise; the controller
-      ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged).
+      ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged;
+      its ``delay_offset`` later, the default 0 leaving its rollouts unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -289,9 +293,11 @@ class JugglingV2Env(OneBallEnv):
         tracker = None
         if self.controller_name == "juggler_delay_tracker":
             tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
+        estimate = self.controller_name == ESTIMATE_OFFSET[0]  # its offset: on the estimate
         self.controller = make_v2_controller(
-            self.controller_name, juggler, self.gravity, lv.mean_delay + self.delay_offset,
-            tracker,
+            self.controller_name, juggler, self.gravity,
+            lv.mean_delay + (0.0 if estimate else self.delay_offset), tracker,
+            self.delay_offset if estimate else 0.0,
         )  # fmt: skip
         self.likeness = v1_likeness(self.gravity, "train")
         spec = WorldSpec.of(

@@ -33,7 +33,9 @@ captured at:
   through the frames at ``s = arrival - t_r - d``: for each delay ``d`` on a 5 ms grid
   over ``DELAY_GRID`` the least-squares ``v`` and the residual, the best ``d`` per
   flight from its first ``ANCHOR_FRAMES`` frames (the drag has not yet bent the flight
-  much), averaged over the episode's flights (the delay is one per episode);
+  much), averaged over the episode's flights (the delay is one per episode); with an
+  ``offset`` the frames are placed by that average plus the offset (a correction of the
+  estimate chosen elsewhere, on validation seeds; 0 by default);
 * ``"oracle"``: at its arrival minus the episode's TRUE delay, with the ball's true drag
   (an upper reference, given what the world hides; labelled so wherever it is reported).
   Like every other estimator it does not know a frame's jitter: no observation could
@@ -217,19 +219,32 @@ class FlightEstimator:
         The newest frames the flight is fitted to (>= 3).
     delay:
         s; ``"mean_delay"``'s fixed delay.
+    offset:
+        s; added to ``"release"``'s estimated delay where it places the frames (may be
+        negative; the estimate itself, :attr:`delay_estimate`, is unchanged); only
+        ``"release"`` takes a nonzero one.
     drag:
         1/m; the oracle's drag (set per episode by :meth:`reset`).
     """
 
-    def __init__(self, mode: str, gravity: float, window: int = 10, delay: float = 0.0) -> None:
+    def __init__(
+        self, mode: str, gravity: float, window: int = 10, delay: float = 0.0,
+        offset: float = 0.0,
+    ) -> None:  # fmt: skip
         if mode not in ESTIMATORS:
             raise ValueError(f"mode must be one of {list(ESTIMATORS)}; got {mode!r}")
         if window < 3:
             raise ValueError(f"window must be >= 3; got {window!r}")
+        if not math.isfinite(offset) or (offset and mode != "release"):
+            raise ValueError(
+                f"offset must be finite and nonzero only for mode 'release'; got {offset!r}"
+            )
         self.mode = mode
         self.gravity = float(gravity)
         self.window = int(window)
         self.fixed_delay = float(delay)
+        #: s added to the release-anchored estimate where the frames are placed
+        self.offset = float(offset)
         self.drag = 0.0
         self.reset()
 
@@ -308,7 +323,7 @@ class FlightEstimator:
             return arrivals - self.fixed_delay
         if self.mode == "release":
             d = self.delay_estimate
-            return None if d is None else arrivals - d
+            return None if d is None else arrivals - (d + self.offset)
         return arrivals - self.true_delay
 
     def fit(self) -> tuple[float, FloatArray, FloatArray] | None:

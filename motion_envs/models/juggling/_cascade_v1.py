@@ -81,7 +81,11 @@ estimator's pooled delay (mode ``"release"``) with ``juggler_mean_delay_catch``'
 plan per juggler (the same :data:`CASCADE_CATCH_PLANS` entry, declared, not re-tuned:
 the fitted juggler told each ball ``lead`` ahead, the siteswap juggler's own catch). It
 reads nothing the two rows do not read; it is the strongest simple fix a reviewer would
-write in a few lines, a competitor.
+write in a few lines, a competitor. Told an ``offset`` (the env's ``delay_offset``,
+:class:`CascadeBallView`'s ``offset``), its frames are placed by the pooled delay plus
+the offset (and, before the first estimate, by the prior the env gives: the level's
+mean plus the offset): a correction of the estimate's bias, chosen on validation seeds
+by the bench (row ``estimator_offset_catch``).
 
 :data:`CASCADE_V1_CONTROLLERS` maps each controller name to the pattern's juggler
 variant and the estimator's mode; ``fixed_point`` (the juggler that catches at the
@@ -222,12 +226,18 @@ class PooledReleaseEstimator(FlightEstimator):
         by the owner at a new episode.
     prior:
         s, the delay before the first estimate (the level's mean).
+    offset:
+        s, added to the pool's mean where the frames are placed
+        (:class:`~motion_envs.models.juggling.FlightEstimator`'s ``offset``; may be
+        negative); the prior is used as given.
     """
 
-    def __init__(self, gravity: float, pool: list[float], prior: float) -> None:
+    def __init__(
+        self, gravity: float, pool: list[float], prior: float, offset: float = 0.0
+    ) -> None:
         self.pool = pool  # before FlightEstimator.__init__, which calls reset()
         self._pool_seen = 0
-        super().__init__("release", gravity, delay=prior)
+        super().__init__("release", gravity, delay=prior, offset=offset)
 
     def reset(self, drag: float = 0.0, delay: float = 0.0) -> None:
         """A new episode (the pool itself is cleared by its owner)."""
@@ -278,19 +288,24 @@ class CascadeBallView:
         (mode ``"mean_delay"``): the estimators' delay is its told delay, reset at every
         episode and corrected at every catch (:meth:`felt`), each flight fitted with the
         delay told at its release; None: the fixed ``delay``.
+    offset:
+        s (mode ``"release"`` only; may be negative): the frames are placed by the pooled
+        delay plus ``offset`` (:class:`PooledReleaseEstimator`); 0: the pooled delay.
     """
 
     def __init__(
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
-        lead: float = 0.0, tracker: DelayTracker | None = None,
+        lead: float = 0.0, tracker: DelayTracker | None = None, offset: float = 0.0,
     ) -> None:  # fmt: skip
         if tracker is not None and mode != "mean_delay":
             raise ValueError(f"a tracker needs the estimators' mode 'mean_delay'; got {mode!r}")
+        if offset and mode != "release":
+            raise ValueError(f"offset is for the estimators' mode 'release'; got {mode!r}")
         self.tracker = tracker
         #: the episode's delays found from the releases (mode ``"release"``; s)
         self.pool: list[float] = []
         self.estimators: list[FlightEstimator] = (
-            [PooledReleaseEstimator(gravity, self.pool, delay) for _ in range(balls)]
+            [PooledReleaseEstimator(gravity, self.pool, delay, offset) for _ in range(balls)]
             if mode == "release"
             else [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
         )

@@ -231,15 +231,21 @@ def make_v2_controller(
     gravity: float,
     mean_delay: float,
     tracker: DelayTracker | None = None,
+    estimate_offset: float = 0.0,
 ) -> V2Controller:
     """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
     ``juggler`` (its episodes never touch ``juggler``); ``juggler_delay_tracker`` needs
-    its ``tracker`` (the other controllers take none)."""
+    its ``tracker`` (the other controllers take none). ``estimate_offset`` (s, may be
+    negative) is added to the release-anchored estimate where the frames are placed
+    (:class:`~motion_envs.models.juggling.FlightEstimator`'s ``offset``; the estimators
+    of mode ``"release"`` only)."""
     if name not in V2_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
     if (tracker is not None) != (name == "juggler_delay_tracker"):
         raise ValueError(f"tracker is for controller='juggler_delay_tracker' only; got {name!r}")
-    estimator = FlightEstimator(V2_CONTROLLERS[name], gravity, delay=mean_delay)
+    estimator = FlightEstimator(
+        V2_CONTROLLERS[name], gravity, delay=mean_delay, offset=estimate_offset
+    )
     if tracker is not None:
         plan = CATCH_PLANS["juggler_mean_delay_catch"]
         return DelayTrackerController(juggler.variant(), estimator, plan, tracker)
