@@ -379,6 +379,7 @@ CASES: dict[str, Case] = {
             {"level": "hard", "controller": "juggler_delay_estimator"},
             {"level": "medium", "residual_phases": ["catch"]},
             {"controller": "juggler_mean_delay_catch", "observe_task_error": True},
+            {"controller": "juggler_delay_estimator_catch", "delay_offset": -0.01},
         ),
     ),
     "MotionEnvs/Cascade-v1": Case(
@@ -392,6 +393,7 @@ CASES: dict[str, Case] = {
             {"level": "easy", "controller": "juggler_mean_delay_catch", "observe_task_error": True},
             {"level": "easy", "pattern": "5", "controller": "juggler_delay_estimator"},
             {"level": "medium", "controller": "juggler_delay_estimator_catch", "max_catches": 2},
+            {"level": "hard", "controller": "juggler_delay_estimator_catch", "delay_offset": 0.02},
         ),
     ),
     "MotionEnvs/Cascade": Case(
