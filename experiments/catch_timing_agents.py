@@ -3,9 +3,13 @@ reference rows, on Juggling-v2 and Cascade-v1 (issue 34: an agent whose action c
 re-time the catch).
 
 For each block and learner seed: :func:`baselines.agents.catch_timing.train_timing_cem`
-trains the linear timing policy by CEM on TRAINING episodes on top of the delay tracker
-the rows' bench chose on VALIDATION seeds (its gain and offset), keeps the generation
-best on VALIDATION episodes, and only then plays the TEST seeds, the same seeds the
+trains the linear timing policy by CEM on TRAINING episodes on top of its base: the delay
+tracker the rows' bench chose on VALIDATION seeds (its gain and offset; ``--base
+tracker``, the default) or, with ``--base estimator``, the delay estimator with the catch
+plan told the offset the bench chose on VALIDATION seeds for ``estimator_offset_catch``
+(the level document's ``estimator_offset_s``, taken whether or not that row is the best
+non-oracle one: a validation choice either way); it keeps the generation best on
+VALIDATION episodes, and only then plays the TEST seeds, the same seeds the
 rows' bench played (``motion-bench juggling --version v2 [--pattern 3]``, replayed by
 ``experiments/juggling_v2_agents.py`` / ``cascade_v1_agents.py``'s ``level_rows``: every
 grid choice and the best non-oracle row made on validation, ``oracle_catch`` the upper
@@ -16,20 +20,23 @@ drop and catch rate). With ``--memory`` the policy also keeps the sum and the me
 timing errors it felt in the episode (:class:`baselines.agents.catch_timing.FeltErrors`).
 
 Per seed: the agent's score, ``agent - best non-oracle row``, ``agent - its base`` (the
-tracker, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over test episodes,
-with power lines), its hand deviation from the held-out SIMULATED demonstrations against
-the juggler's + 5 mm; per block the median seed (by ``agent - best row``) and the
-validation pick (the best validation score), and the issue's targets in words. With
+tracker or the estimator, ``w = 0``) and ``oracle_catch - agent`` (paired bootstrap over
+test episodes, with power lines), its hand deviation from the held-out SIMULATED
+demonstrations against the juggler's + 5 mm; per block the median seed (by ``agent -
+best row``) and the validation pick (the best validation score), and the issue's targets
+in words. With
 ``--every-row`` the agent is also paired with EVERY non-oracle row, the issue's last
 target (each simple hand-written row below the agent), not only with the row validation
 chose; ``--rescore JSON ...`` scores the kept policies of earlier runs without training.
 
     python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
         [--seeds 0 1 2] [--generations 10] [--population 10] [--batch 16]
-        [--memory] [--test-episodes 100] [--every-row] [--rescore JSON ...] [--out DIR]
+        [--memory] [--base {tracker,estimator}] [--test-episodes 100] [--every-row]
+        [--rescore JSON ...] [--out DIR]
 
-Writes ``DIR/catch_timing_agents.json`` and ``DIR/catch_timing_agents.png`` (each seed's
-validation score per generation, the base's as a line).
+Writes ``DIR/catch_timing_agents.json`` (with the base it played on) and
+``DIR/catch_timing_agents.png`` (each seed's validation score per generation, the base's
+as a line).
 """
 
 from __future__ import annotations
@@ -59,6 +66,8 @@ from baselines.agents.catch_timing import CEMSettings, TimingPolicy, n_features,
 
 HERE = Path(__file__).resolve().parent
 TIMING_SCALE = 0.1
+#: The controllers the policy can act on (``--base``), the first the default.
+BASES = ("tracker", "estimator")
 
 
 def _script(name: str) -> Any:
@@ -70,31 +79,49 @@ def _script(name: str) -> Any:
     return module
 
 
+def base_kwargs(base: str, lv: dict[str, Any]) -> dict[str, Any]:
+    """The env keywords of the policy's ``base`` (one of :data:`BASES`) from the rows'
+    level document ``lv``: the delay tracker with the gain and offset validation chose for
+    ``delay_tracker``, or the delay estimator with the catch plan told the offset
+    validation chose for ``estimator_offset_catch`` (``estimator_offset_s``)."""
+    if base == "tracker":
+        trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
+        return {"controller": "juggler_delay_tracker", "tracker_gain": trk["gain"],
+                "delay_offset": trk["offset_s"]}  # fmt: skip
+    if base == "estimator":
+        return {
+            "controller": "juggler_delay_estimator_catch",
+            "delay_offset": float(lv["estimator_offset_s"]),
+        }
+    raise ValueError(f"--base must be one of {list(BASES)}; got {base!r}")
+
+
 def block_rows(
-    block: str, test_episodes: int, val_rows: int = 30, every_row: bool = False
+    block: str,
+    test_episodes: int,
+    val_rows: int = 30,
+    every_row: bool = False,
+    base: str = "tracker",
 ) -> dict[str, Any]:
-    """The rows of ``block``: its env, the agent's training and scoring keywords (the
-    tracker's validated gain and offset), the played test episodes of the best
-    non-oracle row (``every_row``: of every row), ``oracle_catch`` and the juggler's
-    deviation (``val_rows``: the cascade bench's validation episodes, its default 30)."""
+    """The rows of ``block``: its env, the agent's training and scoring keywords (its
+    ``base``'s, :func:`base_kwargs`), the played test episodes of the best non-oracle row
+    (``every_row``: of every row), ``oracle_catch`` and the juggler's deviation
+    (``val_rows``: the cascade bench's validation episodes, its default 30)."""
     kind, level = block.split("-", 1)
     if kind == "v2":
         from baselines.juggling_bench.v2 import RESIDUAL_SCALE, UPPER_REFERENCE, V2Config
 
         lv, played = _script("juggling_v2_agents").level_rows(level, test_episodes, every_row)
-        trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
-        base = {
+        kw = {
             "level": level,
-            "controller": "juggler_delay_tracker",
-            "tracker_gain": trk["gain"],
-            "delay_offset": trk["offset_s"],
+            **base_kwargs(base, lv),
             "max_catches": V2Config().max_catches,
             "residual_scale": RESIDUAL_SCALE,
             "observe_task_error": True,
             "timing_scale": TIMING_SCALE,
         }
         juggler_mm = 1000 * played["juggler"].deviation
-        return {"env": "MotionEnvs/Juggling-v2", "train_kwargs": base, "test_kwargs": base,
+        return {"env": "MotionEnvs/Juggling-v2", "train_kwargs": kw, "test_kwargs": kw,
                 "lv": lv, "played": played, "upper": UPPER_REFERENCE, "cascade": False,
                 "juggler_mm": juggler_mm}  # fmt: skip
     if kind in ("cascade3", "cascade5"):
@@ -104,20 +131,17 @@ def block_rows(
         config = CascadeV1Config(pattern=pattern, episodes=test_episodes, val_episodes=val_rows)
         doc, played = _script("cascade_v1_agents").level_rows(level, config, every_row)
         lv = doc["levels"][0]
-        trk = lv.get("tracker", {"gain": 0.0, "offset_s": 0.0})
-        base = {
+        kw = {
             "level": level,
             "pattern": pattern,
-            "controller": "juggler_delay_tracker",
-            "tracker_gain": trk["gain"],
-            "delay_offset": trk["offset_s"],
+            **base_kwargs(base, lv),
             "max_catches": 10,
             "observe_task_error": True,
             "timing_scale": TIMING_SCALE,
         }
         juggler_mm = 1000 * lv["rows"]["juggler"].get("deviation_m", math.nan)
-        return {"env": "MotionEnvs/Cascade-v1", "train_kwargs": base,
-                "test_kwargs": {**base, "max_catches": config.max_catches}, "lv": lv,
+        return {"env": "MotionEnvs/Cascade-v1", "train_kwargs": kw,
+                "test_kwargs": {**kw, "max_catches": config.max_catches}, "lv": lv,
                 "played": played, "upper": UPPER_REFERENCE, "cascade": True,
                 "juggler_mm": juggler_mm}  # fmt: skip
     raise ValueError(f"--blocks: unknown block {block!r} (v2-, cascade3- or cascade5-LEVEL)")
@@ -193,10 +217,12 @@ def score_test(rows: dict[str, Any], weights: Any, n: int, memory: bool = False)
     return res
 
 
-def load_earlier(paths: list[Path]) -> dict[str, Any]:
+def load_earlier(paths: list[Path], base: str = "tracker") -> dict[str, Any]:
     """Earlier runs' ``catch_timing_agents.json`` files (``--rescore``), their blocks'
     runs pooled by block (one seed per file, as the runs were made); a missing or
-    unreadable file is a one-line ``ValueError`` naming it."""
+    unreadable file, or one trained on another ``base`` than this run's (a file without
+    one was trained on the tracker, the only base then), is a one-line ``ValueError``
+    naming it."""
     pooled: dict[str, dict[str, Any]] = {}
     for path in paths:
         try:
@@ -206,6 +232,11 @@ def load_earlier(paths: list[Path]) -> dict[str, Any]:
         if not isinstance(doc, dict) or not isinstance(doc.get("blocks"), list):
             raise ValueError(f"--rescore {path}: no 'blocks' list; not a catch_timing_agents.json")
         for blk in doc["blocks"]:
+            if blk.get("base", "tracker") != base:
+                raise ValueError(
+                    f"--rescore {path}: {blk['block']} was trained on the base "
+                    f"{blk.get('base', 'tracker')!r}, not --base {base!r}"
+                )
             into = pooled.setdefault(blk["block"], {**blk, "runs": []})
             into["runs"] += blk["runs"]
     return {"blocks": list(pooled.values())}
@@ -243,7 +274,9 @@ def earlier_run(
     raise ValueError(f"--rescore {path}: {block} has no seed {seed}")
 
 
-def words(block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: str) -> str:
+def words(
+    block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: str, base: str = "tracker"
+) -> str:
     d, b, o = (run[k] for k in ("minus_best_catch_rate", "minus_base_catch_rate",
                                 "oracle_minus_catch_rate"))  # fmt: skip
     t = run["targets"]
@@ -254,7 +287,7 @@ def words(block: str, best: str, run: dict[str, Any], juggler_mm: float, tag: st
     text = (
         f"{block}, {tag} (seed {run['seed']}): agent - {best} {f(d)} catch rate (target >= "
         f"+{MARGIN:.2f} with the interval above 0: {'met' if t['margin'] else 'NOT met'}); "
-        f"agent - its base (the tracker) {f(b)}; oracle_catch - agent {f(o)}; deviation "
+        f"agent - its base (the {base}) {f(b)}; oracle_catch - agent {f(o)}; deviation "
         f"{run['deviation_mm']:.1f} mm against the juggler's {juggler_mm:.1f} + "
         f"{DEVIATION_SLACK_MM:.0f} mm ({'met' if t['likeness'] else 'NOT met'})"
     )
@@ -277,7 +310,8 @@ def plot(blocks: list[dict[str, Any]], path: Path) -> Path:
             g = np.arange(1, len(run["val_scores"]) + 1)
             ax.plot(g, run["val_scores"], marker="o", ms=3, label=f"seed {run['seed']}")
             ax.plot(run["kept"] + 1, run["val_scores"][run["kept"]], "k*", ms=10)
-        ax.axhline(blk["base_val_score"], color="grey", ls="--", label="base (w = 0)")
+        base = blk.get("base", "tracker")
+        ax.axhline(blk["base_val_score"], color="grey", ls="--", label=f"base (w = 0, the {base})")
         ax.set_xlabel("CEM generation")
         ax.set_ylabel("mean catches" if blk["cascade"] else "catch rate")
         ax.set_title(f"{blk['block']}: validation score (* kept)")
@@ -303,6 +337,14 @@ def main(argv: list[str] | None = None) -> int:
         help="the policy also keeps the sum and mean of the felt timing errors",
     )
     ap.add_argument(
+        "--base",
+        choices=BASES,
+        default=BASES[0],
+        help="the controller the policy re-times: the delay tracker (validated gain and "
+        "offset) or the delay estimator with the catch plan (estimator_offset_catch's "
+        "validated offset)",
+    )
+    ap.add_argument(
         "--every-row",
         action="store_true",
         help="also pair the agent with every non-oracle row (Juggling-v2 replays them all)",
@@ -318,7 +360,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("catch_timing_agents"))
     args = ap.parse_args(argv)
     try:
-        earlier = None if args.rescore is None else load_earlier(args.rescore)
+        earlier = None if args.rescore is None else load_earlier(args.rescore, args.base)
     except ValueError as err:
         ap.error(str(err))
     from tqdm import tqdm
@@ -330,13 +372,15 @@ def main(argv: list[str] | None = None) -> int:
                            memory=args.memory)  # fmt: skip
     args.out.mkdir(parents=True, exist_ok=True)
     doc: dict[str, Any] = {"machine": machine(), "settings": vars(settings),
-                           "timing_scale": TIMING_SCALE, "blocks": []}  # fmt: skip
+                           "timing_scale": TIMING_SCALE, "base": args.base,
+                           "blocks": []}  # fmt: skip
     for block in args.blocks:
         t0 = time.process_time()
-        rows = block_rows(block, args.test_episodes, every_row=args.every_row)
+        rows = block_rows(block, args.test_episodes, every_row=args.every_row, base=args.base)
         rows_cpu = time.process_time() - t0
         best = rows["lv"]["best_non_oracle"]
-        blk: dict[str, Any] = {"block": block, "cascade": rows["cascade"], "best_non_oracle": best,
+        blk: dict[str, Any] = {"block": block, "base": args.base, "cascade": rows["cascade"],
+                               "best_non_oracle": best,
                                "base_kwargs": rows["train_kwargs"], "rows_cpu_s": rows_cpu,
                                "juggler_deviation_mm": rows["juggler_mm"], "runs": []}  # fmt: skip
         for seed in args.seeds:
@@ -359,7 +403,7 @@ def main(argv: list[str] | None = None) -> int:
             run = score_test(rows, trained["weights"], args.test_episodes, args.memory)
             run.update(seed=seed, **trained, test_cpu_s=time.process_time() - t0)
             blk["runs"].append(run)
-            print(words(block, best, run, rows["juggler_mm"], "this seed"), flush=True)
+            print(words(block, best, run, rows["juggler_mm"], "this seed", args.base), flush=True)
         from baselines.agents.catch_timing import block_score, play_scores
         from motion_envs.datasets.juggling import SPLIT_SEEDS
 
@@ -379,8 +423,8 @@ def main(argv: list[str] | None = None) -> int:
         blk["median_seed"], blk["validation_pick"] = median["seed"], pick["seed"]
         jmm = rows["juggler_mm"]
         blk["words"] = [
-            words(block, best, median, jmm, "median seed"),
-            words(block, best, pick, jmm, "validation pick"),
+            words(block, best, median, jmm, "median seed", args.base),
+            words(block, best, pick, jmm, "validation pick", args.base),
         ]
         for line in blk["words"]:
             print(line, flush=True)

@@ -72,8 +72,9 @@ def reset_poisoned(env: Any, clean: np.ndarray, subjects: np.ndarray, l: int) ->
 
 
 def rollout_digest(env: Any, seed: int) -> str:
-    """A SHA-256 of a zero-action Cascade-v1 episode reset with ``seed``: every
-    observation, reward and the balls' states in ``info``, step by step."""
+    """A SHA-256 of a zero-action Cascade-v1 episode reset with ``seed`` (the residuals
+    and any timing entry 0): every observation, reward and the balls' states in
+    ``info``, step by step."""
     import hashlib
 
     h = hashlib.sha256()
@@ -81,7 +82,7 @@ def rollout_digest(env: Any, seed: int) -> str:
     h.update(obs.tobytes())
     done = False
     while not done:
-        obs, reward, te, tr, info = env.step(np.zeros(4, np.float32))
+        obs, reward, te, tr, info = env.step(np.zeros(env.action_space.shape, np.float32))
         done = te or tr
         h.update(obs.tobytes() + np.float64(reward).tobytes() + info["balls"].tobytes())
     return h.hexdigest()

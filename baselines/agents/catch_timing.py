@@ -1,13 +1,15 @@
 r"""A learned catch-timing policy: the felt task error in, the told delay out, on top of
-the delay tracker (Juggling-v2 and Cascade-v1 with ``timing_scale``).
+the delay tracker or the delay estimator with the catch plan (Juggling-v2 and Cascade-v1
+with ``timing_scale``).
 
 Why this action. The learners on the position residual found no repeatable gradient at
 their base (``experiments/ars_gradient_signal.py``): the room the oracle leaves is in
 WHEN the hand meets the ball, and a residual on the hand target turns a felt timing
 error into a position only through a product of observations. The envs' timing entry
 (``timing_scale``) re-times the catch directly: the delay the juggler is told is the
-tracker's plus ``timing_scale * u``, latched at each release
-(:mod:`motion_envs.models.juggling._delay_tracker`).
+tracker's plus ``timing_scale * u`` (:mod:`motion_envs.models.juggling._delay_tracker`),
+or the estimator's estimate plus ``delay_offset + timing_scale * u``, latched at each
+release.
 
 The policy (:class:`TimingPolicy`) reads only the task-error entries of the observation
 (``observe_task_error=True``; per hand its last catch's ``(offset, timing, timed,
@@ -26,9 +28,10 @@ error a Kalman filter converges to), so the learned correction can use every cat
 the episode, not the last one only. A row's memory is cleared when its catch count
 falls (a new episode in that row) or the batch changes size. The residual entries are 0 (the
 hand follows the juggler; its likeness is the controller's). ``w = 0`` is the base (the
-tracker with its validated gain and offset). The tracker itself is in the family only
-through its own state; the policy adds a correction per catch on top of it, the residual
-on an analytic prior of Ploeger & Peters.
+tracker with its validated gain and offset, or the estimator with its validated
+offset). The base itself is in the family only through its own state; the policy adds a
+correction per catch on top of it, the residual on an analytic prior of Ploeger &
+Peters.
 
 The learner (:func:`train_timing_cem`) is the cross-entropy method (diagonal Gaussian
 over ``w``, mean 0 and standard deviation ``sigma`` at the start): each generation
@@ -253,9 +256,9 @@ def train_timing_cem(
     progress: Callable[[int, float, float], None] | None = None,
 ) -> TimingTraining:
     """CEM over the timing policy's weights on TRAINING episodes, the generation kept on
-    VALIDATION episodes (module docstring). ``kwargs`` are the env's (with
-    ``controller="juggler_delay_tracker"``, ``timing_scale > 0`` and
-    ``observe_task_error=True``); ``progress(g, train, val)`` after each generation."""
+    VALIDATION episodes (module docstring). ``kwargs`` are the env's (with a controller
+    that takes a timing entry, ``timing_scale > 0`` and ``observe_task_error=True``);
+    ``progress(g, train, val)`` after each generation."""
     import gymnasium as gym
 
     import motion_envs  # noqa: F401

@@ -145,13 +145,17 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     ``[-1, 1]`` are clipped, NaN counts as 0 (``info["action_invalid"]``); a wrong shape
     raises ``ValueError``.
 
-    With ``timing_scale > 0`` (controller ``juggler_delay_tracker`` only)
-    ``Box(-1, 1, (5,), float32)``: the residuals, then a **timing** entry ``u``: the
-    delay the juggler is told is the tracker's plus ``timing_scale * u`` s (at least 0),
-    and each ball released in a step is fitted with the delay told in that step (every
-    flight keeps the delay of its release), so the agent RE-TIMES the catches instead of
-    moving the hands. ``u = 0`` is the tracker. The action cost ``|a|^2`` is the
-    residuals'.
+    With ``timing_scale > 0`` (controllers ``juggler_delay_tracker`` and
+    ``juggler_delay_estimator_catch`` only) ``Box(-1, 1, (5,), float32)``: the
+    residuals, then a **timing** entry ``u``: the delay the juggler is told is the
+    tracker's plus ``timing_scale * u`` s (at least 0), or for the delay estimator the
+    pooled estimate plus an offset of ``delay_offset + timing_scale * u`` s (before the
+    first estimate the level's mean plus it; at least 0), and each ball released in a
+    step is fitted with the delay told in that step (every flight keeps the delay, or
+    the offset, of its release; the balls in the air at the reset are told ``u = 0``),
+    so the agent RE-TIMES the catches instead of moving the hands. ``u = 0`` is the
+    controller alone (the tracker, or the estimator told `delay_offset`). The action
+    cost ``|a|^2`` is the residuals'.
 
     ## Observation Space
     ``Box(low, high, (32 + 18 N,), float32)`` (86 for three balls, 122 for five; 8 more
@@ -230,14 +234,14 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative) |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
     | `observe_task_error` | **bool** | `False`  | 8 last entries: each hand's last catch's task error (table above) |
     | `reward_weights`  | **dict**  | `None`      | keys `catch`, `drop`, `likeness`, `action` |
-    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
+    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` and `juggler_delay_estimator_catch` only) |
     | `render_mode`     | **str**   | `None`      | `None` or `"rgb_array"` (camera `side`) |
     | `width`           | **int**   | `480`       | frame width in pixels |
     | `height`          | **int**   | `480`       | frame height in pixels |
@@ -249,7 +253,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       False, leaves every rollout unchanged; ``timing_scale`` later still, its default
       0 likewise; the controller ``juggler_delay_estimator_catch`` later, every other
       controller's rollout unchanged; its ``delay_offset`` later still, the default 0
-      leaving its rollouts unchanged).
+      leaving its rollouts unchanged, and then its timing entry, ``timing_scale`` 0 by
+      default).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -308,6 +313,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
             self.balls, mode, self.gravity, lv.mean_delay + self.delay_offset, catch_height(self.controller),
             lead, tracker, estimate,
         )  # fmt: skip
+        if self.timing_scale and tracker is None:  # the estimator's timing entry
+            self.view.adjust = 0.0
         self.likeness = pattern_likeness(self.pattern, self.gravity)
         self._likeness = LikenessQuery(self.likeness)
         spec = WorldSpec.of(
@@ -436,8 +443,11 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         invalid = not bool(np.isfinite(a).all())
         a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
         if self.timing_scale:  # told from this step's releases on (CascadeBallView.record)
-            assert self.view.tracker is not None
-            self.view.tracker.adjust = self.timing_scale * float(a[-1])
+            adjust = self.timing_scale * float(a[-1])
+            if self.view.tracker is not None:
+                self.view.tracker.adjust = adjust
+            else:  # the release estimator's offset
+                self.view.adjust = adjust
             a = a[: 2 * CASCADE_HANDS]
         true = self._advance(self.residual_scale * a.reshape(2, 2))
         caught = sum(int(c >= 0) for c in true.caught)

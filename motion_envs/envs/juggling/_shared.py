@@ -27,6 +27,7 @@ __all__ = [
     "ESTIMATE_OFFSET",
     "MAX_TIMING_SCALE",
     "OFFSET_CONTROLLERS",
+    "TIMING_CONTROLLERS",
     "LevelsEnvMixin",
     "check_delay_offset",
     "check_phases",
@@ -85,15 +86,23 @@ def check_delay_offset(delay_offset: float, controller: str) -> float:
 
 
 def _tracker_argument(
-    name: str, value: float, high: float, controller: str, unit: str = ""
+    name: str,
+    value: float,
+    high: float,
+    controller: str,
+    unit: str = "",
+    controllers: tuple[str, ...] = ("juggler_delay_tracker",),
 ) -> float:
-    """The argument ``name``'s ``value`` as a float in ``[0, high]``, nonzero only with the
-    ``juggler_delay_tracker`` controller; else one-line ValueError naming the argument."""
+    """The argument ``name``'s ``value`` as a float in ``[0, high]``, nonzero only with one
+    of ``controllers`` (the tracker's by default); else one-line ValueError naming the
+    argument."""
     out = _real(value, 0.0, high)
     if math.isnan(out):
         raise ValueError(f"{name} must be in [0, {high}]{unit}; got {value!r:.80}")
-    if out and controller != "juggler_delay_tracker":
-        raise ValueError(f"{name} is for controller='juggler_delay_tracker'; got {controller!r}")
+    if out and controller not in controllers:
+        raise ValueError(
+            f"{name} is for controller={' or '.join(map(repr, controllers))}; got {controller!r}"
+        )
     return out
 
 
@@ -105,13 +114,20 @@ def check_tracker_gain(tracker_gain: float, controller: str) -> float:
 
 #: s, the largest ``timing_scale`` accepted (the human delay range's width, 150 ms).
 MAX_TIMING_SCALE = 0.15
+#: The controllers with an agent's timing entry (``timing_scale``): the delay tracker
+#: (its told delay, :class:`~motion_envs.models.juggling.DelayTracker`'s ``adjust``) and
+#: the delay estimator with the catch plan (its estimate's offset, ``delay_offset``
+#: plus the entry's), each latched per flight at its release.
+TIMING_CONTROLLERS = ("juggler_delay_tracker", ESTIMATE_OFFSET[0])
 
 
 def check_timing_scale(timing_scale: float, controller: str) -> float:
     """``timing_scale`` (s told later per unit of the action's timing entry) in ``[0,
-    MAX_TIMING_SCALE]``, for the tracker whose told delay it adjusts
-    (:func:`_tracker_argument`)."""
-    return _tracker_argument("timing_scale", timing_scale, MAX_TIMING_SCALE, controller, " s")
+    MAX_TIMING_SCALE]``, nonzero only for the :data:`TIMING_CONTROLLERS` whose told delay
+    it adjusts (:func:`_tracker_argument`)."""
+    return _tracker_argument(
+        "timing_scale", timing_scale, MAX_TIMING_SCALE, controller, " s", TIMING_CONTROLLERS
+    )
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

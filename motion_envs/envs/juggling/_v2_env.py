@@ -142,14 +142,16 @@ class JugglingV2Env(OneBallEnv):
     ``Box(-1, 1, (2,), float32)``: the residual ``(dx, dz)`` added to the controller's
     next hand target, times `residual_scale` (m), in the phases of `residual_phases`.
 
-    With ``timing_scale > 0`` (controller ``juggler_delay_tracker`` only)
-    ``Box(-1, 1, (3,), float32)``: the residual, then a **timing** entry ``u``: the
-    delay the juggler is told is the tracker's plus ``timing_scale * u`` s (at least 0),
-    and the flight released in a step is fitted with the delay told in that step, so the
-    agent RE-TIMES the catch (a later told delay, a later meeting, the hand waiting
-    lower) instead of moving the hand. ``u = 0`` is the tracker. The action cost
-    ``|a|^2`` is the residual's; a non-finite ``u`` counts as 0 and sets
-    ``action_invalid``.
+    With ``timing_scale > 0`` (controllers ``juggler_delay_tracker`` and
+    ``juggler_delay_estimator_catch`` only) ``Box(-1, 1, (3,), float32)``: the residual,
+    then a **timing** entry ``u``: the delay the juggler is told is the tracker's plus
+    ``timing_scale * u`` s (at least 0), or for the delay estimator its estimate plus an
+    offset of ``delay_offset + timing_scale * u`` s (the sum at least 0); the flight
+    released in a step is fitted with the delay told in that step (the offset latched at
+    its release), so the agent RE-TIMES the catch (a later told delay, a later meeting,
+    the hand waiting lower) instead of moving the hand. ``u = 0`` is the controller
+    alone (the tracker, or the estimator told `delay_offset`). The action cost ``|a|^2``
+    is the residual's; a non-finite ``u`` counts as 0 and sets ``action_invalid``.
 
     ## Observation Space
     ``Box(low, high, (32,), float32)``, ``(36,)`` with ``observe_task_error=True``
@@ -225,9 +227,9 @@ class JugglingV2Env(OneBallEnv):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative) |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
-    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` only) |
+    | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` and `juggler_delay_estimator_catch` only) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
@@ -243,7 +245,8 @@ class JugglingV2Env(OneBallEnv):
       (``observe_task_error`` added later; its default, False, leaves every rollout
       unchanged; ``timing_scale`` later still, its default 0 likewise; the controller
       ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged;
-      its ``delay_offset`` later, the default 0 leaving its rollouts unchanged).
+      its ``delay_offset`` later, the default 0 leaving its rollouts unchanged; its
+      timing entry later still, ``timing_scale`` 0 by default).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -319,6 +322,10 @@ class JugglingV2Env(OneBallEnv):
             lv.position_std,
         )
         self._held = HeldTaskErrors(1, self.max_catches)
+        #: s, the timing entry's ``timing_scale * u`` of the last step, told the estimator
+        #: of ``juggler_delay_estimator_catch`` at the next release (the tracker keeps its
+        #: own, ``DelayTracker.adjust``)
+        self._adjust = 0.0
         self._init_spaces(self.max_catches * V1_CYCLE_TIME)
         if self.timing_scale:
             self.action_space = gym.spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
@@ -355,6 +362,9 @@ class JugglingV2Env(OneBallEnv):
         self.controller.estimator.reset(self.drag, self.delay)
         state = controller_view(true)
         self.controller.reset(state, controller_rng)
+        if self.timing_scale:  # no adjustment before the first action
+            self._adjust = 0.0
+            self._retell()
         self._frames.clear()
         self._release_time = math.nan
         self._closest = None
@@ -370,10 +380,13 @@ class JugglingV2Env(OneBallEnv):
             return super().step(action)
         a = as_action(action, (3,))
         u = float(a[2])
-        controller = self.controller
-        assert isinstance(controller, DelayTrackerController)
         finite = math.isfinite(u)
-        controller.tracker.adjust = self.timing_scale * (min(max(u, -1.0), 1.0) if finite else 0.0)
+        adjust = self.timing_scale * (min(max(u, -1.0), 1.0) if finite else 0.0)
+        controller = self.controller
+        if isinstance(controller, DelayTrackerController):
+            controller.tracker.adjust = adjust
+        else:  # the estimator's offset: latched at this step's release, if any (_retell)
+            self._adjust = adjust
         obs, reward, terminated, truncated, info = super().step(a[:2])
         if not finite:
             info["action_invalid"] = True
@@ -406,8 +419,7 @@ class JugglingV2Env(OneBallEnv):
         if true.released:
             controller.estimator.released(true.time, *hand)
             if self.timing_scale:  # the new flight fitted with the delay told now
-                assert isinstance(controller, DelayTrackerController)
-                controller.retell()
+                self._retell()
             self._release_time = true.time
             self._closest = None
         elif not true.held and controller.phase == "catch" and true.ball_vel[1] < 0:
@@ -423,6 +435,19 @@ class JugglingV2Env(OneBallEnv):
             self._drift()
         self._observe_frames(obs, true.time)
         return obs, out
+
+    def _retell(self) -> None:
+        """With a timing entry, at a release and at a reset: the delay told from now on,
+        so the flight released now is fitted with it until the next release: the
+        tracker's told delay (:meth:`DelayTrackerController.retell`, its ``adjust`` set
+        in :meth:`step`), or the release-anchored estimator's ``offset``, `delay_offset`
+        plus the timing entry's ``timing_scale * u`` (``_adjust``, 0 at a reset)."""
+        controller = self.controller
+        if isinstance(controller, DelayTrackerController):
+            controller.retell()
+        else:
+            controller.estimator.offset = self.delay_offset + self._adjust
+            controller.estimator._fitted = False
 
     def _add_info(self, info: dict[str, Any], terminated: bool) -> None:
         """At a catch its ``task_error`` and ``catch_speed``; at a drop its ``miss_error``

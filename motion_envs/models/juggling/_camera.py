@@ -34,8 +34,9 @@ captured at:
   over ``DELAY_GRID`` the least-squares ``v`` and the residual, the best ``d`` per
   flight from its first ``ANCHOR_FRAMES`` frames (the drag has not yet bent the flight
   much), averaged over the episode's flights (the delay is one per episode); with an
-  ``offset`` the frames are placed by that average plus the offset (a correction of the
-  estimate chosen elsewhere, on validation seeds; 0 by default);
+  ``offset`` the frames are placed by that average plus the offset, at least 0 (a
+  correction of the estimate chosen elsewhere, on validation seeds, plus an agent's
+  timing entry where the envs have one, set per flight at its release; 0 by default);
 * ``"oracle"``: at its arrival minus the episode's TRUE delay, with the ball's true drag
   (an upper reference, given what the world hides; labelled so wherever it is reported).
   Like every other estimator it does not know a frame's jitter: no observation could
@@ -221,8 +222,9 @@ class FlightEstimator:
         s; ``"mean_delay"``'s fixed delay.
     offset:
         s; added to ``"release"``'s estimated delay where it places the frames (may be
-        negative; the estimate itself, :attr:`delay_estimate`, is unchanged); only
-        ``"release"`` takes a nonzero one.
+        negative; the sum at least 0; the estimate itself, :attr:`delay_estimate`, is
+        unchanged); only ``"release"`` takes a nonzero one. An attribute the envs may set
+        again between flights (an agent's timing entry, latched at each release).
     drag:
         1/m; the oracle's drag (set per episode by :meth:`reset`).
     """
@@ -323,7 +325,7 @@ class FlightEstimator:
             return arrivals - self.fixed_delay
         if self.mode == "release":
             d = self.delay_estimate
-            return None if d is None else arrivals - (d + self.offset)
+            return None if d is None else arrivals - max(d + self.offset, 0.0)
         return arrivals - self.true_delay
 
     def fit(self) -> tuple[float, FloatArray, FloatArray] | None:

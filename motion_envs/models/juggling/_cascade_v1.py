@@ -85,7 +85,9 @@ write in a few lines, a competitor. Told an ``offset`` (the env's ``delay_offset
 :class:`CascadeBallView`'s ``offset``), its frames are placed by the pooled delay plus
 the offset (and, before the first estimate, by the prior the env gives: the level's
 mean plus the offset): a correction of the estimate's bias, chosen on validation seeds
-by the bench (row ``estimator_offset_catch``).
+by the bench (row ``estimator_offset_catch``). An agent's timing entry (the env's
+``timing_scale``, :class:`CascadeBallView`'s ``adjust``) is added to that offset (and
+prior) for each flight at its ball's release, as the tracker's told delay is latched.
 
 :data:`CASCADE_V1_CONTROLLERS` maps each controller name to the pattern's juggler
 variant and the estimator's mode; ``fixed_point`` (the juggler that catches at the
@@ -95,6 +97,7 @@ nominal point and time, never looking) is the trivial row.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -291,6 +294,16 @@ class CascadeBallView:
     offset:
         s (mode ``"release"`` only; may be negative): the frames are placed by the pooled
         delay plus ``offset`` (:class:`PooledReleaseEstimator`); 0: the pooled delay.
+
+    Attributes
+    ----------
+    adjust:
+        s or None: an agent's timing entry on the release estimator (mode ``"release"``,
+        the env's ``timing_scale``; None: no timing entry, set to 0 by the env to have
+        one). Each flight released from now on is fitted with the offset ``offset +
+        adjust`` and, before the episode's first estimate, the prior ``delay + adjust``
+        (at least 0), kept until its ball's next release (:meth:`record`), as a tracker's
+        flight keeps the delay told at its release; 0 again at every reset.
     """
 
     def __init__(
@@ -302,6 +315,8 @@ class CascadeBallView:
         if offset and mode != "release":
             raise ValueError(f"offset is for the estimators' mode 'release'; got {mode!r}")
         self.tracker = tracker
+        self.offset, self.prior = float(offset), float(delay)
+        self.adjust: float | None = None
         #: the episode's delays found from the releases (mode ``"release"``; s)
         self.pool: list[float] = []
         self.estimators: list[FlightEstimator] = (
@@ -322,6 +337,9 @@ class CascadeBallView:
         each ball in flight at the start known by its ``nominal`` (unscattered) state."""
         self.priors = []
         self.pool.clear()
+        if self.adjust is not None:  # no adjustment before the first action
+            self.adjust = 0.0
+            self._retime(range(len(self.estimators)))
         for i, est in enumerate(self.estimators):
             est.reset(float(drags[i]), delay)
             p, v = nominal.ball_pos[i].copy(), nominal.ball_vel[i].copy()
@@ -353,6 +371,16 @@ class CascadeBallView:
             self.estimators[i].fixed_delay = self.tracker.told
             self.estimators[i]._fitted = False
 
+    def _retime(self, balls: Iterable[int]) -> None:
+        """The release estimators of ``balls`` told the offset ``offset + adjust`` and the
+        prior ``delay + adjust`` (at least 0; the class's ``adjust``)."""
+        assert self.adjust is not None
+        for i in balls:
+            est = self.estimators[i]
+            est.offset = self.offset + self.adjust
+            est.fixed_delay = max(self.prior + self.adjust, 0.0)
+            est._fitted = False
+
     def record(self, true: CascadeState, frames: list[list[CameraFrame]]) -> None:
         """After a control period: each ball released in it starts a new flight (from its
         thrower's hand state), then each ball's frames that arrived are added."""
@@ -363,6 +391,8 @@ class CascadeBallView:
                 self.estimators[b].released(true.time, float(p[0]), float(p[1]))
                 if self.tracker is not None:  # the new flight fitted with the told delay
                     self._tell([b])
+                elif self.adjust is not None:  # with the offset told now
+                    self._retime([b])
         for est, new in zip(self.estimators, frames, strict=True):
             est.add(new)
 
