@@ -322,15 +322,19 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
     hold = Hold.remote()
     ray.get(hold.ready.remote())
     done = threading.Event()
+    sent: list[float] = []  # s after the start at which the ctrl-C was sent
+    start = time.monotonic()
 
     def ctrl_c_when_the_second_trial_starts() -> None:
-        deadline = time.monotonic() + 300
+        # generous: on a loaded 2-core machine the first trial alone can take minutes
+        deadline = start + 1200
         while not done.is_set() and time.monotonic() < deadline:
             entries = list(runs.iterdir()) if runs.is_dir() else []
             finished = [d for d in entries if (d / "run.json").is_file()]
             # the second trial has started: its locked run folder or its staging folder
             # beside the first trial's finished one
             if finished and len(entries) >= 2:
+                sent.append(time.monotonic() - start)
                 os.kill(os.getpid(), signal.SIGINT)  # Ray Tune's handler: save and stop
                 return
             time.sleep(0.02)
@@ -344,7 +348,8 @@ def test_resume_continues_an_interrupted_sweep_to_the_same_results(
         watcher.join()
         ray.kill(hold)
     err = capsys.readouterr().err
-    assert code == 130, err
+    when = f"ctrl-C sent {sent[0]:.0f} s in" if sent else "no ctrl-C sent (deadline passed)"
+    assert code == 130, f"{when}; the sweep took {time.monotonic() - start:.0f} s; {err}"
     assert f"interrupted with 1 of 2 trials finished; continue it with --resume --out {out}" in err
     assert not (out / "results.json").exists()
     finished = [d for d in sorted(runs.iterdir()) if (d / "run.json").is_file()]
