@@ -27,7 +27,9 @@ best row``) and the validation pick (the best validation score), and the issue's
 in words. With
 ``--every-row`` the agent is also paired with EVERY non-oracle row, the issue's last
 target (each simple hand-written row below the agent), not only with the row validation
-chose; ``--rescore JSON ...`` scores the kept policies of earlier runs without training.
+chose; ``--keep-base`` lets the base (``w = 0``) compete in the validation choice of
+the kept generation; ``--rescore JSON ...`` scores the kept policies of earlier runs
+without training.
 
     python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
         [--seeds 0 1 2] [--generations 10] [--population 10] [--batch 16]
@@ -217,6 +219,11 @@ def score_test(rows: dict[str, Any], weights: Any, n: int, memory: bool = False)
     return res
 
 
+def kept_score(run: dict[str, Any], base_val_score: float) -> float:
+    """The validation score of the run's kept policy (the base's when it kept the base)."""
+    return base_val_score if run["kept"] == -1 else float(run["val_scores"][run["kept"]])
+
+
 def load_earlier(paths: list[Path], base: str = "tracker") -> dict[str, Any]:
     """Earlier runs' ``catch_timing_agents.json`` files (``--rescore``), their blocks'
     runs pooled by block (one seed per file, as the runs were made); a missing or
@@ -284,8 +291,9 @@ def words(
     def f(x: dict[str, Any]) -> str:
         return f"{x['value']:+.3f} [{x['ci'][0]:+.3f}, {x['ci'][1]:+.3f}]"
 
+    kept = " (validation kept the base itself, w = 0)" if run["kept"] == -1 else ""
     text = (
-        f"{block}, {tag} (seed {run['seed']}): agent - {best} {f(d)} catch rate (target >= "
+        f"{block}, {tag} (seed {run['seed']}){kept}: agent - {best} {f(d)} catch rate (target >= "
         f"+{MARGIN:.2f} with the interval above 0: {'met' if t['margin'] else 'NOT met'}); "
         f"agent - its base (the {base}) {f(b)}; oracle_catch - agent {f(o)}; deviation "
         f"{run['deviation_mm']:.1f} mm against the juggler's {juggler_mm:.1f} + "
@@ -309,7 +317,10 @@ def plot(blocks: list[dict[str, Any]], path: Path) -> Path:
         for run in blk["runs"]:
             g = np.arange(1, len(run["val_scores"]) + 1)
             ax.plot(g, run["val_scores"], marker="o", ms=3, label=f"seed {run['seed']}")
-            ax.plot(run["kept"] + 1, run["val_scores"][run["kept"]], "k*", ms=10)
+            if run["kept"] >= 0:
+                ax.plot(run["kept"] + 1, run["val_scores"][run["kept"]], "k*", ms=10)
+            else:  # --keep-base: the base itself kept, drawn at generation 0
+                ax.plot(0, blk["base_val_score"], "k*", ms=10)
         base = blk.get("base", "tracker")
         ax.axhline(blk["base_val_score"], color="grey", ls="--", label=f"base (w = 0, the {base})")
         ax.set_xlabel("CEM generation")
@@ -345,6 +356,11 @@ def main(argv: list[str] | None = None) -> int:
         "validated offset)",
     )
     ap.add_argument(
+        "--keep-base",
+        action="store_true",
+        help="the base (w = 0) competes in the validation choice of the kept generation",
+    )
+    ap.add_argument(
         "--every-row",
         action="store_true",
         help="also pair the agent with every non-oracle row (Juggling-v2 replays them all)",
@@ -369,7 +385,7 @@ def main(argv: list[str] | None = None) -> int:
 
     settings = CEMSettings(generations=args.generations, population=args.population,
                            batch=args.batch, val_episodes=args.val_episodes,
-                           memory=args.memory)  # fmt: skip
+                           memory=args.memory, keep_base=args.keep_base)  # fmt: skip
     args.out.mkdir(parents=True, exist_ok=True)
     doc: dict[str, Any] = {"machine": machine(), "settings": vars(settings),
                            "timing_scale": TIMING_SCALE, "base": args.base,
@@ -399,6 +415,8 @@ def main(argv: list[str] | None = None) -> int:
                 trained = {"kept": tr.kept, "weights": tr.weights.tolist(),
                            "val_scores": tr.val_scores, "train_scores": tr.train_scores,
                            "train_cpu_s": time.process_time() - t0}  # fmt: skip
+                if settings.keep_base:  # the base's validation score, played by the learner
+                    trained["base_score"] = tr.base_score
             t0 = time.process_time()
             run = score_test(rows, trained["weights"], args.test_episodes, args.memory)
             run.update(seed=seed, **trained, test_cpu_s=time.process_time() - t0)
@@ -410,16 +428,19 @@ def main(argv: list[str] | None = None) -> int:
         val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
         hands, dim = (2, 5) if rows["cascade"] else (1, 3)
         zero = TimingPolicy(np.zeros(n_features(hands, args.memory)), hands, dim, args.memory)
+        played_base = [r["base_score"] for r in blk["runs"] if "base_score" in r]
         blk["base_val_score"] = (
             earlier_block(earlier, _names(args.rescore), block)["base_val_score"]
             if earlier is not None
+            else played_base[0]
+            if played_base  # --keep-base: the same zero policy on the same seeds
             else block_score(
                 *play_scores(rows["env"], rows["train_kwargs"], zero, val_seeds), rows["cascade"]
             )
         )
         runs = sorted(blk["runs"], key=lambda r: r["minus_best_catch_rate"]["value"])
         median = runs[len(runs) // 2]
-        pick = max(blk["runs"], key=lambda r: r["val_scores"][r["kept"]])
+        pick = max(blk["runs"], key=lambda r: kept_score(r, blk["base_val_score"]))
         blk["median_seed"], blk["validation_pick"] = median["seed"], pick["seed"]
         jmm = rows["juggler_mm"]
         blk["words"] = [

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -90,6 +91,47 @@ def test_cem_climbs_and_keeps_on_validation(monkeypatch: pytest.MonkeyPatch) -> 
     assert all(len(np.unique(s)) == settings.batch for s in train)  # shared by candidates
     again = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, settings, seed=4)
     np.testing.assert_array_equal(again.weights, out.weights)
+
+
+def _quadratic_scorer(target: np.ndarray, played: list[str]) -> Any:
+    """A fake ``play_scores``: catches fall with the squared distance of ``w`` from
+    ``target``; records each call's split."""
+
+    def fake(env_id: str, kwargs: Any, policy: ct.TimingPolicy, seeds: np.ndarray) -> Any:
+        w = np.broadcast_to(np.atleast_2d(policy.weights), (len(seeds), len(target)))
+        played.append("val" if seeds.min() >= SPLIT_SEEDS["val"] else "train")
+        loss = ((w - target) ** 2).sum(axis=1)  # resolved to 1e-6: no ties near the base
+        return np.round(10**6 * (1 - loss / 10)).astype(np.int64), np.full(len(seeds), 10**6)
+
+    return fake
+
+
+def test_keep_base_keeps_w0_when_no_generation_beats_it_on_validation(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The best policy IS the base (target 0): every generation's mean lies off it, so
+    validation scores each below the base, and ``keep_base`` keeps the base (zeros);
+    without it the argmax keeps a generation below the base. With the target far from 0
+    the learner's generation beats the base and is kept either way."""
+    played: list[str] = []
+    settings = ct.CEMSettings(generations=3, population=6, elite=2, batch=2, val_episodes=3)
+    monkeypatch.setattr(ct, "play_scores", _quadratic_scorer(np.zeros(5), played))
+    plain = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, settings, seed=1)
+    assert plain.kept >= 0 and np.isnan(plain.base_score)
+    assert played.count("val") == settings.generations  # no base played
+    played.clear()
+    kb = replace(settings, keep_base=True)
+    kept = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, kb, seed=1)
+    assert played.count("val") == settings.generations + 1 and played[0] == "val"  # base first
+    assert kept.base_score == 1.0 > max(kept.val_scores)  # the base: zero loss
+    assert kept.kept == -1
+    np.testing.assert_array_equal(kept.weights, np.zeros(5))
+    assert kept.val_scores == plain.val_scores  # the base changes nothing else
+    far = np.array([2.0, -1.5, 0.0, 1.0, 1.2])
+    monkeypatch.setattr(ct, "play_scores", _quadratic_scorer(far, []))
+    learned = ct.train_timing_cem("MotionEnvs/Juggling-v2", V2_KW, kb, seed=1)
+    assert learned.kept == int(np.argmax(learned.val_scores)) >= 0
+    assert max(learned.val_scores) > learned.base_score
 
 
 def test_cem_refuses_an_env_without_the_timing_entry() -> None:

@@ -76,3 +76,9 @@ def test_rescore_refuses_an_unreadable_file_in_one_line(tmp_path: Path) -> None:
         cta.load_earlier([other])
     with pytest.raises(SystemExit):  # argparse's one-line error, exit status 2
         cta.main(["--rescore", str(tmp_path / "missing.json")])
+
+
+def test_the_validation_pick_reads_the_base_score_when_the_base_was_kept() -> None:
+    cta = load_experiment("catch_timing_agents")
+    assert cta.kept_score({"kept": -1, "val_scores": [0.2, 0.9]}, 0.5) == 0.5
+    assert cta.kept_score({"kept": 1, "val_scores": [0.2, 0.9]}, 0.5) == 0.9

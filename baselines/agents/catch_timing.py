@@ -42,11 +42,15 @@ catch rate pooled over the episodes; cascades: mean catches before the first dro
 moves the mean and standard deviation to theirs (smoothed, never below ``min_sigma``).
 The mean after every generation is scored on ``val_episodes`` VALIDATION episodes; the
 generation with the best validation score is kept (the earliest on ties), as a
-checkpoint is chosen; test seeds are never played here.
+checkpoint is chosen; test seeds are never played here. With ``keep_base`` the base
+(``w = 0``, the controller alone) is scored on the same validation episodes first and
+competes in that choice, winning ties: a learner that finds nothing better on
+validation keeps the base instead of a generation validation scores below it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -173,6 +177,8 @@ class CEMSettings:
     smoothing: float = 0.3
     val_episodes: int = 50
     memory: bool = False
+    #: the base (``w = 0``) competes in the validation choice (module docstring)
+    keep_base: bool = False
 
     def __post_init__(self) -> None:
         for name in ("generations", "population", "elite", "batch", "val_episodes"):
@@ -235,16 +241,21 @@ def block_score(catches: NDArray[np.int64], tosses: NDArray[np.int64], cascade: 
 @dataclass
 class TimingTraining:
     """One learner's run: the mean ``w`` after every generation, its validation score,
-    the elite's mean training score, and the kept generation (best on validation)."""
+    the elite's mean training score, and the kept generation (best on validation; -1:
+    the base ``w = 0``, only with ``keep_base``, whose validation score is
+    ``base_score``, NaN without it)."""
 
     means: list[FloatArray] = field(default_factory=list)
     val_scores: list[float] = field(default_factory=list)
     train_scores: list[float] = field(default_factory=list)
     kept: int = 0
+    base_score: float = math.nan
 
     @property
     def weights(self) -> FloatArray:
-        """The kept ``w``."""
+        """The kept ``w`` (zeros when the base was kept)."""
+        if self.kept == -1:
+            return np.zeros_like(self.means[0])
         return self.means[self.kept]
 
 
@@ -278,6 +289,9 @@ def train_timing_cem(
     out = TimingTraining()
     val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
     s = settings
+    if s.keep_base:
+        zero = TimingPolicy(np.zeros(p), hands, action_dim, mem)
+        out.base_score = block_score(*play_scores(env_id, kwargs, zero, val_seeds), cascade)
     for g in range(s.generations):
         cand = mean + std * rng.standard_normal((s.population, p))
         base = SPLIT_SEEDS["train"] + seed * 10**6 + g * s.batch
@@ -303,4 +317,6 @@ def train_timing_cem(
         if progress is not None:
             progress(g, out.train_scores[-1], val)
     out.kept = int(np.argmax(out.val_scores))  # the first of the best
+    if s.keep_base and out.base_score >= out.val_scores[out.kept]:  # the base wins ties
+        out.kept = -1
     return out
