@@ -103,3 +103,28 @@ def load_experiment(name: str) -> Any:
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+def check_timing_entry(env: Any, plain: Any) -> None:
+    """``env`` (a wrapped env with a timing entry) has one action entry more than
+    ``plain`` (the same without it); Gymnasium's and SB3's checkers pass; ``reset(seed)``
+    is deterministic under a random timing action."""
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check
+
+    assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
+    check_env(env.unwrapped, skip_render_check=True)
+    sb3_check(env.unwrapped, warn=True)
+
+    def play(seed: int) -> np.ndarray:
+        rng = np.random.default_rng(0)
+        obs, _ = env.reset(seed=seed)
+        path = [obs]
+        for _ in range(300):
+            obs, _, term, trunc, _ = env.step(rng.uniform(-1, 1, env.action_space.shape))
+            path.append(obs)
+            if term or trunc:
+                break
+        return np.stack(path)
+
+    np.testing.assert_array_equal(play(1003), play(1003))

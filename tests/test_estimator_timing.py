@@ -17,8 +17,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
-from _helpers import load_experiment, rollout_digest
-from gymnasium.utils.env_checker import check_env
+from _helpers import check_timing_entry, load_experiment, rollout_digest
 
 import motion_envs  # noqa: F401  (registers the ids)
 from baselines.agents import catch_timing as ct
@@ -282,27 +281,8 @@ def test_timing_scale_with_another_controller_is_one_line(env_id: str, controlle
 def test_checkers_pass_with_the_entry_on_the_estimator(env_id: str, extra: dict[str, Any]) -> None:
     """One more action entry; Gymnasium's and SB3's checkers pass; ``reset(seed)`` is
     deterministic under a random timing action."""
-    from stable_baselines3.common.env_checker import check_env as sb3_check
-
     kw = {"level": "medium", "controller": NAME, "delay_offset": -0.01, **extra}
-    env = gym.make(env_id, **kw, timing_scale=SCALE)
-    plain = gym.make(env_id, **kw)
-    assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
-    check_env(env.unwrapped, skip_render_check=True)
-    sb3_check(env.unwrapped, warn=True)
-
-    def play(seed: int) -> np.ndarray:
-        rng = np.random.default_rng(0)
-        obs, _ = env.reset(seed=seed)
-        path = [obs]
-        for _ in range(300):
-            obs, _, term, trunc, _ = env.step(rng.uniform(-1, 1, env.action_space.shape))
-            path.append(obs)
-            if term or trunc:
-                break
-        return np.stack(path)
-
-    np.testing.assert_array_equal(play(1003), play(1003))
+    check_timing_entry(gym.make(env_id, **kw, timing_scale=SCALE), gym.make(env_id, **kw))
 
 
 # -- the catch-timing script's --base estimator ---------------------------------------------

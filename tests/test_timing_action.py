@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
+from _helpers import check_timing_entry
 
 import motion_envs  # noqa: F401  (registers the ids)
 from motion_envs.models.juggling import DelayTracker
@@ -81,27 +81,10 @@ def test_constant_timing_is_a_later_told_delay() -> None:
 def test_timing_entry_spaces_and_checkers(env_id: str, base: dict[str, Any], steps: int) -> None:
     """One more action entry with ``timing_scale``; Gymnasium's and SB3's checkers
     pass; ``reset(seed)`` is deterministic under a random timing action."""
-    from stable_baselines3.common.env_checker import check_env as sb3_check
-
     kw = {**base, "controller": "juggler_delay_tracker", "timing_scale": 0.1}
     env = gym.make(env_id, **kw)
     plain = gym.make(env_id, **{**kw, "timing_scale": 0.0})
-    assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
-    check_env(env.unwrapped, skip_render_check=True)
-    sb3_check(env.unwrapped, warn=True)
-
-    def play(seed: int) -> np.ndarray:
-        rng = np.random.default_rng(0)
-        obs, _ = env.reset(seed=seed)
-        path = [obs]
-        for _ in range(300):
-            obs, _, term, trunc, _ = env.step(rng.uniform(-1, 1, env.action_space.shape))
-            path.append(obs)
-            if term or trunc:
-                break
-        return np.stack(path)
-
-    np.testing.assert_array_equal(play(1003), play(1003))
+    check_timing_entry(env, plain)
     env.close()
     plain.close()
 
