@@ -39,6 +39,8 @@ from motion_envs.models.juggling import (
     DelayTracker,
     DelayTrackerController,
     V2Controller,
+    ballistic_apex,
+    gaze_eye,
     make_v2_controller,
     v1_juggler,
     v1_likeness,
@@ -99,7 +101,8 @@ class JugglingV2Env(OneBallEnv):
     (:data:`~motion_envs.models.juggling.V2_CONTROLLERS`): ``juggler_mean_delay``
     (frames shifted by the level's mean delay), ``juggler_delay_estimator`` (the
     delay estimated from the release, a hand-written fix) and ``juggler_oracle`` (given
-    the episode's true delay and drag, not the frames' jitter; not a competitor). With a
+    the episode's true delay and drag, on `gaze` each frame's gaze latency, not the
+    frames' jitter; not a competitor). With a
     catch planned for the capture rule (the palm arrives early and meets the ball
     descending slower than it; :mod:`~motion_envs.models.juggling._v2_catch`):
     ``juggler_oracle_catch`` (the oracle's information, the UPPER REFERENCE) and
@@ -129,14 +132,25 @@ class JugglingV2Env(OneBallEnv):
     | `medium` | 100-200    | 10          | 5 %         | 2          | 0.009-0.07     | 0.08 / 6 deg              | 5                      |
     | `hard`   | 150-250    | 15          | 10 %        | 3          | 0.009-0.14     | 0.12 / 12 deg             | 5                      |
     | `drift`  | 100-250, a walk | 10     | 5 %         | 2          | 0.009-0.03, per catch | 0.08 / 6 deg       | 5                      |
+    | `gaze`   | 100-200, + 0.5-1.5 ms/deg of eccentricity per frame | 10 | 5 % | 2 | 0.009-0.07   | 0.08 / 6 deg              | 5                      |
 
     Every level's camera runs at 100 Hz and loses the ball within 10 cm of the hand's
     origin. On `drift` the delay and the drag change WITHIN the episode, at every catch
     (between flights): the delay takes a normal step of std 20 ms reflected at 100 and
     250 ms, the drag (a beanbag landing in a new shape) is drawn afresh; the oracle is
     told the new values (:mod:`~motion_envs.models.juggling._v2_levels` has the
-    reasoning). The true current delay and drag are the attributes ``delay`` and
-    ``drag`` (for evaluation; never in the observation or the info).
+    reasoning). On `gaze` the latency changes WITHIN a flight, frame by frame: each
+    frame's latency is ``delay + slope * ecc + jitter``, ``ecc`` the angle (degrees),
+    seen from an eye 0.45 m above the hand's home and 0.40 m out of the plane, between
+    the ball and the fixation point, the apex of the flight predicted ballistically at
+    its release (jugglers fixate near the apex; reaction times grow with eccentricity),
+    ``slope`` drawn per episode from 0.5-1.5 ms per degree (frames 0-80 ms later near
+    the palm than at the apex); the rest is `medium`'s
+    (:mod:`~motion_envs.models.juggling._v2_levels` and
+    :mod:`~motion_envs.models.juggling._camera` have the reasoning); the oracle is told
+    each frame's gaze latency too. The true current delay, drag and gaze slope are the
+    attributes ``delay``, ``drag`` and ``slope`` (0 but on `gaze`; for evaluation; never
+    in the observation or the info).
 
     ## Action Space
     ``Box(-1, 1, (2,), float32)``: the residual ``(dx, dz)`` added to the controller's
@@ -205,9 +219,11 @@ class JugglingV2Env(OneBallEnv):
 
     ## Starting State
     The hand rests at the juggler's home with the ball in it, time 0, toss phase.
-    `reset(seed=S)` seeds five independent streams ``SeedSequence(S).spawn(5)``: the
-    world (release noise), the camera, the controller, the episode's delay and the
-    episode's drag (on `drift` their streams also draw every catch's step and drag).
+    `reset(seed=S)` seeds six independent streams ``SeedSequence(S).spawn(6)``: the
+    world (release noise), the camera, the controller, the episode's delay, the
+    episode's drag (on `drift` their streams also draw every catch's step and drag) and
+    the gaze slope (drawn on `gaze` only; the first five are ``spawn(5)``'s, as before
+    the level existed).
 
     ## Episode End
     ### Termination
@@ -225,7 +241,7 @@ class JugglingV2Env(OneBallEnv):
 
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
-    | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"` or `"drift"` (table above) |
+    | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"`, `"drift"` or `"gaze"` (table above) |
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
@@ -246,7 +262,8 @@ class JugglingV2Env(OneBallEnv):
       unchanged; ``timing_scale`` later still, its default 0 likewise; the controller
       ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged;
       its ``delay_offset`` later, the default 0 leaving its rollouts unchanged; its
-      timing entry later still, ``timing_scale`` 0 by default).
+      timing entry later still, ``timing_scale`` 0 by default; the level `gaze`
+      added 2026-12-07, every other level's rollouts unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -340,6 +357,10 @@ class JugglingV2Env(OneBallEnv):
         self._closest: tuple[float, float, float, float] | None = None
         #: s and 1/m: the episode's true (current) delay and drag (hidden from the policy)
         self.delay = self.drag = math.nan
+        #: s per degree: the episode's true gaze slope (level ``gaze``; 0 elsewhere;
+        #: hidden from the policy)
+        self.slope = math.nan
+        self._eye = gaze_eye((float(self.home[0]), float(self.home[1])))
         self._drift_rngs: tuple[np.random.Generator, np.random.Generator] | None = None
 
     # -- episode ------------------------------------------------------------------------
@@ -348,17 +369,20 @@ class JugglingV2Env(OneBallEnv):
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
         super().reset(seed=seed)
         base = int(seed) if seed is not None else int(self.np_random.integers(2**63))
-        streams = np.random.SeedSequence(base).spawn(5)
-        world_rng, camera_rng, controller_rng, delay_rng, drag_rng = (
+        # spawn(6)'s first five children are spawn(5)'s: the sixth (the gaze slope's)
+        # leaves every other stream, and every level without gaze, as before
+        streams = np.random.SeedSequence(base).spawn(6)
+        world_rng, camera_rng, controller_rng, delay_rng, drag_rng, slope_rng = (
             np.random.default_rng(s) for s in streams
         )
         lv = self.spec_level
         self.delay = float(delay_rng.uniform(*lv.delay))
         self.drag = float(drag_rng.uniform(*lv.drag))
+        self.slope = float(slope_rng.uniform(*lv.gaze_slope)) if lv.gaze_slope[1] else 0.0
         self._drift_rngs = (delay_rng, drag_rng)  # drawn from again at catches (drift)
         true = self.world.reset(self.home, rng=world_rng)
         self.world.set_drag(0, self.drag)
-        self.camera.reset(self.delay, camera_rng)
+        self.camera.reset(self.delay, camera_rng, self.slope, self._eye)
         self.controller.estimator.reset(self.drag, self.delay)
         state = controller_view(true)
         self.controller.reset(state, controller_rng)
@@ -415,6 +439,9 @@ class JugglingV2Env(OneBallEnv):
             controller.felt(self._caught[0])  # what the palm felt (the delay tracker's)
         hand = (float(true.hand_pos[0]), float(true.hand_pos[1]))
         ball = (float(true.ball_pos[0]), float(true.ball_pos[1]))
+        if true.released and self.slope:  # the gaze fixates the new flight's apex
+            vel = (float(true.ball_vel[0]), float(true.ball_vel[1]))
+            self.camera.fixate(ballistic_apex(ball, vel, self.gravity))
         frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)
         if true.released:
             controller.estimator.released(true.time, *hand)

@@ -18,7 +18,8 @@ The public names of small private modules, one concern each:
   scatters a toss (:func:`perturb_release`);
 * ``_camera``: how Juggling-v2 sees the ball (:class:`CameraSensor`: positions at a
   camera rate, a hidden delay with jitter, drops, occlusion) and the flight estimators
-  fed from it (:class:`FlightEstimator`, :func:`drag_flight`); ``_v2_levels``:
+  fed from it (:class:`FlightEstimator`, :func:`drag_flight`; the gaze latency,
+  :func:`eccentricity`); ``_v2_levels``:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:class:`V2Controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
   (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`; the delay estimator
@@ -63,10 +64,14 @@ from motion_envs.models.juggling._camera import (
     ANCHOR_FRAMES,
     DELAY_GRID,
     ESTIMATORS,
+    GAZE_EYE,
     CameraFrame,
     CameraSensor,
     FlightEstimator,
+    ballistic_apex,
     drag_flight,
+    eccentricity,
+    gaze_eye,
 )
 from motion_envs.models.juggling._cascade import (
     CascadeFit,
@@ -241,6 +246,7 @@ __all__ = [
     "ESTIMATORS",
     "FIT_SEED",
     "FIT_TEST_FRACTION",
+    "GAZE_EYE",
     "LEVELS",
     "LIKENESS_TAU",
     "MAX_DEMO_SAMPLES",
@@ -302,6 +308,7 @@ __all__ = [
     "V2Controller",
     "V2Level",
     "across_axis",
+    "ballistic_apex",
     "cascade_fit",
     "cascade_likeness",
     "cascade_reasons",
@@ -316,11 +323,13 @@ __all__ = [
     "detect_flights",
     "drag_flight",
     "draw_episode_noise",
+    "eccentricity",
     "eq10_many",
     "eq10_rows",
     "equivalent_ballistic",
     "estimate_noise",
     "fit_juggler",
+    "gaze_eye",
     "gravity_range",
     "juggler_demonstrations",
     "load_demonstrations",

@@ -13,6 +13,20 @@ in capture order (a frame never overtakes an earlier one: first in, first out). 
 delay is drawn per episode by the environment from the level's human range and never
 shown: a frame says where the ball was, not when.
 
+**Gaze** (Juggling-v2's level ``gaze``): a juggler fixates near the apex of the toss
+(Huys & Beek 2002, *The coupling between point-of-gaze and ball movements in three-ball
+cascade juggling: the effects of expertise, pattern and tempo*, J. Sports Sciences 20:
+171-186), so the ball near the hand is seen in the periphery, and visual reaction times
+rise with retinal eccentricity (Payne 1967, *Visual reaction times on a circle about the
+fovea*, Science 155: 481-482). With a ``slope`` (s per degree; :meth:`CameraSensor.reset`)
+each captured frame's latency is ``delay + slope * ecc + jitter``, ``ecc`` the angle in
+degrees (:func:`eccentricity`), seen from the eye (:func:`gaze_eye`), between the ball's
+true position at capture and the fixation point: the apex of the current flight predicted
+ballistically from the release state (:func:`ballistic_apex`; the person anticipates the
+apex; drag ignored), told the camera at each release (:meth:`CameraSensor.fixate`). Before
+the first release nothing is fixated (and no frame is captured: the ball is held). With
+``slope`` 0 (every other level, Cascade-v1) every frame is exactly as without gaze.
+
 Four random numbers are drawn per captured frame (drop, jitter, two noises), whether or
 not the frame is lost, so a frame's fate does not shift the next frames' draws.
 
@@ -37,8 +51,10 @@ captured at:
   ``offset`` the frames are placed by that average plus the offset, at least 0 (a
   correction of the estimate chosen elsewhere, on validation seeds, plus an agent's
   timing entry where the envs have one, set per flight at its release; 0 by default);
-* ``"oracle"``: at its arrival minus the episode's TRUE delay, with the ball's true drag
-  (an upper reference, given what the world hides; labelled so wherever it is reported).
+* ``"oracle"``: at its arrival minus the episode's TRUE delay and the frame's TRUE gaze
+  latency (``slope * ecc``, :attr:`CameraFrame.gaze`; 0 but on level ``gaze``), with the
+  ball's true drag (an upper reference, given what the world hides; labelled so wherever
+  it is reported).
   Like every other estimator it does not know a frame's jitter: no observation could
   tell it (a frame carries no capture time).
 
@@ -58,10 +74,14 @@ __all__ = [
     "ANCHOR_FRAMES",
     "DELAY_GRID",
     "ESTIMATORS",
+    "GAZE_EYE",
     "CameraFrame",
     "CameraSensor",
     "FlightEstimator",
+    "ballistic_apex",
     "drag_flight",
+    "eccentricity",
+    "gaze_eye",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -72,17 +92,62 @@ ESTIMATORS = ("arrival", "mean_delay", "release", "oracle")
 DELAY_GRID = np.round(np.arange(0.0, 0.4001, 0.005), 6)
 #: Frames after a release from which the release-anchored estimator finds the delay.
 ANCHOR_FRAMES = 8
+#: m; the eye relative to the hand's home ``(dx, dz, y)``: at the home's ``x``, 0.45 m above
+#: it and 0.40 m out of the juggling plane (toward the juggler), for the ``gaze`` level's
+#: eccentricity. A reasoned choice, not a measurement: a juggler's hands work at about
+#: elbow height, some 0.4-0.5 m below the eyes, and 0.3-0.5 m in front of the body.
+GAZE_EYE = (0.0, 0.45, 0.40)
+
+
+def gaze_eye(home: tuple[float, float]) -> tuple[float, float, float]:
+    """The eye ``(x, z, y)`` (m) for the hand's ``home`` ``(x, z)`` (:data:`GAZE_EYE`; the
+    juggling plane is ``y = 0``)."""
+    dx, dz, y = GAZE_EYE
+    return float(home[0]) + dx, float(home[1]) + dz, y
+
+
+def ballistic_apex(
+    p: tuple[float, float], v: tuple[float, float], gravity: float
+) -> tuple[float, float]:
+    """The apex ``(x, z)`` of the ballistic flight from ``p`` at ``v`` (drag ignored); the
+    release point itself when the ball does not rise (``v_z <= 0``)."""
+    vz = float(v[1])
+    if vz <= 0:
+        return float(p[0]), float(p[1])
+    s = vz / gravity
+    return float(p[0]) + float(v[0]) * s, float(p[1]) + 0.5 * vz * s
+
+
+def eccentricity(
+    ball: tuple[float, float], fixation: tuple[float, float], eye: tuple[float, float, float]
+) -> float:
+    """Degrees; the angle at ``eye`` ``(x, z, y)`` between the ball and the fixation point,
+    both ``(x, z)`` in the plane ``y = 0`` (0 when either coincides with the eye)."""
+    ex, ez, ey = eye
+    a = (ball[0] - ex, ball[1] - ez, -ey)
+    b = (fixation[0] - ex, fixation[1] - ez, -ey)
+    na, nb = math.hypot(*a), math.hypot(*b)
+    if na == 0.0 or nb == 0.0:
+        return 0.0
+    cross = math.hypot(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                       a[0] * b[1] - a[1] * b[0])  # fmt: skip
+    dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    return math.degrees(math.atan2(cross, dot))
 
 
 @dataclass(frozen=True)
 class CameraFrame:
     """One received frame: the ball's measured ``x, z`` (m), when it was captured
-    (``capture``, s; hidden from all but the oracle) and when it arrived (``arrival``)."""
+    (``capture``, s; hidden from all but the oracle), when it arrived (``arrival``) and
+    its gaze latency ``slope * ecc`` (``gaze``, s; the part of its latency the
+    eccentricity adds, jitter excluded; 0 without gaze; hidden from all but the
+    oracle)."""
 
     capture: float
     arrival: float
     x: float
     z: float
+    gaze: float = 0.0
 
 
 class CameraSensor:
@@ -130,18 +195,43 @@ class CameraSensor:
         self.occlusion_radius = float(occlusion_radius)
         self.position_std = float(position_std)
         self.delay = 0.0
+        #: s per degree of eccentricity (level ``gaze``; 0: no gaze latency)
+        self.slope = 0.0
+        self.eye = (0.0, 0.0, 1.0)
+        #: the fixation point ``(x, z)`` of the current flight (None before a release)
+        self.fixation: tuple[float, float] | None = None
         self._pending: list[tuple[int, CameraFrame]] = []
         self._last_arrival = -1
         self._rng: np.random.Generator = np.random.default_rng(0)
 
-    def reset(self, delay: float, rng: np.random.Generator) -> None:
-        """A new episode with the visuomotor ``delay`` (s); no frame in flight."""
+    def reset(
+        self,
+        delay: float,
+        rng: np.random.Generator,
+        slope: float = 0.0,
+        eye: tuple[float, float, float] = (0.0, 0.0, 1.0),
+    ) -> None:
+        """A new episode with the visuomotor ``delay`` (s), the gaze ``slope`` (s per
+        degree, module docstring; 0: none) seen from ``eye`` ``(x, z, y)`` (m, off the
+        plane ``y = 0``); no frame in flight, nothing fixated."""
         if not (math.isfinite(delay) and delay >= 0):
             raise ValueError(f"delay must be finite and >= 0; got {delay!r}")
+        if not (math.isfinite(slope) and 0 <= slope <= 0.01):
+            raise ValueError(f"slope must be in [0, 0.01] s per degree; got {slope!r}")
+        if len(eye) != 3 or not all(math.isfinite(e) for e in eye) or eye[2] == 0:
+            raise ValueError(f"eye must be 3 finite numbers (x, z, y), y != 0; got {eye!r}")
         self.delay = float(delay)
+        self.slope = float(slope)
+        self.eye = (float(eye[0]), float(eye[1]), float(eye[2]))
+        self.fixation = None
         self._rng = rng
         self._pending = []
         self._last_arrival = -1
+
+    def fixate(self, apex: tuple[float, float]) -> None:
+        """The new flight's fixation point ``(x, z)`` (its predicted apex); the envs call
+        it at each release, before that step's frame."""
+        self.fixation = (float(apex[0]), float(apex[1]))
 
     def record(
         self, k: int, ball: tuple[float, float], hand: tuple[float, float], held: bool
@@ -155,7 +245,11 @@ class CameraSensor:
             near = math.hypot(bx - hand[0], bz - hand[1]) < self.occlusion_radius
             if not (held or near or u < self.drop_prob):
                 t = k * self.dt
-                latency = max(self.delay + self.jitter_std * jitter, 0.0)
+                gaze = 0.0
+                if self.slope and self.fixation is not None:
+                    gaze = self.slope * eccentricity(ball, self.fixation, self.eye)
+                base = self.delay + gaze if gaze else self.delay
+                latency = max(base + self.jitter_std * jitter, 0.0)
                 arrive = max(k + math.ceil(latency / self.dt - 1e-9), self._last_arrival)
                 self._last_arrival = arrive
                 frame = CameraFrame(
@@ -163,6 +257,7 @@ class CameraSensor:
                     arrive * self.dt,
                     bx + self.position_std * ex,
                     bz + self.position_std * ez,
+                    gaze,
                 )
                 self._pending.append((arrive, frame))
         out = [f for a, f in self._pending if a <= k]
@@ -326,6 +421,9 @@ class FlightEstimator:
         if self.mode == "release":
             d = self.delay_estimate
             return None if d is None else arrivals - max(d + self.offset, 0.0)
+        gaze = np.array([f.gaze for f in frames])
+        if gaze.any():  # level gaze: each frame's own gaze latency
+            return arrivals - (self.true_delay + gaze)
         return arrivals - self.true_delay
 
     def fit(self) -> tuple[float, FloatArray, FloatArray] | None:
