@@ -251,3 +251,75 @@ def test_oracle_frame_times_on_gaze_are_the_capture_times_without_jitter() -> No
                 off.append(np.max(gaze))
                 frames += len(est.frames)
     assert frames > 100 and max(off) > 0.02  # the gaze latency was there to remove
+
+
+# -- the hand-written gaze-aware estimator (juggler_gaze_estimator_catch) ----------------
+def _gaze_flight(
+    est: FlightEstimator, t_r: float, p0: tuple[float, float], v0: tuple[float, float],
+    d: float, k: float, eye: tuple[float, float, float],
+) -> list[CameraFrame]:  # fmt: skip
+    """A noise-free flight released at ``t_r``: 10 frames 10 ms apart from 30 ms, each
+    arriving ``d + k ecc`` after its capture (``ecc`` from the true apex)."""
+    est.released(t_r, *p0, v0)
+    apex = ballistic_apex(p0, v0, 9.81)
+    frames = []
+    for i in range(10):
+        s = 0.03 + 0.01 * i
+        x, z = p0[0] + v0[0] * s, p0[1] + v0[1] * s - 0.5 * 9.81 * s * s
+        gaze = k * eccentricity((x, z), apex, eye)
+        frames.append(CameraFrame(t_r + s, t_r + s + d + gaze, x, z, gaze))
+    est.add(frames)
+    return frames
+
+
+@pytest.mark.parametrize(("d", "k"), [(0.125, 0.0012), (0.17, 0.0), (0.10, 0.0025)])
+def test_gaze_estimator_finds_delay_and_slope_of_a_noise_free_flight(d: float, k: float) -> None:
+    eye = (0.2, 1.45, 0.40)
+    est = FlightEstimator("gaze_release", 9.81)
+    est.eye = eye
+    est.reset()
+    plain = FlightEstimator("release", 9.81)
+    for n, (p0, v0) in enumerate((((0.2, 1.1), (0.3, 4.0)), ((0.25, 1.05), (-0.2, 3.6)))):
+        frames = _gaze_flight(est, 1.0 + 2 * n, p0, v0, d, k, eye)
+        # on the grid points: found exactly, every frame placed at its capture
+        assert est.gaze_estimate == pytest.approx((d, k), abs=1e-12)
+        times = est._times(est.frames)
+        assert times is not None
+        np.testing.assert_allclose(times, [f.capture for f in frames], atol=1e-12)
+        plain.released(1.0 + 2 * n, *p0)
+        plain.add(frames)
+    one = plain._times(plain.frames)
+    assert one is not None
+    spread = np.ptp(one - np.array([f.capture for f in plain.frames]))
+    assert (spread > 0.02) == (k > 0)  # one delay cannot place a gaze flight's frames
+
+
+def test_gaze_estimator_has_no_estimate_before_its_first_anchor() -> None:
+    est = FlightEstimator("gaze_release", 9.81)
+    est.released(0.0, 0.2, 1.0, (0.0, 4.0))
+    assert est.estimate(0.2) is None and est.gaze_estimate is None
+    from motion_envs.models.juggling import SLOPE_GRID
+
+    assert SLOPE_GRID[0] == 0.0 and SLOPE_GRID[-1] == pytest.approx(0.003) and len(SLOPE_GRID) == 31
+
+
+def test_eccentricities_vectorised_is_the_scalar() -> None:
+    from motion_envs.models.juggling import eccentricities
+
+    rng = np.random.default_rng(0)
+    eye = (0.2, 1.45, 0.4)
+    pos = rng.uniform(0.0, 2.0, (7, 2))
+    fix = rng.uniform(0.0, 2.0, (3, 4, 2))
+    got = eccentricities(pos, fix, eye)
+    assert got.shape == (3, 4, 7)
+    want = [[[eccentricity(tuple(p), tuple(f), eye) for p in pos] for f in row] for row in fix]
+    np.testing.assert_allclose(got, want, atol=1e-9)
+
+
+def test_gaze_estimator_controller_in_the_env() -> None:
+    env = JugglingV2Env(level="gaze", controller="juggler_gaze_estimator_catch", max_catches=3)
+    assert env.controller.estimator.eye == gaze_eye((float(env.home[0]), float(env.home[1])))
+    a, _ = _play(env, 4)
+    b, _ = _play(env, 4)
+    assert np.array_equal(a, b)
+    assert env.controller.estimator.gaze_estimate is not None

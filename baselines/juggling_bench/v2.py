@@ -59,6 +59,11 @@ unit action, the scale an agent is given):
   :mod:`motion_envs.models.juggling._delay_tracker`), its gain ``k`` and offset the pair
   of :data:`TRACKER_GRID` with the highest catch rate on the VALIDATION seeds
   (:func:`choose_tracker`; ``k = 0``, offset 0 is ``mean_delay_catch`` itself);
+* ``gaze_estimator_catch``: the same catch plan on the hand-written gaze-aware estimator
+  (``juggler_gaze_estimator_catch``: the latency ``d + k ecc`` with the delay ``d`` and
+  the gaze slope ``k`` found from the releases, pooled over the episode's flights, each
+  frame's eccentricity from the apex anticipated from the hand's release; written for the
+  level ``gaze``, where a single delay cannot place every frame; a competitor);
 * ``random``: uniform random actions (seeded);
 * ``task_error_ilc``: the residual learner from the task-error vector
   (:class:`~baselines.juggling_bench.ilc.TaskErrorILC`: iterative learning control, a
@@ -185,6 +190,7 @@ ROWS = (
     "random",
     "task_error_ilc",
     "delay_tracker",
+    "gaze_estimator_catch",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -416,6 +422,7 @@ def row_players(
         ),
         "random": ("juggler", _Random(0), {}),
         "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
+        "gaze_estimator_catch": ("juggler_gaze_estimator_catch", None, {}),
     }
 
 
@@ -666,9 +673,9 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hHvdxp8", strict=True))
-    # one colour per row (the default cycle has 10; then black, grey, brown, navy)
-    extra = ("black", "0.5", "saddlebrown", "navy")
+    markers = dict(zip(ROWS, "osP^D<>hHvdxp8X", strict=True))
+    # one colour per row (the default cycle has 10; then black, grey, brown, navy, green)
+    extra = ("black", "0.5", "saddlebrown", "navy", "darkgreen")
     colors = {name: f"C{i}" if i < 10 else extra[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():

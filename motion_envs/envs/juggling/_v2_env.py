@@ -111,6 +111,9 @@ class JugglingV2Env(OneBallEnv):
     mean delay's plan: the two hand-written fixes together, a competitor; with
     `delay_offset` the frames are placed by the estimate plus the offset, a correction
     of the estimate's bias that may be negative), and
+    ``juggler_gaze_estimator_catch`` (that catch plan on a hand-written gaze-aware
+    estimator written for `gaze`: the delay and the gaze slope found from the releases,
+    pooled over the episode; a competitor), and
     ``juggler_delay_tracker``: that catch plan with its delay corrected after every
     catch from the catch's timing error, ``D <- clip(D - k (e - delay_offset))`` over
     the level's delay range, told ``D + delay_offset``
@@ -144,8 +147,8 @@ class JugglingV2Env(OneBallEnv):
     seen from an eye 0.45 m above the hand's home and 0.40 m out of the plane, between
     the ball and the fixation point, the apex of the flight predicted ballistically at
     its release (jugglers fixate near the apex; reaction times grow with eccentricity),
-    ``slope`` drawn per episode from 0.5-1.5 ms per degree (frames 0-80 ms later near
-    the palm than at the apex); the rest is `medium`'s
+    ``slope`` drawn per episode from 0.5-1.5 ms per degree (measured: frames up to 83 ms
+    later near the palm than at the apex, 14 ms at the median); the rest is `medium`'s
     (:mod:`~motion_envs.models.juggling._v2_levels` and
     :mod:`~motion_envs.models.juggling._camera` have the reasoning); the oracle is told
     each frame's gaze latency too. The true current delay, drag and gaze slope are the
@@ -242,7 +245,7 @@ class JugglingV2Env(OneBallEnv):
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"`, `"drift"` or `"gaze"` (table above) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker` |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker`, `juggler_gaze_estimator_catch` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
     | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` and `juggler_delay_estimator_catch` only) |
@@ -263,7 +266,8 @@ class JugglingV2Env(OneBallEnv):
       ``juggler_delay_estimator_catch`` added 2026-12-07, the others' rollouts unchanged;
       its ``delay_offset`` later, the default 0 leaving its rollouts unchanged; its
       timing entry later still, ``timing_scale`` 0 by default; the level `gaze`
-      added 2026-12-07, every other level's rollouts unchanged).
+      added 2026-12-07, every other level's rollouts unchanged; the controller
+      ``juggler_gaze_estimator_catch`` with it).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -319,6 +323,8 @@ class JugglingV2Env(OneBallEnv):
             lv.mean_delay + (0.0 if estimate else self.delay_offset), tracker,
             self.delay_offset if estimate else 0.0,
         )  # fmt: skip
+        self._eye = gaze_eye((float(self.home[0]), float(self.home[1])))
+        self.controller.estimator.eye = self._eye  # the gaze-aware estimator's eye
         self.likeness = v1_likeness(self.gravity, "train")
         spec = WorldSpec.of(
             self.task,
@@ -360,7 +366,6 @@ class JugglingV2Env(OneBallEnv):
         #: s per degree: the episode's true gaze slope (level ``gaze``; 0 elsewhere;
         #: hidden from the policy)
         self.slope = math.nan
-        self._eye = gaze_eye((float(self.home[0]), float(self.home[1])))
         self._drift_rngs: tuple[np.random.Generator, np.random.Generator] | None = None
 
     # -- episode ------------------------------------------------------------------------
@@ -444,7 +449,8 @@ class JugglingV2Env(OneBallEnv):
             self.camera.fixate(ballistic_apex(ball, vel, self.gravity))
         frames = self.camera.record(int(self.world.k[0]), ball, hand, true.held)
         if true.released:
-            controller.estimator.released(true.time, *hand)
+            hand_vel = (float(true.hand_vel[0]), float(true.hand_vel[1]))
+            controller.estimator.released(true.time, *hand, hand_vel)
             if self.timing_scale:  # the new flight fitted with the delay told now
                 self._retell()
             self._release_time = true.time

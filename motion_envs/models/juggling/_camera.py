@@ -51,6 +51,21 @@ captured at:
   ``offset`` the frames are placed by that average plus the offset, at least 0 (a
   correction of the estimate chosen elsewhere, on validation seeds, plus an agent's
   timing entry where the envs have one, set per flight at its release; 0 by default);
+* ``"gaze_release"`` (the hand-written gaze-aware estimator, for the level ``gaze``; it
+  is written knowing the gaze model's FORM, the eye :data:`GAZE_EYE` and the fixation on
+  the apex, not its numbers): the release-anchored estimator with a latency ``d + k ecc``
+  of two numbers per episode, both found from the releases. A flight's apex is
+  anticipated ballistically from the HAND's release position and velocity (what the
+  juggler knows of its own toss; the ball's true release differs by the toss's scatter),
+  each frame's eccentricity taken from its MEASURED position; at each flight's anchoring
+  ``(d, k)`` is the grid point (``DELAY_GRID`` x :data:`SLOPE_GRID`) with the least
+  ballistic residual of the anchor frames at ``s = arrival - t_r - d - k ecc``, each
+  flight with its own least-squares velocity, summed over the episode's anchored flights
+  (pooled: both numbers are one per episode). Every frame of the current flight is then
+  placed at ``arrival - d - k ecc``. (The apex from the flight's own fit instead was
+  tried first: on a noise-free flight the true apex is an UNSTABLE fixed point of "fit,
+  predict the apex, recompute the eccentricities, refit" at the true ``(d, k)``, an apex
+  10 cm too high or low running off by 0.37-1.4 m, so the fit cannot find it.)
 * ``"oracle"``: at its arrival minus the episode's TRUE delay and the frame's TRUE gaze
   latency (``slope * ecc``, :attr:`CameraFrame.gaze`; 0 but on level ``gaze``), with the
   ball's true drag (an upper reference, given what the world hides; labelled so wherever
@@ -75,23 +90,30 @@ __all__ = [
     "DELAY_GRID",
     "ESTIMATORS",
     "GAZE_EYE",
+    "SLOPE_GRID",
     "CameraFrame",
     "CameraSensor",
     "FlightEstimator",
     "ballistic_apex",
     "drag_flight",
+    "eccentricities",
     "eccentricity",
     "gaze_eye",
 ]
 
 FloatArray = NDArray[np.float64]
+#: The estimators that anchor on the release.
+_ANCHORED = ("release", "gaze_release")
 
 #: The estimators' names (module docstring).
-ESTIMATORS = ("arrival", "mean_delay", "release", "oracle")
+ESTIMATORS = ("arrival", "mean_delay", "release", "oracle", "gaze_release")
 #: s; the delays the release-anchored estimator tries (5 ms apart).
 DELAY_GRID = np.round(np.arange(0.0, 0.4001, 0.005), 6)
 #: Frames after a release from which the release-anchored estimator finds the delay.
 ANCHOR_FRAMES = 8
+#: s per degree; the gaze slopes the gaze-aware estimator tries (0.1 ms/deg apart, 0 to
+#: twice the level's largest), declared before any run.
+SLOPE_GRID = np.round(np.arange(0.0, 0.00301, 0.0001), 7)
 #: m; the eye relative to the hand's home ``(dx, dz, y)``: at the home's ``x``, 0.45 m above
 #: it and 0.40 m out of the juggling plane (toward the juggler), for the ``gaze`` level's
 #: eccentricity. A reasoned choice, not a measurement: a juggler's hands work at about
@@ -116,6 +138,22 @@ def ballistic_apex(
         return float(p[0]), float(p[1])
     s = vz / gravity
     return float(p[0]) + float(v[0]) * s, float(p[1]) + 0.5 * vz * s
+
+
+def eccentricities(
+    positions: FloatArray, fixations: FloatArray, eye: tuple[float, float, float]
+) -> FloatArray:
+    """Degrees ``(..., n)``; :func:`eccentricity` of ``n`` positions ``(n, 2)`` from each
+    fixation ``(..., 2)`` (vectorised; 0 where either is at the eye)."""
+    e = np.asarray(eye, dtype=np.float64)
+    a = np.concatenate([positions - e[:2], np.full((len(positions), 1), -e[2])], axis=1)
+    f = np.asarray(fixations, dtype=np.float64)
+    b = np.concatenate([f - e[:2], np.full((*f.shape[:-1], 1), -e[2])], axis=-1)
+    b = b[..., None, :]  # (..., 1, 3) against a (n, 3)
+    cross = np.linalg.norm(np.cross(a, b), axis=-1)
+    dot = (a * b).sum(axis=-1)
+    out: FloatArray = np.degrees(np.arctan2(cross, dot))
+    return out
 
 
 def eccentricity(
@@ -343,6 +381,9 @@ class FlightEstimator:
         #: s added to the release-anchored estimate where the frames are placed
         self.offset = float(offset)
         self.drag = 0.0
+        #: the eye ``(x, z, y)`` the ``gaze_release`` estimator measures eccentricities
+        #: from (:func:`gaze_eye` of the hand's home; the envs set it)
+        self.eye = (0.0, 0.0, 1.0)
         self.reset()
 
     def reset(self, drag: float = 0.0, delay: float = 0.0) -> None:
@@ -353,6 +394,13 @@ class FlightEstimator:
         self.frames: list[CameraFrame] = []
         self.release: tuple[float, float, float] | None = None
         self._delays: list[float] = []
+        #: ``gaze_release``: the anchored flights ``(s0, q, ecc)`` (per anchor frame its
+        #: arrival minus the release time, position minus the release point and
+        #: eccentricity from the anticipated apex) and the pooled ``(d, k)``
+        self._gaze_flights: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        self.gaze_estimate: tuple[float, float] | None = None
+        #: ``gaze_release``: the current flight's apex anticipated from the hand's release
+        self._apex: tuple[float, float] | None = None
         self._anchored = False
         self._fit: tuple[float, FloatArray, FloatArray] | None = None
         self._fitted = False
@@ -367,11 +415,16 @@ class FlightEstimator:
             self.drag, self.true_delay = float(drag), float(delay)
             self._fitted = False
 
-    def released(self, time: float, x: float, z: float) -> None:
-        """The hand let the ball go at ``time`` from ``(x, z)``: a new flight."""
-        if self.mode == "release" and self.release is not None and not self._anchored:
+    def released(
+        self, time: float, x: float, z: float, velocity: tuple[float, float] = (0.0, 0.0)
+    ) -> None:
+        """The hand let the ball go at ``time`` from ``(x, z)`` moving at ``velocity``
+        (the hand's, m/s; read by ``gaze_release`` only): a new flight."""
+        if self.mode in _ANCHORED and self.release is not None and not self._anchored:
             self._anchor()  # a short flight still tells the delay
         self.release = (float(time), float(x), float(z))
+        if self.mode == "gaze_release":  # the apex the juggler anticipates from its toss
+            self._apex = ballistic_apex((x, z), velocity, self.gravity)
         self.frames = []
         self._anchored = False
         self._fitted = False
@@ -383,7 +436,7 @@ class FlightEstimator:
         if frames:
             self.frames.extend(frames)
             self._fitted = False
-        if self.mode == "release" and not self._anchored and len(self.frames) >= ANCHOR_FRAMES:
+        if self.mode in _ANCHORED and not self._anchored and len(self.frames) >= ANCHOR_FRAMES:
             self._anchor()
 
     def _anchor(self) -> None:
@@ -391,19 +444,63 @@ class FlightEstimator:
         self._anchored = True
         if self.release is None or len(self.frames) < 3:
             return
+        if self.mode == "gaze_release":
+            self._anchor_gaze()
+            return
+        d = self._release_delay()
+        if d is not None:
+            self._delays.append(d)
+            self._fitted = False
+
+    def _release_delay(self) -> float | None:
+        """The current flight's release-anchored delay (module docstring), or None."""
+        assert self.release is not None
         t_r, rx, rz = self.release
         arrivals = np.array([f.arrival for f in self.frames[:ANCHOR_FRAMES]])
         q = np.array([[f.x - rx, f.z - rz] for f in self.frames[:ANCHOR_FRAMES]])
         s = arrivals[None, :] - t_r - DELAY_GRID[:, None]  # (delays, frames)
         ok = (s > 0).all(axis=1)
         if not ok.any():
-            return
+            return None
         s = s[ok]
         q = np.broadcast_to(q, (s.shape[0], *q.shape)).copy()
         q[..., 1] += 0.5 * self.gravity * s * s
         v = (s[..., None] * q).sum(axis=1) / (s * s).sum(axis=1)[:, None]
         sse = ((q - s[..., None] * v[:, None, :]) ** 2).sum(axis=(1, 2))
-        self._delays.append(float(DELAY_GRID[ok][int(np.argmin(sse))]))
+        return float(DELAY_GRID[ok][int(np.argmin(sse))])
+
+    def _anchor_frames(self) -> tuple[FloatArray, FloatArray]:
+        """The current flight's first ``ANCHOR_FRAMES`` frames: arrival minus release time
+        and position minus release point."""
+        assert self.release is not None
+        t_r, rx, rz = self.release
+        first = self.frames[:ANCHOR_FRAMES]
+        s0 = np.array([f.arrival - t_r for f in first])
+        q = np.array([[f.x - rx, f.z - rz] for f in first])
+        return s0, q
+
+    def _anchor_gaze(self) -> None:
+        """``gaze_release``'s pooled ``(d, k)`` with this flight (module docstring)."""
+        assert self.release is not None and self._apex is not None
+        s0, q = self._anchor_frames()
+        _, rx, rz = self.release
+        ecc = eccentricities(q + np.array([rx, rz]), np.array(self._apex), self.eye)
+        flights = [*self._gaze_flights, (s0, q, ecc)]
+        total = np.zeros((len(DELAY_GRID), len(SLOPE_GRID)))
+        for s0, q, ecc in flights:
+            s = s0 - DELAY_GRID[:, None, None] - SLOPE_GRID[None, :, None] * ecc  # (D, K, n)
+            ok = (s > 0).all(axis=-1)
+            y = np.broadcast_to(q, (*s.shape, 2)).copy()
+            y[..., 1] += 0.5 * self.gravity * s * s
+            ss = np.where(ok, (s * s).sum(axis=-1), 1.0)
+            v = (s[..., None] * y).sum(axis=-2) / ss[..., None]
+            sse = ((y - s[..., None] * v[..., None, :]) ** 2).sum(axis=(-2, -1))
+            total += np.where(ok, sse, np.inf)
+        if not np.isfinite(total).any():
+            return
+        i, j = np.unravel_index(int(np.argmin(total)), total.shape)
+        self._gaze_flights = flights
+        self.gaze_estimate = (float(DELAY_GRID[i]), float(SLOPE_GRID[j]))
         self._fitted = False
 
     @property
@@ -421,6 +518,13 @@ class FlightEstimator:
         if self.mode == "release":
             d = self.delay_estimate
             return None if d is None else arrivals - max(d + self.offset, 0.0)
+        if self.mode == "gaze_release":
+            if self.gaze_estimate is None:
+                return None
+            d, k = self.gaze_estimate
+            assert self._apex is not None
+            pos = np.array([[f.x, f.z] for f in frames])
+            return arrivals - (d + k * eccentricities(pos, np.array(self._apex), self.eye))
         gaze = np.array([f.gaze for f in frames])
         if gaze.any():  # level gaze: each frame's own gaze latency
             return arrivals - (self.true_delay + gaze)

@@ -104,11 +104,13 @@ class CatchPlan:
 #: (oracle) and 0.897 / 0.851 / 0.837 (mean delay): the servo's lag behind a descending
 #: target costs more than the slower meeting gains (BENCHMARKS, Juggling-v2 catch plan).
 #: ``juggler_delay_estimator_catch`` (added 2026-12-07) carries the mean delay's plan as
-#: declared, not re-tuned: the two hand-written fixes put together.
+#: declared, not re-tuned: the two hand-written fixes put together;
+#: ``juggler_gaze_estimator_catch`` (added 2026-12-07, for the level ``gaze``) likewise.
 CATCH_PLANS: dict[str, CatchPlan] = {
     "juggler_oracle_catch": CatchPlan(lead=0.12, descent=0.0),
     "juggler_mean_delay_catch": CatchPlan(lead=0.12, descent=0.0),
     "juggler_delay_estimator_catch": CatchPlan(lead=0.12, descent=0.0),
+    "juggler_gaze_estimator_catch": CatchPlan(lead=0.12, descent=0.0),
 }
 
 

@@ -44,11 +44,13 @@ person's own), ``ecc`` the angle between the ball's true position and the apex p
 ballistically at the release, seen from an eye 0.45 m above the hand's home and 0.40 m out
 of the plane (:mod:`~motion_envs.models.juggling._camera`, *Gaze*; the slope and the eye
 are reasoned choices, not measurements, and not tuned against any row). The per-frame
-latency this produces (frames received on 20 episodes of the zero action, ``juggler``,
-seeds 0-19, jitter included): 129 / 168 / 270 ms (min / median / max), of which the gaze
-part 0.1 / 17.7 / 61.0 ms. Everything else is ``medium``'s: camera, drag, toss scatter,
-delay range. The oracle is told the delay and, per frame, the gaze latency (not the
-jitter).
+latency this produces, measured on the 2,817 frames received in 20 episodes (seeds 0-19,
+at most 3 catches) of ``juggler_oracle_catch``: ``delay + slope * ecc`` 102 / 172 / 274 ms
+(min / median / max), of which the gaze part 0.2 / 13.7 / 82.5 ms at eccentricities of
+0.2 / 14.7 / 66.9 degrees (the ball near the palm is far in the periphery); with the
+jitter and the control step, arrival minus capture 90 / 175 / 290 ms. Everything else is
+``medium``'s: camera, drag, toss scatter, delay range. The oracle is told the delay and,
+per frame, the gaze latency (not the jitter).
 
 **Controllers** (:data:`V2_CONTROLLERS`): the analytic juggler of Juggling-v1 (eq. 9
 toss, eq. 10 correction; the same fit) whose eq. 10 correction is fed the ball's state
@@ -72,6 +74,10 @@ from a :class:`~motion_envs.models.juggling.FlightEstimator`:
 * ``"juggler_delay_estimator_catch"``: the same catch plan on the hand-written delay
   estimator's delay (``"release"``; the mean-delay plan, not re-tuned: the two
   hand-written fixes combined, a competitor);
+* ``"juggler_gaze_estimator_catch"``: the same catch plan (the mean delay's, not
+  re-tuned) on the hand-written gaze-aware estimator (``"gaze_release"``: the delay AND
+  the gaze slope found from the releases, pooled over the episode's flights; written for
+  the level ``gaze``, a competitor);
 * ``"juggler_delay_tracker"``: the mean-delay catch plan whose delay is corrected after
   every catch from the catch's timing error (:mod:`~motion_envs.models.juggling._delay_tracker`;
   the env hands the error to :meth:`V2Controller.felt`; a competitor).
@@ -226,6 +232,7 @@ V2_CONTROLLERS: dict[str, str] = {
     "juggler_mean_delay_catch": "mean_delay",
     "juggler_delay_tracker": "mean_delay",
     "juggler_delay_estimator_catch": "release",
+    "juggler_gaze_estimator_catch": "gaze_release",
 }
 
 
