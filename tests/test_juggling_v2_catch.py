@@ -49,10 +49,12 @@ def test_a_bad_plan_is_one_error_naming_the_field(field: str, value: float) -> N
 
 def test_the_declared_plans_lie_on_the_training_grid() -> None:
     assert set(CATCH_PLANS) == {
-        "juggler_oracle_catch", "juggler_mean_delay_catch", "juggler_delay_estimator_catch"
+        "juggler_oracle_catch", "juggler_mean_delay_catch", "juggler_delay_estimator_catch",
+        "juggler_gaze_estimator_catch",
     }  # fmt: skip
-    # the estimator's catch carries the mean delay's plan as declared (not re-tuned)
-    assert CATCH_PLANS["juggler_delay_estimator_catch"] == CATCH_PLANS["juggler_mean_delay_catch"]
+    # the estimators' catches carry the mean delay's plan as declared (not re-tuned)
+    for name in ("juggler_delay_estimator_catch", "juggler_gaze_estimator_catch"):
+        assert CATCH_PLANS[name] == CATCH_PLANS["juggler_mean_delay_catch"]
     for name, plan in CATCH_PLANS.items():
         assert name in V2_CONTROLLERS
         assert plan.lead in LEAD_GRID and plan.descent in DESCENT_GRID
