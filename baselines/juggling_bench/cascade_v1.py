@@ -63,6 +63,16 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   :mod:`motion_envs.models.juggling._delay_tracker`), its gain and offset the pair of
   Juggling-v2's :data:`~baselines.juggling_bench.v2.TRACKER_GRID` with the most mean
   catches before the first drop on VALIDATION episodes (:func:`choose_tracker`);
+* ``estimator_tracker_catch``: the two corrections together
+  (``juggler_estimator_tracker_catch``: ``delay_estimator_catch`` whose pooled estimate,
+  and prior, is told with a correction ``C + offset``, ``C`` starting at 0 and moving
+  after every catch by either hand, ``C <- clip(C - k (e - offset), -50 ms, +50 ms)``,
+  each flight fitted with the correction told at its ball's release;
+  :class:`~motion_envs.models.juggling.CorrectionTracker`), its gain and offset the pair
+  of Juggling-v2's :data:`~baselines.juggling_bench.v2.ESTIMATOR_TRACKER_GRID` with the
+  most mean catches before the first drop on VALIDATION episodes
+  (:func:`choose_estimator_tracker`; ``(0, 0)`` is ``delay_estimator_catch``); a
+  competitor;
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -74,7 +84,8 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   budget of ``ilc_iterations x ilc_episodes`` TRAINING episodes (default 6 x 10) and
   then scored on validation like every other row (``ilc=False``: not played).
 
-Every choice (the constant, the late offset, the tracker's pair, the estimate's offset;
+Every choice (the constant, the late offset, the tracker's pair, the estimate's offset,
+the estimate's tracker's pair;
 the best non-oracle row, by mean catches before the first drop; ties: the first in grid or
 row order) is made on
 ``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before any test seed is
@@ -139,6 +150,7 @@ __all__ = [
     "check_cascade_v1_config",
     "choose_constant",
     "choose_estimator_offset",
+    "choose_estimator_tracker",
     "choose_late_offset",
     "choose_tracker",
     "deviation_note",
@@ -177,6 +189,7 @@ ROWS = (
     "random",
     "task_error_ilc",
     "delay_tracker",
+    "estimator_tracker_catch",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -326,6 +339,22 @@ def choose_tracker(
     return (float(choice[0]), float(choice[1])), means
 
 
+def choose_estimator_tracker(
+    level: str, config: CascadeV1Config, play: Play = cascade_v1_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The ``(gain, offset)`` of :data:`~baselines.juggling_bench.v2.ESTIMATOR_TRACKER_GRID`
+    for ``juggler_estimator_tracker_catch`` with the most mean catches before the first
+    drop on ``config.val_episodes`` VALIDATION episodes (ties: the first), and every
+    candidate's validation mean (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def mean(choice: tuple[float, float]) -> float:
+        kw = _kwargs(level, config, v2.ESTIMATOR_TRACKER_CONTROLLER, choice[1], choice[0])
+        return _val_mean(play, None, kw, config)
+
+    choice, means = best_on_grid(v2.ESTIMATOR_TRACKER_GRID, mean, v2.tracker_key)
+    return (float(choice[0]), float(choice[1])), means
+
+
 @dataclass(frozen=True)
 class _Constant:
     """The constant action ``(x, z)`` for each hand in its own frame (``x`` mirrored for
@@ -396,9 +425,11 @@ def _players(
     constant: tuple[float, float],
     tracker: tuple[float, float] = (0.0, 0.0),
     estimator_offset: float = 0.0,
+    estimator_tracker: tuple[float, float] = (0.0, 0.0),
 ) -> dict[str, tuple[str, Policy, float, float]]:
     """Each row's controller, policy, delay offset and tracker gain (``offset`` late
-    meeting's, ``estimator_offset`` the estimate's)."""
+    meeting's, ``estimator_offset`` the estimate's, ``tracker`` and ``estimator_tracker``
+    the ``(gain, offset)`` pairs of the delay tracker and of the estimate's tracker)."""
     delay = V2_LEVELS[level].mean_delay
     velocity = CascadeVelocityTimesDelay(pattern_spec(config.pattern).balls, delay, RESIDUAL_SCALE)
     return {
@@ -416,6 +447,12 @@ def _players(
         "fixed_point": ("fixed_point", None, 0.0, 0.0),
         "random": ("juggler", "random", 0.0, 0.0),
         "delay_tracker": ("juggler_delay_tracker", None, tracker[1], tracker[0]),
+        "estimator_tracker_catch": (
+            v2.ESTIMATOR_TRACKER_CONTROLLER,
+            None,
+            estimator_tracker[1],
+            estimator_tracker[0],
+        ),
     }
 
 
@@ -473,6 +510,7 @@ def run_cascade_v1(
     keep: dict[str, dict[str, Any]] | None = None,
     tracker_chooser: Any = choose_tracker,
     estimator_offset_chooser: Any = choose_estimator_offset,
+    estimator_tracker_chooser: Any = choose_estimator_tracker,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed). ``keep``, when given,
@@ -487,7 +525,8 @@ def run_cascade_v1(
         offset, offset_means = offset_chooser(level, config, play)
         tracker, tracker_means = tracker_chooser(level, config, play)
         est_offset, est_means = estimator_offset_chooser(level, config, play)
-        players = _players(level, config, offset, constant, tracker, est_offset)
+        est_tracker, est_tracker_means = estimator_tracker_chooser(level, config, play)
+        players = _players(level, config, offset, constant, tracker, est_offset, est_tracker)
         # the grids' validation plays reused where the choosers made them
         reuse = {
             "juggler": (constant_means, v2.grid_key((0.0, 0.0))),
@@ -497,6 +536,7 @@ def run_cascade_v1(
             "delay_tracker": (tracker_means, v2.tracker_key(tracker)),
             "delay_estimator_catch": (est_means, v2.offset_key(0.0)),
             "estimator_offset_catch": (est_means, v2.offset_key(est_offset)),
+            "estimator_tracker_catch": (est_tracker_means, v2.tracker_key(est_tracker)),
         }
         val_means: dict[str, float] = {}
         for name, (ctl, policy, off, gain) in players.items():
@@ -522,7 +562,7 @@ def run_cascade_v1(
             name: play(policy, _kwargs(level, config, ctl, off, gain), "test", config.episodes)
             # fresh players (no state is carried from the validation plays)
             for name, (ctl, policy, off, gain) in _players(
-                level, config, offset, constant, tracker, est_offset
+                level, config, offset, constant, tracker, est_offset, est_tracker
             ).items()
         }
         if ilc is not None:
@@ -549,6 +589,8 @@ def run_cascade_v1(
                 "tracker_val_mean_catches": tracker_means,
                 "estimator_offset_s": est_offset,
                 "estimator_offset_val_mean_catches": est_means,
+                "estimator_tracker": {"gain": est_tracker[0], "offset_s": est_tracker[1]},
+                "estimator_tracker_val_mean_catches": est_tracker_means,
                 "val_mean_catches": val_means,
                 "best_non_oracle": best,
                 "rows": rows,
@@ -567,6 +609,9 @@ def run_cascade_v1(
                     ),
                 },
                 "estimator_offset_catch_minus": v2.offset_row_minus(played, best, _paired),
+                "estimator_tracker_catch_minus": v2.offset_row_minus(
+                    played, best, _paired, "estimator_tracker_catch"
+                ),
             }
         )
         if ilc is not None:
@@ -678,6 +723,14 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
         if "estimator_offset_catch_minus" in lv:
             est_line = v2.offset_row_line(lv["estimator_offset_catch_minus"], "+.2f")
             lines.append(f"{lv['level']:7s} {est_line} (mean catches)")
+        if "estimator_tracker_catch_minus" in lv:
+            et = lv["estimator_tracker"]
+            et_line = v2.offset_row_line(lv["estimator_tracker_catch_minus"], "+.2f")
+            lines.append(
+                f"{lv['level']:7s} estimate's tracker "
+                f"{v2.tracker_key((et['gain'], et['offset_s']))} (chosen on validation); "
+                f"{et_line} (mean catches)"
+            )
         if "ilc" in lv:
             ilc = lv["ilc"]
             lines.append(
@@ -702,7 +755,7 @@ def row_styles() -> tuple[dict[str, str], dict[str, Any]]:
     import matplotlib.pyplot as plt
 
     tab20 = plt.get_cmap("tab20")
-    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H", strict=False))
+    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H1", strict=False))
     return markers, {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
 
 

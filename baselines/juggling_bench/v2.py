@@ -59,6 +59,14 @@ unit action, the scale an agent is given):
   :mod:`motion_envs.models.juggling._delay_tracker`), its gain ``k`` and offset the pair
   of :data:`TRACKER_GRID` with the highest catch rate on the VALIDATION seeds
   (:func:`choose_tracker`; ``k = 0``, offset 0 is ``mean_delay_catch`` itself);
+* ``estimator_tracker_catch``: the two corrections together
+  (``juggler_estimator_tracker_catch``: ``delay_estimator_catch`` whose frames are placed
+  by the release-anchored estimate plus a correction ``C + offset``, ``C`` starting at 0
+  and moving after every catch as the tracker's ``D``, ``C <- clip(C - k (e - offset),
+  -50 ms, +50 ms)``; :class:`~motion_envs.models.juggling.CorrectionTracker`), its gain
+  and offset the pair of :data:`ESTIMATOR_TRACKER_GRID` with the highest catch rate on
+  the VALIDATION seeds (:func:`choose_estimator_tracker`; ``k = 0``, offset 0 is
+  ``delay_estimator_catch`` itself); a competitor;
 * ``gaze_estimator_catch``: the same catch plan on the hand-written gaze-aware estimator
   (``juggler_gaze_estimator_catch``: the latency ``d + k ecc`` with the delay ``d`` and
   the gaze slope ``k`` found from the releases, pooled over the episode's flights, each
@@ -72,7 +80,7 @@ unit action, the scale an agent is given):
 
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
 seed is played (tested with a spy): the constant, the late offset, the tracker's gain and
-offset, the estimate's offset, and then the best
+offset, the estimate's offset, the estimate's tracker's gain and offset, and then the best
 non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; ties: the
 first in :data:`ROWS`; the
 constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
@@ -123,6 +131,7 @@ __all__ = [
     "CONSTANT_GRID",
     "ENV_ID_V2",
     "ESTIMATOR_OFFSETS",
+    "ESTIMATOR_TRACKER_GRID",
     "LATE_OFFSETS",
     "RESIDUAL_SCALE",
     "ROWS",
@@ -132,6 +141,7 @@ __all__ = [
     "check_v2_config",
     "choose_constant",
     "choose_estimator_offset",
+    "choose_estimator_tracker",
     "choose_offset",
     "choose_tracker",
     "frame_velocity",
@@ -174,6 +184,10 @@ ESTIMATOR_OFFSETS: tuple[float, ...] = (0.0, 0.01, -0.01, 0.02, -0.02, 0.03, 0.0
 TRACKER_GRID: tuple[tuple[float, float], ...] = tuple(
     (k, o) for o in (0.0, 0.02, 0.04) for k in (0.0, 0.1, 0.25, 0.5, 1.0)
 )
+#: ``estimator_tracker_catch``'s ``(gain k, offset s)`` pairs tried on VALIDATION seeds:
+#: the delay tracker's grid (:data:`TRACKER_GRID`, declared before any run of either),
+#: not re-tuned; ``(0, 0)`` is ``delay_estimator_catch``.
+ESTIMATOR_TRACKER_GRID: tuple[tuple[float, float], ...] = TRACKER_GRID
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
@@ -191,6 +205,7 @@ ROWS = (
     "task_error_ilc",
     "delay_tracker",
     "gaze_estimator_catch",
+    "estimator_tracker_catch",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -380,6 +395,23 @@ def choose_estimator_offset(
 
 #: The controller ``estimator_offset_catch`` tells the offset.
 ESTIMATOR_CONTROLLER = "juggler_delay_estimator_catch"
+#: The controller of ``estimator_tracker_catch`` (the estimate with a tracked correction).
+ESTIMATOR_TRACKER_CONTROLLER = "juggler_estimator_tracker_catch"
+
+
+def choose_estimator_tracker(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[tuple[float, float], dict[str, float]]:
+    """The ``(gain, offset)`` of :data:`ESTIMATOR_TRACKER_GRID` for
+    ``juggler_estimator_tracker_catch`` with the highest catch rate on
+    ``config.val_episodes`` VALIDATION episodes (ties: the first), and every candidate's
+    validation catch rate (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(choice: tuple[float, float]) -> float:
+        kw = _kwargs(level, config, ESTIMATOR_TRACKER_CONTROLLER, tracker_kwargs(choice))
+        return _val_catch_rate(play, None, kw, config)
+
+    return best_on_grid(ESTIMATOR_TRACKER_GRID, rate, tracker_key)
 
 
 def _estimate_offset(offset: float) -> dict[str, Any]:
@@ -393,12 +425,14 @@ def row_players(
     offset: float = 0.0,
     tracker: tuple[float, float] = (0.0, 0.0),
     estimator_offset: float = 0.0,
+    estimator_tracker: tuple[float, float] = (0.0, 0.0),
 ) -> dict[str, tuple[str, Policy | None, dict[str, Any]]]:
     """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller,
     residual policy (None: the zero action) and extra env keywords, played with
     :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice,
-    ``offset`` :func:`choose_offset`'s, ``tracker`` :func:`choose_tracker`'s and
-    ``estimator_offset`` :func:`choose_estimator_offset`'s."""
+    ``offset`` :func:`choose_offset`'s, ``tracker`` :func:`choose_tracker`'s,
+    ``estimator_offset`` :func:`choose_estimator_offset`'s and ``estimator_tracker``
+    :func:`choose_estimator_tracker`'s."""
     delay = V2_LEVELS[level].mean_delay
     return {
         "juggler": ("juggler", None, {}),
@@ -423,6 +457,11 @@ def row_players(
         "random": ("juggler", _Random(0), {}),
         "delay_tracker": ("juggler_delay_tracker", None, tracker_kwargs(tracker)),
         "gaze_estimator_catch": ("juggler_gaze_estimator_catch", None, {}),
+        "estimator_tracker_catch": (
+            ESTIMATOR_TRACKER_CONTROLLER,
+            None,
+            tracker_kwargs(estimator_tracker),
+        ),
     }
 
 
@@ -433,6 +472,7 @@ def run_v2(
     offset_chooser: Any = choose_offset,
     tracker_chooser: Any = choose_tracker,
     estimator_offset_chooser: Any = choose_estimator_offset,
+    estimator_tracker_chooser: Any = choose_estimator_tracker,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed)."""
@@ -444,6 +484,7 @@ def run_v2(
         offset, offset_rates = offset_chooser(level, config, play)
         tracker, tracker_rates = tracker_chooser(level, config, play)
         est_offset, est_rates = estimator_offset_chooser(level, config, play)
+        est_tracker, est_tracker_rates = estimator_tracker_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
         # the grids' plays reused where the choosers made them.
@@ -455,8 +496,9 @@ def run_v2(
             "delay_tracker": (tracker_rates, tracker_key(tracker)),
             "delay_estimator_catch": (est_rates, offset_key(0.0)),
             "estimator_offset_catch": (est_rates, offset_key(est_offset)),
+            "estimator_tracker_catch": (est_tracker_rates, tracker_key(est_tracker)),
         }
-        players = row_players(level, constant, offset, tracker, est_offset)
+        players = row_players(level, constant, offset, tracker, est_offset, est_tracker)
         val_catch: dict[str, float] = {}
         for name, (ctl, policy, extra) in players.items():
             rates, key = reuse.get(name, ({}, ""))
@@ -485,7 +527,7 @@ def run_v2(
             )
             # fresh players: the random row's generator restarts for the test seeds
             for name, (ctl, policy, extra) in row_players(
-                level, constant, offset, tracker, est_offset
+                level, constant, offset, tracker, est_offset, est_tracker
             ).items()
         }
         if config.ilc:
@@ -511,6 +553,8 @@ def run_v2(
                 "tracker_val_catch_rates": tracker_rates,
                 "estimator_offset_s": est_offset,
                 "estimator_offset_val_catch_rates": est_rates,
+                "estimator_tracker": {"gain": est_tracker[0], "offset_s": est_tracker[1]},
+                "estimator_tracker_val_catch_rates": est_tracker_rates,
                 "rows": entries,
                 "best_non_oracle": best,
                 "val_catch_rates": val_catch,
@@ -533,6 +577,9 @@ def run_v2(
                     ),
                 },
                 "estimator_offset_catch_minus": offset_row_minus(played, best, _difference),
+                "estimator_tracker_catch_minus": offset_row_minus(
+                    played, best, _difference, "estimator_tracker_catch"
+                ),
             }
         )
     return {
@@ -549,11 +596,15 @@ def run_v2(
     }
 
 
-def offset_row_minus(played: dict[str, Any], best: str, diff: Any) -> dict[str, Any]:
-    """``estimator_offset_catch`` minus its base ``delay_estimator_catch`` and minus the
-    best non-oracle row ``best`` (chosen on validation), paired by ``diff``."""
-    row = played["estimator_offset_catch"]
+def offset_row_minus(
+    played: dict[str, Any], best: str, diff: Any, name: str = "estimator_offset_catch"
+) -> dict[str, Any]:
+    """The row ``name`` (``estimator_offset_catch`` or ``estimator_tracker_catch``) minus
+    its base ``delay_estimator_catch`` and minus the best non-oracle row ``best`` (chosen
+    on validation), paired by ``diff``."""
+    row = played[name]
     return {
+        "row": name,
         "best": best,
         "minus_delay_estimator_catch": diff(row, played["delay_estimator_catch"]),
         "minus_best": diff(row, played[best]),
@@ -567,7 +618,7 @@ def offset_row_line(d: dict[str, Any], fmt: str = "+.3f") -> str:
         return f"{m['value']:{fmt}} [{m['ci'][0]:{fmt}}, {m['ci'][1]:{fmt}}]"
 
     return (
-        f"estimator_offset_catch - delay_estimator_catch (paired): "
+        f"{d.get('row', 'estimator_offset_catch')} - delay_estimator_catch (paired): "
         f"{f(d['minus_delay_estimator_catch'])}; - {d['best']} (the best non-oracle row): "
         f"{f(d['minus_best'])}"
     )
@@ -633,6 +684,13 @@ def report_v2(doc: dict[str, Any]) -> str:
             lines.append(f"{lv['level']:7s} {tracker_line(lv['delay_tracker_minus'])}")
         if "estimator_offset_catch_minus" in lv:
             lines.append(f"{lv['level']:7s} {offset_row_line(lv['estimator_offset_catch_minus'])}")
+        if "estimator_tracker_catch_minus" in lv:
+            et = lv["estimator_tracker"]
+            lines.append(
+                f"{lv['level']:7s} estimate's tracker "
+                f"{tracker_key((et['gain'], et['offset_s']))} (chosen on validation); "
+                f"{offset_row_line(lv['estimator_tracker_catch_minus'])}"
+            )
         if "oracle_minus_delay_estimator" in lv:
             est = lv["oracle_minus_delay_estimator"]
             lines.append(
@@ -673,9 +731,10 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hHvdxp8X", strict=True))
-    # one colour per row (the default cycle has 10; then black, grey, brown, navy, green)
-    extra = ("black", "0.5", "saddlebrown", "navy", "darkgreen")
+    markers = dict(zip(ROWS, "osP^D<>hHvdxp8X1", strict=True))
+    # one colour per row (the default cycle has 10; then black, grey, brown, navy, green,
+    # magenta)
+    extra = ("black", "0.5", "saddlebrown", "navy", "darkgreen", "magenta")
     colors = {name: f"C{i}" if i < 10 else extra[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():

@@ -48,6 +48,7 @@ from motion_envs.models.juggling import (
     CascadeBallView,
     CascadeController,
     CascadeState,
+    CorrectionTracker,
     DelayTracker,
     SiteswapController,
     catch_height,
@@ -124,8 +125,13 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     delay estimator's pooled delay with the mean-delay catch plan (declared, not
     re-tuned; with `delay_offset` the frames are placed by the pooled delay plus the
     offset, before the first estimate by the level's mean plus it: a correction of the
-    estimate's bias, which may be negative). The agent adds a residual to each hand's
-    command.
+    estimate's bias, which may be negative), and ``juggler_estimator_tracker_catch``:
+    that controller whose pooled estimate (and prior) is told with a correction ``C +
+    delay_offset``, ``C <- clip(C - k (e - delay_offset), -0.05, 0.05)`` after every
+    catch by either hand from 0, each flight fitted with the correction told at its
+    ball's release (``k`` is ``tracker_gain``;
+    :class:`~motion_envs.models.juggling.CorrectionTracker`; a competitor). The agent
+    adds a residual to each hand's command.
 
     Levels (Juggling-v2's; :data:`~motion_envs.models.juggling.V2_LEVELS`):
 
@@ -233,9 +239,9 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"` or `"hard"` (table above) |
     | `pattern`         | **str**   | `"3"`       | a registered pattern's name (as Cascade-v0's: `"3"`, `"3-human"`, `"4"`, `"5"`, `"441"`, `"531"`, `"423"`, `"51"`) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
-    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch`, `juggler_estimator_tracker_catch` |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight), or `juggler_estimator_tracker_catch`'s offset (0-0.25, added to its estimate's correction and the timing error it steers to) |
+    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan), or `juggler_estimator_tracker_catch`'s (0: `juggler_delay_estimator_catch` told `delay_offset`) |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
@@ -254,7 +260,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       0 likewise; the controller ``juggler_delay_estimator_catch`` later, every other
       controller's rollout unchanged; its ``delay_offset`` later still, the default 0
       leaving its rollouts unchanged, and then its timing entry, ``timing_scale`` 0 by
-      default).
+      default; the controller ``juggler_estimator_tracker_catch`` added 2026-12-07, every
+      other controller's rollout unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -305,13 +312,17 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         )
         self.home = self.controller.home
         lead = plan.lead if plan is not None and own is None else 0.0  # told ahead
-        tracker = None
+        tracker: DelayTracker | None = None
         if self.controller_name == "juggler_delay_tracker":
             tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
-        estimate = self.delay_offset if mode == "release" else 0.0  # on the pooled estimate
+        elif self.controller_name == "juggler_estimator_tracker_catch":  # offset: the tracker's
+            tracker = CorrectionTracker(self.tracker_gain, self.delay_offset)
+        told = isinstance(tracker, CorrectionTracker)
+        # on the pooled estimate (the correction tracker's offset: in its correction told)
+        estimate = self.delay_offset if mode == "release" and not told else 0.0
         self.view = CascadeBallView(
-            self.balls, mode, self.gravity, lv.mean_delay + self.delay_offset, catch_height(self.controller),
-            lead, tracker, estimate,
+            self.balls, mode, self.gravity, lv.mean_delay + (0.0 if told else self.delay_offset),
+            catch_height(self.controller), lead, tracker, estimate,
         )  # fmt: skip
         if self.timing_scale and tracker is None:  # the estimator's timing entry
             self.view.adjust = 0.0

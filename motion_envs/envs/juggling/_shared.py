@@ -28,6 +28,7 @@ __all__ = [
     "MAX_TIMING_SCALE",
     "OFFSET_CONTROLLERS",
     "TIMING_CONTROLLERS",
+    "TRACKER_CONTROLLERS",
     "LevelsEnvMixin",
     "check_delay_offset",
     "check_phases",
@@ -38,12 +39,18 @@ __all__ = [
 
 #: The controllers told a ``delay_offset``: a later delay than the level's mean
 #: (``juggler_mean_delay``, ``juggler_delay_tracker``), or a correction of the
-#: release-anchored estimate (``juggler_delay_estimator_catch``, :data:`ESTIMATE_OFFSET`).
+#: release-anchored estimate (``juggler_delay_estimator_catch``, :data:`ESTIMATE_OFFSET`),
+#: or the offset of the estimate's tracked correction (``juggler_estimator_tracker_catch``,
+#: a later meeting as the tracker's, >= 0).
 OFFSET_CONTROLLERS = (
     "juggler_mean_delay",
     "juggler_delay_tracker",
     "juggler_delay_estimator_catch",
+    "juggler_estimator_tracker_catch",
 )
+#: The controllers with a tracker, whose gain ``tracker_gain`` is: the delay tracker and
+#: the release-anchored estimate with its tracked correction.
+TRACKER_CONTROLLERS = ("juggler_delay_tracker", "juggler_estimator_tracker_catch")
 #: The controller whose ``delay_offset`` corrects an ESTIMATE, so may be negative, and
 #: its range (s). The estimate's measured bias has either sign (Cascade-v1, the pooled
 #: estimate minus the true delay: -7.0 to +2.2 ms mean by level and pattern, sd up to
@@ -107,9 +114,11 @@ def _tracker_argument(
 
 
 def check_tracker_gain(tracker_gain: float, controller: str) -> float:
-    """``tracker_gain`` (the tracker's gain ``k``) in ``[0, TRACKER_MAX_GAIN]``
-    (:func:`_tracker_argument`)."""
-    return _tracker_argument("tracker_gain", tracker_gain, TRACKER_MAX_GAIN, controller)
+    """``tracker_gain`` (the tracker's gain ``k``) in ``[0, TRACKER_MAX_GAIN]``, nonzero
+    only for the :data:`TRACKER_CONTROLLERS` (:func:`_tracker_argument`)."""
+    return _tracker_argument(
+        "tracker_gain", tracker_gain, TRACKER_MAX_GAIN, controller, "", TRACKER_CONTROLLERS
+    )
 
 
 #: s, the largest ``timing_scale`` accepted (the human delay range's width, 150 ms).

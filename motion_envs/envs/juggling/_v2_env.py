@@ -36,6 +36,7 @@ from motion_envs.models.juggling import (
     V2_LEVELS,
     CameraFrame,
     CameraSensor,
+    CorrectionTracker,
     DelayTracker,
     DelayTrackerController,
     V2Controller,
@@ -119,7 +120,11 @@ class JugglingV2Env(OneBallEnv):
     the level's delay range, told ``D + delay_offset``
     (:mod:`~motion_envs.models.juggling._delay_tracker`; the gain ``k`` is
     ``tracker_gain``; the env hands the controller the catch's task error, never the
-    delay).
+    delay), and ``juggler_estimator_tracker_catch``: the two put together,
+    ``juggler_delay_estimator_catch`` whose frames are placed by the release-anchored
+    estimate plus a correction ``C + delay_offset``, ``C <- clip(C - k (e -
+    delay_offset), -0.05, 0.05)`` after every catch from 0 (``k`` is ``tracker_gain``;
+    :class:`~motion_envs.models.juggling.CorrectionTracker`; a competitor).
 
     A step is Juggling-v1's, in its batch of one (``V2Batch``, a
     :class:`~motion_envs.envs.juggling._v1_batch.V1Batch`: the command with the
@@ -245,9 +250,9 @@ class JugglingV2Env(OneBallEnv):
     | Parameter         | Type      | Default     | Description |
     |-------------------|-----------|-------------|-------------|
     | `level`           | **str**   | `"medium"`  | `"easy"`, `"medium"`, `"hard"`, `"drift"` or `"gaze"` (table above) |
-    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker`, `juggler_gaze_estimator_catch` |
-    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight) |
-    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan) |
+    | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_delay_estimator`, `juggler_oracle`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator_catch`, `juggler_delay_tracker`, `juggler_gaze_estimator_catch`, `juggler_estimator_tracker_catch` |
+    | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight), or `juggler_estimator_tracker_catch`'s offset (0-0.25, added to its estimate's correction and the timing error it steers to) |
+    | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan), or `juggler_estimator_tracker_catch`'s (0: `juggler_delay_estimator_catch` told `delay_offset`) |
     | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` and `juggler_delay_estimator_catch` only) |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
@@ -267,7 +272,9 @@ class JugglingV2Env(OneBallEnv):
       its ``delay_offset`` later, the default 0 leaving its rollouts unchanged; its
       timing entry later still, ``timing_scale`` 0 by default; the level `gaze`
       added 2026-12-07, every other level's rollouts unchanged; the controller
-      ``juggler_gaze_estimator_catch`` with it).
+      ``juggler_gaze_estimator_catch`` with it; the controller
+      ``juggler_estimator_tracker_catch`` added 2026-12-07, the others' rollouts
+      unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -314,13 +321,16 @@ class JugglingV2Env(OneBallEnv):
         self.task = JugglingTask(gravity=self.gravity)
         juggler = v1_juggler(self.gravity)
         self.home = np.asarray(juggler.home_, dtype=np.float64)
-        tracker = None
+        tracker: DelayTracker | None = None
         if self.controller_name == "juggler_delay_tracker":
             tracker = DelayTracker(self.tracker_gain, self.delay_offset, lv.delay)
+        elif self.controller_name == "juggler_estimator_tracker_catch":  # offset: the tracker's
+            tracker = CorrectionTracker(self.tracker_gain, self.delay_offset)
         estimate = self.controller_name == ESTIMATE_OFFSET[0]  # its offset: on the estimate
+        told = isinstance(tracker, CorrectionTracker)
         self.controller = make_v2_controller(
             self.controller_name, juggler, self.gravity,
-            lv.mean_delay + (0.0 if estimate else self.delay_offset), tracker,
+            lv.mean_delay + (0.0 if estimate or told else self.delay_offset), tracker,
             self.delay_offset if estimate else 0.0,
         )  # fmt: skip
         self._eye = gaze_eye((float(self.home[0]), float(self.home[1])))

@@ -30,7 +30,9 @@ The public names of small private modules, one concern each:
   and every Juggling-v2 controller by name (:func:`make_v2_controller`);
   ``_delay_tracker``: the online delay tracker driven by each catch's timing error
   (:class:`DelayTracker`; Juggling-v2's :class:`DelayTrackerController`, Cascade-v1's
-  through :meth:`CascadeBallView.felt`);
+  through :meth:`CascadeBallView.felt`) and the tracked correction of the
+  release-anchored estimate (:class:`CorrectionTracker`; Juggling-v2's
+  :class:`EstimatorTrackerController`, Cascade-v1's through the view likewise);
 * ``_levels``: Juggling-v1's levels (:data:`LEVELS`), its reference controllers
   (:func:`make_controller`) and :class:`HumanLikeness`;
 * ``_flights``: ball flights in recordings (:func:`detect_flights`: free-flight segments
@@ -124,7 +126,12 @@ from motion_envs.models.juggling._controller import (
     eq10_rows,
     replan_many,
 )
-from motion_envs.models.juggling._delay_tracker import TRACKER_MAX_GAIN, DelayTracker
+from motion_envs.models.juggling._delay_tracker import (
+    CORRECTION_BOUND,
+    TRACKER_MAX_GAIN,
+    CorrectionTracker,
+    DelayTracker,
+)
 from motion_envs.models.juggling._fit import (
     DEMO_CYCLES,
     FIT_SEED,
@@ -217,6 +224,7 @@ from motion_envs.models.juggling._v2_catch import (
     CatchPlan,
     CatchPlanController,
     DelayTrackerController,
+    EstimatorTrackerController,
     make_v2_controller,
 )
 from motion_envs.models.juggling._v2_levels import (
@@ -242,6 +250,7 @@ __all__ = [
     "CASCADE_V1_LEVELS",
     "CATCH_PLANS",
     "CONTROLLERS",
+    "CORRECTION_BOUND",
     "DEFAULT_TUNABLES",
     "DELAY_GRID",
     "DEMO_CYCLES",
@@ -281,11 +290,13 @@ __all__ = [
     "CatchPlan",
     "CatchPlanController",
     "ControlOptions",
+    "CorrectionTracker",
     "CycleResult",
     "DefaultFit",
     "DelayTracker",
     "DelayTrackerController",
     "Eq10Rows",
+    "EstimatorTrackerController",
     "Flight",
     "FlightAnalysis",
     "FlightEstimator",

@@ -107,7 +107,7 @@ from motion_envs.models.juggling._camera import CameraFrame, FlightEstimator, dr
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_control import CascadeController, CascadeStart
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
-from motion_envs.models.juggling._delay_tracker import DelayTracker
+from motion_envs.models.juggling._delay_tracker import CorrectionTracker, DelayTracker
 from motion_envs.models.juggling._v2_catch import CatchPlan
 
 __all__ = [
@@ -138,6 +138,7 @@ CASCADE_V1_CONTROLLERS: dict[str, tuple[str, str]] = {
     "juggler_delay_estimator": ("juggler", "release"),
     "juggler_delay_tracker": ("juggler", "mean_delay"),
     "juggler_delay_estimator_catch": ("juggler", "release"),
+    "juggler_estimator_tracker_catch": ("juggler", "release"),
 }
 #: s; the leads tried on training seeds (0-160 ms in 20 ms steps).
 CASCADE_LEAD_GRID: tuple[float, ...] = tuple(round(0.02 * i, 2) for i in range(9))
@@ -169,11 +170,13 @@ CASCADE_CATCH_PLANS: dict[str, dict[str, CatchPlan | None]] = {
     },
 }
 #: Controllers carrying another controller's plan, declared, not re-tuned: the delay
-#: tracker (the mean-delay plan with its delay corrected per catch) and the delay
-#: estimator with the catch plan (the mean-delay plan on the pooled release delay).
+#: tracker (the mean-delay plan with its delay corrected per catch), the delay
+#: estimator with the catch plan (the mean-delay plan on the pooled release delay) and
+#: the same with the estimate's tracked correction.
 _PLAN_OF: dict[str, str] = {
     "juggler_delay_tracker": "juggler_mean_delay_catch",
     "juggler_delay_estimator_catch": "juggler_mean_delay_catch",
+    "juggler_estimator_tracker_catch": "juggler_mean_delay_catch",
 }
 #: s, the step and the horizon of the oracle's search for the catch-height crossing.
 _SEARCH_STEP, _SEARCH_HORIZON = 0.01, 3.0
@@ -290,7 +293,13 @@ class CascadeBallView:
         ``juggler_delay_tracker``'s :class:`~motion_envs.models.juggling.DelayTracker`
         (mode ``"mean_delay"``): the estimators' delay is its told delay, reset at every
         episode and corrected at every catch (:meth:`felt`), each flight fitted with the
-        delay told at its release; None: the fixed ``delay``.
+        delay told at its release; None: the fixed ``delay``. Or
+        ``juggler_estimator_tracker_catch``'s
+        :class:`~motion_envs.models.juggling.CorrectionTracker` (mode ``"release"``): its
+        correction told ``c`` (``C + offset``) is added to the pooled delay and to the
+        prior (the frames placed by the pooled delay plus ``offset + c``; before the first
+        estimate by ``delay + c``, at least 0), reset with the episode, corrected at every
+        catch and latched per flight at its ball's release likewise.
     offset:
         s (mode ``"release"`` only; may be negative): the frames are placed by the pooled
         delay plus ``offset`` (:class:`PooledReleaseEstimator`); 0: the pooled delay.
@@ -310,8 +319,10 @@ class CascadeBallView:
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
         lead: float = 0.0, tracker: DelayTracker | None = None, offset: float = 0.0,
     ) -> None:  # fmt: skip
-        if tracker is not None and mode != "mean_delay":
-            raise ValueError(f"a tracker needs the estimators' mode 'mean_delay'; got {mode!r}")
+        need = "release" if isinstance(tracker, CorrectionTracker) else "mean_delay"
+        if tracker is not None and mode != need:
+            raise ValueError(f"a {type(tracker).__name__} needs the estimators' mode {need!r}; "
+                             f"got {mode!r}")  # fmt: skip
         if offset and mode != "release":
             raise ValueError(f"offset is for the estimators' mode 'release'; got {mode!r}")
         self.tracker = tracker
@@ -365,11 +376,19 @@ class CascadeBallView:
                 self.tracker.update(timing)
 
     def _tell(self, balls: list[int] | None = None) -> None:
-        """The tracker's told delay to the estimators of ``balls`` (None: all)."""
+        """The tracker's told delay to the estimators of ``balls`` (None: all); a
+        correction tracker's correction added to the offset and the prior."""
         assert self.tracker is not None
+        told = self.tracker.told
+        correction = isinstance(self.tracker, CorrectionTracker)
         for i in range(len(self.estimators)) if balls is None else balls:
-            self.estimators[i].fixed_delay = self.tracker.told
-            self.estimators[i]._fitted = False
+            est = self.estimators[i]
+            if correction:
+                est.offset = self.offset + told
+                est.fixed_delay = max(self.prior + told, 0.0)
+            else:
+                est.fixed_delay = told
+            est._fitted = False
 
     def _retime(self, balls: Iterable[int]) -> None:
         """The release estimators of ``balls`` told the offset ``offset + adjust`` and the

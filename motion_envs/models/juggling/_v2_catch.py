@@ -43,7 +43,7 @@ import numpy as np
 from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingState
 from motion_envs.models.juggling._camera import FlightEstimator
-from motion_envs.models.juggling._delay_tracker import DelayTracker
+from motion_envs.models.juggling._delay_tracker import CorrectionTracker, DelayTracker
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._v2_levels import V2_CONTROLLERS, V2Controller
 
@@ -54,6 +54,7 @@ __all__ = [
     "CatchPlan",
     "CatchPlanController",
     "DelayTrackerController",
+    "EstimatorTrackerController",
     "make_v2_controller",
 ]
 
@@ -105,12 +106,14 @@ class CatchPlan:
 #: target costs more than the slower meeting gains (BENCHMARKS, Juggling-v2 catch plan).
 #: ``juggler_delay_estimator_catch`` (added 2026-12-07) carries the mean delay's plan as
 #: declared, not re-tuned: the two hand-written fixes put together;
-#: ``juggler_gaze_estimator_catch`` (added 2026-12-07, for the level ``gaze``) likewise.
+#: ``juggler_gaze_estimator_catch`` (added 2026-12-07, for the level ``gaze``) and
+#: ``juggler_estimator_tracker_catch`` (added 2026-12-07) likewise.
 CATCH_PLANS: dict[str, CatchPlan] = {
     "juggler_oracle_catch": CatchPlan(lead=0.12, descent=0.0),
     "juggler_mean_delay_catch": CatchPlan(lead=0.12, descent=0.0),
     "juggler_delay_estimator_catch": CatchPlan(lead=0.12, descent=0.0),
     "juggler_gaze_estimator_catch": CatchPlan(lead=0.12, descent=0.0),
+    "juggler_estimator_tracker_catch": CatchPlan(lead=0.12, descent=0.0),
 }
 
 
@@ -227,6 +230,22 @@ class DelayTrackerController(CatchPlanController):
         self._tell()
 
 
+class EstimatorTrackerController(DelayTrackerController):
+    """``juggler_delay_estimator_catch`` whose release-anchored estimate is told with a
+    tracked correction (:class:`~motion_envs.models.juggling.CorrectionTracker`): the
+    frames are placed by the estimate plus the correction told, ``C + offset`` (the
+    estimator's ``offset``), ``C`` reset to 0 at every episode and corrected after every
+    catch from the catch's timing error (:meth:`felt`, as the delay tracker's). One ball:
+    a catch ends the flight, so the correction told at a catch is the one the next
+    flight is fitted with from its release to its catch."""
+
+    tracker: CorrectionTracker
+
+    def _tell(self) -> None:
+        self.estimator.offset = self.tracker.told
+        self.estimator._fitted = False
+
+
 def make_v2_controller(
     name: str,
     juggler: AnalyticJuggler,
@@ -243,11 +262,19 @@ def make_v2_controller(
     of mode ``"release"`` only)."""
     if name not in V2_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
-    if (tracker is not None) != (name == "juggler_delay_tracker"):
-        raise ValueError(f"tracker is for controller='juggler_delay_tracker' only; got {name!r}")
+    correction = name == "juggler_estimator_tracker_catch"
+    if (tracker is not None) != (name == "juggler_delay_tracker" or correction) or (
+        tracker is not None and isinstance(tracker, CorrectionTracker) != correction
+    ):
+        raise ValueError(
+            "tracker is for controller='juggler_delay_tracker' (a DelayTracker) or "
+            f"'juggler_estimator_tracker_catch' (a CorrectionTracker) only; got {name!r}"
+        )
     estimator = FlightEstimator(
         V2_CONTROLLERS[name], gravity, delay=mean_delay, offset=estimate_offset
     )
+    if isinstance(tracker, CorrectionTracker):
+        return EstimatorTrackerController(juggler.variant(), estimator, CATCH_PLANS[name], tracker)
     if tracker is not None:
         plan = CATCH_PLANS["juggler_mean_delay_catch"]
         return DelayTrackerController(juggler.variant(), estimator, plan, tracker)

@@ -233,6 +233,7 @@ V2_CONTROLLERS: dict[str, str] = {
     "juggler_delay_tracker": "mean_delay",
     "juggler_delay_estimator_catch": "release",
     "juggler_gaze_estimator_catch": "gaze_release",
+    "juggler_estimator_tracker_catch": "release",
 }
 
 
