@@ -105,14 +105,37 @@ def load_experiment(name: str) -> Any:
     return module
 
 
-def check_timing_entry(env: Any, plain: Any) -> None:
-    """``env`` (a wrapped env with a timing entry) has one action entry more than
-    ``plain`` (the same without it); Gymnasium's and SB3's checkers pass; ``reset(seed)``
-    is deterministic under a random timing action."""
+#: A noiseless flight for the release-anchored estimators' hand-worked tests: released at
+#: ``T_R`` (s) from ``P0`` at ``V0`` (m, m/s) under gravity ``G``.
+P0, V0, T_R, G = (0.1, 1.0), (-0.8, 3.5), 1.0, 9.81
+
+
+def release_flight(t: float) -> np.ndarray:
+    """The ball of that flight at time ``t``, ``(x, z)``."""
+    s = t - T_R
+    return np.array([P0[0] + V0[0] * s, P0[1] + V0[1] * s - 0.5 * G * s * s])
+
+
+def release_frames(delay: float, n: int) -> list[Any]:
+    """``n`` noiseless camera frames of that flight, captured every 10 ms from 10 ms
+    after the release, arriving ``delay`` s later (put ``delay`` on the estimators' 5 ms
+    grid)."""
+    from motion_envs.models.juggling import CameraFrame
+
+    out = []
+    for j in range(1, n + 1):
+        c = T_R + 0.01 * j
+        x, z = release_flight(c)
+        out.append(CameraFrame(c, c + delay, float(x), float(z)))
+    return out
+
+
+def check_env_contract(env: Any) -> None:
+    """Gymnasium's and SB3's checkers pass on ``env`` (unwrapped) and ``reset(seed)`` is
+    deterministic under a random action (at most 300 steps)."""
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check
 
-    assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check(env.unwrapped, warn=True)
 
@@ -128,3 +151,10 @@ def check_timing_entry(env: Any, plain: Any) -> None:
         return np.stack(path)
 
     np.testing.assert_array_equal(play(1003), play(1003))
+
+
+def check_timing_entry(env: Any, plain: Any) -> None:
+    """``env`` (a wrapped env with a timing entry) has one action entry more than
+    ``plain`` (the same without it), and passes :func:`check_env_contract`."""
+    assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
+    check_env_contract(env)

@@ -18,32 +18,14 @@ import pytest
 
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
 from motion_envs.models.juggling import (
-    CameraFrame,
     CascadeBallView,
     FlightEstimator,
     PooledReleaseEstimator,
 )
-from tests._helpers import rollout_digest
+from tests._helpers import P0, T_R, V0, release_flight, release_frames, rollout_digest
 
 NAME = "juggler_delay_estimator_catch"
 G = 9.81
-P0, V0, T_R = (0.1, 1.0), (-0.8, 3.5), 1.0
-
-
-def _flight(t: float) -> np.ndarray:
-    s = t - T_R
-    return np.array([P0[0] + V0[0] * s, P0[1] + V0[1] * s - 0.5 * G * s * s])
-
-
-def _frames(delay: float, n: int) -> list[CameraFrame]:
-    """``n`` noiseless frames of the flight released at ``T_R``, captured every 10 ms
-    from 10 ms after it, arriving ``delay`` later (135 ms: on the estimator's 5 ms grid)."""
-    out = []
-    for j in range(1, n + 1):
-        c = T_R + 0.01 * j
-        x, z = _flight(c)
-        out.append(CameraFrame(c, c + delay, float(x), float(z)))
-    return out
 
 
 @pytest.mark.parametrize("offset", [0.0, 0.02, -0.015])
@@ -58,12 +40,12 @@ def test_the_offset_tells_the_flight_offset_seconds_later_hand_worked(offset: fl
     ):
         est.reset()
         est.released(T_R, *P0)
-        est.add(_frames(0.135, 12))
+        est.add(release_frames(0.135, 12))
         assert est.delay_estimate == pytest.approx(0.135)
         now = 1.45
         got = est.estimate(now)
         assert got is not None
-        np.testing.assert_allclose(got[0], _flight(now + offset), atol=1e-9)
+        np.testing.assert_allclose(got[0], release_flight(now + offset), atol=1e-9)
         s = now + offset - T_R
         np.testing.assert_allclose(got[1], [V0[0], V0[1] - G * s], atol=1e-9)
 

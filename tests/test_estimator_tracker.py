@@ -23,7 +23,6 @@ import pytest
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
 from motion_envs.models.juggling import (
     CORRECTION_BOUND,
-    CameraFrame,
     CascadeBallView,
     CorrectionTracker,
     DelayTracker,
@@ -31,28 +30,18 @@ from motion_envs.models.juggling import (
     make_v2_controller,
     v1_juggler,
 )
-from tests._helpers import rollout_digest
+from tests._helpers import (
+    P0,
+    T_R,
+    check_env_contract,
+    release_flight,
+    release_frames,
+    rollout_digest,
+)
 
 NAME = "juggler_estimator_tracker_catch"
 BASE = "juggler_delay_estimator_catch"
 G = 9.81
-P0, V0, T_R = (0.1, 1.0), (-0.8, 3.5), 1.0
-
-
-def _flight(t: float) -> np.ndarray:
-    s = t - T_R
-    return np.array([P0[0] + V0[0] * s, P0[1] + V0[1] * s - 0.5 * G * s * s])
-
-
-def _frames(delay: float, n: int) -> list[CameraFrame]:
-    """``n`` noiseless frames of the flight released at ``T_R``, captured every 10 ms
-    from 10 ms after it, arriving ``delay`` later (on the estimator's 5 ms grid)."""
-    out = []
-    for j in range(1, n + 1):
-        c = T_R + 0.01 * j
-        x, z = _flight(c)
-        out.append(CameraFrame(c, c + delay, float(x), float(z)))
-    return out
 
 
 # -- the correction tracker --------------------------------------------------------------
@@ -98,11 +87,11 @@ def test_juggling_v2_a_catch_retells_the_estimate_hand_worked() -> None:
     assert est.offset == told
     est.reset()
     est.released(T_R, *P0)
-    est.add(_frames(0.135, 12))
+    est.add(release_frames(0.135, 12))
     assert est.delay_estimate == pytest.approx(0.135)
     got = est.estimate(1.45)
     assert got is not None
-    np.testing.assert_allclose(got[0], _flight(1.45 + told), atol=1e-9)
+    np.testing.assert_allclose(got[0], release_flight(1.45 + told), atol=1e-9)
     env.reset(seed=0)
     assert ctrl.tracker.estimate == 0.0 and est.offset == 0.02  # a new episode: C = 0
 
@@ -269,26 +258,9 @@ def test_the_models_refuse_a_wrong_tracker() -> None:
 # -- the checkers --------------------------------------------------------------------------
 @pytest.mark.parametrize("env_cls", [JugglingV2Env, CascadeV1Env])
 def test_gymnasium_and_sb3_checkers_pass_and_reset_is_deterministic(env_cls: Any) -> None:
-    from gymnasium.utils.env_checker import check_env
-    from stable_baselines3.common.env_checker import check_env as sb3_check
-
     env = env_cls(level="medium", controller=NAME, tracker_gain=0.5, delay_offset=0.02,
                   max_catches=4)  # fmt: skip
-    check_env(env, skip_render_check=True)
-    sb3_check(env, warn=True)
-
-    def play(seed: int) -> np.ndarray:
-        rng = np.random.default_rng(0)
-        obs, _ = env.reset(seed=seed)
-        path = [obs]
-        for _ in range(300):
-            obs, _, term, trunc, _ = env.step(rng.uniform(-1, 1, env.action_space.shape))
-            path.append(obs)
-            if term or trunc:
-                break
-        return np.stack(path)
-
-    np.testing.assert_array_equal(play(1003), play(1003))
+    check_env_contract(env)
 
 
 # -- the benches' row ----------------------------------------------------------------------
