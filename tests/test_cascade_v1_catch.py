@@ -121,9 +121,13 @@ def test_the_controllers_carry_their_declared_leads(pattern: str) -> None:
     for name in CASCADE_V1_CONTROLLERS:
         env = CascadeV1Env(level="easy", pattern=pattern, controller=name, max_catches=2)
         plan = catch_plan(name, fitted)
-        # the delay tracker (the mean-delay catch plan with its delay corrected) and the
-        # delay estimator with the catch plan carry the mean-delay plan itself
-        borrows = ("juggler_delay_tracker", "juggler_delay_estimator_catch")
+        # the delay tracker (the mean-delay catch plan with its delay corrected), the
+        # delay estimator with the catch plan and the estimate with a tracked correction
+        # carry the mean-delay plan itself
+        borrows = (
+            "juggler_delay_tracker", "juggler_delay_estimator_catch",
+            "juggler_estimator_tracker_catch",
+        )  # fmt: skip
         base = "juggler_mean_delay_catch" if name in borrows else name
         if base in CASCADE_CATCH_PLANS and plan is not None:
             assert plan is CASCADE_CATCH_PLANS[base]["fitted" if fitted else "siteswap"]

@@ -50,10 +50,13 @@ def test_a_bad_plan_is_one_error_naming_the_field(field: str, value: float) -> N
 def test_the_declared_plans_lie_on_the_training_grid() -> None:
     assert set(CATCH_PLANS) == {
         "juggler_oracle_catch", "juggler_mean_delay_catch", "juggler_delay_estimator_catch",
-        "juggler_gaze_estimator_catch",
+        "juggler_gaze_estimator_catch", "juggler_estimator_tracker_catch",
     }  # fmt: skip
     # the estimators' catches carry the mean delay's plan as declared (not re-tuned)
-    for name in ("juggler_delay_estimator_catch", "juggler_gaze_estimator_catch"):
+    for name in (
+        "juggler_delay_estimator_catch", "juggler_gaze_estimator_catch",
+        "juggler_estimator_tracker_catch",
+    ):  # fmt: skip
         assert CATCH_PLANS[name] == CATCH_PLANS["juggler_mean_delay_catch"]
     for name, plan in CATCH_PLANS.items():
         assert name in V2_CONTROLLERS
