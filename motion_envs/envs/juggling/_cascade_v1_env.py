@@ -31,6 +31,7 @@ from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import (
     LevelsEnvMixin,
     check_delay_offset,
+    check_delay_rule,
     check_timing_scale,
     check_tracker_gain,
 )
@@ -40,6 +41,7 @@ from motion_envs.envs.juggling._world_spec import (
     WorldSpec,
 )
 from motion_envs.models.juggling import (
+    ANCHOR_FRAMES,
     CASCADE_V1_CONTROLLERS,
     CASCADE_V1_LEVELS,
     V2_LEVELS,
@@ -49,6 +51,7 @@ from motion_envs.models.juggling import (
     CascadeController,
     CascadeState,
     CorrectionTracker,
+    DelayRule,
     DelayTracker,
     SiteswapController,
     catch_height,
@@ -242,6 +245,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `controller`      | **str**   | `"juggler"` | `juggler`, `juggler_mean_delay`, `juggler_oracle`, `fixed_point`, `juggler_oracle_catch`, `juggler_mean_delay_catch`, `juggler_delay_estimator`, `juggler_delay_tracker`, `juggler_delay_estimator_catch`, `juggler_estimator_tracker_catch` |
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s pooled estimate and its prior, the level's mean (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight), or `juggler_estimator_tracker_catch`'s offset (0-0.25, added to its estimate's correction and the timing error it steers to) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan), or `juggler_estimator_tracker_catch`'s (0: `juggler_delay_estimator_catch` told `delay_offset`) |
+    | `delay_rule`      | **callable** | `None`   | how the pooled estimate is made from the episode's anchored flights of every ball, `(flights, gravity) -> delay` (:class:`~motion_envs.models.juggling.DelayRule`; None: each flight's least-residual delay, averaged); `juggler_delay_estimator`, `juggler_delay_estimator_catch`, `juggler_estimator_tracker_catch` only |
+    | `anchor_frames`   | **int**   | `8`         | the frames after each release the estimate is made from (>= 3); the same controllers only |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
@@ -261,7 +266,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       controller's rollout unchanged; its ``delay_offset`` later still, the default 0
       leaving its rollouts unchanged, and then its timing entry, ``timing_scale`` 0 by
       default; the controller ``juggler_estimator_tracker_catch`` added 2026-12-07, every
-      other controller's rollout unchanged).
+      other controller's rollout unchanged; ``delay_rule`` and ``anchor_frames`` added
+      2026-12-07, their defaults leaving every rollout unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -284,6 +290,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         observe_task_error: bool = False,
         tracker_gain: float = 0.0,
         timing_scale: float = 0.0,
+        delay_rule: DelayRule | None = None,
+        anchor_frames: int = ANCHOR_FRAMES,
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
         #: Whether the observation ends with each hand's last catch's task error.
@@ -293,6 +301,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
         #: s of told delay per unit of the action's timing entry (0: no timing entry)
         self.timing_scale = check_timing_scale(timing_scale, self.controller_name)
+        rule, anchors = check_delay_rule(delay_rule, anchor_frames, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -322,7 +331,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         estimate = self.delay_offset if mode == "release" and not told else 0.0
         self.view = CascadeBallView(
             self.balls, mode, self.gravity, lv.mean_delay + (0.0 if told else self.delay_offset),
-            catch_height(self.controller), lead, tracker, estimate,
+            catch_height(self.controller), lead, tracker, estimate, rule, anchors,
         )  # fmt: skip
         if self.timing_scale and tracker is None:  # the estimator's timing entry
             self.view.adjust = 0.0

@@ -21,16 +21,24 @@ from motion_envs.envs._common import (
     check_reward_weights,
     check_scale,
 )
-from motion_envs.models.juggling import LEVELS, TRACKER_MAX_GAIN, check_gravity
+from motion_envs.models.juggling import (
+    ANCHOR_FRAMES,
+    LEVELS,
+    TRACKER_MAX_GAIN,
+    DelayRule,
+    check_gravity,
+)
 
 __all__ = [
     "ESTIMATE_OFFSET",
     "MAX_TIMING_SCALE",
     "OFFSET_CONTROLLERS",
+    "RULE_CONTROLLERS",
     "TIMING_CONTROLLERS",
     "TRACKER_CONTROLLERS",
     "LevelsEnvMixin",
     "check_delay_offset",
+    "check_delay_rule",
     "check_phases",
     "check_timing_scale",
     "check_tracker_gain",
@@ -137,6 +145,38 @@ def check_timing_scale(timing_scale: float, controller: str) -> float:
     return _tracker_argument(
         "timing_scale", timing_scale, MAX_TIMING_SCALE, controller, " s", TIMING_CONTROLLERS
     )
+
+
+#: The controllers whose estimators anchor on the release (mode ``"release"``), so take a
+#: ``delay_rule`` and ``anchor_frames``.
+RULE_CONTROLLERS = (
+    "juggler_delay_estimator",
+    "juggler_delay_estimator_catch",
+    "juggler_estimator_tracker_catch",
+)
+
+
+def check_delay_rule(
+    delay_rule: DelayRule | None, anchor_frames: int, controller: str
+) -> tuple[DelayRule | None, int]:
+    """``delay_rule`` (a callable, or None) and ``anchor_frames`` (an integer >= 3), other
+    than their defaults only for the :data:`RULE_CONTROLLERS`; else one-line ValueError
+    naming the argument."""
+    if delay_rule is not None and not callable(delay_rule):
+        raise ValueError(f"delay_rule must be a callable (flights, gravity) -> delay or None; "
+                         f"got {delay_rule!r}")  # fmt: skip
+    if (
+        isinstance(anchor_frames, bool)
+        or not isinstance(anchor_frames, (int, np.integer))
+        or (anchor_frames < 3)
+    ):
+        raise ValueError(f"anchor_frames must be an integer >= 3; got {anchor_frames!r}")
+    if (delay_rule is not None or anchor_frames != ANCHOR_FRAMES) and (
+        controller not in RULE_CONTROLLERS
+    ):
+        raise ValueError(f"delay_rule and anchor_frames are for the controllers "
+                         f"{list(RULE_CONTROLLERS)}; got controller={controller!r}")  # fmt: skip
+    return delay_rule, int(anchor_frames)
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

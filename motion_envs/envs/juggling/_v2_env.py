@@ -20,6 +20,7 @@ from motion_envs.envs.juggling._cascade_v1_errors import HeldTaskErrors, check_o
 from motion_envs.envs.juggling._shared import (
     ESTIMATE_OFFSET,
     check_delay_offset,
+    check_delay_rule,
     check_timing_scale,
     check_tracker_gain,
 )
@@ -32,11 +33,13 @@ from motion_envs.envs.juggling._world_spec import (
     WorldSpec,
 )
 from motion_envs.models.juggling import (
+    ANCHOR_FRAMES,
     V2_CONTROLLERS,
     V2_LEVELS,
     CameraFrame,
     CameraSensor,
     CorrectionTracker,
+    DelayRule,
     DelayTracker,
     DelayTrackerController,
     V2Controller,
@@ -254,6 +257,8 @@ class JugglingV2Env(OneBallEnv):
     | `delay_offset`    | **float** | `0.0`       | s added to the mean delay `juggler_mean_delay` and `juggler_delay_tracker` assume (0-0.25; a later meeting), or to `juggler_delay_estimator_catch`'s estimated delay (-0.05-0.25; a correction of the estimate, may be negative; the timing entry's `timing_scale * u` added per flight), or `juggler_estimator_tracker_catch`'s offset (0-0.25, added to its estimate's correction and the timing error it steers to) |
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan), or `juggler_estimator_tracker_catch`'s (0: `juggler_delay_estimator_catch` told `delay_offset`) |
     | `timing_scale`    | **float** | `0.0`       | s of told delay per unit of the action's timing entry (0-0.15; 0: no timing entry; `juggler_delay_tracker` and `juggler_delay_estimator_catch` only) |
+    | `delay_rule`      | **callable** | `None`   | how the release-anchored estimate is made from the episode's anchored flights, `(flights, gravity) -> delay` (:class:`~motion_envs.models.juggling.DelayRule`; None: each flight's least-residual delay, averaged); `juggler_delay_estimator`, `juggler_delay_estimator_catch`, `juggler_estimator_tracker_catch` only |
+    | `anchor_frames`   | **int**   | `8`         | the frames after each release the estimate is made from (>= 3); the same controllers only |
     | `max_catches`     | **int**   | `10`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which the residual acts; None: all |
@@ -274,7 +279,8 @@ class JugglingV2Env(OneBallEnv):
       added 2026-12-07, every other level's rollouts unchanged; the controller
       ``juggler_gaze_estimator_catch`` with it; the controller
       ``juggler_estimator_tracker_catch`` added 2026-12-07, the others' rollouts
-      unchanged).
+      unchanged; ``delay_rule`` and ``anchor_frames`` added 2026-12-07, their defaults
+      leaving every rollout unchanged).
     * v1: MuJoCo contacts and an actuated hand with human limits, a delayed noisy ball
       sensor with a fixed latency per level.
     * v0: the paper's setting (kinematic hand, exact ball state).
@@ -303,6 +309,8 @@ class JugglingV2Env(OneBallEnv):
         observe_task_error: bool = False,
         tracker_gain: float = 0.0,
         timing_scale: float = 0.0,
+        delay_rule: DelayRule | None = None,
+        anchor_frames: int = ANCHOR_FRAMES,
     ) -> None:
         self.level = check_choice(level, "level", tuple(V2_LEVELS))
         #: Whether the observation holds the last catch's task error (entries 32-35).
@@ -312,6 +320,7 @@ class JugglingV2Env(OneBallEnv):
         self.tracker_gain = check_tracker_gain(tracker_gain, self.controller_name)
         #: s of told delay per unit of the action's timing entry (0: no timing entry)
         self.timing_scale = check_timing_scale(timing_scale, self.controller_name)
+        rule, anchors = check_delay_rule(delay_rule, anchor_frames, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -331,7 +340,7 @@ class JugglingV2Env(OneBallEnv):
         self.controller = make_v2_controller(
             self.controller_name, juggler, self.gravity,
             lv.mean_delay + (0.0 if estimate or told else self.delay_offset), tracker,
-            self.delay_offset if estimate else 0.0,
+            self.delay_offset if estimate else 0.0, rule, anchors,
         )  # fmt: skip
         self._eye = gaze_eye((float(self.home[0]), float(self.home[1])))
         self.controller.estimator.eye = self._eye  # the gaze-aware estimator's eye

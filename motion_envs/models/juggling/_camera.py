@@ -80,7 +80,9 @@ The fitted state is carried to the present along the estimator's model of the fl
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -91,14 +93,18 @@ __all__ = [
     "ESTIMATORS",
     "GAZE_EYE",
     "SLOPE_GRID",
+    "AnchoredFlight",
     "CameraFrame",
     "CameraSensor",
+    "DelayRule",
     "FlightEstimator",
     "ballistic_apex",
     "drag_flight",
     "eccentricities",
     "eccentricity",
     "gaze_eye",
+    "mean_flight_delay",
+    "release_residuals",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -119,6 +125,52 @@ SLOPE_GRID = np.round(np.arange(0.0, 0.00301, 0.0001), 7)
 #: eccentricity. A reasoned choice, not a measurement: a juggler's hands work at about
 #: elbow height, some 0.4-0.5 m below the eyes, and 0.3-0.5 m in front of the body.
 GAZE_EYE = (0.0, 0.45, 0.40)
+
+
+#: One anchored flight as the release-anchored estimators keep it: per anchor frame its
+#: arrival minus the release time (s, shape ``(n,)``) and its position minus the release
+#: point (m, shape ``(n, 2)``).
+AnchoredFlight = tuple[FloatArray, FloatArray]
+
+
+class DelayRule(Protocol):
+    """How a release-anchored estimator turns the episode's anchored flights into one
+    delay (s), or None when they tell none (:class:`FlightEstimator`'s ``rule``)."""
+
+    def __call__(self, flights: Sequence[AnchoredFlight], gravity: float) -> float | None: ...
+
+
+def release_residuals(
+    s0: FloatArray, q: FloatArray, gravity: float, grid: FloatArray = DELAY_GRID
+) -> FloatArray:
+    r"""Per delay ``d`` of ``grid``, the least-squares residual of the ballistic flight
+    from the release point through one flight's anchor frames (``inf`` where a frame
+    would precede the release, ``s <= 0``).
+
+    With ``s_i = s0_i - d`` and ``y_i = q_i + (0, g s_i^2 / 2)``, the flight
+    ``r + v s - g s^2 / 2`` passes through the frames when ``y_i = v s_i``; the best
+    ``v = \sum s_i y_i / \sum s_i^2`` and the residual ``\sum_i |y_i - v s_i|^2``.
+    """
+    s = np.asarray(s0, dtype=np.float64)[None, :] - np.asarray(grid)[:, None]  # (delays, n)
+    ok = (s > 0).all(axis=1)
+    y = np.broadcast_to(np.asarray(q, dtype=np.float64), (s.shape[0], *np.shape(q))).copy()
+    y[..., 1] += 0.5 * gravity * s * s
+    ss = np.where(ok, (s * s).sum(axis=1), 1.0)
+    v = (s[..., None] * y).sum(axis=1) / ss[:, None]
+    sse = ((y - s[..., None] * v[:, None, :]) ** 2).sum(axis=(1, 2))
+    return np.where(ok, sse, np.inf)
+
+
+def mean_flight_delay(flights: Sequence[AnchoredFlight], gravity: float) -> float | None:
+    """The release-anchored estimators' default :class:`DelayRule`: each flight's
+    least-residual delay on :data:`DELAY_GRID` (:func:`release_residuals`), averaged over
+    the flights that tell one; None when none does."""
+    delays = []
+    for s0, q in flights:
+        r = release_residuals(s0, q, gravity)
+        if np.isfinite(r).any():
+            delays.append(float(DELAY_GRID[int(np.argmin(r))]))
+    return float(np.mean(delays)) if delays else None
 
 
 def gaze_eye(home: tuple[float, float]) -> tuple[float, float, float]:
@@ -360,11 +412,19 @@ class FlightEstimator:
         again between flights (an agent's timing entry, latched at each release).
     drag:
         1/m; the oracle's drag (set per episode by :meth:`reset`).
+    rule:
+        ``"release"`` only: how the episode's anchored flights make one delay
+        (:class:`DelayRule`); None: :func:`mean_flight_delay`, each flight's least-residual
+        delay averaged over the flights.
+    anchor_frames:
+        ``"release"`` only: the frames after a release the delay is found from (>= 3;
+        :data:`ANCHOR_FRAMES` by default).
     """
 
     def __init__(
         self, mode: str, gravity: float, window: int = 10, delay: float = 0.0,
-        offset: float = 0.0,
+        offset: float = 0.0, rule: DelayRule | None = None,
+        anchor_frames: int = ANCHOR_FRAMES,
     ) -> None:  # fmt: skip
         if mode not in ESTIMATORS:
             raise ValueError(f"mode must be one of {list(ESTIMATORS)}; got {mode!r}")
@@ -374,7 +434,13 @@ class FlightEstimator:
             raise ValueError(
                 f"offset must be finite and nonzero only for mode 'release'; got {offset!r}"
             )
+        if (rule is not None or anchor_frames != ANCHOR_FRAMES) and mode != "release":
+            raise ValueError(f"rule and anchor_frames are for mode 'release'; got {mode!r}")
+        if int(anchor_frames) != anchor_frames or anchor_frames < 3:
+            raise ValueError(f"anchor_frames must be an integer >= 3; got {anchor_frames!r}")
         self.mode = mode
+        self.rule = rule
+        self.anchor_frames = int(anchor_frames)
         self.gravity = float(gravity)
         self.window = int(window)
         self.fixed_delay = float(delay)
@@ -394,6 +460,9 @@ class FlightEstimator:
         self.frames: list[CameraFrame] = []
         self.release: tuple[float, float, float] | None = None
         self._delays: list[float] = []
+        #: the anchored flights a :attr:`rule` reads (kept only with one)
+        self._anchors: list[AnchoredFlight] = []
+        self._ruled: tuple[int, float | None] = (0, None)
         #: ``gaze_release``: the anchored flights ``(s0, q, ecc)`` (per anchor frame its
         #: arrival minus the release time, position minus the release point and
         #: eccentricity from the anticipated apex) and the pooled ``(d, k)``
@@ -436,7 +505,7 @@ class FlightEstimator:
         if frames:
             self.frames.extend(frames)
             self._fitted = False
-        if self.mode in _ANCHORED and not self._anchored and len(self.frames) >= ANCHOR_FRAMES:
+        if self.mode in _ANCHORED and not self._anchored and len(self.frames) >= self.anchor_frames:
             self._anchor()
 
     def _anchor(self) -> None:
@@ -447,34 +516,20 @@ class FlightEstimator:
         if self.mode == "gaze_release":
             self._anchor_gaze()
             return
-        d = self._release_delay()
-        if d is not None:
-            self._delays.append(d)
+        s0, q = self._anchor_frames()
+        residuals = release_residuals(s0, q, self.gravity)
+        if np.isfinite(residuals).any():
+            self._delays.append(float(DELAY_GRID[int(np.argmin(residuals))]))
+            if self.rule is not None:
+                self._anchors.append((s0, q))
             self._fitted = False
 
-    def _release_delay(self) -> float | None:
-        """The current flight's release-anchored delay (module docstring), or None."""
+    def _anchor_frames(self) -> AnchoredFlight:
+        """The current flight's first :attr:`anchor_frames` frames: arrival minus release
+        time and position minus release point."""
         assert self.release is not None
         t_r, rx, rz = self.release
-        arrivals = np.array([f.arrival for f in self.frames[:ANCHOR_FRAMES]])
-        q = np.array([[f.x - rx, f.z - rz] for f in self.frames[:ANCHOR_FRAMES]])
-        s = arrivals[None, :] - t_r - DELAY_GRID[:, None]  # (delays, frames)
-        ok = (s > 0).all(axis=1)
-        if not ok.any():
-            return None
-        s = s[ok]
-        q = np.broadcast_to(q, (s.shape[0], *q.shape)).copy()
-        q[..., 1] += 0.5 * self.gravity * s * s
-        v = (s[..., None] * q).sum(axis=1) / (s * s).sum(axis=1)[:, None]
-        sse = ((q - s[..., None] * v[:, None, :]) ** 2).sum(axis=(1, 2))
-        return float(DELAY_GRID[ok][int(np.argmin(sse))])
-
-    def _anchor_frames(self) -> tuple[FloatArray, FloatArray]:
-        """The current flight's first ``ANCHOR_FRAMES`` frames: arrival minus release time
-        and position minus release point."""
-        assert self.release is not None
-        t_r, rx, rz = self.release
-        first = self.frames[:ANCHOR_FRAMES]
+        first = self.frames[: self.anchor_frames]
         s0 = np.array([f.arrival - t_r for f in first])
         q = np.array([[f.x - rx, f.z - rz] for f in first])
         return s0, q
@@ -505,9 +560,15 @@ class FlightEstimator:
 
     @property
     def delay_estimate(self) -> float | None:
-        """s; the release-anchored estimator's delay (the mean over the episode's
-        flights so far), or None before the first."""
-        return float(np.mean(self._delays)) if self._delays else None
+        """s; the release-anchored estimator's delay from the episode's flights so far
+        (by its :attr:`rule`; without one the mean of the flights' delays), or None
+        before the first."""
+        if self.rule is None:
+            return float(np.mean(self._delays)) if self._delays else None
+        if self._ruled[0] != len(self._anchors):  # the rule asked once per new flight
+            got = self.rule(self._anchors, self.gravity) if self._anchors else None
+            self._ruled = (len(self._anchors), got)
+        return self._ruled[1]
 
     def _times(self, frames: list[CameraFrame]) -> FloatArray | None:
         arrivals = np.array([f.arrival for f in frames])

@@ -103,7 +103,14 @@ from dataclasses import replace
 import numpy as np
 
 from motion_envs._typing import FloatArray
-from motion_envs.models.juggling._camera import CameraFrame, FlightEstimator, drag_flight
+from motion_envs.models.juggling._camera import (
+    ANCHOR_FRAMES,
+    AnchoredFlight,
+    CameraFrame,
+    DelayRule,
+    FlightEstimator,
+    drag_flight,
+)
 from motion_envs.models.juggling._cascade import CascadeState
 from motion_envs.models.juggling._cascade_control import CascadeController, CascadeStart
 from motion_envs.models.juggling._cascade_siteswap_control import SiteswapController
@@ -236,19 +243,34 @@ class PooledReleaseEstimator(FlightEstimator):
         s, added to the pool's mean where the frames are placed
         (:class:`~motion_envs.models.juggling.FlightEstimator`'s ``offset``; may be
         negative); the prior is used as given.
+    rule, anchors:
+        A :class:`~motion_envs.models.juggling.DelayRule` that makes the pooled delay
+        from the episode's anchored flights of every ball, kept in the shared list
+        ``anchors`` (cleared by the owner with ``pool``); None: the mean of ``pool``.
+    anchor_frames:
+        The frames after a release each flight's delay is found from.
     """
 
     def __init__(
-        self, gravity: float, pool: list[float], prior: float, offset: float = 0.0
-    ) -> None:
+        self, gravity: float, pool: list[float], prior: float, offset: float = 0.0,
+        rule: DelayRule | None = None, anchors: list[AnchoredFlight] | None = None,
+        anchor_frames: int = ANCHOR_FRAMES,
+    ) -> None:  # fmt: skip
+        if (rule is None) != (anchors is None):
+            raise ValueError("rule and anchors are given together (the shared flights)")
         self.pool = pool  # before FlightEstimator.__init__, which calls reset()
+        self.anchors = anchors if anchors is not None else []
         self._pool_seen = 0
-        super().__init__("release", gravity, delay=prior, offset=offset)
+        super().__init__(
+            "release", gravity, delay=prior, offset=offset, rule=rule,
+            anchor_frames=anchor_frames,
+        )  # fmt: skip
 
     def reset(self, drag: float = 0.0, delay: float = 0.0) -> None:
         """A new episode (the pool itself is cleared by its owner)."""
         super().reset(drag, delay)
         self._delays = self.pool
+        self._anchors = self.anchors
         self._pool_seen = 0
 
     def flying_at_start(self, time: float, x: float, z: float) -> None:
@@ -258,7 +280,7 @@ class PooledReleaseEstimator(FlightEstimator):
         self._anchored = True
 
     def _times(self, frames: list[CameraFrame]) -> FloatArray | None:
-        if not self.pool:
+        if self.delay_estimate is None:
             return np.array([f.arrival for f in frames]) - self.fixed_delay
         return super()._times(frames)
 
@@ -303,6 +325,10 @@ class CascadeBallView:
     offset:
         s (mode ``"release"`` only; may be negative): the frames are placed by the pooled
         delay plus ``offset`` (:class:`PooledReleaseEstimator`); 0: the pooled delay.
+    rule, anchor_frames:
+        Mode ``"release"`` only: the :class:`~motion_envs.models.juggling.DelayRule`
+        that makes the pooled delay from every ball's anchored flights (None: the mean of
+        the flights' delays) and the frames each flight is anchored on.
 
     Attributes
     ----------
@@ -318,6 +344,7 @@ class CascadeBallView:
     def __init__(
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
         lead: float = 0.0, tracker: DelayTracker | None = None, offset: float = 0.0,
+        rule: DelayRule | None = None, anchor_frames: int = ANCHOR_FRAMES,
     ) -> None:  # fmt: skip
         need = "release" if isinstance(tracker, CorrectionTracker) else "mean_delay"
         if tracker is not None and mode != need:
@@ -330,10 +357,20 @@ class CascadeBallView:
         self.adjust: float | None = None
         #: the episode's delays found from the releases (mode ``"release"``; s)
         self.pool: list[float] = []
+        #: the episode's anchored flights of every ball (mode ``"release"`` with a rule)
+        self.anchors: list[AnchoredFlight] | None = [] if rule is not None else None
         self.estimators: list[FlightEstimator] = (
-            [PooledReleaseEstimator(gravity, self.pool, delay, offset) for _ in range(balls)]
+            [
+                PooledReleaseEstimator(
+                    gravity, self.pool, delay, offset, rule, self.anchors, anchor_frames
+                )
+                for _ in range(balls)
+            ]
             if mode == "release"
-            else [FlightEstimator(mode, gravity, delay=delay) for _ in range(balls)]
+            else [
+                FlightEstimator(mode, gravity, delay=delay, rule=rule, anchor_frames=anchor_frames)
+                for _ in range(balls)
+            ]
         )
         self.gravity = float(gravity)
         self.height = float(height)
@@ -348,6 +385,8 @@ class CascadeBallView:
         each ball in flight at the start known by its ``nominal`` (unscattered) state."""
         self.priors = []
         self.pool.clear()
+        if self.anchors is not None:
+            self.anchors.clear()
         if self.adjust is not None:  # no adjustment before the first action
             self.adjust = 0.0
             self._retime(range(len(self.estimators)))
@@ -419,7 +458,7 @@ class CascadeBallView:
     def delay_estimate(self) -> float | None:
         """s, the pooled delay found from the episode's releases so far (mode
         ``"release"``), None before the first (and for the other modes)."""
-        return float(np.mean(self.pool)) if self.pool else None
+        return self.estimators[0].delay_estimate if self.estimators else None
 
     def ball(self, i: int, now: float) -> tuple[FloatArray, FloatArray]:
         """Flying ball ``i``'s ``(position, velocity)`` at ``now`` as the juggler is told:

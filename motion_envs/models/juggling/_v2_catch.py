@@ -42,7 +42,7 @@ import numpy as np
 
 from motion_envs._typing import FloatArray
 from motion_envs.datasets.juggling import JugglingState
-from motion_envs.models.juggling._camera import FlightEstimator
+from motion_envs.models.juggling._camera import ANCHOR_FRAMES, DelayRule, FlightEstimator
 from motion_envs.models.juggling._delay_tracker import CorrectionTracker, DelayTracker
 from motion_envs.models.juggling._juggler import AnalyticJuggler
 from motion_envs.models.juggling._v2_levels import V2_CONTROLLERS, V2Controller
@@ -253,13 +253,16 @@ def make_v2_controller(
     mean_delay: float,
     tracker: DelayTracker | None = None,
     estimate_offset: float = 0.0,
+    rule: DelayRule | None = None,
+    anchor_frames: int = ANCHOR_FRAMES,
 ) -> V2Controller:
     """The controller ``name`` (one of :data:`V2_CONTROLLERS`) on a variant of
     ``juggler`` (its episodes never touch ``juggler``); ``juggler_delay_tracker`` needs
     its ``tracker`` (the other controllers take none). ``estimate_offset`` (s, may be
     negative) is added to the release-anchored estimate where the frames are placed
     (:class:`~motion_envs.models.juggling.FlightEstimator`'s ``offset``; the estimators
-    of mode ``"release"`` only)."""
+    of mode ``"release"`` only), as are a delay ``rule`` and the ``anchor_frames``
+    (:class:`~motion_envs.models.juggling.FlightEstimator`'s)."""
     if name not in V2_CONTROLLERS:
         raise ValueError(f"controller must be one of {list(V2_CONTROLLERS)}; got {name!r}")
     correction = name == "juggler_estimator_tracker_catch"
@@ -271,8 +274,9 @@ def make_v2_controller(
             f"'juggler_estimator_tracker_catch' (a CorrectionTracker) only; got {name!r}"
         )
     estimator = FlightEstimator(
-        V2_CONTROLLERS[name], gravity, delay=mean_delay, offset=estimate_offset
-    )
+        V2_CONTROLLERS[name], gravity, delay=mean_delay, offset=estimate_offset, rule=rule,
+        anchor_frames=anchor_frames,
+    )  # fmt: skip
     if isinstance(tracker, CorrectionTracker):
         return EstimatorTrackerController(juggler.variant(), estimator, CATCH_PLANS[name], tracker)
     if tracker is not None:
