@@ -28,12 +28,15 @@ in words. With
 ``--every-row`` the agent is also paired with EVERY non-oracle row, the issue's last
 target (each simple hand-written row below the agent), not only with the row validation
 chose; ``--keep-base`` lets the base (``w = 0``) compete in the validation choice of
-the kept generation; ``--rescore JSON ...`` scores the kept policies of earlier runs
-without training.
+the kept generation, and ``--keep-margin M`` makes a generation replace it only when
+its paired validation gain exceeds M standard errors (the winner's curse; the gain and
+its standard error are written per seed); ``--rescore JSON ...`` scores the kept
+policies of earlier runs without training.
 
     python experiments/catch_timing_agents.py [--blocks v2-drift cascade3-medium]
         [--seeds 0 1 2] [--generations 10] [--population 10] [--batch 16]
         [--memory] [--base {tracker,estimator}] [--test-episodes 100] [--every-row]
+        [--keep-base [--keep-margin 1.0]]
         [--rescore JSON ...] [--out DIR]
 
 Writes ``DIR/catch_timing_agents.json`` (with the base it played on) and
@@ -361,6 +364,14 @@ def main(argv: list[str] | None = None) -> int:
         help="the base (w = 0) competes in the validation choice of the kept generation",
     )
     ap.add_argument(
+        "--keep-margin",
+        type=float,
+        default=0.0,
+        metavar="M",
+        help="with --keep-base: a generation replaces the base only when its paired "
+        "validation gain exceeds M standard errors (default 0: any gain)",
+    )
+    ap.add_argument(
         "--every-row",
         action="store_true",
         help="also pair the agent with every non-oracle row (Juggling-v2 replays them all)",
@@ -383,9 +394,13 @@ def main(argv: list[str] | None = None) -> int:
 
     from motion_envs._io import atomic_write_text
 
-    settings = CEMSettings(generations=args.generations, population=args.population,
-                           batch=args.batch, val_episodes=args.val_episodes,
-                           memory=args.memory, keep_base=args.keep_base)  # fmt: skip
+    try:
+        settings = CEMSettings(generations=args.generations, population=args.population,
+                               batch=args.batch, val_episodes=args.val_episodes,
+                               memory=args.memory, keep_base=args.keep_base,
+                               keep_margin=args.keep_margin)  # fmt: skip
+    except ValueError as err:
+        ap.error(str(err))
     args.out.mkdir(parents=True, exist_ok=True)
     doc: dict[str, Any] = {"machine": machine(), "settings": vars(settings),
                            "timing_scale": TIMING_SCALE, "base": args.base,
@@ -417,6 +432,7 @@ def main(argv: list[str] | None = None) -> int:
                            "train_cpu_s": time.process_time() - t0}  # fmt: skip
                 if settings.keep_base:  # the base's validation score, played by the learner
                     trained["base_score"] = tr.base_score
+                    trained["val_gain_over_base"] = {"value": tr.gain[0], "se": tr.gain[1]}
             t0 = time.process_time()
             run = score_test(rows, trained["weights"], args.test_episodes, args.memory)
             run.update(seed=seed, **trained, test_cpu_s=time.process_time() - t0)

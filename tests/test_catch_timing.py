@@ -11,6 +11,13 @@ import pytest
 from baselines.agents import catch_timing as ct
 from motion_envs.datasets.juggling import SPLIT_SEEDS
 
+CASCADE_KW = {
+    "level": "easy",
+    "controller": "juggler_delay_tracker",
+    "timing_scale": 0.1,
+    "observe_task_error": True,
+    "max_catches": 2,
+}
 V2_KW = {
     "level": "easy",
     "controller": "juggler_delay_tracker",
@@ -206,3 +213,53 @@ def test_the_memory_sums_the_felt_timings_of_a_real_episode() -> None:
         policy(obs[None])  # the last observation: its catch is counted too
         assert policy.felt.total[0, 0] == pytest.approx(total, abs=1e-6)
     assert checked >= 3
+
+
+def test_paired_gain_of_catches_is_the_paired_t_tests() -> None:
+    """Cascades: the mean paired difference and its standard error, as scipy's paired t
+    test has them (t = mean / se)."""
+    from scipy import stats
+
+    rng = np.random.default_rng(4)
+    a, b = rng.poisson(4, 40), rng.poisson(3, 40)
+    gain, se = ct.paired_gain((a, np.ones(40, np.int64)), (b, np.ones(40, np.int64)), True)
+    assert gain == pytest.approx(float(np.mean(a - b)))
+    assert gain / se == pytest.approx(float(stats.ttest_rel(a, b).statistic))
+
+
+def test_paired_gain_of_a_pooled_rate_hand_worked() -> None:
+    """One ball, two episodes: played 3/4 and 1/2 (R = 4/6), base 2/4 and 1/2 (R' = 3/6);
+    influences (c - R t) / mean t: (1/3, -1/3) / 3 and (0, 0) / 3; gain 1/6; the paired
+    differences (1/9, -1/9) have sd sqrt(2)/9, so se = 1/9."""
+    gain, se = ct.paired_gain((np.array([3, 1]), np.array([4, 2])),
+                              (np.array([2, 1]), np.array([4, 2])), False)  # fmt: skip
+    assert gain == pytest.approx(1 / 6) and se == pytest.approx(1 / 9)
+    with pytest.raises(ValueError, match="paired"):
+        ct.paired_gain((np.array([1]), np.array([1])), (np.array([1, 2]), np.array([1, 2])), True)
+
+
+def test_keep_margin_keeps_the_base_within_the_noise(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A best generation above the base on validation by less than the margin's standard
+    errors loses to the base; with margin 0 the same run keeps the generation."""
+
+    def fake(env_id: str, kwargs: Any, policy: ct.TimingPolicy, seeds: np.ndarray) -> Any:
+        ones = np.ones(len(seeds), np.int64)
+        if seeds.min() < SPLIT_SEEDS["val"]:  # training: every candidate alike
+            return 10 * ones, ones
+        noise = np.random.default_rng(seeds).integers(-3, 4, len(seeds))  # +-3 catches
+        lift = 1 if np.abs(policy.weights).sum() > 0 else 0  # a learned w: +1 on every other
+        return 10 + noise + lift * (np.arange(len(seeds)) % 2), ones
+
+    monkeypatch.setattr(ct, "play_scores", fake)
+    base = ct.CEMSettings(generations=2, population=4, elite=2, batch=2, val_episodes=20,
+                          keep_base=True)  # fmt: skip
+    any_gain = ct.train_timing_cem("MotionEnvs/Cascade-v1", CASCADE_KW, base, seed=0)
+    assert any_gain.kept >= 0 and any_gain.gain[0] == pytest.approx(0.5)
+    margin = ct.train_timing_cem(
+        "MotionEnvs/Cascade-v1", CASCADE_KW, replace(base, keep_margin=50.0), seed=0
+    )
+    assert margin.kept == -1 and margin.gain == any_gain.gain
+    with pytest.raises(ValueError, match="keep_base"):
+        ct.CEMSettings(keep_margin=1.0)
+    with pytest.raises(ValueError, match="keep_margin"):
+        ct.CEMSettings(keep_base=True, keep_margin=-1.0)

@@ -45,7 +45,11 @@ generation with the best validation score is kept (the earliest on ties), as a
 checkpoint is chosen; test seeds are never played here. With ``keep_base`` the base
 (``w = 0``, the controller alone) is scored on the same validation episodes first and
 competes in that choice, winning ties: a learner that finds nothing better on
-validation keeps the base instead of a generation validation scores below it.
+validation keeps the base instead of a generation validation scores below it. With a
+``keep_margin`` of ``m`` standard errors the best generation replaces the base only when
+its paired validation gain over the base exceeds ``m`` standard errors of that gain
+(:func:`paired_gain`): the best of several generations on the same validation episodes
+is biased upward (the winner's curse), and a gain within the noise keeps the base.
 """
 
 from __future__ import annotations
@@ -179,11 +183,18 @@ class CEMSettings:
     memory: bool = False
     #: the base (``w = 0``) competes in the validation choice (module docstring)
     keep_base: bool = False
+    #: standard errors of the paired validation gain a generation needs over the base
+    #: to replace it (with ``keep_base``; 0: any gain; module docstring)
+    keep_margin: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("generations", "population", "elite", "batch", "val_episodes"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1; got {getattr(self, name)!r}")
+        if not (math.isfinite(self.keep_margin) and self.keep_margin >= 0):
+            raise ValueError(f"keep_margin must be finite and >= 0; got {self.keep_margin!r}")
+        if self.keep_margin and not self.keep_base:
+            raise ValueError("keep_margin needs keep_base (the base it is a margin over)")
         if self.elite > self.population:
             raise ValueError(f"elite must be <= population; got {self.elite} > {self.population}")
         if not (self.sigma > 0 and 0 < self.min_sigma <= self.sigma and 0 <= self.smoothing < 1):
@@ -238,6 +249,33 @@ def block_score(catches: NDArray[np.int64], tosses: NDArray[np.int64], cascade: 
     return float(catches.sum() / max(int(tosses.sum()), 1))
 
 
+def paired_gain(
+    played: tuple[NDArray[np.int64], NDArray[np.int64]],
+    base: tuple[NDArray[np.int64], NDArray[np.int64]],
+    cascade: bool,
+) -> tuple[float, float]:
+    r"""``(gain, standard error)`` of :func:`block_score` of ``played`` over ``base``, two
+    ``(catches, tosses)`` on the same episodes (paired).
+
+    Cascades: the mean of ``d_i = c_i - c'_i`` and ``sd(d) / sqrt(n)``. One ball (the
+    pooled catch rate ``R = \sum c / \sum t``), by the delta method: each episode's
+    influence ``e_i = (c_i - R t_i) / \bar t``, the gain ``R - R'`` and the standard error
+    ``sd(e - e') / sqrt(n)``. ``sd`` with ``n - 1``; 0 for one episode."""
+    c1, t1 = (np.asarray(a, dtype=np.float64) for a in played)
+    c0, t0 = (np.asarray(a, dtype=np.float64) for a in base)
+    if not (c1.shape == t1.shape == c0.shape == t0.shape and c1.ndim == 1 and len(c1)):
+        raise ValueError(f"need paired 1-d scores of one length; got {c1.shape}, {c0.shape}")
+    if cascade:
+        d = c1 - c0
+        gain = float(d.mean())
+    else:
+        r1, r0 = c1.sum() / max(t1.sum(), 1.0), c0.sum() / max(t0.sum(), 1.0)
+        d = (c1 - r1 * t1) / max(t1.mean(), 1e-12) - (c0 - r0 * t0) / max(t0.mean(), 1e-12)
+        gain = float(r1 - r0)
+    se = float(d.std(ddof=1) / math.sqrt(len(d))) if len(d) > 1 else 0.0
+    return gain, se
+
+
 @dataclass
 class TimingTraining:
     """One learner's run: the mean ``w`` after every generation, its validation score,
@@ -250,6 +288,9 @@ class TimingTraining:
     train_scores: list[float] = field(default_factory=list)
     kept: int = 0
     base_score: float = math.nan
+    #: the kept-or-not generation's paired validation gain over the base and its
+    #: standard error (:func:`paired_gain`; NaN without ``keep_base``)
+    gain: tuple[float, float] = (math.nan, math.nan)
 
     @property
     def weights(self) -> FloatArray:
@@ -289,9 +330,12 @@ def train_timing_cem(
     out = TimingTraining()
     val_seeds = SPLIT_SEEDS["val"] + np.arange(settings.val_episodes, dtype=np.int64)
     s = settings
+    base_played: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None
+    val_played: list[tuple[NDArray[np.int64], NDArray[np.int64]]] = []
     if s.keep_base:
         zero = TimingPolicy(np.zeros(p), hands, action_dim, mem)
-        out.base_score = block_score(*play_scores(env_id, kwargs, zero, val_seeds), cascade)
+        base_played = play_scores(env_id, kwargs, zero, val_seeds)
+        out.base_score = block_score(*base_played, cascade)
     for g in range(s.generations):
         cand = mean + std * rng.standard_normal((s.population, p))
         base = SPLIT_SEEDS["train"] + seed * 10**6 + g * s.batch
@@ -305,18 +349,20 @@ def train_timing_cem(
         elite = cand[np.argsort(-scores, kind="stable")[: s.elite]]
         mean = s.smoothing * mean + (1 - s.smoothing) * elite.mean(axis=0)
         std = np.maximum(s.smoothing * std + (1 - s.smoothing) * elite.std(axis=0), s.min_sigma)
-        val = block_score(
-            *play_scores(
+        val_played.append(
+            play_scores(
                 env_id, kwargs, TimingPolicy(mean.copy(), hands, action_dim, mem), val_seeds
-            ),
-            cascade,
+            )
         )
+        val = block_score(*val_played[-1], cascade)
         out.means.append(mean.copy())
         out.val_scores.append(val)
         out.train_scores.append(float(np.sort(scores)[::-1][: s.elite].mean()))
         if progress is not None:
             progress(g, out.train_scores[-1], val)
     out.kept = int(np.argmax(out.val_scores))  # the first of the best
-    if s.keep_base and out.base_score >= out.val_scores[out.kept]:  # the base wins ties
-        out.kept = -1
+    if base_played is not None:  # the base wins ties, and gains within the margin
+        out.gain = paired_gain(val_played[out.kept], base_played, cascade)
+        if out.base_score >= out.val_scores[out.kept] or out.gain[0] <= s.keep_margin * out.gain[1]:
+            out.kept = -1
     return out
