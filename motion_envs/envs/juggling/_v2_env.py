@@ -498,8 +498,7 @@ class JugglingV2Env(OneBallEnv):
         if isinstance(controller, DelayTrackerController):
             controller.retell()
         else:
-            controller.estimator.offset = self.delay_offset + self._adjust
-            controller.estimator._fitted = False
+            controller.estimator.tell(offset=self.delay_offset + self._adjust)
 
     def _add_info(self, info: dict[str, Any], terminated: bool) -> None:
         """At a catch its ``task_error`` and ``catch_speed``; at a drop its ``miss_error``

@@ -484,6 +484,16 @@ class FlightEstimator:
             self.drag, self.true_delay = float(drag), float(delay)
             self._fitted = False
 
+    def tell(self, *, delay: float | None = None, offset: float | None = None) -> None:
+        """A new told ``delay`` (the fixed delay: ``"mean_delay"``'s, a pooled estimator's
+        prior) and/or ``offset`` (on the release-anchored estimate), used from the next
+        fit on (a tracker's or an agent's timing entry, latched at a release)."""
+        if delay is not None:
+            self.fixed_delay = float(delay)
+        if offset is not None:
+            self.offset = float(offset)
+        self._fitted = False
+
     def released(
         self, time: float, x: float, z: float, velocity: tuple[float, float] = (0.0, 0.0)
     ) -> None:

@@ -423,21 +423,18 @@ class CascadeBallView:
         for i in range(len(self.estimators)) if balls is None else balls:
             est = self.estimators[i]
             if correction:
-                est.offset = self.offset + told
-                est.fixed_delay = max(self.prior + told, 0.0)
+                est.tell(delay=max(self.prior + told, 0.0), offset=self.offset + told)
             else:
-                est.fixed_delay = told
-            est._fitted = False
+                est.tell(delay=told)
 
     def _retime(self, balls: Iterable[int]) -> None:
         """The release estimators of ``balls`` told the offset ``offset + adjust`` and the
         prior ``delay + adjust`` (at least 0; the class's ``adjust``)."""
         assert self.adjust is not None
         for i in balls:
-            est = self.estimators[i]
-            est.offset = self.offset + self.adjust
-            est.fixed_delay = max(self.prior + self.adjust, 0.0)
-            est._fitted = False
+            self.estimators[i].tell(
+                delay=max(self.prior + self.adjust, 0.0), offset=self.offset + self.adjust
+            )
 
     def record(self, true: CascadeState, frames: list[list[CameraFrame]]) -> None:
         """After a control period: each ball released in it starts a new flight (from its

@@ -208,8 +208,7 @@ class DelayTrackerController(CatchPlanController):
         self._tell()
 
     def _tell(self) -> None:
-        self.estimator.fixed_delay = self.tracker.told
-        self.estimator._fitted = False
+        self.estimator.tell(delay=self.tracker.told)
 
     def retell(self) -> None:
         """The tracker's told delay (its estimate, offset and an agent's ``adjust``) to
@@ -242,8 +241,7 @@ class EstimatorTrackerController(DelayTrackerController):
     tracker: CorrectionTracker
 
     def _tell(self) -> None:
-        self.estimator.offset = self.tracker.told
-        self.estimator._fitted = False
+        self.estimator.tell(offset=self.tracker.told)
 
 
 def make_v2_controller(
