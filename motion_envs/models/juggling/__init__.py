@@ -19,7 +19,9 @@ The public names of small private modules, one concern each:
 * ``_camera``: how Juggling-v2 sees the ball (:class:`CameraSensor`: positions at a
   camera rate, a hidden delay with jitter, drops, occlusion) and the flight estimators
   fed from it (:class:`FlightEstimator`, :func:`drag_flight`; the gaze latency,
-  :func:`eccentricity`); ``_v2_levels``:
+  :func:`eccentricity`); ``_pooled_delay``: the release-anchored delay fitted to all of an
+  episode's flights at once (:func:`pooled_flight_delay`, a :class:`DelayRule`);
+  ``_v2_levels``:
   Juggling-v2's levels (:data:`V2_LEVELS`) and controllers (:class:`V2Controller`);
   ``_cascade_v1``: Cascade-v1's view of the balls through those cameras and estimators
   (:class:`CascadeBallView`, :data:`CASCADE_V1_CONTROLLERS`; the delay estimator
@@ -204,6 +206,11 @@ from motion_envs.models.juggling._patterns import (
     pattern_tempo,
     register_pattern,
 )
+from motion_envs.models.juggling._pooled_delay import (
+    parabolic_minimum,
+    pooled_flight_delay,
+    pooled_residuals,
+)
 from motion_envs.models.juggling._run import (
     CycleResult,
     cycle_rng,
@@ -361,6 +368,7 @@ __all__ = [
     "make_v2_controller",
     "mean_flight_delay",
     "nearest_palm",
+    "parabolic_minimum",
     "pattern_controller",
     "pattern_likeness",
     "pattern_plan",
@@ -372,6 +380,8 @@ __all__ = [
     "phase_conditions",
     "plan_catch",
     "planned_catch",
+    "pooled_flight_delay",
+    "pooled_residuals",
     "predict_forward",
     "register_pattern",
     "release_residuals",
