@@ -22,7 +22,10 @@ can be replayed alone and paired with them on the same test seeds.
   it (:func:`~baselines.juggling_bench.cascade_v1.choose_estimator_offset`; its table
   in ``estimator_offset_val_mean_catches``; the 0 ms candidate, ``delay_estimator_catch``
   itself, is checked against ``DIR``'s validation mean of that row,
-  ``zero_offset_equals_kept_val``). A row ``DIR`` holds is compared with its kept
+  ``zero_offset_equals_kept_val``); ``pooled_estimator_catch`` likewise first gets its
+  anchor frames chosen on the validation seeds
+  (:func:`~baselines.juggling_bench.cascade_v1.choose_pooled_anchor`; its table in
+  ``pooled_val_mean_catches``). A row ``DIR`` holds is compared with its kept
   episodes (``equals_kept``: the replay plays what the bench played);
 * ``--replay DIR --kept``: the same pairing of ``DIR``'s own episodes of ``--row``,
   nothing played (a bench run with the row in it; its summary, with the hand
@@ -54,11 +57,13 @@ from baselines.juggling_bench.cascade_v1 import (
     _players,
     cascade_v1_episodes,
     choose_estimator_offset,
+    choose_pooled_anchor,
     row_summary,
     run_cascade_v1,
 )
-from baselines.juggling_bench.v2 import offset_key
+from baselines.juggling_bench.v2 import anchor_key, offset_key
 from motion_envs._io import atomic_write_text
+from motion_envs.models.juggling import ANCHOR_FRAMES
 
 
 def _episodes_doc(eps: CascadeEpisodes) -> dict[str, list[Any]]:
@@ -121,6 +126,14 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
                 if zero is None
                 else est_means[offset_key(0.0)] == zero,
             }
+        pooled_anchor = lv.get("pooled_anchor_frames", ANCHOR_FRAMES)
+        if row == "pooled_estimator_catch" and "pooled_anchor_frames" not in lv and not kept_row:
+            pooled_anchor, pooled_means = choose_pooled_anchor(level, config)
+            val_means[row] = pooled_means[anchor_key(pooled_anchor)]
+            chosen = {
+                "pooled_anchor_frames": pooled_anchor,
+                "pooled_val_mean_catches": pooled_means,
+            }
         if kept_row:
             if row not in kept[level]:
                 raise ValueError(f"{folder}: no kept episodes of row {row!r} on {level}")
@@ -128,10 +141,10 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
         else:
             players = _players(
                 level, config, lv["late_offset_s"], tuple(lv["constant"]),
-                estimator_offset=est_offset,
+                estimator_offset=est_offset, pooled_anchor=pooled_anchor,
             )  # fmt: skip
-            ctl, policy, off, gain = players[row]
-            kwargs = _kwargs(level, config, ctl, off, gain)
+            ctl, policy, off, gain, extra = players[row]
+            kwargs = _kwargs(level, config, ctl, off, gain, extra)
             new = cascade_v1_episodes(policy, kwargs, "test", seeds.size)
             if not np.array_equal(new.seeds, seeds):
                 raise ValueError(f"{folder}: the kept test seeds differ from the replayed ones")
@@ -190,6 +203,10 @@ def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
         print(f"  estimate's offset chosen on validation: {got['estimator_offset_s'] * 1000:+.0f}"
               f" ms (validation means {means}; the 0 ms candidate equals the kept "
               f"delay_estimator_catch's: {got['zero_offset_equals_kept_val']})")  # fmt: skip
+    if "pooled_anchor_frames" in got:
+        means = {k: round(v, 2) for k, v in got["pooled_val_mean_catches"].items()}
+        print(f"  pooled estimate's anchor frames chosen on validation: "
+              f"{got['pooled_anchor_frames']} (validation means {means})")  # fmt: skip
 
 
 def main() -> None:

@@ -215,6 +215,7 @@ def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
         "juggler_mean_delay", "late_meeting", "mean_delay_catch", "delay_estimator",
         "delay_estimator_catch", "estimator_offset_catch", "random", "task_error_ilc",
         "delay_tracker", "gaze_estimator_catch", "estimator_tracker_catch",
+        "pooled_estimator_catch",
     }  # fmt: skip
     assert set(level["val_catch_rates"]) == set(level["rows"]) - {"oracle", "oracle_catch"}
     assert set(level["oracle_catch_minus_rows"]) == set(level["rows"]) - {"oracle_catch"}

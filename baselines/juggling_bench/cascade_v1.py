@@ -73,6 +73,14 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   most mean catches before the first drop on VALIDATION episodes
   (:func:`choose_estimator_tracker`; ``(0, 0)`` is ``delay_estimator_catch``); a
   competitor;
+* ``pooled_estimator_catch``: ``delay_estimator_catch`` whose pooled delay is fitted to
+  all the episode's anchored flights of every ball at once (the env's ``delay_rule``
+  :func:`~motion_envs.models.juggling.pooled_flight_delay`: one least-squares delay,
+  refined below the 5 ms grid, instead of the mean of each flight's grid delay), each
+  flight anchored on its first ``anchor_frames`` frames, the number of Juggling-v2's
+  :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` (declared before any run) with
+  the most mean catches before the first drop on VALIDATION episodes
+  (:func:`choose_pooled_anchor`); no offset; a competitor;
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -85,7 +93,7 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   then scored on validation like every other row (``ilc=False``: not played).
 
 Every choice (the constant, the late offset, the tracker's pair, the estimate's offset,
-the estimate's tracker's pair;
+the estimate's tracker's pair, the pooled estimate's anchor frames;
 the best non-oracle row, by mean catches before the first drop; ties: the first in grid or
 row order) is made on
 ``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before any test seed is
@@ -132,7 +140,7 @@ from baselines.juggling_bench.cascade import CascadeEpisodes, summary
 from baselines.juggling_bench.cascade_v1_view import FRESH_FRAME, catching_velocities
 from baselines.juggling_bench.grid_choice import best_on_grid
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS, episode_seeds
-from motion_envs.models.juggling import CASCADE_V1_LEVELS, V2_LEVELS, pattern_spec
+from motion_envs.models.juggling import ANCHOR_FRAMES, CASCADE_V1_LEVELS, V2_LEVELS, pattern_spec
 
 __all__ = [
     "CASCADE_V1_ENV_ID",
@@ -152,6 +160,7 @@ __all__ = [
     "choose_estimator_offset",
     "choose_estimator_tracker",
     "choose_late_offset",
+    "choose_pooled_anchor",
     "choose_tracker",
     "deviation_note",
     "plot_cascade_v1",
@@ -190,6 +199,7 @@ ROWS = (
     "task_error_ilc",
     "delay_tracker",
     "estimator_tracker_catch",
+    "pooled_estimator_catch",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -270,8 +280,12 @@ def cascade_v1_episodes(
 
 
 def _kwargs(
-    level: str, config: CascadeV1Config, controller: str, offset: float = 0.0, gain: float = 0.0
-) -> dict[str, Any]:
+    level: str, config: CascadeV1Config, controller: str, offset: float = 0.0,
+    gain: float = 0.0, extra: dict[str, Any] | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """The env keywords of a row: ``offset`` its ``delay_offset``, ``gain`` its
+    ``tracker_gain`` (each left out at 0), ``extra`` any others (the pooled row's
+    ``delay_rule`` and ``anchor_frames``)."""
     out: dict[str, Any] = {
         "level": level,
         "pattern": config.pattern,
@@ -283,6 +297,7 @@ def _kwargs(
         out["delay_offset"] = offset
     if gain:
         out["tracker_gain"] = gain
+    out.update(extra or {})
     return out
 
 
@@ -353,6 +368,23 @@ def choose_estimator_tracker(
 
     choice, means = best_on_grid(v2.ESTIMATOR_TRACKER_GRID, mean, v2.tracker_key)
     return (float(choice[0]), float(choice[1])), means
+
+
+def choose_pooled_anchor(
+    level: str, config: CascadeV1Config, play: Play = cascade_v1_episodes
+) -> tuple[int, dict[str, float]]:
+    """The anchor frames of :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` for
+    ``pooled_estimator_catch`` (``juggler_delay_estimator_catch`` with the pooled delay
+    rule) with the most mean catches before the first drop on ``config.val_episodes``
+    VALIDATION episodes (ties: the first, the fewest), and every candidate's validation
+    mean (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def mean(frames: int) -> float:
+        kw = _kwargs(level, config, v2.ESTIMATOR_CONTROLLER, extra=v2.pooled_kwargs(frames))
+        return _val_mean(play, None, kw, config)
+
+    frames, means = best_on_grid(v2.POOLED_ANCHOR_FRAMES, mean, v2.anchor_key)
+    return int(frames), means
 
 
 @dataclass(frozen=True)
@@ -426,32 +458,42 @@ def _players(
     tracker: tuple[float, float] = (0.0, 0.0),
     estimator_offset: float = 0.0,
     estimator_tracker: tuple[float, float] = (0.0, 0.0),
-) -> dict[str, tuple[str, Policy, float, float]]:
-    """Each row's controller, policy, delay offset and tracker gain (``offset`` late
-    meeting's, ``estimator_offset`` the estimate's, ``tracker`` and ``estimator_tracker``
-    the ``(gain, offset)`` pairs of the delay tracker and of the estimate's tracker)."""
+    pooled_anchor: int = ANCHOR_FRAMES,
+) -> dict[str, tuple[str, Policy, float, float, dict[str, Any]]]:
+    """Each row's controller, policy, delay offset, tracker gain and other env keywords
+    (``offset`` late meeting's, ``estimator_offset`` the estimate's, ``tracker`` and
+    ``estimator_tracker`` the ``(gain, offset)`` pairs of the delay tracker and of the
+    estimate's tracker, ``pooled_anchor`` the pooled estimate's anchor frames)."""
     delay = V2_LEVELS[level].mean_delay
     velocity = CascadeVelocityTimesDelay(pattern_spec(config.pattern).balls, delay, RESIDUAL_SCALE)
     return {
-        "juggler": ("juggler", None, 0.0, 0.0),
-        "oracle": ("juggler_oracle", None, 0.0, 0.0),
-        "oracle_catch": ("juggler_oracle_catch", None, 0.0, 0.0),
-        "best_constant": ("juggler", _constant_policy(constant), 0.0, 0.0),
-        "velocity_x_mean_delay": ("juggler", velocity, 0.0, 0.0),
-        "juggler_mean_delay": ("juggler_mean_delay", None, 0.0, 0.0),
-        "late_meeting": ("juggler_mean_delay", None, offset, 0.0),
-        "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0, 0.0),
-        "delay_estimator": ("juggler_delay_estimator", None, 0.0, 0.0),
-        "delay_estimator_catch": (v2.ESTIMATOR_CONTROLLER, None, 0.0, 0.0),
-        "estimator_offset_catch": (v2.ESTIMATOR_CONTROLLER, None, estimator_offset, 0.0),
-        "fixed_point": ("fixed_point", None, 0.0, 0.0),
-        "random": ("juggler", "random", 0.0, 0.0),
-        "delay_tracker": ("juggler_delay_tracker", None, tracker[1], tracker[0]),
+        "juggler": ("juggler", None, 0.0, 0.0, {}),
+        "oracle": ("juggler_oracle", None, 0.0, 0.0, {}),
+        "oracle_catch": ("juggler_oracle_catch", None, 0.0, 0.0, {}),
+        "best_constant": ("juggler", _constant_policy(constant), 0.0, 0.0, {}),
+        "velocity_x_mean_delay": ("juggler", velocity, 0.0, 0.0, {}),
+        "juggler_mean_delay": ("juggler_mean_delay", None, 0.0, 0.0, {}),
+        "late_meeting": ("juggler_mean_delay", None, offset, 0.0, {}),
+        "mean_delay_catch": ("juggler_mean_delay_catch", None, 0.0, 0.0, {}),
+        "delay_estimator": ("juggler_delay_estimator", None, 0.0, 0.0, {}),
+        "delay_estimator_catch": (v2.ESTIMATOR_CONTROLLER, None, 0.0, 0.0, {}),
+        "estimator_offset_catch": (v2.ESTIMATOR_CONTROLLER, None, estimator_offset, 0.0, {}),
+        "fixed_point": ("fixed_point", None, 0.0, 0.0, {}),
+        "random": ("juggler", "random", 0.0, 0.0, {}),
+        "delay_tracker": ("juggler_delay_tracker", None, tracker[1], tracker[0], {}),
         "estimator_tracker_catch": (
             v2.ESTIMATOR_TRACKER_CONTROLLER,
             None,
             estimator_tracker[1],
             estimator_tracker[0],
+            {},
+        ),
+        "pooled_estimator_catch": (
+            v2.ESTIMATOR_CONTROLLER,
+            None,
+            0.0,
+            0.0,
+            v2.pooled_kwargs(pooled_anchor),
         ),
     }
 
@@ -511,6 +553,7 @@ def run_cascade_v1(
     tracker_chooser: Any = choose_tracker,
     estimator_offset_chooser: Any = choose_estimator_offset,
     estimator_tracker_chooser: Any = choose_estimator_tracker,
+    pooled_chooser: Any = choose_pooled_anchor,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed). ``keep``, when given,
@@ -526,7 +569,9 @@ def run_cascade_v1(
         tracker, tracker_means = tracker_chooser(level, config, play)
         est_offset, est_means = estimator_offset_chooser(level, config, play)
         est_tracker, est_tracker_means = estimator_tracker_chooser(level, config, play)
-        players = _players(level, config, offset, constant, tracker, est_offset, est_tracker)
+        pooled_anchor, pooled_means = pooled_chooser(level, config, play)
+        chosen = (offset, constant, tracker, est_offset, est_tracker, pooled_anchor)
+        players = _players(level, config, *chosen)
         # the grids' validation plays reused where the choosers made them
         reuse = {
             "juggler": (constant_means, v2.grid_key((0.0, 0.0))),
@@ -537,9 +582,10 @@ def run_cascade_v1(
             "delay_estimator_catch": (est_means, v2.offset_key(0.0)),
             "estimator_offset_catch": (est_means, v2.offset_key(est_offset)),
             "estimator_tracker_catch": (est_tracker_means, v2.tracker_key(est_tracker)),
+            "pooled_estimator_catch": (pooled_means, v2.anchor_key(pooled_anchor)),
         }
         val_means: dict[str, float] = {}
-        for name, (ctl, policy, off, gain) in players.items():
+        for name, (ctl, policy, off, gain, extra) in players.items():
             if name in REFERENCES:
                 continue
             means, key = reuse.get(name, ({}, ""))
@@ -547,7 +593,7 @@ def run_cascade_v1(
                 val_means[name] = means[key]
             else:
                 val_means[name] = _val_mean(
-                    play, policy, _kwargs(level, config, ctl, off, gain), config
+                    play, policy, _kwargs(level, config, ctl, off, gain, extra), config
                 )
         ilc = _train_ilc(level, config) if config.ilc else None
         if ilc is not None:
@@ -559,11 +605,11 @@ def run_cascade_v1(
         rival = max((r for r in ROWS if r in val_means and r != "delay_tracker"),
                     key=lambda r: val_means[r])  # fmt: skip
         played = {
-            name: play(policy, _kwargs(level, config, ctl, off, gain), "test", config.episodes)
+            name: play(
+                policy, _kwargs(level, config, ctl, off, gain, extra), "test", config.episodes
+            )
             # fresh players (no state is carried from the validation plays)
-            for name, (ctl, policy, off, gain) in _players(
-                level, config, offset, constant, tracker, est_offset, est_tracker
-            ).items()
+            for name, (ctl, policy, off, gain, extra) in _players(level, config, *chosen).items()
         }
         if ilc is not None:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -591,6 +637,8 @@ def run_cascade_v1(
                 "estimator_offset_val_mean_catches": est_means,
                 "estimator_tracker": {"gain": est_tracker[0], "offset_s": est_tracker[1]},
                 "estimator_tracker_val_mean_catches": est_tracker_means,
+                "pooled_anchor_frames": pooled_anchor,
+                "pooled_val_mean_catches": pooled_means,
                 "val_mean_catches": val_means,
                 "best_non_oracle": best,
                 "rows": rows,
@@ -612,6 +660,7 @@ def run_cascade_v1(
                 "estimator_tracker_catch_minus": v2.offset_row_minus(
                     played, best, _paired, "estimator_tracker_catch"
                 ),
+                "pooled_estimator_catch_minus": v2.pooled_row_minus(played, best, _paired),
             }
         )
         if ilc is not None:
@@ -731,6 +780,11 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
                 f"{v2.tracker_key((et['gain'], et['offset_s']))} (chosen on validation); "
                 f"{et_line} (mean catches)"
             )
+        if "pooled_estimator_catch_minus" in lv:
+            line = v2.pooled_row_line(
+                lv["pooled_estimator_catch_minus"], lv["pooled_anchor_frames"], "+.2f"
+            )
+            lines.append(f"{lv['level']:7s} {line} (mean catches)")
         if "ilc" in lv:
             ilc = lv["ilc"]
             lines.append(
@@ -755,7 +809,7 @@ def row_styles() -> tuple[dict[str, str], dict[str, Any]]:
     import matplotlib.pyplot as plt
 
     tab20 = plt.get_cmap("tab20")
-    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H1", strict=False))
+    markers = dict(zip(ROWS, "osP^D<>hvxpXd8H12", strict=False))
     return markers, {name: tab20((2 * i) % 20 + (2 * i) // 20) for i, name in enumerate(ROWS)}
 
 

@@ -67,6 +67,14 @@ unit action, the scale an agent is given):
   and offset the pair of :data:`ESTIMATOR_TRACKER_GRID` with the highest catch rate on
   the VALIDATION seeds (:func:`choose_estimator_tracker`; ``k = 0``, offset 0 is
   ``delay_estimator_catch`` itself); a competitor;
+* ``pooled_estimator_catch``: ``delay_estimator_catch`` whose delay is the POOLED estimate
+  (the env's ``delay_rule``
+  :func:`~motion_envs.models.juggling.pooled_flight_delay`: one least-squares delay fitted
+  to all the episode's anchored flights at once, refined below the 5 ms grid, instead of
+  the mean of each flight's grid delay) found from each flight's first ``anchor_frames``
+  frames, the number of :data:`POOLED_ANCHOR_FRAMES` (declared here before any run) with
+  the highest catch rate on the VALIDATION seeds (:func:`choose_pooled_anchor`); no
+  offset (the upper reference is told the exact delay, with no offset); a competitor;
 * ``gaze_estimator_catch``: the same catch plan on the hand-written gaze-aware estimator
   (``juggler_gaze_estimator_catch``: the latency ``d + k ecc`` with the delay ``d`` and
   the gaze slope ``k`` found from the releases, pooled over the episode's flights, each
@@ -80,13 +88,15 @@ unit action, the scale an agent is given):
 
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
 seed is played (tested with a spy): the constant, the late offset, the tracker's gain and
-offset, the estimate's offset, the estimate's tracker's gain and offset, and then the best
+offset, the estimate's offset, the estimate's tracker's gain and offset, the pooled
+estimate's anchor frames, and then the best
 non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; ties: the
 first in :data:`ROWS`; the
 constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
 grid's for ``juggler_mean_delay`` and ``late_meeting``, the tracker grid's for
 ``delay_tracker``, the estimate's offset grid's for ``delay_estimator_catch`` and
-``estimator_offset_catch``, the ILC row is scored on
+``estimator_offset_catch``, the anchor grid's for ``pooled_estimator_catch``, the ILC
+row is scored on
 validation after its training). Every row is then played on the TEST seeds
 (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
@@ -125,7 +135,7 @@ from baselines.juggling_bench.grid_choice import best_on_grid
 from baselines.juggling_bench.ilc import ILCConfig, TaskErrorILC
 from baselines.juggling_bench.levels import summary
 from motion_envs.datasets.juggling import SIMULATED_LABEL, SPLIT_SEEDS
-from motion_envs.models.juggling import V2_LEVELS
+from motion_envs.models.juggling import ANCHOR_FRAMES, V2_LEVELS, pooled_flight_delay
 
 __all__ = [
     "CONSTANT_GRID",
@@ -133,22 +143,27 @@ __all__ = [
     "ESTIMATOR_OFFSETS",
     "ESTIMATOR_TRACKER_GRID",
     "LATE_OFFSETS",
+    "POOLED_ANCHOR_FRAMES",
     "RESIDUAL_SCALE",
     "ROWS",
     "TRACKER_GRID",
     "V2Config",
     "VelocityTimesDelay",
+    "anchor_key",
     "check_v2_config",
     "choose_constant",
     "choose_estimator_offset",
     "choose_estimator_tracker",
     "choose_offset",
+    "choose_pooled_anchor",
     "choose_tracker",
     "frame_velocity",
     "grid_key",
     "offset_key",
     "offset_row_line",
     "offset_row_minus",
+    "pooled_kwargs",
+    "pooled_row_minus",
     "report_v2",
     "row_players",
     "run_v2",
@@ -188,6 +203,13 @@ TRACKER_GRID: tuple[tuple[float, float], ...] = tuple(
 #: the delay tracker's grid (:data:`TRACKER_GRID`, declared before any run of either),
 #: not re-tuned; ``(0, 0)`` is ``delay_estimator_catch``.
 ESTIMATOR_TRACKER_GRID: tuple[tuple[float, float], ...] = TRACKER_GRID
+#: ``pooled_estimator_catch``'s anchor frames (each flight's first frames the pooled delay
+#: is fitted to) tried on VALIDATION seeds, declared before any bench run of the row: the
+#: default 8 first (ties: the fewest, the earliest estimate), then 12, 16 and 20 (on 40
+#: VALIDATION episodes of Cascade-v1 three balls and Juggling-v2 medium and hard the first
+#: flight's estimate from 8 frames erred with an sd of 12-21 ms, from 16 of 5-9 ms, its
+#: mean within +4.5 ms: ``experiments/delay_estimate_error.py``).
+POOLED_ANCHOR_FRAMES: tuple[int, ...] = (8, 12, 16, 20)
 #: The rows, in the report's order.
 ROWS = (
     "juggler",
@@ -206,6 +228,7 @@ ROWS = (
     "delay_tracker",
     "gaze_estimator_catch",
     "estimator_tracker_catch",
+    "pooled_estimator_catch",
 )
 #: The references (given what the world hides): never a competitor, never chosen.
 REFERENCES = ("oracle", "oracle_catch")
@@ -414,6 +437,34 @@ def choose_estimator_tracker(
     return best_on_grid(ESTIMATOR_TRACKER_GRID, rate, tracker_key)
 
 
+def anchor_key(frames: int) -> str:
+    """An anchor frames' key in the validation tables (``"16 frames"``)."""
+    return f"{int(frames)} frames"
+
+
+def pooled_kwargs(frames: int) -> dict[str, Any]:
+    """The env keywords of ``pooled_estimator_catch`` with ``frames`` anchor frames: the
+    pooled delay rule (:func:`~motion_envs.models.juggling.pooled_flight_delay`)."""
+    return {"delay_rule": pooled_flight_delay, "anchor_frames": int(frames)}
+
+
+def choose_pooled_anchor(
+    level: str, config: V2Config, play: Play = juggling_episodes
+) -> tuple[int, dict[str, float]]:
+    """The anchor frames of :data:`POOLED_ANCHOR_FRAMES` for ``pooled_estimator_catch``
+    (``juggler_delay_estimator_catch`` with the pooled delay rule) with the highest catch
+    rate on ``config.val_episodes`` VALIDATION episodes (ties: the first, the fewest), and
+    every candidate's validation catch rate
+    (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+
+    def rate(frames: int) -> float:
+        kw = _kwargs(level, config, ESTIMATOR_CONTROLLER, pooled_kwargs(frames))
+        return _val_catch_rate(play, None, kw, config)
+
+    frames, rates = best_on_grid(POOLED_ANCHOR_FRAMES, rate, anchor_key)
+    return int(frames), rates
+
+
 def _estimate_offset(offset: float) -> dict[str, Any]:
     """The env keywords of the estimate's ``offset`` (none for 0: the row's own keywords)."""
     return {"delay_offset": float(offset)} if offset else {}
@@ -426,13 +477,14 @@ def row_players(
     tracker: tuple[float, float] = (0.0, 0.0),
     estimator_offset: float = 0.0,
     estimator_tracker: tuple[float, float] = (0.0, 0.0),
+    pooled_anchor: int = ANCHOR_FRAMES,
 ) -> dict[str, tuple[str, Policy | None, dict[str, Any]]]:
     """Every row of :data:`ROWS` but the trained ``task_error_ilc``: its controller,
     residual policy (None: the zero action) and extra env keywords, played with
     :func:`_kwargs`'s keywords; ``constant`` is :func:`choose_constant`'s choice,
     ``offset`` :func:`choose_offset`'s, ``tracker`` :func:`choose_tracker`'s,
-    ``estimator_offset`` :func:`choose_estimator_offset`'s and ``estimator_tracker``
-    :func:`choose_estimator_tracker`'s."""
+    ``estimator_offset`` :func:`choose_estimator_offset`'s, ``estimator_tracker``
+    :func:`choose_estimator_tracker`'s and ``pooled_anchor`` :func:`choose_pooled_anchor`'s."""
     delay = V2_LEVELS[level].mean_delay
     return {
         "juggler": ("juggler", None, {}),
@@ -462,6 +514,7 @@ def row_players(
             None,
             tracker_kwargs(estimator_tracker),
         ),
+        "pooled_estimator_catch": (ESTIMATOR_CONTROLLER, None, pooled_kwargs(pooled_anchor)),
     }
 
 
@@ -473,6 +526,7 @@ def run_v2(
     tracker_chooser: Any = choose_tracker,
     estimator_offset_chooser: Any = choose_estimator_offset,
     estimator_tracker_chooser: Any = choose_estimator_tracker,
+    pooled_chooser: Any = choose_pooled_anchor,
 ) -> dict[str, Any]:
     """Every level's rows (module docstring); JSON-ready. ``play`` and the choosers are
     for tests (the spy that proves the choices read no test seed)."""
@@ -485,6 +539,7 @@ def run_v2(
         tracker, tracker_rates = tracker_chooser(level, config, play)
         est_offset, est_rates = estimator_offset_chooser(level, config, play)
         est_tracker, est_tracker_rates = estimator_tracker_chooser(level, config, play)
+        pooled_anchor, pooled_rates = pooled_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
         # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
         # the grids' plays reused where the choosers made them.
@@ -497,8 +552,10 @@ def run_v2(
             "delay_estimator_catch": (est_rates, offset_key(0.0)),
             "estimator_offset_catch": (est_rates, offset_key(est_offset)),
             "estimator_tracker_catch": (est_tracker_rates, tracker_key(est_tracker)),
+            "pooled_estimator_catch": (pooled_rates, anchor_key(pooled_anchor)),
         }
-        players = row_players(level, constant, offset, tracker, est_offset, est_tracker)
+        chosen = (constant, offset, tracker, est_offset, est_tracker, pooled_anchor)
+        players = row_players(level, *chosen)
         val_catch: dict[str, float] = {}
         for name, (ctl, policy, extra) in players.items():
             rates, key = reuse.get(name, ({}, ""))
@@ -526,9 +583,7 @@ def run_v2(
                 policy, ENV_ID_V2, _kwargs(level, config, ctl, extra), "test", config.episodes
             )
             # fresh players: the random row's generator restarts for the test seeds
-            for name, (ctl, policy, extra) in row_players(
-                level, constant, offset, tracker, est_offset, est_tracker
-            ).items()
+            for name, (ctl, policy, extra) in row_players(level, *chosen).items()
         }
         if config.ilc:
             played["task_error_ilc"] = ilc.evaluate("test", config.episodes)
@@ -555,6 +610,8 @@ def run_v2(
                 "estimator_offset_val_catch_rates": est_rates,
                 "estimator_tracker": {"gain": est_tracker[0], "offset_s": est_tracker[1]},
                 "estimator_tracker_val_catch_rates": est_tracker_rates,
+                "pooled_anchor_frames": pooled_anchor,
+                "pooled_val_catch_rates": pooled_rates,
                 "rows": entries,
                 "best_non_oracle": best,
                 "val_catch_rates": val_catch,
@@ -580,6 +637,7 @@ def run_v2(
                 "estimator_tracker_catch_minus": offset_row_minus(
                     played, best, _difference, "estimator_tracker_catch"
                 ),
+                "pooled_estimator_catch_minus": pooled_row_minus(played, best, _difference),
             }
         )
     return {
@@ -609,6 +667,37 @@ def offset_row_minus(
         "minus_delay_estimator_catch": diff(row, played["delay_estimator_catch"]),
         "minus_best": diff(row, played[best]),
     }
+
+
+def pooled_row_minus(played: dict[str, Any], best: str, diff: Any) -> dict[str, Any]:
+    """``pooled_estimator_catch`` minus its base ``delay_estimator_catch``, minus
+    ``estimator_offset_catch``, minus the best non-oracle row ``best`` (chosen on
+    validation), and ``oracle_catch`` minus it (the room it leaves), paired by ``diff``."""
+    row = played["pooled_estimator_catch"]
+    return {
+        **offset_row_minus(played, best, diff, "pooled_estimator_catch"),
+        "minus_estimator_offset_catch": diff(row, played["estimator_offset_catch"]),
+        "oracle_catch_minus_row": diff(played[UPPER_REFERENCE], row),
+    }
+
+
+def pooled_row_line(d: dict[str, Any], frames: int, fmt: str = "+.3f") -> str:
+    """The report's line of :func:`pooled_row_minus` (``frames`` the chosen anchor
+    frames; ``fmt`` as :func:`tracker_line`'s)."""
+
+    def f(m: dict[str, Any]) -> str:
+        return f"{m['value']:{fmt}} [{m['ci'][0]:{fmt}}, {m['ci'][1]:{fmt}}]"
+
+    offset = (
+        ""
+        if d["best"] == "estimator_offset_catch"  # said by offset_row_line already
+        else f"; - estimator_offset_catch: {f(d['minus_estimator_offset_catch'])}"
+    )
+    return (
+        f"pooled estimate's anchor frames {frames} (chosen on validation); "
+        f"{offset_row_line(d, fmt)}{offset}; {UPPER_REFERENCE} - it (the room left): "
+        f"{f(d['oracle_catch_minus_row'])}"
+    )
 
 
 def offset_row_line(d: dict[str, Any], fmt: str = "+.3f") -> str:
@@ -691,6 +780,9 @@ def report_v2(doc: dict[str, Any]) -> str:
                 f"{tracker_key((et['gain'], et['offset_s']))} (chosen on validation); "
                 f"{offset_row_line(lv['estimator_tracker_catch_minus'])}"
             )
+        if "pooled_estimator_catch_minus" in lv:
+            line = pooled_row_line(lv["pooled_estimator_catch_minus"], lv["pooled_anchor_frames"])
+            lines.append(f"{lv['level']:7s} {line}")
         if "oracle_minus_delay_estimator" in lv:
             est = lv["oracle_minus_delay_estimator"]
             lines.append(
@@ -731,10 +823,10 @@ def plot_v2(doc: dict[str, Any]) -> Any:
     n = len(doc["levels"])
     fig = new_figure(5.2 * n, 4.4 if n > 1 else 5.0)
     axes = fig.subplots(1, n, squeeze=False, sharey=True)
-    markers = dict(zip(ROWS, "osP^D<>hHvdxp8X1", strict=True))
+    markers = dict(zip(ROWS, "osP^D<>hHvdxp8X12", strict=True))
     # one colour per row (the default cycle has 10; then black, grey, brown, navy, green,
-    # magenta)
-    extra = ("black", "0.5", "saddlebrown", "navy", "darkgreen", "magenta")
+    # magenta, teal)
+    extra = ("black", "0.5", "saddlebrown", "navy", "darkgreen", "magenta", "teal")
     colors = {name: f"C{i}" if i < 10 else extra[i - 10] for i, name in enumerate(ROWS)}
     for ax, lv in zip(axes[0], doc["levels"], strict=True):
         for name, m in lv["rows"].items():

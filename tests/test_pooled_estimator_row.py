@@ -1,0 +1,136 @@
+"""The benches' row ``pooled_estimator_catch``: ``juggler_delay_estimator_catch`` with the
+pooled delay rule, its anchor frames chosen on VALIDATION seeds (a spy on every play
+proves no test seed is read before the choice; synthetic rankings that differ between
+the splits tell a choice made on test seeds apart)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
+from motion_envs.models.juggling import ANCHOR_FRAMES, pooled_flight_delay
+
+NAME = "juggler_delay_estimator_catch"
+#: The anchor frames the synthetic rankings favour per split.
+FAVOURED = {"val": 16, "test": 8}
+
+
+def _pooled(kwargs: dict[str, Any]) -> int | None:
+    """The anchor frames of a play of the pooled row, None for any other play."""
+    if kwargs.get("controller") != NAME or kwargs.get("delay_rule") is None:
+        return None
+    assert kwargs["delay_rule"] is pooled_flight_delay
+    return int(kwargs["anchor_frames"])
+
+
+def test_the_grid_is_declared_fewest_first_and_every_candidate_is_an_env_argument() -> None:
+    from baselines.juggling_bench import v2
+
+    grid = v2.POOLED_ANCHOR_FRAMES
+    assert grid[0] == ANCHOR_FRAMES and list(grid) == sorted(grid)  # ties: the fewest
+    assert len({v2.anchor_key(n) for n in grid}) == len(grid)
+    for n in grid:
+        JugglingV2Env(controller=NAME, **v2.pooled_kwargs(n))
+        CascadeV1Env(controller=NAME, **v2.pooled_kwargs(n))
+
+
+def _validation_first_in_grid_order(calls: list[tuple[str, dict[str, Any], bool]]) -> None:
+    """The choice's plays are the grid's anchor frames in order, on validation seeds, and
+    every validation play comes before the first test play."""
+    from baselines.juggling_bench.v2 import POOLED_ANCHOR_FRAMES
+
+    chosen = [(s, kw) for s, kw, choosing in calls if choosing]
+    assert [s for s, _ in chosen] == ["val"] * len(POOLED_ANCHOR_FRAMES)
+    assert [_pooled(kw) for _, kw in chosen] == list(POOLED_ANCHOR_FRAMES)
+    splits = [s for s, _, _ in calls]
+    assert "test" in splits and "val" not in splits[splits.index("test") :]
+
+
+def test_juggling_v2_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
+    """On validation the row catches every toss only at 16 frames, on test only at 8: the
+    row must carry 16 (and so catch nothing on test), the choice must play validation
+    seeds only, in grid order, and the row enters the best non-oracle row's choice (the
+    only row at 1.0 on validation)."""
+    from baselines.juggling_bench.v2 import (
+        POOLED_ANCHOR_FRAMES,
+        V2Config,
+        anchor_key,
+        choose_pooled_anchor,
+        report_v2,
+        run_v2,
+    )
+    from tests.test_juggling_v2_bench import Spy
+
+    spy = Spy()
+    calls: list[tuple[str, dict[str, Any], bool]] = []
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        calls.append((split, kwargs, spy.choosing))
+        eps = spy.play(policy, env_id, kwargs, split, n)
+        if kwargs["controller"] == "juggler_delay_estimator":
+            return replace(eps, catches=np.zeros(n, dtype=np.int64), dropped=np.ones(n, bool))
+        if kwargs["controller"] != NAME:
+            return eps
+        catches = np.full(n, 3 if _pooled(kwargs) == FAVOURED[split] else 0)
+        return replace(eps, catches=catches, dropped=catches < 3)
+
+    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = run_v2(config, play, pooled_chooser=spy.chooser(choose_pooled_anchor))
+    (lv,) = doc["levels"]
+    _validation_first_in_grid_order(calls)
+    assert lv["pooled_anchor_frames"] == 16
+    assert lv["pooled_val_catch_rates"] == {
+        anchor_key(k): 1.0 if k == 16 else 0.0 for k in POOLED_ANCHOR_FRAMES
+    }
+    assert lv["val_catch_rates"]["pooled_estimator_catch"] == 1.0
+    assert lv["best_non_oracle"] == "pooled_estimator_catch"
+    assert lv["rows"]["pooled_estimator_catch"]["catch_rate"] == 0.0  # 16 frames on test
+    minus = lv["pooled_estimator_catch_minus"]
+    assert minus["row"] == "pooled_estimator_catch" and minus["minus_best"]["value"] == 0.0
+    assert minus["minus_delay_estimator_catch"]["value"] == 0.0  # neither catches on test
+    room = minus["oracle_catch_minus_row"]["value"]
+    assert room == lv["rows"]["oracle_catch"]["catch_rate"]
+    assert "pooled estimate's anchor frames 16 (chosen on validation)" in report_v2(doc)
+    tested = [_pooled(kw) for s, kw, _ in calls if s == "test" and _pooled(kw) is not None]
+    assert tested == [16]
+
+
+def test_cascade_v1_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
+    """Cascade-v1's bench likewise, by mean catches before the first drop: 15 on
+    validation only at 16 frames, on test only at 8."""
+    from baselines.juggling_bench.cascade_v1 import (
+        CascadeV1Config,
+        choose_pooled_anchor,
+        report_cascade_v1,
+        run_cascade_v1,
+    )
+    from tests.test_cascade_v1 import Spy
+
+    spy = Spy()
+    calls: list[tuple[str, dict[str, Any], bool]] = []
+    catches = spy.catches
+
+    def ranked(policy: Any, kwargs: dict[str, Any], split: str) -> int:
+        calls.append((split, kwargs, spy.choosing))
+        frames = _pooled(kwargs)
+        if frames is None:
+            return catches(policy, kwargs, split)
+        return 15 if frames == FAVOURED[split] else 2
+
+    spy.catches = ranked  # type: ignore[method-assign]
+    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = run_cascade_v1(config, spy.play, pooled_chooser=spy.chooser(choose_pooled_anchor))
+    (lv,) = doc["levels"]
+    _validation_first_in_grid_order(calls)
+    assert lv["pooled_anchor_frames"] == 16
+    assert lv["pooled_val_mean_catches"]["16 frames"] == 15.0
+    assert lv["val_mean_catches"]["pooled_estimator_catch"] == 15.0
+    assert lv["best_non_oracle"] == "pooled_estimator_catch"
+    assert lv["rows"]["pooled_estimator_catch"]["catches_mean"] == 2.0  # 16 frames on test
+    minus = lv["pooled_estimator_catch_minus"]
+    assert minus["minus_delay_estimator_catch"]["value"] == 2.0 - 1.0
+    assert minus["minus_estimator_offset_catch"]["value"] == 2.0 - 1.0
+    assert "pooled estimate's anchor frames 16 (chosen on validation)" in report_cascade_v1(doc)
