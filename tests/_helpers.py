@@ -158,3 +158,26 @@ def check_timing_entry(env: Any, plain: Any) -> None:
     ``plain`` (the same without it), and passes :func:`check_env_contract`."""
     assert env.action_space.shape == (plain.action_space.shape[0] + 1,)
     check_env_contract(env)
+
+
+def ranked_v2_play(
+    spy: Any, calls: list[tuple[str, dict[str, Any], bool]], controller: str, wins: Any
+) -> Any:
+    """A Juggling-v2 bench ``play`` over ``spy`` (``tests/test_juggling_v2_bench.Spy``)
+    that records ``(split, kwargs, choosing)`` in ``calls`` and ranks synthetically: the
+    release-anchored ``juggler_delay_estimator`` catches nothing, a play of ``controller``
+    catches every toss where ``wins(kwargs, split)`` and none elsewhere, any other play
+    as the spy's."""
+    from dataclasses import replace
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        calls.append((split, kwargs, spy.choosing))
+        eps = spy.play(policy, env_id, kwargs, split, n)
+        if kwargs["controller"] == "juggler_delay_estimator":
+            return replace(eps, catches=np.zeros(n, dtype=np.int64), dropped=np.ones(n, bool))
+        if kwargs["controller"] != controller:
+            return eps
+        catches = np.full(n, 3 if wins(kwargs, split) else 0)
+        return replace(eps, catches=catches, dropped=catches < 3)
+
+    return play

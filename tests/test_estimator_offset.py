@@ -22,7 +22,15 @@ from motion_envs.models.juggling import (
     FlightEstimator,
     PooledReleaseEstimator,
 )
-from tests._helpers import P0, T_R, V0, release_flight, release_frames, rollout_digest
+from tests._helpers import (
+    P0,
+    T_R,
+    V0,
+    ranked_v2_play,
+    release_flight,
+    release_frames,
+    rollout_digest,
+)
 
 NAME = "juggler_delay_estimator_catch"
 G = 9.81
@@ -147,7 +155,6 @@ def test_juggling_v2_the_estimates_offset_is_chosen_on_validation_seeds() -> Non
     on test only at 0 ms: the row must carry +20 ms (and so catch nothing on test), the
     choice must play validation seeds only, in grid order, and the row enters the best
     non-oracle row's choice (the only row at 1.0 on validation)."""
-    from dataclasses import replace
 
     from baselines.juggling_bench.v2 import (
         ESTIMATOR_OFFSETS,
@@ -162,15 +169,9 @@ def test_juggling_v2_the_estimates_offset_is_chosen_on_validation_seeds() -> Non
     favoured = {"val": 0.02, "test": 0.0}
     calls: list[tuple[str, dict[str, Any], bool]] = []
 
-    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
-        calls.append((split, kwargs, spy.choosing))
-        eps = spy.play(policy, env_id, kwargs, split, n)
-        if kwargs["controller"] == "juggler_delay_estimator":
-            return replace(eps, catches=np.zeros(n, dtype=np.int64), dropped=np.ones(n, bool))
-        if kwargs["controller"] != NAME:
-            return eps
-        catches = np.full(n, 3 if kwargs.get("delay_offset", 0.0) == favoured[split] else 0)
-        return replace(eps, catches=catches, dropped=catches < 3)
+    play = ranked_v2_play(
+        spy, calls, NAME, lambda kw, split: kw.get("delay_offset", 0.0) == favoured[split]
+    )
 
     config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_v2(config, play, estimator_offset_chooser=spy.chooser(choose_estimator_offset))

@@ -14,7 +14,6 @@ SB3's checkers; the benches' choice reads validation seeds only (a spy on every 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -34,6 +33,7 @@ from tests._helpers import (
     P0,
     T_R,
     check_env_contract,
+    ranked_v2_play,
     release_flight,
     release_frames,
     rollout_digest,
@@ -302,15 +302,7 @@ def test_juggling_v2_the_estimates_tracker_is_chosen_on_validation_seeds() -> No
     spy = Spy()
     calls: list[tuple[str, dict[str, Any], bool]] = []
 
-    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
-        calls.append((split, kwargs, spy.choosing))
-        eps = spy.play(policy, env_id, kwargs, split, n)
-        if kwargs["controller"] == "juggler_delay_estimator":
-            return replace(eps, catches=np.zeros(n, dtype=np.int64), dropped=np.ones(n, bool))
-        if kwargs["controller"] != NAME:
-            return eps
-        catches = np.full(n, 3 if _pair(kwargs) == FAVOURED[split] else 0)
-        return replace(eps, catches=catches, dropped=catches < 3)
+    play = ranked_v2_play(spy, calls, NAME, lambda kw, split: _pair(kw) == FAVOURED[split])
 
     config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_v2(config, play, estimator_tracker_chooser=spy.chooser(choose_estimator_tracker))

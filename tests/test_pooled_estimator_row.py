@@ -5,13 +5,11 @@ the splits tell a choice made on test seeds apart)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
-
-import numpy as np
 
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
 from motion_envs.models.juggling import ANCHOR_FRAMES, pooled_flight_delay
+from tests._helpers import ranked_v2_play
 
 NAME = "juggler_delay_estimator_catch"
 #: The anchor frames the synthetic rankings favour per split.
@@ -67,15 +65,7 @@ def test_juggling_v2_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
     spy = Spy()
     calls: list[tuple[str, dict[str, Any], bool]] = []
 
-    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
-        calls.append((split, kwargs, spy.choosing))
-        eps = spy.play(policy, env_id, kwargs, split, n)
-        if kwargs["controller"] == "juggler_delay_estimator":
-            return replace(eps, catches=np.zeros(n, dtype=np.int64), dropped=np.ones(n, bool))
-        if kwargs["controller"] != NAME:
-            return eps
-        catches = np.full(n, 3 if _pooled(kwargs) == FAVOURED[split] else 0)
-        return replace(eps, catches=catches, dropped=catches < 3)
+    play = ranked_v2_play(spy, calls, NAME, lambda kw, split: _pooled(kw) == FAVOURED[split])
 
     config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_v2(config, play, pooled_chooser=spy.chooser(choose_pooled_anchor))
