@@ -1,0 +1,335 @@
+"""The LEARNED delay estimate as a competitor row: ``learned_estimator_catch``.
+
+``learned_estimator_catch`` is ``juggler_delay_estimator_catch`` (the zero action) told
+the learned :class:`~baselines.learned.delay_estimator.LearnedDelayRule` (``delay_rule=``):
+a supervised regressor from the episode's anchored flights so far to the episode's delay
+(features, model and its choice by grouped K-fold CV over TRAINING episodes in
+:mod:`baselines.learned.delay_estimator`). Per cell (``--cell``):
+
+* ``cascade3_medium`` / ``cascade3_hard``: Cascade-v1 three balls, paired with the rows
+  of a bench folder kept by ``experiments/cascade_v1_replay_row.py --bench`` (``--bench-dir``:
+  its ``results.json`` and ``episodes.json``, every row's test seeds and catches; the
+  other rows' rollouts are bit-identical at this commit);
+* ``v2_medium`` / ``v2_hard``: Juggling-v2 (the bench's keywords, ``max_catches`` 3),
+  whose bench keeps no episodes: the rows paired against (``delay_estimator_catch``,
+  ``estimator_offset_catch``, ``oracle_catch`` and the best non-oracle row, each with
+  the parameters the bench chose on VALIDATION, read from ``--bench-dir``'s
+  ``results.json``) are played here on the same test seeds.
+
+For every training seed ``k`` of ``--seeds``: record ``--train-episodes`` TRAINING
+episodes (block ``k``: episodes ``k N .. (k + 1) N - 1`` of the training split, so the
+seeds differ in their data, their folds and the MLP's initialisation), fit, save the model
+file and load it back (the rule played is the loaded one); the CPU time of recording and
+fitting is the seed's training budget. Then:
+
+* the estimate's error on ``--val-episodes`` VALIDATION episodes (the flights of
+  ``delay_estimator_catch``'s own episodes, recorded as in training): the learned and the
+  default rule's error (estimate minus true delay; mean, sd and RMSE in ms) at the 1st,
+  2nd and 3rd flight and over every call;
+* the row on the TEST seeds: mean catches (Cascade-v1: before the first drop) and catch
+  rate with 95 % bootstrap intervals, the hand deviation, and the paired differences
+  (mean catches and catch rate, 95 % bootstrap over the seeds) from every paired row,
+  ``oracle_catch`` minus the row too. The median seed is the one with the median catch-rate
+  difference from the best non-oracle row.
+
+The demonstrations are SIMULATED.
+
+    python experiments/learned_delay_estimator.py --cell cascade3_medium \
+        --bench-dir /work/notes/benchdirs/cascade3_medium --out DIR
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from baselines.learned.delay_estimator import (
+    CONTROLLER,
+    FlightSamples,
+    LearnedDelayRule,
+    collect_flights,
+    train_delay_rule,
+)
+from motion_envs._io import atomic_write_text
+
+CELLS = ("cascade3_medium", "cascade3_hard", "v2_medium", "v2_hard")
+ROW = "learned_estimator_catch"
+CASCADE_ID, V2_ID = "MotionEnvs/Cascade-v1", "MotionEnvs/Juggling-v2"
+
+
+def _cell(cell: str) -> tuple[str, str]:
+    if cell not in CELLS:
+        raise ValueError(f"cell must be one of {list(CELLS)}; got {cell!r}")
+    env, level = cell.split("_")
+    return env, level
+
+
+def _bench(folder: Path, level: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    doc = json.loads((folder / "results.json").read_text(encoding="utf-8"))
+    lv = next((x for x in doc["levels"] if x["level"] == level), None)
+    if lv is None:
+        raise ValueError(f"{folder}: no level {level!r} in results.json")
+    return doc, lv
+
+
+def env_kwargs(cell: str, doc: dict[str, Any]) -> tuple[str, dict[str, Any]]:
+    """The env id and keywords (no controller) of ``cell``'s row, as its bench plays it."""
+    env, level = _cell(cell)
+    if env == "cascade3":
+        from baselines.juggling_bench.cascade_v1 import CascadeV1Config, _kwargs
+
+        config = CascadeV1Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
+        kw = _kwargs(level, config, CONTROLLER)
+        if config.pattern != "3":
+            raise ValueError(f"the bench folder is of pattern {config.pattern!r}, not '3'")
+        return CASCADE_ID, {k: v for k, v in kw.items() if k != "controller"}
+    from baselines.juggling_bench import v2
+
+    config = v2.V2Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
+    kw = v2._kwargs(level, config, CONTROLLER)
+    return V2_ID, {k: v for k, v in kw.items() if k != "controller"}
+
+
+def estimate_errors(rule: Any, samples: FlightSamples) -> dict[str, Any]:
+    """The rule's error (estimate minus true delay, ms) over ``samples``: mean, sd and
+    RMSE at the 1st, 2nd, 3rd flight and over every sample."""
+    n = samples.n_flights()
+    err = np.full(n.size, np.nan)
+    for i, fl in enumerate(samples.flights):
+        got = rule(list(fl), samples.gravity)
+        if got is not None:
+            err[i] = 1000.0 * (got - samples.delay[i])
+    out: dict[str, Any] = {}
+    for key, mask in (("1", n == 1), ("2", n == 2), ("3", n == 3), ("all", n >= 1)):
+        e = err[mask & np.isfinite(err)]
+        out[key] = {
+            "n": int(e.size),
+            "mean_ms": float(e.mean()) if e.size else None,
+            "sd_ms": float(e.std()) if e.size else None,
+            "rmse_ms": float(np.sqrt((e**2).mean())) if e.size else None,
+        }
+    return out
+
+
+def _paired_catches(a: Any, b: Any) -> dict[str, Any]:
+    from baselines.stats import group_bootstrap
+
+    if not np.array_equal(a.seeds, b.seeds):
+        raise ValueError("paired episodes must share their seeds")
+    d = (a.catches - b.catches).astype(np.float64)
+    value, lo, hi = group_bootstrap(lambda rows: float(d[rows].mean()), np.arange(d.size))
+    return {"value": value, "ci": [lo, hi]}
+
+
+def _paired_rate(a: Any, b: Any) -> dict[str, Any]:
+    from baselines.agents.juggling_score import catch_rate_comparison
+
+    c = catch_rate_comparison(a, b)
+    return {"value": c.difference, "ci": list(c.ci95)}
+
+
+def _row_entry(eps: Any, cascade: bool) -> dict[str, Any]:
+    from baselines.stats import group_bootstrap
+
+    if cascade:
+        from baselines.juggling_bench.cascade_v1 import row_summary
+
+        return row_summary(eps)
+    from baselines.juggling_bench.levels import summary
+
+    c = eps.catches.astype(np.float64)
+    _, lo, hi = group_bootstrap(lambda rows: float(c[rows].mean()), np.arange(c.size))
+    return {**summary(eps), "catches_mean": float(c.mean()), "catches_mean_ci": [lo, hi]}
+
+
+def paired_rows(cell: str, folder: Path, n_test: int | None) -> tuple[dict[str, Any], str, Any]:
+    """``(rows, best non-oracle, test seeds)``: the rows the learned row is paired with,
+    on the bench's test seeds (kept for Cascade-v1; played here for Juggling-v2)."""
+    env, level = _cell(cell)
+    doc, lv = _bench(folder, level)
+    if env == "cascade3":
+        from baselines.juggling_bench.cascade import CascadeEpisodes
+
+        kept = json.loads((folder / "episodes.json").read_text(encoding="utf-8"))[level]
+        rows = {}
+        for name, e in kept.items():
+            ep = list(zip(e["catches"], e["tosses"], e["dropped"], e["time"], strict=True))
+            rows[name] = CascadeEpisodes.from_rows(np.asarray(e["seeds"]), ep)
+        seeds = next(iter(rows.values())).seeds
+        return rows, lv["best_non_oracle"], seeds
+    from baselines.agents.juggling_score import juggling_episodes
+    from baselines.juggling_bench import v2
+
+    config = v2.V2Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
+    players = v2.row_players(
+        level, tuple(lv["constant"]), lv["late_offset_s"],
+        (lv["tracker"]["gain"], lv["tracker"]["offset_s"]), lv["estimator_offset_s"],
+        (lv["estimator_tracker"]["gain"], lv["estimator_tracker"]["offset_s"]),
+    )  # fmt: skip
+    best = lv["best_non_oracle"]
+    n = n_test or config.episodes
+    rows = {}
+    for name in dict.fromkeys(
+        ["delay_estimator_catch", "estimator_offset_catch", "oracle_catch", best]
+    ):
+        ctl, policy, extra = players[name]
+        rows[name] = juggling_episodes(policy, V2_ID, v2._kwargs(level, config, ctl, extra),
+                                       "test", n)  # fmt: skip
+    return rows, best, rows[best].seeds
+
+
+def play_row(cell: str, env_id: str, kwargs: dict[str, Any], rule: Any, n: int) -> Any:
+    """``learned_estimator_catch`` on the first ``n`` TEST seeds."""
+    full = {**kwargs, "controller": CONTROLLER, "delay_rule": rule}
+    if env_id == CASCADE_ID:
+        from baselines.juggling_bench.cascade_v1 import cascade_v1_episodes
+
+        return cascade_v1_episodes(None, full, "test", n)
+    from baselines.agents.juggling_score import juggling_episodes
+
+    return juggling_episodes(None, env_id, full, "test", n)
+
+
+def run(
+    cell: str,
+    folder: Path,
+    out: Path,
+    train_episodes: int,
+    val_episodes: int,
+    seeds: tuple[int, ...],
+    n_test: int | None = None,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """The cell's measurement (module docstring); writes ``out/results.json`` and the
+    model files ``out/model_seed{k}.safetensors``."""
+    env, level = _cell(cell)
+    doc, _ = _bench(folder, level)
+    env_id, kwargs = env_kwargs(cell, doc)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.process_time()
+    val = collect_flights(env_id, kwargs, "val", val_episodes, progress=progress)
+    val_default = estimate_errors(lambda fl, g: _default(fl, g), val)
+    rows, best, test_seeds = paired_rows(cell, folder, n_test)
+    n = test_seeds.size
+    cascade = env_id == CASCADE_ID
+    per_seed = []
+    for k in seeds:
+        c0 = time.process_time()
+        rule, _ = train_delay_rule(env_id, kwargs, train_episodes, seed=k,
+                                   first=k * train_episodes, progress=progress)  # fmt: skip
+        train_cpu = time.process_time() - c0
+        path = rule.save(out / f"model_seed{k}.safetensors")
+        rule = LearnedDelayRule.load(path)
+        played = play_row(cell, env_id, kwargs, rule, n)
+        if not np.array_equal(played.seeds, test_seeds):
+            raise ValueError(f"{folder}: the kept test seeds differ from the played ones")
+        per_seed.append(
+            {
+                "seed": k,
+                "train_first_episode": k * train_episodes,
+                "train_cpu_s": train_cpu,
+                "chosen": rule.info["chosen"],
+                "cv_rmse": rule.info["cv_rmse"],
+                "cv_default_rule_rmse_ms": rule.info["cv_default_rule_rmse_ms"],
+                "training_rows": rule.info["training_rows"],
+                "val_errors": estimate_errors(rule, val),
+                "row": _row_entry(played, cascade),
+                "minus": {name: _paired_catches(played, e) for name, e in rows.items()},
+                "minus_catch_rate": {name: _paired_rate(played, e) for name, e in rows.items()},
+                "oracle_catch_minus_row": {
+                    "catches": _paired_catches(rows["oracle_catch"], played),
+                    "catch_rate": _paired_rate(rows["oracle_catch"], played),
+                },
+            }
+        )
+    order = sorted(range(len(per_seed)),
+                   key=lambda i: per_seed[i]["minus_catch_rate"][best]["value"])  # fmt: skip
+    result = {
+        "cell": cell,
+        "env_id": env_id,
+        "env_kwargs": kwargs,
+        "bench_dir": str(folder),
+        "row": ROW,
+        "train_episodes_per_seed": train_episodes,
+        "val_episodes": val_episodes,
+        "test_episodes": int(n),
+        "best_non_oracle": best,
+        "val_errors_default_rule": val_default,
+        "rows": {name: _row_entry(e, cascade) if not cascade else _kept_entry(doc, level, name, e)
+                 for name, e in rows.items()},  # fmt: skip
+        "seeds": per_seed,
+        "median_seed": per_seed[order[len(order) // 2]]["seed"],
+        "cpu_s": time.process_time() - t0,
+        "demonstrations": "SIMULATED",
+    }
+    atomic_write_text(out / "results.json", json.dumps(result, indent=2) + "\n")
+    _print(result)
+    return result
+
+
+def _default(flights: Any, gravity: float) -> float | None:
+    from motion_envs.models.juggling import mean_flight_delay
+
+    return mean_flight_delay(flights, gravity)
+
+
+def _kept_entry(doc: dict[str, Any], level: str, name: str, eps: Any) -> dict[str, Any]:
+    """A kept Cascade-v1 row's entry as its bench wrote it (with its hand deviation)."""
+    lv = next(x for x in doc["levels"] if x["level"] == level)
+    from baselines.juggling_bench.cascade_v1 import row_summary
+
+    return lv["rows"].get(name) or row_summary(eps)
+
+
+def _ci(d: dict[str, Any], fmt: str) -> str:
+    return f"{d['value']:{fmt}} [{d['ci'][0]:{fmt}}, {d['ci'][1]:{fmt}}]"
+
+
+def _print(r: dict[str, Any]) -> None:
+    print(f"{r['cell']}: {r['row']}, {r['train_episodes_per_seed']} training episodes per "
+          f"seed, {r['test_episodes']} test episodes; best non-oracle (validation): "
+          f"{r['best_non_oracle']}")  # fmt: skip
+    d = r["val_errors_default_rule"]
+    print("  default rule, validation error (ms): " + "; ".join(
+        f"{k}: {v['mean_ms']:+.1f} sd {v['sd_ms']:.1f} rmse {v['rmse_ms']:.1f} (n {v['n']})"
+        for k, v in d.items() if v["n"]))  # fmt: skip
+    for s in r["seeds"]:
+        m = s["row"]
+        print(f"  seed {s['seed']}: {s['chosen']}, training {s['train_cpu_s']:.0f} s CPU; "
+              f"mean catches {m['catches_mean']:.2f} {m['catches_mean_ci']}, catch rate "
+              f"{m['catch_rate']:.3f} {m['catch_rate_ci']}")  # fmt: skip
+        print("    validation error (ms): " + "; ".join(
+            f"{k}: {v['mean_ms']:+.1f} sd {v['sd_ms']:.1f} rmse {v['rmse_ms']:.1f}"
+            for k, v in s["val_errors"].items() if v["n"]))  # fmt: skip
+        for name in s["minus"]:
+            print(f"    - {name:24s} {_ci(s['minus'][name], '+.2f')} catches, "
+                  f"{_ci(s['minus_catch_rate'][name], '+.3f')} rate")  # fmt: skip
+    print(f"  median seed: {r['median_seed']}; CPU {r['cpu_s']:.0f} s")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cell", required=True, choices=CELLS)
+    ap.add_argument("--bench-dir", type=Path, required=True)
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--train-episodes", type=int, default=2000)
+    ap.add_argument("--val-episodes", type=int, default=300)
+    ap.add_argument("--seeds", default="0,1,2")
+    ap.add_argument("--test-episodes", type=int, default=None,
+                    help="Juggling-v2 only: test episodes (default: the bench's)")  # fmt: skip
+    ap.add_argument("--no-progress", action="store_true")
+    args = ap.parse_args()
+    seeds = tuple(int(s) for s in args.seeds.split(","))
+    if args.train_episodes < 2 or args.val_episodes < 1:
+        ap.error("--train-episodes must be >= 2 and --val-episodes >= 1")
+    run(args.cell, args.bench_dir, args.out, args.train_episodes, args.val_episodes, seeds,
+        args.test_episodes, not args.no_progress)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
