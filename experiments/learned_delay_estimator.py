@@ -90,8 +90,8 @@ def env_kwargs(cell: str, doc: dict[str, Any]) -> tuple[str, dict[str, Any]]:
         return CASCADE_ID, {k: v for k, v in kw.items() if k != "controller"}
     from baselines.juggling_bench import v2
 
-    config = v2.V2Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
-    kw = v2._kwargs(level, config, CONTROLLER)
+    v2_config = v2.V2Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
+    kw = v2._kwargs(level, v2_config, CONTROLLER)
     return V2_ID, {k: v for k, v in kw.items() if k != "controller"}
 
 
@@ -156,7 +156,7 @@ def paired_rows(cell: str, folder: Path, n_test: int | None) -> tuple[dict[str, 
         from baselines.juggling_bench.cascade import CascadeEpisodes
 
         kept = json.loads((folder / "episodes.json").read_text(encoding="utf-8"))[level]
-        rows = {}
+        rows: dict[str, Any] = {}
         for name, e in kept.items():
             ep = list(zip(e["catches"], e["tosses"], e["dropped"], e["time"], strict=True))
             rows[name] = CascadeEpisodes.from_rows(np.asarray(e["seeds"]), ep)
@@ -207,7 +207,7 @@ def run(
 ) -> dict[str, Any]:
     """The cell's measurement (module docstring); writes ``out/results.json`` and the
     model files ``out/model_seed{k}.safetensors``."""
-    env, level = _cell(cell)
+    _, level = _cell(cell)
     doc, _ = _bench(folder, level)
     env_id, kwargs = env_kwargs(cell, doc)
     out.mkdir(parents=True, exist_ok=True)
@@ -260,8 +260,10 @@ def run(
         "test_episodes": int(n),
         "best_non_oracle": best,
         "val_errors_default_rule": val_default,
-        "rows": {name: _row_entry(e, cascade) if not cascade else _kept_entry(doc, level, name, e)
-                 for name, e in rows.items()},  # fmt: skip
+        "rows": {
+            name: _kept_entry(doc, level, name, e) if cascade else _row_entry(e, cascade)
+            for name, e in rows.items()
+        },
         "seeds": per_seed,
         "median_seed": per_seed[order[len(order) // 2]]["seed"],
         "cpu_s": time.process_time() - t0,
@@ -301,8 +303,10 @@ def _print(r: dict[str, Any]) -> None:
     for s in r["seeds"]:
         m = s["row"]
         print(f"  seed {s['seed']}: {s['chosen']}, training {s['train_cpu_s']:.0f} s CPU; "
-              f"mean catches {m['catches_mean']:.2f} {m['catches_mean_ci']}, catch rate "
-              f"{m['catch_rate']:.3f} {m['catch_rate_ci']}")  # fmt: skip
+              f"mean catches {m['catches_mean']:.2f} [{m['catches_mean_ci'][0]:.2f}, "
+              f"{m['catches_mean_ci'][1]:.2f}], catch rate {m['catch_rate']:.3f} "
+              f"[{m['catch_rate_ci'][0]:.3f}, {m['catch_rate_ci'][1]:.3f}], deviation "
+              f"{1000 * m['deviation_m']:.1f} mm")  # fmt: skip
         print("    validation error (ms): " + "; ".join(
             f"{k}: {v['mean_ms']:+.1f} sd {v['sd_ms']:.1f} rmse {v['rmse_ms']:.1f}"
             for k, v in s["val_errors"].items() if v["n"]))  # fmt: skip

@@ -8,6 +8,9 @@
   and the ridge regressor (scikit-learn);
 * :mod:`baselines.learned.position`: the ``ridge`` and ``mlp`` columns of LASA;
 * :mod:`baselines.learned.model_file`: safetensors weights with a JSON header.
+* :mod:`baselines.learned.delay_estimator`: a learned delay rule for the juggling envs'
+  release-anchored estimate (ridge or a small MLP, chosen by grouped K-fold CV over
+  training episodes), the row ``learned_estimator_catch``.
 
 Importing this package does not import torch; :func:`torch_available` says whether the
 torch rows can run.

@@ -104,10 +104,21 @@ MLP_LR = 3e-3
 #: The model kinds a file may hold.
 KINDS = ("delay-rule-ridge", "delay-rule-mlp")
 _SHAPES: dict[str, Callable[[int, int], dict[str, tuple[int, ...]]]] = {
-    "delay-rule-ridge": lambda p, h: {"x_mean": (p,), "x_scale": (p,), "coef": (p,),
-                                      "intercept": (1,)},  # fmt: skip
-    "delay-rule-mlp": lambda p, h: {"x_mean": (p,), "x_scale": (p,), "W1": (p, h),
-                                    "b1": (h,), "W2": (h,), "b2": (1,), "y_scale": (1,)},  # fmt: skip
+    "delay-rule-ridge": lambda p, h: {
+        "x_mean": (p,),
+        "x_scale": (p,),
+        "coef": (p,),
+        "intercept": (1,),
+    },
+    "delay-rule-mlp": lambda p, h: {
+        "x_mean": (p,),
+        "x_scale": (p,),
+        "W1": (p, h),
+        "b1": (h,),
+        "W2": (h,),
+        "b2": (1,),
+        "y_scale": (1,),
+    },
 }
 _STEP = float(DELAY_GRID[1] - DELAY_GRID[0])
 
@@ -303,7 +314,7 @@ def _fit_mlp(
     with deterministic_torch():
         g = torch.Generator().manual_seed(seed)
         p = X.shape[1]
-        W1 = (torch.randn(p, MLP_HIDDEN, generator=g, dtype=torch.float64) / math.sqrt(p))
+        W1 = torch.randn(p, MLP_HIDDEN, generator=g, dtype=torch.float64) / math.sqrt(p)
         b1 = torch.zeros(MLP_HIDDEN, dtype=torch.float64)
         W2 = torch.zeros(MLP_HIDDEN, dtype=torch.float64)  # starts at the mean correction
         b2 = torch.zeros(1, dtype=torch.float64)
@@ -315,7 +326,7 @@ def _fit_mlp(
             opt.zero_grad()
             pred = torch.tanh(xt @ W1 + b1) @ W2 + b2
             loss = ((pred - yt) ** 2).mean() + decay * ((W1**2).sum() + (W2**2).sum())
-            loss.backward()
+            loss.backward()  # type: ignore[no-untyped-call]
             opt.step()
             if epoch in epochs:
                 out[epoch] = {
@@ -344,7 +355,9 @@ def _candidates() -> list[tuple[str, dict[str, Any]]]:
 
 
 def _name(kind: str, hp: Mapping[str, Any]) -> str:
-    return kind.removeprefix("delay-rule-") + "(" + ", ".join(f"{k}={v}" for k, v in hp.items()) + ")"
+    return (
+        kind.removeprefix("delay-rule-") + "(" + ", ".join(f"{k}={v}" for k, v in hp.items()) + ")"
+    )
 
 
 class LearnedDelayRule:
@@ -386,12 +399,13 @@ class LearnedDelayRule:
                         sq[i][held] = (_predict(kind, t, X[held]) - y[held]) ** 2
         table = {}
         for i, (kind, hp) in enumerate(cands):
-            entry = {"rmse_ms": 1000 * float(np.sqrt(sq[i].mean()))}
+            entry: dict[str, float | None] = {"rmse_ms": 1000 * float(np.sqrt(sq[i].mean()))}
             for k in (1, 2, 3):
-                entry[f"rmse_ms_{k}"] = 1000 * float(np.sqrt(sq[i][n == k].mean())) if (n == k).any() else None  # fmt: skip
+                at = sq[i][n == k]
+                entry[f"rmse_ms_{k}"] = 1000 * float(np.sqrt(at.mean())) if at.size else None
             table[_name(kind, hp)] = entry
         default = {"rmse_ms": 1000 * float(np.sqrt((y**2).mean()))}
-        best = min(range(len(cands)), key=lambda i: (table[_name(*cands[i])]["rmse_ms"], i))
+        best = min(range(len(cands)), key=lambda i: (float(sq[i].mean()), i))
         kind, hp = cands[best]
         if kind == "delay-rule-ridge":
             tensors = _fit_ridge(X, y, hp["alpha"])
@@ -449,25 +463,34 @@ class LearnedDelayRule:
         arch = header["architecture"]
         kind = arch.get("kind")
         if kind not in KINDS:
-            raise model_file_error(p, f"field 'architecture.kind' is {kind!r}, expected one of {list(KINDS)}")  # fmt: skip
+            raise model_file_error(
+                p, f"field 'architecture.kind' is {kind!r}, expected one of {list(KINDS)}"
+            )
         feats = header.get("features", {})
-        if feats.get("grid_s") != DELAY_GRID.tolist() or feats.get("n_cap") != N_CAP or (
-            feats.get("curve_clip") != CURVE_CLIP
+        if (
+            feats.get("grid_s") != DELAY_GRID.tolist()
+            or feats.get("n_cap") != N_CAP
+            or (feats.get("curve_clip") != CURVE_CLIP)
         ):
             raise model_file_error(p, "field 'features' does not match this motion-envs' features")
         hidden = arch.get("hidden")
         if arch.get("n_inputs") != N_FEATURES or not isinstance(hidden, int) or hidden < 0:
-            raise model_file_error(p, f"field 'architecture' is {arch!r}, expected n_inputs {N_FEATURES}")  # fmt: skip
+            raise model_file_error(
+                p, f"field 'architecture' is {arch!r}, expected n_inputs {N_FEATURES}"
+            )
         shapes = _SHAPES[kind](N_FEATURES, hidden)
         if set(tensors) != set(shapes):
             raise model_file_error(p, f"tensors {sorted(tensors)}, expected {sorted(shapes)}")
         for name, shape in shapes.items():
             t = tensors[name]
             if t.shape != shape or t.dtype != np.float64:
-                raise model_file_error(p, f"tensor {name!r} is {t.dtype}{list(t.shape)}, expected float64{list(shape)}")  # fmt: skip
+                raise model_file_error(
+                    p, f"tensor {name!r} is {t.dtype}{list(t.shape)}, expected float64{list(shape)}"
+                )
         if not (tensors["x_scale"] > 0).all():
             raise model_file_error(p, "tensor 'x_scale' must be positive")
-        info = {**header.get("extra", {}), "training_data_sha256": header.get("training_data_sha256", "")}  # fmt: skip
+        info = {**header.get("extra", {})}
+        info["training_data_sha256"] = header.get("training_data_sha256", "")
         return cls(kind, tensors, info)
 
 
