@@ -195,6 +195,46 @@ def play_row(cell: str, env_id: str, kwargs: dict[str, Any], rule: Any, n: int) 
     return juggling_episodes(None, env_id, full, "test", n)
 
 
+class _TrueDelay:
+    """A delay rule that tells the env's TRUE delay (a reference, never a competitor)."""
+
+    env: Any = None
+
+    def __call__(self, flights: Any, gravity: float) -> float | None:
+        return float(self.env.delay) if flights else None
+
+
+def true_delay_reference(cell: str, folder: Path) -> dict[str, Any]:
+    """Cascade-v1 only: ``delay_estimator_catch`` told the episode's TRUE delay by its
+    rule (the drag not told; ``oracle_catch`` is told both) on the bench's test seeds,
+    paired with ``delay_estimator_catch`` and ``oracle_catch``: how much of the room the
+    exact delay alone takes."""
+    from baselines.juggling_bench.cascade import CascadeEpisodes
+    from motion_envs.datasets.juggling import episode_seeds
+    from motion_envs.envs.juggling import CascadeV1Env
+
+    env, level = _cell(cell)
+    if env != "cascade3":
+        raise ValueError(f"the true-delay reference is for the Cascade-v1 cells; got {cell!r}")
+    doc, _ = _bench(folder, level)
+    _, kwargs = env_kwargs(cell, doc)
+    rows, best, seeds = paired_rows(cell, folder, None)
+    rule = _TrueDelay()
+    world = CascadeV1Env(**kwargs, controller=CONTROLLER, delay_rule=rule)
+    rule.env = world
+    if not np.array_equal(seeds, episode_seeds("test", seeds.size)):
+        raise ValueError(f"{folder}: the kept test seeds are not the test split's first ones")
+    told = CascadeEpisodes.from_rows(seeds, [world.play(int(s)) for s in seeds.tolist()])
+    out = {"cell": cell, "row": _row_entry(told, True), "best_non_oracle": best}
+    for name in dict.fromkeys(["delay_estimator_catch", "oracle_catch", best]):
+        out[f"minus_{name}"] = {
+            "catches": _paired_catches(told, rows[name]),
+            "catch_rate": _paired_rate(told, rows[name]),
+        }
+    print(json.dumps(out, indent=1))
+    return out
+
+
 def run(
     cell: str,
     folder: Path,
@@ -327,7 +367,14 @@ def main() -> None:
     ap.add_argument("--test-episodes", type=int, default=None,
                     help="Juggling-v2 only: test episodes (default: the bench's)")  # fmt: skip
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--true-delay", action="store_true",
+                    help="Cascade-v1: only the reference told the TRUE delay")  # fmt: skip
     args = ap.parse_args()
+    if args.true_delay:
+        got = true_delay_reference(args.cell, args.bench_dir)
+        args.out.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(args.out / "true_delay.json", json.dumps(got, indent=2) + "\n")
+        return
     seeds = tuple(int(s) for s in args.seeds.split(","))
     if args.train_episodes < 2 or args.val_episodes < 1:
         ap.error("--train-episodes must be >= 2 and --val-episodes >= 1")
