@@ -235,6 +235,53 @@ def true_delay_reference(cell: str, folder: Path) -> dict[str, Any]:
     return out
 
 
+def pair_pooled(cell: str, folder: Path, out: Path, frames: int) -> dict[str, Any]:
+    """``pooled_estimator_catch`` (``delay_estimator_catch`` with the pooled delay rule on
+    ``frames`` anchor frames, the bench's validation choice) played on the test seeds and
+    paired with each seed's learned row, replayed from ``out``'s model files (checked
+    equal to the summary ``out/results.json`` holds)."""
+    from motion_envs.models.juggling import pooled_flight_delay
+
+    _, level = _cell(cell)
+    doc, _ = _bench(folder, level)
+    env_id, kwargs = env_kwargs(cell, doc)
+    done = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    n = int(done["test_episodes"])
+    pooled_kw = {**kwargs, "controller": CONTROLLER, "delay_rule": pooled_flight_delay,
+                 "anchor_frames": int(frames)}  # fmt: skip
+    if env_id == CASCADE_ID:
+        from baselines.juggling_bench.cascade_v1 import cascade_v1_episodes
+
+        pooled = cascade_v1_episodes(None, pooled_kw, "test", n)
+    else:
+        from baselines.agents.juggling_score import juggling_episodes
+
+        pooled = juggling_episodes(None, env_id, pooled_kw, "test", n)
+    cascade = env_id == CASCADE_ID
+    result: dict[str, Any] = {
+        "cell": cell,
+        "pooled_anchor_frames": int(frames),
+        "pooled_estimator_catch": _row_entry(pooled, cascade),
+        "seeds": [],
+    }
+    for s in done["seeds"]:
+        rule = LearnedDelayRule.load(out / f"model_seed{s['seed']}.safetensors")
+        played = play_row(cell, env_id, kwargs, rule, n)
+        again = _row_entry(played, cascade)
+        result["seeds"].append(
+            {
+                "seed": s["seed"],
+                "replay_equals_run": again["catch_rate"] == s["row"]["catch_rate"]
+                and again["catches"] == s["row"]["catches"],
+                "minus_pooled": _paired_catches(played, pooled),
+                "minus_pooled_catch_rate": _paired_rate(played, pooled),
+            }
+        )
+    atomic_write_text(out / "pooled_pairing.json", json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result, indent=1))
+    return result
+
+
 def run(
     cell: str,
     folder: Path,
@@ -369,7 +416,12 @@ def main() -> None:
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--true-delay", action="store_true",
                     help="Cascade-v1: only the reference told the TRUE delay")  # fmt: skip
+    ap.add_argument("--pair-pooled", type=int, default=None, metavar="FRAMES",
+                    help="pair --out's rows with pooled_estimator_catch")  # fmt: skip
     args = ap.parse_args()
+    if args.pair_pooled is not None:
+        pair_pooled(args.cell, args.bench_dir, args.out, args.pair_pooled)
+        return
     if args.true_delay:
         got = true_delay_reference(args.cell, args.bench_dir)
         args.out.mkdir(parents=True, exist_ok=True)

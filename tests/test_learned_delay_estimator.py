@@ -192,6 +192,9 @@ def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
     assert set(s["minus"]) == {"delay_estimator_catch", "oracle_catch"}
     assert s["val_errors"]["all"]["n"] == got["val_errors_default_rule"]["all"]["n"] > 0
     assert got["median_seed"] == 0 and got["test_episodes"] == 3
+    paired = mod.pair_pooled("cascade3_medium", bench, tmp_path / "out", 8)
+    assert paired["seeds"][0]["replay_equals_run"] is True  # the saved rule plays the same
+    assert (tmp_path / "out" / "pooled_pairing.json").is_file()
     told = mod.true_delay_reference("cascade3_medium", bench)
     assert told["row"]["catches_mean"] >= 0 and set(told) >= {"minus_oracle_catch"}
     with pytest.raises(ValueError, match="Cascade-v1"):

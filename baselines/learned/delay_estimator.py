@@ -28,7 +28,8 @@ min r_f) / mean_finite(r_f - min r_f), CURVE_CLIP)`` (``inf`` -> ``CURVE_CLIP``)
 4. the least-residual delay of the flights' summed raw residuals (pooled), minus ``base``
    (0 where no delay is finite for every flight);
 5. that pooled delay parabola-refined, minus ``base``;
-6. ``min(n, N_CAP)`` and 7. ``1 / n`` (``n`` the flights);
+6. ``min(n, N_CAP)`` (``n`` the flights);
+7. ``1 / n``;
 8. the mean over flights of ``log10(min r_f + 1e-12)`` (the fit's noise).
 
 The target is the correction ``delay - base``; the rule returns ``base + prediction``,
