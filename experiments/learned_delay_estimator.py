@@ -32,6 +32,13 @@ fitting is the seed's training budget. Then:
   ``oracle_catch`` minus the row too. The median seed is the one with the median catch-rate
   difference from the best non-oracle row.
 
+Two further modes, nothing trained: ``--true-delay`` (Cascade-v1) plays
+``delay_estimator_catch`` told the episode's TRUE delay through its rule (the drag not
+told; a reference) on the kept test seeds and pairs it; ``--pair-pooled FRAMES`` plays
+``pooled_estimator_catch`` on ``FRAMES`` anchor frames (its bench's validation choice) on
+the test seeds and pairs it with each seed's row replayed from ``--out``'s model files
+(``replay_equals_run``: the replay gives the summary the run wrote).
+
 The demonstrations are SIMULATED.
 
     python experiments/learned_delay_estimator.py --cell cascade3_medium \
