@@ -1,10 +1,18 @@
-"""What of the room above the hand-written fixes on Cascade-v1 is the drag, what the delay
-(issue 34): ``oracle_catch`` (told the true delay and every ball's drag) against the same
-controller told the true delay but NO drag (its estimators reset with drag 0), the
-hand-written fixes together (``juggler_delay_estimator_catch``) and the mean-delay catch
-plan, all with the zero action on the same VALIDATION seeds (``SPLIT_SEEDS["val"] + i``;
-no test seed is played). Mean catches before the first drop (at most ``--max-catches``),
-each row minus ``oracle_catch`` paired over the seeds with a 95 % bootstrap interval.
+"""What of the room above the hand-written fixes on Cascade-v1 is the drag, what the delay,
+and when the delay is known: ``oracle_catch`` (told the true delay and every ball's drag
+from the episode's start) against the same controller told the true delay but NO drag
+(its estimators reset with drag 0); the hand-written estimate with the catch plan
+(``juggler_delay_estimator_catch``) told the TRUE delay from the start (its prior, which
+places the frames before the first anchored flight, set to the true delay, and its rule
+returning it), told it only once a flight is anchored (the rule alone: before, the
+level's mean), as it is (the default rule), and with the pooled rule on 20 anchor frames
+(``pooled_estimator_catch``'s, the frames validation chose on both levels); and the
+mean-delay catch plan. All with the zero action on the same VALIDATION seeds
+(``SPLIT_SEEDS["val"] + i``; no test seed is played). Mean catches before the first drop
+(at most ``--max-catches``), each row minus ``oracle_catch`` paired over the seeds with a
+95 % bootstrap interval, and the steps between neighbouring rows (the drag; the oracle's
+own estimator against the hand-written one told the same; the delay before the first
+anchored flight; the estimate's error).
 
     python experiments/cascade_v1_room_source.py [--pattern 3] [--levels medium hard]
         [--episodes 40] [--max-catches 30]
@@ -30,15 +38,37 @@ from _timing import machine, print_json
 from baselines.stats import paired_mean_difference
 from motion_envs.datasets.juggling import SPLIT_SEEDS
 from motion_envs.envs.juggling import CascadeV1Env
-from motion_envs.models.juggling import FlightEstimator
+from motion_envs.models.juggling import (
+    FlightEstimator,
+    PooledReleaseEstimator,
+    pooled_flight_delay,
+)
 
-#: Row -> (controller, the oracle's drag withheld).
-ROWS: dict[str, tuple[str, bool]] = {
-    "oracle_catch": ("juggler_oracle_catch", False),
-    "oracle_catch_no_drag": ("juggler_oracle_catch", True),
-    "delay_estimator_catch": ("juggler_delay_estimator_catch", False),
-    "mean_delay_catch": ("juggler_mean_delay_catch", False),
+#: Row -> (controller, what it is told: ``"no_drag"`` the oracle's drag withheld,
+#: ``"true"`` the true delay from the start, ``"anchored"`` the true delay once a flight
+#: is anchored, ``"pooled"`` the pooled rule on 20 frames, ``""`` nothing).
+ROWS: dict[str, tuple[str, str]] = {
+    "oracle_catch": ("juggler_oracle_catch", ""),
+    "oracle_catch_no_drag": ("juggler_oracle_catch", "no_drag"),
+    "estimate_told_true_delay": ("juggler_delay_estimator_catch", "true"),
+    "estimate_told_true_delay_anchored": ("juggler_delay_estimator_catch", "anchored"),
+    "pooled_estimator_catch_20": ("juggler_delay_estimator_catch", "pooled"),
+    "delay_estimator_catch": ("juggler_delay_estimator_catch", ""),
+    "mean_delay_catch": ("juggler_mean_delay_catch", ""),
 }
+#: The steps reported between rows ``(upper, lower, what the step is)``.
+STEPS = (
+    ("oracle_catch", "oracle_catch_no_drag", "the drag"),
+    ("oracle_catch_no_drag", "estimate_told_true_delay", "the oracle's estimator (should be 0)"),
+    (
+        "estimate_told_true_delay",
+        "estimate_told_true_delay_anchored",
+        "the delay before the first anchored flight",
+    ),
+    ("estimate_told_true_delay_anchored", "delay_estimator_catch", "the estimate's error"),
+    ("pooled_estimator_catch_20", "delay_estimator_catch", "the pooled rule on 20 frames"),
+)
+POOLED_FRAMES = 20
 
 
 @contextmanager
@@ -56,15 +86,41 @@ def drag_withheld() -> Iterator[None]:
         FlightEstimator.reset = reset  # type: ignore[method-assign]
 
 
-def catches(controller: str, no_drag: bool, level: str, pattern: str, seeds: list[int],
+@contextmanager
+def prior_told_true() -> Iterator[None]:
+    """Every pooled estimator reset in the block places its frames by the episode's true
+    delay (the ``delay`` its owner resets it with) before its first estimate."""
+    reset = PooledReleaseEstimator.reset
+
+    def told(self: PooledReleaseEstimator, drag: float = 0.0, delay: float = 0.0) -> None:
+        reset(self, drag, delay)
+        self.fixed_delay = float(delay)
+
+    PooledReleaseEstimator.reset = told  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        PooledReleaseEstimator.reset = reset  # type: ignore[method-assign]
+
+
+def catches(controller: str, told: str, level: str, pattern: str, seeds: list[int],
             max_catches: int) -> np.ndarray:  # fmt: skip
     """Mean catches before the first drop of the zero-action episodes of ``seeds``."""
+    kw: dict[str, Any] = {}
+    env_box: list[CascadeV1Env] = []
+    if told in ("true", "anchored"):
+        kw["delay_rule"] = lambda flights, gravity: env_box[0].delay
+    elif told == "pooled":
+        kw.update(delay_rule=pooled_flight_delay, anchor_frames=POOLED_FRAMES)
     env = CascadeV1Env(level=level, pattern=pattern, controller=controller,
-                       max_catches=max_catches)  # fmt: skip
-    if no_drag:
-        with drag_withheld():
-            return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
-    return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
+                       max_catches=max_catches, **kw)  # fmt: skip
+    env_box.append(env)
+    blocks = {"no_drag": drag_withheld, "true": prior_told_true}
+    block = blocks[told]() if told in blocks else None
+    if block is None:
+        return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
+    with block:
+        return np.array([env.play(s)[0] for s in seeds], dtype=np.int64)
 
 
 def run(pattern: str, levels: list[str], episodes: int, max_catches: int) -> dict[str, Any]:
@@ -80,6 +136,11 @@ def run(pattern: str, levels: list[str], episodes: int, max_catches: int) -> dic
             if name != "oracle_catch":
                 d = paired_mean_difference(v, got["oracle_catch"], name, "oracle_catch")
                 lv[f"{name}_minus_oracle_catch"] = {"value": d.difference, "ci": list(d.ci95)}
+        lv["steps"] = []
+        for upper, lower, what in STEPS:
+            d = paired_mean_difference(got[upper], got[lower], upper, lower)
+            lv["steps"].append({"upper": upper, "lower": lower, "what": what,
+                                "value": d.difference, "ci": list(d.ci95)})  # fmt: skip
         lv["cpu_s"] = time.process_time() - t0
         out["levels"][level] = lv
     return out
@@ -104,6 +165,9 @@ def main(argv: list[str] | None = None) -> int:
                 )
             )
             print(f"{args.pattern} {level:7s} {name:24s} {mean:6.2f}{diff}")
+        for st in lv["steps"]:
+            print(f"{args.pattern} {level:7s} step {st['upper']} - {st['lower']} ({st['what']}): "
+                  f"{st['value']:+.2f} [{st['ci'][0]:+.2f}, {st['ci'][1]:+.2f}]")  # fmt: skip
         print(f"{args.pattern} {level:7s} CPU {lv['cpu_s']:.1f} s")
     doc["machine"] = machine()
     print_json(doc)
