@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from baselines.juggling_bench.cascade_v1 import _paired
 from baselines.learned.delay_estimator import (
     CONTROLLER,
     FlightSamples,
@@ -121,16 +122,6 @@ def estimate_errors(rule: Any, samples: FlightSamples) -> dict[str, Any]:
             "rmse_ms": float(np.sqrt((e**2).mean())) if e.size else None,
         }
     return out
-
-
-def _paired_catches(a: Any, b: Any) -> dict[str, Any]:
-    from baselines.stats import group_bootstrap
-
-    if not np.array_equal(a.seeds, b.seeds):
-        raise ValueError("paired episodes must share their seeds")
-    d = (a.catches - b.catches).astype(np.float64)
-    value, lo, hi = group_bootstrap(lambda rows: float(d[rows].mean()), np.arange(d.size))
-    return {"value": value, "ci": [lo, hi]}
 
 
 def _paired_rate(a: Any, b: Any) -> dict[str, Any]:
@@ -235,7 +226,7 @@ def true_delay_reference(cell: str, folder: Path) -> dict[str, Any]:
     out = {"cell": cell, "row": _row_entry(told, True), "best_non_oracle": best}
     for name in dict.fromkeys(["delay_estimator_catch", "oracle_catch", best]):
         out[f"minus_{name}"] = {
-            "catches": _paired_catches(told, rows[name]),
+            "catches": _paired(told, rows[name]),
             "catch_rate": _paired_rate(told, rows[name]),
         }
     print(json.dumps(out, indent=1))
@@ -280,7 +271,7 @@ def pair_pooled(cell: str, folder: Path, out: Path, frames: int) -> dict[str, An
                 "seed": s["seed"],
                 "replay_equals_run": again["catch_rate"] == s["row"]["catch_rate"]
                 and again["catches"] == s["row"]["catches"],
-                "minus_pooled": _paired_catches(played, pooled),
+                "minus_pooled": _paired(played, pooled),
                 "minus_pooled_catch_rate": _paired_rate(played, pooled),
             }
         )
@@ -333,10 +324,10 @@ def run(
                 "training_rows": rule.info["training_rows"],
                 "val_errors": estimate_errors(rule, val),
                 "row": _row_entry(played, cascade),
-                "minus": {name: _paired_catches(played, e) for name, e in rows.items()},
+                "minus": {name: _paired(played, e) for name, e in rows.items()},
                 "minus_catch_rate": {name: _paired_rate(played, e) for name, e in rows.items()},
                 "oracle_catch_minus_row": {
-                    "catches": _paired_catches(rows["oracle_catch"], played),
+                    "catches": _paired(rows["oracle_catch"], played),
                     "catch_rate": _paired_rate(rows["oracle_catch"], played),
                 },
             }

@@ -70,7 +70,12 @@ from baselines.learned.model_file import (
     write_model_file,
 )
 from motion_envs.datasets.juggling import episode_seeds
-from motion_envs.models.juggling import DELAY_GRID, AnchoredFlight, mean_flight_delay
+from motion_envs.models.juggling import (
+    DELAY_GRID,
+    AnchoredFlight,
+    mean_flight_delay,
+    parabolic_minimum,
+)
 from motion_envs.models.juggling import release_residuals as _residuals
 
 __all__ = [
@@ -121,18 +126,15 @@ _SHAPES: dict[str, Callable[[int, int], dict[str, tuple[int, ...]]]] = {
         "y_scale": (1,),
     },
 }
-_STEP = float(DELAY_GRID[1] - DELAY_GRID[0])
 
 
-def _refined(r: NDArray[np.float64], k: int) -> float:
-    """The grid delay ``k`` moved to the vertex of the parabola through ``r[k-1:k+2]``
-    (at most half a step; the grid delay where a neighbour is missing or not finite)."""
-    if 0 < k < r.size - 1 and np.isfinite(r[k - 1 : k + 2]).all():
-        den = r[k - 1] - 2.0 * r[k] + r[k + 1]
-        if den > 0:
-            shift = float(np.clip(0.5 * (r[k - 1] - r[k + 1]) / den, -0.5, 0.5))
-            return float(DELAY_GRID[k]) + shift * _STEP
-    return float(DELAY_GRID[k])
+def _refined(r: NDArray[np.float64]) -> float:
+    """The least-residual grid delay of ``r`` refined below the grid by the parabola
+    through it and its neighbours (:func:`~motion_envs.models.juggling.parabolic_minimum`;
+    ``r`` has a finite entry)."""
+    d = parabolic_minimum(DELAY_GRID, r)
+    assert d is not None
+    return d
 
 
 def flight_features(
@@ -152,7 +154,7 @@ def flight_features(
         c = np.where(ok, rel / (scale if scale > 0 else 1.0), CURVE_CLIP)
         curves.append(np.minimum(c, CURVE_CLIP))
         grid_d.append(float(DELAY_GRID[k]))
-        fine_d.append(_refined(r, k))
+        fine_d.append(_refined(r))
         logs.append(math.log10(float(r[k]) + 1e-12))
         raws.append(r)
     if not curves:
@@ -162,7 +164,7 @@ def flight_features(
     pooled = np.sum(raws, axis=0)
     if np.isfinite(pooled).any():
         kp = int(np.argmin(pooled))
-        pooled_d, pooled_fine = float(DELAY_GRID[kp]) - base, _refined(pooled, kp) - base
+        pooled_d, pooled_fine = float(DELAY_GRID[kp]) - base, _refined(pooled) - base
     else:
         pooled_d = pooled_fine = 0.0
     x = np.concatenate(
