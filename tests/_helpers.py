@@ -181,3 +181,33 @@ def ranked_v2_play(
         return replace(eps, catches=catches, dropped=catches < 3)
 
     return play
+
+
+def assert_validation_first_in_grid_order(
+    calls: list[tuple[str, dict[str, Any], bool]], key: Any, grid: Any
+) -> None:
+    """A bench's choice on a grid read validation seeds only: the plays made while
+    choosing (``calls``: split, env keywords, whether choosing) are ``grid``'s candidates
+    in order (``key(kwargs)`` of each), all on validation seeds, and every validation play
+    comes before the first test play."""
+    chosen = [(s, kw) for s, kw, choosing in calls if choosing]
+    assert [s for s, _ in chosen] == ["val"] * len(grid)
+    assert [key(kw) for _, kw in chosen] == list(grid)
+    splits = [s for s, _, _ in calls]
+    assert "test" in splits and "val" not in splits[splits.index("test") :]
+
+
+def rank_cascade_catches(
+    spy: Any, calls: list[tuple[str, dict[str, Any], bool]], score: Any
+) -> None:
+    """Make a Cascade-v1 bench spy (``tests/test_cascade_v1.Spy``) record ``(split,
+    kwargs, choosing)`` in ``calls`` and catch ``score(kwargs, split)`` in each play, or,
+    where that is None, what the spy's own ``catches`` gives."""
+    catches = spy.catches
+
+    def ranked(policy: Any, kwargs: dict[str, Any], split: str) -> int:
+        calls.append((split, kwargs, spy.choosing))
+        got = score(kwargs, split)
+        return catches(policy, kwargs, split) if got is None else int(got)
+
+    spy.catches = ranked

@@ -26,6 +26,8 @@ from tests._helpers import (
     P0,
     T_R,
     V0,
+    assert_validation_first_in_grid_order,
+    rank_cascade_catches,
     ranked_v2_play,
     release_flight,
     release_frames,
@@ -138,16 +140,12 @@ def test_the_grid_is_declared_around_zero_smallest_correction_first() -> None:
 
 
 def _validation_first_in_grid_order(calls: list[tuple[str, dict[str, Any], bool]]) -> None:
-    """The choice's plays (``calls``: split, env keywords, whether choosing) are the
-    grid's candidates in order, on validation seeds, and every validation play comes
-    before the first test play."""
+    """The choice's plays are the offsets in order, on validation seeds, before any test."""
     from baselines.juggling_bench.v2 import ESTIMATOR_OFFSETS
 
-    chosen = [(s, kw) for s, kw, choosing in calls if choosing]
-    assert [s for s, _ in chosen] == ["val"] * len(ESTIMATOR_OFFSETS)
-    assert [kw.get("delay_offset", 0.0) for _, kw in chosen] == list(ESTIMATOR_OFFSETS)
-    splits = [s for s, _, _ in calls]
-    assert "test" in splits and "val" not in splits[splits.index("test") :]
+    assert_validation_first_in_grid_order(
+        calls, lambda kw: kw.get("delay_offset", 0.0), ESTIMATOR_OFFSETS
+    )
 
 
 def test_juggling_v2_the_estimates_offset_is_chosen_on_validation_seeds() -> None:
@@ -207,15 +205,17 @@ def test_cascade_v1_the_estimates_offset_is_chosen_on_validation_seeds() -> None
     spy = Spy()
     favoured = {"val": 0.02, "test": 0.0}
     calls: list[tuple[str, dict[str, Any], bool]] = []
-    catches = spy.catches
-
-    def ranked(policy: Any, kwargs: dict[str, Any], split: str) -> int:
-        calls.append((split, kwargs, spy.choosing))
-        if kwargs["controller"] != NAME:
-            return catches(policy, kwargs, split)
-        return 15 if kwargs.get("delay_offset", 0.0) == favoured[split] else 2
-
-    spy.catches = ranked  # type: ignore[method-assign]
+    rank_cascade_catches(
+        spy,
+        calls,
+        lambda kw, split: (
+            None
+            if kw["controller"] != NAME
+            else 15
+            if kw.get("delay_offset", 0.0) == favoured[split]
+            else 2
+        ),
+    )
     config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_cascade_v1(
         config, spy.play, estimator_offset_chooser=spy.chooser(choose_estimator_offset)

@@ -32,7 +32,9 @@ from motion_envs.models.juggling import (
 from tests._helpers import (
     P0,
     T_R,
+    assert_validation_first_in_grid_order,
     check_env_contract,
+    rank_cascade_catches,
     ranked_v2_play,
     release_flight,
     release_frames,
@@ -272,16 +274,12 @@ def _pair(kwargs: dict[str, Any]) -> tuple[float, float]:
 
 
 def _validation_first_in_grid_order(calls: list[tuple[str, dict[str, Any], bool]]) -> None:
-    """The choice's plays are the grid's pairs in order, on validation seeds, and every
-    validation play comes before the first test play."""
+    """The choice's plays are the grid's pairs in order, on validation seeds, before any
+    test play, each of the row's controller."""
     from baselines.juggling_bench.v2 import ESTIMATOR_TRACKER_GRID
 
-    chosen = [(s, kw) for s, kw, choosing in calls if choosing]
-    assert [s for s, _ in chosen] == ["val"] * len(ESTIMATOR_TRACKER_GRID)
-    assert all(kw["controller"] == NAME for _, kw in chosen)
-    assert [_pair(kw) for _, kw in chosen] == list(ESTIMATOR_TRACKER_GRID)
-    splits = [s for s, _, _ in calls]
-    assert "test" in splits and "val" not in splits[splits.index("test") :]
+    assert all(kw["controller"] == NAME for _, kw, choosing in calls if choosing)
+    assert_validation_first_in_grid_order(calls, _pair, ESTIMATOR_TRACKER_GRID)
 
 
 def test_juggling_v2_the_estimates_tracker_is_chosen_on_validation_seeds() -> None:
@@ -337,15 +335,13 @@ def test_cascade_v1_the_estimates_tracker_is_chosen_on_validation_seeds() -> Non
 
     spy = Spy()
     calls: list[tuple[str, dict[str, Any], bool]] = []
-    catches = spy.catches
-
-    def ranked(policy: Any, kwargs: dict[str, Any], split: str) -> int:
-        calls.append((split, kwargs, spy.choosing))
-        if kwargs["controller"] != NAME:
-            return catches(policy, kwargs, split)
-        return 15 if _pair(kwargs) == FAVOURED[split] else 2
-
-    spy.catches = ranked  # type: ignore[method-assign]
+    rank_cascade_catches(
+        spy,
+        calls,
+        lambda kw, split: (
+            None if kw["controller"] != NAME else 15 if _pair(kw) == FAVOURED[split] else 2
+        ),
+    )
     config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_cascade_v1(
         config, spy.play, estimator_tracker_chooser=spy.chooser(choose_estimator_tracker)

@@ -7,9 +7,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from _helpers import assert_validation_first_in_grid_order, rank_cascade_catches, ranked_v2_play
+
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
 from motion_envs.models.juggling import ANCHOR_FRAMES, pooled_flight_delay
-from tests._helpers import ranked_v2_play
 
 NAME = "juggler_delay_estimator_catch"
 #: The anchor frames the synthetic rankings favour per split.
@@ -36,15 +37,11 @@ def test_the_grid_is_declared_fewest_first_and_every_candidate_is_an_env_argumen
 
 
 def _validation_first_in_grid_order(calls: list[tuple[str, dict[str, Any], bool]]) -> None:
-    """The choice's plays are the grid's anchor frames in order, on validation seeds, and
-    every validation play comes before the first test play."""
+    """The choice's plays are the grid's anchor frames in order, on validation seeds,
+    before any test play."""
     from baselines.juggling_bench.v2 import POOLED_ANCHOR_FRAMES
 
-    chosen = [(s, kw) for s, kw, choosing in calls if choosing]
-    assert [s for s, _ in chosen] == ["val"] * len(POOLED_ANCHOR_FRAMES)
-    assert [_pooled(kw) for _, kw in chosen] == list(POOLED_ANCHOR_FRAMES)
-    splits = [s for s, _, _ in calls]
-    assert "test" in splits and "val" not in splits[splits.index("test") :]
+    assert_validation_first_in_grid_order(calls, _pooled, POOLED_ANCHOR_FRAMES)
 
 
 def test_juggling_v2_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
@@ -101,16 +98,13 @@ def test_cascade_v1_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
 
     spy = Spy()
     calls: list[tuple[str, dict[str, Any], bool]] = []
-    catches = spy.catches
-
-    def ranked(policy: Any, kwargs: dict[str, Any], split: str) -> int:
-        calls.append((split, kwargs, spy.choosing))
-        frames = _pooled(kwargs)
-        if frames is None:
-            return catches(policy, kwargs, split)
-        return 15 if frames == FAVOURED[split] else 2
-
-    spy.catches = ranked  # type: ignore[method-assign]
+    rank_cascade_catches(
+        spy,
+        calls,
+        lambda kw, split: (
+            None if _pooled(kw) is None else 15 if _pooled(kw) == FAVOURED[split] else 2
+        ),
+    )
     config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_cascade_v1(config, spy.play, pooled_chooser=spy.chooser(choose_pooled_anchor))
     (lv,) = doc["levels"]
