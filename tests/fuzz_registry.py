@@ -160,6 +160,8 @@ _JUGGLING_V2 = {
     "tracker_gain": "fraction",
     "timing_scale": "fraction",
     "observe_task_error": "flag",
+    "delay_rule": "rule",
+    "anchor_frames": "small_int",
     **_JUGGLING_RESIDUAL,
 }
 ENVS: dict[str, dict[str, object]] = {

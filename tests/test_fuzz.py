@@ -435,6 +435,10 @@ VALUES = {
     ),
     "count": COUNT,
     "optional_count": st.one_of(st.none(), COUNT),
+    # a release-anchored estimate's delay rule: a callable, or anything else
+    "rule": st.one_of(
+        st.none(), st.just(lambda flights, gravity: 0.15), NUMBERS, st.text(max_size=3)
+    ),
     "phases": st.one_of(
         st.lists(st.sampled_from(["toss", "go_down", "catch", "return", "x", ""]), max_size=5),
         st.tuples(st.sampled_from(["catch", "toss"])),
