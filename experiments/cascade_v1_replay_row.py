@@ -29,13 +29,22 @@ can be replayed alone and paired with them on the same test seeds.
   episodes (``equals_kept``: the replay plays what the bench played);
 * ``--replay DIR --kept``: the same pairing of ``DIR``'s own episodes of ``--row``,
   nothing played (a bench run with the row in it; its summary, with the hand
-  deviation, as the bench wrote it).
+  deviation, as the bench wrote it);
+* ``--pick DIR --rows A,B,... --val-episodes N``: how sure the bench's choice of the
+  best non-oracle row is. The named rows, each with the parameters ``DIR``'s bench chose
+  on validation (``pooled_estimator_catch`` with ``--pooled-anchor`` frames), are played
+  on ``N`` VALIDATION episodes (the bench's own are the first ``val_episodes`` of them,
+  checked against ``DIR``'s validation means: ``first_equal_bench``); per row the mean
+  catches with a 95 % bootstrap interval, the pick on the bench's episodes and on all
+  ``N``, and every row minus the pick on ``N`` (paired). No test seed is played.
 
 The demonstrations are SIMULATED.
 
     python experiments/cascade_v1_replay_row.py --bench DIR --pattern 5 --levels easy
     python experiments/cascade_v1_replay_row.py --replay DIR [--row oracle_catch] [--out F]
     python experiments/cascade_v1_replay_row.py --replay DIR --kept --row delay_estimator_catch
+    python experiments/cascade_v1_replay_row.py --pick DIR \
+        --rows late_meeting,pooled_estimator_catch --val-episodes 200 [--pooled-anchor 20]
 """
 
 from __future__ import annotations
@@ -178,6 +187,65 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
     return out
 
 
+def pick(folder: Path, rows: list[str], n: int, pooled_anchor: int) -> dict[str, Any]:
+    """The named rows on ``n`` validation episodes and the pick among them (module
+    docstring)."""
+    doc = json.loads((folder / "results.json").read_text(encoding="utf-8"))
+    config = CascadeV1Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
+    if n < config.val_episodes:
+        raise ValueError(f"--val-episodes must be >= the bench's {config.val_episodes}; got {n}")
+    out: dict[str, Any] = {}
+    for lv in doc["levels"]:
+        level = lv["level"]
+        tracker, est_tracker = lv["tracker"], lv["estimator_tracker"]
+        players = _players(
+            level, config, lv["late_offset_s"], tuple(lv["constant"]),
+            (tracker["gain"], tracker["offset_s"]), lv["estimator_offset_s"],
+            (est_tracker["gain"], est_tracker["offset_s"]), pooled_anchor,
+        )  # fmt: skip
+        unknown = [r for r in rows if r not in players or r in REFERENCES]
+        if unknown:
+            raise ValueError(f"--rows: not non-oracle rows of the bench: {unknown}")
+        eps: dict[str, CascadeEpisodes] = {}
+        for row in rows:
+            ctl, policy, off, gain, extra = players[row]
+            eps[row] = cascade_v1_episodes(
+                policy, _kwargs(level, config, ctl, off, gain, extra), "val", n
+            )
+        k = config.val_episodes
+        first = {r: float(e.catches[:k].mean()) for r, e in eps.items()}
+        full = {r: float(e.catches.mean()) for r, e in eps.items()}
+        order = [r for r in ROWS if r in eps]  # the bench's rule: the first on a tie
+        best_first, best_full = (max(order, key=means.get) for means in (first, full))
+        out[level] = {
+            "val_episodes": n,
+            "bench_val_episodes": k,
+            "rows": {r: row_summary(e) for r, e in eps.items()},
+            "first_mean_catches": first,
+            "first_equal_bench": {
+                r: first[r] == lv["val_mean_catches"][r] for r in eps if r in lv["val_mean_catches"]
+            },
+            "pick_on_bench_episodes": best_first,
+            "pick_on_all": best_full,
+            "minus_pick_on_all": {
+                r: _paired(e, eps[best_full]) for r, e in eps.items() if r != best_full
+            },
+        }
+        print(f"{level}: pick on the bench's {k} validation episodes {best_first}, on {n} "
+              f"{best_full}")  # fmt: skip
+        for r in sorted(eps, key=lambda r: -full[r]):
+            lo, hi = out[level]["rows"][r]["catches_mean_ci"]
+            d = out[level]["minus_pick_on_all"].get(r)
+            vs = (
+                ""
+                if d is None
+                else f"; - {best_full} {d['value']:+.2f} [{d['ci'][0]:+.2f}, {d['ci'][1]:+.2f}]"
+            )
+            print(f"  {r:24s} {full[r]:.2f} [{lo:.2f}, {hi:.2f}] on {n} (first {k}: "
+                  f"{first[r]:.2f}){vs}")  # fmt: skip
+    return out
+
+
 def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
     m = got["row"]
     (mlo, mhi), (rlo, rhi) = m["catches_mean_ci"], m["catch_rate_ci"]
@@ -218,9 +286,21 @@ def main() -> None:
     ap.add_argument("--row", default="oracle_catch")
     ap.add_argument("--kept", action="store_true", help="pair DIR's own episodes of --row")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--pick", type=Path, default=None)
+    ap.add_argument("--rows", default="late_meeting,pooled_estimator_catch")
+    ap.add_argument("--val-episodes", type=int, default=200)
+    ap.add_argument("--pooled-anchor", type=int, default=ANCHOR_FRAMES)
     args = ap.parse_args()
-    if (args.bench is None) == (args.replay is None):
-        ap.error("give one of --bench DIR and --replay DIR")
+    if sum(a is not None for a in (args.bench, args.replay, args.pick)) != 1:
+        ap.error("give one of --bench DIR, --replay DIR and --pick DIR")
+    if args.pick is not None:
+        try:
+            picked = pick(args.pick, args.rows.split(","), args.val_episodes, args.pooled_anchor)
+        except ValueError as err:
+            ap.error(str(err))
+        if args.out:
+            atomic_write_text(args.out, json.dumps(picked, indent=2) + "\n")
+        return
     if args.bench is not None:
         bench(args.bench, args.pattern, tuple(args.levels.split(",")))
         return
