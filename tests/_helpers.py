@@ -211,3 +211,37 @@ def rank_cascade_catches(
         return catches(policy, kwargs, split) if got is None else int(got)
 
     spy.catches = ranked
+
+
+def run_ranked_v2(
+    controller: str, wins: Any, **choosers: Any
+) -> tuple[dict[str, Any], list[tuple[str, dict[str, Any], bool]]]:
+    """Juggling-v2's bench on one small medium level (5 test and 4 validation episodes,
+    no ILC) over a spy ranked by :func:`ranked_v2_play` (``controller`` catches every toss
+    where ``wins(kwargs, split)``), each chooser keyword's function spied: the bench's
+    document and the plays ``(split, kwargs, choosing)``."""
+    from baselines.juggling_bench.v2 import V2Config, run_v2
+    from tests.test_juggling_v2_bench import Spy
+
+    spy = Spy()
+    calls: list[tuple[str, dict[str, Any], bool]] = []
+    play = ranked_v2_play(spy, calls, controller, wins)
+    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = run_v2(config, play, **{k: spy.chooser(f) for k, f in choosers.items()})
+    return doc, calls
+
+
+def run_ranked_cascade_v1(
+    score: Any, **choosers: Any
+) -> tuple[dict[str, Any], list[tuple[str, dict[str, Any], bool]]]:
+    """Cascade-v1's bench likewise (:func:`rank_cascade_catches` with ``score``): the
+    bench's document and the plays."""
+    from baselines.juggling_bench.cascade_v1 import CascadeV1Config, run_cascade_v1
+    from tests.test_cascade_v1 import Spy
+
+    spy = Spy()
+    calls: list[tuple[str, dict[str, Any], bool]] = []
+    rank_cascade_catches(spy, calls, score)
+    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
+    doc = run_cascade_v1(config, spy.play, **{k: spy.chooser(f) for k, f in choosers.items()})
+    return doc, calls

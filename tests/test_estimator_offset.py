@@ -27,11 +27,11 @@ from tests._helpers import (
     T_R,
     V0,
     assert_validation_first_in_grid_order,
-    rank_cascade_catches,
-    ranked_v2_play,
     release_flight,
     release_frames,
     rollout_digest,
+    run_ranked_cascade_v1,
+    run_ranked_v2,
 )
 
 NAME = "juggler_delay_estimator_catch"
@@ -156,23 +156,16 @@ def test_juggling_v2_the_estimates_offset_is_chosen_on_validation_seeds() -> Non
 
     from baselines.juggling_bench.v2 import (
         ESTIMATOR_OFFSETS,
-        V2Config,
         choose_estimator_offset,
         report_v2,
-        run_v2,
     )
-    from tests.test_juggling_v2_bench import Spy
 
-    spy = Spy()
     favoured = {"val": 0.02, "test": 0.0}
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-
-    play = ranked_v2_play(
-        spy, calls, NAME, lambda kw, split: kw.get("delay_offset", 0.0) == favoured[split]
+    doc, calls = run_ranked_v2(
+        NAME,
+        lambda kw, split: kw.get("delay_offset", 0.0) == favoured[split],
+        estimator_offset_chooser=choose_estimator_offset,
     )
-
-    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_v2(config, play, estimator_offset_chooser=spy.chooser(choose_estimator_offset))
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)
     assert lv["estimator_offset_s"] == 0.02
@@ -196,18 +189,11 @@ def test_cascade_v1_the_estimates_offset_is_chosen_on_validation_seeds() -> None
     """Cascade-v1's bench likewise, by mean catches before the first drop: 15 on
     validation only at +20 ms, on test only at 0 ms."""
     from baselines.juggling_bench.cascade_v1 import (
-        CascadeV1Config,
         choose_estimator_offset,
-        run_cascade_v1,
     )
-    from tests.test_cascade_v1 import Spy
 
-    spy = Spy()
     favoured = {"val": 0.02, "test": 0.0}
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-    rank_cascade_catches(
-        spy,
-        calls,
+    doc, calls = run_ranked_cascade_v1(
         lambda kw, split: (
             None
             if kw["controller"] != NAME
@@ -215,10 +201,7 @@ def test_cascade_v1_the_estimates_offset_is_chosen_on_validation_seeds() -> None
             if kw.get("delay_offset", 0.0) == favoured[split]
             else 2
         ),
-    )
-    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_cascade_v1(
-        config, spy.play, estimator_offset_chooser=spy.chooser(choose_estimator_offset)
+        estimator_offset_chooser=choose_estimator_offset,
     )
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)

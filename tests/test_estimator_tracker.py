@@ -34,11 +34,11 @@ from tests._helpers import (
     T_R,
     assert_validation_first_in_grid_order,
     check_env_contract,
-    rank_cascade_catches,
-    ranked_v2_play,
     release_flight,
     release_frames,
     rollout_digest,
+    run_ranked_cascade_v1,
+    run_ranked_v2,
 )
 
 NAME = "juggler_estimator_tracker_catch"
@@ -289,21 +289,16 @@ def test_juggling_v2_the_estimates_tracker_is_chosen_on_validation_seeds() -> No
     enters the best non-oracle row's choice (the only row at 1.0 on validation)."""
     from baselines.juggling_bench.v2 import (
         ESTIMATOR_TRACKER_GRID,
-        V2Config,
         choose_estimator_tracker,
         report_v2,
-        run_v2,
         tracker_key,
     )
-    from tests.test_juggling_v2_bench import Spy
 
-    spy = Spy()
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-
-    play = ranked_v2_play(spy, calls, NAME, lambda kw, split: _pair(kw) == FAVOURED[split])
-
-    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_v2(config, play, estimator_tracker_chooser=spy.chooser(choose_estimator_tracker))
+    doc, calls = run_ranked_v2(
+        NAME,
+        lambda kw, split: _pair(kw) == FAVOURED[split],
+        estimator_tracker_chooser=choose_estimator_tracker,
+    )
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)
     assert lv["estimator_tracker"] == {"gain": 0.25, "offset_s": 0.02}
@@ -326,25 +321,15 @@ def test_cascade_v1_the_estimates_tracker_is_chosen_on_validation_seeds() -> Non
     """Cascade-v1's bench likewise, by mean catches before the first drop: 15 on
     validation only at ``(0.25, +20 ms)``, on test only at ``(1, 0)``."""
     from baselines.juggling_bench.cascade_v1 import (
-        CascadeV1Config,
         choose_estimator_tracker,
         report_cascade_v1,
-        run_cascade_v1,
     )
-    from tests.test_cascade_v1 import Spy
 
-    spy = Spy()
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-    rank_cascade_catches(
-        spy,
-        calls,
+    doc, calls = run_ranked_cascade_v1(
         lambda kw, split: (
             None if kw["controller"] != NAME else 15 if _pair(kw) == FAVOURED[split] else 2
         ),
-    )
-    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_cascade_v1(
-        config, spy.play, estimator_tracker_chooser=spy.chooser(choose_estimator_tracker)
+        estimator_tracker_chooser=choose_estimator_tracker,
     )
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)

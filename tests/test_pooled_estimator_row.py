@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from _helpers import assert_validation_first_in_grid_order, rank_cascade_catches, ranked_v2_play
+from _helpers import assert_validation_first_in_grid_order, run_ranked_cascade_v1, run_ranked_v2
 
 from motion_envs.envs.juggling import CascadeV1Env, JugglingV2Env
 from motion_envs.models.juggling import ANCHOR_FRAMES, pooled_flight_delay
@@ -51,21 +51,14 @@ def test_juggling_v2_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
     only row at 1.0 on validation)."""
     from baselines.juggling_bench.v2 import (
         POOLED_ANCHOR_FRAMES,
-        V2Config,
         anchor_key,
         choose_pooled_anchor,
         report_v2,
-        run_v2,
     )
-    from tests.test_juggling_v2_bench import Spy
 
-    spy = Spy()
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-
-    play = ranked_v2_play(spy, calls, NAME, lambda kw, split: _pooled(kw) == FAVOURED[split])
-
-    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_v2(config, play, pooled_chooser=spy.chooser(choose_pooled_anchor))
+    doc, calls = run_ranked_v2(
+        NAME, lambda kw, split: _pooled(kw) == FAVOURED[split], pooled_chooser=choose_pooled_anchor
+    )
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)
     assert lv["pooled_anchor_frames"] == 16
@@ -89,24 +82,16 @@ def test_cascade_v1_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
     """Cascade-v1's bench likewise, by mean catches before the first drop: 15 on
     validation only at 16 frames, on test only at 8."""
     from baselines.juggling_bench.cascade_v1 import (
-        CascadeV1Config,
         choose_pooled_anchor,
         report_cascade_v1,
-        run_cascade_v1,
     )
-    from tests.test_cascade_v1 import Spy
 
-    spy = Spy()
-    calls: list[tuple[str, dict[str, Any], bool]] = []
-    rank_cascade_catches(
-        spy,
-        calls,
+    doc, calls = run_ranked_cascade_v1(
         lambda kw, split: (
             None if _pooled(kw) is None else 15 if _pooled(kw) == FAVOURED[split] else 2
         ),
+        pooled_chooser=choose_pooled_anchor,
     )
-    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
-    doc = run_cascade_v1(config, spy.play, pooled_chooser=spy.chooser(choose_pooled_anchor))
     (lv,) = doc["levels"]
     _validation_first_in_grid_order(calls)
     assert lv["pooled_anchor_frames"] == 16
