@@ -212,7 +212,9 @@ ENVS: dict[str, dict[str, object]] = {
         },
     },
     "MotionEnvs/Juggling-v2": {"kwargs": _JUGGLING_V2},
-    "MotionEnvs/Cascade-v1": {"kwargs": {**_JUGGLING_V2, "pattern": "name"}},
+    "MotionEnvs/Cascade-v1": {
+        "kwargs": {**_JUGGLING_V2, "pattern": "name", "anchor_start": "flag"}
+    },
     "MotionEnvs/Cascade-v0": {
         "kwargs": {
             **_JUGGLING_LEVEL,

@@ -30,6 +30,7 @@ from motion_envs.envs.juggling._cascade_v1_errors import (
 from motion_envs.envs.juggling._likeness import LikenessQuery
 from motion_envs.envs.juggling._shared import (
     LevelsEnvMixin,
+    check_anchor_start,
     check_delay_offset,
     check_delay_rule,
     check_timing_scale,
@@ -247,6 +248,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
     | `tracker_gain`    | **float** | `0.0`       | `juggler_delay_tracker`'s gain `k` (0-1.5; 0: the mean-delay catch plan), or `juggler_estimator_tracker_catch`'s (0: `juggler_delay_estimator_catch` told `delay_offset`) |
     | `delay_rule`      | **callable** | `None`   | how the pooled estimate is made from the episode's anchored flights of every ball, `(flights, gravity) -> delay` (:class:`~motion_envs.models.juggling.DelayRule`; None: each flight's least-residual delay, averaged); `juggler_delay_estimator`, `juggler_delay_estimator_catch`, `juggler_estimator_tracker_catch` only |
     | `anchor_frames`   | **int**   | `8`         | the frames after each release the estimate is made from (>= 3); the same controllers only |
+    | `anchor_start`    | **bool**  | `False`     | each ball in flight at the start also anchored on the throw it left its thrower's hand with before `t = 0` (its time and point, the juggler's own; the velocity fitted), so the pooled estimate can come before the episode's first release is seen; the same controllers only |
     | `max_catches`     | **int**   | `30`        | catches after which the episode is truncated |
     | `residual_scale`  | **float** | `0.05`      | m of residual for an action of 1 |
     | `residual_phases` | **tuple** | `None`      | phases in which a hand's residual acts; None: all |
@@ -267,7 +269,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
       leaving its rollouts unchanged, and then its timing entry, ``timing_scale`` 0 by
       default; the controller ``juggler_estimator_tracker_catch`` added 2026-12-07, every
       other controller's rollout unchanged; ``delay_rule`` and ``anchor_frames`` added
-      2026-12-07, their defaults leaving every rollout unchanged).
+      2026-12-07, their defaults leaving every rollout unchanged; ``anchor_start`` added
+      2026-12-07, False by default, every rollout unchanged).
     * v0: the pattern on Juggling-v1's physics, sensor and levels.
     """
 
@@ -292,6 +295,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         timing_scale: float = 0.0,
         delay_rule: DelayRule | None = None,
         anchor_frames: int = ANCHOR_FRAMES,
+        anchor_start: bool = False,
     ) -> None:
         self.level = check_choice(level, "level", CASCADE_V1_LEVELS)
         #: Whether the observation ends with each hand's last catch's task error.
@@ -302,6 +306,8 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         #: s of told delay per unit of the action's timing entry (0: no timing entry)
         self.timing_scale = check_timing_scale(timing_scale, self.controller_name)
         rule, anchors = check_delay_rule(delay_rule, anchor_frames, self.controller_name)
+        #: whether the balls in flight at the start are anchored on their throws
+        self.anchor_start = check_anchor_start(anchor_start, self.controller_name)
         self._init_episode_arguments(
             (max_catches, residual_scale, residual_phases, reward_weights),
             (render_mode, width, height),
@@ -332,6 +338,7 @@ class CascadeV1Env(SideCameraMixin, LevelsEnvMixin, gym.Env):
         self.view = CascadeBallView(
             self.balls, mode, self.gravity, lv.mean_delay + (0.0 if told else self.delay_offset),
             catch_height(self.controller), lead, tracker, estimate, rule, anchors,
+            self.anchor_start,
         )  # fmt: skip
         if self.timing_scale and tracker is None:  # the estimator's timing entry
             self.view.adjust = 0.0

@@ -37,6 +37,7 @@ __all__ = [
     "TIMING_CONTROLLERS",
     "TRACKER_CONTROLLERS",
     "LevelsEnvMixin",
+    "check_anchor_start",
     "check_delay_offset",
     "check_delay_rule",
     "check_phases",
@@ -177,6 +178,17 @@ def check_delay_rule(
         raise ValueError(f"delay_rule and anchor_frames are for the controllers "
                          f"{list(RULE_CONTROLLERS)}; got controller={controller!r}")  # fmt: skip
     return delay_rule, int(anchor_frames)
+
+
+def check_anchor_start(anchor_start: bool, controller: str) -> bool:
+    """``anchor_start`` (a bool), True only for the :data:`RULE_CONTROLLERS`; else one-line
+    ValueError naming the argument."""
+    if not isinstance(anchor_start, (bool, np.bool_)):
+        raise ValueError(f"anchor_start must be True or False; got {anchor_start!r}")
+    if anchor_start and controller not in RULE_CONTROLLERS:
+        raise ValueError(f"anchor_start is for the controllers {list(RULE_CONTROLLERS)}; "
+                         f"got controller={controller!r}")  # fmt: skip
+    return bool(anchor_start)
 
 
 def check_phases(phases: Sequence[str] | None) -> tuple[str, ...] | None:

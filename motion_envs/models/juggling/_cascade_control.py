@@ -93,12 +93,16 @@ class CascadeStart:
     """The world at ``t = 0`` (world frame; :meth:`CascadeController.start`):
     ``holder[b]`` the hand holding ball ``b`` or -1 (flying), ``thrower[b]`` the hand
     that threw a flying ball (-1 for a held one), ``ball_pos``, ``ball_vel`` ``(B, 2)``
-    (a held ball's rows are zero: it sits in its hand)."""
+    (a held ball's rows are zero: it sits in its hand), ``releases[b]`` the throw
+    ``(time, x, z)`` a flying ball left its thrower's hand with (its time before 0; None
+    for a held ball; empty: not known). The throws are the juggler's own: what a release
+    estimator may anchor the starting balls on."""
 
     holder: tuple[int, ...]
     thrower: tuple[int, ...]
     ball_pos: FloatArray
     ball_vel: FloatArray
+    releases: tuple[tuple[float, float, float] | None, ...] = ()
 
 
 def _own(h: int, xz: FloatArray) -> FloatArray:
@@ -183,14 +187,16 @@ class CascadeController:
         n, g = self.balls, self.task.gravity
         pos, vel = np.zeros((n, 2)), np.zeros((n, 2))
         thrower = [-1] * n
+        releases: list[tuple[float, float, float] | None] = [None] * n
         for b, h, t_r in self._initial_throws():
             p = _own(h, self.pattern.release_position)
             v = _own(h, self.pattern.release_velocity)
             s = -t_r
             pos[b], vel[b] = ballistic_position(p, v, s, g), v - [0.0, g * s]
             thrower[b] = h
+            releases[b] = (float(t_r), float(p[0]), float(p[1]))
         holder = (0, 1) + (-1,) * (n - 2)
-        return CascadeStart(holder, tuple(thrower), pos, vel)
+        return CascadeStart(holder, tuple(thrower), pos, vel, tuple(releases))
 
     # -- episode --------------------------------------------------------------------
     def reset(self, state: CascadeState, rng: np.random.Generator | None = None) -> None:

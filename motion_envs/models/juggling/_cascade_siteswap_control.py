@@ -168,6 +168,7 @@ class SiteswapController:
         n = self.balls
         pos, vel = np.zeros((n, 2)), np.zeros((n, 2))
         holder, thrower = [-1] * n, [-1] * n
+        releases: list[tuple[float, float, float] | None] = [None] * n
         g = self.task.gravity
         for b, (land, k) in enumerate(self._past()):
             if land <= 1:
@@ -178,7 +179,8 @@ class SiteswapController:
             s = -self.plan.time(k)
             pos[b], vel[b] = ballistic_position(p, v, s, g), v - np.array((0.0, g * s))
             thrower[b] = k % 2
-        return CascadeStart(tuple(holder), tuple(thrower), pos, vel)
+            releases[b] = (float(self.plan.time(k)), float(p[0]), float(p[1]))
+        return CascadeStart(tuple(holder), tuple(thrower), pos, vel, tuple(releases))
 
     def reset(self, state: CascadeState, rng: np.random.Generator | None = None) -> None:
         """Start an episode from the (measured) state of :meth:`start` (``rng`` unused:

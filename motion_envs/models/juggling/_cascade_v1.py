@@ -329,6 +329,13 @@ class CascadeBallView:
         Mode ``"release"`` only: the :class:`~motion_envs.models.juggling.DelayRule`
         that makes the pooled delay from every ball's anchored flights (None: the mean of
         the flights' delays) and the frames each flight is anchored on.
+    anchor_start:
+        Mode ``"release"`` only: each ball in flight at the start is anchored on the throw
+        it left its thrower's hand with before ``t = 0`` (:attr:`CascadeStart.releases`,
+        the juggler's own throw: its time and point; the ball's velocity is fitted, so a
+        scattered start is anchored exactly) and tells the pooled delay as every release
+        does; False: its flight tells none (the estimate waits for the first release of
+        the episode).
 
     Attributes
     ----------
@@ -345,6 +352,7 @@ class CascadeBallView:
         self, balls: int, mode: str, gravity: float, delay: float, height: float,
         lead: float = 0.0, tracker: DelayTracker | None = None, offset: float = 0.0,
         rule: DelayRule | None = None, anchor_frames: int = ANCHOR_FRAMES,
+        anchor_start: bool = False,
     ) -> None:  # fmt: skip
         need = "release" if isinstance(tracker, CorrectionTracker) else "mean_delay"
         if tracker is not None and mode != need:
@@ -352,6 +360,9 @@ class CascadeBallView:
                              f"got {mode!r}")  # fmt: skip
         if offset and mode != "release":
             raise ValueError(f"offset is for the estimators' mode 'release'; got {mode!r}")
+        if anchor_start and mode != "release":
+            raise ValueError(f"anchor_start is for the estimators' mode 'release'; got {mode!r}")
+        self.anchor_start = bool(anchor_start)
         self.tracker = tracker
         self.offset, self.prior = float(offset), float(delay)
         self.adjust: float | None = None
@@ -382,7 +393,8 @@ class CascadeBallView:
 
     def reset(self, nominal: CascadeStart, drags: FloatArray, delay: float) -> None:
         """A new episode at ``t = 0``: the oracle told each ball's drag and the delay;
-        each ball in flight at the start known by its ``nominal`` (unscattered) state."""
+        each ball in flight at the start known by its ``nominal`` (unscattered) state and,
+        with :attr:`anchor_start`, anchored on its throw (``nominal.releases``)."""
         self.priors = []
         self.pool.clear()
         if self.anchors is not None:
@@ -394,7 +406,10 @@ class CascadeBallView:
             est.reset(float(drags[i]), delay)
             p, v = nominal.ball_pos[i].copy(), nominal.ball_vel[i].copy()
             self.priors.append((0.0, p, v))
-            if nominal.holder[i] < 0 and isinstance(est, PooledReleaseEstimator):
+            throw = nominal.releases[i] if nominal.releases else None
+            if nominal.holder[i] < 0 and self.anchor_start and throw is not None:
+                est.released(*throw)  # anchored on the juggler's own throw before t = 0
+            elif nominal.holder[i] < 0 and isinstance(est, PooledReleaseEstimator):
                 est.flying_at_start(0.0, float(p[0]), float(p[1]))
             elif nominal.holder[i] < 0:
                 est.released(0.0, float(p[0]), float(p[1]))
