@@ -23,7 +23,7 @@ can be replayed alone and paired with them on the same test seeds.
   in ``estimator_offset_val_mean_catches``; the 0 ms candidate, ``delay_estimator_catch``
   itself, is checked against ``DIR``'s validation mean of that row,
   ``zero_offset_equals_kept_val``); ``pooled_estimator_catch`` likewise first gets its
-  anchor frames chosen on the validation seeds
+  anchor frames and start anchor chosen on the validation seeds
   (:func:`~baselines.juggling_bench.cascade_v1.choose_pooled_anchor`; its table in
   ``pooled_val_mean_catches``). A row ``DIR`` holds is compared with its kept
   episodes (``equals_kept``: the replay plays what the bench played);
@@ -32,7 +32,8 @@ can be replayed alone and paired with them on the same test seeds.
   deviation, as the bench wrote it);
 * ``--pick DIR --rows A,B,... --val-episodes N``: how sure the bench's choice of the
   best non-oracle row is. The named rows, each with the parameters ``DIR``'s bench chose
-  on validation (``pooled_estimator_catch`` with ``--pooled-anchor`` frames), are played
+  on validation (``pooled_estimator_catch`` with ``--pooled-anchor`` frames, and with
+  ``--pooled-start`` the start anchored on its throws), are played
   on ``N`` VALIDATION episodes (the bench's own are the first ``val_episodes`` of them,
   checked against ``DIR``'s validation means: ``first_equal_bench``); per row the mean
   catches with a 95 % bootstrap interval, the pick on the bench's episodes and on all
@@ -44,7 +45,8 @@ The demonstrations are SIMULATED.
     python experiments/cascade_v1_replay_row.py --replay DIR [--row oracle_catch] [--out F]
     python experiments/cascade_v1_replay_row.py --replay DIR --kept --row delay_estimator_catch
     python experiments/cascade_v1_replay_row.py --pick DIR \
-        --rows late_meeting,pooled_estimator_catch --val-episodes 200 [--pooled-anchor 20]
+        --rows late_meeting,pooled_estimator_catch --val-episodes 200 \
+        [--pooled-anchor 20] [--pooled-start]
 """
 
 from __future__ import annotations
@@ -67,10 +69,11 @@ from baselines.juggling_bench.cascade_v1 import (
     cascade_v1_episodes,
     choose_estimator_offset,
     choose_pooled_anchor,
+    pooled_key,
     row_summary,
     run_cascade_v1,
 )
-from baselines.juggling_bench.v2 import anchor_key, offset_key
+from baselines.juggling_bench.v2 import offset_key
 from motion_envs._io import atomic_write_text
 from motion_envs.models.juggling import ANCHOR_FRAMES
 
@@ -135,12 +138,16 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
                 if zero is None
                 else est_means[offset_key(0.0)] == zero,
             }
-        pooled_anchor = lv.get("pooled_anchor_frames", ANCHOR_FRAMES)
+        pooled_anchor = (
+            lv.get("pooled_anchor_frames", ANCHOR_FRAMES),
+            lv.get("pooled_anchor_start", False),
+        )
         if row == "pooled_estimator_catch" and "pooled_anchor_frames" not in lv and not kept_row:
             pooled_anchor, pooled_means = choose_pooled_anchor(level, config)
-            val_means[row] = pooled_means[anchor_key(pooled_anchor)]
+            val_means[row] = pooled_means[pooled_key(pooled_anchor)]
             chosen = {
-                "pooled_anchor_frames": pooled_anchor,
+                "pooled_anchor_frames": pooled_anchor[0],
+                "pooled_anchor_start": pooled_anchor[1],
                 "pooled_val_mean_catches": pooled_means,
             }
         if kept_row:
@@ -187,7 +194,7 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
     return out
 
 
-def pick(folder: Path, rows: list[str], n: int, pooled_anchor: int) -> dict[str, Any]:
+def pick(folder: Path, rows: list[str], n: int, pooled_anchor: tuple[int, bool]) -> dict[str, Any]:
     """The named rows on ``n`` validation episodes and the pick among them (module
     docstring)."""
     doc = json.loads((folder / "results.json").read_text(encoding="utf-8"))
@@ -274,7 +281,8 @@ def _print_level(level: str, row: str, got: dict[str, Any]) -> None:
     if "pooled_anchor_frames" in got:
         means = {k: round(v, 2) for k, v in got["pooled_val_mean_catches"].items()}
         print(f"  pooled estimate's anchor frames chosen on validation: "
-              f"{got['pooled_anchor_frames']} (validation means {means})")  # fmt: skip
+              f"{got['pooled_anchor_frames']}, start anchored: {got['pooled_anchor_start']} "
+              f"(validation means {means})")  # fmt: skip
 
 
 def main() -> None:
@@ -290,12 +298,14 @@ def main() -> None:
     ap.add_argument("--rows", default="late_meeting,pooled_estimator_catch")
     ap.add_argument("--val-episodes", type=int, default=200)
     ap.add_argument("--pooled-anchor", type=int, default=ANCHOR_FRAMES)
+    ap.add_argument("--pooled-start", action="store_true", help="the pooled row's start anchor")
     args = ap.parse_args()
     if sum(a is not None for a in (args.bench, args.replay, args.pick)) != 1:
         ap.error("give one of --bench DIR, --replay DIR and --pick DIR")
     if args.pick is not None:
         try:
-            picked = pick(args.pick, args.rows.split(","), args.val_episodes, args.pooled_anchor)
+            choice = (args.pooled_anchor, args.pooled_start)
+            picked = pick(args.pick, args.rows.split(","), args.val_episodes, choice)
         except ValueError as err:
             ap.error(str(err))
         if args.out:

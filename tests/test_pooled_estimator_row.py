@@ -93,8 +93,9 @@ def test_cascade_v1_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
         pooled_chooser=choose_pooled_anchor,
     )
     (lv,) = doc["levels"]
-    _validation_first_in_grid_order(calls)
+    _validation_first_in_grid_order_cascade(calls)
     assert lv["pooled_anchor_frames"] == 16
+    assert lv["pooled_anchor_start"] is False  # tied with the start anchored: the first
     assert lv["pooled_val_mean_catches"]["16 frames"] == 15.0
     assert lv["val_mean_catches"]["pooled_estimator_catch"] == 15.0
     assert lv["best_non_oracle"] == "pooled_estimator_catch"
@@ -103,3 +104,47 @@ def test_cascade_v1_the_anchor_frames_are_chosen_on_validation_seeds() -> None:
     assert minus["minus_delay_estimator_catch"]["value"] == 2.0 - 1.0
     assert minus["minus_estimator_offset_catch"]["value"] == 2.0 - 1.0
     assert "pooled estimate's anchor frames 16 (chosen on validation)" in report_cascade_v1(doc)
+
+
+def _pooled_pair(kwargs: dict[str, Any]) -> tuple[int, bool] | None:
+    """Cascade-v1's pooled play's ``(anchor frames, start anchored)``, None for another."""
+    frames = _pooled(kwargs)
+    return None if frames is None else (frames, bool(kwargs.get("anchor_start", False)))
+
+
+def _validation_first_in_grid_order_cascade(calls: list[tuple[str, dict[str, Any], bool]]) -> None:
+    """Cascade-v1's choice's plays are its grid's pairs in order, on validation seeds,
+    before any test play."""
+    from baselines.juggling_bench.cascade_v1 import POOLED_GRID
+
+    assert_validation_first_in_grid_order(calls, _pooled_pair, POOLED_GRID)
+
+
+def test_cascade_v1_the_start_anchor_is_chosen_on_validation_seeds() -> None:
+    """Validation favours 12 frames with the start anchored, test 20 frames without: the
+    bench plays the validation pair on test and says it."""
+    from baselines.juggling_bench.cascade_v1 import (
+        POOLED_GRID,
+        choose_pooled_anchor,
+        report_cascade_v1,
+    )
+
+    favoured = {"val": (12, True), "test": (20, False)}
+    assert POOLED_GRID[: len(POOLED_GRID) // 2] == tuple((f, False) for f, _ in POOLED_GRID[4:])
+    doc, calls = run_ranked_cascade_v1(
+        lambda kw, split: (
+            None if _pooled_pair(kw) is None else 15 if _pooled_pair(kw) == favoured[split] else 2
+        ),
+        pooled_chooser=choose_pooled_anchor,
+    )
+    (lv,) = doc["levels"]
+    _validation_first_in_grid_order_cascade(calls)
+    assert (lv["pooled_anchor_frames"], lv["pooled_anchor_start"]) == (12, True)
+    assert lv["pooled_val_mean_catches"]["12 frames, start anchored"] == 15.0
+    assert lv["pooled_val_mean_catches"]["12 frames"] == 2.0
+    assert lv["rows"]["pooled_estimator_catch"]["catches_mean"] == 2.0  # its pair on test
+    tested = [_pooled_pair(kw) for s, kw, _ in calls if s == "test" and _pooled_pair(kw)]
+    assert tested == [(12, True)]
+    assert "anchor frames 12, the start anchored on its throws (chosen on validation)" in (
+        report_cascade_v1(doc)
+    )

@@ -77,10 +77,12 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   all the episode's anchored flights of every ball at once (the env's ``delay_rule``
   :func:`~motion_envs.models.juggling.pooled_flight_delay`: one least-squares delay,
   refined below the 5 ms grid, instead of the mean of each flight's grid delay), each
-  flight anchored on its first ``anchor_frames`` frames, the number of Juggling-v2's
-  :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` (declared before any run) with
-  the most mean catches before the first drop on VALIDATION episodes
-  (:func:`choose_pooled_anchor`); no offset; a competitor;
+  flight anchored on its first ``anchor_frames`` frames, and the balls in flight at the
+  start either telling no delay or anchored on the throws the juggler made before ``t =
+  0`` (the env's ``anchor_start``): the pair of :data:`POOLED_GRID` (Juggling-v2's
+  :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES`, without then with the start
+  anchor; declared before any run) with the most mean catches before the first drop on
+  VALIDATION episodes (:func:`choose_pooled_anchor`); no offset; a competitor;
 * ``fixed_point``: the juggler that catches at the nominal point and time, never
   looking (trivial);
 * ``random``: uniform random actions on the juggler (trivial; each episode's generator
@@ -93,7 +95,7 @@ env's own action space, :data:`RESIDUAL_SCALE` m per unit action):
   then scored on validation like every other row (``ilc=False``: not played).
 
 Every choice (the constant, the late offset, the tracker's pair, the estimate's offset,
-the estimate's tracker's pair, the pooled estimate's anchor frames;
+the estimate's tracker's pair, the pooled estimate's anchor frames and start anchor;
 the best non-oracle row, by mean catches before the first drop; ties: the first in grid or
 row order) is made on
 ``val_episodes`` VALIDATION episodes (``SPLIT_SEEDS["val"]``) before any test seed is
@@ -147,6 +149,7 @@ __all__ = [
     "CONSTANT_GRID",
     "FRESH_FRAME",
     "LATE_OFFSETS",
+    "POOLED_GRID",
     "REFERENCES",
     "RESIDUAL_SCALE",
     "ROWS",
@@ -164,6 +167,7 @@ __all__ = [
     "choose_tracker",
     "deviation_note",
     "plot_cascade_v1",
+    "pooled_key",
     "report_cascade_v1",
     "row_styles",
     "row_summary",
@@ -370,21 +374,42 @@ def choose_estimator_tracker(
     return (float(choice[0]), float(choice[1])), means
 
 
+#: ``pooled_estimator_catch``'s candidates ``(anchor frames, start anchored)``: Juggling-v2's
+#: :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES`, without the start anchor,
+#: then with it (ties: the first: no start anchor, the fewest frames).
+POOLED_GRID: tuple[tuple[int, bool], ...] = tuple(
+    (frames, start) for start in (False, True) for frames in v2.POOLED_ANCHOR_FRAMES
+)
+
+
+def pooled_key(choice: tuple[int, bool]) -> str:
+    """A :data:`POOLED_GRID` pair's key in the validation tables (``"16 frames"``,
+    ``"16 frames, start anchored"``)."""
+    frames, start = choice
+    return v2.anchor_key(frames) + (", start anchored" if start else "")
+
+
+def pooled_extra(choice: tuple[int, bool]) -> dict[str, Any]:
+    """The env keywords of ``pooled_estimator_catch`` with a :data:`POOLED_GRID` pair."""
+    frames, start = choice
+    return {**v2.pooled_kwargs(frames), **({"anchor_start": True} if start else {})}
+
+
 def choose_pooled_anchor(
     level: str, config: CascadeV1Config, play: Play = cascade_v1_episodes
-) -> tuple[int, dict[str, float]]:
-    """The anchor frames of :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` for
+) -> tuple[tuple[int, bool], dict[str, float]]:
+    """The pair ``(anchor frames, start anchored)`` of :data:`POOLED_GRID` for
     ``pooled_estimator_catch`` (``juggler_delay_estimator_catch`` with the pooled delay
     rule) with the most mean catches before the first drop on ``config.val_episodes``
-    VALIDATION episodes (ties: the first, the fewest), and every candidate's validation
-    mean (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
+    VALIDATION episodes (ties: the first), and every candidate's validation mean
+    (:func:`~baselines.juggling_bench.grid_choice.best_on_grid`)."""
 
-    def mean(frames: int) -> float:
-        kw = _kwargs(level, config, v2.ESTIMATOR_CONTROLLER, extra=v2.pooled_kwargs(frames))
+    def mean(choice: tuple[int, bool]) -> float:
+        kw = _kwargs(level, config, v2.ESTIMATOR_CONTROLLER, extra=pooled_extra(choice))
         return _val_mean(play, None, kw, config)
 
-    frames, means = best_on_grid(v2.POOLED_ANCHOR_FRAMES, mean, v2.anchor_key)
-    return int(frames), means
+    (frames, start), means = best_on_grid(POOLED_GRID, mean, pooled_key)
+    return (int(frames), bool(start)), means
 
 
 @dataclass(frozen=True)
@@ -458,12 +483,13 @@ def _players(
     tracker: tuple[float, float] = (0.0, 0.0),
     estimator_offset: float = 0.0,
     estimator_tracker: tuple[float, float] = (0.0, 0.0),
-    pooled_anchor: int = ANCHOR_FRAMES,
+    pooled_anchor: tuple[int, bool] = (ANCHOR_FRAMES, False),
 ) -> dict[str, tuple[str, Policy, float, float, dict[str, Any]]]:
     """Each row's controller, policy, delay offset, tracker gain and other env keywords
     (``offset`` late meeting's, ``estimator_offset`` the estimate's, ``tracker`` and
     ``estimator_tracker`` the ``(gain, offset)`` pairs of the delay tracker and of the
-    estimate's tracker, ``pooled_anchor`` the pooled estimate's anchor frames)."""
+    estimate's tracker, ``pooled_anchor`` the pooled estimate's :data:`POOLED_GRID`
+    pair)."""
     delay = V2_LEVELS[level].mean_delay
     velocity = CascadeVelocityTimesDelay(pattern_spec(config.pattern).balls, delay, RESIDUAL_SCALE)
     return {
@@ -493,7 +519,7 @@ def _players(
             None,
             0.0,
             0.0,
-            v2.pooled_kwargs(pooled_anchor),
+            pooled_extra(pooled_anchor),
         ),
     }
 
@@ -582,7 +608,7 @@ def run_cascade_v1(
             "delay_estimator_catch": (est_means, v2.offset_key(0.0)),
             "estimator_offset_catch": (est_means, v2.offset_key(est_offset)),
             "estimator_tracker_catch": (est_tracker_means, v2.tracker_key(est_tracker)),
-            "pooled_estimator_catch": (pooled_means, v2.anchor_key(pooled_anchor)),
+            "pooled_estimator_catch": (pooled_means, pooled_key(pooled_anchor)),
         }
         val_means: dict[str, float] = {}
         for name, (ctl, policy, off, gain, extra) in players.items():
@@ -637,7 +663,8 @@ def run_cascade_v1(
                 "estimator_offset_val_mean_catches": est_means,
                 "estimator_tracker": {"gain": est_tracker[0], "offset_s": est_tracker[1]},
                 "estimator_tracker_val_mean_catches": est_tracker_means,
-                "pooled_anchor_frames": pooled_anchor,
+                "pooled_anchor_frames": pooled_anchor[0],
+                "pooled_anchor_start": pooled_anchor[1],
                 "pooled_val_mean_catches": pooled_means,
                 "val_mean_catches": val_means,
                 "best_non_oracle": best,
@@ -781,9 +808,10 @@ def report_cascade_v1(doc: dict[str, Any]) -> str:
                 f"{et_line} (mean catches)"
             )
         if "pooled_estimator_catch_minus" in lv:
-            line = v2.pooled_row_line(
-                lv["pooled_estimator_catch_minus"], lv["pooled_anchor_frames"], "+.2f"
-            )
+            frames = str(lv["pooled_anchor_frames"])
+            if lv.get("pooled_anchor_start", False):
+                frames += ", the start anchored on its throws"
+            line = v2.pooled_row_line(lv["pooled_estimator_catch_minus"], frames, "+.2f")
             lines.append(f"{lv['level']:7s} {line} (mean catches)")
         if "ilc" in lv:
             ilc = lv["ilc"]

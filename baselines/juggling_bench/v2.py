@@ -681,9 +681,9 @@ def pooled_row_minus(played: dict[str, Any], best: str, diff: Any) -> dict[str, 
     }
 
 
-def pooled_row_line(d: dict[str, Any], frames: int, fmt: str = "+.3f") -> str:
+def pooled_row_line(d: dict[str, Any], frames: int | str, fmt: str = "+.3f") -> str:
     """The report's line of :func:`pooled_row_minus` (``frames`` the chosen anchor
-    frames; ``fmt`` as :func:`tracker_line`'s)."""
+    frames, or their key with the start anchor; ``fmt`` as :func:`tracker_line`'s)."""
 
     def f(m: dict[str, Any]) -> str:
         return f"{m['value']:{fmt}} [{m['ci'][0]:{fmt}}, {m['ci'][1]:{fmt}}]"
