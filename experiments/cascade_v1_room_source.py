@@ -6,13 +6,16 @@ from the episode's start) against the same controller told the true delay but NO
 places the frames before the first anchored flight, set to the true delay, and its rule
 returning it), told it only once a flight is anchored (the rule alone: before, the
 level's mean), as it is (the default rule), and with the pooled rule on 20 anchor frames
-(``pooled_estimator_catch``'s, the frames validation chose on both levels); and the
-mean-delay catch plan. All with the zero action on the same VALIDATION seeds
+(``pooled_estimator_catch``'s, the frames validation chose on both levels), the last
+two also with the balls in flight at the start anchored on their throws before ``t = 0``
+(the env's ``anchor_start``: the first anchored flight comes sooner); and the mean-delay
+catch plan. All with the zero action on the same VALIDATION seeds
 (``SPLIT_SEEDS["val"] + i``; no test seed is played). Mean catches before the first drop
 (at most ``--max-catches``), each row minus ``oracle_catch`` paired over the seeds with a
 95 % bootstrap interval, and the steps between neighbouring rows (the drag; the oracle's
 own estimator against the hand-written one told the same; the delay before the first
-anchored flight; the estimate's error).
+anchored flight; the estimate's error; the same with the start anchored; the start
+anchor's gain).
 
     python experiments/cascade_v1_room_source.py [--pattern 3] [--levels medium hard]
         [--episodes 40] [--max-catches 30]
@@ -46,13 +49,16 @@ from motion_envs.models.juggling import (
 
 #: Row -> (controller, what it is told: ``"no_drag"`` the oracle's drag withheld,
 #: ``"true"`` the true delay from the start, ``"anchored"`` the true delay once a flight
-#: is anchored, ``"pooled"`` the pooled rule on 20 frames, ``""`` nothing).
+#: is anchored, ``"pooled"`` the pooled rule on 20 frames, ``""`` nothing; ``"_start"``:
+#: the balls in flight at the start anchored on their throws).
 ROWS: dict[str, tuple[str, str]] = {
     "oracle_catch": ("juggler_oracle_catch", ""),
     "oracle_catch_no_drag": ("juggler_oracle_catch", "no_drag"),
     "estimate_told_true_delay": ("juggler_delay_estimator_catch", "true"),
     "estimate_told_true_delay_anchored": ("juggler_delay_estimator_catch", "anchored"),
+    "estimate_told_true_delay_anchored_start": ("juggler_delay_estimator_catch", "anchored_start"),
     "pooled_estimator_catch_20": ("juggler_delay_estimator_catch", "pooled"),
+    "pooled_estimator_catch_20_start": ("juggler_delay_estimator_catch", "pooled_start"),
     "delay_estimator_catch": ("juggler_delay_estimator_catch", ""),
     "mean_delay_catch": ("juggler_mean_delay_catch", ""),
 }
@@ -67,6 +73,17 @@ STEPS = (
     ),
     ("estimate_told_true_delay_anchored", "delay_estimator_catch", "the estimate's error"),
     ("pooled_estimator_catch_20", "delay_estimator_catch", "the pooled rule on 20 frames"),
+    (
+        "estimate_told_true_delay",
+        "estimate_told_true_delay_anchored_start",
+        "the delay before the first anchored flight, the start anchored",
+    ),
+    (
+        "estimate_told_true_delay_anchored_start",
+        "pooled_estimator_catch_20_start",
+        "the pooled estimate's error, the start anchored",
+    ),
+    ("pooled_estimator_catch_20_start", "pooled_estimator_catch_20", "the start anchor"),
 )
 POOLED_FRAMES = 20
 
@@ -108,6 +125,9 @@ def catches(controller: str, told: str, level: str, pattern: str, seeds: list[in
     """Mean catches before the first drop of the zero-action episodes of ``seeds``."""
     kw: dict[str, Any] = {}
     env_box: list[CascadeV1Env] = []
+    if told.endswith("_start"):
+        kw["anchor_start"] = True
+        told = told.removesuffix("_start")
     if told in ("true", "anchored"):
         kw["delay_rule"] = lambda flights, gravity: env_box[0].delay
     elif told == "pooled":
