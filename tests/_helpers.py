@@ -245,3 +245,87 @@ def run_ranked_cascade_v1(
     config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4, ilc=False)
     doc = run_cascade_v1(config, spy.play, **{k: spy.chooser(f) for k, f in choosers.items()})
     return doc, calls
+
+
+#: The juggling benches' rows whose parameter a grid chooses (Juggling-v2's and
+#: Cascade-v1's alike): when the pick is made on the grids' episodes their plays score them.
+GRID_ROWS = frozenset(
+    {
+        "juggler",
+        "best_constant",
+        "juggler_mean_delay",
+        "late_meeting",
+        "delay_tracker",
+        "delay_estimator_catch",
+        "estimator_offset_catch",
+        "estimator_tracker_catch",
+        "pooled_estimator_catch",
+    }
+)
+
+
+def recording_ilc(calls: list[tuple[str, int, bool, str]], spy: Any, episodes: Any) -> Any:
+    """A stand-in for a bench's task-error ILC class recording its training and plays in
+    ``calls`` as ``(split, n, spy.choosing, "ilc")`` (training: split ``"train"``, n 0);
+    its ``evaluate(split, n)`` returns ``episodes(split, n)``."""
+
+    class RecordingILC:
+        c, d, history = np.zeros(2), 0.1, []
+
+        def __init__(self, *args: Any) -> None:
+            pass
+
+        def train(self) -> None:
+            calls.append(("train", 0, spy.choosing, "ilc"))
+
+        def evaluate(self, split: str, n: int) -> Any:
+            calls.append((split, n, spy.choosing, "ilc"))
+            return episodes(split, n)
+
+    return RecordingILC
+
+
+def assert_picked_on(
+    doc: dict[str, Any],
+    calls: list[tuple[str, int, bool, str]],
+    counts: tuple[int, int],
+    rows: Any,
+) -> None:
+    """A juggling bench's pick of the best row read ``counts = (val_episodes,
+    pick_episodes)`` validation episodes as it should: ``calls`` (its plays ``(split, n,
+    choosing, controller)``, the ILC's training as split ``"train"``) show the grids on
+    ``val_episodes``, the pick on ``pick_episodes`` of each row of ``rows`` (the
+    non-reference rows) once, or with equal counts of those off a grid only (the grids'
+    plays reused), the training and every validation play before the first test play;
+    the document's ``seeds`` say both counts."""
+    from motion_envs.datasets.juggling import SPLIT_SEEDS
+
+    val_episodes, pick_episodes = counts
+    first = SPLIT_SEEDS["val"]
+    assert doc["seeds"]["choice"] == {"split": "val", "first": first, "count": val_episodes}
+    assert doc["seeds"]["pick"] == {"split": "val", "first": first, "count": pick_episodes}
+    assert {(s, n) for s, n, choosing, _ in calls if choosing} == {("val", val_episodes)}
+    pick = [n for s, n, choosing, _ in calls if s == "val" and not choosing]
+    assert set(pick) == {pick_episodes}
+    played = set(rows) if pick_episodes > val_episodes else set(rows) - GRID_ROWS
+    assert len(pick) == len(played)
+    splits = [s for s, _, _, _ in calls]
+    assert "test" in splits and "val" not in splits[splits.index("test") :]
+    assert splits.index("train") < splits.index("test")
+
+
+def pick_ranking_catches(
+    kwargs: dict[str, Any], split: str, n: int, first: int, late: int
+) -> np.ndarray:
+    """The catches of ``n`` episodes of a juggling bench's play that tell a pick of the
+    best row on 4 validation episodes from one on more: on validation
+    ``juggler_mean_delay_catch`` catches ``first`` in each of the first 4 episodes and
+    none after, ``juggler_mean_delay`` at +40 ms (late meeting's grid candidate) ``late``
+    in every episode; every other play, and every test play, none."""
+    catches = np.zeros(n, dtype=np.int64)
+    ctl = kwargs["controller"]
+    if split == "val" and ctl == "juggler_mean_delay_catch":
+        catches[:4] = first
+    elif split == "val" and ctl == "juggler_mean_delay" and kwargs.get("delay_offset") == 0.04:
+        catches[:] = late
+    return catches

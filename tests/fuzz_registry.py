@@ -280,6 +280,7 @@ CLI_NUMERIC_OPTIONS: tuple[tuple[str, str], ...] = (
     ("juggling", "--mujoco-cycles"),
     ("juggling", "--episodes"),
     ("juggling", "--max-catches"),
+    ("juggling", "--pick-episodes"),
     ("juggling", "--n-balls"),
     ("juggling", "--pattern"),
     ("calibrate-cohort", "--max-evaluations"),

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from _helpers import assert_picked_on, pick_ranking_catches, recording_ilc
 from scipy.integrate import solve_ivp
 
 from baselines import options
@@ -255,6 +256,73 @@ def test_the_best_row_is_not_read_from_test_seeds() -> None:
     assert max(test_means, key=lambda r: test_means[r]) != "fixed_point"
 
 
+def _picked_cascade(
+    pick_episodes: int, monkeypatch: pytest.MonkeyPatch
+) -> tuple[dict[str, Any], list[tuple[str, int, bool, str]]]:
+    """Cascade-v1's bench (medium, 5 test and 4 validation episodes, every chooser spied)
+    picking on ``pick_episodes`` validation episodes, over a play where on validation
+    ``mean_delay_catch`` catches 9 balls in each of the first 4 episodes and none after,
+    late meeting (+40 ms only) 5 in every episode, a stand-in task-error ILC 1, every
+    other row none (on test: none at all); the document and the plays ``(split, n,
+    choosing, controller)``, the ILC's with controller ``"ilc"``."""
+    from baselines.juggling_bench import cascade_v1, cascade_v1_ilc
+
+    spy, calls = Spy(), []
+
+    def episodes(split: str, n: int, catches: Any) -> CascadeEpisodes:
+        return CascadeEpisodes(seeds=episode_seeds(split, n), catches=catches,
+                               tosses=catches + 1, dropped=np.ones(n, dtype=bool),
+                               time=np.full(n, 1.0))  # fmt: skip
+
+    def play(policy: Any, kwargs: dict[str, Any], split: str, n: int) -> CascadeEpisodes:
+        spy.play(policy, kwargs, split, n)  # fails on test while choosing
+        calls.append((split, n, spy.choosing, kwargs["controller"]))
+        return episodes(split, n, pick_ranking_catches(kwargs, split, n, 9, 5))
+
+    ilc = recording_ilc(calls, spy, lambda split, n: episodes(split, n, np.ones(n, np.int64)))
+    monkeypatch.setattr(cascade_v1_ilc, "CascadeTaskErrorILC", ilc)
+    config = CascadeV1Config(levels=("medium",), episodes=5, val_episodes=4,
+                             pick_episodes=pick_episodes)  # fmt: skip
+    choosers = {
+        f"{n}chooser": spy.chooser(getattr(cascade_v1, f"choose_{c}"))
+        for n, c in (("offset_", "late_offset"), ("constant_", "constant"),
+                     ("tracker_", "tracker"), ("estimator_offset_", "estimator_offset"),
+                     ("estimator_tracker_", "estimator_tracker"), ("pooled_", "pooled_anchor"))
+    }  # fmt: skip
+    return run_cascade_v1(config, play, **choosers), calls
+
+
+def test_the_best_row_is_picked_on_pick_episodes_validation_episodes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On the grids' 4 validation episodes mean_delay_catch (9) is above late meeting
+    (5); on 12 it is below (3): the pick on 12 is late meeting, played at its +40 ms
+    chosen on the grid, every row scored on 12 validation episodes (the ILC too), all
+    before any test seed."""
+    doc, calls = _picked_cascade(12, monkeypatch)
+    (lv,) = doc["levels"]
+    assert lv["late_offset_s"] == 0.04
+    assert (lv["best_non_oracle"], lv["delay_tracker_minus"]["rival"]) == ("late_meeting",) * 2
+    means = lv["val_mean_catches"]
+    assert (means["mean_delay_catch"], means["late_meeting"], means["task_error_ilc"]) == (3, 5, 1)
+    assert "the best non-oracle row picked on 12" in report_cascade_v1(doc)
+    assert_picked_on(doc, calls, (4, 12), set(ROWS) - set(REFERENCES))
+
+
+def test_picked_on_the_grids_episodes_the_pick_is_the_old_rule(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``pick_episodes == val_episodes``: the best of the rows' means on the grids' 4
+    episodes (mean_delay_catch, 9 against late meeting's 5), the grids' plays reused (the
+    grid rows are not played again) and the learner scored on those 4."""
+    doc, calls = _picked_cascade(4, monkeypatch)
+    (lv,) = doc["levels"]
+    assert (lv["best_non_oracle"], lv["delay_tracker_minus"]["rival"]) == ("mean_delay_catch",) * 2
+    assert lv["val_mean_catches"]["mean_delay_catch"] == 9.0
+    assert lv["val_mean_catches"]["late_meeting"] == lv["late_offset_val_mean_catches"]["40 ms"]
+    assert_picked_on(doc, calls, (4, 4), set(ROWS) - set(REFERENCES))
+
+
 def test_the_spy_catches_a_choice_made_on_test_seeds() -> None:
     def leaky(level: str, config: CascadeV1Config, play: Any) -> Any:
         eps = play(None, {"level": level, "controller": "juggler"}, "test", 3)
@@ -272,14 +340,19 @@ def test_bad_configs_name_the_field() -> None:
         (CascadeV1Config(pattern="7"), "pattern"),
         (CascadeV1Config(episodes=1), "episodes"),
         (CascadeV1Config(max_catches=0), "max_catches"),
+        (CascadeV1Config(val_episodes=30, pick_episodes=29), "pick_episodes"),
     ):
-        with pytest.raises(options.ConfigError, match=field):
+        with pytest.raises(options.ConfigError, match=f"^{field}: "):
             check_cascade_v1_config(config)
+    with pytest.raises(options.ConfigError, match=r"must be >= val_episodes \(30\); got 29$"):
+        check_cascade_v1_config(CascadeV1Config(val_episodes=30, pick_episodes=29))
+    check_cascade_v1_config(CascadeV1Config(val_episodes=30, pick_episodes=30))
 
 
 def test_a_small_real_run_writes_its_table(tmp_path: Any) -> None:
     config = CascadeV1Config(pattern="3", levels=("easy",), episodes=2, val_episodes=2,
-                             max_catches=2, ilc_iterations=2, ilc_episodes=2)  # fmt: skip
+                             pick_episodes=2, max_catches=2, ilc_iterations=2,
+                             ilc_episodes=2)  # fmt: skip
     doc = run_cascade_v1(config)
     (lv,) = doc["levels"]
     assert set(lv["rows"]) == set(ROWS)

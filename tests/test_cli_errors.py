@@ -148,6 +148,19 @@ CASES = [
     (["juggling", "--levels", ","], "argument --levels: expected a comma list of distinct"),
     (["juggling", "--levels", "easy", "--episodes", "1"], "argument --episodes: expected an"),
     (["juggling", "--levels", "easy", "--max-catches", "0"], "argument --max-catches: expected"),
+    (["juggling", "--version", "v2", "--pick-episodes", "1"], "argument --pick-episodes: expected"),
+    (
+        ["juggling", "--version", "v2", "--pattern", "3", "--pick-episodes", "29"],
+        "argument --pick-episodes: must be >= val_episodes (30); got 29",
+    ),
+    (
+        ["juggling", "--version", "v2", "--pick-episodes", "10"],
+        "argument --pick-episodes: must be >= val_episodes (30); got 10",
+    ),
+    (
+        ["juggling", "--levels", "easy", "--pick-episodes", "200"],
+        "--pick-episodes: needs --version",
+    ),
     (["juggling", "--analyse", "{tmp}/missing.csv"], "argument --analyse: {tmp}/missing.csv"),
     (["juggling", "--analyse", "{tmp}/rec.tsv"], "argument --analyse: motion capture file"),
     (["juggling", "--n-balls", "0"], "argument --n-balls: expected an integer >= 1"),

@@ -8,7 +8,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 import pytest
+from _helpers import assert_picked_on, pick_ranking_catches, recording_ilc
 
+from baselines import options
 from baselines.agents.juggling_score import JugglingEpisodes
 from baselines.juggling_bench.v2 import (
     CONSTANT_GRID,
@@ -159,10 +161,90 @@ def test_the_catch_rows_choice_is_made_on_validation_and_never_picks_a_reference
     config = V2Config(levels=("hard",), episodes=5, val_episodes=4, ilc=False)
     (lv,) = run_v2(config, play, spy.chooser(choose_constant), spy.chooser(choose_offset))["levels"]
     assert lv["best_non_oracle"] == "mean_delay_catch"
-    assert lv["val_catch_rates"]["mean_delay_catch"] == pytest.approx(11 / 12)
+    # picked on the default pick_episodes validation episodes: one toss of them all missed
+    tosses = 3 * config.pick_episodes
+    assert lv["val_catch_rates"]["mean_delay_catch"] == pytest.approx((tosses - 1) / tosses)
     assert UPPER_REFERENCE not in lv["val_catch_rates"]
     assert lv["rows"]["mean_delay_catch"]["catch_rate"] == 0.0
     assert lv["room_below_oracle_catch"]["value"] == pytest.approx(1.0)
+
+
+def _picked_v2(
+    pick_episodes: int, monkeypatch: pytest.MonkeyPatch
+) -> tuple[dict[str, Any], list[tuple[str, int, bool, str]]]:
+    """Juggling-v2's bench (medium, 5 test and 4 validation episodes, every chooser
+    spied) picking on ``pick_episodes`` validation episodes, over a play where on
+    validation ``mean_delay_catch`` catches every toss of the first 4 episodes and none
+    after, late meeting (+40 ms only) 2 of 3 tosses in every episode, a stand-in
+    task-error ILC 1 of 3, every other row none (on test: none at all); the document and
+    the plays ``(split, n, choosing, controller)``, the ILC's with controller ``"ilc"``."""
+    from baselines.juggling_bench import v2
+
+    spy, calls = Spy(), []
+
+    def play(policy: Any, env_id: str, kwargs: dict[str, Any], split: str, n: int) -> Any:
+        eps = spy.play(policy, env_id, kwargs, split, n)  # fails on test while choosing
+        calls.append((split, n, spy.choosing, kwargs["controller"]))
+        catches = pick_ranking_catches(kwargs, split, n, 3, 2)
+        return replace(eps, catches=catches, dropped=catches < 3)
+
+    def ilc_episodes(split: str, n: int) -> JugglingEpisodes:
+        eps = spy.play(None, "ilc", {"level": "medium"}, split, n)
+        return replace(eps, catches=np.ones(n, dtype=np.int64), dropped=np.ones(n, bool))
+
+    monkeypatch.setattr(v2, "TaskErrorILC", recording_ilc(calls, spy, ilc_episodes))
+    config = V2Config(levels=("medium",), episodes=5, val_episodes=4, pick_episodes=pick_episodes)
+    names = ("", "offset_", "tracker_", "estimator_offset_", "estimator_tracker_", "pooled_")
+    choosers = {
+        f"{n}chooser": spy.chooser(getattr(v2, f))
+        for n, f in zip(names, ("choose_constant", "choose_offset", "choose_tracker",
+                                "choose_estimator_offset", "choose_estimator_tracker",
+                                "choose_pooled_anchor"), strict=True)
+    }  # fmt: skip
+    return run_v2(config, play, **choosers), calls
+
+
+def test_the_best_row_is_picked_on_pick_episodes_validation_episodes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On the grids' 4 validation episodes mean_delay_catch (1) is above late meeting
+    (2/3); on 12 it is below (4/12): the pick on 12 is late meeting, played at its +40 ms
+    chosen on the grid, every row scored on 12 validation episodes (the ILC too), all
+    before any test seed."""
+    doc, calls = _picked_v2(12, monkeypatch)
+    (lv,) = doc["levels"]
+    assert lv["late_offset_s"] == 0.04
+    assert lv["best_non_oracle"] == "late_meeting"
+    assert lv["delay_tracker_minus"]["rival"] == "late_meeting"
+    assert lv["val_catch_rates"]["mean_delay_catch"] == pytest.approx(4 / 12)
+    assert lv["val_catch_rates"]["late_meeting"] == pytest.approx(2 / 3)
+    assert lv["val_catch_rates"]["task_error_ilc"] == pytest.approx(1 / 3)
+    assert lv["late_offset_val_catch_rates"]["40 ms"] == pytest.approx(2 / 3)  # the grid's 4
+    assert "the best non-oracle row picked on 12" in report_v2(doc)
+    assert_picked_on(doc, calls, (4, 12), set(ROWS) - set(REFERENCES))
+
+
+def test_picked_on_the_grids_episodes_the_pick_is_the_old_rule(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``pick_episodes == val_episodes``: the best of the rows' rates on the grids' 4
+    episodes (mean_delay_catch, 1 against late meeting's 2/3), the grids' plays reused
+    (the grid rows are not played again) and the learner scored on those 4; a pick on
+    fewer episodes than the grids' is refused."""
+    from baselines.juggling_bench.v2 import check_v2_config
+
+    doc, calls = _picked_v2(4, monkeypatch)
+    (lv,) = doc["levels"]
+    assert lv["best_non_oracle"] == "mean_delay_catch"
+    assert lv["delay_tracker_minus"]["rival"] == "mean_delay_catch"
+    assert lv["val_catch_rates"]["mean_delay_catch"] == 1.0
+    assert lv["val_catch_rates"]["late_meeting"] == lv["late_offset_val_catch_rates"]["40 ms"]
+    assert_picked_on(doc, calls, (4, 4), set(ROWS) - set(REFERENCES))
+    with pytest.raises(
+        options.ConfigError, match=r"^pick_episodes: must be >= val_episodes \(30\); got 29$"
+    ):
+        check_v2_config(V2Config(val_episodes=30, pick_episodes=29))
+    check_v2_config(V2Config(val_episodes=30, pick_episodes=30))
 
 
 def test_env_delay_offset_shifts_only_the_mean_delay_juggler() -> None:
@@ -206,8 +288,8 @@ def test_velocity_times_delay_is_the_two_line_fix() -> None:
 
 
 def test_a_small_real_run_writes_the_table_and_the_plot(tmp_path: Any) -> None:
-    config = V2Config(levels=("easy",), episodes=3, val_episodes=2, max_catches=1,
-                      ilc_iterations=2, ilc_episodes=2)  # fmt: skip
+    config = V2Config(levels=("easy",), episodes=3, val_episodes=2, pick_episodes=2,
+                      max_catches=1, ilc_iterations=2, ilc_episodes=2)  # fmt: skip
     doc = run_v2(config)
     (level,) = doc["levels"]
     assert set(level["rows"]) == {

@@ -189,7 +189,8 @@ def test_bench_reports_oracle_minus_delay_estimator_paired() -> None:
             segment_deviation=np.linspace(0.01, 0.02, n),
         )  # fmt: skip
 
-    doc = run_v2(V2Config(levels=("drift",), episodes=6, val_episodes=2, ilc=False), play)
+    config = V2Config(levels=("drift",), episodes=6, val_episodes=2, pick_episodes=2, ilc=False)
+    doc = run_v2(config, play)
     (level,) = doc["levels"]
     got = level["oracle_minus_delay_estimator"]
     expected = (14 - 7) / 18

@@ -83,6 +83,10 @@ def main(args: argparse.Namespace) -> int:
         return 0
     if args.n_balls is not None:
         return options.fail("motion-bench juggling", "--n-balls: needs --analyse")
+    if args.pick_episodes is not None and args.version != "v2":
+        return options.fail("motion-bench juggling", "--pick-episodes: needs --version v2")
+    # --version v2's pick of the best non-oracle row (the config's default when not given)
+    pick = {} if args.pick_episodes is None else {"pick_episodes": args.pick_episodes}
     if args.pattern is not None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: not with --pattern")
@@ -93,11 +97,13 @@ def main(args: argparse.Namespace) -> int:
         else:
             config_class, bench = CascadeConfig, (run_cascade, report_cascade, write_cascade)
             folder = f"juggling-pattern-{args.pattern}"
-        return _levels_benchmark(args, config_class, bench, folder, pattern=args.pattern)
+        fields = {"pattern": args.pattern, **(pick if args.version == "v2" else {})}
+        return _levels_benchmark(args, config_class, bench, folder, **fields)
     if args.version == "v2":
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: not with --version v2")
-        return _levels_benchmark(args, V2Config, (run_v2, report_v2, write_v2), "juggling-v2")
+        bench = (run_v2, report_v2, write_v2)
+        return _levels_benchmark(args, V2Config, bench, "juggling-v2", **pick)
     if args.levels is None:
         if args.agent is not None:
             return options.fail("motion-bench juggling", "--agent: needs --levels")
@@ -280,7 +286,8 @@ with the reasons it does not fit (ball count, flight, the hand's speed limit).
 With --version v2 --pattern P: MotionEnvs/Cascade-v1 instead (the pattern at Juggling-v2's
 human levels easy, medium, hard: a hidden per-episode delay, a position-only camera per
 ball, drag per ball, the capture at impact). Per level, the late-meeting offset and the
-best non-oracle row are chosen on 30 validation episodes, then --episodes (100) test
+best non-oracle row are chosen on validation episodes (the grids on 30, the best row
+on --pick-episodes, 200), then --episodes (100) test
 episodes of each row (the juggler, the oracle given the true delay and drag, the
 mean-delay juggler, late meeting, a fixed catch point, random actions), each ending at
 the first drop or after --max-catches (30) catches. Reported with 95 % bootstrap
@@ -400,6 +407,13 @@ def register(subparsers: argparse._SubParsersAction[options.Parser]) -> None:
         default=None,
         help="catches after which an episode ends (--levels: default 3; --pattern: 10; "
         "--version v2 --pattern: 30)",
+    )
+    p.add_argument(
+        "--pick-episodes",
+        type=options.int_at_least(2),
+        default=None,
+        help="--version v2: the validation episodes the best non-oracle row is picked on "
+        "(default 200; at least the grids' 30)",
     )
     p.add_argument(
         "--agent",

@@ -89,16 +89,18 @@ unit action, the scale an agent is given):
 Choices are made on the validation seeds (``SPLIT_SEEDS["val"] + i``) before any test
 seed is played (tested with a spy): the constant, the late offset, the tracker's gain and
 offset, the estimate's offset, the estimate's tracker's gain and offset, the pooled
-estimate's anchor frames, and then the best
-non-oracle row (the highest catch rate on ``val_episodes`` VALIDATION episodes; ties: the
-first in :data:`ROWS`; the
-constant grid's plays are reused for ``juggler`` and ``best_constant``, the offset
-grid's for ``juggler_mean_delay`` and ``late_meeting``, the tracker grid's for
-``delay_tracker``, the estimate's offset grid's for ``delay_estimator_catch`` and
-``estimator_offset_catch``, the anchor grid's for ``pooled_estimator_catch``, the ILC
-row is scored on
-validation after its training). Every row is then played on the TEST seeds
-(``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
+estimate's anchor frames, each on the first ``val_episodes`` (30) VALIDATION episodes;
+and then the best non-oracle row and the tracker's rival, on the first ``pick_episodes``
+(200) VALIDATION episodes (the highest catch rate; ties: the first in :data:`ROWS`;
+every row played with the parameter its grid chose, the ILC row scored after its
+training; when ``pick_episodes == val_episodes`` the grids' plays are reused: the
+constant grid's for ``juggler`` and ``best_constant``, the offset grid's for
+``juggler_mean_delay`` and ``late_meeting``, the tracker grid's for ``delay_tracker``,
+the estimate's offset grid's for ``delay_estimator_catch`` and
+``estimator_offset_catch``, the anchor grid's for ``pooled_estimator_catch``; the pick's
+rates are ``val_catch_rates``, its seeds ``seeds["pick"]``; 30 episodes picked the wrong
+row on Cascade-v1's three balls medium, BENCHMARKS). Every row is then played on the
+TEST seeds (``SPLIT_SEEDS["test"] + i``). Each row reports its catch rate (catches per toss,
 pooled) and the hand's deviation from the held-out SIMULATED demonstrations
 (:mod:`baselines.agents.juggling_score`, the likeness criterion), each with a 95 %
 bootstrap interval over episodes, and the ROOM left below the upper reference by the
@@ -150,6 +152,7 @@ __all__ = [
     "V2Config",
     "VelocityTimesDelay",
     "anchor_key",
+    "check_pick_episodes",
     "check_v2_config",
     "choose_constant",
     "choose_estimator_offset",
@@ -162,6 +165,7 @@ __all__ = [
     "offset_key",
     "offset_row_line",
     "offset_row_minus",
+    "pick_count",
     "pooled_kwargs",
     "pooled_row_minus",
     "report_v2",
@@ -248,6 +252,8 @@ class V2Config:
     levels: tuple[str, ...] = ("medium", "hard")
     episodes: int = 100
     val_episodes: int = 30
+    #: the validation episodes the best non-oracle row is picked on (>= ``val_episodes``)
+    pick_episodes: int = 200
     max_catches: int = 3
     ilc: bool = True
     ilc_iterations: int = 6
@@ -264,8 +270,18 @@ def check_v2_config(config: V2Config) -> None:
     for name in ("episodes", "val_episodes", "ilc_iterations", "ilc_episodes"):
         if getattr(config, name) < 2:
             raise options.ConfigError(name, f"must be >= 2; got {getattr(config, name)}")
+    check_pick_episodes(config.pick_episodes, config.val_episodes)
     if config.max_catches < 1:
         raise options.ConfigError("max_catches", f"must be >= 1; got {config.max_catches}")
+
+
+def check_pick_episodes(pick_episodes: int, val_episodes: int) -> None:
+    """Raise :class:`baselines.options.ConfigError` (``pick_episodes``) unless the best
+    row's validation episodes include the grids' (``pick_episodes >= val_episodes``)."""
+    if pick_episodes < val_episodes:
+        raise options.ConfigError(
+            "pick_episodes", f"must be >= val_episodes ({val_episodes}); got {pick_episodes}"
+        )
 
 
 class VelocityTimesDelay:
@@ -350,11 +366,16 @@ def tracker_kwargs(choice: tuple[float, float]) -> dict[str, Any]:
 
 
 def _val_catch_rate(
-    play: Play, policy: Policy | None, kwargs: dict[str, Any], config: V2Config
+    play: Play,
+    policy: Policy | None,
+    kwargs: dict[str, Any],
+    config: V2Config,
+    episodes: int | None = None,
 ) -> float:
-    """The catch rate of ``config.val_episodes`` VALIDATION episodes played with
-    ``kwargs``."""
-    return play(policy, ENV_ID_V2, kwargs, "val", config.val_episodes).catch_rate
+    """The catch rate of the first ``episodes`` (default ``config.val_episodes``)
+    VALIDATION episodes played with ``kwargs``."""
+    n = config.val_episodes if episodes is None else episodes
+    return play(policy, ENV_ID_V2, kwargs, "val", n).catch_rate
 
 
 def choose_tracker(
@@ -541,8 +562,8 @@ def run_v2(
         est_tracker, est_tracker_rates = estimator_tracker_chooser(level, config, play)
         pooled_anchor, pooled_rates = pooled_chooser(level, config, play)
         delay = V2_LEVELS[level].mean_delay
-        # The best non-oracle row, chosen on VALIDATION episodes before any test seed:
-        # the grids' plays reused where the choosers made them.
+        # The best non-oracle row, chosen on the first pick_episodes VALIDATION episodes
+        # before any test seed: the grids' plays reused when they are those episodes.
         reuse = {
             "juggler": (val_rates, grid_key((0.0, 0.0))),
             "best_constant": (val_rates, grid_key(constant)),
@@ -561,21 +582,22 @@ def run_v2(
             rates, key = reuse.get(name, ({}, ""))
             if name in REFERENCES:
                 continue
-            if key in rates:
+            if key in rates and config.pick_episodes == config.val_episodes:
                 val_catch[name] = rates[key]
             else:
                 val_catch[name] = _val_catch_rate(
-                    play, policy, _kwargs(level, config, ctl, extra), config
-                )
+                    play, policy, _kwargs(level, config, ctl, extra), config,
+                    config.pick_episodes,
+                )  # fmt: skip
         ilc = TaskErrorILC(
             level, RESIDUAL_SCALE, delay,
             ILCConfig(config.ilc_iterations, config.ilc_episodes, max_catches=config.max_catches),
         )  # fmt: skip
         if config.ilc:
             ilc.train()
-            val_catch["task_error_ilc"] = ilc.evaluate("val", config.val_episodes).catch_rate
+            val_catch["task_error_ilc"] = ilc.evaluate("val", config.pick_episodes).catch_rate
         best = max((r for r in ROWS if r in val_catch), key=lambda r: val_catch[r])
-        # the tracker's rival: the best other non-oracle row, chosen on validation too
+        # the tracker's rival: the best other non-oracle row, picked on validation too
         rival = max((r for r in ROWS if r in val_catch and r != "delay_tracker"),
                     key=lambda r: val_catch[r])  # fmt: skip
         played = {
@@ -647,6 +669,7 @@ def run_v2(
         "residual_scale_m": RESIDUAL_SCALE,
         "seeds": {
             "choice": {"split": "val", "first": SPLIT_SEEDS["val"], "count": config.val_episodes},
+            "pick": {"split": "val", "first": SPLIT_SEEDS["val"], "count": config.pick_episodes},
             "test": {"split": "test", "first": SPLIT_SEEDS["test"], "count": config.episodes},
         },
         "levels": levels,
@@ -718,6 +741,13 @@ def _difference(a: JugglingEpisodes, b: JugglingEpisodes) -> dict[str, Any]:
     return {"value": value, "ci": [lo, hi]}
 
 
+def pick_count(doc: dict[str, Any]) -> int:
+    """The validation episodes the document's best non-oracle row was picked on (a
+    document written before ``pick_episodes``: the grids' ``choice`` count)."""
+    seeds = doc["seeds"]
+    return int(seeds.get("pick", seeds["choice"])["count"])
+
+
 def _val(lv: dict[str, Any]) -> str:
     rates = lv.get("val_catch_rates", {})
     return ", ".join(f"{k} {v:.3f}" for k, v in rates.items()) or "not recorded"
@@ -728,9 +758,11 @@ def report_v2(doc: dict[str, Any]) -> str:
     test = doc["seeds"]["test"]
     lines = [
         f"Juggling-v2 rows ({doc['demonstrations']}); {test['count']} test episodes per level "
-        f"and row (seeds from {test['first']}); choices on {doc['seeds']['choice']['count']} "
-        "validation episodes; oracle, oracle_catch = references given the true delay and drag "
-        "(not competitors); oracle_catch (with the catch plan) is the UPPER REFERENCE",
+        f"and row (seeds from {test['first']}); grid choices on "
+        f"{doc['seeds']['choice']['count']} validation episodes, the best non-oracle row "
+        f"picked on {pick_count(doc)}; oracle, oracle_catch = references given the true "
+        "delay and drag (not competitors); oracle_catch (with the catch plan) is the "
+        "UPPER REFERENCE",
         f"{'level':7s} {'row':22s} {'catch rate [95% CI]':24s} {'deviation m [95% CI]':24s}",
     ]
     for lv in doc["levels"]:
@@ -752,7 +784,8 @@ def report_v2(doc: dict[str, Any]) -> str:
             f"{lv['level']:7s} best constant {tuple(lv['constant'])}; late offset "
             f"{lv.get('late_offset_s', 0.0) * 1000:.0f} ms; {trk_text}{est_text}best "
             "non-oracle row "
-            f"{lv['best_non_oracle']} (chosen on validation: {_val(lv)}); room below the "
+            f"{lv['best_non_oracle']} (picked on {pick_count(doc)} validation episodes: "
+            f"{_val(lv)}); room below the "
             f"upper reference ({ref} - {lv['best_non_oracle']}, paired): {room['value']:+.3f} "
             f"[{room['ci'][0]:+.3f}, {room['ci'][1]:+.3f}]"
         )
