@@ -34,8 +34,9 @@ can be replayed alone and paired with them on the same test seeds.
   best non-oracle row is. The named rows, each with the parameters ``DIR``'s bench chose
   on validation (``pooled_estimator_catch`` with ``--pooled-anchor`` frames, and with
   ``--pooled-start`` the start anchored on its throws), are played
-  on ``N`` VALIDATION episodes (the bench's own are the first ``val_episodes`` of them,
-  checked against ``DIR``'s validation means: ``first_equal_bench``); per row the mean
+  on ``N`` VALIDATION episodes (the bench's own are the first of them: ``DIR``'s
+  ``pick_episodes``, or ``val_episodes`` for a bench made before it, checked against
+  ``DIR``'s validation means: ``first_equal_bench``); per row the mean
   catches with a 95 % bootstrap interval, the pick on the bench's episodes and on all
   ``N``, and every row minus the pick on ``N`` (paired). No test seed is played.
 
@@ -112,6 +113,12 @@ def _rate_difference(a: CascadeEpisodes, b: CascadeEpisodes, names: tuple[str, s
     return {"value": d.difference, "ci": list(d.ci95)}
 
 
+def _pick_episodes(doc: dict[str, Any]) -> int:
+    """The validation episodes ``doc``'s bench picked its best row on (``val_episodes``
+    for a bench made before ``pick_episodes``)."""
+    return int(doc["config"].get("pick_episodes", doc["config"]["val_episodes"]))
+
+
 def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
     """``row`` replayed on ``folder``'s test seeds (or, ``kept_row``, its kept episodes)
     and paired with its other rows (module docstring)."""
@@ -168,7 +175,7 @@ def replay(folder: Path, row: str, kept_row: bool = False) -> dict[str, Any]:
                 equals_kept = _episodes_doc(new) == kept[level][row]
             if row not in REFERENCES and row not in val_means:
                 val_means[row] = float(
-                    cascade_v1_episodes(policy, kwargs, "val", config.val_episodes).catches.mean()
+                    cascade_v1_episodes(policy, kwargs, "val", _pick_episodes(doc)).catches.mean()
                 )
         rivals = [name for name in others if name not in REFERENCES]
         top = max(rivals, key=lambda name: float(others[name].catches.mean()))
@@ -199,8 +206,9 @@ def pick(folder: Path, rows: list[str], n: int, pooled_anchor: tuple[int, bool])
     docstring)."""
     doc = json.loads((folder / "results.json").read_text(encoding="utf-8"))
     config = CascadeV1Config(**{**doc["config"], "levels": tuple(doc["config"]["levels"])})
-    if n < config.val_episodes:
-        raise ValueError(f"--val-episodes must be >= the bench's {config.val_episodes}; got {n}")
+    k = _pick_episodes(doc)
+    if n < k:
+        raise ValueError(f"--val-episodes must be >= the bench's {k}; got {n}")
     out: dict[str, Any] = {}
     for lv in doc["levels"]:
         level = lv["level"]
@@ -219,7 +227,6 @@ def pick(folder: Path, rows: list[str], n: int, pooled_anchor: tuple[int, bool])
             eps[row] = cascade_v1_episodes(
                 policy, _kwargs(level, config, ctl, off, gain, extra), "val", n
             )
-        k = config.val_episodes
         first = {r: float(e.catches[:k].mean()) for r, e in eps.items()}
         full = {r: float(e.catches.mean()) for r, e in eps.items()}
         order = [r for r in ROWS if r in eps]  # the bench's rule: the first on a tie
