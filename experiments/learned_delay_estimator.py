@@ -20,7 +20,8 @@ For every training seed ``k`` of ``--seeds``: record ``--train-episodes`` TRAINI
 episodes (block ``k``: episodes ``k N .. (k + 1) N - 1`` of the training split, so the
 seeds differ in their data, their folds and the MLP's initialisation), fit, save the model
 file and load it back (the rule played is the loaded one); the CPU time of recording and
-fitting is the seed's training budget. Then:
+fitting is the seed's training budget. Every seed is trained before any test seed is
+played. Then:
 
 * the estimate's error on ``--val-episodes`` VALIDATION episodes (the flights of
   ``delay_estimator_catch``'s own episodes, recorded as in training): the learned and the
@@ -32,12 +33,27 @@ fitting is the seed's training budget. Then:
   ``oracle_catch`` minus the row too. The median seed is the one with the median catch-rate
   difference from the best non-oracle row.
 
+``--anchor-start`` (Cascade-v1 cells): the balls in flight at ``t = 0`` are anchored on
+the juggler's throws before it (the env's ``anchor_start``) for the row, its training and
+validation flights (so the start flights are among the flights the rule is trained on, as
+the env gives them at play time) and the pooled row it is paired with. The anchor frames
+(of both rows) are ``pooled_estimator_catch``'s with the start anchored: the frames of
+:data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` (the bench's declared candidates)
+with the most mean catches before the first drop of the pooled row with the start anchored
+on ``--choice-episodes`` VALIDATION episodes (default the bench's ``val_episodes``; ties:
+the fewest frames), chosen before anything is trained or any test seed is played. That
+row, ``pooled_estimator_catch_start``, is then played on the test seeds and paired like
+the kept rows (``oracle_catch`` minus it too: the room left), and the median seed is the
+one with the median catch-rate difference from it. The validation error of the pooled
+rule on the same flights is reported beside the learned and the default rule's.
+
 Two further modes, nothing trained: ``--true-delay`` (Cascade-v1) plays
 ``delay_estimator_catch`` told the episode's TRUE delay through its rule (the drag not
 told; a reference) on the kept test seeds and pairs it; ``--pair-pooled FRAMES`` plays
 ``pooled_estimator_catch`` on ``FRAMES`` anchor frames (its bench's validation choice) on
-the test seeds and pairs it with each seed's row replayed from ``--out``'s model files
-(``replay_equals_run``: the replay gives the summary the run wrote).
+the test seeds (with ``--anchor-start``: the start anchored too) and pairs it with each
+seed's row replayed from ``--out``'s model files and env keywords (``replay_equals_run``:
+the replay gives the summary the run wrote).
 
 The demonstrations are SIMULATED.
 
@@ -55,7 +71,7 @@ from typing import Any
 
 import numpy as np
 
-from baselines.juggling_bench.cascade_v1 import _paired
+from baselines.juggling_bench.cascade_v1 import _paired, pooled_extra, pooled_key
 from baselines.learned.delay_estimator import (
     CONTROLLER,
     FlightSamples,
@@ -67,6 +83,8 @@ from motion_envs._io import atomic_write_text
 
 CELLS = ("cascade3_medium", "cascade3_hard", "v2_medium", "v2_hard")
 ROW = "learned_estimator_catch"
+#: The pooled row with the start anchored, played by ``--anchor-start`` on the test seeds.
+POOLED_START = "pooled_estimator_catch_start"
 CASCADE_ID, V2_ID = "MotionEnvs/Cascade-v1", "MotionEnvs/Juggling-v2"
 
 
@@ -233,38 +251,74 @@ def true_delay_reference(cell: str, folder: Path) -> dict[str, Any]:
     return out
 
 
-def pair_pooled(cell: str, folder: Path, out: Path, frames: int) -> dict[str, Any]:
-    """``pooled_estimator_catch`` (``delay_estimator_catch`` with the pooled delay rule on
-    ``frames`` anchor frames, the bench's validation choice) played on the test seeds and
-    paired with each seed's learned row, replayed from ``out``'s model files (checked
-    equal to the summary ``out/results.json`` holds)."""
-    from motion_envs.models.juggling import pooled_flight_delay
+def choose_start_frames(
+    cell: str, doc: dict[str, Any], episodes: int
+) -> tuple[int, dict[str, float]]:
+    """The anchor frames of :data:`~baselines.juggling_bench.v2.POOLED_ANCHOR_FRAMES` with
+    the most mean catches before the first drop of ``pooled_estimator_catch`` with the
+    start anchored on the first ``episodes`` VALIDATION episodes (ties: the first, the
+    fewest frames), and every candidate's validation mean (Cascade-v1 cells)."""
+    from baselines.juggling_bench.cascade_v1 import cascade_v1_episodes
+    from baselines.juggling_bench.grid_choice import best_on_grid
+    from baselines.juggling_bench.v2 import POOLED_ANCHOR_FRAMES
 
-    _, level = _cell(cell)
+    env, _ = _cell(cell)
+    if env != "cascade3":
+        raise ValueError(f"anchor_start is for the Cascade-v1 cells; got cell {cell!r}")
+    if episodes < 1:
+        raise ValueError(f"choice episodes must be >= 1; got {episodes!r}")
+    _, kwargs = env_kwargs(cell, doc)
+    grid = tuple((frames, True) for frames in POOLED_ANCHOR_FRAMES)
+
+    def mean(choice: tuple[int, bool]) -> float:
+        kw = {**kwargs, "controller": CONTROLLER, **pooled_extra(choice)}
+        return float(cascade_v1_episodes(None, kw, "val", episodes).catches.mean())
+
+    (frames, _), means = best_on_grid(grid, mean, pooled_key)
+    return int(frames), means
+
+
+def _play_pooled(env_id: str, kwargs: dict[str, Any], frames: int, start: bool, n: int) -> Any:
+    """``pooled_estimator_catch`` on ``frames`` anchor frames (``start``: the start
+    anchored) on the first ``n`` TEST seeds."""
+    kw = {**kwargs, "controller": CONTROLLER, **pooled_extra((frames, start))}
+    if env_id == CASCADE_ID:
+        from baselines.juggling_bench.cascade_v1 import cascade_v1_episodes
+
+        return cascade_v1_episodes(None, kw, "test", n)
+    from baselines.agents.juggling_score import juggling_episodes
+
+    return juggling_episodes(None, env_id, kw, "test", n)
+
+
+def pair_pooled(
+    cell: str, folder: Path, out: Path, frames: int, start: bool = False
+) -> dict[str, Any]:
+    """``pooled_estimator_catch`` (``delay_estimator_catch`` with the pooled delay rule on
+    ``frames`` anchor frames, the bench's validation choice; ``start``: the start anchored
+    too) played on the test seeds and paired with each seed's learned row, replayed from
+    ``out``'s model files with the env keywords the run wrote (checked equal to the
+    summary ``out/results.json`` holds)."""
+    env, level = _cell(cell)
+    if start and env != "cascade3":
+        raise ValueError(f"anchor_start is for the Cascade-v1 cells; got cell {cell!r}")
     doc, _ = _bench(folder, level)
     env_id, kwargs = env_kwargs(cell, doc)
     done = json.loads((out / "results.json").read_text(encoding="utf-8"))
     n = int(done["test_episodes"])
-    pooled_kw = {**kwargs, "controller": CONTROLLER, "delay_rule": pooled_flight_delay,
-                 "anchor_frames": int(frames)}  # fmt: skip
-    if env_id == CASCADE_ID:
-        from baselines.juggling_bench.cascade_v1 import cascade_v1_episodes
-
-        pooled = cascade_v1_episodes(None, pooled_kw, "test", n)
-    else:
-        from baselines.agents.juggling_score import juggling_episodes
-
-        pooled = juggling_episodes(None, env_id, pooled_kw, "test", n)
+    pooled = _play_pooled(env_id, kwargs, frames, start, n)
+    row_kwargs = {**kwargs, **done["env_kwargs"]}
     cascade = env_id == CASCADE_ID
     result: dict[str, Any] = {
         "cell": cell,
         "pooled_anchor_frames": int(frames),
+        "pooled_anchor_start": bool(start),
         "pooled_estimator_catch": _row_entry(pooled, cascade),
         "seeds": [],
     }
     for s in done["seeds"]:
         rule = LearnedDelayRule.load(out / f"model_seed{s['seed']}.safetensors")
-        played = play_row(cell, env_id, kwargs, rule, n)
+        played = play_row(cell, env_id, row_kwargs, rule, n)
         again = _row_entry(played, cascade)
         result["seeds"].append(
             {
@@ -289,27 +343,57 @@ def run(
     seeds: tuple[int, ...],
     n_test: int | None = None,
     progress: bool = True,
+    anchor_start: bool = False,
+    choice_episodes: int | None = None,
 ) -> dict[str, Any]:
     """The cell's measurement (module docstring); writes ``out/results.json`` and the
-    model files ``out/model_seed{k}.safetensors``."""
-    _, level = _cell(cell)
+    model files ``out/model_seed{k}.safetensors``. ``anchor_start``: the start anchored,
+    the anchor frames chosen on ``choice_episodes`` VALIDATION episodes (None: the
+    bench's ``val_episodes``) first (:func:`choose_start_frames`)."""
+    from motion_envs.models.juggling import pooled_flight_delay
+
+    env, level = _cell(cell)
+    if anchor_start and env != "cascade3":
+        raise ValueError(f"anchor_start is for the Cascade-v1 cells; got cell {cell!r}")
     doc, _ = _bench(folder, level)
-    env_id, kwargs = env_kwargs(cell, doc)
+    env_id, bench_kwargs = env_kwargs(cell, doc)
+    kwargs = dict(bench_kwargs)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.process_time()
+    choice: dict[str, Any] | None = None
+    frames = 0
+    if anchor_start:
+        n_choice = (
+            int(doc["config"]["val_episodes"]) if choice_episodes is None else choice_episodes
+        )
+        frames, means = choose_start_frames(cell, doc, n_choice)
+        kwargs.update(pooled_extra((frames, True)))
+        del kwargs["delay_rule"]  # the learned rule is the row's; the frames and start kept
+        choice = {"split": "val", "episodes": n_choice, "anchor_frames": frames,
+                  "val_mean_catches": means, "cpu_s": time.process_time() - t0}  # fmt: skip
     val = collect_flights(env_id, kwargs, "val", val_episodes, progress=progress)
     val_default = estimate_errors(lambda fl, g: _default(fl, g), val)
-    rows, best, test_seeds = paired_rows(cell, folder, n_test)
-    n = test_seeds.size
-    cascade = env_id == CASCADE_ID
-    per_seed = []
+    val_pooled = estimate_errors(pooled_flight_delay, val)
+    trained = []  # every seed trained before any test seed is played
     for k in seeds:
         c0 = time.process_time()
         rule, _ = train_delay_rule(env_id, kwargs, train_episodes, seed=k,
                                    first=k * train_episodes, progress=progress)  # fmt: skip
         train_cpu = time.process_time() - c0
         path = rule.save(out / f"model_seed{k}.safetensors")
-        rule = LearnedDelayRule.load(path)
+        trained.append((k, train_cpu, LearnedDelayRule.load(path)))
+    rows, best, test_seeds = paired_rows(cell, folder, n_test)
+    n = test_seeds.size
+    cascade = env_id == CASCADE_ID
+    pooled_cpu = 0.0
+    if anchor_start:
+        c0 = time.process_time()
+        rows[POOLED_START] = _play_pooled(env_id, bench_kwargs, frames, True, n)
+        pooled_cpu = time.process_time() - c0
+    ref = POOLED_START if anchor_start else best
+    per_seed = []
+    for k, train_cpu, rule in trained:
+        c0 = time.process_time()
         played = play_row(cell, env_id, kwargs, rule, n)
         if not np.array_equal(played.seeds, test_seeds):
             raise ValueError(f"{folder}: the kept test seeds differ from the played ones")
@@ -318,6 +402,7 @@ def run(
                 "seed": k,
                 "train_first_episode": k * train_episodes,
                 "train_cpu_s": train_cpu,
+                "test_cpu_s": time.process_time() - c0,
                 "chosen": rule.info["chosen"],
                 "cv_rmse": rule.info["cv_rmse"],
                 "cv_default_rule_rmse_ms": rule.info["cv_default_rule_rmse_ms"],
@@ -333,7 +418,7 @@ def run(
             }
         )
     order = sorted(range(len(per_seed)),
-                   key=lambda i: per_seed[i]["minus_catch_rate"][best]["value"])  # fmt: skip
+                   key=lambda i: per_seed[i]["minus_catch_rate"][ref]["value"])  # fmt: skip
     result = {
         "cell": cell,
         "env_id": env_id,
@@ -344,13 +429,24 @@ def run(
         "val_episodes": val_episodes,
         "test_episodes": int(n),
         "best_non_oracle": best,
+        "anchor_start": anchor_start,
+        "anchor_frames_choice": choice,
+        "median_seed_against": ref,
         "val_errors_default_rule": val_default,
+        "val_errors_pooled_rule": val_pooled,
         "rows": {
             name: _kept_entry(doc, level, name, e) if cascade else _row_entry(e, cascade)
             for name, e in rows.items()
         },
+        "oracle_catch_minus_pooled_start": None
+        if not anchor_start
+        else {
+            "catches": _paired(rows["oracle_catch"], rows[POOLED_START]),
+            "catch_rate": _paired_rate(rows["oracle_catch"], rows[POOLED_START]),
+        },
         "seeds": per_seed,
         "median_seed": per_seed[order[len(order) // 2]]["seed"],
+        "pooled_start_cpu_s": pooled_cpu,
         "cpu_s": time.process_time() - t0,
         "demonstrations": "SIMULATED",
     }
@@ -381,10 +477,19 @@ def _print(r: dict[str, Any]) -> None:
     print(f"{r['cell']}: {r['row']}, {r['train_episodes_per_seed']} training episodes per "
           f"seed, {r['test_episodes']} test episodes; best non-oracle (validation): "
           f"{r['best_non_oracle']}")  # fmt: skip
-    d = r["val_errors_default_rule"]
-    print("  default rule, validation error (ms): " + "; ".join(
-        f"{k}: {v['mean_ms']:+.1f} sd {v['sd_ms']:.1f} rmse {v['rmse_ms']:.1f} (n {v['n']})"
-        for k, v in d.items() if v["n"]))  # fmt: skip
+    if r["anchor_frames_choice"]:
+        c = r["anchor_frames_choice"]
+        print(f"  start anchored; anchor frames {c['anchor_frames']} (validation, "
+              f"{c['episodes']} episodes: {c['val_mean_catches']})")  # fmt: skip
+    for rule in ("default", "pooled"):
+        d = r[f"val_errors_{rule}_rule"]
+        print(f"  {rule} rule, validation error (ms): " + "; ".join(
+            f"{k}: {v['mean_ms']:+.1f} sd {v['sd_ms']:.1f} rmse {v['rmse_ms']:.1f} (n {v['n']})"
+            for k, v in d.items() if v["n"]))  # fmt: skip
+    if r["oracle_catch_minus_pooled_start"]:
+        o = r["oracle_catch_minus_pooled_start"]
+        print(f"  oracle_catch - {POOLED_START}: {_ci(o['catches'], '+.2f')} catches, "
+              f"{_ci(o['catch_rate'], '+.3f')} rate")  # fmt: skip
     for s in r["seeds"]:
         m = s["row"]
         print(f"  seed {s['seed']}: {s['chosen']}, training {s['train_cpu_s']:.0f} s CPU; "
@@ -398,7 +503,11 @@ def _print(r: dict[str, Any]) -> None:
         for name in s["minus"]:
             print(f"    - {name:24s} {_ci(s['minus'][name], '+.2f')} catches, "
                   f"{_ci(s['minus_catch_rate'][name], '+.3f')} rate")  # fmt: skip
-    print(f"  median seed: {r['median_seed']}; CPU {r['cpu_s']:.0f} s")
+        o = s["oracle_catch_minus_row"]
+        print(f"    oracle_catch - row: {_ci(o['catches'], '+.2f')} catches, "
+              f"{_ci(o['catch_rate'], '+.3f')} rate")  # fmt: skip
+    print(f"  median seed (against {r['median_seed_against']}): {r['median_seed']}; "
+          f"CPU {r['cpu_s']:.0f} s")  # fmt: skip
 
 
 def main() -> None:
@@ -416,9 +525,19 @@ def main() -> None:
                     help="Cascade-v1: only the reference told the TRUE delay")  # fmt: skip
     ap.add_argument("--pair-pooled", type=int, default=None, metavar="FRAMES",
                     help="pair --out's rows with pooled_estimator_catch")  # fmt: skip
+    ap.add_argument("--anchor-start", action="store_true",
+                    help="Cascade-v1: the start anchored for the row, its data and the "
+                         "pooled row; the anchor frames chosen on validation")  # fmt: skip
+    ap.add_argument("--choice-episodes", type=int, default=None,
+                    help="--anchor-start: validation episodes of the anchor frames' "
+                         "choice (default: the bench's val_episodes)")  # fmt: skip
     args = ap.parse_args()
+    if args.anchor_start and not args.cell.startswith("cascade3"):
+        ap.error("--anchor-start is for the Cascade-v1 cells (cascade3_*)")
+    if args.choice_episodes is not None and args.choice_episodes < 1:
+        ap.error("--choice-episodes must be >= 1")
     if args.pair_pooled is not None:
-        pair_pooled(args.cell, args.bench_dir, args.out, args.pair_pooled)
+        pair_pooled(args.cell, args.bench_dir, args.out, args.pair_pooled, args.anchor_start)
         return
     if args.true_delay:
         got = true_delay_reference(args.cell, args.bench_dir)
@@ -429,7 +548,8 @@ def main() -> None:
     if args.train_episodes < 2 or args.val_episodes < 1:
         ap.error("--train-episodes must be >= 2 and --val-episodes >= 1")
     run(args.cell, args.bench_dir, args.out, args.train_episodes, args.val_episodes, seeds,
-        args.test_episodes, not args.no_progress)  # fmt: skip
+        args.test_episodes, not args.no_progress, args.anchor_start,
+        args.choice_episodes)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -157,9 +157,9 @@ def test_training_reads_only_training_seeds(
     assert rule.info["training_episodes"] == len(set(samples.episode))
 
 
-def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
-    """A bench folder of 3 test episodes of two rows (played now as the bench plays
-    them), then 4 training episodes, 3 validation episodes, one seed."""
+def _tiny_bench(tmp_path: Path) -> Path:
+    """A Cascade-v1 three-ball medium bench folder of 3 test episodes of two rows, played
+    now as the bench plays them."""
     from baselines.juggling_bench.cascade_v1 import (
         CascadeV1Config,
         _kwargs,
@@ -167,7 +167,6 @@ def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
         row_summary,
     )
 
-    mod = load_experiment("learned_delay_estimator")
     config = CascadeV1Config(levels=("medium",), episodes=3, val_episodes=2, max_catches=4,
                              ilc=False)  # fmt: skip
     kept, rows = {}, {}
@@ -185,6 +184,14 @@ def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
     bench.mkdir()
     (bench / "results.json").write_text(json.dumps(doc))
     (bench / "episodes.json").write_text(json.dumps({"medium": kept}))
+    return bench
+
+
+def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
+    """A bench folder of 3 test episodes of two rows (:func:`_tiny_bench`), then 4
+    training episodes, 3 validation episodes, one seed."""
+    mod = load_experiment("learned_delay_estimator")
+    bench = _tiny_bench(tmp_path)
     got = mod.run("cascade3_medium", bench, tmp_path / "out", 4, 3, (0,), progress=False)
     assert (tmp_path / "out" / "model_seed0.safetensors").is_file()
     assert json.loads((tmp_path / "out" / "results.json").read_text())["cell"] == "cascade3_medium"
@@ -199,3 +206,80 @@ def test_the_experiment_runs_on_a_tiny_budget(tmp_path: Path) -> None:
     assert told["row"]["catches_mean"] >= 0 and set(told) >= {"minus_oracle_catch"}
     with pytest.raises(ValueError, match="Cascade-v1"):
         mod.true_delay_reference("v2_hard", bench)
+
+
+@pytest.mark.parametrize("start", [False, True])
+def test_the_start_flights_are_recorded_when_the_start_is_anchored(start: bool) -> None:
+    """A flight's first anchor frame arrives its delay plus under 0.1 s after its release
+    when the ball is released in the episode (measured on these seeds: 0.05-0.09 s), and
+    more than 0.12 s after it for a ball thrown before ``t = 0`` whose first frame is seen
+    only after the start (0.14-0.18 s): with the start anchored, each episode's first
+    sample is such a start flight; without, no flight is."""
+    from baselines.learned.delay_estimator import collect_flights
+
+    kwargs = {"level": "medium", "pattern": "3", "max_catches": 30, "anchor_frames": 20,
+              "anchor_start": start}  # fmt: skip
+    s = collect_flights("MotionEnvs/Cascade-v1", kwargs, "train", 3, progress=False)
+    lag = [[float(s0[0]) - d for s0, _ in fl] for fl, d in zip(s.flights, s.delay, strict=True)]
+    first = {e: i for i, e in reversed(list(enumerate(s.episode)))}
+    assert len(first) == 3 and all(len(s.flights[i]) == 1 for i in first.values())
+    if start:
+        assert all(lag[i][0] > 0.12 for i in first.values())
+    else:
+        assert max(x for row in lag for x in row) < 0.1
+
+
+def test_anchor_start_run_chooses_on_validation_trains_on_training_then_plays_test(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``run(anchor_start=True)``: every reset has the start anchored; the anchor frames
+    are chosen first on validation seeds only (one pass of the choice's episodes per
+    declared candidate), the rule is trained on training seeds only, and every test seed
+    comes after every training and validation seed; the chosen frames are the candidates'
+    best validation mean (ties: the first); the pooled row with the start anchored is
+    paired and ``--pair-pooled --anchor-start`` replays the row exactly."""
+    from baselines.juggling_bench.v2 import POOLED_ANCHOR_FRAMES
+    from motion_envs.envs.juggling import CascadeV1Env
+
+    mod = load_experiment("learned_delay_estimator")
+    bench = _tiny_bench(tmp_path)
+    seen: list[tuple[int, bool]] = []
+    reset = CascadeV1Env.reset
+
+    def spy(self: Any, *, seed: int | None = None, options: Any = None) -> Any:
+        seen.append((-1 if seed is None else int(seed), bool(self.anchor_start)))
+        return reset(self, seed=seed, options=options)
+
+    monkeypatch.setattr(CascadeV1Env, "reset", spy)
+    out = tmp_path / "out"
+    got = mod.run("cascade3_medium", bench, out, 3, 2, (0,), progress=False,
+                  anchor_start=True, choice_episodes=2)  # fmt: skip
+    seeds = [s for s, _ in seen if s >= 0]
+    assert all(st for s, st in seen if s >= 0)  # the start anchored in every episode played
+    val, train, test = (episode_seeds(split, 3).tolist() for split in ("val", "train", "test"))
+    n_choice = 2 * len(POOLED_ANCHOR_FRAMES)
+    assert seeds[:n_choice] == val[:2] * len(POOLED_ANCHOR_FRAMES)  # the choice first
+    assert seeds[n_choice : n_choice + 2] == val[:2]  # the validation flights
+    assert seeds[n_choice + 2 : n_choice + 5] == train  # the training flights
+    assert all(s >= SPLIT_SEEDS["test"] for s in seeds[n_choice + 5 :])
+    assert set(seeds[n_choice + 5 :]) == set(test)
+    c = got["anchor_frames_choice"]
+    means = c["val_mean_catches"]
+    assert list(means) == [f"{f} frames, start anchored" for f in POOLED_ANCHOR_FRAMES]
+    best = max(means.values())
+    assert c["anchor_frames"] == POOLED_ANCHOR_FRAMES[list(means.values()).index(best)]
+    assert got["env_kwargs"]["anchor_start"] is True
+    assert got["env_kwargs"]["anchor_frames"] == c["anchor_frames"]
+    assert "delay_rule" not in got["env_kwargs"]
+    (s,) = got["seeds"]
+    assert set(s["minus"]) == {"delay_estimator_catch", "oracle_catch", mod.POOLED_START}
+    assert got["median_seed_against"] == mod.POOLED_START
+    assert set(got["oracle_catch_minus_pooled_start"]) == {"catches", "catch_rate"}
+    assert got["val_errors_pooled_rule"]["all"]["n"] == got["val_errors_default_rule"]["all"]["n"]
+    paired = mod.pair_pooled("cascade3_medium", bench, out, c["anchor_frames"], start=True)
+    assert paired["pooled_anchor_start"] is True
+    assert paired["seeds"][0]["replay_equals_run"] is True
+    # the pooled row paired here is the one the run played on the same seeds
+    assert paired["pooled_estimator_catch"] == got["rows"][mod.POOLED_START]
+    with pytest.raises(ValueError, match="Cascade-v1"):
+        mod.run("v2_medium", bench, out, 3, 2, (0,), anchor_start=True)
