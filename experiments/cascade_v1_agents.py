@@ -409,6 +409,7 @@ def main(argv: list[str] | None = None) -> int:
         levels=tuple(args.levels),
         episodes=args.test_episodes,
         val_episodes=args.val_episodes,
+        pick_episodes=max(args.val_episodes, bench.pick_episodes),
         max_catches=args.max_catches,
     )
     from baselines.juggling_bench.cascade_v1 import check_cascade_v1_config

@@ -133,7 +133,10 @@ def block_rows(
         pattern = kind[-1]
         from baselines.juggling_bench.cascade_v1 import UPPER_REFERENCE, CascadeV1Config
 
-        config = CascadeV1Config(pattern=pattern, episodes=test_episodes, val_episodes=val_rows)
+        config = CascadeV1Config(
+            pattern=pattern, episodes=test_episodes, val_episodes=val_rows,
+            pick_episodes=max(val_rows, CascadeV1Config.pick_episodes),
+        )  # fmt: skip
         doc, played = _script("cascade_v1_agents").level_rows(level, config, every_row)
         lv = doc["levels"][0]
         kw = {
