@@ -13,12 +13,12 @@ but the ROWS' ``max_catches`` (the bench's 30, ``--max-catches``), so its catche
 the first drop are censored where the rows' are.
 
 The rows are ``motion-bench juggling --version v2 --pattern P``'s
-(:func:`baselines.juggling_bench.cascade_v1.run_cascade_v1`: its grids' choices and the
-best non-oracle row made on ``--val-episodes`` VALIDATION episodes by mean catches before
-the first drop, before any test seed is played, ``task_error_ilc`` trained on TRAINING
-episodes; ``oracle_catch``, given the true delay and drag, the upper reference); their
-test episodes are kept as the bench plays them (``run_cascade_v1(..., keep=)``: the same
-seeds, no replay) and paired with the agent's.
+(:func:`baselines.juggling_bench.cascade_v1.run_cascade_v1`: its grids' choices made on
+``--val-episodes`` and the best non-oracle row on ``--pick-episodes`` VALIDATION episodes
+by mean catches before the first drop, before any test seed is played,
+``task_error_ilc`` trained on TRAINING episodes; ``oracle_catch``, given the true delay
+and drag, the upper reference); their test episodes are kept as the bench plays them
+(``run_cascade_v1(..., keep=)``: the same seeds, no replay) and paired with the agent's.
 
 Per run: the agent's mean and median catches before the first drop and catch rate with
 95 % bootstrap intervals; ``agent - best non-oracle row`` and ``oracle_catch - agent``
@@ -398,6 +398,13 @@ def main(argv: list[str] | None = None) -> int:
         help=f"the rows' validation episodes (default: the bench's {bench.val_episodes})",
     )
     p.add_argument(
+        "--pick-episodes",
+        type=int,
+        default=None,
+        help=f"the validation episodes the best non-oracle row is picked on (default: the "
+        f"bench's {bench.pick_episodes}, or --val-episodes if more)",
+    )
+    p.add_argument(
         "--max-catches",
         type=int,
         default=bench.max_catches,
@@ -409,7 +416,11 @@ def main(argv: list[str] | None = None) -> int:
         levels=tuple(args.levels),
         episodes=args.test_episodes,
         val_episodes=args.val_episodes,
-        pick_episodes=max(args.val_episodes, bench.pick_episodes),
+        pick_episodes=(
+            max(args.val_episodes, bench.pick_episodes)
+            if args.pick_episodes is None
+            else args.pick_episodes
+        ),
         max_catches=args.max_catches,
     )
     from baselines.juggling_bench.cascade_v1 import check_cascade_v1_config

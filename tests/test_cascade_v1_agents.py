@@ -30,7 +30,7 @@ pytest.importorskip("stable_baselines3")
 
 ENV = "MotionEnvs/Cascade-v1"
 ARGS = ["--levels", "medium", "--seeds", "0", "--test-episodes", "2", "--val-episodes", "2",
-        "--max-catches", "3", "--reuse-only"]  # fmt: skip
+        "--pick-episodes", "2", "--max-catches", "3", "--reuse-only"]  # fmt: skip
 
 
 def _script() -> Any:
